@@ -1,0 +1,100 @@
+/* Every compile-time capacity of rsm, in one place.
+ *
+ * Each value can be overridden by defining it before this header is read,
+ * most simply through a user header named at build time:
+ *     -DRSM_USER_CONFIG=my_rsm_config.h
+ * which is included first. Capacities only bound memory; tuning values
+ * (thresholds, noise, seeds) live in the runtime config structs of each
+ * module. RAM costs below are for the state struct that holds the buffer. */
+#ifndef RSM_CONFIG_H
+#define RSM_CONFIG_H
+
+#define RSM_STRINGIFY_(x) #x
+#define RSM_STRINGIFY(x) RSM_STRINGIFY_(x)
+
+#ifdef RSM_USER_CONFIG
+#include RSM_STRINGIFY(RSM_USER_CONFIG)
+#endif
+
+/* ---- scans ------------------------------------------------------------ */
+
+/* Readings per scan the core accepts (LMS: 181 or 361; CARMEN logs: 180;
+ * one LMS 0xB0 telegram carries at most 401). 8 bytes each in a scan. */
+#ifndef RSM_MAX_BEAMS
+#define RSM_MAX_BEAMS 361
+#endif
+
+/* ---- image and map ---------------------------------------------------- */
+
+/* log2 of the side, in cells, of the square scrolling map and of the scan
+ * image drawn in the same frame. 7 -> 128 x 128 cells (6.4 m at 5 cm).
+ * Map: 1 byte per cell; scan image: 1 bit per cell. */
+#ifndef RSM_MAP_SIZE_LOG2
+#define RSM_MAP_SIZE_LOG2 7
+#endif
+
+/* Cells a single reading may mark in the scan image (1 with the sigma rule,
+ * up to 4 when every cell the sigma circle touches is marked). */
+#ifndef RSM_CELLS_PER_BEAM
+#define RSM_CELLS_PER_BEAM 4
+#endif
+
+/* ---- key points and matches ------------------------------------------- */
+
+/* Harris key points kept per image (strongest first). 8 bytes each. */
+#ifndef RSM_MAX_KEYPOINTS
+#define RSM_MAX_KEYPOINTS 64
+#endif
+
+/* Harris candidates examined per image before the strongest are kept
+ * (occupied cells and their neighbours). 8 bytes each, on the stack of
+ * the detector's caller-owned workspace. */
+#ifndef RSM_MAX_CANDIDATES
+#define RSM_MAX_CANDIDATES 1024
+#endif
+
+/* Tentative correspondences between reference and current key points.
+ * 4 bytes each. */
+#ifndef RSM_MAX_MATCHES
+#define RSM_MAX_MATCHES 192
+#endif
+
+/* ---- ICP baseline ------------------------------------------------------ */
+
+/* Points in each ICP point set (reference and current). 8 bytes each. */
+#ifndef RSM_ICP_MAX_POINTS
+#define RSM_ICP_MAX_POINTS RSM_MAX_BEAMS
+#endif
+
+/* ---- serial protocols -------------------------------------------------- */
+
+/* Largest ARIA packet on the wire: 3 header bytes + a byte count of 255. */
+#ifndef RSM_ARIA_MAX_PACKET
+#define RSM_ARIA_MAX_PACKET 258
+#endif
+
+/* Largest SICK LMS 2xx telegram accepted on the wire (0xB0 with 401 values
+ * is 812 bytes; optional index bytes add a few). */
+#ifndef RSM_LMS_MAX_TELEGRAM
+#define RSM_LMS_MAX_TELEGRAM 820
+#endif
+
+/* ---- derived values and compile-time checks ---------------------------- */
+
+#define RSM_MAP_SIZE (1 << RSM_MAP_SIZE_LOG2)
+#define RSM_MAP_CELLS (RSM_MAP_SIZE * RSM_MAP_SIZE)
+
+/* C99 static assertion: a negative array size stops the build. */
+#define RSM_STATIC_ASSERT(name, cond) typedef char rsm_static_assert_##name[(cond) ? 1 : -1]
+
+RSM_STATIC_ASSERT(max_beams_positive, RSM_MAX_BEAMS >= 2);
+RSM_STATIC_ASSERT(max_beams_fits_lms, RSM_MAX_BEAMS <= 4096);
+RSM_STATIC_ASSERT(map_size_range, RSM_MAP_SIZE_LOG2 >= 4 && RSM_MAP_SIZE_LOG2 <= 12);
+RSM_STATIC_ASSERT(keypoints_fit_grid, RSM_MAX_KEYPOINTS >= 2 && RSM_MAX_KEYPOINTS <= RSM_MAP_CELLS);
+RSM_STATIC_ASSERT(candidates_hold_keypoints, RSM_MAX_CANDIDATES >= RSM_MAX_KEYPOINTS);
+RSM_STATIC_ASSERT(matches_positive, RSM_MAX_MATCHES >= 2);
+RSM_STATIC_ASSERT(cells_per_beam_range, RSM_CELLS_PER_BEAM >= 1 && RSM_CELLS_PER_BEAM <= 4);
+RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
+RSM_STATIC_ASSERT(lms_telegram_size, RSM_LMS_MAX_TELEGRAM >= 812);
+
+#endif /* RSM_CONFIG_H */

@@ -1,0 +1,10 @@
+/* A deliberately small configuration: the core tests run again against it so
+ * that capacity limits and truncation paths are exercised. */
+#ifndef RSM_SMALL_CONFIG_H
+#define RSM_SMALL_CONFIG_H
+#define RSM_MAX_BEAMS 181
+#define RSM_MAP_SIZE_LOG2 6
+#define RSM_MAX_KEYPOINTS 16
+#define RSM_MAX_CANDIDATES 256
+#define RSM_MAX_MATCHES 32
+#endif

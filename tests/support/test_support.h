@@ -1,0 +1,13 @@
+/* Helpers shared by the unit tests: where the project and the shared data are. */
+#ifndef RSM_TEST_SUPPORT_H
+#define RSM_TEST_SUPPORT_H
+
+#include <stddef.h>
+
+/* Writes "<root>/<rel>" into out (cap bytes); returns out, or NULL if too long.
+ * root is the source tree for rsm_test_source_path and the shared/ folder
+ * beside it for rsm_test_shared_path. */
+const char *rsm_test_source_path(char *out, size_t cap, const char *rel);
+const char *rsm_test_shared_path(char *out, size_t cap, const char *rel);
+
+#endif
