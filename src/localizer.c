@@ -16,6 +16,8 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.ransac = rsm_ransac_config_default();
     c.icp = rsm_icp_config_default();
     c.odometry = rsm_odometry_config_default();
+    /* Measured on the Intel log (tools/bench): heading drift dominates. */
+    c.odometry.sigma_rot_per_m = 0.2f;
     c.map_min_hits = 1u;
     c.map_on_reject = 1u;
     c.min_points = 20u;
@@ -26,8 +28,11 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.search_max_m = 0.6f;
     c.gate_d2 = 16.27f;
     c.noise = RSM_NOISE_RESIDUAL;
-    c.r_min_xy_m = 0.01f;
-    c.r_min_theta_rad = 0.0044f;
+    c.r_min_xy_m = 0.003f;
+    c.r_min_theta_rad = 0.001f;
+    c.refine_iterations = 10u;
+    c.refine_saturation = 2u;
+    c.refine_noise_scale = 10.0f;
     return c;
 }
 
@@ -57,7 +62,8 @@ int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, 
         !(cfg->grid.sigma_m >= 0.0f) || cfg->grid.sigma_m * 2.0f >= cfg->grid.cell_m || cfg->map_min_hits < 1u ||
         cfg->min_points < 2u || cfg->min_keypoints < 2u || !(cfg->match_window_m >= 0.0f) ||
         !(cfg->search_min_m > 0.0f) || !(cfg->search_max_m >= cfg->search_min_m) || !(cfg->gate_d2 >= 0.0f) ||
-        !(cfg->r_min_xy_m > 0.0f) || !(cfg->r_min_theta_rad > 0.0f) || cfg->noise > RSM_NOISE_FIXED) {
+        !(cfg->r_min_xy_m > 0.0f) || !(cfg->r_min_theta_rad > 0.0f) || cfg->noise > RSM_NOISE_FIXED ||
+        cfg->refine_saturation < 1u || !(cfg->refine_noise_scale > 0.0f)) {
         return RSM_ERR_INVAL;
     }
     memset(loc, 0, sizeof *loc);
@@ -232,6 +238,25 @@ static void measurement_noise(const rsm_localizer_config_t *cfg, float rms, uint
     r[8] = sth2;
 }
 
+/* R from the map fit: cost-scaled inverse information, floored. Falls back
+ * to the RANSAC-based r (unchanged) if the information is singular. */
+static void refined_noise(const rsm_localizer_config_t *cfg, const rsm_map_fit_t *fit, float r[9])
+{
+    float inv[9];
+    float s2;
+    size_t k;
+    if (cfg->noise == RSM_NOISE_FIXED || fit->used < 4u || rsm_mat3_inverse(fit->info, inv) != RSM_OK) {
+        return;
+    }
+    s2 = cfg->refine_noise_scale * fit->cost * (float)fit->used / (float)(fit->used - 3u);
+    for (k = 0; k < 9; ++k) {
+        r[k] = s2 * inv[k];
+    }
+    r[0] += cfg->r_min_xy_m * cfg->r_min_xy_m;
+    r[4] += cfg->r_min_xy_m * cfg->r_min_xy_m;
+    r[8] += cfg->r_min_theta_rad * cfg->r_min_theta_rad;
+}
+
 static float search_radius(const rsm_localizer_t *loc)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
@@ -332,6 +357,15 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         z.y = pred.y + rr.t.y;
         z.theta = rsm_wrap_angle(pred.theta + rr.t.theta);
         measurement_noise(cfg, rr.rms_m, rr.support, spread2, r);
+        if (cfg->refine_iterations > 0u) {
+            rsm_map_fit_t fit;
+            if (rsm_map_align(&loc->map, loc->pts, npts, &z, cfg->refine_saturation, cfg->refine_iterations, &fit) ==
+                    RSM_OK &&
+                fit.iterations > 0u) {
+                z = fit.pose;
+                refined_noise(cfg, &fit, r);
+            }
+        }
         return fuse(loc, &z, r, rep);
     }
 }

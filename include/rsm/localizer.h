@@ -73,8 +73,13 @@ typedef struct rsm_localizer_config {
     float search_max_m;             /* radius cap; default 0.6 */
     float gate_d2;                  /* Mahalanobis gate on the measured pose, 3 dof; default 16.27 (99.9%) */
     rsm_noise_model_t noise;        /* default RSM_NOISE_RESIDUAL */
-    float r_min_xy_m;               /* residual model floors; default 0.01 m */
-    float r_min_theta_rad;          /* default 0.0044 (0.25 deg) */
+    float r_min_xy_m;               /* residual model floors; default 0.003 m */
+    float r_min_theta_rad;          /* default 0.001 rad */
+    uint32_t refine_iterations;     /* Gauss-Newton steps aligning the points to the map after
+                                     * RANSAC (sub-cell accuracy); 0 = the paper's method only;
+                                     * default 10 */
+    uint8_t refine_saturation;      /* map hits that count as fully occupied; default 2 */
+    float refine_noise_scale;       /* scales the fit's covariance into R; default 10 */
 } rsm_localizer_config_t;
 
 rsm_localizer_config_t rsm_localizer_config_default(void);

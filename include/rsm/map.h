@@ -48,6 +48,26 @@ static inline uint8_t rsm_map_hits(const rsm_map_t *map, int32_t gx, int32_t gy)
     return map->hits[rsm_window_index(gx, gy)];
 }
 
+/* Result of aligning points to the map. */
+typedef struct rsm_map_fit {
+    rsm_pose_t pose;     /* refined pose */
+    float info[9];       /* J^T J of the last iteration (information, unnormalised) */
+    float cost;          /* mean squared residual (1 - M)^2 over used points */
+    uint32_t used;       /* points with a non-zero map gradient */
+    uint32_t iterations;
+} rsm_map_fit_t;
+
+/* Refines pose so that the robot-frame points land on occupied map cells:
+ * Gauss-Newton on sum (1 - M(pose (+) p))^2, where M is the map's occupancy
+ * (min(hits, saturation) / saturation) interpolated bilinearly between cell
+ * centres. The cost is flat far from walls, so stray (outlier) points have no
+ * pull; the basin is about one cell, which is why this runs after RANSAC.
+ * Returns RSM_OK, RSM_ERR_DEGENERATE when too few points touch the map or
+ * the normal equations are singular (fit->pose = start), RSM_ERR_INVAL for
+ * bad arguments. Reentrant. */
+int rsm_map_align(const rsm_map_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *start,
+                  uint8_t saturation, uint32_t iterations, rsm_map_fit_t *fit);
+
 #ifdef __cplusplus
 }
 #endif

@@ -33,7 +33,8 @@ static void usage(FILE *f)
             "KEY is one of: cell, sigma, rule (0 inside, 1 touch, 2 nearest), min_hits, window,\n"
             "search_sigmas, search_min, search_max, gate, noise (0 residual, 1 fixed), r_min_xy,\n"
             "r_min_theta, inlier_tol, length_tol, iterations, min_support, seed, k_den, nms,\n"
-            "max_range, min_range, icp_iterations, icp_pair_dist, trans_per_m, rot_per_rad, rot_per_m.\n");
+            "max_range, min_range, icp_iterations, icp_pair_dist, trans_per_m, rot_per_rad, rot_per_m,\n"
+            "map_on_reject, refine (iterations, 0 = off), refine_sat, refine_scale.\n");
 }
 
 static int set_option(rsm_localizer_config_t *c, const char *kv)
@@ -83,6 +84,9 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     F("rot_per_rad", odometry.sigma_rot_per_rad)
     F("rot_per_m", odometry.sigma_rot_per_m)
     U("map_on_reject", map_on_reject, uint8_t)
+    U("refine", refine_iterations, uint32_t)
+    U("refine_sat", refine_saturation, uint8_t)
+    F("refine_scale", refine_noise_scale)
 #undef F
 #undef U
     return -1;
