@@ -144,12 +144,67 @@ static float sample(const rsm_map_t *map, float x, float y, float inv_sat, uint8
     return (m00 * (1.0f - du) + m10 * du) * (1.0f - dv) + (m01 * (1.0f - du) + m11 * du) * dv;
 }
 
+/* Normal equations of sum (1 - M)^2 at pose: upper triangle of J^T J in h,
+ * J^T r in b. Returns the points with a non-zero map gradient (used); their
+ * summed squared residual goes to *cost_used and the residual of every
+ * finite point (those off the map count 1) to *total, which is the cost the
+ * steps must decrease. */
+static uint32_t normal_equations(const rsm_map_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *pose,
+                                 float inv_sat, uint8_t sat, float h[6], float b[3], float *cost_used, float *total)
+{
+    const float c = cosf(pose->theta);
+    const float s = sinf(pose->theta);
+    uint32_t used = 0;
+    size_t k;
+    memset(h, 0, 6 * sizeof h[0]);
+    memset(b, 0, 3 * sizeof b[0]);
+    *cost_used = 0.0f;
+    *total = 0.0f;
+    for (k = 0; k < n; ++k) {
+        const float wx = pose->x + c * pts[k].x - s * pts[k].y;
+        const float wy = pose->y + s * pts[k].x + c * pts[k].y;
+        float dmx;
+        float dmy;
+        float m;
+        float jt;
+        float r;
+        if (!(fabsf(wx) < 1.0e6f && fabsf(wy) < 1.0e6f)) {
+            continue;
+        }
+        m = sample(map, wx, wy, inv_sat, sat, &dmx, &dmy);
+        r = 1.0f - m;
+        *total += r * r;
+        if (dmx == 0.0f && dmy == 0.0f) {
+            continue;
+        }
+        /* d(world)/d(theta) = (-s px - c py, c px - s py). */
+        jt = dmx * (-s * pts[k].x - c * pts[k].y) + dmy * (c * pts[k].x - s * pts[k].y);
+        h[0] += dmx * dmx;
+        h[1] += dmx * dmy;
+        h[2] += dmx * jt;
+        h[3] += dmy * dmy;
+        h[4] += dmy * jt;
+        h[5] += jt * jt;
+        b[0] += dmx * r;
+        b[1] += dmy * r;
+        b[2] += jt * r;
+        *cost_used += r * r;
+        ++used;
+    }
+    return used;
+}
+
 int rsm_map_align(const rsm_map_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *start,
                   uint8_t saturation, uint32_t iterations, rsm_map_fit_t *fit)
 {
     rsm_pose_t pose;
     uint32_t it;
+    uint32_t used;
     float inv_sat;
+    float h[6];
+    float b[3];
+    float cost_used;
+    float total;
     if (map == NULL || (n > 0 && pts == NULL) || start == NULL || fit == NULL || saturation == 0u) {
         return RSM_ERR_INVAL;
     }
@@ -157,91 +212,77 @@ int rsm_map_align(const rsm_map_t *map, const rsm_point_t *pts, size_t n, const 
     pose = *start;
     memset(fit, 0, sizeof *fit);
     fit->pose = *start;
+    used = normal_equations(map, pts, n, &pose, inv_sat, saturation, h, b, &cost_used, &total);
     for (it = 0; it < iterations; ++it) {
-        const float c = cosf(pose.theta);
-        const float s = sinf(pose.theta);
-        float h[6] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f}; /* upper triangle of J^T J */
-        float b[3] = {0.0f, 0.0f, 0.0f};
-        float cost = 0.0f;
-        uint32_t used = 0;
-        size_t k;
-        for (k = 0; k < n; ++k) {
-            const float wx = pose.x + c * pts[k].x - s * pts[k].y;
-            const float wy = pose.y + s * pts[k].x + c * pts[k].y;
-            float dmx;
-            float dmy;
-            float m;
-            float jt;
-            float r;
-            if (!(fabsf(wx) < 1.0e6f && fabsf(wy) < 1.0e6f)) {
-                continue;
-            }
-            m = sample(map, wx, wy, inv_sat, saturation, &dmx, &dmy);
-            if (dmx == 0.0f && dmy == 0.0f) {
-                continue;
-            }
-            /* d(world)/d(theta) = (-s px - c py, c px - s py). */
-            jt = dmx * (-s * pts[k].x - c * pts[k].y) + dmy * (c * pts[k].x - s * pts[k].y);
-            r = 1.0f - m;
-            h[0] += dmx * dmx;
-            h[1] += dmx * dmy;
-            h[2] += dmx * jt;
-            h[3] += dmy * dmy;
-            h[4] += dmy * jt;
-            h[5] += jt * jt;
-            b[0] += dmx * r;
-            b[1] += dmy * r;
-            b[2] += jt * r;
-            cost += r * r;
-            ++used;
-        }
-        if (used < 3u) {
+        const float a00 = h[0], a01 = h[1], a02 = h[2], a11 = h[3], a12 = h[4], a22 = h[5];
+        const float c00 = a11 * a22 - a12 * a12;
+        const float c01 = a02 * a12 - a01 * a22;
+        const float c02 = a01 * a12 - a02 * a11;
+        const float det = a00 * c00 + a01 * c01 + a02 * c02;
+        const float scale = (a00 + a11) * (a00 + a11) * a22;
+        float dx;
+        float dy;
+        float dt;
+        int halvings;
+        int accepted = 0;
+        if (used < 3u || !(fabsf(det) > 1.0e-9f * (scale > 0.0f ? scale : 1.0f))) {
             return it == 0 ? RSM_ERR_DEGENERATE : RSM_OK;
         }
         {
-            const float a00 = h[0], a01 = h[1], a02 = h[2], a11 = h[3], a12 = h[4], a22 = h[5];
-            const float c00 = a11 * a22 - a12 * a12;
-            const float c01 = a02 * a12 - a01 * a22;
-            const float c02 = a01 * a12 - a02 * a11;
-            const float det = a00 * c00 + a01 * c01 + a02 * c02;
-            const float scale = (a00 + a11) * (a00 + a11) * a22;
-            float dx;
-            float dy;
-            float dt;
-            if (!(fabsf(det) > 1.0e-9f * (scale > 0.0f ? scale : 1.0f))) {
-                return it == 0 ? RSM_ERR_DEGENERATE : RSM_OK;
+            const float c11 = a00 * a22 - a02 * a02;
+            const float c12 = a01 * a02 - a00 * a12;
+            const float c22 = a00 * a11 - a01 * a01;
+            dx = (c00 * b[0] + c01 * b[1] + c02 * b[2]) / det;
+            dy = (c01 * b[0] + c11 * b[1] + c12 * b[2]) / det;
+            dt = (c02 * b[0] + c12 * b[1] + c22 * b[2]) / det;
+        }
+        /* A step beyond one cell means the linearisation is not valid. */
+        if (!(fabsf(dx) < map->cell_m && fabsf(dy) < map->cell_m && fabsf(dt) < 0.05f)) {
+            return it == 0 ? RSM_ERR_DEGENERATE : RSM_OK;
+        }
+        fit->info[0] = a00;
+        fit->info[1] = a01;
+        fit->info[2] = a02;
+        fit->info[3] = a01;
+        fit->info[4] = a11;
+        fit->info[5] = a12;
+        fit->info[6] = a02;
+        fit->info[7] = a12;
+        fit->info[8] = a22;
+        fit->cost = cost_used / (float)used;
+        fit->used = used;
+        fit->iterations = it + 1u;
+        /* The occupancy is bilinear between cell centres, so the cost has
+         * kinks where a full Gauss-Newton step overshoots and cycles: take
+         * the step only where it lowers the cost, halving it otherwise. */
+        for (halvings = 0; halvings < 6 && !accepted; ++halvings) {
+            rsm_pose_t cand;
+            float ch[6];
+            float cb[3];
+            float ccost;
+            float ctotal;
+            uint32_t cused;
+            cand.x = pose.x + dx;
+            cand.y = pose.y + dy;
+            cand.theta = rsm_wrap_angle(pose.theta + dt);
+            cused = normal_equations(map, pts, n, &cand, inv_sat, saturation, ch, cb, &ccost, &ctotal);
+            if (ctotal < total) {
+                pose = cand;
+                used = cused;
+                memcpy(h, ch, sizeof h);
+                memcpy(b, cb, sizeof b);
+                cost_used = ccost;
+                total = ctotal;
+                accepted = 1;
+            } else {
+                dx *= 0.5f;
+                dy *= 0.5f;
+                dt *= 0.5f;
             }
-            {
-                const float c11 = a00 * a22 - a02 * a02;
-                const float c12 = a01 * a02 - a00 * a12;
-                const float c22 = a00 * a11 - a01 * a01;
-                dx = (c00 * b[0] + c01 * b[1] + c02 * b[2]) / det;
-                dy = (c01 * b[0] + c11 * b[1] + c12 * b[2]) / det;
-                dt = (c02 * b[0] + c12 * b[1] + c22 * b[2]) / det;
-            }
-            /* A step beyond one cell means the linearisation is not valid. */
-            if (!(fabsf(dx) < map->cell_m && fabsf(dy) < map->cell_m && fabsf(dt) < 0.05f)) {
-                return it == 0 ? RSM_ERR_DEGENERATE : RSM_OK;
-            }
-            pose.x += dx;
-            pose.y += dy;
-            pose.theta = rsm_wrap_angle(pose.theta + dt);
-            fit->pose = pose;
-            fit->info[0] = a00;
-            fit->info[1] = a01;
-            fit->info[2] = a02;
-            fit->info[3] = a01;
-            fit->info[4] = a11;
-            fit->info[5] = a12;
-            fit->info[6] = a02;
-            fit->info[7] = a12;
-            fit->info[8] = a22;
-            fit->cost = cost / (float)used;
-            fit->used = used;
-            fit->iterations = it + 1u;
-            if (fabsf(dx) < 1.0e-4f && fabsf(dy) < 1.0e-4f && fabsf(dt) < 1.0e-4f) {
-                break;
-            }
+        }
+        fit->pose = pose;
+        if (!accepted || (fabsf(dx) < 1.0e-4f && fabsf(dy) < 1.0e-4f && fabsf(dt) < 1.0e-4f)) {
+            break;
         }
     }
     return RSM_OK;
