@@ -63,7 +63,12 @@ int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, 
         cfg->min_points < 2u || cfg->min_keypoints < 2u || !(cfg->match_window_m >= 0.0f) ||
         !(cfg->search_min_m > 0.0f) || !(cfg->search_max_m >= cfg->search_min_m) || !(cfg->gate_d2 >= 0.0f) ||
         !(cfg->r_min_xy_m > 0.0f) || !(cfg->r_min_theta_rad > 0.0f) || cfg->noise > RSM_NOISE_FIXED ||
-        cfg->refine_saturation < 1u || !(cfg->refine_noise_scale > 0.0f)) {
+        cfg->refine_saturation < 1u || !(cfg->refine_noise_scale > 0.0f) || cfg->harris.k_den <= 0 ||
+        cfg->harris.k_num < 0 || cfg->harris.nms_radius < 0 || cfg->min_keypoints > RSM_MAX_KEYPOINTS ||
+        cfg->min_points > RSM_MAX_BEAMS) {
+        /* (The Harris part has no init of its own: a bad one would make
+         * every detection fail with RSM_ERR_INVAL, read as no key points;
+         * thresholds beyond the capacities could never be met.) */
         return RSM_ERR_INVAL;
     }
     memset(loc, 0, sizeof *loc);
