@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "rsm/config.h"
+#include "rsm/icp.h"
 #include "rsm/ransac.h"
 #include "rsm/status.h"
 #include "synth.h"
@@ -222,6 +223,46 @@ void test_ransac_estimate_should_recover_rotations_near_180_degrees(void)
     check_recovery(0.0f, 0.5f, 180.0f, 9u, 53u);
     check_recovery(0.4f, 0.0f, 135.0f, 9u, 54u);
     check_recovery(-0.1f, -0.4f, -100.0f, 9u, 55u);
+}
+
+void test_ransac_estimate_should_refine_by_least_squares_over_the_inliers(void)
+{
+    /* 1 cm noise on the current points: any two-point hypothesis is off by
+     * centimetres, the least-squares refit over all 20 inliers is the
+     * result (rsm_rigid_fit over exactly the correct matches). */
+    const rsm_pose_t t = {0.3f, -0.2f, 0.35f};
+    static rsm_point_t src[NPTS];
+    static rsm_point_t dst[NPTS];
+    rsm_synth_rng_t rng;
+    rsm_ransac_result_t res;
+    rsm_pose_t ls;
+    size_t n = 0;
+    size_t k;
+    make_reference(NPTS, 71u);
+    make_current(&t, NPTS);
+    make_matches(NPTS, 10u, 72u);
+    rsm_synth_rng_seed(&rng, 73u);
+    for (k = 0; k < NPTS; ++k) {
+        cur[k].x += 0.01f * rsm_synth_rng_gauss(&rng);
+        cur[k].y += 0.01f * rsm_synth_rng_gauss(&rng);
+    }
+    for (k = 0; k < NPTS; ++k) {
+        if (!wrong[k]) {
+            src[n] = cur[m[k].cur];
+            dst[n] = ref[m[k].ref];
+            ++n;
+        }
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rigid_fit(src, dst, NULL, n, &ls));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ransac_init(&rs, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ransac_estimate(&rs, ref, cur, m, NPTS, &res));
+    TEST_ASSERT_EQUAL_UINT32(20u, res.support);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-5f, ls.x, res.t.x);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-5f, ls.y, res.t.y);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-6f, ls.theta, res.t.theta);
+    assert_pose_near(&t, &res.t, 0.006f, 0.3f * DEG);
+    /* The RMS residual reflects the noise (about 1.4 cm per point). */
+    TEST_ASSERT_TRUE(res.rms_m > 0.005f && res.rms_m < 0.025f);
 }
 
 /* ---- the early length test ---------------------------------------------------- */
@@ -459,6 +500,7 @@ int main(void)
     RUN_TEST(test_ransac_estimate_should_recover_a_transform_with_50_percent_wrong_matches);
     RUN_TEST(test_ransac_estimate_should_recover_a_transform_with_70_percent_wrong_matches);
     RUN_TEST(test_ransac_estimate_should_recover_rotations_near_180_degrees);
+    RUN_TEST(test_ransac_estimate_should_refine_by_least_squares_over_the_inliers);
     RUN_TEST(test_ransac_estimate_should_count_samples_stopped_by_the_length_test);
     RUN_TEST(test_ransac_estimate_should_not_reject_any_sample_on_exact_data);
     RUN_TEST(test_ransac_estimate_should_reject_wrong_samples_by_length_with_wrong_matches);
