@@ -496,7 +496,7 @@ void test_localizer_scan_should_reject_invalid_arguments(void)
 
 /* ---- determinism and independence ------------------------------------------------ */
 
-void test_localizer_should_be_bit_identical_side_by_side(void)
+void test_localizer_scan_should_be_bit_identical_side_by_side(void)
 {
     rsm_localizer_report_t ra;
     rsm_localizer_report_t rb;
@@ -536,7 +536,7 @@ static void interleaved_step(rsm_localizer_t *l, size_t k, const rsm_synth_odo_e
     track[k] = rsm_localizer_pose(l);
 }
 
-void test_localizer_should_not_interfere_with_another_localizer(void)
+void test_localizer_scan_should_not_interfere_with_another_localizer(void)
 {
     static const rsm_synth_odo_error_t err_b = {-0.02f, -0.04f};
     rsm_localizer_config_t cfg_b;
@@ -585,7 +585,7 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_stay_finite_after_a_one_metre_jump_with_map_on_reject);
     RUN_TEST(test_localizer_motion_should_refuse_non_finite_increments);
     RUN_TEST(test_localizer_scan_should_reject_invalid_arguments);
-    RUN_TEST(test_localizer_should_be_bit_identical_side_by_side);
-    RUN_TEST(test_localizer_should_not_interfere_with_another_localizer);
+    RUN_TEST(test_localizer_scan_should_be_bit_identical_side_by_side);
+    RUN_TEST(test_localizer_scan_should_not_interfere_with_another_localizer);
     return UNITY_END();
 }
