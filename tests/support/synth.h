@@ -76,9 +76,11 @@ typedef struct rsm_synth_world {
  *    x in [3.0, 3.3], east wall at y in [1.4, 1.7]).
  * Free space a robot may drive through: the room away from the box and
  * pillar, and the corridor's centre line (y = 0 for x in [2, 4.4], then
- * x = 4.4 for y in [0, 2.8]). Every pose in the room sees several corners
- * within 1.5 m, so the small test configuration (3.2 m window) has
- * structure to match. */
+ * x = 4.4 for y in [0, 2.8]). Corners are close together, so that even
+ * the small test configuration (3.2 m window) finds structure to match
+ * from most poses. Every wall lies on a multiple of 5 cm, i.e. on the
+ * border of the default 5 cm cells: the worst case for the half-cell
+ * quantisation of the map (shift the frame by 2.5 cm for the best case). */
 rsm_synth_world_t rsm_synth_world_room(void);
 
 /* Only the L-corridor of the room world, as a world of its own (both ends

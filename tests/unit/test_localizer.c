@@ -145,6 +145,81 @@ static run_result_t run(rsm_localizer_t *l, rsm_method_t method, rsm_synth_rng_t
     return r;
 }
 
+/* ---- the synthetic world itself ------------------------------------------------- */
+
+void test_synth_scan_should_cast_exact_ranges(void)
+{
+    const rsm_pose_t origin = {0.0f, 0.0f, 0.0f};
+    const rsm_pose_t turned = {-1.5f, 1.0f, RSM_PI};
+    const size_t mid = scan_cfg.beams / 2u;
+    make_scan(&origin, NULL, 42u);
+    TEST_ASSERT_TRUE(scan.stamp_us == 42u);
+    TEST_ASSERT_EQUAL_size_t(181u, scan.count);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-6f, -0.5f * RSM_PI, scan.angle_rad[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-6f, 0.0f, scan.angle_rad[mid]);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-6f, 0.5f * RSM_PI, scan.angle_rad[scan.count - 1u]);
+    /* East through the doorway to the corridor's end wall, south into the
+     * alcove, north to the north wall. */
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-5f, 4.8f, scan.range_m[mid]);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-5f, 1.8f, scan.range_m[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-5f, 1.5f, scan.range_m[scan.count - 1u]);
+    /* Facing west from (-1.5, 1): the west wall 0.5 m ahead. */
+    make_scan(&turned, NULL, 0u);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-5f, 0.5f, scan.range_m[mid]);
+    /* A ray that leaves the world reads max range exactly. */
+    {
+        const rsm_synth_world_t corridor = rsm_synth_world_corridor();
+        TEST_ASSERT_EQUAL_FLOAT(20.0f, rsm_synth_cast(&corridor, 0.0f, 0.0f, RSM_PI, 20.0f));
+        TEST_ASSERT_FLOAT_WITHIN(1.0e-5f, 2.0f, rsm_synth_cast(&corridor, 0.0f, 0.0f, 0.0f, 20.0f));
+    }
+}
+
+void test_synth_scan_should_replace_exactly_the_outlier_share_deterministically(void)
+{
+    static rsm_scan_t exact;
+    static rsm_scan_t again;
+    const rsm_pose_t pose = {0.3f, -0.7f, 0.4f};
+    rsm_synth_rng_t rng;
+    size_t changed = 0;
+    size_t i;
+    make_scan(&pose, NULL, 0u);
+    memcpy(&exact, &scan, sizeof scan);
+    scan_cfg.outlier_fraction = 0.3f;
+    rsm_synth_rng_seed(&rng, 99u);
+    make_scan(&pose, &rng, 0u);
+    for (i = 0; i < scan.count; ++i) {
+        TEST_ASSERT_TRUE(isfinite(scan.range_m[i]));
+        if (scan.range_m[i] != exact.range_m[i]) {
+            ++changed;
+            TEST_ASSERT_TRUE(scan.range_m[i] >= scan_cfg.outlier_min_m && scan.range_m[i] < scan_cfg.outlier_max_m);
+        }
+    }
+    TEST_ASSERT_EQUAL_size_t(54u, changed); /* round(0.3 * 181) */
+    memcpy(&again, &scan, sizeof scan);
+    rsm_synth_rng_seed(&rng, 99u);
+    make_scan(&pose, &rng, 0u);
+    TEST_ASSERT_EQUAL_MEMORY(&again, &scan, sizeof scan);
+    /* Noise or outliers without an rng are refused. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_synth_scan(&world, &pose, &scan_cfg, NULL, 0u, &scan));
+}
+
+void test_synth_path_should_follow_the_legs(void)
+{
+    const rsm_pose_t *end = &path[path_len - 1u];
+    const rsm_motion_t u = rsm_synth_motion(&path[0], &path[1], &odo_err);
+    const rsm_motion_t exact = rsm_synth_motion(&path[0], &path[1], NULL);
+    /* 29 + 16 + 20 + 16 + 30 + 16 + 20 + 16 + 10 steps after the start. */
+    TEST_ASSERT_EQUAL_size_t(174u, path_len);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-4f, -0.5f, end->x);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-4f, -1.0f, end->y);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-4f, 0.0f, rsm_wrap_angle(end->theta));
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-6f, 0.1f, exact.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-6f, 0.0f, exact.dy);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-6f, 0.0f, exact.dtheta);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-6f, 0.103f, u.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1.0e-6f, 0.005f, u.dtheta);
+}
+
 /* ---- init ------------------------------------------------------------------ */
 
 void test_localizer_config_default_should_be_valid(void)
@@ -574,6 +649,9 @@ void test_localizer_scan_should_not_interfere_with_another_localizer(void)
 int main(void)
 {
     UNITY_BEGIN();
+    RUN_TEST(test_synth_scan_should_cast_exact_ranges);
+    RUN_TEST(test_synth_scan_should_replace_exactly_the_outlier_share_deterministically);
+    RUN_TEST(test_synth_path_should_follow_the_legs);
     RUN_TEST(test_localizer_config_default_should_be_valid);
     RUN_TEST(test_localizer_init_should_reject_bad_configs);
     RUN_TEST(test_localizer_scan_should_beat_odometry_on_a_synthetic_loop);

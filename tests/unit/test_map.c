@@ -36,7 +36,7 @@ void tearDown(void)
  * coordinates (1..250), so a cell that moved or was cleared is noticed. */
 static uint8_t pattern(int32_t gx, int32_t gy)
 {
-    return (uint8_t)(1 + (uint32_t)((gx * 7 + gy * 13) & 0x7FFF) % 250u);
+    return (uint8_t)(1u + (((uint32_t)gx * 7u + (uint32_t)gy * 13u) & 0x7FFFu) % 250u);
 }
 
 static void fill_pattern(void)
