@@ -10,10 +10,11 @@ RSM_VENV="$RSM_ROOT/.venv"
 RSM_VENV_PY="$RSM_VENV/bin/python"
 
 # Debian packages the build and the tests need (tools/test installs them).
-# libclang-rt-dev carries libFuzzer: clang only recommends it.
+# libclang-rt-dev carries libFuzzer (clang only recommends it); zlib1g-dev is
+# for rsm-nav reading gzipped CARMEN logs.
 RSM_DEBS=(cmake ninja-build gcc g++ pkg-config libserialport-dev
           gcc-arm-none-eabi libnewlib-arm-none-eabi clang libclang-rt-dev
-          python3-venv valgrind)
+          python3-venv valgrind zlib1g-dev)
 
 # ---- messages and stages ------------------------------------------------------
 
@@ -31,7 +32,7 @@ RSM_TIMINGS=()
 rsm_on_exit() {
     local rc=$?
     if [ "$rc" -ne 0 ] && [ -n "$RSM_STAGE" ]; then
-        printf '\n%s: FAILED in stage "%s" (exit %s)\n' "${0##*/}" "$RSM_STAGE" "$rc" >&2
+        printf '\ntools/%s: FAILED in stage "%s" (exit %s)\n' "${0##*/}" "$RSM_STAGE" "$rc" >&2
     fi
 }
 trap rsm_on_exit EXIT
@@ -93,7 +94,7 @@ rsm_ensure_debs() {
     fi
     rsm_info "Debian packages: installing ${missing[*]}"
     rsm_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -qq
-    rsm_as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" </dev/null
+    rsm_as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq -o Dpkg::Use-Pty=0 "${missing[@]}" </dev/null
 }
 
 # ---- Python venv -------------------------------------------------------------------
