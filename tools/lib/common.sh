@@ -26,6 +26,7 @@ rsm_section() { printf '\n==== %s ====\n' "$*"; }
 
 RSM_STAGE=""
 RSM_TIMINGS=()
+RSM_START=$(date +%s)
 
 # Reports which stage failed when a script exits non-zero (set -e keeps its
 # full effect inside stages because they are never run as a condition).
@@ -57,6 +58,7 @@ rsm_print_timings() {
     for t in "${RSM_TIMINGS[@]}"; do
         printf '%s\n' "$t"
     done
+    printf '%5ss  total so far\n' "$(($(date +%s) - RSM_START))"
 }
 
 rsm_require_cmd() {
@@ -138,14 +140,15 @@ rsm_setup() {
 
 # rsm_cmake_configure DIR [CMAKE ARGS...]: configures DIR (relative to the
 # source root) with Ninja, unless it is already configured from this source
-# tree with exactly these arguments; ninja itself re-runs CMake when a
+# tree with exactly these arguments (and CMAKE_PREFIX_PATH); ninja itself re-runs CMake when a
 # CMakeLists.txt changes. A build directory made by another generator or from
 # another source tree is wiped first.
 rsm_cmake_configure() {
     local dir="$RSM_ROOT/$1" stamp want cache home gen
     shift
     stamp="$dir/.rsm-configure-args"
-    want=$(printf '%s\n' "$@")
+    # CMAKE_PREFIX_PATH from the environment decides which Unity is found.
+    want=$(printf '%s\n' "$@" "env CMAKE_PREFIX_PATH=${CMAKE_PREFIX_PATH:-}")
     cache="$dir/CMakeCache.txt"
     if [ -f "$cache" ]; then
         home=$(sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$cache")
