@@ -18,11 +18,6 @@ int32_t rsm_grid_cell_of(float v_m, float cell_m)
     return (int32_t)floorf(v_m / cell_m);
 }
 
-int rsm_window_contains(const rsm_window_t *w, int32_t gx, int32_t gy)
-{
-    return (uint32_t)(gx - w->ox) < (uint32_t)RSM_MAP_SIZE && (uint32_t)(gy - w->oy) < (uint32_t)RSM_MAP_SIZE;
-}
-
 void rsm_image_clear(rsm_image_t *img)
 {
     size_t k;

@@ -33,26 +33,43 @@ uint32_t rsm_harris_patch_image(const void *ctx, int32_t gx, int32_t gy)
     return patch;
 }
 
-static int32_t px(uint32_t patch, int32_t dx, int32_t dy)
-{
-    return (int32_t)((patch >> (uint32_t)((dy + 2) * 5 + (dx + 2))) & 1u);
-}
-
 int32_t rsm_harris_response(const rsm_harris_config_t *cfg, uint32_t patch)
 {
     static const int32_t w[3] = {1, 2, 1};
+    int32_t p[5][5];
+    int32_t sv[3][5]; /* vertical 1-2-1 smoothing of rows 1..3 */
+    int32_t sh[5][3]; /* horizontal 1-2-1 smoothing of columns 1..3 */
     int32_t sxx = 0;
     int32_t syy = 0;
     int32_t sxy = 0;
-    int32_t dy;
-    int32_t dx;
-    for (dy = -1; dy <= 1; ++dy) {
-        for (dx = -1; dx <= 1; ++dx) {
-            const int32_t ix = (px(patch, dx + 1, dy - 1) + 2 * px(patch, dx + 1, dy) + px(patch, dx + 1, dy + 1))
-                               - (px(patch, dx - 1, dy - 1) + 2 * px(patch, dx - 1, dy) + px(patch, dx - 1, dy + 1));
-            const int32_t iy = (px(patch, dx - 1, dy + 1) + 2 * px(patch, dx, dy + 1) + px(patch, dx + 1, dy + 1))
-                               - (px(patch, dx - 1, dy - 1) + 2 * px(patch, dx, dy - 1) + px(patch, dx + 1, dy - 1));
-            const int32_t wt = w[dx + 1] * w[dy + 1];
+    int32_t x;
+    int32_t y;
+    if (patch == 0u) {
+        return 0; /* nothing occupied: no structure at all */
+    }
+    for (y = 0; y < 5; ++y) {
+        for (x = 0; x < 5; ++x) {
+            p[y][x] = (int32_t)((patch >> (uint32_t)(y * 5 + x)) & 1u);
+        }
+    }
+    /* Sobel = 1-2-1 smoothing across the derivative direction, then a
+     * central difference; smoothing once shares work between the nine
+     * window pixels. */
+    for (y = 1; y <= 3; ++y) {
+        for (x = 0; x < 5; ++x) {
+            sv[y - 1][x] = p[y - 1][x] + 2 * p[y][x] + p[y + 1][x];
+        }
+    }
+    for (y = 0; y < 5; ++y) {
+        for (x = 1; x <= 3; ++x) {
+            sh[y][x - 1] = p[y][x - 1] + 2 * p[y][x] + p[y][x + 1];
+        }
+    }
+    for (y = 1; y <= 3; ++y) {
+        for (x = 1; x <= 3; ++x) {
+            const int32_t ix = sv[y - 1][x + 1] - sv[y - 1][x - 1];
+            const int32_t iy = sh[y + 1][x - 1] - sh[y - 1][x - 1];
+            const int32_t wt = w[x - 1] * w[y - 1];
             sxx += wt * ix * ix;
             syy += wt * iy * iy;
             sxy += wt * ix * iy;

@@ -133,10 +133,25 @@ typedef struct map_src {
 static uint32_t patch_map(const void *ctx, int32_t gx, int32_t gy)
 {
     const map_src_t *src = (const map_src_t *)ctx;
+    const rsm_window_t *w = &src->map->win;
     uint32_t patch = 0;
     uint32_t bit = 0;
     int32_t dy;
     int32_t dx;
+    if (rsm_window_contains(w, gx - 2, gy - 2) && rsm_window_contains(w, gx + 2, gy + 2)) {
+        /* Whole patch inside the window: index storage directly. */
+        const uint32_t m = (uint32_t)RSM_MAP_SIZE - 1u;
+        for (dy = -2; dy <= 2; ++dy) {
+            const uint32_t row = ((uint32_t)(gy + dy) & m) << RSM_MAP_SIZE_LOG2;
+            for (dx = -2; dx <= 2; ++dx) {
+                if (src->map->hits[row | ((uint32_t)(gx + dx) & m)] >= src->min_hits) {
+                    patch |= 1u << bit;
+                }
+                ++bit;
+            }
+        }
+        return patch;
+    }
     for (dy = -2; dy <= 2; ++dy) {
         for (dx = -2; dx <= 2; ++dx) {
             if (rsm_map_hits(src->map, gx + dx, gy + dy) >= src->min_hits) {

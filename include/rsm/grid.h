@@ -63,7 +63,10 @@ typedef struct rsm_image {
 int32_t rsm_grid_cell_of(float v_m, float cell_m);
 
 /* True if the global cell lies inside the window. */
-int rsm_window_contains(const rsm_window_t *w, int32_t gx, int32_t gy);
+static inline int rsm_window_contains(const rsm_window_t *w, int32_t gx, int32_t gy)
+{
+    return (uint32_t)(gx - w->ox) < (uint32_t)RSM_MAP_SIZE && (uint32_t)(gy - w->oy) < (uint32_t)RSM_MAP_SIZE;
+}
 
 /* Toroidal storage index of a global cell (the caller checks containment). */
 static inline uint32_t rsm_window_index(int32_t gx, int32_t gy)
