@@ -352,14 +352,24 @@ static void reject_candidate(rsm_lms_parser_t *p)
     p->pos = p->head;
 }
 
-/* Examines the byte at pos (pos < wr). Returns the event type published,
- * RSM_LMS_EVENT_NONE if none. */
+/* Publishes a one-byte ACK or NAK event. */
+static rsm_lms_event_type_t publish_byte(rsm_lms_event_t *out, rsm_lms_event_type_t type)
+{
+    clear_event(out);
+    out->type = type;
+    return type;
+}
+
+/* Examines the byte at pos (pos < wr) as byte number pos - head of the
+ * candidate (0 while hunting). Returns the event type published, or
+ * RSM_LMS_EVENT_NONE. */
 static rsm_lms_event_type_t examine(rsm_lms_parser_t *p, rsm_lms_event_t *out)
 {
     const size_t have = p->pos - p->head; /* candidate bytes before this one */
     const uint8_t b = p->buf[p->pos];
+    size_t field;
 
-    if (have == 0u) {
+    if (have == 0u) { /* hunting */
         p->pos++;
         if (b == RSM_LMS_STX) {
             return RSM_LMS_EVENT_NONE; /* candidate started */
@@ -367,56 +377,46 @@ static rsm_lms_event_type_t examine(rsm_lms_parser_t *p, rsm_lms_event_t *out)
         p->head = p->pos;
         if (b == RSM_LMS_ACK) {
             p->stats.acks++;
-            clear_event(out);
-            out->type = RSM_LMS_EVENT_ACK;
-            return RSM_LMS_EVENT_ACK;
+            return publish_byte(out, RSM_LMS_EVENT_ACK);
         }
         if (b == RSM_LMS_NAK) {
             p->stats.naks++;
-            clear_event(out);
-            out->type = RSM_LMS_EVENT_NAK;
-            return RSM_LMS_EVENT_NAK;
+            return publish_byte(out, RSM_LMS_EVENT_NAK);
         }
         p->stats.bytes_skipped++;
         return RSM_LMS_EVENT_NONE;
     }
-    if (have == 1u) {
-        if ((b & RSM_LMS_REPLY_ADR) == 0u) {
-            reject_candidate(p); /* not a reply address: STX was noise */
-        } else {
-            p->pos++;
-        }
+    if (have == 1u && (b & RSM_LMS_REPLY_ADR) == 0u) {
+        reject_candidate(p); /* not a reply address: the STX was noise */
         return RSM_LMS_EVENT_NONE;
     }
     p->pos++;
-    if (have == 2u) {
-        return RSM_LMS_EVENT_NONE; /* LEN low byte */
+    if (have < 3u) {
+        return RSM_LMS_EVENT_NONE; /* ADR or LEN low byte */
     }
-    {
-        const size_t field = get_u16(p->buf + p->head + 2);
-        if (have == 3u) {
-            if (field == 0u || field > LMS_MAX_LEN) {
-                p->stats.bad_length++;
-                reject_candidate(p);
-            }
-            return RSM_LMS_EVENT_NONE;
-        }
-        if (have + 1u < field + RSM_LMS_OVERHEAD) {
-            return RSM_LMS_EVENT_NONE; /* more to come */
-        }
-        /* The candidate is complete: have + 1 == LEN + 6. */
-        if (!frame_crc_ok(p->buf + p->head, field + RSM_LMS_OVERHEAD)) {
-            p->stats.crc_errors++;
+    field = get_u16(p->buf + p->head + 2);
+    if (have == 3u) {
+        if (field == 0u || field > LMS_MAX_LEN) {
+            p->stats.bad_length++;
             reject_candidate(p);
-            return RSM_LMS_EVENT_NONE;
         }
-        p->stats.telegrams_ok++;
-        clear_event(out);
-        out->type = RSM_LMS_EVENT_TELEGRAM;
-        make_view(p->buf + p->head, field + RSM_LMS_OVERHEAD, &out->telegram);
-        p->head = p->pos;
-        return RSM_LMS_EVENT_TELEGRAM;
+        return RSM_LMS_EVENT_NONE;
     }
+    if (have + 1u < field + RSM_LMS_OVERHEAD) {
+        return RSM_LMS_EVENT_NONE; /* more to come */
+    }
+    /* complete: LEN + 6 bytes from head */
+    if (!frame_crc_ok(p->buf + p->head, field + RSM_LMS_OVERHEAD)) {
+        p->stats.crc_errors++;
+        reject_candidate(p);
+        return RSM_LMS_EVENT_NONE;
+    }
+    p->stats.telegrams_ok++;
+    clear_event(out);
+    out->type = RSM_LMS_EVENT_TELEGRAM;
+    make_view(p->buf + p->head, field + RSM_LMS_OVERHEAD, &out->telegram);
+    p->head = p->pos;
+    return RSM_LMS_EVENT_TELEGRAM;
 }
 
 /* Empties the buffer indices when nothing is held, and moves the held bytes

@@ -301,8 +301,9 @@ int rsm_lms_parser_init(rsm_lms_parser_t *p);
  * telegram hidden inside or behind a corrupted one is still found. No byte
  * is ever read or written outside p->buf or data[0..len).
  *
- * ACK/NAK: a 0x06 or 0x15 byte met while hunting (never inside a candidate)
- * is reported as an ACK or NAK event and counted. The receiver cannot tell
+ * ACK/NAK: a 0x06 or 0x15 byte met while hunting (never inside a candidate,
+ * but possibly among the bytes re-examined after a rejected candidate) is
+ * reported as an ACK or NAK event and counted. The receiver cannot tell
  * such a byte from line noise of the same value; it only means something
  * while the driver awaits the answer to a request, so the driver decides
  * (e.g. ignores ACK/NAK events in streaming mode).

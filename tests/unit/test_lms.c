@@ -1481,8 +1481,8 @@ void test_rsm_lms_parser_flush_should_drop_held_bytes_as_skipped(void)
     TEST_ASSERT_EQUAL_INT(RSM_LMS_EVENT_TELEGRAM, ev.type);
 }
 
-/* Builds a stream: prefix, then LEN field value `field`, then a good
- * telegram, and checks the exact counters. */
+/* Builds a stream: STX, reply ADR and the LEN field value `field`, then a
+ * good telegram. Returns its length. */
 static size_t bad_len_stream(uint8_t *s, uint16_t field)
 {
     s[0] = 0x02;
@@ -1589,8 +1589,8 @@ void test_rsm_lms_parser_feed_should_find_a_largest_telegram_inside_a_failed_can
     }
 }
 
-/* Flips every bit of telegram tl in turn, follows it with enough copies of
- * good to complete any candidate, and checks against the reference. */
+/* Flips every bit of tele in turn, follows it with enough copies of good to
+ * complete any candidate, and checks the receiver against the reference. */
 static void check_every_bit_flip(const uint8_t *tele, size_t tl, const uint8_t *good,
                                  size_t gl)
 {
