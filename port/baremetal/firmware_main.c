@@ -20,6 +20,8 @@
 #include <stdint.h>
 
 #include "rsm/hal.h"
+#include "rsm/lms.h"
+#include "rsm/localizer.h"
 #include "rsm/status.h"
 #include "tick_clock.h"
 #include "uart_ring.h"
@@ -74,9 +76,13 @@ static struct fw_stats {
     uint32_t laser_overflows;
 } fw_stats;
 
-/* >>> RSM_FIRMWARE_STATE: driver and localizer state goes here, e.g.
- *     static rsm_aria_t fw_robot;  static rsm_lms_t fw_laser;
- *     static rsm_localizer_t fw_localizer;  (with their static const configs) */
+/* The localizer and the laser telegram decoder (the ARIA side and the full
+ * drivers come with the HAL drivers; the robot link is only drained now). */
+static rsm_localizer_config_t fw_loc_cfg;
+static rsm_localizer_t fw_localizer;
+static rsm_lms_parser_t fw_lms_parser;
+static rsm_lms_scan_t fw_lms_scan;
+static rsm_scan_t fw_scan;
 
 /* ---- board functions behind the HAL ---------------------------------------- */
 
@@ -181,6 +187,35 @@ static int fw_service_link(const rsm_link_t *link, uint32_t *byte_count)
     return n;
 }
 
+/* Decodes laser bytes; each full 0xB0 scan goes to the localizer. Scanner
+ * angles run 0..180 deg from the right; the robot frame has 0 ahead. */
+static void fw_feed_laser(size_t n, uint64_t now_us)
+{
+    size_t off = 0;
+    while (off < n) {
+        rsm_lms_event_t ev;
+        size_t used = 0;
+        const int got = rsm_lms_parser_feed(&fw_lms_parser, fw_chunk + off, n - off, &used, &ev);
+        off += used;
+        if (got <= 0) {
+            break;
+        }
+        if (ev.type == RSM_LMS_EVENT_TELEGRAM && ev.telegram.cmd == 0xB0u &&
+            rsm_lms_decode_b0(&ev.telegram, NULL, &fw_lms_scan) == RSM_OK && fw_lms_scan.step_cdeg != 0u) {
+            size_t i;
+            const float step = (float)fw_lms_scan.step_cdeg * (RSM_PI / 18000.0f);
+            const float start = (float)fw_lms_scan.start_cdeg * (RSM_PI / 18000.0f) - RSM_PI / 2.0f;
+            (void)rsm_scan_set_uniform(&fw_scan, fw_lms_scan.count, start, step);
+            for (i = 0; i < fw_lms_scan.count; ++i) {
+                /* Invalid readings carry 0 m, which the core drops and counts. */
+                fw_scan.range_m[i] = fw_lms_scan.reading[i].range_m;
+            }
+            fw_scan.stamp_us = now_us;
+            (void)rsm_localizer_scan(&fw_localizer, &fw_scan, NULL);
+        }
+    }
+}
+
 int main(void)
 {
     uint64_t now_us = 0u;
@@ -203,7 +238,16 @@ int main(void)
     (void)rsm_link_set_baud(&fw_laser_link, 9600u);
 
     /* >>> RSM_FIRMWARE_INIT: initialise the drivers on fw_robot_link and
-     *     fw_laser_link with fw_clock, and the localizer, here. */
+     *     fw_laser_link with fw_clock here. */
+    {
+        const rsm_pose_t start = {0.0f, 0.0f, 0.0f};
+        fw_loc_cfg = rsm_localizer_config_default();
+        if (rsm_localizer_init(&fw_localizer, &fw_loc_cfg, &start, NULL) != RSM_OK ||
+            rsm_lms_parser_init(&fw_lms_parser) != RSM_OK) {
+            for (;;) {
+            }
+        }
+    }
 
     for (;;) {
         int moved = 0;
@@ -215,7 +259,11 @@ int main(void)
          *     poll functions (they read the links themselves), then feed
          *     odometry and scans to the localizer at now_us. */
         moved += fw_service_link(&fw_robot_link, &fw_stats.robot_bytes);
-        moved += fw_service_link(&fw_laser_link, &fw_stats.laser_bytes);
+        {
+            const int n = fw_service_link(&fw_laser_link, &fw_stats.laser_bytes);
+            fw_feed_laser((size_t)n, now_us);
+            moved += n;
+        }
 
         fw_stats.robot_overflows = rsm_uart_ring_overflows(&fw_robot_rx);
         fw_stats.laser_overflows = rsm_uart_ring_overflows(&fw_laser_rx);
