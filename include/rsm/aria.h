@@ -213,7 +213,8 @@ typedef struct rsm_aria_parser_stats {
 } rsm_aria_parser_stats_t;
 
 /* Incremental receiver. Initialise with rsm_aria_parser_init; the fields
- * other than stats are private. About 270 bytes. */
+ * other than stats are private. About 300 bytes, no pointers kept, so it
+ * may be copied or placed anywhere. */
 typedef struct rsm_aria_parser {
     rsm_aria_parser_stats_t stats;    /* public, read-only for the caller */
     uint8_t buf[RSM_ARIA_MAX_PACKET]; /* held bytes; a candidate starts at buf[0] */
@@ -369,21 +370,32 @@ int rsm_aria_encode_raw(uint8_t id, const uint8_t *payload, size_t len, uint8_t 
 int rsm_aria_encode(uint8_t cmd, rsm_aria_arg_kind_t kind, int32_t value, const char *str,
                     size_t str_len, uint8_t *out, size_t cap);
 
-/* Shorthands of rsm_aria_encode for the three argument kinds. */
+/* rsm_aria_encode with kind NONE: the command byte only (6 bytes). */
 int rsm_aria_encode_none(uint8_t cmd, uint8_t *out, size_t cap);
+/* rsm_aria_encode with kind INT: value in [-32767, 32767] (9 bytes). */
 int rsm_aria_encode_int(uint8_t cmd, int32_t value, uint8_t *out, size_t cap);
+/* rsm_aria_encode with kind STR: str_len <= 197 bytes (str_len + 9 bytes). */
 int rsm_aria_encode_str(uint8_t cmd, const char *str, size_t str_len, uint8_t *out, size_t cap);
 
 /* Handshake and session. SYNC0 is byte-identical to PULSE, SYNC1 to the
  * bare OPEN, SYNC2 to the bare CLOSE. The _int1 forms carry int 1, as
- * ARIA sends them; the bare forms are the manual's. */
+ * ARIA sends them; the bare forms are the manual's (both are accepted by
+ * ARCOS as far as the sources show). */
+/* SYNC0, first handshake step: FA FB 03 00 00 00. */
 int rsm_aria_encode_sync0(uint8_t *out, size_t cap);
+/* SYNC1, second handshake step: FA FB 03 01 00 01. */
 int rsm_aria_encode_sync1(uint8_t *out, size_t cap);
+/* SYNC2, third handshake step; the reply carries name, class, subclass. */
 int rsm_aria_encode_sync2(uint8_t *out, size_t cap);
+/* PULSE: keep-alive that resets the robot's watchdog; no argument. */
 int rsm_aria_encode_pulse(uint8_t *out, size_t cap);
+/* OPEN without an argument (manual form): start the SIP stream. */
 int rsm_aria_encode_open(uint8_t *out, size_t cap);
+/* OPEN with int 1 (ARIA's form). */
 int rsm_aria_encode_open_int1(uint8_t *out, size_t cap);
+/* CLOSE without an argument (manual form): end the session. */
 int rsm_aria_encode_close(uint8_t *out, size_t cap);
+/* CLOSE with int 1 (ARIA's form). */
 int rsm_aria_encode_close_int1(uint8_t *out, size_t cap);
 
 /* ENABLE 1 when on is non-zero (motors on), ENABLE 0 otherwise. */
@@ -483,6 +495,9 @@ int rsm_aria_parser_feed(rsm_aria_parser_t *p, const uint8_t *data, size_t len, 
  * them and abandons, as truncated, any further candidate they leave
  * incomplete, so bytes from before the silence never join bytes from
  * after it.
+ * If the caller stopped calling rsm_aria_parser_feed after a 1, before a
+ * 0, the held bytes have not all been examined yet: they are only marked
+ * final and any abandonment is counted by the next feed call.
  * Returns 1 if a candidate was counted as truncated, 0 otherwise,
  * RSM_ERR_INVAL if p is NULL. Same reentrancy as rsm_aria_parser_feed. */
 int rsm_aria_parser_timeout(rsm_aria_parser_t *p);

@@ -749,6 +749,9 @@ void test_encode_should_reject_out_of_range_command_arguments(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_aria_encode_setv(-1, buf, sizeof(buf)));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_aria_encode_setrv(-1, buf, sizeof(buf)));
     TEST_ASSERT_EQUAL_INT(9, rsm_aria_encode_setv(0, buf, sizeof(buf)));
+    TEST_ASSERT_EQUAL_INT(9, rsm_aria_encode_setrv(100, buf, sizeof(buf)));
+    TEST_ASSERT_EQUAL_HEX8(RSM_ARIA_CMD_SETRV, buf[3]);
+    TEST_ASSERT_EQUAL_HEX8(100u, buf[5]);
     TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_aria_encode_hostbaud(5u, buf, sizeof(buf)));
     TEST_ASSERT_EQUAL_INT(9, rsm_aria_encode_hostbaud(4u, buf, sizeof(buf)));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_aria_encode_vel2(128, 0, buf, sizeof(buf)));
@@ -1967,6 +1970,16 @@ void test_decode_config_should_cut_long_strings_and_keep_later_fields(void)
     TEST_ASSERT_EQUAL_UINT8(100u, c.sip_cycle);
     TEST_ASSERT_EQUAL_UINT16(2000u, c.watchdog);
     TEST_ASSERT_EQUAL_UINT16(128u, c.ticks_mm);
+    /* A firmware string too long for its array, ended by the payload end. */
+    len = required + 2u;
+    memset(payload + len, 'f', RSM_ARIA_STR_SIZE + 5u);
+    len += RSM_ARIA_STR_SIZE + 5u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_packet_build(&pkt, 0x20u, payload, len));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_decode_config(&pkt, &c));
+    TEST_ASSERT_EQUAL_UINT32(RSM_ARIA_STR_SIZE - 1u, (uint32_t)strlen(c.firmware));
+    TEST_ASSERT_EQUAL_HEX8(0x18u, c.truncated);
+    TEST_ASSERT_EQUAL_HEX32(RSM_ARIA_CONFIG_HAS_SHUTDOWN_VOLTS | RSM_ARIA_CONFIG_HAS_FIRMWARE,
+                            c.present);
     /* A required string without its NUL. */
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_packet_build(&pkt, 0x20u, payload, 5u));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_aria_decode_config(&pkt, &c));
