@@ -33,10 +33,10 @@
 #define RSM_MAP_SIZE_LOG2 7
 #endif
 
-/* Cells a single reading may mark in the scan image (1 with the sigma rule,
- * up to 4 when every cell the sigma circle touches is marked). */
-#ifndef RSM_CELLS_PER_BEAM
-#define RSM_CELLS_PER_BEAM 4
+/* Set cells listed per scan image (work and clearing follow this list;
+ * extra cells are still drawn). 4 bytes each. */
+#ifndef RSM_IMAGE_MAX_CELLS
+#define RSM_IMAGE_MAX_CELLS (2 * RSM_MAX_BEAMS)
 #endif
 
 /* ---- key points and matches ------------------------------------------- */
@@ -47,10 +47,10 @@
 #endif
 
 /* Harris candidates examined per image before the strongest are kept
- * (occupied cells and their neighbours). 8 bytes each, on the stack of
- * the detector's caller-owned workspace. */
+ * (occupied cells near the scan). 8 bytes each, in the detector's
+ * caller-owned workspace. */
 #ifndef RSM_MAX_CANDIDATES
-#define RSM_MAX_CANDIDATES 1024
+#define RSM_MAX_CANDIDATES 768
 #endif
 
 /* Tentative correspondences between reference and current key points.
@@ -93,7 +93,7 @@ RSM_STATIC_ASSERT(map_size_range, RSM_MAP_SIZE_LOG2 >= 4 && RSM_MAP_SIZE_LOG2 <=
 RSM_STATIC_ASSERT(keypoints_fit_grid, RSM_MAX_KEYPOINTS >= 2 && RSM_MAX_KEYPOINTS <= RSM_MAP_CELLS);
 RSM_STATIC_ASSERT(candidates_hold_keypoints, RSM_MAX_CANDIDATES >= RSM_MAX_KEYPOINTS);
 RSM_STATIC_ASSERT(matches_positive, RSM_MAX_MATCHES >= 2);
-RSM_STATIC_ASSERT(cells_per_beam_range, RSM_CELLS_PER_BEAM >= 1 && RSM_CELLS_PER_BEAM <= 4);
+RSM_STATIC_ASSERT(image_cells_positive, RSM_IMAGE_MAX_CELLS >= RSM_MAX_BEAMS);
 RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
 RSM_STATIC_ASSERT(lms_telegram_size, RSM_LMS_MAX_TELEGRAM >= 812);
 

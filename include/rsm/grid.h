@@ -1,0 +1,118 @@
+/* The grid: world points -> a binary image of cells of side a (eqs 6-9).
+ *
+ * Cells are indexed globally with floor(x / a) (not C's truncating cast,
+ * which would make the cells either side of zero one cell too wide). Images
+ * live in a square window of RSM_MAP_SIZE cells whose lower-left global cell
+ * is (ox, oy); storage is toroidal (cell (gx, gy) lives at bit
+ * (gx mod N) + N (gy mod N)), so the window scrolls with the robot without
+ * moving any memory. Only cells inside the window are ever stored. */
+#ifndef RSM_GRID_H
+#define RSM_GRID_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/config.h"
+#include "rsm/geom.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* How a reading near a cell border is treated (DESIGN.md, step 2). */
+typedef enum rsm_grid_rule {
+    RSM_GRID_SIGMA_INSIDE = 0, /* paper: mark only if the point is >= sigma inside its cell */
+    RSM_GRID_SIGMA_TOUCH = 1,  /* mark every cell the sigma circle touches (1 to 4) */
+    RSM_GRID_NEAREST = 2       /* mark the cell the point falls in */
+} rsm_grid_rule_t;
+
+typedef struct rsm_grid_config {
+    float cell_m;          /* a: cell side, metres; default 0.05 (the paper's 50 mm) */
+    float sigma_m;         /* laser range noise, metres; default 0.005 (the paper's 5 mm) */
+    rsm_grid_rule_t rule;  /* default RSM_GRID_SIGMA_TOUCH */
+} rsm_grid_config_t;
+
+rsm_grid_config_t rsm_grid_config_default(void);
+
+/* The window: global cell of its lower-left corner. */
+typedef struct rsm_window {
+    int32_t ox;
+    int32_t oy;
+} rsm_window_t;
+
+/* A cell's global index. */
+typedef struct rsm_cell {
+    int32_t gx;
+    int32_t gy;
+} rsm_cell_t;
+
+#define RSM_BITMAP_WORDS (RSM_MAP_CELLS / 32)
+
+/* A binary image over the window, with the list of its set cells so that
+ * work (and clearing) costs grow with occupied cells, not with image area.
+ * RAM: RSM_MAP_CELLS / 8 + 4 * RSM_IMAGE_MAX_CELLS bytes. */
+typedef struct rsm_image {
+    uint32_t bits[RSM_BITMAP_WORDS];
+    uint32_t cells[RSM_IMAGE_MAX_CELLS]; /* toroidal indices of the set cells */
+    size_t count;          /* set cells listed in cells[] */
+    uint32_t outside;      /* points that fell outside the window (last mark call) */
+    uint32_t overflow;     /* cells not listed because cells[] was full */
+} rsm_image_t;
+
+/* Global cell of a coordinate: floor(v / a). */
+int32_t rsm_grid_cell_of(float v_m, float cell_m);
+
+/* True if the global cell lies inside the window. */
+static inline int rsm_window_contains(const rsm_window_t *w, int32_t gx, int32_t gy)
+{
+    return (uint32_t)(gx - w->ox) < (uint32_t)RSM_MAP_SIZE && (uint32_t)(gy - w->oy) < (uint32_t)RSM_MAP_SIZE;
+}
+
+/* Toroidal storage index of a global cell (the caller checks containment). */
+static inline uint32_t rsm_window_index(int32_t gx, int32_t gy)
+{
+    const uint32_t m = (uint32_t)RSM_MAP_SIZE - 1u;
+    return ((uint32_t)gx & m) | (((uint32_t)gy & m) << RSM_MAP_SIZE_LOG2);
+}
+
+/* Global cell of a toroidal index inside window w. */
+static inline rsm_cell_t rsm_window_cell(const rsm_window_t *w, uint32_t index)
+{
+    const uint32_t m = (uint32_t)RSM_MAP_SIZE - 1u;
+    rsm_cell_t c;
+    c.gx = w->ox + (int32_t)(((index & m) - (uint32_t)w->ox) & m);
+    c.gy = w->oy + (int32_t)(((index >> RSM_MAP_SIZE_LOG2) - (uint32_t)w->oy) & m);
+    return c;
+}
+
+/* Empties an image. Cost: O(listed cells). */
+void rsm_image_clear(rsm_image_t *img);
+
+/* Clears every bit (use once after declaring an image). Cost: O(window). */
+void rsm_image_reset(rsm_image_t *img);
+
+/* Reads a cell: 1 if set, 0 if clear or outside the window. */
+static inline int rsm_image_get(const rsm_image_t *img, const rsm_window_t *w, int32_t gx, int32_t gy)
+{
+    uint32_t i;
+    if ((uint32_t)(gx - w->ox) >= (uint32_t)RSM_MAP_SIZE || (uint32_t)(gy - w->oy) >= (uint32_t)RSM_MAP_SIZE) {
+        return 0;
+    }
+    i = rsm_window_index(gx, gy);
+    return (int)((img->bits[i >> 5] >> (i & 31u)) & 1u);
+}
+
+/* Sets a cell inside the window and lists it; returns 1 if it was newly set,
+ * 0 if already set or outside the window (counted in outside). */
+int rsm_image_set(rsm_image_t *img, const rsm_window_t *w, int32_t gx, int32_t gy);
+
+/* Marks the cells of n world-frame points under the grid rule (appends to
+ * what is already set). Returns the number of newly set cells. */
+size_t rsm_image_mark_points(rsm_image_t *img, const rsm_window_t *w, const rsm_grid_config_t *cfg,
+                             const rsm_point_t *pts, size_t n);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_GRID_H */

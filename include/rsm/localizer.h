@@ -1,0 +1,166 @@
+/* The pipeline: odometry prediction, then per scan grid image -> Harris key
+ * points -> tentative matches -> RANSAC pose -> EKF update -> map. The
+ * method switch also runs the ICP baseline or odometry alone through the
+ * same filter and map, so all three are compared on equal terms.
+ *
+ * All state is caller-owned (rsm_localizer_t, about 55 KiB with the default
+ * config.h; see docs/ for the breakdown). Two localizers never interfere.
+ * Not reentrant for one state; no function blocks or allocates. */
+#ifndef RSM_LOCALIZER_H
+#define RSM_LOCALIZER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/config.h"
+#include "rsm/ekf.h"
+#include "rsm/geom.h"
+#include "rsm/grid.h"
+#include "rsm/harris.h"
+#include "rsm/icp.h"
+#include "rsm/map.h"
+#include "rsm/match.h"
+#include "rsm/odometry.h"
+#include "rsm/ransac.h"
+#include "rsm/scan.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum rsm_method {
+    RSM_METHOD_RSM = 0,      /* robust scan matching (this library's method) */
+    RSM_METHOD_ICP = 1,      /* the paper's baseline: point-to-point ICP, scan to scan */
+    RSM_METHOD_ODOMETRY = 2  /* dead reckoning only */
+} rsm_method_t;
+
+/* What a scan did to the estimate. */
+typedef enum rsm_outcome {
+    RSM_SCAN_ACCEPTED = 0,       /* measurement fused */
+    RSM_SCAN_FIRST = 1,          /* first scan: started the map */
+    RSM_SCAN_ODOMETRY = 2,       /* method is odometry only */
+    RSM_SCAN_FEW_POINTS = 3,     /* too few usable readings */
+    RSM_SCAN_FEW_KEYPOINTS = 4,  /* too few key points in scan or reference */
+    RSM_SCAN_FEW_MATCHES = 5,    /* too few tentative matches */
+    RSM_SCAN_LOW_SUPPORT = 6,    /* RANSAC (or ICP) found no well-supported pose */
+    RSM_SCAN_JUMP = 7,           /* measured pose too far for the covariance */
+    RSM_SCAN_FILTER = 8,         /* EKF refused the update (singular) */
+    RSM_SCAN_OUT_OF_ORDER = 9,   /* timestamp went backwards: scan ignored */
+    RSM_SCAN_OUTCOMES = 10
+} rsm_outcome_t;
+
+/* Measurement noise model for the EKF update. */
+typedef enum rsm_noise_model {
+    RSM_NOISE_RESIDUAL = 0, /* from the match residuals, floored */
+    RSM_NOISE_FIXED = 1     /* the paper's (1 cell, 1 cell, 0.25 deg) */
+} rsm_noise_model_t;
+
+typedef struct rsm_localizer_config {
+    rsm_method_t method;
+    rsm_scan_limits_t limits;       /* usable range interval */
+    rsm_grid_config_t grid;         /* cell size and marking rule */
+    rsm_harris_config_t harris;
+    rsm_ransac_config_t ransac;
+    rsm_icp_config_t icp;
+    rsm_odometry_config_t odometry; /* geometry for ticks, and process noise */
+    uint8_t map_min_hits;           /* map cells with this many hits are occupied; default 1 */
+    uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
+    uint16_t min_points;            /* usable readings needed; default 20 */
+    uint16_t min_keypoints;         /* key points needed in each image; default 4 */
+    float match_window_m;           /* w of the +-w box; default 0.05 (one cell) */
+    float search_sigmas;            /* nearest-neighbour radius in predicted std devs; default 3 */
+    float search_min_m;             /* radius floor; default 0.15 */
+    float search_max_m;             /* radius cap; default 0.6 */
+    float gate_d2;                  /* Mahalanobis gate on the measured pose, 3 dof; default 16.27 (99.9%) */
+    rsm_noise_model_t noise;        /* default RSM_NOISE_RESIDUAL */
+    float r_min_xy_m;               /* residual model floors; default 0.003 m */
+    float r_min_theta_rad;          /* default 0.001 rad */
+    uint32_t refine_iterations;     /* Gauss-Newton steps aligning the points to the map after
+                                     * RANSAC (sub-cell accuracy); 0 = the paper's method only;
+                                     * default 10 */
+    uint8_t refine_saturation;      /* map hits that count as fully occupied; default 2 */
+    float refine_noise_scale;       /* scales the fit's covariance into R; default 10 */
+} rsm_localizer_config_t;
+
+rsm_localizer_config_t rsm_localizer_config_default(void);
+
+/* Diagnostics of the last scan. */
+typedef struct rsm_localizer_report {
+    rsm_outcome_t outcome;
+    rsm_pose_t pose;          /* estimate after this scan */
+    float cov[9];             /* its covariance, row-major */
+    rsm_pose_t measured;      /* scan-matching measurement (if one was made) */
+    uint32_t points;          /* usable readings */
+    uint32_t keypoints_cur;
+    uint32_t keypoints_ref;
+    uint32_t matches;
+    uint32_t inliers;
+    uint32_t iterations;      /* RANSAC hypotheses or ICP iterations */
+    float residual_m;         /* RMS residual of the accepted fit */
+    float mahalanobis_d2;     /* of the measurement against the prediction */
+} rsm_localizer_report_t;
+
+typedef struct rsm_localizer_counters {
+    uint32_t scans;                          /* scans offered */
+    uint32_t outcome[RSM_SCAN_OUTCOMES];     /* per outcome */
+    rsm_scan_drops_t drops;                  /* unusable readings by reason */
+    uint32_t motions;                        /* odometry increments applied */
+    uint32_t bad_motions;                    /* non-finite increments refused */
+} rsm_localizer_counters_t;
+
+typedef struct rsm_localizer {
+    const rsm_localizer_config_t *cfg;   /* kept by pointer */
+    rsm_ekf_t ekf;
+    rsm_odometry_t odo;
+    rsm_map_t map;
+    rsm_image_t image;                   /* current scan image */
+    rsm_image_t visited;                 /* reference candidates already listed */
+    rsm_harris_work_t harris;
+    rsm_ransac_t ransac;
+    rsm_icp_t icp;
+    rsm_cell_t cands[RSM_MAX_CANDIDATES];
+    rsm_keypoint_t kp_cur[RSM_MAX_KEYPOINTS];
+    rsm_keypoint_t kp_ref[RSM_MAX_KEYPOINTS];
+    rsm_point_t pt_cur[RSM_MAX_KEYPOINTS];
+    rsm_point_t pt_ref[RSM_MAX_KEYPOINTS];
+    rsm_match_t matches[RSM_MAX_MATCHES];
+    rsm_point_t pts[RSM_MAX_BEAMS];      /* usable readings, robot frame */
+    rsm_point_t world[RSM_MAX_BEAMS];    /* the same in the world frame */
+    uint64_t last_stamp_us;
+    uint8_t have_scan;
+    rsm_localizer_counters_t counters;
+    rsm_localizer_report_t last;
+} rsm_localizer_t;
+
+/* Validates cfg (and each module's part) and starts at pose x0 with
+ * covariance p0 (NULL: zero). Returns RSM_OK or RSM_ERR_INVAL. */
+int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, const rsm_pose_t *x0,
+                       const float p0[9]);
+
+/* Predicts with an odometry increment (robot frame at the step's start).
+ * Non-finite increments are refused with RSM_ERR_RANGE and counted. */
+int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u);
+
+/* Predicts from raw wheel encoder counters (see rsm_odometry_update_ticks);
+ * the first call only latches and returns RSM_ERR_AGAIN. */
+int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right);
+
+/* Processes one scan taken at the current predicted pose. Always fills
+ * *rep (may be NULL) and returns RSM_OK when the estimate is usable,
+ * whatever the outcome; rejected scans leave the prediction in place and say
+ * why in rep->outcome and the counters. Returns RSM_ERR_ORDER (scan ignored)
+ * when its timestamp is older than the previous scan's, RSM_ERR_INVAL for
+ * bad arguments or a count above RSM_MAX_BEAMS. */
+int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep);
+
+/* Current estimate. */
+rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc);
+
+/* Short name of an outcome, for logs ("accepted", "few_keypoints", ...). */
+const char *rsm_outcome_name(rsm_outcome_t o);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_LOCALIZER_H */

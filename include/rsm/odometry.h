@@ -1,0 +1,90 @@
+/* Differential-drive odometry: encoder tick deltas (or pose deltas from a log)
+ * to a motion increment, its noise, and the motion-model Jacobians.
+ *
+ * Motion increment u = (dx, dy, dtheta) is expressed in the robot frame at
+ * the start of the step; the new pose is pose (+) u. From wheel travel
+ * dL, dR (metres): dS = (dL + dR) / 2, dtheta = (dR - dL) / B (CCW positive;
+ * the paper's eq. 5 has a stray 1/2 and the opposite sign), and the chord of
+ * the arc is taken at the mid heading: dx = dS cos(dtheta/2),
+ * dy = dS sin(dtheta/2). */
+#ifndef RSM_ODOMETRY_H
+#define RSM_ODOMETRY_H
+
+#include <stdint.h>
+
+#include "rsm/geom.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct rsm_odometry_config {
+    float ticks_per_m_left;   /* encoder ticks per metre of tyre travel (TicksMM * 1000) */
+    float ticks_per_m_right;
+    float wheel_base_m;       /* B: effective track width, metres */
+    uint8_t counter_bits;     /* width of the hardware counters: 16..32 (32 for ARIA ENCODER) */
+    /* Process noise (standard deviations) of the increment: */
+    float sigma_trans_per_m;  /* m of translation error per m travelled */
+    float sigma_rot_per_rad;  /* rad of heading error per rad turned */
+    float sigma_rot_per_m;    /* rad of heading error per m travelled (drift) */
+    float sigma_trans_min_m;  /* floor on translation std per step */
+    float sigma_rot_min_rad;  /* floor on heading std per step */
+} rsm_odometry_config_t;
+
+/* P3-DX defaults: TicksMM 128 (calibrate), B = 0.357 m, 32-bit counters.
+ * Noise: 0.05 m/m, 0.05 rad/rad, 0.02 rad/m, floors 2 mm and 2 mrad. */
+rsm_odometry_config_t rsm_odometry_config_default(void);
+
+typedef struct rsm_odometry {
+    const rsm_odometry_config_t *cfg; /* kept by pointer: must outlive the state */
+    uint32_t last_left;
+    uint32_t last_right;
+    uint8_t have_last;
+    uint32_t steps;           /* increments produced */
+} rsm_odometry_t;
+
+typedef struct rsm_motion {
+    float dx;       /* m, robot frame at step start */
+    float dy;       /* m */
+    float dtheta;   /* rad, wrapped to (-pi, pi] */
+} rsm_motion_t;
+
+/* Validates cfg (positive geometry, 16 <= counter_bits <= 32, non-negative
+ * noise) and resets the state. Returns RSM_OK or RSM_ERR_INVAL. */
+int rsm_odometry_init(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg);
+
+/* Feeds raw counter values (only the low counter_bits are used). The first
+ * call only latches the counts and returns RSM_ERR_AGAIN with *out zeroed;
+ * later calls return RSM_OK and the increment since the previous call, with
+ * differences taken modulo 2^counter_bits (wrap-around safe). */
+int rsm_odometry_update_ticks(rsm_odometry_t *odo, uint32_t left, uint32_t right, rsm_motion_t *out);
+
+/* Increment from signed tick differences already computed by the caller
+ * (zero increment if cfg is NULL or has non-positive geometry). */
+rsm_motion_t rsm_odometry_from_ticks(const rsm_odometry_config_t *cfg, int32_t d_left, int32_t d_right);
+
+/* Increment between two odometry poses from a log: between(prev, cur). */
+rsm_motion_t rsm_odometry_from_poses(const rsm_pose_t *prev, const rsm_pose_t *cur);
+
+/* Applies an increment: returns pose (+) u. */
+rsm_pose_t rsm_odometry_apply(const rsm_pose_t *pose, const rsm_motion_t *u);
+
+/* Jacobians of pose (+) u at (pose, u): jv = d/d(pose), ju = d/d(u), both
+ * 3x3 row-major. */
+void rsm_odometry_jacobians(const rsm_pose_t *pose, const rsm_motion_t *u, float jv[9], float ju[9]);
+
+/* Diagonal process noise covariance Q (3x3 row-major, in increment space)
+ * that grows with |dS| and |dtheta| per the config, with |dS| taken as the
+ * chord |(dx, dy)|:
+ *   var_dx = var_dy = (sigma_trans_per_m |dS|)^2 + sigma_trans_min_m^2
+ *   var_dtheta = (sigma_rot_per_rad |dtheta|)^2 + (sigma_rot_per_m |dS|)^2
+ *                + sigma_rot_min_rad^2
+ * Translation noise is isotropic in the step frame. q untouched if any
+ * argument is NULL. */
+void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float q[9]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_ODOMETRY_H */

@@ -1,0 +1,60 @@
+/* One laser scan as the core consumes it: ranges and beam angles in the
+ * robot frame, with a timestamp. Filled by a driver, a log reader or a test. */
+#ifndef RSM_SCAN_H
+#define RSM_SCAN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/config.h"
+#include "rsm/geom.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct rsm_scan {
+    uint64_t stamp_us;               /* acquisition time, microseconds, monotonic */
+    size_t count;                    /* readings used, <= RSM_MAX_BEAMS */
+    float range_m[RSM_MAX_BEAMS];    /* metres; invalid readings may be any value */
+    float angle_rad[RSM_MAX_BEAMS];  /* beam direction in the robot frame, CCW positive */
+} rsm_scan_t;
+
+/* Why readings were not used (cumulative counters kept by the caller). */
+typedef struct rsm_scan_drops {
+    uint32_t nan;          /* NaN or infinite range */
+    uint32_t too_short;    /* <= min range (0 is the usual "no echo" code) */
+    uint32_t too_long;     /* >= max range (max-range "no return" readings) */
+} rsm_scan_drops_t;
+
+/* Range limits of a scan's usable readings, metres. */
+typedef struct rsm_scan_limits {
+    float min_range_m;     /* readings at or below are dropped; default 0.05 */
+    float max_range_m;     /* readings at or above are dropped; default 20 */
+} rsm_scan_limits_t;
+
+rsm_scan_limits_t rsm_scan_limits_default(void);
+
+/* Sets count readings at angles start + i * step (radians). Ranges are not
+ * touched. Returns RSM_OK, or RSM_ERR_NOMEM if count > RSM_MAX_BEAMS (scan
+ * unchanged). */
+int rsm_scan_set_uniform(rsm_scan_t *scan, size_t count, float start_rad, float step_rad);
+
+/* True if reading i is usable under the limits; otherwise counts why in
+ * drops (which may be NULL). False, counting nothing, if scan or lim is NULL
+ * or i >= scan->count. */
+int rsm_scan_reading_ok(const rsm_scan_t *scan, size_t i, const rsm_scan_limits_t *lim,
+                        rsm_scan_drops_t *drops);
+
+/* Converts the usable readings to points in the robot frame. Writes at most
+ * cap points into out (overwritten, not appended) and returns how many, or a
+ * negative status for bad arguments. Drops are counted into drops (may be
+ * NULL). Reentrant. */
+int rsm_scan_to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_point_t *out,
+                       size_t cap, rsm_scan_drops_t *drops);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_SCAN_H */

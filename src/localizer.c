@@ -1,0 +1,464 @@
+#include "rsm/localizer.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "rsm/status.h"
+
+rsm_localizer_config_t rsm_localizer_config_default(void)
+{
+    rsm_localizer_config_t c;
+    memset(&c, 0, sizeof c);
+    c.method = RSM_METHOD_RSM;
+    c.limits = rsm_scan_limits_default();
+    c.grid = rsm_grid_config_default();
+    c.harris = rsm_harris_config_default();
+    c.ransac = rsm_ransac_config_default();
+    c.icp = rsm_icp_config_default();
+    c.odometry = rsm_odometry_config_default();
+    /* Measured on the Intel log (tools/bench): heading drift dominates. */
+    c.odometry.sigma_rot_per_m = 0.2f;
+    c.map_min_hits = 1u;
+    c.map_on_reject = 1u;
+    c.min_points = 20u;
+    c.min_keypoints = 4u;
+    c.match_window_m = 0.05f;
+    c.search_sigmas = 3.0f;
+    c.search_min_m = 0.15f;
+    c.search_max_m = 0.6f;
+    c.gate_d2 = 16.27f;
+    c.noise = RSM_NOISE_RESIDUAL;
+    c.r_min_xy_m = 0.003f;
+    c.r_min_theta_rad = 0.001f;
+    c.refine_iterations = 10u;
+    c.refine_saturation = 2u;
+    c.refine_noise_scale = 10.0f;
+    return c;
+}
+
+const char *rsm_outcome_name(rsm_outcome_t o)
+{
+    switch (o) {
+    case RSM_SCAN_ACCEPTED: return "accepted";
+    case RSM_SCAN_FIRST: return "first";
+    case RSM_SCAN_ODOMETRY: return "odometry";
+    case RSM_SCAN_FEW_POINTS: return "few_points";
+    case RSM_SCAN_FEW_KEYPOINTS: return "few_keypoints";
+    case RSM_SCAN_FEW_MATCHES: return "few_matches";
+    case RSM_SCAN_LOW_SUPPORT: return "low_support";
+    case RSM_SCAN_JUMP: return "jump";
+    case RSM_SCAN_FILTER: return "filter";
+    case RSM_SCAN_OUT_OF_ORDER: return "out_of_order";
+    default: return "unknown";
+    }
+}
+
+int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, const rsm_pose_t *x0,
+                       const float p0[9])
+{
+    int rc;
+    if (loc == NULL || cfg == NULL || x0 == NULL || cfg->method > RSM_METHOD_ODOMETRY ||
+        !(cfg->limits.max_range_m > cfg->limits.min_range_m) || !(cfg->grid.cell_m > 0.0f) ||
+        !(cfg->grid.sigma_m >= 0.0f) || cfg->grid.sigma_m * 2.0f >= cfg->grid.cell_m || cfg->map_min_hits < 1u ||
+        cfg->min_points < 2u || cfg->min_keypoints < 2u || !(cfg->match_window_m >= 0.0f) ||
+        !(cfg->search_min_m > 0.0f) || !(cfg->search_max_m >= cfg->search_min_m) || !(cfg->gate_d2 >= 0.0f) ||
+        !(cfg->r_min_xy_m > 0.0f) || !(cfg->r_min_theta_rad > 0.0f) || cfg->noise > RSM_NOISE_FIXED ||
+        cfg->refine_saturation < 1u || !(cfg->refine_noise_scale > 0.0f)) {
+        return RSM_ERR_INVAL;
+    }
+    memset(loc, 0, sizeof *loc);
+    loc->cfg = cfg;
+    if ((rc = rsm_ekf_init(&loc->ekf, x0, p0)) != RSM_OK || (rc = rsm_odometry_init(&loc->odo, &cfg->odometry)) != RSM_OK ||
+        (rc = rsm_ransac_init(&loc->ransac, &cfg->ransac)) != RSM_OK || (rc = rsm_icp_init(&loc->icp, &cfg->icp)) != RSM_OK ||
+        (rc = rsm_map_init(&loc->map, cfg->grid.cell_m, x0->x, x0->y)) != RSM_OK) {
+        return rc;
+    }
+    rsm_image_reset(&loc->image);
+    rsm_image_reset(&loc->visited);
+    return RSM_OK;
+}
+
+int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
+{
+    float q[9];
+    if (loc == NULL || u == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (!isfinite(u->dx) || !isfinite(u->dy) || !isfinite(u->dtheta)) {
+        loc->counters.bad_motions++;
+        return RSM_ERR_RANGE;
+    }
+    rsm_odometry_noise(&loc->cfg->odometry, u, q);
+    rsm_ekf_predict(&loc->ekf, u, q);
+    loc->counters.motions++;
+    return RSM_OK;
+}
+
+int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right)
+{
+    rsm_motion_t u;
+    int rc;
+    if (loc == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    rc = rsm_odometry_update_ticks(&loc->odo, left, right, &u);
+    if (rc != RSM_OK) {
+        return rc;
+    }
+    return rsm_localizer_motion(loc, &u);
+}
+
+rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc)
+{
+    return loc->ekf.x;
+}
+
+static void to_world(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t n)
+{
+    const float c = cosf(pose->theta);
+    const float s = sinf(pose->theta);
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        loc->world[k].x = pose->x + c * loc->pts[k].x - s * loc->pts[k].y;
+        loc->world[k].y = pose->y + s * loc->pts[k].x + c * loc->pts[k].y;
+    }
+}
+
+/* Patch reader over the thresholded map. */
+typedef struct map_src {
+    const rsm_map_t *map;
+    uint8_t min_hits;
+} map_src_t;
+
+static uint32_t patch_map(const void *ctx, int32_t gx, int32_t gy)
+{
+    const map_src_t *src = (const map_src_t *)ctx;
+    const rsm_window_t *w = &src->map->win;
+    uint32_t patch = 0;
+    uint32_t bit = 0;
+    int32_t dy;
+    int32_t dx;
+    if (rsm_window_contains(w, gx - 2, gy - 2) && rsm_window_contains(w, gx + 2, gy + 2)) {
+        /* Whole patch inside the window: index storage directly. */
+        const uint32_t m = (uint32_t)RSM_MAP_SIZE - 1u;
+        for (dy = -2; dy <= 2; ++dy) {
+            const uint32_t row = ((uint32_t)(gy + dy) & m) << RSM_MAP_SIZE_LOG2;
+            for (dx = -2; dx <= 2; ++dx) {
+                if (src->map->hits[row | ((uint32_t)(gx + dx) & m)] >= src->min_hits) {
+                    patch |= 1u << bit;
+                }
+                ++bit;
+            }
+        }
+        return patch;
+    }
+    for (dy = -2; dy <= 2; ++dy) {
+        for (dx = -2; dx <= 2; ++dx) {
+            if (rsm_map_hits(src->map, gx + dx, gy + dy) >= src->min_hits) {
+                patch |= 1u << bit;
+            }
+            ++bit;
+        }
+    }
+    return patch;
+}
+
+/* Key points of the current image. */
+static size_t current_keypoints(rsm_localizer_t *loc)
+{
+    const rsm_window_t *w = &loc->map.win;
+    rsm_harris_image_src_t src;
+    size_t n = loc->image.count < RSM_MAX_CANDIDATES ? loc->image.count : RSM_MAX_CANDIDATES;
+    size_t k;
+    int got;
+    for (k = 0; k < n; ++k) {
+        loc->cands[k] = rsm_window_cell(w, loc->image.cells[k]);
+    }
+    src.img = &loc->image;
+    src.win = w;
+    got = rsm_harris_detect(&loc->cfg->harris, &loc->harris, rsm_harris_patch_image, &src, loc->cands, n,
+                            loc->kp_cur, RSM_MAX_KEYPOINTS, NULL);
+    return got > 0 ? (size_t)got : 0u;
+}
+
+/* Key points of the reference map near the current scan's cells: only map
+ * cells within radius cells of an occupied current cell are candidates. */
+static size_t reference_keypoints(rsm_localizer_t *loc, int32_t radius)
+{
+    const rsm_window_t *w = &loc->map.win;
+    const uint8_t min_hits = loc->cfg->map_min_hits;
+    map_src_t src;
+    size_t n = 0;
+    size_t k;
+    int got;
+    rsm_image_clear(&loc->visited);
+    for (k = 0; k < loc->image.count && n < RSM_MAX_CANDIDATES; ++k) {
+        const rsm_cell_t c = rsm_window_cell(w, loc->image.cells[k]);
+        int32_t dy;
+        int32_t dx;
+        for (dy = -radius; dy <= radius && n < RSM_MAX_CANDIDATES; ++dy) {
+            for (dx = -radius; dx <= radius && n < RSM_MAX_CANDIDATES; ++dx) {
+                if (rsm_map_hits(&loc->map, c.gx + dx, c.gy + dy) >= min_hits &&
+                    rsm_image_set(&loc->visited, w, c.gx + dx, c.gy + dy)) {
+                    loc->cands[n].gx = c.gx + dx;
+                    loc->cands[n].gy = c.gy + dy;
+                    ++n;
+                }
+            }
+        }
+    }
+    src.map = &loc->map;
+    src.min_hits = min_hits;
+    got = rsm_harris_detect(&loc->cfg->harris, &loc->harris, patch_map, &src, loc->cands, n, loc->kp_ref,
+                            RSM_MAX_KEYPOINTS, NULL);
+    return got > 0 ? (size_t)got : 0u;
+}
+
+/* Key point centres in metres relative to the predicted robot position. */
+static void keypoints_to_points(const rsm_keypoint_t *kp, size_t n, float a, const rsm_pose_t *origin,
+                                rsm_point_t *out)
+{
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        out[k].x = ((float)kp[k].gx + 0.5f) * a - origin->x;
+        out[k].y = ((float)kp[k].gy + 0.5f) * a - origin->y;
+    }
+}
+
+/* Measurement noise from the fit: residual spread over the inliers, with
+ * the angle's lever arm from how far the inliers spread around the robot. */
+static void measurement_noise(const rsm_localizer_config_t *cfg, float rms, uint32_t inliers, float spread2,
+                              float r[9])
+{
+    float sxy2;
+    float sth2;
+    memset(r, 0, 9 * sizeof r[0]);
+    if (cfg->noise == RSM_NOISE_FIXED) {
+        const float cell = cfg->grid.cell_m;
+        const float th = 0.25f * RSM_PI / 180.0f;
+        r[0] = cell * cell;
+        r[4] = cell * cell;
+        r[8] = th * th;
+        return;
+    }
+    {
+        const float quant = cfg->grid.cell_m * 0.2887f; /* a / sqrt(12): one cell's rounding */
+        const float e2 = rms * rms + quant * quant;
+        const float n = inliers > 2u ? (float)inliers - 2.0f : 1.0f;
+        sxy2 = e2 / n + cfg->r_min_xy_m * cfg->r_min_xy_m;
+        sth2 = e2 / (n * (spread2 > 0.01f ? spread2 : 0.01f)) + cfg->r_min_theta_rad * cfg->r_min_theta_rad;
+    }
+    r[0] = sxy2;
+    r[4] = sxy2;
+    r[8] = sth2;
+}
+
+/* R from the map fit: cost-scaled inverse information, floored. Falls back
+ * to the RANSAC-based r (unchanged) if the information is singular. */
+static void refined_noise(const rsm_localizer_config_t *cfg, const rsm_map_fit_t *fit, float r[9])
+{
+    float inv[9];
+    float s2;
+    size_t k;
+    if (cfg->noise == RSM_NOISE_FIXED || fit->used < 4u || rsm_mat3_inverse(fit->info, inv) != RSM_OK) {
+        return;
+    }
+    s2 = cfg->refine_noise_scale * fit->cost * (float)fit->used / (float)(fit->used - 3u);
+    for (k = 0; k < 9; ++k) {
+        r[k] = s2 * inv[k];
+    }
+    r[0] += cfg->r_min_xy_m * cfg->r_min_xy_m;
+    r[4] += cfg->r_min_xy_m * cfg->r_min_xy_m;
+    r[8] += cfg->r_min_theta_rad * cfg->r_min_theta_rad;
+}
+
+static float search_radius(const rsm_localizer_t *loc)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const float *p = loc->ekf.p;
+    /* Position std plus the heading std acting over a typical 3 m lever. */
+    const float sd = sqrtf((p[0] > p[4] ? p[0] : p[4])) + 3.0f * sqrtf(p[8]);
+    float r = cfg->search_sigmas * sd;
+    if (!(r >= cfg->search_min_m)) {
+        r = cfg->search_min_m;
+    }
+    if (r > cfg->search_max_m) {
+        r = cfg->search_max_m;
+    }
+    return r;
+}
+
+/* Fuses measurement z; returns the outcome. */
+static rsm_outcome_t fuse(rsm_localizer_t *loc, const rsm_pose_t *z, const float r[9], rsm_localizer_report_t *rep)
+{
+    float d2 = 0.0f;
+    int rc;
+    rep->measured = *z;
+    if (rsm_ekf_mahalanobis(&loc->ekf, z, r, &d2) != RSM_OK) {
+        return RSM_SCAN_FILTER;
+    }
+    rep->mahalanobis_d2 = d2;
+    rc = rsm_ekf_update(&loc->ekf, z, r, loc->cfg->gate_d2);
+    if (rc == RSM_ERR_RANGE) {
+        return RSM_SCAN_JUMP;
+    }
+    return rc == RSM_OK ? RSM_SCAN_ACCEPTED : RSM_SCAN_FILTER;
+}
+
+static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const float a = cfg->grid.cell_m;
+    const rsm_pose_t pred = loc->ekf.x;
+    rsm_ransac_result_t rr;
+    size_t nkc;
+    size_t nkr;
+    int nm;
+    float radius_m;
+    float r[9];
+    int32_t radius_cells;
+
+    (void)rsm_map_recenter(&loc->map, pred.x, pred.y);
+    to_world(loc, &pred, npts);
+    rsm_image_clear(&loc->image);
+    (void)rsm_image_mark_points(&loc->image, &loc->map.win, &cfg->grid, loc->world, npts);
+    if (!loc->have_scan) {
+        return RSM_SCAN_FIRST;
+    }
+    nkc = current_keypoints(loc);
+    rep->keypoints_cur = (uint32_t)nkc;
+    if (nkc < cfg->min_keypoints) {
+        return RSM_SCAN_FEW_KEYPOINTS;
+    }
+    radius_m = search_radius(loc);
+    radius_cells = (int32_t)ceilf(radius_m / a) + 1;
+    nkr = reference_keypoints(loc, radius_cells);
+    rep->keypoints_ref = (uint32_t)nkr;
+    if (nkr < cfg->min_keypoints) {
+        return RSM_SCAN_FEW_KEYPOINTS;
+    }
+    keypoints_to_points(loc->kp_cur, nkc, a, &pred, loc->pt_cur);
+    keypoints_to_points(loc->kp_ref, nkr, a, &pred, loc->pt_ref);
+    nm = rsm_match_tentative(loc->pt_ref, nkr, loc->pt_cur, nkc, radius_m, cfg->match_window_m, loc->matches,
+                             RSM_MAX_MATCHES, NULL);
+    rep->matches = nm > 0 ? (uint32_t)nm : 0u;
+    if (nm < 2 || (uint32_t)nm < cfg->ransac.min_support) {
+        return RSM_SCAN_FEW_MATCHES;
+    }
+    if (rsm_ransac_estimate(&loc->ransac, loc->pt_ref, loc->pt_cur, loc->matches, (size_t)nm, &rr) != RSM_OK) {
+        rep->inliers = rr.support;
+        rep->iterations = rr.iterations;
+        return RSM_SCAN_LOW_SUPPORT;
+    }
+    rep->inliers = rr.support;
+    rep->iterations = rr.iterations;
+    rep->residual_m = rr.rms_m;
+    {
+        /* The robot sits at the origin of the matching frame, so the
+         * corrected pose is T applied to it. */
+        float spread2 = 0.0f;
+        size_t k;
+        uint32_t cnt = 0;
+        rsm_pose_t z;
+        for (k = 0; k < (size_t)nm; ++k) {
+            if (loc->ransac.inlier[k]) {
+                const rsm_point_t *p = &loc->pt_cur[loc->matches[k].cur];
+                spread2 += p->x * p->x + p->y * p->y;
+                ++cnt;
+            }
+        }
+        spread2 = cnt > 0 ? spread2 / (float)cnt : 0.0f;
+        z.x = pred.x + rr.t.x;
+        z.y = pred.y + rr.t.y;
+        z.theta = rsm_wrap_angle(pred.theta + rr.t.theta);
+        measurement_noise(cfg, rr.rms_m, rr.support, spread2, r);
+        if (cfg->refine_iterations > 0u) {
+            rsm_map_fit_t fit;
+            if (rsm_map_align(&loc->map, loc->pts, npts, &z, cfg->refine_saturation, cfg->refine_iterations, &fit) ==
+                    RSM_OK &&
+                fit.iterations > 0u) {
+                z = fit.pose;
+                refined_noise(cfg, &fit, r);
+            }
+        }
+        return fuse(loc, &z, r, rep);
+    }
+}
+
+static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep)
+{
+    const rsm_pose_t pred = loc->ekf.x;
+    rsm_icp_result_t res;
+    float r[9];
+    int rc;
+    rsm_outcome_t out;
+    if (!loc->have_scan) {
+        return RSM_SCAN_FIRST;
+    }
+    rc = rsm_icp_align(&loc->icp, loc->pts, npts, &pred, &res);
+    rep->iterations = res.iterations;
+    rep->inliers = res.pairs;
+    if (rc != RSM_OK) {
+        return RSM_SCAN_LOW_SUPPORT;
+    }
+    rep->residual_m = res.rms_m;
+    measurement_noise(loc->cfg, res.rms_m, res.pairs, 4.0f, r);
+    out = fuse(loc, &res.pose, r, rep);
+    return out;
+}
+
+int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep)
+{
+    rsm_localizer_report_t local;
+    rsm_outcome_t outcome;
+    rsm_pose_t est;
+    size_t npts;
+    int n;
+    if (rep == NULL) {
+        rep = &local;
+    }
+    memset(rep, 0, sizeof *rep);
+    if (loc == NULL || scan == NULL || scan->count > RSM_MAX_BEAMS) {
+        return RSM_ERR_INVAL;
+    }
+    loc->counters.scans++;
+    if (loc->have_scan && scan->stamp_us < loc->last_stamp_us) {
+        loc->counters.outcome[RSM_SCAN_OUT_OF_ORDER]++;
+        rep->outcome = RSM_SCAN_OUT_OF_ORDER;
+        rep->pose = loc->ekf.x;
+        memcpy(rep->cov, loc->ekf.p, sizeof rep->cov);
+        return RSM_ERR_ORDER;
+    }
+    n = rsm_scan_to_points(scan, &loc->cfg->limits, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
+    npts = n > 0 ? (size_t)n : 0u;
+    rep->points = (uint32_t)npts;
+    if (npts < loc->cfg->min_points) {
+        outcome = RSM_SCAN_FEW_POINTS;
+    } else if (loc->cfg->method == RSM_METHOD_ODOMETRY) {
+        outcome = RSM_SCAN_ODOMETRY;
+    } else if (loc->cfg->method == RSM_METHOD_ICP) {
+        outcome = step_icp(loc, npts, rep);
+    } else {
+        outcome = step_rsm(loc, npts, rep);
+    }
+    est = loc->ekf.x;
+    if (npts >= loc->cfg->min_points) {
+        const int fused = outcome == RSM_SCAN_ACCEPTED || outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_ODOMETRY;
+        if (fused || loc->cfg->map_on_reject) {
+            (void)rsm_map_recenter(&loc->map, est.x, est.y);
+            to_world(loc, &est, npts);
+            (void)rsm_map_add_points(&loc->map, loc->world, npts);
+            if (loc->cfg->method == RSM_METHOD_ICP) {
+                (void)rsm_icp_set_reference(&loc->icp, loc->world, npts);
+            }
+        }
+        loc->have_scan = 1u;
+    }
+    loc->last_stamp_us = scan->stamp_us;
+    loc->counters.outcome[outcome]++;
+    rep->outcome = outcome;
+    rep->pose = est;
+    memcpy(rep->cov, loc->ekf.p, sizeof rep->cov);
+    loc->last = *rep;
+    return RSM_OK;
+}
