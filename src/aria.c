@@ -113,7 +113,8 @@ int rsm_aria_encode(uint8_t cmd, rsm_aria_arg_kind_t kind, int32_t value, const 
     default:
         return RSM_ERR_INVAL;
     }
-    return rsm_aria_encode_raw(cmd, payload, len, out, cap);
+    /* No payload bytes at all for NONE: nothing of payload[] is read. */
+    return rsm_aria_encode_raw(cmd, (len > 0u) ? payload : NULL, len, out, cap);
 }
 
 int rsm_aria_encode_none(uint8_t cmd, uint8_t *out, size_t cap)

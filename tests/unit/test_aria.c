@@ -1258,7 +1258,9 @@ void test_parser_feed_should_give_the_same_result_one_byte_at_a_time(void)
                  whole.stats.packets_ok, whole.stats.truncated, &bytewise.stats);
     TEST_ASSERT_EQUAL_UINT32((uint32_t)rsm_aria_parser_pending(&whole),
                              (uint32_t)rsm_aria_parser_pending(&bytewise));
-    TEST_ASSERT_EQUAL_MEMORY(whole.buf, bytewise.buf, rsm_aria_parser_pending(&whole));
+    if (rsm_aria_parser_pending(&whole) > 0u) {
+        TEST_ASSERT_EQUAL_MEMORY(whole.buf, bytewise.buf, rsm_aria_parser_pending(&whole));
+    }
 }
 
 void test_parser_feed_should_hold_at_most_one_frame_of_bytes(void)
