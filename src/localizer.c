@@ -89,7 +89,10 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
         return RSM_ERR_RANGE;
     }
     rsm_odometry_noise(&loc->cfg->odometry, u, q);
-    rsm_ekf_predict(&loc->ekf, u, q);
+    if (rsm_ekf_predict(&loc->ekf, u, q) != RSM_OK) {
+        loc->counters.bad_motions++;
+        return RSM_ERR_RANGE;
+    }
     loc->counters.motions++;
     return RSM_OK;
 }
