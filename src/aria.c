@@ -7,8 +7,6 @@
 #include "rsm/geom.h"
 
 RSM_STATIC_ASSERT(aria_buffer_holds_any_frame, RSM_ARIA_MAX_PACKET >= 258);
-RSM_STATIC_ASSERT(aria_sonar_positive, RSM_ARIA_MAX_SONAR >= 1);
-RSM_STATIC_ASSERT(aria_str_size, RSM_ARIA_STR_SIZE >= 2);
 
 /* Payload bytes of a SIP before the sonar readings, and per reading. */
 #define SIP_FIXED_LEN 19u

@@ -26,19 +26,8 @@
 extern "C" {
 #endif
 
-/* ---- capacities ---------------------------------------------------------- */
-
-/* Sonar readings kept from one SIP (disc numbers are 0..31). Readings past
- * this count are still skipped correctly, only not stored. 3 bytes each. */
-#ifndef RSM_ARIA_MAX_SONAR
-#define RSM_ARIA_MAX_SONAR 32
-#endif
-
-/* Size, NUL included, of every decoded string (robot name, class, subclass,
- * CONFIG strings). Longer strings are cut and flagged as truncated. */
-#ifndef RSM_ARIA_STR_SIZE
-#define RSM_ARIA_STR_SIZE 32
-#endif
+/* Capacities (RSM_ARIA_MAX_PACKET, RSM_ARIA_MAX_SONAR, RSM_ARIA_STR_SIZE)
+ * are in rsm/config.h. */
 
 /* ---- framing constants ------------------------------------------------------ */
 
