@@ -74,12 +74,11 @@ int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, 
     memset(loc, 0, sizeof *loc);
     loc->cfg = cfg;
     if ((rc = rsm_ekf_init(&loc->ekf, x0, p0)) != RSM_OK || (rc = rsm_odometry_init(&loc->odo, &cfg->odometry)) != RSM_OK ||
-        (rc = rsm_ransac_init(&loc->ransac, &cfg->ransac)) != RSM_OK || (rc = rsm_icp_init(&loc->icp, &cfg->icp)) != RSM_OK ||
+        (rc = rsm_ransac_init(&loc->ransac, &cfg->ransac)) != RSM_OK || (cfg->method == RSM_METHOD_ICP && (rc = rsm_icp_init(&loc->work.icp, &cfg->icp)) != RSM_OK) ||
         (rc = rsm_map_init(&loc->map, cfg->grid.cell_m, x0->x, x0->y)) != RSM_OK) {
         return rc;
     }
     rsm_image_reset(&loc->image);
-    rsm_image_reset(&loc->visited);
     return RSM_OK;
 }
 
@@ -94,7 +93,10 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
         return RSM_ERR_RANGE;
     }
     rsm_odometry_noise(&loc->cfg->odometry, u, q);
-    rsm_ekf_predict(&loc->ekf, u, q);
+    if (rsm_ekf_predict(&loc->ekf, u, q) != RSM_OK) {
+        loc->counters.bad_motions++;
+        return RSM_ERR_RANGE;
+    }
     loc->counters.motions++;
     return RSM_OK;
 }
@@ -177,11 +179,11 @@ static size_t current_keypoints(rsm_localizer_t *loc)
     size_t k;
     int got;
     for (k = 0; k < n; ++k) {
-        loc->cands[k] = rsm_window_cell(w, loc->image.cells[k]);
+        loc->work.rsm.cands[k] = rsm_window_cell(w, loc->image.cells[k]);
     }
     src.img = &loc->image;
     src.win = w;
-    got = rsm_harris_detect(&loc->cfg->harris, &loc->harris, rsm_harris_patch_image, &src, loc->cands, n,
+    got = rsm_harris_detect(&loc->cfg->harris, &loc->work.rsm.harris, rsm_harris_patch_image, &src, loc->work.rsm.cands, n,
                             loc->kp_cur, RSM_MAX_KEYPOINTS, NULL);
     return got > 0 ? (size_t)got : 0u;
 }
@@ -192,29 +194,38 @@ static size_t reference_keypoints(rsm_localizer_t *loc, int32_t radius)
 {
     const rsm_window_t *w = &loc->map.win;
     const uint8_t min_hits = loc->cfg->map_min_hits;
+    uint32_t *visited = loc->work.rsm.visited;
     map_src_t src;
     size_t n = 0;
     size_t k;
     int got;
-    rsm_image_clear(&loc->visited);
     for (k = 0; k < loc->image.count && n < RSM_MAX_CANDIDATES; ++k) {
         const rsm_cell_t c = rsm_window_cell(w, loc->image.cells[k]);
         int32_t dy;
         int32_t dx;
         for (dy = -radius; dy <= radius && n < RSM_MAX_CANDIDATES; ++dy) {
             for (dx = -radius; dx <= radius && n < RSM_MAX_CANDIDATES; ++dx) {
-                if (rsm_map_hits(&loc->map, c.gx + dx, c.gy + dy) >= min_hits &&
-                    rsm_image_set(&loc->visited, w, c.gx + dx, c.gy + dy)) {
-                    loc->cands[n].gx = c.gx + dx;
-                    loc->cands[n].gy = c.gy + dy;
-                    ++n;
+                if (rsm_map_hits(&loc->map, c.gx + dx, c.gy + dy) >= min_hits) {
+                    const uint32_t i = rsm_window_index(c.gx + dx, c.gy + dy);
+                    const uint32_t bit = 1u << (i & 31u);
+                    if ((visited[i >> 5] & bit) == 0u) {
+                        visited[i >> 5] |= bit;
+                        loc->work.rsm.cands[n].gx = c.gx + dx;
+                        loc->work.rsm.cands[n].gy = c.gy + dy;
+                        ++n;
+                    }
                 }
             }
         }
     }
+    /* Candidates are the only bits set: clearing them empties the set. */
+    for (k = 0; k < n; ++k) {
+        const uint32_t i = rsm_window_index(loc->work.rsm.cands[k].gx, loc->work.rsm.cands[k].gy);
+        visited[i >> 5] &= ~(1u << (i & 31u));
+    }
     src.map = &loc->map;
     src.min_hits = min_hits;
-    got = rsm_harris_detect(&loc->cfg->harris, &loc->harris, patch_map, &src, loc->cands, n, loc->kp_ref,
+    got = rsm_harris_detect(&loc->cfg->harris, &loc->work.rsm.harris, patch_map, &src, loc->work.rsm.cands, n, loc->kp_ref,
                             RSM_MAX_KEYPOINTS, NULL);
     return got > 0 ? (size_t)got : 0u;
 }
@@ -400,7 +411,7 @@ static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     if (!loc->have_scan) {
         return RSM_SCAN_FIRST;
     }
-    rc = rsm_icp_align(&loc->icp, loc->pts, npts, &pred, &res);
+    rc = rsm_icp_align(&loc->work.icp, loc->pts, npts, &pred, &res);
     rep->iterations = res.iterations;
     rep->inliers = res.pairs;
     if (rc != RSM_OK) {
@@ -454,7 +465,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
             to_world(loc, &est, npts);
             (void)rsm_map_add_points(&loc->map, loc->world, npts);
             if (loc->cfg->method == RSM_METHOD_ICP) {
-                (void)rsm_icp_set_reference(&loc->icp, loc->world, npts);
+                (void)rsm_icp_set_reference(&loc->work.icp, loc->world, npts);
             }
         }
         loc->have_scan = 1u;

@@ -31,7 +31,13 @@ int rsm_scan_set_uniform(rsm_scan_t *scan, size_t count, float start_rad, float 
 int rsm_scan_reading_ok(const rsm_scan_t *scan, size_t i, const rsm_scan_limits_t *lim,
                         rsm_scan_drops_t *drops)
 {
-    const float r = scan->range_m[i];
+    float r;
+    /* Out-of-range indices and missing arguments are not readings: refused,
+     * and not counted as drops. */
+    if (scan == NULL || lim == NULL || i >= scan->count || i >= RSM_MAX_BEAMS) {
+        return 0;
+    }
+    r = scan->range_m[i];
     if (!isfinite(r) || !isfinite(scan->angle_rad[i])) {
         if (drops != NULL) {
             drops->nan++;

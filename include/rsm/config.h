@@ -73,6 +73,18 @@
 #define RSM_ARIA_MAX_PACKET 258
 #endif
 
+/* Sonar readings kept from one SIP (disc numbers are 0..31). Readings past
+ * this count are still skipped correctly, only not stored. 3 bytes each. */
+#ifndef RSM_ARIA_MAX_SONAR
+#define RSM_ARIA_MAX_SONAR 32
+#endif
+
+/* Size, NUL included, of every decoded ARIA string (robot name, class,
+ * subclass, CONFIG strings). Longer strings are cut and flagged. */
+#ifndef RSM_ARIA_STR_SIZE
+#define RSM_ARIA_STR_SIZE 32
+#endif
+
 /* Largest SICK LMS 2xx telegram accepted on the wire (0xB0 with 401 values
  * is 812 bytes; optional index bytes add a few). */
 #ifndef RSM_LMS_MAX_TELEGRAM
@@ -95,6 +107,8 @@ RSM_STATIC_ASSERT(candidates_hold_keypoints, RSM_MAX_CANDIDATES >= RSM_MAX_KEYPO
 RSM_STATIC_ASSERT(matches_positive, RSM_MAX_MATCHES >= 2);
 RSM_STATIC_ASSERT(image_cells_positive, RSM_IMAGE_MAX_CELLS >= RSM_MAX_BEAMS);
 RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
+RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONAR <= 255);
+RSM_STATIC_ASSERT(aria_str_size, RSM_ARIA_STR_SIZE >= 8 && RSM_ARIA_STR_SIZE <= 256);
 RSM_STATIC_ASSERT(lms_telegram_size, RSM_LMS_MAX_TELEGRAM >= 812);
 
 #endif /* RSM_CONFIG_H */

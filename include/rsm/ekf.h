@@ -20,28 +20,35 @@ typedef struct rsm_ekf {
     float p[9];       /* covariance, row-major, symmetric positive definite */
     uint32_t predicts;
     uint32_t updates;
-    uint32_t rejected; /* updates refused: singular S or gate exceeded */
+    uint32_t rejected; /* updates refused: non-finite input, singular S, gate
+                        * exceeded or non-finite result */
 } rsm_ekf_t;
 
 /* Sets the state and covariance (p0 row-major; NULL -> zero). Returns
  * RSM_ERR_INVAL if p0 is not symmetric with a non-negative diagonal. */
 int rsm_ekf_init(rsm_ekf_t *ekf, const rsm_pose_t *x0, const float p0[9]);
 
-/* x = x (+) u; P = Jv P Jv^T + Ju Q Ju^T (q is 3x3 in increment space). */
-void rsm_ekf_predict(rsm_ekf_t *ekf, const rsm_motion_t *u, const float q[9]);
+/* x = x (+) u; P = Jv P Jv^T + Ju Q Ju^T (q is 3x3 in increment space;
+ * NULL -> no process noise), Jacobians taken at the prior state. Returns
+ * RSM_OK, RSM_ERR_INVAL for NULL ekf/u or non-finite u/q, RSM_ERR_DEGENERATE
+ * if the result would not be finite; the state is unchanged on error. */
+int rsm_ekf_predict(rsm_ekf_t *ekf, const rsm_motion_t *u, const float q[9]);
 
 /* Squared Mahalanobis distance of measurement z (noise r, 3x3) from the
- * current state, written to *d2. RSM_ERR_DEGENERATE if S is singular. */
+ * current state, written to *d2. RSM_ERR_DEGENERATE if S is singular or z/r
+ * are not finite, RSM_ERR_INVAL for NULL arguments (*d2 untouched). */
 int rsm_ekf_mahalanobis(const rsm_ekf_t *ekf, const rsm_pose_t *z, const float r[9], float *d2);
 
 /* Update with measured pose z and its covariance r. If gate_d2 > 0 and the
  * squared Mahalanobis distance exceeds it, the state is left unchanged and
  * RSM_ERR_RANGE is returned. RSM_ERR_DEGENERATE (state unchanged) if S is
- * singular or the result would not be finite. */
+ * singular, z or r is not finite, or the result would not be finite. These
+ * three outcomes count in `rejected`. RSM_ERR_INVAL for NULL arguments. */
 int rsm_ekf_update(rsm_ekf_t *ekf, const rsm_pose_t *z, const float r[9], float gate_d2);
 
-/* Closed-form inverse of a 3x3 matrix; RSM_ERR_DEGENERATE if |det| is tiny
- * relative to the entries (out untouched). */
+/* Closed-form inverse of a 3x3 matrix; RSM_ERR_DEGENERATE if an entry is not
+ * finite or |det| <= 1e-6 * (product of the row norms), out untouched;
+ * RSM_ERR_INVAL for NULL. out may be m itself. */
 int rsm_mat3_inverse(const float m[9], float out[9]);
 
 #ifdef __cplusplus

@@ -36,28 +36,40 @@ typedef struct rsm_icp {
     const rsm_icp_config_t *cfg;              /* kept by pointer */
     rsm_point_t ref[RSM_ICP_MAX_POINTS];      /* world frame */
     size_t ref_count;
-    rsm_point_t work[RSM_ICP_MAX_POINTS];     /* current points, transformed */
+    rsm_point_t work[RSM_ICP_MAX_POINTS];     /* scratch: reference partner of each
+                                               * current point (NaN: none) */
 } rsm_icp_t;
 
-/* Validates cfg (max_iterations >= 1, positive distances) and clears the
- * reference. RSM_OK or RSM_ERR_INVAL. */
+/* Validates cfg (max_iterations >= 1, max_pair_dist_m > 0, non-negative
+ * convergence thresholds, min_pairs <= RSM_ICP_MAX_POINTS; a min_pairs below 2
+ * acts as 2) and clears the reference. RSM_OK or RSM_ERR_INVAL. */
 int rsm_icp_init(rsm_icp_t *icp, const rsm_icp_config_t *cfg);
 
 /* Copies n world-frame points as the new reference (at most
- * RSM_ICP_MAX_POINTS; more -> RSM_ERR_NOMEM, reference unchanged). */
+ * RSM_ICP_MAX_POINTS; more -> RSM_ERR_NOMEM, reference unchanged). Points
+ * that are not finite are left out of ref_count. */
 int rsm_icp_set_reference(rsm_icp_t *icp, const rsm_point_t *pts, size_t n);
 
 /* Aligns n robot-frame points to the reference starting from the world-frame
  * guess. On RSM_OK *res holds the aligned pose. RSM_ERR_DEGENERATE when
- * there is no reference or fewer than min_pairs pairs (res->pose = guess).
- * Reentrant for distinct states. */
+ * there is no reference or, in any iteration, fewer than min_pairs pairs or
+ * a degenerate fit (res->pose = guess, iterations and pairs as reached,
+ * rms_m = 0). RSM_ERR_NOMEM if n > RSM_ICP_MAX_POINTS, RSM_ERR_INVAL for
+ * NULL arguments or a non-finite guess (*res untouched for both). Points
+ * that are not finite are never paired. Stops after the first iteration whose
+ * step moves the pose less than converged_m and turns it less than
+ * converged_rad, or after max_iterations. rms_m is over the last iteration's
+ * pairs at the returned pose. Reentrant for distinct states. */
 int rsm_icp_align(rsm_icp_t *icp, const rsm_point_t *pts, size_t n, const rsm_pose_t *guess,
                   rsm_icp_result_t *res);
 
 /* Least-squares rigid transform mapping src[i] onto dst[i] (w may be NULL
- * for unit weights): closed form for 2-D. Writes *t such that
- * dst ~= t (+) src. RSM_ERR_DEGENERATE for fewer than 2 pairs. Shared by
- * ICP and the RANSAC refinement. */
+ * for unit weights; pairs of weight 0 are ignored): closed form for 2-D.
+ * Writes *t such that dst ~= t (+) src. RSM_ERR_DEGENERATE (*t untouched) for
+ * fewer than 2 pairs of positive weight, or when the rotation is undetermined
+ * (all src or all dst points coincide, or the cost is flat in the angle).
+ * RSM_ERR_INVAL for NULL arguments, non-finite points, or weights that are
+ * negative or not finite. Shared by ICP and the RANSAC refinement. */
 int rsm_rigid_fit(const rsm_point_t *src, const rsm_point_t *dst, const float *w, size_t n,
                   rsm_pose_t *t);
 

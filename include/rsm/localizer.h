@@ -114,11 +114,16 @@ typedef struct rsm_localizer {
     rsm_odometry_t odo;
     rsm_map_t map;
     rsm_image_t image;                   /* current scan image */
-    rsm_image_t visited;                 /* reference candidates already listed */
-    rsm_harris_work_t harris;
     rsm_ransac_t ransac;
-    rsm_icp_t icp;
-    rsm_cell_t cands[RSM_MAX_CANDIDATES];
+    /* Only one method runs per localizer, so their scratch shares memory. */
+    union {
+        struct {
+            uint32_t visited[RSM_BITMAP_WORDS];   /* reference candidates already listed */
+            rsm_harris_work_t harris;
+            rsm_cell_t cands[RSM_MAX_CANDIDATES];
+        } rsm;
+        rsm_icp_t icp;                            /* reference scan of the ICP baseline */
+    } work;
     rsm_keypoint_t kp_cur[RSM_MAX_KEYPOINTS];
     rsm_keypoint_t kp_ref[RSM_MAX_KEYPOINTS];
     rsm_point_t pt_cur[RSM_MAX_KEYPOINTS];

@@ -31,7 +31,8 @@ typedef struct rsm_odometry_config {
     float sigma_rot_min_rad;  /* floor on heading std per step */
 } rsm_odometry_config_t;
 
-/* P3-DX defaults: TicksMM 128 (calibrate), B = 0.357 m, 32-bit counters. */
+/* P3-DX defaults: TicksMM 128 (calibrate), B = 0.357 m, 32-bit counters.
+ * Noise: 0.05 m/m, 0.05 rad/rad, 0.02 rad/m, floors 2 mm and 2 mrad. */
 rsm_odometry_config_t rsm_odometry_config_default(void);
 
 typedef struct rsm_odometry {
@@ -58,7 +59,8 @@ int rsm_odometry_init(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg);
  * differences taken modulo 2^counter_bits (wrap-around safe). */
 int rsm_odometry_update_ticks(rsm_odometry_t *odo, uint32_t left, uint32_t right, rsm_motion_t *out);
 
-/* Increment from signed tick differences already computed by the caller. */
+/* Increment from signed tick differences already computed by the caller
+ * (zero increment if cfg is NULL or has non-positive geometry). */
 rsm_motion_t rsm_odometry_from_ticks(const rsm_odometry_config_t *cfg, int32_t d_left, int32_t d_right);
 
 /* Increment between two odometry poses from a log: between(prev, cur). */
@@ -72,7 +74,13 @@ rsm_pose_t rsm_odometry_apply(const rsm_pose_t *pose, const rsm_motion_t *u);
 void rsm_odometry_jacobians(const rsm_pose_t *pose, const rsm_motion_t *u, float jv[9], float ju[9]);
 
 /* Diagonal process noise covariance Q (3x3 row-major, in increment space)
- * that grows with |dS| and |dtheta| per the config. */
+ * that grows with |dS| and |dtheta| per the config, with |dS| taken as the
+ * chord |(dx, dy)|:
+ *   var_dx = var_dy = (sigma_trans_per_m |dS|)^2 + sigma_trans_min_m^2
+ *   var_dtheta = (sigma_rot_per_rad |dtheta|)^2 + (sigma_rot_per_m |dS|)^2
+ *                + sigma_rot_min_rad^2
+ * Translation noise is isotropic in the step frame. q untouched if any
+ * argument is NULL. */
 void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float q[9]);
 
 #ifdef __cplusplus

@@ -2,8 +2,21 @@
 #ifndef RSM_RSM_H
 #define RSM_RSM_H
 
+#include "rsm/aria.h"
 #include "rsm/config.h"
+#include "rsm/ekf.h"
 #include "rsm/geom.h"
+#include "rsm/grid.h"
+#include "rsm/hal.h"
+#include "rsm/harris.h"
+#include "rsm/icp.h"
+#include "rsm/lms.h"
+#include "rsm/localizer.h"
+#include "rsm/map.h"
+#include "rsm/match.h"
+#include "rsm/odometry.h"
+#include "rsm/ransac.h"
+#include "rsm/scan.h"
 #include "rsm/status.h"
 
 #endif /* RSM_RSM_H */

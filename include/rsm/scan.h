@@ -41,7 +41,8 @@ rsm_scan_limits_t rsm_scan_limits_default(void);
 int rsm_scan_set_uniform(rsm_scan_t *scan, size_t count, float start_rad, float step_rad);
 
 /* True if reading i is usable under the limits; otherwise counts why in
- * drops (which may be NULL). */
+ * drops (which may be NULL). False, counting nothing, if scan or lim is NULL
+ * or i >= scan->count. */
 int rsm_scan_reading_ok(const rsm_scan_t *scan, size_t i, const rsm_scan_limits_t *lim,
                         rsm_scan_drops_t *drops);
 

@@ -7,4 +7,6 @@
 #define RSM_MAX_KEYPOINTS 16
 #define RSM_MAX_CANDIDATES 256
 #define RSM_MAX_MATCHES 32
+#define RSM_ARIA_MAX_SONAR 8
+#define RSM_ARIA_STR_SIZE 12
 #endif

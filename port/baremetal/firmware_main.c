@@ -1,0 +1,274 @@
+/* Example firmware main for a Cortex-M4F board: a template, and the image that
+ * tools/cross-check measures to report what linking rsm costs.
+ *
+ * This file is the APPLICATION, not the library: it owns every piece of rsm
+ * state, statically, at file scope (the library itself keeps none), and it is
+ * the only place where interrupt handlers may reach that state directly.
+ *
+ * What it does today: sets up a millisecond tick clock, two UART receive
+ * rings filled from their interrupts, and two rsm_link_t on top of them (the
+ * Pioneer P3-DX on one UART, the SICK LMS 2xx on the other), then drains both
+ * links in the main loop, counting bytes. The ARIA and LMS drivers and the
+ * localizer slot into the places marked ">>> RSM_FIRMWARE" below.
+ *
+ * The register layout is a PLACEHOLDER in the style of an STM32F4 USART
+ * (SR/DR/BRR/CR1, RXNE and TXE flags) at made-up board addresses; SysTick is
+ * the architectural Cortex-M one. Replace everything under "board
+ * placeholders" with your vendor's headers and startup code, whose vector
+ * table must point at the handlers defined here. */
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/hal.h"
+#include "rsm/lms.h"
+#include "rsm/localizer.h"
+#include "rsm/status.h"
+#include "tick_clock.h"
+#include "uart_ring.h"
+
+/* ---- board placeholders --------------------------------------------------- */
+
+typedef struct fw_usart_regs {
+    volatile uint32_t sr;  /* status: RXNE = byte received, TXE = data register empty */
+    volatile uint32_t dr;  /* data */
+    volatile uint32_t brr; /* baud rate divisor = peripheral clock / baud */
+    volatile uint32_t cr1; /* control: UE, TE, RE, RXNEIE */
+} fw_usart_regs_t;
+
+#define FW_USART_ROBOT ((fw_usart_regs_t *)0x40011000u) /* placeholder: P3-DX port */
+#define FW_USART_LASER ((fw_usart_regs_t *)0x40004400u) /* placeholder: LMS port */
+#define FW_SR_RXNE (1u << 5)
+#define FW_SR_TXE (1u << 7)
+#define FW_CR1_RE (1u << 2)
+#define FW_CR1_TE (1u << 3)
+#define FW_CR1_RXNEIE (1u << 5)
+#define FW_CR1_UE (1u << 13)
+#define FW_PCLK_HZ 84000000u  /* placeholder: the UARTs' peripheral clock */
+#define FW_CORE_HZ 168000000u /* placeholder: the core clock that drives SysTick */
+#define FW_TX_SPIN_LIMIT 100000u
+
+/* SysTick (architectural on every ARMv7-M core). */
+#define FW_SYST_CSR (*(volatile uint32_t *)0xE000E010u)
+#define FW_SYST_RVR (*(volatile uint32_t *)0xE000E014u)
+#define FW_SYST_CVR (*(volatile uint32_t *)0xE000E018u)
+
+/* ---- the application's state (caller-owned rsm state, static here) -------- */
+
+/* Milliseconds since reset; written only by SysTick_Handler. */
+static volatile uint32_t fw_ms_ticks;
+
+static rsm_tick_clock_t fw_tick;          /* 64-bit microseconds from fw_ms_ticks */
+static rsm_clock_t fw_clock;              /* fw_tick as an rsm_clock_t */
+static rsm_uart_ring_t fw_robot_rx;       /* filled by USART1_IRQHandler */
+static rsm_uart_ring_t fw_laser_rx;       /* filled by USART2_IRQHandler */
+static rsm_uart_link_t fw_robot_uart;
+static rsm_uart_link_t fw_laser_uart;
+static rsm_link_t fw_robot_link;          /* hand this to the ARIA driver */
+static rsm_link_t fw_laser_link;          /* hand this to the LMS driver */
+static uint8_t fw_chunk[64];              /* bytes moved per read */
+
+/* Counters for a debugger or a telemetry frame (count, don't print). */
+static struct fw_stats {
+    uint32_t robot_bytes;
+    uint32_t laser_bytes;
+    uint32_t link_errors;
+    uint32_t robot_overflows;
+    uint32_t laser_overflows;
+} fw_stats;
+
+/* The localizer and the laser telegram decoder (the ARIA side and the full
+ * drivers come with the HAL drivers; the robot link is only drained now). */
+static rsm_localizer_config_t fw_loc_cfg;
+static rsm_localizer_t fw_localizer;
+static rsm_lms_parser_t fw_lms_parser;
+static rsm_lms_scan_t fw_lms_scan;
+static rsm_scan_t fw_scan;
+
+/* ---- board functions behind the HAL ---------------------------------------- */
+
+static uint32_t fw_read_ms(void *hw)
+{
+    (void)hw;
+    return fw_ms_ticks;
+}
+
+static int fw_uart_tx_byte(void *hw, uint8_t byte)
+{
+    fw_usart_regs_t *usart = (fw_usart_regs_t *)hw;
+    uint32_t spins = FW_TX_SPIN_LIMIT;
+    while ((usart->sr & FW_SR_TXE) == 0u) {
+        if (--spins == 0u) {
+            return RSM_ERR_TIMEOUT;
+        }
+    }
+    usart->dr = byte;
+    return RSM_OK;
+}
+
+static int fw_uart_set_baud(void *hw, uint32_t baud)
+{
+    fw_usart_regs_t *usart = (fw_usart_regs_t *)hw;
+    const uint32_t div = (FW_PCLK_HZ + baud / 2u) / baud;
+    if (div < 16u || div > 0xFFFFu) {
+        return RSM_ERR_RANGE;
+    }
+    usart->brr = div;
+    return RSM_OK;
+}
+
+static void fw_idle(void *hw)
+{
+    (void)hw;
+    /* Sleep until the next interrupt: a received byte or the 1 ms tick. */
+    __asm__ volatile("wfi");
+}
+
+static const rsm_tick_clock_config_t fw_tick_cfg = {
+    fw_read_ms, NULL, 1000u, 32u
+};
+static const rsm_uart_link_config_t fw_robot_uart_cfg = {
+    fw_uart_tx_byte, fw_uart_set_baud, fw_idle, (void *)FW_USART_ROBOT
+};
+static const rsm_uart_link_config_t fw_laser_uart_cfg = {
+    fw_uart_tx_byte, fw_uart_set_baud, fw_idle, (void *)FW_USART_LASER
+};
+
+/* ---- interrupt handlers (the vector table points here) ---------------------- */
+
+void SysTick_Handler(void);
+void USART1_IRQHandler(void);
+void USART2_IRQHandler(void);
+
+void SysTick_Handler(void)
+{
+    fw_ms_ticks = fw_ms_ticks + 1u;
+}
+
+/* Moves every byte the UART holds into the ring; the ring is the only state
+ * shared with the main loop, and the ISR is its only producer. */
+static void fw_uart_rx_isr(fw_usart_regs_t *usart, rsm_uart_ring_t *ring)
+{
+    while ((usart->sr & FW_SR_RXNE) != 0u) {
+        (void)rsm_uart_ring_push(ring, (uint8_t)(usart->dr & 0xFFu));
+    }
+}
+
+void USART1_IRQHandler(void)
+{
+    fw_uart_rx_isr(FW_USART_ROBOT, &fw_robot_rx);
+}
+
+void USART2_IRQHandler(void)
+{
+    fw_uart_rx_isr(FW_USART_LASER, &fw_laser_rx);
+}
+
+/* ---- start-up and main loop ------------------------------------------------- */
+
+static void fw_board_init(void)
+{
+    FW_SYST_RVR = FW_CORE_HZ / 1000u - 1u; /* 1 kHz tick */
+    FW_SYST_CVR = 0u;
+    FW_SYST_CSR = 7u; /* core clock, interrupt, enable */
+    FW_USART_ROBOT->cr1 = FW_CR1_UE | FW_CR1_TE | FW_CR1_RE | FW_CR1_RXNEIE;
+    FW_USART_LASER->cr1 = FW_CR1_UE | FW_CR1_TE | FW_CR1_RE | FW_CR1_RXNEIE;
+    /* Placeholder: enable the two USART interrupts in the NVIC here. */
+}
+
+/* Moves what one link has received to its consumer; returns the bytes moved. */
+static int fw_service_link(const rsm_link_t *link, uint32_t *byte_count)
+{
+    const int n = rsm_link_read(link, fw_chunk, sizeof fw_chunk, 0u);
+    if (n < 0) {
+        fw_stats.link_errors++;
+        return 0;
+    }
+    *byte_count += (uint32_t)n;
+    return n;
+}
+
+/* Decodes laser bytes; each full 0xB0 scan goes to the localizer. Scanner
+ * angles run 0..180 deg from the right; the robot frame has 0 ahead. */
+static void fw_feed_laser(size_t n, uint64_t now_us)
+{
+    size_t off = 0;
+    while (off < n) {
+        rsm_lms_event_t ev;
+        size_t used = 0;
+        const int got = rsm_lms_parser_feed(&fw_lms_parser, fw_chunk + off, n - off, &used, &ev);
+        off += used;
+        if (got <= 0) {
+            break;
+        }
+        if (ev.type == RSM_LMS_EVENT_TELEGRAM && ev.telegram.cmd == 0xB0u &&
+            rsm_lms_decode_b0(&ev.telegram, NULL, &fw_lms_scan) == RSM_OK && fw_lms_scan.step_cdeg != 0u) {
+            size_t i;
+            const float step = (float)fw_lms_scan.step_cdeg * (RSM_PI / 18000.0f);
+            const float start = (float)fw_lms_scan.start_cdeg * (RSM_PI / 18000.0f) - RSM_PI / 2.0f;
+            (void)rsm_scan_set_uniform(&fw_scan, fw_lms_scan.count, start, step);
+            for (i = 0; i < fw_lms_scan.count; ++i) {
+                /* Invalid readings carry 0 m, which the core drops and counts. */
+                fw_scan.range_m[i] = fw_lms_scan.reading[i].range_m;
+            }
+            fw_scan.stamp_us = now_us;
+            (void)rsm_localizer_scan(&fw_localizer, &fw_scan, NULL);
+        }
+    }
+}
+
+int main(void)
+{
+    uint64_t now_us = 0u;
+
+    /* Rings first: the interrupts that fill them are enabled by fw_board_init. */
+    rsm_uart_ring_init(&fw_robot_rx);
+    rsm_uart_ring_init(&fw_laser_rx);
+    if (rsm_tick_clock_init(&fw_tick, &fw_tick_cfg, &fw_clock) != RSM_OK ||
+        rsm_uart_link_init(&fw_robot_uart, &fw_robot_uart_cfg, &fw_robot_rx, &fw_clock,
+                           &fw_robot_link) != RSM_OK ||
+        rsm_uart_link_init(&fw_laser_uart, &fw_laser_uart_cfg, &fw_laser_rx, &fw_clock,
+                           &fw_laser_link) != RSM_OK) {
+        for (;;) {
+            /* A configuration error: stop here, where a debugger will look. */
+        }
+    }
+    fw_board_init();
+    /* P3-DX and LMS 2xx both power up at 9600 baud. */
+    (void)rsm_link_set_baud(&fw_robot_link, 9600u);
+    (void)rsm_link_set_baud(&fw_laser_link, 9600u);
+
+    /* >>> RSM_FIRMWARE_INIT: initialise the drivers on fw_robot_link and
+     *     fw_laser_link with fw_clock here. */
+    {
+        const rsm_pose_t start = {0.0f, 0.0f, 0.0f};
+        fw_loc_cfg = rsm_localizer_config_default();
+        if (rsm_localizer_init(&fw_localizer, &fw_loc_cfg, &start, NULL) != RSM_OK ||
+            rsm_lms_parser_init(&fw_lms_parser) != RSM_OK) {
+            for (;;) {
+            }
+        }
+    }
+
+    for (;;) {
+        int moved = 0;
+        /* Keeps the tick clock's 64-bit extension current, and is the time
+         * base for everything below. */
+        (void)rsm_clock_now_us(&fw_clock, &now_us);
+
+        /* >>> RSM_FIRMWARE_LOOP: replace these two drains by the drivers'
+         *     poll functions (they read the links themselves), then feed
+         *     odometry and scans to the localizer at now_us. */
+        moved += fw_service_link(&fw_robot_link, &fw_stats.robot_bytes);
+        {
+            const int n = fw_service_link(&fw_laser_link, &fw_stats.laser_bytes);
+            fw_feed_laser((size_t)n, now_us);
+            moved += n;
+        }
+
+        fw_stats.robot_overflows = rsm_uart_ring_overflows(&fw_robot_rx);
+        fw_stats.laser_overflows = rsm_uart_ring_overflows(&fw_laser_rx);
+        if (moved == 0) {
+            fw_idle(NULL);
+        }
+    }
+}

@@ -1,0 +1,259 @@
+/* Differential-drive odometry: wheel ticks -> motion increment, plus the
+ * motion model's Jacobians and process noise (see include/rsm/odometry.h). */
+#include "rsm/odometry.h"
+
+#include <math.h>
+#include <stddef.h>
+
+#include "rsm/status.h"
+
+rsm_odometry_config_t rsm_odometry_config_default(void)
+{
+    rsm_odometry_config_t c;
+    /* P3-DX: TicksMM = 128 in the ARIA robot parameter file, i.e. 128000
+     * ticks per metre; calibrate per robot (tyre pressure moves it by %). */
+    c.ticks_per_m_left = 128000.0f;
+    c.ticks_per_m_right = 128000.0f;
+    /* Effective track width of a P3-DX (DiffConvFactor-calibrated). */
+    c.wheel_base_m = 0.357f;
+    /* ARIA ENCODER packets carry full 32-bit counters. */
+    c.counter_bits = 32u;
+    /* 5 cm of translation error per metre driven. */
+    c.sigma_trans_per_m = 0.05f;
+    /* 0.05 rad of heading error per rad turned (about 3 deg per 60 deg). */
+    c.sigma_rot_per_rad = 0.05f;
+    /* 0.02 rad (about 1.1 deg) of heading drift per metre driven, from
+     * unequal effective wheel radii. */
+    c.sigma_rot_per_m = 0.02f;
+    /* Floors so that a standing robot still has a positive-definite Q:
+     * 2 mm and 2 mrad per step. */
+    c.sigma_trans_min_m = 0.002f;
+    c.sigma_rot_min_rad = 0.002f;
+    return c;
+}
+
+static int positive_finite(float v)
+{
+    return isfinite(v) && v > 0.0f;
+}
+
+static int non_negative_finite(float v)
+{
+    return isfinite(v) && v >= 0.0f;
+}
+
+int rsm_odometry_init(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg)
+{
+    if (odo == NULL || cfg == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (!positive_finite(cfg->ticks_per_m_left) || !positive_finite(cfg->ticks_per_m_right) ||
+        !positive_finite(cfg->wheel_base_m)) {
+        return RSM_ERR_INVAL;
+    }
+    if (cfg->counter_bits < 16u || cfg->counter_bits > 32u) {
+        return RSM_ERR_INVAL;
+    }
+    if (!non_negative_finite(cfg->sigma_trans_per_m) || !non_negative_finite(cfg->sigma_rot_per_rad) ||
+        !non_negative_finite(cfg->sigma_rot_per_m) || !non_negative_finite(cfg->sigma_trans_min_m) ||
+        !non_negative_finite(cfg->sigma_rot_min_rad)) {
+        return RSM_ERR_INVAL;
+    }
+    odo->cfg = cfg;
+    odo->last_left = 0u;
+    odo->last_right = 0u;
+    odo->have_last = 0u;
+    odo->steps = 0u;
+    return RSM_OK;
+}
+
+static uint32_t counter_mask(uint8_t bits)
+{
+    /* bits is 16..32 (validated); a shift by 32 would be undefined. */
+    return bits >= 32u ? 0xFFFFFFFFu : ((1u << bits) - 1u);
+}
+
+/* (cur - last) modulo 2^bits, read as a two's-complement number of that
+ * width: a counter that wrapped forwards gives a small positive step, one
+ * that wrapped backwards a small negative step. */
+static int32_t counter_delta(uint32_t cur, uint32_t last, uint8_t bits)
+{
+    const uint32_t mask = counter_mask(bits);
+    const uint32_t half = 1u << (bits - 1u);
+    const uint32_t d = (cur - last) & mask;
+    uint32_t mag;
+    if (d < half) {
+        return (int32_t)d;
+    }
+    /* Negative: magnitude is 2^bits - d, in [1, half]. Built without
+     * relying on implementation-defined unsigned-to-signed conversion. */
+    mag = (mask - d) + 1u;
+    if (mag > 0x7FFFFFFFu) {
+        return INT32_MIN;
+    }
+    return -(int32_t)mag;
+}
+
+int rsm_odometry_update_ticks(rsm_odometry_t *odo, uint32_t left, uint32_t right, rsm_motion_t *out)
+{
+    uint32_t mask;
+    int32_t dl;
+    int32_t dr;
+    if (odo == NULL || odo->cfg == NULL || out == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (odo->cfg->counter_bits < 16u || odo->cfg->counter_bits > 32u) {
+        return RSM_ERR_INVAL;
+    }
+    mask = counter_mask(odo->cfg->counter_bits);
+    left &= mask;
+    right &= mask;
+    if (!odo->have_last) {
+        odo->last_left = left;
+        odo->last_right = right;
+        odo->have_last = 1u;
+        out->dx = 0.0f;
+        out->dy = 0.0f;
+        out->dtheta = 0.0f;
+        return RSM_ERR_AGAIN;
+    }
+    dl = counter_delta(left, odo->last_left, odo->cfg->counter_bits);
+    dr = counter_delta(right, odo->last_right, odo->cfg->counter_bits);
+    odo->last_left = left;
+    odo->last_right = right;
+    *out = rsm_odometry_from_ticks(odo->cfg, dl, dr);
+    odo->steps++;
+    return RSM_OK;
+}
+
+rsm_motion_t rsm_odometry_from_ticks(const rsm_odometry_config_t *cfg, int32_t d_left, int32_t d_right)
+{
+    rsm_motion_t u;
+    float dl;
+    float dr;
+    float ds;
+    float dth;
+    u.dx = 0.0f;
+    u.dy = 0.0f;
+    u.dtheta = 0.0f;
+    /* No status channel here: an unusable config gives the zero increment. */
+    if (cfg == NULL || !positive_finite(cfg->ticks_per_m_left) || !positive_finite(cfg->ticks_per_m_right) ||
+        !positive_finite(cfg->wheel_base_m)) {
+        return u;
+    }
+    dl = (float)d_left / cfg->ticks_per_m_left;
+    dr = (float)d_right / cfg->ticks_per_m_right;
+    ds = 0.5f * (dl + dr);
+    /* CCW positive: the right wheel running ahead turns the robot left. */
+    dth = (dr - dl) / cfg->wheel_base_m;
+    /* Chord at the mid heading: exact direction of the chord of a circular
+     * arc, and a length error of only dS*dth^2/24. */
+    u.dx = ds * cosf(0.5f * dth);
+    u.dy = ds * sinf(0.5f * dth);
+    u.dtheta = rsm_wrap_angle(dth);
+    return u;
+}
+
+rsm_motion_t rsm_odometry_from_poses(const rsm_pose_t *prev, const rsm_pose_t *cur)
+{
+    rsm_motion_t u;
+    rsm_pose_t d;
+    u.dx = 0.0f;
+    u.dy = 0.0f;
+    u.dtheta = 0.0f;
+    if (prev == NULL || cur == NULL) {
+        return u;
+    }
+    d = rsm_pose_between(prev, cur);
+    u.dx = d.x;
+    u.dy = d.y;
+    u.dtheta = d.theta;
+    return u;
+}
+
+rsm_pose_t rsm_odometry_apply(const rsm_pose_t *pose, const rsm_motion_t *u)
+{
+    rsm_pose_t b;
+    if (pose == NULL) {
+        b.x = 0.0f;
+        b.y = 0.0f;
+        b.theta = 0.0f;
+        return b;
+    }
+    if (u == NULL) {
+        return *pose;
+    }
+    b.x = u->dx;
+    b.y = u->dy;
+    b.theta = u->dtheta;
+    return rsm_pose_compose(pose, &b);
+}
+
+void rsm_odometry_jacobians(const rsm_pose_t *pose, const rsm_motion_t *u, float jv[9], float ju[9])
+{
+    float c;
+    float s;
+    if (pose == NULL || u == NULL) {
+        return;
+    }
+    c = cosf(pose->theta);
+    s = sinf(pose->theta);
+    /* x' = x + c dx - s dy, y' = y + s dx + c dy, theta' = theta + dtheta. */
+    if (jv != NULL) {
+        jv[0] = 1.0f;
+        jv[1] = 0.0f;
+        jv[2] = -s * u->dx - c * u->dy;
+        jv[3] = 0.0f;
+        jv[4] = 1.0f;
+        jv[5] = c * u->dx - s * u->dy;
+        jv[6] = 0.0f;
+        jv[7] = 0.0f;
+        jv[8] = 1.0f;
+    }
+    if (ju != NULL) {
+        ju[0] = c;
+        ju[1] = -s;
+        ju[2] = 0.0f;
+        ju[3] = s;
+        ju[4] = c;
+        ju[5] = 0.0f;
+        ju[6] = 0.0f;
+        ju[7] = 0.0f;
+        ju[8] = 1.0f;
+    }
+}
+
+void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float q[9])
+{
+    float ds;
+    float dth;
+    float st;
+    float sr_turn;
+    float sr_drift;
+    float var_t;
+    float var_r;
+    int i;
+    if (cfg == NULL || u == NULL || q == NULL) {
+        return;
+    }
+    /* |dS| is the chord length; it differs from the arc length by a
+     * negligible dS*dtheta^2/24 per step. */
+    ds = sqrtf(u->dx * u->dx + u->dy * u->dy);
+    dth = fabsf(u->dtheta);
+    st = cfg->sigma_trans_per_m * ds;
+    sr_turn = cfg->sigma_rot_per_rad * dth;
+    sr_drift = cfg->sigma_rot_per_m * ds;
+    var_t = st * st + cfg->sigma_trans_min_m * cfg->sigma_trans_min_m;
+    var_r = sr_turn * sr_turn + sr_drift * sr_drift + cfg->sigma_rot_min_rad * cfg->sigma_rot_min_rad;
+    for (i = 0; i < 9; ++i) {
+        q[i] = 0.0f;
+    }
+    /* Isotropic translation noise (same variance along and across the
+     * step), so Ju Q Ju^T does not depend on the heading. Across-track error
+     * from a heading error within the step is only |dS|/2 times that error;
+     * the heading variance carries it into x and y through Jv from the next
+     * step on. A diagonal Q cannot hold the dy-dtheta correlation anyway. */
+    q[0] = var_t;
+    q[4] = var_t;
+    q[8] = var_r;
+}

@@ -1,0 +1,467 @@
+/* Unit tests for src/odometry.c: tick deltas to motion increments, counter
+ * wrap-around, pose round trips, Jacobians and process noise. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "rsm/odometry.h"
+#include "rsm/status.h"
+#include "unity.h"
+
+static rsm_odometry_config_t cfg;
+static rsm_odometry_t odo;
+
+void setUp(void)
+{
+    cfg = rsm_odometry_config_default();
+    memset(&odo, 0, sizeof odo);
+}
+
+void tearDown(void)
+{
+}
+
+/* Small deterministic generator for the randomised tests (xorshift32). */
+static uint32_t rng_next(uint32_t *s)
+{
+    uint32_t x = *s;
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    *s = x;
+    return x;
+}
+
+/* Uniform in [lo, hi). */
+static float rng_uniform(uint32_t *s, float lo, float hi)
+{
+    const float u = (float)(rng_next(s) >> 8) / 16777216.0f;
+    return lo + (hi - lo) * u;
+}
+
+static int32_t ticks_for(float metres)
+{
+    return (int32_t)lrintf(metres * 128000.0f);
+}
+
+void test_config_default_should_describe_a_p3dx(void)
+{
+    TEST_ASSERT_EQUAL_FLOAT(128000.0f, cfg.ticks_per_m_left);
+    TEST_ASSERT_EQUAL_FLOAT(128000.0f, cfg.ticks_per_m_right);
+    TEST_ASSERT_EQUAL_FLOAT(0.357f, cfg.wheel_base_m);
+    TEST_ASSERT_EQUAL_INT(32, cfg.counter_bits);
+    TEST_ASSERT_EQUAL_FLOAT(0.05f, cfg.sigma_trans_per_m);
+    TEST_ASSERT_EQUAL_FLOAT(0.05f, cfg.sigma_rot_per_rad);
+    TEST_ASSERT_EQUAL_FLOAT(0.02f, cfg.sigma_rot_per_m);
+    TEST_ASSERT_EQUAL_FLOAT(0.002f, cfg.sigma_trans_min_m);
+    TEST_ASSERT_EQUAL_FLOAT(0.002f, cfg.sigma_rot_min_rad);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
+    TEST_ASSERT_TRUE(odo.cfg == &cfg);
+    TEST_ASSERT_EQUAL_INT(0, odo.have_last);
+    TEST_ASSERT_EQUAL_UINT32(0u, odo.steps);
+}
+
+void test_init_should_reject_invalid_configs(void)
+{
+    rsm_odometry_config_t bad;
+    rsm_odometry_t before;
+    memset(&odo, 0xA5, sizeof odo);
+    before = odo;
+
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(NULL, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, NULL));
+
+    bad = cfg;
+    bad.ticks_per_m_left = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.ticks_per_m_right = -128000.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.wheel_base_m = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.wheel_base_m = NAN;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.ticks_per_m_left = INFINITY;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.counter_bits = 15u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.counter_bits = 33u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.sigma_trans_per_m = -0.1f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.sigma_rot_per_rad = NAN;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.sigma_rot_per_m = -1.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.sigma_trans_min_m = -0.001f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+    bad = cfg;
+    bad.sigma_rot_min_rad = INFINITY;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &bad));
+
+    /* Rejected configs leave the state alone. */
+    TEST_ASSERT_EQUAL_MEMORY(&before, &odo, sizeof odo);
+
+    /* The limits of the counter width are accepted, and zero noise too. */
+    bad = cfg;
+    bad.counter_bits = 16u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &bad));
+    bad.counter_bits = 32u;
+    bad.sigma_trans_per_m = 0.0f;
+    bad.sigma_rot_min_rad = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &bad));
+}
+
+void test_update_ticks_should_latch_on_first_call(void)
+{
+    rsm_motion_t u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
+    u.dx = 9.0f;
+    u.dy = 9.0f;
+    u.dtheta = 9.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks(&odo, 1000u, 2000u, &u));
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dx);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dy);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dtheta);
+    TEST_ASSERT_EQUAL_UINT32(0u, odo.steps);
+
+    /* The latched values are the baseline of the next increment, however
+     * large the absolute counts were. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 1000u + 128000u, 2000u + 128000u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 1.0f, u.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.0f, u.dy);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.0f, u.dtheta);
+    TEST_ASSERT_EQUAL_UINT32(1u, odo.steps);
+
+    /* Re-initialising latches again. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks(&odo, 5u, 5u, &u));
+}
+
+void test_update_ticks_should_reject_null_arguments(void)
+{
+    rsm_motion_t u;
+    rsm_odometry_t blank;
+    memset(&blank, 0, sizeof blank);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_update_ticks(NULL, 0u, 0u, &u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_update_ticks(&odo, 0u, 0u, NULL));
+    /* A state never initialised has no config. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_update_ticks(&blank, 0u, 0u, &u));
+    TEST_ASSERT_EQUAL_INT(0, odo.have_last);
+}
+
+void test_from_ticks_should_drive_straight(void)
+{
+    const rsm_motion_t u = rsm_odometry_from_ticks(&cfg, ticks_for(0.5f), ticks_for(0.5f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.5f, u.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.0f, u.dy);
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.0f, u.dtheta);
+
+    /* Backwards. */
+    const rsm_motion_t b = rsm_odometry_from_ticks(&cfg, -ticks_for(0.25f), -ticks_for(0.25f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, -0.25f, b.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.0f, b.dy);
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.0f, b.dtheta);
+}
+
+void test_from_ticks_should_spin_counter_clockwise_when_right_wheel_leads(void)
+{
+    /* Left back 0.1 m, right forward 0.1 m: dS = 0, dtheta = (dR - dL)/B =
+     * 0.2/0.357 = +0.5602 rad. The printed eq. 5 would give -0.2801. */
+    const rsm_motion_t u = rsm_odometry_from_ticks(&cfg, -ticks_for(0.1f), ticks_for(0.1f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.0f, u.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.0f, u.dy);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.2f / 0.357f, u.dtheta);
+    TEST_ASSERT_TRUE(u.dtheta > 0.0f);
+
+    /* And the mirror image turns clockwise. */
+    const rsm_motion_t v = rsm_odometry_from_ticks(&cfg, ticks_for(0.1f), -ticks_for(0.1f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, -0.2f / 0.357f, v.dtheta);
+}
+
+void test_from_ticks_should_follow_an_arc_at_mid_heading(void)
+{
+    /* Left 1.0 m, right 1.2 m: dS = 1.1, dtheta = 0.2 / 0.357. */
+    const float dth = 0.2f / 0.357f;
+    const rsm_motion_t u = rsm_odometry_from_ticks(&cfg, ticks_for(1.0f), ticks_for(1.2f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, dth, u.dtheta);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 1.1f * cosf(0.5f * dth), u.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 1.1f * sinf(0.5f * dth), u.dy);
+    /* Turning left moves the robot to its left. */
+    TEST_ASSERT_TRUE(u.dy > 0.0f);
+
+    /* Unequal tick scales per wheel are honoured. */
+    rsm_odometry_config_t c2 = cfg;
+    c2.ticks_per_m_right = 64000.0f;
+    const rsm_motion_t w = rsm_odometry_from_ticks(&c2, 128000, 64000);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 1.0f, w.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.0f, w.dtheta);
+}
+
+void test_from_ticks_should_return_zero_for_unusable_config(void)
+{
+    rsm_odometry_config_t bad = cfg;
+    rsm_motion_t u = rsm_odometry_from_ticks(NULL, 1000, 2000);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dx);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dy);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dtheta);
+    bad.wheel_base_m = 0.0f;
+    u = rsm_odometry_from_ticks(&bad, 1000, 2000);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dx);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dtheta);
+}
+
+void test_update_ticks_should_unwrap_32_bit_counters_both_ways(void)
+{
+    rsm_motion_t u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
+    /* Forwards across 2^32: 0xFFFFFF00 -> 0x00000100 is +512 ticks. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks(&odo, 0xFFFFFF00u, 0xFFFFFF00u, &u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0x00000100u, 0x00000100u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 512.0f / 128000.0f, u.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.0f, u.dtheta);
+    /* Backwards across 0: 0x00000100 -> 0xFFFFFF00 is -512 ticks. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0xFFFFFF00u, 0xFFFFFF00u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, -512.0f / 128000.0f, u.dx);
+    /* Exactly half the range is read as the most negative step, -2^31. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0x7FFFFF00u, 0x7FFFFF00u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-3f, -2147483648.0f / 128000.0f, u.dx);
+    /* Across the signed boundary 0x7FFFFF00 -> 0x80000100 is +512. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0x80000100u, 0x80000100u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 512.0f / 128000.0f, u.dx);
+    /* Wheels wrapping in opposite directions: a spin in place. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0x00000010u, 0xFFFFFFF0u, &u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0xFFFFFFF0u, 0x00000010u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.0f, u.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, (64.0f / 128000.0f) / 0.357f, u.dtheta);
+    TEST_ASSERT_EQUAL_UINT32(6u, odo.steps);
+}
+
+void test_update_ticks_should_unwrap_16_bit_counters_both_ways(void)
+{
+    rsm_motion_t u;
+    cfg.counter_bits = 16u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks(&odo, 0xFF00u, 0xFF00u, &u));
+    /* Forwards across 2^16. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0x0100u, 0x0100u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 512.0f / 128000.0f, u.dx);
+    /* Backwards across 0. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0xFF00u, 0xFF00u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, -512.0f / 128000.0f, u.dx);
+    /* Bits above the counter width are ignored: same low 16 bits, no motion. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0xABCDFF00u, 0x1234FF00u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-9f, 0.0f, u.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-9f, 0.0f, u.dtheta);
+    /* Half the range back is the most negative step: -32768 ticks. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0x7F00u, 0x7F00u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, -32768.0f / 128000.0f, u.dx);
+    /* Just under half the range forwards is positive: +32767 ticks. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0xFEFFu, 0xFEFFu, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 32767.0f / 128000.0f, u.dx);
+}
+
+void test_from_poses_should_round_trip_through_apply(void)
+{
+    uint32_t seed = 0x2545F491u;
+    int k;
+    for (k = 0; k < 2000; ++k) {
+        rsm_pose_t a;
+        rsm_pose_t b;
+        rsm_pose_t c;
+        rsm_motion_t u;
+        a.x = rng_uniform(&seed, -50.0f, 50.0f);
+        a.y = rng_uniform(&seed, -50.0f, 50.0f);
+        b.x = a.x + rng_uniform(&seed, -2.0f, 2.0f);
+        b.y = a.y + rng_uniform(&seed, -2.0f, 2.0f);
+        if (k % 4 == 0) {
+            /* Headings straddling +-pi. */
+            a.theta = RSM_PI - rng_uniform(&seed, 0.0f, 0.01f);
+            b.theta = -RSM_PI + rng_uniform(&seed, 0.0f, 0.01f);
+        } else if (k % 4 == 1) {
+            a.theta = -RSM_PI + rng_uniform(&seed, 0.0f, 0.01f);
+            b.theta = RSM_PI - rng_uniform(&seed, 0.0f, 0.01f);
+        } else {
+            a.theta = rng_uniform(&seed, -RSM_PI, RSM_PI);
+            b.theta = rng_uniform(&seed, -RSM_PI, RSM_PI);
+        }
+        u = rsm_odometry_from_poses(&a, &b);
+        TEST_ASSERT_TRUE(u.dtheta > -RSM_PI && u.dtheta <= RSM_PI);
+        c = rsm_odometry_apply(&a, &u);
+        TEST_ASSERT_FLOAT_WITHIN(2e-5f, b.x, c.x);
+        TEST_ASSERT_FLOAT_WITHIN(2e-5f, b.y, c.y);
+        TEST_ASSERT_FLOAT_WITHIN(2e-6f, 0.0f, rsm_wrap_angle(c.theta - b.theta));
+    }
+}
+
+void test_from_poses_should_express_motion_in_the_start_frame(void)
+{
+    /* Facing +y, moving 1 m along +y is 1 m forward; a crossing of +-pi is a
+     * small turn, not a full one. */
+    rsm_pose_t a = { 2.0f, 3.0f, 0.5f * RSM_PI };
+    rsm_pose_t b = { 2.0f, 4.0f, 0.5f * RSM_PI };
+    rsm_motion_t u = rsm_odometry_from_poses(&a, &b);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 1.0f, u.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.0f, u.dy);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.0f, u.dtheta);
+
+    a.theta = 3.1f;
+    b = a;
+    b.theta = -3.1f;
+    u = rsm_odometry_from_poses(&a, &b);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, RSM_TWO_PI - 6.2f, u.dtheta);
+
+    u = rsm_odometry_from_poses(NULL, &b);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dx);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dtheta);
+}
+
+void test_apply_should_chain_with_ticks(void)
+{
+    /* Four quarter turns on the spot and four 1 m legs close a square. */
+    rsm_pose_t p = { 0.0f, 0.0f, 0.0f };
+    const int32_t quarter = (int32_t)lrintf(0.25f * RSM_PI * 0.357f * 128000.0f);
+    int k;
+    for (k = 0; k < 4; ++k) {
+        rsm_motion_t u = rsm_odometry_from_ticks(&cfg, 128000, 128000);
+        p = rsm_odometry_apply(&p, &u);
+        u = rsm_odometry_from_ticks(&cfg, -quarter, quarter);
+        p = rsm_odometry_apply(&p, &u);
+    }
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, p.x);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, p.y);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, rsm_wrap_angle(p.theta));
+}
+
+void test_jacobians_should_match_finite_differences(void)
+{
+    uint32_t seed = 12345u;
+    const float h = 1e-2f;
+    int k;
+    for (k = 0; k < 200; ++k) {
+        rsm_pose_t p;
+        rsm_motion_t u;
+        float jv[9];
+        float ju[9];
+        int col;
+        p.x = rng_uniform(&seed, -5.0f, 5.0f);
+        p.y = rng_uniform(&seed, -5.0f, 5.0f);
+        p.theta = rng_uniform(&seed, -3.0f, 3.0f);
+        u.dx = rng_uniform(&seed, -0.5f, 0.5f);
+        u.dy = rng_uniform(&seed, -0.2f, 0.2f);
+        u.dtheta = rng_uniform(&seed, -0.5f, 0.5f);
+        rsm_odometry_jacobians(&p, &u, jv, ju);
+        for (col = 0; col < 3; ++col) {
+            rsm_pose_t pp = p;
+            rsm_pose_t pm = p;
+            rsm_motion_t up = u;
+            rsm_motion_t um = u;
+            rsm_pose_t a;
+            rsm_pose_t b;
+            float *fp = col == 0 ? &pp.x : (col == 1 ? &pp.y : &pp.theta);
+            float *fm = col == 0 ? &pm.x : (col == 1 ? &pm.y : &pm.theta);
+            float *gp = col == 0 ? &up.dx : (col == 1 ? &up.dy : &up.dtheta);
+            float *gm = col == 0 ? &um.dx : (col == 1 ? &um.dy : &um.dtheta);
+            *fp += h;
+            *fm -= h;
+            *gp += h;
+            *gm -= h;
+            /* d/d(pose), central differences. */
+            a = rsm_odometry_apply(&pp, &u);
+            b = rsm_odometry_apply(&pm, &u);
+            TEST_ASSERT_FLOAT_WITHIN(2e-4f, (a.x - b.x) / (2.0f * h), jv[0 * 3 + col]);
+            TEST_ASSERT_FLOAT_WITHIN(2e-4f, (a.y - b.y) / (2.0f * h), jv[1 * 3 + col]);
+            TEST_ASSERT_FLOAT_WITHIN(2e-4f, rsm_wrap_angle(a.theta - b.theta) / (2.0f * h), jv[2 * 3 + col]);
+            /* d/d(u). */
+            a = rsm_odometry_apply(&p, &up);
+            b = rsm_odometry_apply(&p, &um);
+            TEST_ASSERT_FLOAT_WITHIN(2e-4f, (a.x - b.x) / (2.0f * h), ju[0 * 3 + col]);
+            TEST_ASSERT_FLOAT_WITHIN(2e-4f, (a.y - b.y) / (2.0f * h), ju[1 * 3 + col]);
+            TEST_ASSERT_FLOAT_WITHIN(2e-4f, rsm_wrap_angle(a.theta - b.theta) / (2.0f * h), ju[2 * 3 + col]);
+        }
+    }
+}
+
+void test_noise_should_grow_with_travel_and_turn(void)
+{
+    float q[9];
+    rsm_motion_t u = { 0.0f, 0.0f, 0.0f };
+    const float f2 = 0.002f * 0.002f;
+    int i;
+
+    /* Standing still: only the floors. */
+    rsm_odometry_noise(&cfg, &u, q);
+    TEST_ASSERT_FLOAT_WITHIN(1e-10f, f2, q[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-10f, f2, q[4]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-10f, f2, q[8]);
+
+    /* 1 m straight ahead. */
+    u.dx = 1.0f;
+    rsm_odometry_noise(&cfg, &u, q);
+    TEST_ASSERT_FLOAT_WITHIN(1e-8f, 0.05f * 0.05f + f2, q[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-8f, 0.05f * 0.05f + f2, q[4]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-8f, 0.02f * 0.02f + f2, q[8]);
+    for (i = 0; i < 9; ++i) {
+        if (i != 0 && i != 4 && i != 8) {
+            TEST_ASSERT_EQUAL_FLOAT(0.0f, q[i]);
+        }
+    }
+
+    /* Backwards travel counts by magnitude. */
+    u.dx = -1.0f;
+    rsm_odometry_noise(&cfg, &u, q);
+    TEST_ASSERT_FLOAT_WITHIN(1e-8f, 0.05f * 0.05f + f2, q[0]);
+
+    /* A spin of -1 rad in place. */
+    u.dx = 0.0f;
+    u.dtheta = -1.0f;
+    rsm_odometry_noise(&cfg, &u, q);
+    TEST_ASSERT_FLOAT_WITHIN(1e-10f, f2, q[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-8f, 0.05f * 0.05f + f2, q[8]);
+
+    /* Both: the heading terms add. */
+    u.dx = 0.6f;
+    u.dy = 0.8f;
+    u.dtheta = 0.5f;
+    rsm_odometry_noise(&cfg, &u, q);
+    TEST_ASSERT_FLOAT_WITHIN(1e-8f, 0.05f * 0.05f + f2, q[4]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-8f, 0.025f * 0.025f + 0.02f * 0.02f + f2, q[8]);
+
+    /* NULL arguments leave q alone. */
+    q[0] = 42.0f;
+    rsm_odometry_noise(NULL, &u, q);
+    rsm_odometry_noise(&cfg, NULL, q);
+    rsm_odometry_noise(&cfg, &u, NULL);
+    TEST_ASSERT_EQUAL_FLOAT(42.0f, q[0]);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_config_default_should_describe_a_p3dx);
+    RUN_TEST(test_init_should_reject_invalid_configs);
+    RUN_TEST(test_update_ticks_should_latch_on_first_call);
+    RUN_TEST(test_update_ticks_should_reject_null_arguments);
+    RUN_TEST(test_from_ticks_should_drive_straight);
+    RUN_TEST(test_from_ticks_should_spin_counter_clockwise_when_right_wheel_leads);
+    RUN_TEST(test_from_ticks_should_follow_an_arc_at_mid_heading);
+    RUN_TEST(test_from_ticks_should_return_zero_for_unusable_config);
+    RUN_TEST(test_update_ticks_should_unwrap_32_bit_counters_both_ways);
+    RUN_TEST(test_update_ticks_should_unwrap_16_bit_counters_both_ways);
+    RUN_TEST(test_from_poses_should_round_trip_through_apply);
+    RUN_TEST(test_from_poses_should_express_motion_in_the_start_frame);
+    RUN_TEST(test_apply_should_chain_with_ticks);
+    RUN_TEST(test_jacobians_should_match_finite_differences);
+    RUN_TEST(test_noise_should_grow_with_travel_and_turn);
+    return UNITY_END();
+}
