@@ -282,7 +282,12 @@ void test_localizer_init_should_reject_bad_configs(void)
     BAD(harris.k_den, 0);
     BAD(ransac.confidence, 1.0f);
     BAD(ransac.min_support, 1u);
-    BAD(icp.max_iterations, 0u);
+    /* The ICP part only matters (and is only checked) for the ICP method. */
+    c = cfg;
+    c.icp.max_iterations = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &c, &x0, NULL));
+    c.method = RSM_METHOD_ICP;
+    assert_rejected(&c, "icp.max_iterations");
     BAD(odometry.wheel_base_m, 0.0f);
     /* Thresholds the capacities could never meet. */
     BAD(min_keypoints, (uint16_t)(RSM_MAX_KEYPOINTS + 1));
