@@ -109,6 +109,10 @@ static int tty_setup(rsm_posix_fd_link_t *s, uint32_t baud)
         s->last_errno = errno;
         return RSM_ERR_IO;
     }
+    if (!s->saved_valid) {
+        s->saved_tio = tio;
+        s->saved_valid = 1;
+    }
     tio.c_iflag &= ~(tcflag_t)(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON |
                                IXOFF | IXANY | INPCK);
     tio.c_oflag &= ~(tcflag_t)OPOST;
@@ -457,6 +461,11 @@ int rsm_posix_fd_close(rsm_posix_fd_link_t *s)
     if (s == NULL) {
         return RSM_ERR_INVAL;
     }
+    if (s->fd >= 0 && s->is_tty && s->saved_valid && !s->hangup) {
+        /* Best effort: a vanished device has no settings to restore. */
+        (void)tcsetattr(s->fd, TCSANOW, &s->saved_tio);
+    }
+    s->saved_valid = 0;
     if (s->fd >= 0 && s->owns_fd) {
         /* POSIX leaves the descriptor state unspecified after EINTR; Linux
          * has released it, so never retry (it could close a reused fd). */

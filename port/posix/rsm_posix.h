@@ -28,6 +28,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <termios.h>
 
 #include "rsm/hal.h"
 #include "rsm/status.h"
@@ -70,6 +71,9 @@ typedef struct rsm_posix_fd_link {
     uint32_t eof_count; /* reads that returned end of stream */
     uint32_t write_timeout_ms; /* see RSM_POSIX_WRITE_TIMEOUT_MS; may be changed
                                   by the caller between calls */
+    int saved_valid;           /* private: saved_tio holds the settings found */
+    struct termios saved_tio;  /* private: terminal settings before set-up,
+                                  restored by rsm_posix_fd_close */
 } rsm_posix_fd_link_t;
 
 /* Opens path and fills *s. path is borrowed (not kept).
@@ -108,7 +112,9 @@ int rsm_posix_fd_adopt(rsm_posix_fd_link_t *s, int fd, uint32_t baud, unsigned f
  * Returns RSM_OK or RSM_ERR_INVAL (NULL s or link). */
 int rsm_posix_fd_link(rsm_posix_fd_link_t *s, rsm_link_t *link);
 
-/* Closes the descriptor if owned; s->fd becomes -1. Safe to call twice.
+/* Restores a terminal's settings as they were before open/adopt (so that
+ * adopting an interactive stdin does not leave it raw), then closes the
+ * descriptor if owned; s->fd becomes -1. Safe to call twice.
  * Returns RSM_OK, RSM_ERR_INVAL (NULL s) or RSM_ERR_IO (close failed;
  * the descriptor is released anyway, last_errno set). */
 int rsm_posix_fd_close(rsm_posix_fd_link_t *s);

@@ -7,6 +7,9 @@
 #include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <termios.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -310,6 +313,61 @@ void test_fd_adopt_should_refuse_a_closed_descriptor(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_posix_fd_adopt(&st, -1, 0u, 0u, 0));
 }
 
+void test_fd_close_should_restore_the_terminal_settings_of_an_adopted_tty(void)
+{
+    struct termios before, after;
+    int slave;
+    open_pty();
+    slave = open(slave_path, O_RDWR | O_NOCTTY);
+    TEST_ASSERT_TRUE(slave >= 0);
+    TEST_ASSERT_EQUAL_INT(0, tcgetattr(slave, &before));
+    TEST_ASSERT_TRUE((before.c_lflag & ICANON) != 0u); /* a fresh pty is cooked */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_posix_fd_adopt(&st, slave, 0u, 0u, 0));
+    TEST_ASSERT_EQUAL_INT(1, st.is_tty);
+    TEST_ASSERT_EQUAL_INT(0, tcgetattr(slave, &after));
+    TEST_ASSERT_TRUE((after.c_lflag & ICANON) == 0u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_posix_fd_close(&st));
+    TEST_ASSERT_EQUAL_INT(0, tcgetattr(slave, &after)); /* not owned: still open */
+    TEST_ASSERT_TRUE((after.c_lflag & ICANON) != 0u);
+    TEST_ASSERT_EQUAL_INT(0, close(slave));
+}
+
+void test_fd_open_should_read_a_fifo_until_its_writer_closes(void)
+{
+    const uint8_t data[] = {0xFA, 0xFB, 0x03};
+    uint8_t buf[16];
+    size_t got = 0;
+    pid_t child;
+    int wstatus = 0;
+    int n;
+    strcpy(tmp_path, "test_posix_fifo");
+    (void)unlink(tmp_path);
+    TEST_ASSERT_EQUAL_INT(0, mkfifo(tmp_path, 0600));
+    child = fork();
+    TEST_ASSERT_TRUE(child >= 0);
+    if (child == 0) {
+        /* Writer: opening blocks until the reader opens, then exits. */
+        const int fd = open(tmp_path, O_WRONLY);
+        if (fd < 0 || write(fd, data, sizeof data) != (ssize_t)sizeof data) {
+            _exit(1);
+        }
+        _exit(close(fd) == 0 ? 0 : 1);
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_posix_fd_open(&st, tmp_path, 9600u, 0u));
+    TEST_ASSERT_EQUAL_INT(0, st.is_tty);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_posix_fd_link(&st, &lnk));
+    while ((n = rsm_link_read(&lnk, buf + got, sizeof buf - got, 2000000u)) > 0) {
+        got += (size_t)n;
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_IO, n);
+    TEST_ASSERT_EQUAL_INT(1, st.eof);
+    TEST_ASSERT_EQUAL_size_t(sizeof data, got);
+    TEST_ASSERT_EQUAL_MEMORY(data, buf, sizeof data);
+    TEST_ASSERT_EQUAL_INT(child, waitpid(child, &wstatus, 0));
+    TEST_ASSERT_TRUE(WIFEXITED(wstatus));
+    TEST_ASSERT_EQUAL_INT(0, WEXITSTATUS(wstatus));
+}
+
 /* ---- errors at open time ----------------------------------------------------------- */
 
 void test_fd_open_should_report_a_missing_path_with_its_errno(void)
@@ -424,6 +482,8 @@ int main(void)
     RUN_TEST(test_fd_link_should_treat_baud_and_flush_as_no_ops_on_a_file);
     RUN_TEST(test_fd_adopt_should_read_a_pipe_until_its_writer_closes);
     RUN_TEST(test_fd_adopt_should_refuse_a_closed_descriptor);
+    RUN_TEST(test_fd_close_should_restore_the_terminal_settings_of_an_adopted_tty);
+    RUN_TEST(test_fd_open_should_read_a_fifo_until_its_writer_closes);
     RUN_TEST(test_fd_open_should_report_a_missing_path_with_its_errno);
     RUN_TEST(test_fd_open_should_refuse_a_directory_and_a_non_tty_when_a_tty_is_required);
     RUN_TEST(test_link_open_auto_should_pick_the_fd_backend_for_ptys_and_files);

@@ -225,23 +225,49 @@ static void aria_sip_fields(json_out_t *w, const rsm_aria_sip_t *s)
         json_end_obj(w);
     }
     json_end_arr(w);
-    if (s->present & RSM_ARIA_SIP_HAS_GRIP_STATE) kv_int(w, "grip_state", s->grip_state);
-    if (s->present & RSM_ARIA_SIP_HAS_ANPORT) kv_int(w, "anport", s->anport);
-    if (s->present & RSM_ARIA_SIP_HAS_ANALOG) kv_int(w, "analog", s->analog);
-    if (s->present & RSM_ARIA_SIP_HAS_DIGIN) kv_hex(w, "digin", s->digin, 2);
-    if (s->present & RSM_ARIA_SIP_HAS_DIGOUT) kv_hex(w, "digout", s->digout, 2);
-    if (s->present & RSM_ARIA_SIP_HAS_BATTERY_X10) kv_int(w, "battery_x10", s->battery_x10);
-    if (s->present & RSM_ARIA_SIP_HAS_CHARGE_STATE) kv_int(w, "charge_state", s->charge_state);
+    if (s->present & RSM_ARIA_SIP_HAS_GRIP_STATE) {
+        kv_int(w, "grip_state", s->grip_state);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_ANPORT) {
+        kv_int(w, "anport", s->anport);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_ANALOG) {
+        kv_int(w, "analog", s->analog);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_DIGIN) {
+        kv_hex(w, "digin", s->digin, 2);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_DIGOUT) {
+        kv_hex(w, "digout", s->digout, 2);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_BATTERY_X10) {
+        kv_int(w, "battery_x10", s->battery_x10);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_CHARGE_STATE) {
+        kv_int(w, "charge_state", s->charge_state);
+    }
     if (s->present & RSM_ARIA_SIP_HAS_ROT_VEL) {
         kv_int(w, "rot_vel", s->rot_vel);
         kv_double(w, "rot_vel_deg_s", (double)s->rot_vel / 10.0);
     }
-    if (s->present & RSM_ARIA_SIP_HAS_FAULT_FLAGS) kv_hex(w, "fault_flags", s->fault_flags, 4);
-    if (s->present & RSM_ARIA_SIP_HAS_LAT_VEL) kv_int(w, "lat_vel", s->lat_vel);
-    if (s->present & RSM_ARIA_SIP_HAS_TEMPERATURE) kv_int(w, "temperature", s->temperature);
-    if (s->present & RSM_ARIA_SIP_HAS_STATE_OF_CHARGE) kv_int(w, "state_of_charge", s->state_of_charge);
-    if (s->present & RSM_ARIA_SIP_HAS_UC_TIME) kv_int(w, "uc_time", s->uc_time);
-    if (s->present & RSM_ARIA_SIP_HAS_FLAGS3) kv_hex(w, "flags3", s->flags3, 8);
+    if (s->present & RSM_ARIA_SIP_HAS_FAULT_FLAGS) {
+        kv_hex(w, "fault_flags", s->fault_flags, 4);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_LAT_VEL) {
+        kv_int(w, "lat_vel", s->lat_vel);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_TEMPERATURE) {
+        kv_int(w, "temperature", s->temperature);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_STATE_OF_CHARGE) {
+        kv_int(w, "state_of_charge", s->state_of_charge);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_UC_TIME) {
+        kv_int(w, "uc_time", s->uc_time);
+    }
+    if (s->present & RSM_ARIA_SIP_HAS_FLAGS3) {
+        kv_hex(w, "flags3", s->flags3, 8);
+    }
 }
 
 static void aria_config_fields(json_out_t *w, const rsm_aria_config_t *c)
@@ -292,8 +318,12 @@ static void aria_config_fields(json_out_t *w, const rsm_aria_config_t *c)
     kv_int(w, "aux2_baud", c->aux2_baud);
     kv_int(w, "aux3_baud", c->aux3_baud);
     kv_int(w, "ticks_mm", c->ticks_mm);
-    if (c->present & RSM_ARIA_CONFIG_HAS_SHUTDOWN_VOLTS) kv_int(w, "shutdown_volts", c->shutdown_volts);
-    if (c->present & RSM_ARIA_CONFIG_HAS_FIRMWARE) kv_str(w, "firmware", c->firmware);
+    if (c->present & RSM_ARIA_CONFIG_HAS_SHUTDOWN_VOLTS) {
+        kv_int(w, "shutdown_volts", c->shutdown_volts);
+    }
+    if (c->present & RSM_ARIA_CONFIG_HAS_FIRMWARE) {
+        kv_str(w, "firmware", c->firmware);
+    }
 }
 
 static void emit_aria_packet(dump_ctx_t *d)
