@@ -248,8 +248,8 @@ static void handle_encoder(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, rsm_p3dx
 
 static void handle_config(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt)
 {
-    /* The CONFIGpac is large; decode it into the SIP slot's neighbour would
-     * cost RAM, so it lives on the stack only for this call. */
+    /* Only three fields are kept, so the decoded CONFIGpac (a few hundred
+     * bytes) lives on the stack for this call instead of in the state. */
     rsm_aria_config_t c;
     if (rsm_aria_decode_config(pkt, &c) != RSM_OK) {
         d->stats.unknown_packets++;

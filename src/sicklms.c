@@ -353,6 +353,8 @@ static void handle_event(rsm_sicklms_t *d, const rsm_lms_event_t *e, uint64_t no
         if (d->sub == SUB_ACK) {
             d->stats.acks++;
             d->sub = SUB_REPLY;
+            /* req[4] is the CMD byte of the request telegram; a mode change
+             * may take the LMS up to 3 s (protocols.md 2.4). */
             d->deadline_us = now + (d->req[4] == RSM_LMS_CMD_MODE ? d->cfg->mode_timeout_us
                                                                    : d->cfg->reply_timeout_us);
         }
