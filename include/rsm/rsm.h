@@ -15,8 +15,10 @@
 #include "rsm/map.h"
 #include "rsm/match.h"
 #include "rsm/odometry.h"
+#include "rsm/p3dx.h"
 #include "rsm/ransac.h"
 #include "rsm/scan.h"
+#include "rsm/sicklms.h"
 #include "rsm/status.h"
 
 #endif /* RSM_RSM_H */

@@ -1,0 +1,217 @@
+/* Pioneer P3-DX driver: the ARIA codec (rsm/aria.h) on an rsm_link_t.
+ *
+ * A non-blocking state machine driven by rsm_p3dx_poll. Each poll reads the
+ * link at most once, with a timeout no longer than config.read_timeout_us
+ * (shorter when a deadline is nearer), handles what arrived and the timers,
+ * and returns at most one event. Deadlines are absolute times from the
+ * driver's clock, so it does not matter how often poll is called.
+ *
+ * Connect (protocols.md 1.6): SYNC0 -> SYNC1 -> SYNC2, each reply awaited
+ * step_timeout_us; a wrong reply restarts at SYNC0; a SIP or ENCODER packet
+ * during the handshake means an old session is open: CLOSE, wait
+ * close_wait_us, flush, restart. Then OPEN, optionally CONFIG (TicksMM,
+ * RevCount and the watchdog are taken from the CONFIGpac if it arrives within
+ * config_timeout_us, else the config defaults stay), ENABLE 1, ENCODER 2.
+ * After sync_tries failed attempts at one rate the next rate of the probe
+ * list (9600, 38400, 19200, 115200, 57600) is tried, when probe_baud is set
+ * and the link has set_baud.
+ *
+ * Connected: one command at least every keepalive_us (PULSE when idle);
+ * queued velocity commands are sent by the next poll; no SIP for
+ * link_lost_us gives a LINK_LOST event and a new handshake from SYNC0.
+ *
+ * All state is in the caller's rsm_p3dx_t; the driver keeps pointers to the
+ * link, the clock and the config given to init, which must outlive it. One
+ * driver must not be used from two contexts at once; distinct drivers are
+ * independent. Nothing here is ISR-safe (it calls the link). */
+#ifndef RSM_P3DX_H
+#define RSM_P3DX_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/aria.h"
+#include "rsm/hal.h"
+#include "rsm/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Bytes read from the link per poll (one read call). */
+#define RSM_P3DX_RX_CHUNK 64u
+
+/* Runtime tuning. rsm_p3dx_config_default gives the values in brackets. */
+typedef struct rsm_p3dx_config {
+    uint32_t baud;               /* first line rate tried, bit/s [9600] */
+    uint8_t probe_baud;          /* 1: try the other rates after sync_tries failures [1] */
+    uint8_t sync_tries;          /* handshake attempts per rate, >= 1 [3] */
+    uint8_t request_config;      /* 1: send CONFIG and wait for the CONFIGpac [1] */
+    uint8_t enable_motors;       /* 1: send ENABLE 1 after connecting [1] */
+    uint8_t request_encoder;     /* 1: send ENCODER 2 after connecting [1] */
+    uint32_t read_timeout_us;    /* longest wait inside one poll, > 0 [10 000] */
+    uint32_t step_timeout_us;    /* handshake reply timeout per step [1 000 000] */
+    uint32_t close_wait_us;      /* wait after CLOSE of a stale session [200 000] */
+    uint32_t config_timeout_us;  /* wait for the CONFIGpac [1 000 000] */
+    uint32_t keepalive_us;       /* longest gap between commands [500 000] */
+    uint32_t link_lost_us;       /* no SIP for this long = link lost [2 000 000];
+                                    ARIA uses 8 s */
+    uint32_t disconnect_wait_us; /* between ENABLE 0 and CLOSE [100 000] */
+    uint32_t byte_timeout_us;    /* partial packet abandoned after this silence [100 000] */
+    uint16_t ticks_mm;           /* TicksMM until a CONFIGpac says otherwise [128] */
+    uint16_t rev_count;          /* RevCount until a CONFIGpac says otherwise [0 = unknown] */
+    uint16_t watchdog_ms;        /* robot watchdog until a CONFIGpac says otherwise [2000] */
+} rsm_p3dx_config_t;
+
+/* Fills *cfg with the defaults above. Returns RSM_OK or RSM_ERR_INVAL
+ * (cfg NULL). Pure, reentrant. */
+int rsm_p3dx_config_default(rsm_p3dx_config_t *cfg);
+
+/* Driver states (d->state; read-only for the caller). */
+typedef enum rsm_p3dx_state {
+    RSM_P3DX_IDLE = 0,          /* not connected; rsm_p3dx_connect starts */
+    RSM_P3DX_SYNC = 1,          /* handshake, awaiting reply to SYNC0..2 */
+    RSM_P3DX_CLOSE_WAIT = 2,    /* CLOSE sent to a stale session */
+    RSM_P3DX_CONFIG_WAIT = 3,   /* OPEN (and CONFIG) sent, awaiting CONFIGpac */
+    RSM_P3DX_CONNECTED = 4,
+    RSM_P3DX_DISCONNECTING = 5  /* ENABLE 0 sent, CLOSE follows */
+} rsm_p3dx_state_t;
+
+typedef enum rsm_p3dx_event_type {
+    RSM_P3DX_EVENT_NONE = 0,
+    RSM_P3DX_EVENT_CONNECTED = 1,    /* handshake done; d->robot, d->ticks_mm valid */
+    RSM_P3DX_EVENT_ENCODER = 2,      /* encoder counts in ev->encoder */
+    RSM_P3DX_EVENT_SIP = 3,          /* a standard SIP in *ev->sip */
+    RSM_P3DX_EVENT_LINK_LOST = 4,    /* no SIP for link_lost_us; reconnecting */
+    RSM_P3DX_EVENT_DISCONNECTED = 5  /* CLOSE sent after rsm_p3dx_disconnect */
+} rsm_p3dx_event_type_t;
+
+/* One encoder reading: raw free-running counts and the receive time. */
+typedef struct rsm_p3dx_encoder {
+    int32_t left;       /* left wheel count, ticks */
+    int32_t right;      /* right wheel count, ticks */
+    int32_t d_left;     /* left - previous left, modulo 2^32 (0 if !has_delta) */
+    int32_t d_right;    /* right - previous right, modulo 2^32 */
+    uint8_t has_delta;  /* 0 for the first packet of a connection */
+    uint64_t stamp_us;  /* clock time of the read that completed the packet */
+} rsm_p3dx_encoder_t;
+
+typedef struct rsm_p3dx_event {
+    rsm_p3dx_event_type_t type;
+    rsm_p3dx_encoder_t encoder;  /* ENCODER only, zero otherwise */
+    const rsm_aria_sip_t *sip;   /* SIP only: points to d->sip, valid until
+                                    the next poll; NULL otherwise */
+    uint64_t stamp_us;           /* receive (or detection) time of the event */
+} rsm_p3dx_event_t;
+
+/* Counters; each wraps modulo 2^32. Framing errors (checksum, bad length,
+ * truncated, skipped bytes) are in d->parser.stats. */
+typedef struct rsm_p3dx_stats {
+    uint32_t sync_replies;       /* SYNC0..2 replies accepted */
+    uint32_t sips;               /* standard SIPs (0x32/0x33) decoded */
+    uint32_t encoder_packets;    /* ENCODER packets decoded */
+    uint32_t config_packets;     /* CONFIGpacs decoded */
+    uint32_t unknown_packets;    /* verified packets of another or unexpected type,
+                                    or that failed to decode */
+    uint32_t handshake_timeouts; /* handshake steps without a reply */
+    uint32_t handshake_restarts; /* wrong reply: restarted at SYNC0 */
+    uint32_t stale_sessions;     /* SIPs during the handshake: CLOSE sent */
+    uint32_t handshake_retries;  /* SYNC0 re-sent (after a timeout, restart, CLOSE) */
+    uint32_t config_timeouts;    /* CONFIGpac did not come; defaults kept */
+    uint32_t baud_changes;       /* set_baud calls made by probing */
+    uint32_t connects;           /* handshakes completed */
+    uint32_t link_lost;          /* LINK_LOST events */
+    uint32_t reconnects;         /* handshakes completed after a link loss */
+    uint32_t keepalives;         /* PULSEs sent while connected */
+    uint32_t commands;           /* motion commands sent (VEL, RVEL, VEL2, STOP) */
+    uint32_t write_errors;       /* link writes that failed */
+    uint32_t read_errors;        /* link reads that failed */
+} rsm_p3dx_stats_t;
+
+/* Driver state, caller owned (about 1 KB). Members are read-only for the
+ * caller; stats, state, robot, sip, ticks_mm, rev_count, watchdog_ms and
+ * baud may be read at any time. */
+typedef struct rsm_p3dx {
+    const rsm_p3dx_config_t *cfg;
+    const rsm_link_t *link;
+    const rsm_clock_t *clock;
+    rsm_p3dx_state_t state;
+    rsm_p3dx_stats_t stats;
+    rsm_aria_parser_t parser;
+    rsm_aria_sync2_t robot;   /* SYNC2 reply of the current connection */
+    rsm_aria_sip_t sip;       /* last SIP */
+    uint16_t ticks_mm;        /* from the CONFIGpac, else cfg->ticks_mm */
+    uint16_t rev_count;       /* from the CONFIGpac, else cfg->rev_count */
+    uint16_t watchdog_ms;     /* from the CONFIGpac, else cfg->watchdog_ms */
+    uint32_t baud;            /* current line rate */
+    /* private */
+    uint8_t step;             /* handshake step awaited, 0..2 */
+    uint8_t tries;            /* failed attempts at this rate */
+    uint8_t probe_idx;
+    uint8_t lost;             /* a link loss is being recovered */
+    uint8_t have_enc;
+    int32_t last_left;
+    int32_t last_right;
+    uint64_t deadline_us;
+    uint64_t last_tx_us;
+    uint64_t last_sip_us;
+    uint64_t last_rx_us;
+    uint8_t pend_vel;         /* VEL + RVEL queued */
+    uint8_t pend_vel2;
+    uint8_t pend_stop;
+    int16_t vel_mm_s;
+    int16_t rvel_deg_s;
+    int8_t vel2_left;
+    int8_t vel2_right;
+    uint8_t rx[RSM_P3DX_RX_CHUNK];
+    size_t rx_off;
+    size_t rx_len;
+    uint64_t rx_stamp_us;
+} rsm_p3dx_t;
+
+/* Initialises d in the IDLE state with zero counters. link, clock and cfg
+ * are kept by pointer and must outlive d. Nothing is sent.
+ * Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers, a link without read or
+ * write, a clock without now_us, read_timeout_us 0, sync_tries 0 or a zero
+ * timeout (d is then unchanged). */
+int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
+                  const rsm_p3dx_config_t *cfg);
+
+/* Starts the handshake (sends SYNC0 at d->baud). Also restarts it from any
+ * other state. Returns RSM_OK, RSM_ERR_INVAL (d NULL) or a link error from
+ * the write (the handshake still proceeds: a timeout will resend). */
+int rsm_p3dx_connect(rsm_p3dx_t *d);
+
+/* Runs the state machine once: at most one link read of at most
+ * cfg->read_timeout_us, then the timers. *ev receives the event (type NONE
+ * if nothing happened). Returns RSM_OK, RSM_ERR_INVAL (NULL pointers), or a
+ * negative link status if the read failed (ev type NONE; the driver stays
+ * usable). Never blocks longer than the read timeout plus the link's write
+ * time. */
+int rsm_p3dx_poll(rsm_p3dx_t *d, rsm_p3dx_event_t *ev);
+
+/* Queues VEL mm_s (|mm_s| <= 32767, mm/s) and RVEL deg_s (deg/s, CCW
+ * positive); the next poll sends them while connected. Replaces a queued
+ * VEL2 or STOP. Returns RSM_OK, RSM_ERR_INVAL or RSM_ERR_RANGE (nothing
+ * queued). */
+int rsm_p3dx_set_vel(rsm_p3dx_t *d, int32_t mm_s, int32_t deg_s);
+
+/* Queues VEL2 with wheel speeds in Vel2Divisor units (20 mm/s), each in
+ * [-127, 127]. Replaces a queued VEL/RVEL or STOP. Returns RSM_OK,
+ * RSM_ERR_INVAL or RSM_ERR_RANGE (nothing queued). */
+int rsm_p3dx_set_vel2(rsm_p3dx_t *d, int32_t left, int32_t right);
+
+/* Queues STOP and drops queued velocity commands. RSM_OK or RSM_ERR_INVAL. */
+int rsm_p3dx_stop(rsm_p3dx_t *d);
+
+/* Starts an orderly disconnect when connected (ENABLE 0 now, CLOSE after
+ * disconnect_wait_us, then a DISCONNECTED event and IDLE); in any other
+ * state goes to IDLE at once. Returns RSM_OK, RSM_ERR_INVAL or a write
+ * error. */
+int rsm_p3dx_disconnect(rsm_p3dx_t *d);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_P3DX_H */

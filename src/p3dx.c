@@ -1,0 +1,564 @@
+#include "rsm/p3dx.h"
+
+#include <string.h>
+
+/* Rates tried in turn when the robot does not answer (p2os's order). */
+static const uint32_t probe_rates[5] = {9600u, 38400u, 19200u, 115200u, 57600u};
+#define N_PROBE_RATES 5u
+
+int rsm_p3dx_config_default(rsm_p3dx_config_t *cfg)
+{
+    if (cfg == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    memset(cfg, 0, sizeof *cfg);
+    cfg->baud = 9600u;
+    cfg->probe_baud = 1u;
+    cfg->sync_tries = 3u;
+    cfg->request_config = 1u;
+    cfg->enable_motors = 1u;
+    cfg->request_encoder = 1u;
+    cfg->read_timeout_us = 10000u;
+    cfg->step_timeout_us = 1000000u;
+    cfg->close_wait_us = 200000u;
+    cfg->config_timeout_us = 1000000u;
+    cfg->keepalive_us = 500000u;
+    cfg->link_lost_us = 2000000u;
+    cfg->disconnect_wait_us = 100000u;
+    cfg->byte_timeout_us = 100000u;
+    cfg->ticks_mm = 128u;
+    cfg->rev_count = 0u;
+    cfg->watchdog_ms = 2000u;
+    return RSM_OK;
+}
+
+static uint64_t now_of(const rsm_p3dx_t *d)
+{
+    uint64_t t = 0u;
+    (void)rsm_clock_now_us(d->clock, &t);
+    return t;
+}
+
+static int send_frame(rsm_p3dx_t *d, const uint8_t *buf, int n, uint64_t now)
+{
+    int st;
+    if (n < 0) {
+        return n;
+    }
+    st = rsm_link_write_all(d->link, buf, (size_t)n, NULL);
+    if (st != RSM_OK) {
+        d->stats.write_errors++;
+        return st;
+    }
+    d->last_tx_us = now;
+    return RSM_OK;
+}
+
+/* Drops held input: the link's buffer, our chunk and the parser's partial
+ * packet. The parser's counters survive (they are cumulative). */
+static void drop_input(rsm_p3dx_t *d)
+{
+    rsm_aria_parser_stats_t keep = d->parser.stats;
+    (void)rsm_link_flush(d->link);
+    (void)rsm_aria_parser_init(&d->parser);
+    d->parser.stats = keep;
+    d->rx_off = 0u;
+    d->rx_len = 0u;
+}
+
+static void send_sync(rsm_p3dx_t *d, uint8_t step, uint64_t now)
+{
+    uint8_t buf[8];
+    int n;
+    if (step == 0u) {
+        n = rsm_aria_encode_sync0(buf, sizeof buf);
+    } else if (step == 1u) {
+        n = rsm_aria_encode_sync1(buf, sizeof buf);
+    } else {
+        n = rsm_aria_encode_sync2(buf, sizeof buf);
+    }
+    d->step = step;
+    d->state = RSM_P3DX_SYNC;
+    d->deadline_us = now + d->cfg->step_timeout_us;
+    (void)send_frame(d, buf, n, now);
+}
+
+/* Back to SYNC0 after a failed attempt, moving to the next rate once this
+ * one has had its sync_tries. */
+static void restart_handshake(rsm_p3dx_t *d, uint64_t now)
+{
+    d->stats.handshake_retries++;
+    d->tries++;
+    if (d->tries >= d->cfg->sync_tries) {
+        d->tries = 0u;
+        if (d->cfg->probe_baud && d->link->set_baud != NULL) {
+            d->probe_idx = (uint8_t)((d->probe_idx + 1u) % N_PROBE_RATES);
+            if (rsm_link_set_baud(d->link, probe_rates[d->probe_idx]) == RSM_OK) {
+                d->baud = probe_rates[d->probe_idx];
+                d->stats.baud_changes++;
+            }
+        }
+    }
+    drop_input(d);
+    send_sync(d, 0u, now);
+}
+
+static void begin_handshake(rsm_p3dx_t *d, uint64_t now)
+{
+    size_t i;
+    d->tries = 0u;
+    d->have_enc = 0u;
+    for (i = 0u; i < N_PROBE_RATES; i++) {
+        if (probe_rates[i] == d->baud) {
+            d->probe_idx = (uint8_t)i;
+        }
+    }
+    drop_input(d);
+    send_sync(d, 0u, now);
+}
+
+int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
+                  const rsm_p3dx_config_t *cfg)
+{
+    if (d == NULL || link == NULL || clock == NULL || cfg == NULL || link->read == NULL ||
+        link->write == NULL || clock->now_us == NULL || cfg->read_timeout_us == 0u ||
+        cfg->sync_tries == 0u || cfg->step_timeout_us == 0u || cfg->keepalive_us == 0u ||
+        cfg->link_lost_us == 0u || cfg->baud == 0u) {
+        return RSM_ERR_INVAL;
+    }
+    memset(d, 0, sizeof *d);
+    d->cfg = cfg;
+    d->link = link;
+    d->clock = clock;
+    d->state = RSM_P3DX_IDLE;
+    (void)rsm_aria_parser_init(&d->parser);
+    d->ticks_mm = cfg->ticks_mm;
+    d->rev_count = cfg->rev_count;
+    d->watchdog_ms = cfg->watchdog_ms;
+    d->baud = cfg->baud;
+    return RSM_OK;
+}
+
+int rsm_p3dx_connect(rsm_p3dx_t *d)
+{
+    uint64_t now;
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    now = now_of(d);
+    d->lost = 0u;
+    begin_handshake(d, now);
+    return RSM_OK;
+}
+
+/* OPEN was acknowledged by the SYNC2 reply: start the session. */
+static void open_session(rsm_p3dx_t *d, uint64_t now)
+{
+    uint8_t buf[12];
+    (void)send_frame(d, buf, rsm_aria_encode_open_int1(buf, sizeof buf), now);
+    d->last_sip_us = now;
+    d->state = RSM_P3DX_CONFIG_WAIT;
+    d->deadline_us = now;
+    if (d->cfg->request_config) {
+        (void)send_frame(d, buf, rsm_aria_encode_config(buf, sizeof buf), now);
+        d->deadline_us = now + d->cfg->config_timeout_us;
+    }
+}
+
+static void finish_connect(rsm_p3dx_t *d, uint64_t now, rsm_p3dx_event_t *ev)
+{
+    uint8_t buf[12];
+    if (d->cfg->enable_motors) {
+        (void)send_frame(d, buf, rsm_aria_encode_enable(1, buf, sizeof buf), now);
+    }
+    if (d->cfg->request_encoder) {
+        (void)send_frame(d, buf, rsm_aria_encode_encoder(1, buf, sizeof buf), now);
+    }
+    d->state = RSM_P3DX_CONNECTED;
+    d->last_sip_us = now;
+    d->tries = 0u;
+    d->stats.connects++;
+    if (d->lost) {
+        d->stats.reconnects++;
+        d->lost = 0u;
+    }
+    ev->type = RSM_P3DX_EVENT_CONNECTED;
+    ev->stamp_us = now;
+}
+
+static int is_session_packet(uint8_t id)
+{
+    return (id & 0xF0u) == 0x30u || id == RSM_ARIA_PAC_ENCODER;
+}
+
+static void handle_handshake_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t now)
+{
+    uint8_t buf[12];
+    if (is_session_packet(pkt->id)) {
+        /* An old session is still streaming: close it, let its last packets
+         * drain, then start again (ARIA and p2os do the same). */
+        d->stats.stale_sessions++;
+        (void)send_frame(d, buf, rsm_aria_encode_close_int1(buf, sizeof buf), now);
+        d->state = RSM_P3DX_CLOSE_WAIT;
+        d->deadline_us = now + d->cfg->close_wait_us;
+        return;
+    }
+    if (pkt->id > RSM_ARIA_PAC_SYNC2) {
+        d->stats.unknown_packets++;
+        return;
+    }
+    if (pkt->id != d->step) {
+        d->stats.handshake_restarts++;
+        restart_handshake(d, now);
+        return;
+    }
+    d->stats.sync_replies++;
+    if (d->step < 2u) {
+        send_sync(d, (uint8_t)(d->step + 1u), now);
+        return;
+    }
+    if (rsm_aria_decode_sync2(pkt, &d->robot) != RSM_OK) {
+        memset(&d->robot, 0, sizeof d->robot);
+    }
+    open_session(d, now);
+}
+
+static void handle_encoder(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, rsm_p3dx_event_t *ev)
+{
+    rsm_aria_encoder_t enc;
+    if (rsm_aria_decode_encoder(pkt, &enc) != RSM_OK) {
+        d->stats.unknown_packets++;
+        return;
+    }
+    d->stats.encoder_packets++;
+    ev->type = RSM_P3DX_EVENT_ENCODER;
+    ev->stamp_us = d->rx_stamp_us;
+    ev->encoder.left = enc.left;
+    ev->encoder.right = enc.right;
+    ev->encoder.stamp_us = d->rx_stamp_us;
+    if (d->have_enc) {
+        ev->encoder.d_left = rsm_aria_count_delta(enc.left, d->last_left);
+        ev->encoder.d_right = rsm_aria_count_delta(enc.right, d->last_right);
+        ev->encoder.has_delta = 1u;
+    }
+    d->last_left = enc.left;
+    d->last_right = enc.right;
+    d->have_enc = 1u;
+}
+
+static void handle_config(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt)
+{
+    /* Only three fields are kept, so the decoded CONFIGpac (a few hundred
+     * bytes) lives on the stack for this call instead of in the state. */
+    rsm_aria_config_t c;
+    if (rsm_aria_decode_config(pkt, &c) != RSM_OK) {
+        d->stats.unknown_packets++;
+        return;
+    }
+    d->stats.config_packets++;
+    if (c.ticks_mm != 0u) {
+        d->ticks_mm = c.ticks_mm;
+    }
+    if (c.rev_count != 0u) {
+        d->rev_count = c.rev_count;
+    }
+    if (c.watchdog != 0u) {
+        d->watchdog_ms = c.watchdog;
+    }
+}
+
+/* A packet while a session is open (CONFIG_WAIT, CONNECTED, DISCONNECTING). */
+static void handle_session_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t now,
+                                  rsm_p3dx_event_t *ev)
+{
+    if (pkt->id == RSM_ARIA_PAC_SIP_STOPPED || pkt->id == RSM_ARIA_PAC_SIP_MOVING) {
+        if (rsm_aria_decode_sip(pkt, &d->sip) != RSM_OK) {
+            d->stats.unknown_packets++;
+            return;
+        }
+        d->stats.sips++;
+        d->last_sip_us = d->rx_stamp_us;
+        if (d->state == RSM_P3DX_CONNECTED) {
+            ev->type = RSM_P3DX_EVENT_SIP;
+            ev->sip = &d->sip;
+            ev->stamp_us = d->rx_stamp_us;
+        }
+    } else if (pkt->id == RSM_ARIA_PAC_ENCODER) {
+        if (d->state == RSM_P3DX_CONNECTED) {
+            handle_encoder(d, pkt, ev);
+        } else {
+            d->stats.unknown_packets++;
+        }
+    } else if (pkt->id == RSM_ARIA_PAC_CONFIG) {
+        handle_config(d, pkt);
+        if (d->state == RSM_P3DX_CONFIG_WAIT) {
+            finish_connect(d, now, ev);
+        }
+    } else {
+        d->stats.unknown_packets++;
+    }
+}
+
+static void handle_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t now,
+                          rsm_p3dx_event_t *ev)
+{
+    switch (d->state) {
+    case RSM_P3DX_SYNC:
+        handle_handshake_packet(d, pkt, now);
+        break;
+    case RSM_P3DX_CONFIG_WAIT:
+    case RSM_P3DX_CONNECTED:
+    case RSM_P3DX_DISCONNECTING:
+        handle_session_packet(d, pkt, now, ev);
+        break;
+    case RSM_P3DX_IDLE:
+    case RSM_P3DX_CLOSE_WAIT:
+    default:
+        /* Nobody is listening: packets of a closing session are dropped. */
+        break;
+    }
+}
+
+/* Feeds held bytes until a packet yields an event or the chunk is used up. */
+static void drain(rsm_p3dx_t *d, uint64_t now, rsm_p3dx_event_t *ev)
+{
+    rsm_aria_packet_t pkt;
+    for (;;) {
+        size_t used = 0u;
+        int r = rsm_aria_parser_feed(&d->parser, d->rx + d->rx_off, d->rx_len - d->rx_off, &used,
+                                     &pkt);
+        if (r < 0) {
+            d->rx_off = d->rx_len;
+            return;
+        }
+        d->rx_off += used;
+        if (r == 0) {
+            return;
+        }
+        handle_packet(d, &pkt, now, ev);
+        if (ev->type != RSM_P3DX_EVENT_NONE) {
+            return;
+        }
+    }
+}
+
+static int send_pending(rsm_p3dx_t *d, uint64_t now)
+{
+    uint8_t buf[12];
+    if (d->pend_stop) {
+        d->pend_stop = 0u;
+        d->stats.commands++;
+        return send_frame(d, buf, rsm_aria_encode_stop(buf, sizeof buf), now);
+    }
+    if (d->pend_vel) {
+        d->pend_vel = 0u;
+        d->stats.commands += 2u;
+        (void)send_frame(d, buf, rsm_aria_encode_vel(d->vel_mm_s, buf, sizeof buf), now);
+        return send_frame(d, buf, rsm_aria_encode_rvel(d->rvel_deg_s, buf, sizeof buf), now);
+    }
+    if (d->pend_vel2) {
+        d->pend_vel2 = 0u;
+        d->stats.commands++;
+        return send_frame(d, buf, rsm_aria_encode_vel2(d->vel2_left, d->vel2_right, buf, sizeof buf),
+                          now);
+    }
+    return RSM_OK;
+}
+
+static void run_timers(rsm_p3dx_t *d, uint64_t now, rsm_p3dx_event_t *ev)
+{
+    uint8_t buf[12];
+    switch (d->state) {
+    case RSM_P3DX_SYNC:
+        if (now >= d->deadline_us) {
+            d->stats.handshake_timeouts++;
+            restart_handshake(d, now);
+        }
+        break;
+    case RSM_P3DX_CLOSE_WAIT:
+        if (now >= d->deadline_us) {
+            restart_handshake(d, now);
+        }
+        break;
+    case RSM_P3DX_CONFIG_WAIT:
+        if (now >= d->deadline_us) {
+            if (d->cfg->request_config) {
+                d->stats.config_timeouts++;
+            }
+            finish_connect(d, now, ev);
+        }
+        break;
+    case RSM_P3DX_CONNECTED:
+        if (now - d->last_sip_us >= d->cfg->link_lost_us) {
+            d->stats.link_lost++;
+            d->lost = 1u;
+            ev->type = RSM_P3DX_EVENT_LINK_LOST;
+            ev->stamp_us = now;
+            begin_handshake(d, now);
+            break;
+        }
+        (void)send_pending(d, now);
+        if (now - d->last_tx_us >= d->cfg->keepalive_us) {
+            d->stats.keepalives++;
+            (void)send_frame(d, buf, rsm_aria_encode_pulse(buf, sizeof buf), now);
+        }
+        break;
+    case RSM_P3DX_DISCONNECTING:
+        if (now >= d->deadline_us) {
+            (void)send_frame(d, buf, rsm_aria_encode_close_int1(buf, sizeof buf), now);
+            d->state = RSM_P3DX_IDLE;
+            ev->type = RSM_P3DX_EVENT_DISCONNECTED;
+            ev->stamp_us = now;
+        }
+        break;
+    case RSM_P3DX_IDLE:
+    default:
+        break;
+    }
+}
+
+/* Time until the next timer of the current state fires (0 if due). */
+static uint64_t time_to_deadline(const rsm_p3dx_t *d, uint64_t now)
+{
+    uint64_t due;
+    switch (d->state) {
+    case RSM_P3DX_SYNC:
+    case RSM_P3DX_CLOSE_WAIT:
+    case RSM_P3DX_CONFIG_WAIT:
+    case RSM_P3DX_DISCONNECTING:
+        due = d->deadline_us;
+        break;
+    case RSM_P3DX_CONNECTED: {
+        const uint64_t ka = d->last_tx_us + d->cfg->keepalive_us;
+        const uint64_t lost = d->last_sip_us + d->cfg->link_lost_us;
+        due = ka < lost ? ka : lost;
+        break;
+    }
+    case RSM_P3DX_IDLE:
+    default:
+        return UINT64_MAX;
+    }
+    return due > now ? due - now : 0u;
+}
+
+int rsm_p3dx_poll(rsm_p3dx_t *d, rsm_p3dx_event_t *ev)
+{
+    uint64_t now;
+    uint64_t wait;
+    uint32_t timeout;
+    int n;
+    if (d == NULL || ev == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    memset(ev, 0, sizeof *ev);
+    now = now_of(d);
+
+    /* Bytes left over from the previous poll come first. */
+    drain(d, now, ev);
+    if (ev->type != RSM_P3DX_EVENT_NONE) {
+        return RSM_OK;
+    }
+    run_timers(d, now, ev);
+    if (ev->type != RSM_P3DX_EVENT_NONE) {
+        return RSM_OK;
+    }
+
+    wait = time_to_deadline(d, now);
+    timeout = d->cfg->read_timeout_us;
+    if (wait < (uint64_t)timeout) {
+        timeout = (uint32_t)wait;
+    }
+    n = rsm_link_read(d->link, d->rx, sizeof d->rx, timeout);
+    now = now_of(d);
+    if (n < 0) {
+        d->stats.read_errors++;
+        return n;
+    }
+    if (n > 0) {
+        d->rx_off = 0u;
+        d->rx_len = (size_t)n;
+        d->rx_stamp_us = now;
+        d->last_rx_us = now;
+        drain(d, now, ev);
+        if (ev->type != RSM_P3DX_EVENT_NONE) {
+            return RSM_OK;
+        }
+    } else if (rsm_aria_parser_pending(&d->parser) > 0u &&
+               now - d->last_rx_us >= d->cfg->byte_timeout_us) {
+        /* A packet cut short: abandon it, then look at what it held. */
+        (void)rsm_aria_parser_timeout(&d->parser);
+        d->rx_off = 0u;
+        d->rx_len = 0u;
+        drain(d, now, ev);
+        if (ev->type != RSM_P3DX_EVENT_NONE) {
+            return RSM_OK;
+        }
+    }
+    run_timers(d, now, ev);
+    return RSM_OK;
+}
+
+int rsm_p3dx_set_vel(rsm_p3dx_t *d, int32_t mm_s, int32_t deg_s)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (mm_s < -RSM_ARIA_INT_MAX || mm_s > RSM_ARIA_INT_MAX || deg_s < -RSM_ARIA_INT_MAX ||
+        deg_s > RSM_ARIA_INT_MAX) {
+        return RSM_ERR_RANGE;
+    }
+    d->vel_mm_s = (int16_t)mm_s;
+    d->rvel_deg_s = (int16_t)deg_s;
+    d->pend_vel = 1u;
+    d->pend_vel2 = 0u;
+    d->pend_stop = 0u;
+    return RSM_OK;
+}
+
+int rsm_p3dx_set_vel2(rsm_p3dx_t *d, int32_t left, int32_t right)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (left < -RSM_ARIA_VEL2_MAX || left > RSM_ARIA_VEL2_MAX || right < -RSM_ARIA_VEL2_MAX ||
+        right > RSM_ARIA_VEL2_MAX) {
+        return RSM_ERR_RANGE;
+    }
+    d->vel2_left = (int8_t)left;
+    d->vel2_right = (int8_t)right;
+    d->pend_vel2 = 1u;
+    d->pend_vel = 0u;
+    d->pend_stop = 0u;
+    return RSM_OK;
+}
+
+int rsm_p3dx_stop(rsm_p3dx_t *d)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    d->pend_stop = 1u;
+    d->pend_vel = 0u;
+    d->pend_vel2 = 0u;
+    return RSM_OK;
+}
+
+int rsm_p3dx_disconnect(rsm_p3dx_t *d)
+{
+    uint8_t buf[12];
+    uint64_t now;
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    now = now_of(d);
+    d->pend_stop = 0u;
+    d->pend_vel = 0u;
+    d->pend_vel2 = 0u;
+    if (d->state != RSM_P3DX_CONNECTED) {
+        d->state = RSM_P3DX_IDLE;
+        return RSM_OK;
+    }
+    d->state = RSM_P3DX_DISCONNECTING;
+    d->deadline_us = now + d->cfg->disconnect_wait_us;
+    return send_frame(d, buf, rsm_aria_encode_enable(0, buf, sizeof buf), now);
+}

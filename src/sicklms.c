@@ -1,0 +1,512 @@
+#include "rsm/sicklms.h"
+
+#include <string.h>
+
+/* Start-up steps, in order. */
+#define STEP_PROBE 0u   /* 0x20 0x25 at a candidate rate */
+#define STEP_BAUD 1u    /* 0x20 0x40/0x41/0x42 */
+#define STEP_VARIANT 2u /* 0x3B */
+#define STEP_STREAM 3u  /* 0x20 0x24 */
+
+/* What the request in flight waits for. */
+#define SUB_ACK 0u
+#define SUB_REPLY 1u
+#define SUB_NAK_WAIT 2u
+
+static const uint32_t probe_rates[3] = {9600u, 38400u, 19200u};
+#define N_RATES 3u
+
+#define PI_F 3.14159265358979f
+
+static int rate_index(uint32_t baud)
+{
+    size_t i;
+    for (i = 0u; i < N_RATES; i++) {
+        if (probe_rates[i] == baud) {
+            return (int)i;
+        }
+    }
+    return -1;
+}
+
+int rsm_sicklms_config_default(rsm_sicklms_config_t *cfg)
+{
+    if (cfg == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    memset(cfg, 0, sizeof *cfg);
+    cfg->address = 0u;
+    cfg->power_up_baud = 9600u;
+    cfg->baud = 38400u;
+    cfg->probe = 1u;
+    cfg->angle_deg = 180u;
+    cfg->resolution_cdeg = 100u;
+    cfg->upside_down = 0u;
+    cfg->max_tries = 3u;
+    cfg->read_timeout_us = 10000u;
+    cfg->ack_timeout_us = 200000u;
+    cfg->reply_timeout_us = 1000000u;
+    cfg->mode_timeout_us = 3000000u;
+    cfg->nak_wait_us = 30000u;
+    cfg->baud_settle_us = 250000u;
+    cfg->retry_wait_us = 1000000u;
+    cfg->stream_timeout_us = 1000000u;
+    cfg->byte_timeout_us = 100000u;
+    cfg->latency_us = 0u;
+    (void)rsm_lms_b0_format_default(&cfg->format);
+    return RSM_OK;
+}
+
+int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
+                     const rsm_sicklms_config_t *cfg)
+{
+    uint8_t probe[16];
+    if (d == NULL || link == NULL || clock == NULL || cfg == NULL || link->read == NULL ||
+        link->write == NULL || clock->now_us == NULL || cfg->read_timeout_us == 0u ||
+        cfg->ack_timeout_us == 0u || cfg->reply_timeout_us == 0u || cfg->mode_timeout_us == 0u ||
+        cfg->max_tries == 0u || cfg->address > 0x7Fu || rate_index(cfg->power_up_baud) < 0 ||
+        (cfg->baud != 0u && rate_index(cfg->baud) < 0) ||
+        rsm_lms_encode_variant(probe, sizeof probe, cfg->address, cfg->angle_deg,
+                               cfg->resolution_cdeg) < 0) {
+        return RSM_ERR_INVAL;
+    }
+    memset(d, 0, sizeof *d);
+    d->cfg = cfg;
+    d->link = link;
+    d->clock = clock;
+    d->state = RSM_SICKLMS_IDLE;
+    d->baud = cfg->power_up_baud;
+    (void)rsm_lms_parser_init(&d->parser);
+    return RSM_OK;
+}
+
+static uint64_t now_of(const rsm_sicklms_t *d)
+{
+    uint64_t t = 0u;
+    (void)rsm_clock_now_us(d->clock, &t);
+    return t;
+}
+
+/* Drops received input (link buffer, our chunk, the parser's bytes). */
+static void drop_input(rsm_sicklms_t *d)
+{
+    (void)rsm_link_flush(d->link);
+    (void)rsm_lms_parser_flush(&d->parser);
+    d->rx_off = 0u;
+    d->rx_len = 0u;
+}
+
+static void send_request(rsm_sicklms_t *d, uint64_t now)
+{
+    if (rsm_link_write_all(d->link, d->req, d->req_len, NULL) != RSM_OK) {
+        d->stats.write_errors++;
+    }
+    d->tries++;
+    d->sub = SUB_ACK;
+    d->deadline_us = now + d->cfg->ack_timeout_us;
+}
+
+/* Builds and sends the request of a start-up step. */
+static void start_step(rsm_sicklms_t *d, uint8_t step, uint64_t now)
+{
+    const rsm_sicklms_config_t *c = d->cfg;
+    int n;
+    switch (step) {
+    case STEP_PROBE:
+        n = rsm_lms_encode_mode(d->req, sizeof d->req, c->address, RSM_LMS_MODE_ON_REQUEST);
+        d->req_reply = RSM_LMS_REPLY_MODE;
+        d->stats.probes++;
+        break;
+    case STEP_BAUD:
+        n = rsm_lms_encode_mode_baud(d->req, sizeof d->req, c->address, c->baud);
+        d->req_reply = RSM_LMS_REPLY_MODE;
+        break;
+    case STEP_VARIANT:
+        n = rsm_lms_encode_variant(d->req, sizeof d->req, c->address, c->angle_deg,
+                                   c->resolution_cdeg);
+        d->req_reply = RSM_LMS_REPLY_VARIANT;
+        break;
+    case STEP_STREAM:
+    default:
+        n = rsm_lms_encode_mode(d->req, sizeof d->req, c->address, RSM_LMS_MODE_CONTINUOUS);
+        d->req_reply = RSM_LMS_REPLY_MODE;
+        step = STEP_STREAM;
+        break;
+    }
+    d->req_len = n > 0 ? (size_t)n : 0u;
+    d->step = step;
+    d->tries = 0u;
+    d->state = RSM_SICKLMS_STARTING;
+    send_request(d, now);
+}
+
+/* Sets the link to probe_rates[idx] and probes there. */
+static void probe_at(rsm_sicklms_t *d, uint8_t idx, uint64_t now)
+{
+    d->probe_idx = idx;
+    if (probe_rates[idx] != d->baud && rsm_link_set_baud(d->link, probe_rates[idx]) == RSM_OK) {
+        d->baud = probe_rates[idx];
+        d->stats.baud_changes++;
+    }
+    drop_input(d);
+    start_step(d, STEP_PROBE, now);
+}
+
+/* A new probe round starting at rate first (the current rate when the link
+ * cannot change rates). */
+static void begin_probing(rsm_sicklms_t *d, uint32_t first, uint64_t now)
+{
+    int idx = rate_index(first);
+    if (idx < 0 || d->link->set_baud == NULL) {
+        idx = rate_index(d->baud);
+    }
+    if (idx < 0) {
+        idx = 0;
+    }
+    d->probed = 0u;
+    probe_at(d, (uint8_t)idx, now);
+}
+
+int rsm_sicklms_connect(rsm_sicklms_t *d)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    d->lost = 0u;
+    begin_probing(d, d->cfg->power_up_baud, now_of(d));
+    return RSM_OK;
+}
+
+static void fail(rsm_sicklms_t *d, int status, uint64_t now, rsm_sicklms_event_t *ev)
+{
+    d->stats.errors++;
+    d->state = RSM_SICKLMS_BACKOFF;
+    d->deadline_us = now + d->cfg->retry_wait_us;
+    ev->type = RSM_SICKLMS_EVENT_ERROR;
+    ev->status = status;
+    ev->stamp_us = now;
+}
+
+/* No ACK or no reply in time. */
+static void request_timed_out(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
+{
+    if (d->sub == SUB_ACK) {
+        d->stats.ack_timeouts++;
+    } else {
+        d->stats.reply_timeouts++;
+    }
+    if (d->step == STEP_PROBE) {
+        /* Nothing at this rate: the next one (one try each, 2.10 step 2). */
+        d->probed++;
+        if (!d->cfg->probe || d->link->set_baud == NULL || d->probed >= N_RATES) {
+            d->probed = 0u;
+            fail(d, RSM_ERR_TIMEOUT, now, ev);
+            return;
+        }
+        probe_at(d, (uint8_t)((d->probe_idx + 1u) % N_RATES), now);
+        return;
+    }
+    if (d->step == STEP_BAUD) {
+        /* The LMS may or may not have switched: never repeat the change
+         * blindly, find it again, trying the new rate first. */
+        begin_probing(d, d->cfg->baud, now);
+        return;
+    }
+    if (d->tries >= d->cfg->max_tries) {
+        fail(d, RSM_ERR_TIMEOUT, now, ev);
+        return;
+    }
+    d->stats.retries++;
+    drop_input(d);
+    send_request(d, now);
+}
+
+static void streaming_started(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
+{
+    d->state = RSM_SICKLMS_STREAMING;
+    d->last_tel_us = now;
+    d->stats.connects++;
+    if (d->lost) {
+        d->stats.reconnects++;
+        d->lost = 0u;
+    }
+    ev->type = RSM_SICKLMS_EVENT_CONNECTED;
+    ev->stamp_us = now;
+}
+
+/* The expected reply of the step in flight arrived. */
+static void step_done(rsm_sicklms_t *d, const rsm_lms_telegram_t *t, uint64_t now,
+                      rsm_sicklms_event_t *ev)
+{
+    rsm_lms_mode_reply_t mode;
+    rsm_lms_variant_reply_t var;
+    switch (d->step) {
+    case STEP_PROBE:
+        if (rsm_lms_decode_mode_reply(t, &mode) != RSM_OK) {
+            fail(d, RSM_ERR_PROTO, now, ev);
+            return;
+        }
+        if (d->cfg->baud != 0u && d->cfg->baud != d->baud && d->link->set_baud != NULL) {
+            start_step(d, STEP_BAUD, now);
+        } else {
+            start_step(d, STEP_VARIANT, now);
+        }
+        return;
+    case STEP_BAUD:
+        if (rsm_lms_decode_mode_reply(t, &mode) != RSM_OK ||
+            mode.result != RSM_LMS_MODE_RESULT_OK) {
+            fail(d, RSM_ERR_PROTO, now, ev);
+            return;
+        }
+        /* The reply came at the old rate; now both sides move. */
+        if (rsm_link_set_baud(d->link, d->cfg->baud) != RSM_OK) {
+            fail(d, RSM_ERR_IO, now, ev);
+            return;
+        }
+        d->baud = d->cfg->baud;
+        d->stats.baud_changes++;
+        drop_input(d);
+        d->state = RSM_SICKLMS_SETTLE;
+        d->deadline_us = now + d->cfg->baud_settle_us;
+        return;
+    case STEP_VARIANT:
+        if (rsm_lms_decode_variant_reply(t, &var) != RSM_OK ||
+            var.result != RSM_LMS_RESULT_ACCEPTED || var.angle_deg != d->cfg->angle_deg ||
+            var.resolution_cdeg != d->cfg->resolution_cdeg) {
+            fail(d, RSM_ERR_PROTO, now, ev);
+            return;
+        }
+        start_step(d, STEP_STREAM, now);
+        return;
+    case STEP_STREAM:
+    default:
+        if (rsm_lms_decode_mode_reply(t, &mode) != RSM_OK ||
+            mode.result != RSM_LMS_MODE_RESULT_OK) {
+            fail(d, RSM_ERR_PROTO, now, ev);
+            return;
+        }
+        streaming_started(d, now, ev);
+        return;
+    }
+}
+
+/* Converts d->raw into d->scan in the robot frame. */
+static int convert_scan(rsm_sicklms_t *d)
+{
+    const rsm_lms_scan_t *r = &d->raw;
+    size_t i;
+    uint32_t invalid = 0u;
+    if (r->step_cdeg == 0u || r->count > RSM_MAX_BEAMS) {
+        return RSM_ERR_PROTO;
+    }
+    for (i = 0u; i < r->count; i++) {
+        const int32_t cdeg = (int32_t)r->start_cdeg + (int32_t)(i * r->step_cdeg);
+        const int32_t bearing = d->cfg->upside_down ? 9000 - cdeg : cdeg - 9000;
+        d->scan.angle_rad[i] = (float)bearing * (PI_F / 18000.0f);
+        if (r->reading[i].code == RSM_LMS_READING_OK) {
+            d->scan.range_m[i] = r->reading[i].range_m;
+        } else {
+            d->scan.range_m[i] = 0.0f;
+            invalid++;
+        }
+    }
+    d->scan.count = r->count;
+    d->scan.stamp_us = d->rx_stamp_us >= d->cfg->latency_us ? d->rx_stamp_us - d->cfg->latency_us
+                                                            : 0u;
+    d->stats.invalid_readings += invalid;
+    return RSM_OK;
+}
+
+static void handle_event(rsm_sicklms_t *d, const rsm_lms_event_t *e, uint64_t now,
+                         rsm_sicklms_event_t *ev)
+{
+    if (e->type == RSM_LMS_EVENT_TELEGRAM) {
+        d->stats.telegrams++;
+    }
+    if (d->state == RSM_SICKLMS_STREAMING) {
+        if (e->type != RSM_LMS_EVENT_TELEGRAM) {
+            return; /* 0x06/0x15 bytes mean nothing while streaming */
+        }
+        d->last_tel_us = d->rx_stamp_us;
+        if (e->telegram.cmd != RSM_LMS_REPLY_VALUES) {
+            d->stats.unexpected++;
+            return;
+        }
+        if (rsm_lms_decode_b0(&e->telegram, &d->cfg->format, &d->raw) != RSM_OK ||
+            convert_scan(d) != RSM_OK) {
+            d->stats.bad_scans++;
+            return;
+        }
+        d->stats.scans++;
+        ev->type = RSM_SICKLMS_EVENT_SCAN;
+        ev->scan = &d->scan;
+        ev->stamp_us = d->scan.stamp_us;
+        return;
+    }
+    if (d->state != RSM_SICKLMS_STARTING || d->sub == SUB_NAK_WAIT) {
+        if (e->type == RSM_LMS_EVENT_TELEGRAM) {
+            d->stats.unexpected++;
+        }
+        return;
+    }
+    if (e->type == RSM_LMS_EVENT_ACK) {
+        if (d->sub == SUB_ACK) {
+            d->stats.acks++;
+            d->sub = SUB_REPLY;
+            /* req[4] is the CMD byte of the request telegram; a mode change
+             * may take the LMS up to 3 s (protocols.md 2.4). */
+            d->deadline_us = now + (d->req[4] == RSM_LMS_CMD_MODE ? d->cfg->mode_timeout_us
+                                                                   : d->cfg->reply_timeout_us);
+        }
+        return;
+    }
+    if (e->type == RSM_LMS_EVENT_NAK ||
+        (e->type == RSM_LMS_EVENT_TELEGRAM && e->telegram.cmd == RSM_LMS_REPLY_NOT_ACK)) {
+        if (e->type == RSM_LMS_EVENT_NAK) {
+            d->stats.naks++;
+        } else {
+            d->stats.rejected++;
+        }
+        if (d->tries >= d->cfg->max_tries) {
+            fail(d, RSM_ERR_PROTO, now, ev);
+            return;
+        }
+        /* The listing asks for at least 30 ms before the next request. */
+        d->sub = SUB_NAK_WAIT;
+        d->deadline_us = now + d->cfg->nak_wait_us;
+        return;
+    }
+    if (e->type == RSM_LMS_EVENT_TELEGRAM) {
+        if (e->telegram.cmd == d->req_reply) {
+            step_done(d, &e->telegram, now, ev);
+        } else {
+            d->stats.unexpected++; /* e.g. 0xB0 of a stream left running */
+        }
+    }
+}
+
+static void drain(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
+{
+    rsm_lms_event_t e;
+    for (;;) {
+        size_t used = 0u;
+        int r = rsm_lms_parser_feed(&d->parser, d->rx + d->rx_off, d->rx_len - d->rx_off, &used, &e);
+        if (r < 0) {
+            d->rx_off = d->rx_len;
+            break;
+        }
+        d->rx_off += used;
+        if (r == 0) {
+            break;
+        }
+        handle_event(d, &e, now, ev);
+        if (ev->type != RSM_SICKLMS_EVENT_NONE) {
+            break;
+        }
+    }
+    d->stats.crc_errors = d->parser.stats.crc_errors;
+}
+
+static void run_timers(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
+{
+    switch (d->state) {
+    case RSM_SICKLMS_STARTING:
+        if (now < d->deadline_us) {
+            break;
+        }
+        if (d->sub == SUB_NAK_WAIT) {
+            d->stats.retries++;
+            send_request(d, now);
+        } else {
+            request_timed_out(d, now, ev);
+        }
+        break;
+    case RSM_SICKLMS_SETTLE:
+        if (now >= d->deadline_us) {
+            start_step(d, STEP_VARIANT, now);
+        }
+        break;
+    case RSM_SICKLMS_BACKOFF:
+        if (now >= d->deadline_us) {
+            begin_probing(d, d->baud, now);
+        }
+        break;
+    case RSM_SICKLMS_STREAMING:
+        if (now - d->last_tel_us >= d->cfg->stream_timeout_us) {
+            d->stats.link_lost++;
+            d->lost = 1u;
+            ev->type = RSM_SICKLMS_EVENT_LINK_LOST;
+            ev->stamp_us = now;
+            begin_probing(d, d->baud, now);
+        }
+        break;
+    case RSM_SICKLMS_IDLE:
+    default:
+        break;
+    }
+}
+
+static uint64_t time_to_deadline(const rsm_sicklms_t *d, uint64_t now)
+{
+    uint64_t due;
+    if (d->state == RSM_SICKLMS_IDLE) {
+        return UINT64_MAX;
+    }
+    due = d->state == RSM_SICKLMS_STREAMING ? d->last_tel_us + d->cfg->stream_timeout_us
+                                            : d->deadline_us;
+    return due > now ? due - now : 0u;
+}
+
+int rsm_sicklms_poll(rsm_sicklms_t *d, rsm_sicklms_event_t *ev)
+{
+    uint64_t now;
+    uint64_t wait;
+    uint32_t timeout;
+    int n;
+    if (d == NULL || ev == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    memset(ev, 0, sizeof *ev);
+    now = now_of(d);
+    drain(d, now, ev);
+    if (ev->type != RSM_SICKLMS_EVENT_NONE) {
+        return RSM_OK;
+    }
+    run_timers(d, now, ev);
+    if (ev->type != RSM_SICKLMS_EVENT_NONE) {
+        return RSM_OK;
+    }
+    wait = time_to_deadline(d, now);
+    timeout = d->cfg->read_timeout_us;
+    if (wait < (uint64_t)timeout) {
+        timeout = (uint32_t)wait;
+    }
+    n = rsm_link_read(d->link, d->rx, sizeof d->rx, timeout);
+    now = now_of(d);
+    if (n < 0) {
+        d->stats.read_errors++;
+        return n;
+    }
+    if (n > 0) {
+        d->rx_off = 0u;
+        d->rx_len = (size_t)n;
+        d->rx_stamp_us = now;
+        d->last_rx_us = now;
+        drain(d, now, ev);
+        if (ev->type != RSM_SICKLMS_EVENT_NONE) {
+            return RSM_OK;
+        }
+    } else if (now - d->last_rx_us >= d->cfg->byte_timeout_us) {
+        rsm_lms_event_t e;
+        /* A telegram cut short: abandon it and look at what it held. */
+        while (ev->type == RSM_SICKLMS_EVENT_NONE && rsm_lms_parser_timeout(&d->parser, &e) == 1) {
+            handle_event(d, &e, now, ev);
+        }
+        d->stats.crc_errors = d->parser.stats.crc_errors;
+        if (ev->type != RSM_SICKLMS_EVENT_NONE) {
+            return RSM_OK;
+        }
+    }
+    run_timers(d, now, ev);
+    return RSM_OK;
+}

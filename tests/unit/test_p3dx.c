@@ -1,0 +1,592 @@
+/* Tests of the P3-DX driver (src/p3dx.c) against a scripted fake robot on
+ * the in-memory fakelink. */
+#include <string.h>
+
+#include "fakelink.h"
+#include "rsm/aria.h"
+#include "rsm/p3dx.h"
+#include "rsm/status.h"
+#include "unity.h"
+
+/* ---- the fake robot ----------------------------------------------------------- */
+
+typedef struct fake_robot {
+    rsm_aria_parser_t parser;
+    int sync_stage;      /* next SYNC expected: 0, 1, 2; 3 = synced (cmd 1 is OPEN) */
+    int connected;       /* session open: SIPs and (if asked) encoder packets flow */
+    int encoder_on;
+    int enabled;
+    int send_config;     /* answer CONFIG */
+    int wrong_sync1;     /* answer the next SYNC1 with ID 0 */
+    uint32_t reply_delay_us;
+    uint64_t next_sip_us;
+    int32_t left;
+    int32_t right;
+    int32_t step_left;   /* encoder increment per SIP cycle */
+    int32_t step_right;
+    uint32_t opens;
+    uint32_t closes;
+    uint32_t configs;
+    uint32_t pulses_while_connected;
+} fake_robot_t;
+
+static rsm_fakelink_t fl;
+static rsm_link_t link;
+static rsm_clock_t clk;
+static fake_robot_t robot;
+static rsm_p3dx_config_t cfg;
+static rsm_p3dx_t drv;
+
+#define T0_US 1000000u
+#define SIP_CYCLE_US 100000u
+
+static void robot_send(uint8_t id, const uint8_t *payload, size_t len)
+{
+    uint8_t buf[RSM_ARIA_MAX_PACKET];
+    int n = rsm_aria_encode_raw(id, payload, len, buf, sizeof buf);
+    TEST_ASSERT_GREATER_THAN_INT(0, n);
+    rsm_fakelink_send(&fl, buf, (size_t)n, robot.reply_delay_us);
+}
+
+static size_t put_u16(uint8_t *p, size_t at, uint16_t v)
+{
+    p[at] = (uint8_t)(v & 0xFFu);
+    p[at + 1u] = (uint8_t)(v >> 8);
+    return at + 2u;
+}
+
+static size_t put_str(uint8_t *p, size_t at, const char *s)
+{
+    size_t n = strlen(s) + 1u;
+    memcpy(p + at, s, n);
+    return at + n;
+}
+
+/* A CONFIGpac with TicksMM 132, RevCount 32550, Watchdog 1500. */
+static void robot_send_config(void)
+{
+    uint8_t p[200];
+    size_t at = 0u;
+    int i;
+    memset(p, 0, sizeof p);
+    at = put_str(p, at, "Pioneer");
+    at = put_str(p, at, "p3dx-sh");
+    at = put_str(p, at, "SN42");
+    p[at++] = 0u;                                /* four_mot */
+    for (i = 0; i < 5; i++) {
+        at = put_u16(p, at, 300u);               /* tops, pwm */
+    }
+    at = put_str(p, at, "fakebot");
+    p[at++] = 100u;                              /* sip cycle */
+    p[at++] = 0u;                                /* host baud */
+    p[at++] = 0u;                                /* aux1 baud */
+    at = put_u16(p, at, 0u);                     /* gripper */
+    at = put_u16(p, at, 1u);                     /* front sonar */
+    p[at++] = 0u;                                /* rear sonar */
+    at = put_u16(p, at, 110u);                   /* low battery */
+    at = put_u16(p, at, 32550u);                 /* RevCount */
+    at = put_u16(p, at, 1500u);                  /* Watchdog */
+    p[at++] = 0u;                                /* normal mpacs */
+    for (i = 0; i < 16; i++) {
+        at = put_u16(p, at, 7u);                 /* stall .. trans_ki */
+    }
+    for (i = 0; i < 6; i++) {
+        p[at++] = 0u;                            /* bumps .. has_gyro */
+    }
+    at = put_u16(p, at, 0u);                     /* drift factor */
+    p[at++] = 0u;                                /* aux2 */
+    p[at++] = 0u;                                /* aux3 */
+    at = put_u16(p, at, 132u);                   /* TicksMM */
+    robot_send(RSM_ARIA_PAC_CONFIG, p, at);
+}
+
+static void robot_send_sip_and_encoder(void)
+{
+    uint8_t sip[34];
+    uint8_t enc[8];
+    uint32_t l;
+    uint32_t r;
+    memset(sip, 0, sizeof sip);
+    sip[10] = 120u; /* battery */
+    robot_send(RSM_ARIA_PAC_SIP_STOPPED, sip, sizeof sip);
+    if (robot.encoder_on) {
+        robot.left = (int32_t)((uint32_t)robot.left + (uint32_t)robot.step_left);
+        robot.right = (int32_t)((uint32_t)robot.right + (uint32_t)robot.step_right);
+        l = (uint32_t)robot.left;
+        r = (uint32_t)robot.right;
+        enc[0] = (uint8_t)l;
+        enc[1] = (uint8_t)(l >> 8);
+        enc[2] = (uint8_t)(l >> 16);
+        enc[3] = (uint8_t)(l >> 24);
+        enc[4] = (uint8_t)r;
+        enc[5] = (uint8_t)(r >> 8);
+        enc[6] = (uint8_t)(r >> 16);
+        enc[7] = (uint8_t)(r >> 24);
+        robot_send(RSM_ARIA_PAC_ENCODER, enc, sizeof enc);
+    }
+}
+
+static int32_t int_arg(const rsm_aria_packet_t *pkt)
+{
+    const uint8_t *p = rsm_aria_payload(pkt);
+    int32_t v;
+    if (pkt->payload_len < 3u) {
+        return 0;
+    }
+    v = (int32_t)p[1] | ((int32_t)p[2] << 8);
+    return p[0] == RSM_ARIA_ARGTYPE_NINT ? -v : v;
+}
+
+static void robot_handle(const rsm_aria_packet_t *pkt)
+{
+    static const uint8_t sync2[] = "fakebot\0Pioneer\0p3dx-sh";
+    const uint8_t cmd = pkt->id;
+    if (robot.sync_stage < 3 && !robot.connected && cmd <= 2u) {
+        if ((int)cmd != robot.sync_stage) {
+            robot.sync_stage = 0;
+            return;
+        }
+        if (cmd == 1u && robot.wrong_sync1) {
+            robot.wrong_sync1 = 0;
+            robot.sync_stage = 0;
+            robot_send(0u, NULL, 0u);
+            return;
+        }
+        if (cmd == 2u) {
+            robot_send(2u, sync2, sizeof sync2);
+        } else {
+            robot_send(cmd, NULL, 0u);
+        }
+        robot.sync_stage++;
+        return;
+    }
+    switch (cmd) {
+    case RSM_ARIA_CMD_OPEN:
+        if (robot.sync_stage == 3 && !robot.connected) {
+            robot.connected = 1;
+            robot.opens++;
+            robot.next_sip_us = fl.now_us + SIP_CYCLE_US;
+        }
+        break;
+    case RSM_ARIA_CMD_CLOSE:
+        if (robot.connected) {
+            robot.closes++;
+        }
+        robot.connected = 0;
+        robot.encoder_on = 0;
+        robot.sync_stage = 0;
+        break;
+    case RSM_ARIA_CMD_CONFIG:
+        robot.configs++;
+        if (robot.connected && robot.send_config) {
+            robot_send_config();
+        }
+        break;
+    case RSM_ARIA_CMD_ENCODER:
+        robot.encoder_on = int_arg(pkt) > 0;
+        break;
+    case RSM_ARIA_CMD_ENABLE:
+        robot.enabled = int_arg(pkt);
+        break;
+    case RSM_ARIA_CMD_PULSE:
+        if (robot.connected) {
+            robot.pulses_while_connected++;
+        }
+        break;
+    default:
+        break;
+    }
+}
+
+static void robot_peer(rsm_fakelink_t *f, const uint8_t *data, size_t len, void *user)
+{
+    rsm_aria_packet_t pkt;
+    size_t off = 0u;
+    (void)f;
+    (void)user;
+    for (;;) {
+        size_t used = 0u;
+        int r = rsm_aria_parser_feed(&robot.parser, data + off, len - off, &used, &pkt);
+        off += used;
+        if (r != 1) {
+            break;
+        }
+        robot_handle(&pkt);
+    }
+}
+
+/* The robot's SIP clock. */
+static void robot_tick(void)
+{
+    while (robot.connected && fl.now_us >= robot.next_sip_us) {
+        robot_send_sip_and_encoder();
+        robot.next_sip_us += SIP_CYCLE_US;
+    }
+}
+
+/* One poll with the robot's clock run first; checks the no-blocking rule. */
+static rsm_p3dx_event_type_t step(rsm_p3dx_event_t *ev)
+{
+    const uint64_t before = fl.now_us;
+    robot_tick();
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_poll(&drv, ev));
+    TEST_ASSERT_LESS_OR_EQUAL_UINT64((uint64_t)cfg.read_timeout_us, fl.now_us - before);
+    return ev->type;
+}
+
+/* Polls until an event of the given type or until max_us of fake time. */
+static int run_until(rsm_p3dx_event_type_t want, uint64_t max_us, rsm_p3dx_event_t *ev)
+{
+    const uint64_t end = fl.now_us + max_us;
+    while (fl.now_us < end) {
+        if (step(ev) == want) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static void run_for(uint64_t us)
+{
+    rsm_p3dx_event_t ev;
+    const uint64_t end = fl.now_us + us;
+    while (fl.now_us < end) {
+        (void)step(&ev);
+    }
+}
+
+static void connect_ok(void)
+{
+    rsm_p3dx_event_t ev;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_INT(RSM_P3DX_CONNECTED, drv.state);
+}
+
+void setUp(void)
+{
+    rsm_fakelink_init(&fl, T0_US, &link, &clk);
+    memset(&robot, 0, sizeof robot);
+    (void)rsm_aria_parser_init(&robot.parser);
+    robot.send_config = 1;
+    robot.reply_delay_us = 3000u;
+    robot.step_left = 100;
+    robot.step_right = 110;
+    rsm_fakelink_set_peer(&fl, robot_peer, NULL);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_config_default(&cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_init(&drv, &link, &clk, &cfg));
+}
+
+void tearDown(void)
+{
+}
+
+/* ---- tests ---------------------------------------------------------------------- */
+
+void test_p3dx_init_should_reject_bad_arguments(void)
+{
+    rsm_p3dx_config_t bad = cfg;
+    rsm_link_t nolink = link;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(NULL, &link, &clk, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, NULL, &clk, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &link, NULL, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &link, &clk, NULL));
+    bad.read_timeout_us = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &link, &clk, &bad));
+    bad = cfg;
+    bad.sync_tries = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &link, &clk, &bad));
+    nolink.read = NULL;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &nolink, &clk, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_config_default(NULL));
+}
+
+void test_p3dx_connect_should_complete_the_handshake_with_a_scripted_robot(void)
+{
+    uint8_t expect[64];
+    size_t n = 0u;
+    int k;
+
+    connect_ok();
+    /* SYNC0, SYNC1, SYNC2, OPEN 1, CONFIG 1, ENABLE 1, ENCODER 2, in order. */
+    k = rsm_aria_encode_sync0(expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_sync1(expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_sync2(expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_open_int1(expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_config(expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_enable(1, expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_encoder(1, expect + n, sizeof expect - n);
+    n += (size_t)k;
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)n, (uint32_t)fl.host_log_len);
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(expect, fl.host_log, n);
+
+    TEST_ASSERT_EQUAL_UINT32(3u, drv.stats.sync_replies);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.config_packets);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.connects);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.reconnects);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.handshake_timeouts);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.handshake_retries);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.config_timeouts);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.parser.stats.checksum_errors);
+    TEST_ASSERT_EQUAL_UINT16(132u, drv.ticks_mm);
+    TEST_ASSERT_EQUAL_UINT16(32550u, drv.rev_count);
+    TEST_ASSERT_EQUAL_UINT16(1500u, drv.watchdog_ms);
+    TEST_ASSERT_EQUAL_MEMORY("p3dx-sh", drv.robot.subclass, 8u);
+    TEST_ASSERT_EQUAL_MEMORY("Pioneer", drv.robot.robot_class, 8u);
+    TEST_ASSERT_EQUAL_INT(1, robot.connected);
+    TEST_ASSERT_EQUAL_INT(1, robot.enabled);
+    TEST_ASSERT_EQUAL_INT(1, robot.encoder_on);
+    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+}
+
+void test_p3dx_connect_should_keep_config_defaults_when_no_configpac_arrives(void)
+{
+    rsm_p3dx_event_t ev;
+    robot.send_config = 0;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.config_timeouts);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.config_packets);
+    TEST_ASSERT_EQUAL_UINT16(128u, drv.ticks_mm);
+    TEST_ASSERT_EQUAL_UINT16(2000u, drv.watchdog_ms);
+    /* Connected one config timeout after OPEN (+ reply latencies). */
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT64(T0_US + cfg.config_timeout_us, ev.stamp_us);
+}
+
+void test_p3dx_poll_should_yield_encoder_ticks_including_32_bit_wrap(void)
+{
+    rsm_p3dx_event_t ev;
+    int i;
+    robot.left = 0x7FFFFF00;   /* wraps to negative after 3 steps of 100 */
+    robot.right = -50;
+    robot.step_left = 100;
+    robot.step_right = 20;
+    connect_ok();
+
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+    TEST_ASSERT_EQUAL_INT32(0x7FFFFF64, ev.encoder.left);
+    TEST_ASSERT_EQUAL_INT32(-30, ev.encoder.right);
+    TEST_ASSERT_EQUAL_UINT8(0u, ev.encoder.has_delta);
+    TEST_ASSERT_EQUAL_UINT64(fl.now_us, ev.encoder.stamp_us);
+    for (i = 0; i < 3; i++) {
+        TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+        TEST_ASSERT_EQUAL_UINT8(1u, ev.encoder.has_delta);
+        TEST_ASSERT_EQUAL_INT32(100, ev.encoder.d_left);
+        TEST_ASSERT_EQUAL_INT32(20, ev.encoder.d_right);
+    }
+    /* 0x7FFFFF64 + 300 wrapped past INT32_MAX. */
+    TEST_ASSERT_EQUAL_INT32((int32_t)0x80000090u, ev.encoder.left);
+    TEST_ASSERT_EQUAL_INT32(30, ev.encoder.right);
+    TEST_ASSERT_EQUAL_UINT32(4u, drv.stats.encoder_packets);
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT32(4u, drv.stats.sips);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.unknown_packets);
+}
+
+void test_p3dx_connect_should_close_a_stale_session_and_retry(void)
+{
+    rsm_p3dx_event_t ev;
+    /* A previous client left the session open: SIPs are flowing. */
+    robot.connected = 1;
+    robot.sync_stage = 3;
+    robot.next_sip_us = fl.now_us + 1000u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.stale_sessions);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.handshake_retries);
+    TEST_ASSERT_EQUAL_UINT32(1u, robot.closes);
+    TEST_ASSERT_EQUAL_UINT32(1u, robot.opens);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.connects);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.handshake_timeouts);
+    TEST_ASSERT_EQUAL_UINT32(1u, (uint32_t)rsm_fakelink_find_write(&fl, 0u,
+        (const uint8_t[]){0xFA, 0xFB, 0x06, 0x02, 0x3B, 0x01, 0x00, 0x03, 0x3B}, 9u));
+}
+
+void test_p3dx_connect_should_restart_at_sync0_on_a_wrong_reply(void)
+{
+    rsm_p3dx_event_t ev;
+    robot.wrong_sync1 = 1;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.handshake_restarts);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.handshake_retries);
+    TEST_ASSERT_EQUAL_UINT32(4u, drv.stats.sync_replies); /* 0, then 0, 1, 2 */
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.connects);
+}
+
+void test_p3dx_poll_should_report_link_loss_and_reconnect_when_the_robot_returns(void)
+{
+    rsm_p3dx_event_t ev;
+    uint64_t lost_at;
+    connect_ok();
+    run_for(300000u);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.link_lost);
+
+    /* The robot resets and the line goes dead. */
+    fl.silent = 1;
+    robot.connected = 0;
+    robot.sync_stage = 0;
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_LINK_LOST, 5000000u, &ev));
+    lost_at = ev.stamp_us;
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.link_lost);
+    TEST_ASSERT_EQUAL_INT(RSM_P3DX_SYNC, drv.state);
+    /* Between 2.0 and 2.1 s after the last SIP (cycle 100 ms). */
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT64(drv.last_sip_us + cfg.link_lost_us, lost_at);
+
+    /* One handshake timeout while silent, then the robot is back. */
+    run_for(1500000u);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.handshake_timeouts);
+    fl.silent = 0;
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 3000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(2u, drv.stats.handshake_timeouts);
+    TEST_ASSERT_EQUAL_UINT32(2u, drv.stats.handshake_retries);
+    TEST_ASSERT_EQUAL_UINT32(2u, drv.stats.connects);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.reconnects);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.baud_changes);
+    TEST_ASSERT_EQUAL_UINT32(cfg.read_timeout_us, fl.max_read_timeout_us);
+}
+
+void test_p3dx_poll_should_send_a_pulse_after_500_ms_without_commands(void)
+{
+    static const uint8_t pulse[] = {0xFA, 0xFB, 0x03, 0x00, 0x00, 0x00};
+    size_t mark;
+    size_t first;
+    long w;
+    connect_ok();
+    mark = fl.n_writes;
+    first = fl.host_log_len;
+    run_for(450000u);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.keepalives);
+    run_for(100000u);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.keepalives);
+    TEST_ASSERT_EQUAL_UINT32(1u, (uint32_t)rsm_fakelink_count_host(&fl, first, pulse, sizeof pulse));
+    w = rsm_fakelink_find_write(&fl, mark, pulse, sizeof pulse);
+    TEST_ASSERT_GREATER_OR_EQUAL_INT32(0, (int32_t)w);
+    TEST_ASSERT_EQUAL_UINT64(fl.writes[mark - 1u].at_us + cfg.keepalive_us, fl.writes[w].at_us);
+    TEST_ASSERT_EQUAL_UINT32(1u, robot.pulses_while_connected);
+    /* A command resets the keep-alive timer. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_set_vel(&drv, 100, 0));
+    run_for(400000u);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.keepalives);
+}
+
+void test_p3dx_set_vel_should_send_the_same_bytes_as_the_aria_encoder(void)
+{
+    uint8_t expect[64];
+    size_t n = 0u;
+    size_t first;
+    int k;
+    connect_ok();
+    first = fl.host_log_len;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_set_vel(&drv, 300, -20));
+    run_for(20000u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_set_vel2(&drv, -5, 5));
+    run_for(20000u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_stop(&drv));
+    run_for(20000u);
+    k = rsm_aria_encode_vel(300, expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_rvel(-20, expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_vel2(-5, 5, expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_stop(expect + n, sizeof expect - n);
+    n += (size_t)k;
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)n, (uint32_t)(fl.host_log_len - first));
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(expect, fl.host_log + first, n);
+    /* VEL2 -5/+5 is 1B FB 04 (protocols.md 1.5). */
+    TEST_ASSERT_EQUAL_HEX8(0x1Bu, fl.host_log[first + 18u + 4u]);
+    TEST_ASSERT_EQUAL_HEX8(0xFBu, fl.host_log[first + 18u + 5u]);
+    TEST_ASSERT_EQUAL_HEX8(0x04u, fl.host_log[first + 18u + 6u]);
+    TEST_ASSERT_EQUAL_UINT32(4u, drv.stats.commands);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_p3dx_set_vel(&drv, 40000, 0));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_p3dx_set_vel2(&drv, 128, 0));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_stop(NULL));
+}
+
+void test_p3dx_poll_should_count_garbage_and_bit_flips_and_keep_decoding(void)
+{
+    static const uint8_t garbage[] = {0x11, 0xFA, 0x22, 0x33, 0xFB, 0x44, 0x55};
+    rsm_p3dx_event_t ev;
+    uint32_t enc_before;
+    uint32_t skipped_before;
+    connect_ok();
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+    enc_before = drv.stats.encoder_packets;
+    skipped_before = drv.parser.stats.bytes_skipped;
+
+    /* Garbage between two SIP cycles, then a bit flip in the next SIP's
+     * payload (byte 10 of the frame). */
+    rsm_fakelink_inject(&fl, garbage, sizeof garbage, 0u);
+    fl.flip_index = 10;
+    run_for(SIP_CYCLE_US + 20000u);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.parser.stats.checksum_errors);
+    /* Garbage (7 bytes) plus the re-examined tail of the corrupted SIP
+     * (its 40 bytes minus the rejected first byte) are skipped. */
+    TEST_ASSERT_EQUAL_UINT32(skipped_before + (uint32_t)sizeof garbage + 39u,
+                             drv.parser.stats.bytes_skipped);
+    /* The encoder packet right after the corrupted SIP is still decoded. */
+    TEST_ASSERT_EQUAL_UINT32(enc_before + 1u, drv.stats.encoder_packets);
+    run_for(3u * SIP_CYCLE_US);
+    TEST_ASSERT_EQUAL_UINT32(enc_before + 4u, drv.stats.encoder_packets);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.parser.stats.checksum_errors);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.link_lost);
+}
+
+void test_p3dx_connect_should_probe_the_baud_rate(void)
+{
+    rsm_p3dx_event_t ev;
+    rsm_fakelink_set_peer_baud(&fl, 38400u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 10000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(38400u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(38400u, fl.host_baud);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.baud_changes);
+    TEST_ASSERT_EQUAL_UINT32(3u, drv.stats.handshake_timeouts);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.connects);
+}
+
+void test_p3dx_disconnect_should_disable_the_motors_then_close(void)
+{
+    static const uint8_t close1[] = {0xFA, 0xFB, 0x06, 0x02, 0x3B, 0x01, 0x00, 0x03, 0x3B};
+    uint8_t en0[12];
+    rsm_p3dx_event_t ev;
+    long we;
+    long wc;
+    int n;
+    connect_ok();
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_DISCONNECTED, 1000000u, &ev));
+    n = rsm_aria_encode_enable(0, en0, sizeof en0);
+    we = rsm_fakelink_find_write(&fl, 0u, en0, (size_t)n);
+    wc = rsm_fakelink_find_write(&fl, 0u, close1, sizeof close1);
+    TEST_ASSERT_GREATER_OR_EQUAL_INT32(0, (int32_t)we);
+    TEST_ASSERT_GREATER_THAN_INT32((int32_t)we, (int32_t)wc);
+    TEST_ASSERT_EQUAL_UINT64(fl.writes[we].at_us + cfg.disconnect_wait_us, fl.writes[wc].at_us);
+    TEST_ASSERT_EQUAL_INT(RSM_P3DX_IDLE, drv.state);
+    TEST_ASSERT_EQUAL_INT(0, robot.connected);
+    TEST_ASSERT_EQUAL_INT(0, robot.enabled);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_p3dx_init_should_reject_bad_arguments);
+    RUN_TEST(test_p3dx_connect_should_complete_the_handshake_with_a_scripted_robot);
+    RUN_TEST(test_p3dx_connect_should_keep_config_defaults_when_no_configpac_arrives);
+    RUN_TEST(test_p3dx_poll_should_yield_encoder_ticks_including_32_bit_wrap);
+    RUN_TEST(test_p3dx_connect_should_close_a_stale_session_and_retry);
+    RUN_TEST(test_p3dx_connect_should_restart_at_sync0_on_a_wrong_reply);
+    RUN_TEST(test_p3dx_poll_should_report_link_loss_and_reconnect_when_the_robot_returns);
+    RUN_TEST(test_p3dx_poll_should_send_a_pulse_after_500_ms_without_commands);
+    RUN_TEST(test_p3dx_set_vel_should_send_the_same_bytes_as_the_aria_encoder);
+    RUN_TEST(test_p3dx_poll_should_count_garbage_and_bit_flips_and_keep_decoding);
+    RUN_TEST(test_p3dx_connect_should_probe_the_baud_rate);
+    RUN_TEST(test_p3dx_disconnect_should_disable_the_motors_then_close);
+    return UNITY_END();
+}

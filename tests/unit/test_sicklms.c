@@ -1,0 +1,468 @@
+/* Tests of the SICK LMS driver (src/sicklms.c) against a scripted fake LMS on
+ * the in-memory fakelink. */
+#include <string.h>
+
+#include "fakelink.h"
+#include "rsm/lms.h"
+#include "rsm/scan.h"
+#include "rsm/sicklms.h"
+#include "rsm/status.h"
+#include "unity.h"
+
+/* ---- the fake LMS -------------------------------------------------------------- */
+
+typedef struct fake_lms {
+    uint8_t in[64];        /* request bytes being framed */
+    size_t in_len;
+    int streaming;
+    uint16_t angle_deg;
+    uint16_t res_cdeg;
+    int nak_variant;       /* NAK this many variant requests */
+    int ignore_variant;    /* never answer variant requests */
+    int drop_baud_reply;   /* ACK a baud change, lose its 0xA0, switch anyway */
+    uint32_t requests;     /* well-formed requests seen */
+    uint64_t next_scan_us;
+} fake_lms_t;
+
+static rsm_fakelink_t fl;
+static rsm_link_t link;
+static rsm_clock_t clk;
+static fake_lms_t lms;
+static rsm_sicklms_config_t cfg;
+static rsm_sicklms_t drv;
+
+#define T0_US 1000000u
+#define SCAN_PERIOD_US 200000u
+#define ACK_DELAY_US 5000u
+#define REPLY_DELAY_US 10000u
+
+static void lms_reply(uint8_t cmd, const uint8_t *data, size_t len, uint32_t delay_us)
+{
+    uint8_t buf[RSM_LMS_MAX_TELEGRAM];
+    int n = rsm_lms_encode(buf, sizeof buf, 0x80u, cmd, data, len);
+    TEST_ASSERT_GREATER_THAN_INT(0, n);
+    rsm_fakelink_send(&fl, buf, (size_t)n, delay_us);
+}
+
+static void lms_ack(void)
+{
+    static const uint8_t ack = RSM_LMS_ACK;
+    rsm_fakelink_send(&fl, &ack, 1u, ACK_DELAY_US);
+}
+
+/* A 181-value 0xB0 in mm: reading i is 500 + 10 i mm, except 3 (no echo,
+ * 0x1FFF) and 100 (dazzled, 0x1FFE). */
+static void lms_send_scan(void)
+{
+    uint8_t data[2u + 2u * 181u + 1u];
+    size_t i;
+    data[0] = 181u & 0xFFu;
+    data[1] = (uint8_t)((181u >> 8) | 0x40u); /* units mm */
+    for (i = 0u; i < 181u; i++) {
+        uint16_t v = (uint16_t)(500u + 10u * i);
+        if (i == 3u) {
+            v = 0x1FFFu;
+        } else if (i == 100u) {
+            v = 0x1FFEu;
+        }
+        data[2u + 2u * i] = (uint8_t)(v & 0xFFu);
+        data[3u + 2u * i] = (uint8_t)(v >> 8);
+    }
+    data[sizeof data - 1u] = 0x10u;
+    lms_reply(RSM_LMS_REPLY_VALUES, data, sizeof data, 0u);
+}
+
+static void lms_handle(uint8_t cmd, const uint8_t *data, size_t len)
+{
+    uint8_t r[8];
+    lms.requests++;
+    if (cmd == RSM_LMS_CMD_MODE && len >= 1u) {
+        const uint8_t mode = data[0];
+        uint32_t new_baud = 0u;
+        if (mode == RSM_LMS_MODE_BAUD_38400) {
+            new_baud = 38400u;
+        } else if (mode == RSM_LMS_MODE_BAUD_19200) {
+            new_baud = 19200u;
+        } else if (mode == RSM_LMS_MODE_BAUD_9600) {
+            new_baud = 9600u;
+        }
+        lms_ack();
+        if (new_baud != 0u && lms.drop_baud_reply) {
+            lms.drop_baud_reply = 0;
+        } else {
+            r[0] = RSM_LMS_MODE_RESULT_OK;
+            r[1] = 0x10u;
+            lms_reply(RSM_LMS_REPLY_MODE, r, 2u, REPLY_DELAY_US);
+        }
+        if (new_baud != 0u) {
+            /* The reply went out at the old rate; the LMS switches now. */
+            rsm_fakelink_set_peer_baud(&fl, new_baud);
+        } else if (mode == RSM_LMS_MODE_CONTINUOUS) {
+            lms.streaming = 1;
+            lms.next_scan_us = fl.now_us + SCAN_PERIOD_US;
+        } else if (mode == RSM_LMS_MODE_ON_REQUEST) {
+            lms.streaming = 0;
+        }
+        return;
+    }
+    if (cmd == RSM_LMS_CMD_SET_VARIANT && len == 4u) {
+        if (lms.ignore_variant) {
+            return;
+        }
+        if (lms.nak_variant > 0) {
+            static const uint8_t nak = RSM_LMS_NAK;
+            lms.nak_variant--;
+            rsm_fakelink_send(&fl, &nak, 1u, ACK_DELAY_US);
+            return;
+        }
+        lms.angle_deg = (uint16_t)(data[0] | (data[1] << 8));
+        lms.res_cdeg = (uint16_t)(data[2] | (data[3] << 8));
+        lms_ack();
+        r[0] = RSM_LMS_RESULT_ACCEPTED;
+        memcpy(r + 1, data, 4u);
+        r[5] = 0x10u;
+        lms_reply(RSM_LMS_REPLY_VARIANT, r, 6u, REPLY_DELAY_US);
+        return;
+    }
+    lms_ack();
+}
+
+/* Frames host requests (STX 00 LEN CMD data CRC) out of what the LMS hears;
+ * anything else (garbled bytes) is dropped. */
+static void lms_peer(rsm_fakelink_t *f, const uint8_t *data, size_t len, void *user)
+{
+    size_t i;
+    (void)f;
+    (void)user;
+    for (i = 0u; i < len; i++) {
+        if (lms.in_len < sizeof lms.in) {
+            lms.in[lms.in_len++] = data[i];
+        }
+        for (;;) {
+            size_t total;
+            if (lms.in_len > 0u && lms.in[0] != RSM_LMS_STX) {
+                memmove(lms.in, lms.in + 1, --lms.in_len);
+                continue;
+            }
+            if (lms.in_len >= 2u && lms.in[1] != 0x00u) {
+                memmove(lms.in, lms.in + 1, --lms.in_len);
+                continue;
+            }
+            if (lms.in_len < 4u) {
+                break;
+            }
+            total = (size_t)(lms.in[2] | (lms.in[3] << 8)) + 6u;
+            if (total > sizeof lms.in) {
+                memmove(lms.in, lms.in + 1, --lms.in_len);
+                continue;
+            }
+            if (lms.in_len < total) {
+                break;
+            }
+            if (rsm_lms_crc(lms.in, total - 2u) ==
+                (uint16_t)(lms.in[total - 2u] | (lms.in[total - 1u] << 8))) {
+                lms_handle(lms.in[4], lms.in + 5, total - 7u);
+            }
+            memmove(lms.in, lms.in + total, lms.in_len - total);
+            lms.in_len -= total;
+        }
+    }
+}
+
+static void lms_tick(void)
+{
+    while (lms.streaming && fl.now_us >= lms.next_scan_us) {
+        lms_send_scan();
+        lms.next_scan_us += SCAN_PERIOD_US;
+    }
+}
+
+/* One poll; checks that it waited no longer than the read timeout. */
+static rsm_sicklms_event_type_t step(rsm_sicklms_event_t *ev)
+{
+    const uint64_t before = fl.now_us;
+    lms_tick();
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_poll(&drv, ev));
+    TEST_ASSERT_LESS_OR_EQUAL_UINT64((uint64_t)cfg.read_timeout_us, fl.now_us - before);
+    return ev->type;
+}
+
+static int run_until(rsm_sicklms_event_type_t want, uint64_t max_us, rsm_sicklms_event_t *ev)
+{
+    const uint64_t end = fl.now_us + max_us;
+    while (fl.now_us < end) {
+        if (step(ev) == want) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static void run_for(uint64_t us)
+{
+    rsm_sicklms_event_t ev;
+    const uint64_t end = fl.now_us + us;
+    while (fl.now_us < end) {
+        (void)step(&ev);
+    }
+}
+
+static size_t count_writes(const uint8_t *frame, size_t len)
+{
+    size_t n = 0u;
+    long w = -1;
+    while ((w = rsm_fakelink_find_write(&fl, (size_t)(w + 1), frame, len)) >= 0) {
+        n++;
+    }
+    return n;
+}
+
+static int frame_mode(uint8_t *out, size_t cap, uint8_t mode)
+{
+    return rsm_lms_encode_mode(out, cap, 0u, mode);
+}
+
+void setUp(void)
+{
+    rsm_fakelink_init(&fl, T0_US, &link, &clk);
+    memset(&lms, 0, sizeof lms);
+    rsm_fakelink_set_peer(&fl, lms_peer, NULL);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_config_default(&cfg));
+    cfg.baud = 9600u; /* most tests stay at the power-up rate */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_init(&drv, &link, &clk, &cfg));
+}
+
+void tearDown(void)
+{
+}
+
+/* ---- tests ----------------------------------------------------------------------- */
+
+void test_sicklms_init_should_reject_bad_arguments(void)
+{
+    rsm_sicklms_config_t bad = cfg;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(NULL, &link, &clk, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, NULL, &clk, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, NULL));
+    bad.resolution_cdeg = 25u; /* 180 deg at 0.25 deg is not a variant */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad));
+    bad = cfg;
+    bad.address = 0x80u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad));
+    bad = cfg;
+    bad.baud = 57600u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad));
+    bad = cfg;
+    bad.max_tries = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_config_default(NULL));
+}
+
+void test_sicklms_connect_should_set_the_variant_and_start_streaming(void)
+{
+    uint8_t expect[64];
+    size_t n = 0u;
+    rsm_sicklms_event_t ev;
+    int k;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 5000000u, &ev));
+    k = frame_mode(expect + n, sizeof expect - n, RSM_LMS_MODE_ON_REQUEST);
+    n += (size_t)k;
+    k = rsm_lms_encode_variant(expect + n, sizeof expect - n, 0u, 180u, 100u);
+    n += (size_t)k;
+    k = frame_mode(expect + n, sizeof expect - n, RSM_LMS_MODE_CONTINUOUS);
+    n += (size_t)k;
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)n, (uint32_t)fl.host_log_len);
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(expect, fl.host_log, n);
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_STREAMING, drv.state);
+    TEST_ASSERT_EQUAL_UINT16(180u, lms.angle_deg);
+    TEST_ASSERT_EQUAL_UINT16(100u, lms.res_cdeg);
+    TEST_ASSERT_EQUAL_UINT32(3u, drv.stats.acks);
+    TEST_ASSERT_EQUAL_UINT32(3u, drv.stats.telegrams);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.probes);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.retries);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.naks);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.baud_changes);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.connects);
+    TEST_ASSERT_EQUAL_UINT32(9600u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+}
+
+void test_sicklms_connect_should_resend_no_sooner_than_30_ms_after_a_nak(void)
+{
+    uint8_t var[16];
+    rsm_sicklms_event_t ev;
+    long w1;
+    long w2;
+    int n = rsm_lms_encode_variant(var, sizeof var, 0u, 180u, 100u);
+    lms.nak_variant = 1;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 5000000u, &ev));
+    w1 = rsm_fakelink_find_write(&fl, 0u, var, (size_t)n);
+    w2 = rsm_fakelink_find_write(&fl, (size_t)(w1 + 1), var, (size_t)n);
+    TEST_ASSERT_GREATER_OR_EQUAL_INT32(0, (int32_t)w1);
+    TEST_ASSERT_GREATER_THAN_INT32((int32_t)w1, (int32_t)w2);
+    /* NAK at +5 ms, re-send 30 ms after it. */
+    TEST_ASSERT_EQUAL_UINT64(fl.writes[w1].at_us + ACK_DELAY_US + cfg.nak_wait_us,
+                             fl.writes[w2].at_us);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.naks);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.retries);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.errors);
+    TEST_ASSERT_EQUAL_UINT32(2u, (uint32_t)count_writes(var, (size_t)n));
+}
+
+void test_sicklms_connect_should_retry_an_unacknowledged_request_three_times_then_fail(void)
+{
+    uint8_t var[16];
+    rsm_sicklms_event_t ev;
+    int n = rsm_lms_encode_variant(var, sizeof var, 0u, 180u, 100u);
+    lms.ignore_variant = 1;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_ERROR, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_TIMEOUT, ev.status);
+    TEST_ASSERT_EQUAL_UINT32(3u, (uint32_t)count_writes(var, (size_t)n));
+    TEST_ASSERT_EQUAL_UINT32(3u, drv.stats.ack_timeouts);
+    TEST_ASSERT_EQUAL_UINT32(2u, drv.stats.retries);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.errors);
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_BACKOFF, drv.state);
+    /* After the back-off the start-up begins again with a probe. */
+    lms.ignore_variant = 0;
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(2u, drv.stats.probes);
+}
+
+void test_sicklms_connect_should_probe_and_find_a_unit_at_38400(void)
+{
+    rsm_sicklms_event_t ev;
+    cfg.baud = 0u; /* stay at whatever rate answers */
+    rsm_fakelink_set_peer_baud(&fl, 38400u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(38400u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(38400u, fl.host_baud);
+    TEST_ASSERT_EQUAL_UINT32(2u, drv.stats.probes);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.ack_timeouts);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.baud_changes);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.errors);
+}
+
+void test_sicklms_connect_should_switch_to_38400_after_the_reply_at_the_old_rate(void)
+{
+    uint8_t b38[16];
+    rsm_sicklms_event_t ev;
+    int n = rsm_lms_encode_mode_baud(b38, sizeof b38, 0u, 38400u);
+    cfg.baud = 38400u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(38400u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(38400u, fl.host_baud);
+    TEST_ASSERT_EQUAL_UINT32(38400u, fl.peer_baud);
+    TEST_ASSERT_EQUAL_UINT32(1u, (uint32_t)count_writes(b38, (size_t)n));
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.baud_changes);
+    TEST_ASSERT_EQUAL_UINT32(4u, drv.stats.acks);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.retries);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.ack_timeouts);
+    TEST_ASSERT_EQUAL_UINT32(180u, lms.angle_deg);
+}
+
+void test_sicklms_connect_should_reprobe_instead_of_repeating_a_lost_baud_change(void)
+{
+    uint8_t b38[16];
+    rsm_sicklms_event_t ev;
+    int n = rsm_lms_encode_mode_baud(b38, sizeof b38, 0u, 38400u);
+    cfg.baud = 38400u;
+    lms.drop_baud_reply = 1;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 10000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(1u, (uint32_t)count_writes(b38, (size_t)n));
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.reply_timeouts);
+    TEST_ASSERT_EQUAL_UINT32(2u, drv.stats.probes); /* 9600, then 38400 first */
+    TEST_ASSERT_EQUAL_UINT32(38400u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.errors);
+}
+
+void test_sicklms_poll_should_yield_robot_frame_scans_from_the_b0_stream(void)
+{
+    rsm_sicklms_event_t ev;
+    const float deg = 3.14159265f / 180.0f;
+    int i;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 5000000u, &ev));
+    for (i = 0; i < 3; i++) {
+        TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 1000000u, &ev));
+        TEST_ASSERT_EQUAL_PTR(&drv.scan, ev.scan);
+        TEST_ASSERT_EQUAL_UINT32(181u, (uint32_t)ev.scan->count);
+        TEST_ASSERT_EQUAL_UINT64(fl.now_us, ev.scan->stamp_us);
+        TEST_ASSERT_FLOAT_WITHIN(1e-5f, -90.0f * deg, ev.scan->angle_rad[0]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.0f, ev.scan->angle_rad[90]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-5f, 45.0f * deg, ev.scan->angle_rad[135]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-5f, 90.0f * deg, ev.scan->angle_rad[180]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.500f, ev.scan->range_m[0]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.510f, ev.scan->range_m[1]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, 2.300f, ev.scan->range_m[180]);
+        TEST_ASSERT_EQUAL_FLOAT(0.0f, ev.scan->range_m[3]);
+        TEST_ASSERT_EQUAL_FLOAT(0.0f, ev.scan->range_m[100]);
+    }
+    TEST_ASSERT_EQUAL_UINT32(3u, drv.stats.scans);
+    TEST_ASSERT_EQUAL_UINT32(6u, drv.stats.invalid_readings);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.bad_scans);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.crc_errors);
+}
+
+void test_sicklms_poll_should_count_a_corrupted_telegram_and_keep_streaming(void)
+{
+    rsm_sicklms_event_t ev;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 5000000u, &ev));
+    fl.flip_index = 100; /* a data byte of the next scan */
+    run_for(SCAN_PERIOD_US + 50000u);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.crc_errors);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.scans);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 1000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.scans);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.crc_errors);
+}
+
+void test_sicklms_poll_should_report_link_loss_and_reconnect(void)
+{
+    rsm_sicklms_event_t ev;
+    uint64_t last_scan;
+    cfg.baud = 38400u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 1000000u, &ev));
+    last_scan = ev.stamp_us;
+
+    /* The unit loses power: silence, then it is back at its power-up rate. */
+    fl.silent = 1;
+    lms.streaming = 0;
+    rsm_fakelink_set_peer_baud(&fl, 9600u);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_LINK_LOST, 3000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT64(last_scan + cfg.stream_timeout_us, ev.stamp_us);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.link_lost);
+    fl.silent = 0;
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 10000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(2u, drv.stats.connects);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.reconnects);
+    TEST_ASSERT_EQUAL_UINT32(38400u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(38400u, fl.peer_baud);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 1000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(cfg.read_timeout_us, fl.max_read_timeout_us);
+    TEST_ASSERT_LESS_OR_EQUAL_UINT64((uint64_t)cfg.read_timeout_us, fl.max_read_wait_us);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_sicklms_init_should_reject_bad_arguments);
+    RUN_TEST(test_sicklms_connect_should_set_the_variant_and_start_streaming);
+    RUN_TEST(test_sicklms_connect_should_resend_no_sooner_than_30_ms_after_a_nak);
+    RUN_TEST(test_sicklms_connect_should_retry_an_unacknowledged_request_three_times_then_fail);
+    RUN_TEST(test_sicklms_connect_should_probe_and_find_a_unit_at_38400);
+    RUN_TEST(test_sicklms_connect_should_switch_to_38400_after_the_reply_at_the_old_rate);
+    RUN_TEST(test_sicklms_connect_should_reprobe_instead_of_repeating_a_lost_baud_change);
+    RUN_TEST(test_sicklms_poll_should_yield_robot_frame_scans_from_the_b0_stream);
+    RUN_TEST(test_sicklms_poll_should_count_a_corrupted_telegram_and_keep_streaming);
+    RUN_TEST(test_sicklms_poll_should_report_link_loss_and_reconnect);
+    return UNITY_END();
+}
