@@ -1,0 +1,243 @@
+"""Capture format: writer/reader round trip, every error path, lenient counts,
+and the C reader (tools/nav/capture.c) agreeing with the Python reader."""
+
+import io
+import random
+import shutil
+import struct
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from conftest import REPO_ROOT
+from rsm_tools import capture as cap
+
+CHANNELS = [cap.Channel(0, "robot", "aria", 38400), cap.Channel(1, "laser", "lms2xx", 38400)]
+
+
+def make_records(n=200, seed=1):
+    rng = random.Random(seed)
+    t = 1_000_000
+    out = []
+    for _ in range(n):
+        t += rng.randrange(0, 5000)
+        data = bytes(rng.randrange(256) for _ in range(rng.randrange(0, 300)))
+        # sync bytes inside the data must not confuse anyone
+        if rng.random() < 0.2:
+            data += cap.SYNC + data[:20]
+        out.append((t, rng.randrange(2), rng.randrange(2), data))
+    return out
+
+
+def write_file(path, records, **kw):
+    with cap.CaptureWriter(path, CHANNELS, {"source": "test", "robot.ticks_per_m": "128000"}, **kw) as w:
+        for t, ch, d, data in records:
+            w.write(t, ch, data, d)
+    return path
+
+
+def as_tuples(recs):
+    return [(r.timestamp, r.channel, r.direction, r.data) for r in recs]
+
+
+def test_round_trip_header_and_records(tmp_path):
+    recs = make_records()
+    f = write_file(tmp_path / "a.cap", recs)
+    h, got, st = cap.read_capture(f)
+    assert [(c.id, c.name, c.protocol, c.baud) for c in h.channels] == [
+        (0, "robot", "aria", 38400), (1, "laser", "lms2xx", 38400)]
+    assert h.metadata["source"] == "test" and h.metadata["units.time"] == "us"
+    assert h.channel("laser").id == 1
+    assert as_tuples(got) == recs
+    assert st.records == len(recs) and st.corrupt == st.truncated == 0
+
+
+def test_large_chunks_are_split_and_empty_chunks_kept(tmp_path):
+    big = bytes(range(256)) * 600  # 153600 bytes
+    with cap.CaptureWriter(tmp_path / "b.cap", CHANNELS) as w:
+        w.write(5, "laser", big)
+        w.write(6, "robot", b"", "tx")
+    _, got, _ = cap.read_capture(tmp_path / "b.cap")
+    assert [len(r.data) for r in got] == [65535, 65535, 22530, 0]
+    assert b"".join(r.data for r in got[:3]) == big
+    assert got[3].direction == cap.TX
+
+
+def test_writer_rejects_out_of_order_and_unknown_channel_or_clamps(tmp_path):
+    w = cap.CaptureWriter(tmp_path / "c.cap", CHANNELS)
+    w.write(100, 0, b"a")
+    with pytest.raises(cap.OutOfOrderError, match="earlier than the previous"):
+        w.write(99, 0, b"b")
+    with pytest.raises(cap.UnknownChannelError):
+        w.write(200, 7, b"c")
+    w.close()
+    w = cap.CaptureWriter(tmp_path / "d.cap", CHANNELS, clamp=True)
+    w.write(100, 0, b"a")
+    assert w.write(90, 0, b"b") == 100
+    w.close()
+    assert w.clamped == 1
+    assert [r.timestamp for r in cap.read_capture(tmp_path / "d.cap")[1]] == [100, 100]
+
+
+def test_flushed_after_every_record(tmp_path):
+    f = tmp_path / "e.cap"
+    w = cap.CaptureWriter(f, CHANNELS)
+    w.write(1, 0, b"hello")
+    # not closed: another reader sees the record already
+    assert as_tuples(cap.read_capture(f)[1]) == [(1, 0, 0, b"hello")]
+    w.close()
+
+
+def test_header_errors(tmp_path):
+    good = write_file(tmp_path / "g.cap", make_records(3)).read_bytes()
+    cases = {
+        b"hello world, not a capture": "bad magic",
+        good[:12]: "truncated",
+        good[:30]: "truncated",
+        good[:8] + b"\x02\x00" + good[10:]: "unsupported capture version 2",
+        good[:20] + bytes([good[20] ^ 0x40]) + good[21:]: "CRC mismatch",
+    }
+    for data, msg in cases.items():
+        with pytest.raises(cap.HeaderError, match=msg):
+            cap.CaptureReader(io.BytesIO(data))
+
+
+def corrupt_file(tmp_path, recs):
+    """A capture with record 10 bit-flipped, garbage before record 20, and a cut last record."""
+    f = write_file(tmp_path / "x.cap", recs)
+    raw = bytearray(f.read_bytes())
+    hsize = cap.CaptureReader(io.BytesIO(bytes(raw))).header_size
+    offs = []
+    o = hsize
+    for t, ch, d, data in recs:
+        offs.append(o)
+        o += cap.REC_OVERHEAD + len(data)
+    raw[offs[10] + 16] ^= 0x01          # inside record 10 (data or CRC)
+    raw[offs[20]:offs[20]] = b"garbageRC\x05"  # junk including a false sync
+    raw = raw[:-5]                       # truncate the last record
+    f.write_bytes(bytes(raw))
+    return f
+
+
+def test_strict_reader_raises_after_yielding_good_records(tmp_path):
+    recs = make_records(30)
+    f = corrupt_file(tmp_path, recs)
+    got = []
+    with pytest.raises(cap.CorruptRecordError, match="corrupt capture record") as ei:
+        for r in cap.CaptureReader(f):
+            got.append(r)
+    assert as_tuples(got) == recs[:10]
+    assert ei.value.record == 10
+
+
+def test_lenient_reader_counts_skips_and_resynchronises(tmp_path):
+    recs = make_records(30)
+    f = corrupt_file(tmp_path, recs)
+    r = cap.CaptureReader(f, lenient=True)
+    got = as_tuples(r)
+    expect = recs[:10] + recs[11:29]
+    assert got == expect
+    assert r.stats.corrupt == 2 and r.stats.truncated == 1
+    assert r.stats.skipped_bytes > 0
+    assert "corrupt" in r.stats.summary()
+
+
+def test_truncated_tail_strict(tmp_path):
+    recs = make_records(5)
+    f = write_file(tmp_path / "t.cap", recs)
+    f.write_bytes(f.read_bytes()[:-3])
+    got = []
+    with pytest.raises(cap.TruncatedRecordError, match="ends inside a record"):
+        for r in cap.CaptureReader(f):
+            got.append(r)
+    assert as_tuples(got) == recs[:4]
+
+
+def raw_capture(records):
+    """Hand-built file: bypasses the writer's checks."""
+    h = cap.encode_header(cap.Header(CHANNELS))
+    return h + b"".join(cap.encode_record(*r) for r in records)
+
+
+def test_out_of_order_and_unknown_channel(tmp_path):
+    data = raw_capture([(10, 0, 0, b"a"), (5, 0, 0, b"b"), (11, 9, 0, b"c"), (12, 1, 1, b"d")])
+    with pytest.raises(cap.OutOfOrderError, match="earlier than the previous 10 us"):
+        list(cap.CaptureReader(io.BytesIO(data)))
+    r = cap.CaptureReader(io.BytesIO(data), lenient=True)
+    assert as_tuples(r) == [(10, 0, 0, b"a"), (12, 1, 1, b"d")]
+    assert r.stats.out_of_order == 1 and r.stats.unknown_channel == 1
+    data = raw_capture([(10, 0, 0, b"a"), (11, 9, 0, b"c")])
+    with pytest.raises(cap.UnknownChannelError, match="channel id 9"):
+        list(cap.CaptureReader(io.BytesIO(data)))
+
+
+# ---------------------------------------------------------------------------
+# C reader
+
+
+@pytest.fixture(scope="module")
+def c_reader(tmp_path_factory):
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.fail("no C compiler (gcc/cc) on PATH to build the capture reader test driver")
+    out = tmp_path_factory.mktemp("cdrv") / "capture_dump"
+    nav = REPO_ROOT / "tools" / "nav"
+    cmd = [cc, "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wconversion", "-Werror",
+           "-O1", "-DRSM_CAPTURE_DUMP_MAIN", "-I", str(nav), str(nav / "capture.c"), "-o", str(out)]
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    return out
+
+
+def python_dump(path, lenient):
+    lines = []
+    r = None
+    try:
+        r = cap.CaptureReader(path, lenient=lenient)
+        h = r.header
+        for c in h.channels:
+            lines.append(f"channel {c.id} {c.name} {c.protocol} {c.baud}")
+        for k in sorted(h.metadata):
+            lines.append(f"meta {k}={h.metadata[k]}")
+        for rec in r:
+            lines.append(f"record {rec.offset} {rec.timestamp} {rec.channel} {rec.direction} "
+                         f"{len(rec.data)} {rec.data.hex()}")
+        s = r.stats
+        lines.append(f"end records={s.records} corrupt={s.corrupt} truncated={s.truncated} "
+                     f"order={s.out_of_order} channel={s.unknown_channel} skipped={s.skipped_bytes}")
+    except cap.CaptureError as exc:
+        lines.append(f"error {exc.kind}")
+    return lines
+
+
+def c_dump(exe, path, lenient):
+    args = [str(exe)] + (["--lenient"] if lenient else []) + [str(path)]
+    res = subprocess.run(args, capture_output=True, text=True, timeout=60)
+    assert res.returncode in (0, 1), res.stderr
+    return res.stdout.splitlines()
+
+
+def test_c_reader_matches_python_on_good_file(tmp_path, c_reader):
+    f = write_file(tmp_path / "good.cap", make_records(300, seed=5))
+    for lenient in (False, True):
+        py = python_dump(f, lenient)
+        assert py[-1].startswith("end records=300")
+        assert c_dump(c_reader, f, lenient) == py
+
+
+def test_c_reader_matches_python_on_damaged_files(tmp_path, c_reader):
+    recs = make_records(40, seed=7)
+    files = [corrupt_file(tmp_path, recs)]
+    good = write_file(tmp_path / "g.cap", recs).read_bytes()
+    (tmp_path / "cut.cap").write_bytes(good[:-1])
+    (tmp_path / "junk.cap").write_bytes(good + b"\x00\x01garbage!" * 3)
+    (tmp_path / "half_sync.cap").write_bytes(good + b"R")
+    (tmp_path / "badhdr.cap").write_bytes(good[:20] + b"\xff" + good[21:])
+    (tmp_path / "order.cap").write_bytes(
+        raw_capture([(10, 0, 0, b"a"), (5, 0, 0, b"b"), (11, 9, 0, b"c"), (12, 1, 1, b"d")]))
+    files += [tmp_path / n for n in ("cut.cap", "junk.cap", "half_sync.cap", "badhdr.cap", "order.cap")]
+    for f in files:
+        for lenient in (False, True):
+            py = python_dump(f, lenient)
+            assert c_dump(c_reader, f, lenient) == py, (f.name, lenient)

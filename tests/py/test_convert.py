@@ -1,0 +1,127 @@
+"""rsm-convert: CARMEN log -> capture; decoded bytes reproduce the log."""
+
+import math
+import subprocess
+import sys
+
+import pytest
+
+from conftest import subprocess_env
+from rsm_tools import capture as cap
+from rsm_tools import convert as cv
+from rsm_tools import protocols as p
+from rsm_tools.carmen import FLaser, read_log, time_key
+
+
+def log_records(path):
+    return list(read_log(path, types=("ODOM", "FLASER")))
+
+
+def odometry_from_capture(header, records):
+    """Integrate the ENCODER packets; the pose of log step i is the pose after its last packet."""
+    tpm = float(header.metadata["robot.ticks_per_m"])
+    base = float(header.metadata["robot.wheel_base_m"])
+    pose = tuple(float(v) for v in header.metadata["robot.initial_pose"].split())
+    start = int(header.metadata["robot.start_ticks"])
+    per_step = {}
+    for item in header.metadata["convert.split_steps"].split():
+        i, n = item.split(":")
+        per_step[int(i)] = int(n)
+    enc = [p.decode_encoder(r.data) for r in records if r.channel == 0]
+    prev = (p._s32(start), p._s32(start))
+    out = []
+    k = 0
+    step = 0
+    while k < len(enc):
+        for _ in range(per_step.get(step, 1)):
+            left, right = enc[k]
+            pose = cv.integrate(pose, p.tick_delta(left, prev[0]), p.tick_delta(right, prev[1]), tpm, base)
+            prev = (left, right)
+            k += 1
+        out.append(pose)
+        step += 1
+    return out
+
+
+@pytest.mark.parametrize("start_ticks", [0, 2**31 - 20000])
+def test_encoder_packets_reproduce_log_odometry(tmp_path, head_log, start_ticks):
+    out = tmp_path / "h.cap"
+    st = cv.convert(head_log, out, start_ticks=start_ticks)
+    recs = log_records(head_log)
+    h, got, rst = cap.read_capture(out)
+    assert rst.corrupt == rst.truncated == 0
+    assert st.odom == 1177 and st.scans == 600
+    poses = odometry_from_capture(h, got)
+    want = [r.odom_pose if isinstance(r, FLaser) else r.pose for r in recs]
+    assert len(poses) == len(want) == 1777
+    dmax = max(math.hypot(a[0] - b[0], a[1] - b[1]) for a, b in zip(poses, want))
+    amax = max(abs(cv.wrap(a[2] - b[2])) for a, b in zip(poses, want))
+    assert dmax < 0.001, dmax
+    assert math.degrees(amax) < 0.01, amax
+    if start_ticks:  # the counters really wrapped
+        enc = [p.decode_encoder(r.data) for r in got if r.channel == 0]
+        assert any(l < 0 for l, _ in enc) or any(r < 0 for _, r in enc)
+
+
+def test_timestamps_clamped_monotonic_and_recoverable(tmp_path, head_log):
+    out = tmp_path / "h.cap"
+    st = cv.convert(head_log, out)
+    recs = log_records(head_log)
+    h, got, _ = cap.read_capture(out)  # strict reader: would raise on disorder
+    ts = [r.timestamp for r in got]
+    assert ts == sorted(ts)
+    assert st.clamped == int(h.metadata["convert.clamped_total"]) > 0
+    table = {}
+    for line in h.metadata["convert.clamped"].splitlines():
+        kind, idx, orig, written = line.split()
+        table[(kind, int(idx))] = (int(orig), int(written))
+    # laser telegram k carries scan k's stamp, or its clamp recorded in the table
+    scans = [r for r in recs if r.kind == "FLASER"]
+    laser = [r for r in got if r.channel == 1]
+    assert len(laser) == len(scans) == 600
+    for k, (s, rec) in enumerate(zip(scans, laser)):
+        orig, written = table.get(("FLASER", k), (time_key(s.timestamp), rec.timestamp))
+        assert orig == time_key(s.timestamp) and written == rec.timestamp
+
+
+@pytest.mark.parametrize("units,readings", [("mm", 180), ("mm", 181), ("cm", 361), ("cm", 181)])
+def test_b0_ranges_equal_log_ranges(tmp_path, head_log, units, readings):
+    out = tmp_path / "h.cap"
+    max_range = 8.0 if units == "mm" else 50.0
+    cv.convert(head_log, out, units=units, readings=readings, max_range=max_range)
+    scans = [r for r in log_records(head_log) if r.kind == "FLASER"]
+    _, got, _ = cap.read_capture(out)
+    laser = [r for r in got if r.channel == 1]
+    res = 0.001 if units == "mm" else 0.01
+    n_valid = n_far = 0
+    for s, rec in zip(scans, laser):
+        b0 = p.decode_b0(rec.data)
+        assert b0.count == readings and b0.units == units and b0.status == 0x10
+        got_r = b0.ranges()
+        for j, g in enumerate(got_r):
+            i = j if readings == 180 else int(math.floor(j * 179 / (readings - 1) + 0.5))
+            r = s.ranges[i]
+            if r > max_range:
+                assert g is None and b0.raw[j] == p.LMS_TOO_FAR
+                n_far += 1
+            else:
+                assert abs(g - r) <= res / 2 + 1e-9, (j, g, r)
+                n_valid += 1
+    assert n_valid > 10000 and n_far > 100
+
+
+def test_command_line(tmp_path, head_log):
+    out = tmp_path / "c.cap"
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.convert", str(head_log), str(out),
+                          "--units", "cm", "--readings", "361", "--ticks-per-m", "100000",
+                          "--wheel-base", "0.4", "--max-range", "30"],
+                         capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 0, res.stderr
+    assert "600 0xB0 telegrams" in res.stderr and "timestamps clamped" in res.stderr
+    h, got, _ = cap.read_capture(out)
+    assert h.metadata["laser.units"] == "cm" and h.metadata["robot.ticks_per_m"] == "100000.0"
+    assert h.metadata["source"] == "intel_head.clf.gz"
+    assert [c.protocol for c in h.channels] == ["aria", "lms2xx"]
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.convert", str(tmp_path / "missing.clf"),
+                          str(out)], capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 2 and "missing.clf" in res.stderr

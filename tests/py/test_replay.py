@@ -1,0 +1,196 @@
+"""rsm-replay into pseudo-terminals and rsm-capture from pseudo-terminals."""
+
+import os
+import select
+import signal
+import subprocess
+import sys
+import time
+import tty
+
+import pytest
+
+from conftest import subprocess_env
+from rsm_tools import capture as cap
+from rsm_tools import convert as cv
+from rsm_tools import protocols as p
+
+
+def start(module, *args):
+    return subprocess.Popen([sys.executable, "-m", f"rsm_tools.{module}", *map(str, args)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=subprocess_env())
+
+
+def read_pty_lines(proc, n):
+    out = {}
+    for _ in range(n):
+        line = proc.stdout.readline()
+        assert line, proc.stderr.read()
+        name, path = line.split()
+        out[name] = path
+    return out
+
+
+def drain(fds, want, timeout=30.0):
+    got = {fd: bytearray() for fd in fds}
+    end = time.monotonic() + timeout
+    while any(len(got[fd]) < want[fd] for fd in fds) and time.monotonic() < end:
+        r, _, _ = select.select(fds, [], [], 0.2)
+        for fd in r:
+            try:
+                got[fd] += os.read(fd, 65536)
+            except OSError:
+                pass
+    return got
+
+
+@pytest.fixture(scope="module")
+def head_cap(tmp_path_factory, head_log):
+    out = tmp_path_factory.mktemp("rp") / "h.cap"
+    cv.convert(head_log, out, units="mm", readings=361)
+    return out
+
+
+def expected(path):
+    h, recs, _ = cap.read_capture(path)
+    return {c.name: b"".join(r.data for r in recs if r.channel == c.id and r.is_rx) for c in h.channels}
+
+
+def test_replay_fast_into_ptys_delivers_every_byte(head_cap):
+    want = expected(head_cap)
+    proc = start("replay", head_cap, "--pty", "--fast", "--wait-open", "--linger", "0.5")
+    try:
+        paths = read_pty_lines(proc, 2)
+        assert set(paths) == {"robot", "laser"}
+        fds = {}
+        for name, path in paths.items():
+            fd = os.open(path, os.O_RDWR | os.O_NOCTTY)
+            tty.setraw(fd)
+            fds[name] = fd
+        got = drain(list(fds.values()), {fds[n]: len(want[n]) for n in fds})
+        for n, fd in fds.items():
+            assert bytes(got[fd]) == want[n], n
+            os.close(fd)
+        _, err = proc.communicate(timeout=20)
+        assert proc.returncode == 0, err
+        assert "done" in err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    # the bytes parse as the expected frames
+    fc = p.FrameCounter("lms2xx")
+    fc.feed(want["laser"])
+    assert fc.types == {0xB0: 600}
+
+
+def test_replay_timed_stops_cleanly_on_sigint_and_sigterm(head_cap):
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        proc = start("replay", head_cap, "--pty", "--speed", "1")
+        try:
+            paths = read_pty_lines(proc, 2)
+            fd = os.open(paths["robot"], os.O_RDWR | os.O_NOCTTY)
+            tty.setraw(fd)
+            t0 = time.monotonic()
+            got = drain([fd], {fd: 200}, timeout=10)
+            assert len(got[fd]) >= 200
+            elapsed = time.monotonic() - t0
+            proc.send_signal(sig)
+            _, err = proc.communicate(timeout=10)
+            os.close(fd)
+            assert proc.returncode == 0, err
+            assert f"stopped by {sig.name}" in err
+            assert elapsed > 0.5  # recorded timing: 200 bytes of 14-byte packets at ~10 Hz
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+
+
+def test_replay_errors(tmp_path, head_cap):
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(head_cap), "--port",
+                          "robot=" + str(tmp_path / "no-such-tty")],
+                         capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 2 and "cannot open port robot" in res.stderr
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(head_cap), "--port", "sonar=x"],
+                         capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 2 and "no channel 'sonar'" in res.stderr
+    bad = tmp_path / "bad.cap"
+    bad.write_bytes(b"nope")
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(bad), "--pty"],
+                         capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 2 and "bad magic" in res.stderr
+
+
+# ---------------------------------------------------------------------------
+# rsm-capture
+
+
+def make_pty():
+    m, s = os.openpty()
+    tty.setraw(s)
+    return m, s, os.ttyname(s)
+
+
+def wait_recording(proc, n):
+    for _ in range(n):
+        line = proc.stderr.readline()
+        assert "recording" in line, line + proc.stderr.read()
+
+
+def test_record_two_ptys_then_ctrl_c(tmp_path):
+    m1, s1, path1 = make_pty()
+    m2, s2, path2 = make_pty()
+    out = tmp_path / "rec.cap"
+    proc = start("record", out, "--port", f"robot={path1}@38400:aria", "--port",
+                 f"laser={path2}@38400:lms2xx")
+    try:
+        wait_recording(proc, 2)
+        enc = b"".join(p.encode_encoder(i * 100, -i * 100) for i in range(50))
+        scans = b"".join(p.encode_b0_ranges([1.0 + i * 0.001] * 181) for i in range(5))
+        for i in range(0, len(enc), 70):
+            os.write(m1, enc[i:i + 70])
+            time.sleep(0.002)
+        os.write(m2, scans)
+        time.sleep(1.2)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        for fd in (m1, s1, m2, s2):
+            os.close(fd)
+    assert proc.returncode == 0, err
+    assert "robot 700 B 50 frames" in err and "laser 1860 B 5 frames" in err
+    assert "stopped by SIGINT" in err
+    h, recs, st = cap.read_capture(out)
+    assert [(c.name, c.protocol, c.baud) for c in h.channels] == [
+        ("robot", "aria", 38400), ("laser", "lms2xx", 38400)]
+    assert b"".join(r.data for r in recs if r.channel == 0) == enc
+    assert b"".join(r.data for r in recs if r.channel == 1) == scans
+    ts = [r.timestamp for r in recs]
+    assert ts == sorted(ts)
+
+
+def test_record_port_vanishes_and_missing_port(tmp_path):
+    m, s, path = make_pty()
+    out = tmp_path / "v.cap"
+    proc = start("record", out, "--port", f"robot={path}@9600:aria")
+    try:
+        wait_recording(proc, 1)
+        os.write(m, p.encode_encoder(1, 2))
+        time.sleep(0.5)
+        os.close(s)
+        os.close(m)   # the device goes away
+        _, err = proc.communicate(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 3, err
+    assert "port robot" in err and "vanished" in err
+    _, recs, st = cap.read_capture(out)
+    assert b"".join(r.data for r in recs) == p.encode_encoder(1, 2)
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.record", str(tmp_path / "n.cap"), "--port",
+                          f"robot={tmp_path / 'ttyNONE'}@9600"],
+                         capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 2 and "cannot open port robot" in res.stderr
+    assert not (tmp_path / "n.cap").exists()

@@ -1,0 +1,269 @@
+"""rsm-convert: a CARMEN log to a capture of the serial bytes a P3-DX and an LMS would send.
+
+    rsm-convert LOG OUT.cap [--units mm|cm] [--readings 180|181|361]
+                [--ticks-per-m 128000] [--wheel-base 0.357] [--max-range 8.0]
+
+* Every odometry pose of the log (each ODOM line and the odometry triple of
+  each FLASER line) becomes one ARIA ENCODER packet (0x90) on channel
+  ``robot`` at the record's timestamp.  The 32-bit tick counts come from
+  inverse differential-drive kinematics (see :func:`integrate`), accumulated
+  as integers from the reconstructed pose, so quantisation never drifts.
+* Every FLASER scan becomes one LMS 0xB0 telegram on channel ``laser``
+  right after its ENCODER packet, at the same timestamp.
+* File order is kept; a timestamp earlier than the previous record's is
+  clamped to it.  The clamps are counted, reported and listed in the
+  header metadata ``convert.clamped`` (``kind index original_us
+  written_us`` per line), so every original stamp can be recovered.
+
+Details (beam resampling, range codes) are in docs/capture.md.
+"""
+
+import argparse
+import math
+import os
+import sys
+from dataclasses import dataclass
+from typing import Iterable, List, Optional, Sequence, Tuple
+
+from . import capture as cap
+from . import protocols as proto
+from .carmen import FLaser, Odom, read_log, time_key
+
+Pose = Tuple[float, float, float]
+
+DEFAULT_TICKS_PER_M = 128000.0
+DEFAULT_WHEEL_BASE = 0.357
+DEFAULT_MAX_RANGE = 8.0
+ROBOT, LASER = 0, 1
+
+
+def wrap(a: float) -> float:
+    return math.atan2(math.sin(a), math.cos(a))
+
+
+def integrate(pose: Pose, dl_ticks: int, dr_ticks: int, ticks_per_m: float,
+              wheel_base: float) -> Pose:
+    """Forward kinematics used everywhere in the tools (midpoint-heading step)::
+
+        dl, dr = ticks / ticks_per_m;  ds = (dl + dr) / 2;  dth = (dr - dl) / B
+        x += ds cos(th + dth/2);  y += ds sin(th + dth/2);  th += dth
+    """
+    dl = dl_ticks / ticks_per_m
+    dr = dr_ticks / ticks_per_m
+    ds = 0.5 * (dl + dr)
+    dth = (dr - dl) / wheel_base
+    x, y, th = pose
+    m = th + 0.5 * dth
+    return (x + ds * math.cos(m), y + ds * math.sin(m), wrap(th + dth))
+
+
+class TickEncoder:
+    """Turns a sequence of poses into integer wheel tick counts (inverse kinematics).
+
+    Each step starts from the pose reconstructed from the ticks already issued
+    (closed loop), so rounding never accumulates.  A differential drive cannot
+    move sideways, but a logged odometry step can (the log rounds x, y to 1 mm
+    and theta to a few milliradians).  So a step is one arc (one packet) when
+    that lands within ``split_tol`` metres and ``split_tol_th`` radians of the
+    target; otherwise it is three packets: turn on the spot to face the target
+    (or face away from it, whichever turn is smaller), drive straight, turn on
+    the spot to the target heading.  Turning on the spot (dl = -dr) and driving
+    straight (dl = dr) are exact in the midpoint model, so the error after a
+    split step is only the tick quantisation.
+    """
+
+    def __init__(self, first: Pose, ticks_per_m: float, wheel_base: float, start: int = 0,
+                 split_tol: float = 0.0005, split_tol_th: float = 5e-5) -> None:
+        self.tpm = ticks_per_m
+        self.base = wheel_base
+        self.left = start
+        self.right = start
+        self.pose = first
+        self.split_tol = split_tol
+        self.split_tol_th = split_tol_th
+        self.splits = 0
+
+    def _emit(self, dl: int, dr: int) -> Tuple[int, int]:
+        self.left += dl
+        self.right += dr
+        self.pose = integrate(self.pose, dl, dr, self.tpm, self.base)
+        return self.left, self.right
+
+    def _arc(self, target: Pose) -> Tuple[int, int]:
+        x, y, th = self.pose
+        dth = wrap(target[2] - th)
+        m = th + 0.5 * dth
+        ds = (target[0] - x) * math.cos(m) + (target[1] - y) * math.sin(m)
+        return (int(round((ds - 0.5 * dth * self.base) * self.tpm)),
+                int(round((ds + 0.5 * dth * self.base) * self.tpm)))
+
+    def _turn(self, dth: float) -> Optional[Tuple[int, int]]:
+        t = int(round(0.5 * dth * self.base * self.tpm))
+        return self._emit(-t, t) if t else None
+
+    def step(self, target: Pose) -> List[Tuple[int, int]]:
+        """Cumulative (left, right) counts of the packet(s) that reach ``target``."""
+        dl, dr = self._arc(target)
+        cand = integrate(self.pose, dl, dr, self.tpm, self.base)
+        if (math.hypot(cand[0] - target[0], cand[1] - target[1]) <= self.split_tol
+                and abs(wrap(cand[2] - target[2])) <= self.split_tol_th):
+            return [self._emit(dl, dr)]
+        self.splits += 1
+        out = []
+        dx, dy = target[0] - self.pose[0], target[1] - self.pose[1]
+        face = math.atan2(dy, dx)
+        turn = wrap(face - self.pose[2])
+        if abs(turn) > 0.5 * math.pi:
+            turn = wrap(turn + math.pi)
+        p = self._turn(turn)
+        if p:
+            out.append(p)
+        th = self.pose[2]
+        ds = dx * math.cos(th) + dy * math.sin(th)
+        t = int(round(ds * self.tpm))
+        if t:
+            out.append(self._emit(t, t))
+        p = self._turn(wrap(target[2] - self.pose[2]))
+        if p:
+            out.append(p)
+        if not out:
+            out.append(self._emit(0, 0))
+        return out
+
+
+def resample(ranges: Sequence[float], n: int) -> List[float]:
+    """180 beams to ``n`` readings.
+
+    n == len(ranges): unchanged.  Otherwise the beams are taken to span exactly
+    180 deg (beam i at i*180/(m-1) deg) and reading j (at j*180/(n-1) deg) is the
+    nearest beam: index round(j*(m-1)/(n-1)).  No interpolation, so every
+    reading is a real measurement.
+    """
+    m = len(ranges)
+    if n == m:
+        return list(ranges)
+    return [ranges[int(math.floor(j * (m - 1) / (n - 1) + 0.5))] for j in range(n)]
+
+
+@dataclass
+class ConvertStats:
+    odom: int = 0
+    scans: int = 0
+    clamped: int = 0
+    clamped_scans: int = 0
+    max_clamp_us: int = 0
+    split: int = 0
+    packets: int = 0
+
+    def summary(self) -> str:
+        return (f"{self.odom} ODOM + {self.scans} FLASER -> {self.packets} ENCODER "
+                f"packets and {self.scans} 0xB0 telegrams; {self.clamped} timestamps clamped "
+                f"({self.clamped_scans} of scans, by at most {self.max_clamp_us / 1e6:.6f} s); "
+                f"{self.split} odometry steps sent as 3 packets (sideways motion)")
+
+
+def convert(log, out, units: str = "mm", readings: int = 181,
+            ticks_per_m: float = DEFAULT_TICKS_PER_M, wheel_base: float = DEFAULT_WHEEL_BASE,
+            max_range: float = DEFAULT_MAX_RANGE, start_ticks: int = 0,
+            ground_truth: Optional[str] = None) -> ConvertStats:
+    """Convert the CARMEN log ``log`` to the capture ``out``; returns the counts."""
+    if readings not in (180, 181, 361):
+        raise ValueError("readings must be 180, 181 or 361")
+    if units not in ("mm", "cm"):
+        raise ValueError("units must be mm or cm")
+    recs = [r for r in read_log(log, types=("ODOM", "FLASER"))]
+    st = ConvertStats()
+    # pass 1: timestamps and clamps (the side table goes into the header)
+    stamps = []
+    clamped_lines = []
+    last = None
+    counters = {"ODOM": 0, "FLASER": 0}
+    for r in recs:
+        t = time_key(r.timestamp)
+        idx = counters[r.kind]
+        counters[r.kind] += 1
+        if last is not None and t < last:
+            st.clamped += 1
+            st.max_clamp_us = max(st.max_clamp_us, last - t)
+            if r.kind == "FLASER":
+                st.clamped_scans += 1
+            clamped_lines.append(f"{r.kind} {idx} {t} {last}")
+            t = last
+        last = t
+        stamps.append(t)
+    first = next((r.odom_pose if isinstance(r, FLaser) else r.pose for r in recs), (0.0, 0.0, 0.0))
+    meta = {
+        "source": os.path.basename(str(log)),
+        "created_by": "rsm-convert",
+        "robot.model": "p3dx-sh",
+        "robot.ticks_per_m": repr(float(ticks_per_m)),
+        "robot.wheel_base_m": repr(float(wheel_base)),
+        "robot.kinematics": "midpoint",
+        "robot.initial_pose": " ".join(repr(v) for v in first),
+        "robot.start_ticks": str(start_ticks),
+        "laser.model": "lms2xx",
+        "laser.units": units,
+        "laser.readings": str(readings),
+        "laser.fov_deg": "180",
+        "laser.measuring_mode": "0x00",
+        "laser.max_range_m": repr(float(max_range)),
+        "laser.resampling": "none" if readings == 180 else "nearest beam, 180 beams over 180 deg",
+        "convert.clamped_total": str(st.clamped),
+        "convert.clamped": "\n".join(clamped_lines),
+    }
+    if ground_truth:
+        meta["ground_truth"] = ground_truth
+    channels = [cap.Channel(ROBOT, "robot", "aria", 38400), cap.Channel(LASER, "laser", "lms2xx", 38400)]
+    # pass 2: tick counts (the split steps also go into the header)
+    enc = TickEncoder(first, ticks_per_m, wheel_base, start_ticks)
+    packets = []
+    split = []
+    for i, r in enumerate(recs):
+        counts = enc.step(r.odom_pose if isinstance(r, FLaser) else r.pose)
+        if len(counts) > 1:
+            split.append(f"{i}:{len(counts)}")
+        packets.append(counts)
+    st.split = enc.splits
+    meta["convert.split_steps"] = " ".join(split)
+    with cap.CaptureWriter(out, channels, meta) as w:
+        for r, t, counts in zip(recs, stamps, packets):
+            for lr in counts:
+                w.write(t, ROBOT, proto.encode_encoder(*lr))
+                st.packets += 1
+            if isinstance(r, Odom):
+                st.odom += 1
+            else:
+                st.scans += 1
+                rng = resample(r.ranges, readings)
+                w.write(t, LASER, proto.encode_b0_ranges(rng, units, max_range))
+    return st
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    ap = argparse.ArgumentParser(prog="rsm-convert", description=__doc__.split("\n\n")[0])
+    ap.add_argument("log", help="CARMEN log (plain or gzip)")
+    ap.add_argument("out", help="capture file to write")
+    ap.add_argument("--units", choices=("mm", "cm"), default="mm")
+    ap.add_argument("--readings", type=int, choices=(180, 181, 361), default=181)
+    ap.add_argument("--ticks-per-m", type=float, default=DEFAULT_TICKS_PER_M)
+    ap.add_argument("--wheel-base", type=float, default=DEFAULT_WHEEL_BASE)
+    ap.add_argument("--max-range", type=float, default=DEFAULT_MAX_RANGE,
+                    help="longer ranges are sent as the LMS 'too far' code 0x1FF7 (default 8.0 m)")
+    ap.add_argument("--start-ticks", type=int, default=0,
+                    help="initial value of both tick counters (wraps modulo 2^32)")
+    ap.add_argument("--ground-truth", help="name of a ground-truth file to note in the metadata")
+    a = ap.parse_args(argv)
+    if a.ticks_per_m <= 0 or a.wheel_base <= 0 or a.max_range <= 0:
+        ap.error("--ticks-per-m, --wheel-base and --max-range must be positive")
+    try:
+        st = convert(a.log, a.out, a.units, a.readings, a.ticks_per_m, a.wheel_base,
+                     a.max_range, a.start_ticks, a.ground_truth)
+    except OSError as exc:
+        print(f"rsm-convert: {exc}", file=sys.stderr)
+        return 2
+    print(f"rsm-convert: {st.summary()}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,170 @@
+"""rsm-plot: trajectories drawn over an occupancy map image.
+
+    rsm-plot [--map MAP.pgm|MAP.yaml] --trajectory LABEL=FILE ... [--ground-truth FILE]
+             -o OUT.png [--title T]
+
+The map is a PGM (P5 or P2) with a map_server YAML beside it (same stem,
+``.yaml``) or given directly; ``resolution`` (m/pixel) and ``origin`` (x, y
+of the lower-left pixel) place it in world coordinates.  Trajectory files
+have ``timestamp x y theta`` lines (``#`` comments).
+
+Needs matplotlib, the optional extra ``plot``: ``pip install 'rsm-tools[plot]'``.
+"""
+
+import argparse
+import sys
+from pathlib import Path
+from typing import List, Optional, Sequence, Tuple
+
+EXTRA_HINT = ("rsm-plot needs matplotlib, which the core tools do not install; "
+              "install the optional extra: pip install 'rsm-tools[plot]' (or: pip install matplotlib)")
+
+
+class PlotError(Exception):
+    pass
+
+
+def read_pgm(path: Path) -> Tuple[int, int, int, List[int]]:
+    """(width, height, maxval, pixels row-major, top row first)."""
+    data = path.read_bytes()
+    magic = data[:2]
+    if magic not in (b"P5", b"P2"):
+        raise PlotError(f"{path}: not a PGM image (P5/P2)")
+    tokens: List[bytes] = []
+    i = 2
+    while len(tokens) < 3:
+        while i < len(data) and data[i:i + 1].isspace():
+            i += 1
+        if data[i:i + 1] == b"#":
+            while i < len(data) and data[i] not in (10, 13):
+                i += 1
+            continue
+        j = i
+        while j < len(data) and not data[j:j + 1].isspace():
+            j += 1
+        tokens.append(data[i:j])
+        i = j
+    w, h, maxval = (int(t) for t in tokens)
+    if magic == b"P5":
+        i += 1
+        if maxval > 255:
+            raise PlotError(f"{path}: 16-bit PGM not supported")
+        px = list(data[i:i + w * h])
+    else:
+        px = [int(t) for t in data[i:].split()][: w * h]
+    if len(px) != w * h:
+        raise PlotError(f"{path}: PGM data too short")
+    return w, h, maxval, px
+
+
+def read_map_yaml(path: Path) -> dict:
+    """The few map_server keys we need: image, resolution, origin."""
+    out: dict = {}
+    for line in path.read_text().splitlines():
+        line = line.split("#", 1)[0].strip()
+        if ":" not in line:
+            continue
+        k, v = (s.strip() for s in line.split(":", 1))
+        if k == "origin":
+            out[k] = [float(t) for t in v.strip("[]").split(",")]
+        elif k == "resolution":
+            out[k] = float(v)
+        elif k == "image":
+            out[k] = v.strip("'\"")
+    if "resolution" not in out:
+        raise PlotError(f"{path}: no resolution")
+    out.setdefault("origin", [0.0, 0.0, 0.0])
+    return out
+
+
+def load_map(arg: str):
+    """(pixels as rows top-first, extent [x0, x1, y0, y1]) for a PGM or YAML argument."""
+    p = Path(arg)
+    if p.suffix in (".yaml", ".yml"):
+        meta = read_map_yaml(p)
+        pgm = p.parent / meta.get("image", p.with_suffix(".pgm").name)
+    else:
+        pgm = p
+        y = p.with_suffix(".yaml")
+        meta = read_map_yaml(y) if y.is_file() else {"resolution": 0.05, "origin": [0.0, 0.0, 0.0]}
+    w, h, maxval, px = read_pgm(pgm)
+    res = meta["resolution"]
+    x0, y0 = meta["origin"][0], meta["origin"][1]
+    rows = [[v / maxval for v in px[r * w:(r + 1) * w]] for r in range(h)]
+    return rows, [x0, x0 + w * res, y0, y0 + h * res]
+
+
+def load_trajectory(path: str) -> List[Tuple[float, float, float, float]]:
+    rows = []
+    for n, line in enumerate(Path(path).read_text().splitlines(), 1):
+        s = line.strip()
+        if not s or s.startswith("#"):
+            continue
+        f = s.split()
+        if len(f) < 4:
+            raise PlotError(f"{path}:{n}: want 'timestamp x y theta'")
+        rows.append(tuple(float(v) for v in f[:4]))
+    return rows  # type: ignore[return-value]
+
+
+def _matplotlib():
+    try:
+        import matplotlib
+    except ImportError:
+        raise PlotError(EXTRA_HINT) from None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def plot(out: str, trajectories: Sequence[Tuple[str, str]], map_arg: Optional[str] = None,
+         ground_truth: Optional[str] = None, title: Optional[str] = None) -> None:
+    plt = _matplotlib()
+    fig, ax = plt.subplots(figsize=(8, 8), dpi=100)
+    if map_arg:
+        rows, extent = load_map(map_arg)
+        ax.imshow(rows, cmap="gray", vmin=0.0, vmax=1.0, extent=extent, origin="upper",
+                  interpolation="nearest")
+    if ground_truth:
+        g = load_trajectory(ground_truth)
+        ax.plot([r[1] for r in g], [r[2] for r in g], "k--", lw=1.5, label="ground truth")
+    for label, path in trajectories:
+        t = load_trajectory(path)
+        ax.plot([r[1] for r in t], [r[2] for r in t], lw=1.2, label=label)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    if title:
+        ax.set_title(title)
+    ax.legend(loc="best")
+    fig.tight_layout()
+    fig.savefig(out, format="png")
+    plt.close(fig)
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    ap = argparse.ArgumentParser(prog="rsm-plot", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--map", help="PGM map (YAML beside it) or map_server YAML")
+    ap.add_argument("--trajectory", action="append", default=[], metavar="LABEL=FILE")
+    ap.add_argument("--ground-truth", metavar="FILE")
+    ap.add_argument("-o", "--output", required=True, metavar="OUT.png")
+    ap.add_argument("--title")
+    a = ap.parse_args(argv)
+    trajs = []
+    for spec in a.trajectory:
+        if "=" not in spec:
+            ap.error(f"--trajectory wants LABEL=FILE, got {spec!r}")
+        trajs.append(tuple(spec.split("=", 1)))
+    if not trajs and not a.ground_truth:
+        ap.error("nothing to plot: give --trajectory LABEL=FILE and/or --ground-truth FILE")
+    try:
+        plot(a.output, trajs, a.map, a.ground_truth, a.title)
+    except (PlotError, OSError, ValueError) as exc:
+        print(f"rsm-plot: {exc}", file=sys.stderr)
+        return 2
+    print(f"rsm-plot: wrote {a.output}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,209 @@
+"""rsm-replay: play a capture's received bytes into serial ports or pseudo-terminals.
+
+    rsm-replay CAP [--port CHANNEL=DEVICE ...] [--pty] [--speed X | --fast]
+               [--wait-open] [--linger S] [--quiet]
+
+Only rx records (device -> host) are played; tx records are what the host
+sent and are skipped.  Each channel goes to the serial device named with
+``--port`` (opened with pyserial at the channel's baud rate), or, with
+``--pty``, to a pseudo-terminal created for it: one ``CHANNEL PATH`` line per
+channel is printed on stdout (flushed) before playing starts, so another
+program can open the paths.  Channels with neither are skipped.
+
+Timing: recorded (``--speed 1``, default), scaled (``--speed 4`` = four times
+faster), or ``--fast``: as fast as the reader takes the bytes (writes block
+while the pty buffer is full).  ``--wait-open`` waits for a reader to open
+every pty first.  Progress goes to stderr.  Ctrl-C (SIGINT) or SIGTERM stops
+the replay cleanly (exit status 0 after a "stopped" message).  Exit status 2:
+bad arguments, an unreadable capture or a port that cannot be opened.
+"""
+
+import argparse
+import os
+import select
+import signal
+import sys
+import time
+import tty
+from typing import Dict, List, Optional, Sequence
+
+from . import capture as cap
+
+
+class Stop(Exception):
+    pass
+
+
+def _raise_stop(signum, frame):  # noqa: ARG001
+    raise Stop(signal.Signals(signum).name)
+
+
+class PtyOut:
+    def __init__(self, name: str) -> None:
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        self.path = os.ttyname(self.slave)
+        self.name = name
+
+    def release_slave(self) -> None:
+        if self.slave is not None:
+            os.close(self.slave)
+            self.slave = None
+
+    def opened(self) -> bool:
+        """True once someone has the slave open (the master no longer reports a hang-up)."""
+        p = select.poll()
+        p.register(self.master, select.POLLHUP)
+        return not any(ev & select.POLLHUP for _, ev in p.poll(0))
+
+    def write(self, data: bytes) -> None:
+        view = memoryview(data)
+        while view:
+            n = os.write(self.master, view)
+            view = view[n:]
+
+    def close(self) -> None:
+        self.release_slave()
+        os.close(self.master)
+
+
+class SerialOut:
+    def __init__(self, name: str, device: str, baud: int) -> None:
+        import serial  # pyserial, the package's runtime dependency
+
+        self.name = name
+        self.path = device
+        self.port = serial.Serial(device, baudrate=baud or 9600, timeout=1, write_timeout=None)
+
+    def write(self, data: bytes) -> None:
+        self.port.write(data)
+
+    def close(self) -> None:
+        try:
+            self.port.flush()
+        finally:
+            self.port.close()
+
+
+def parse_ports(specs: Sequence[str]) -> Dict[str, str]:
+    out = {}
+    for s in specs:
+        if "=" not in s:
+            raise ValueError(f"--port wants CHANNEL=DEVICE, got {s!r}")
+        k, v = s.split("=", 1)
+        out[k] = v
+    return out
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    ap = argparse.ArgumentParser(prog="rsm-replay", description=__doc__.split("\n\n")[0])
+    ap.add_argument("capture")
+    ap.add_argument("--port", action="append", default=[], metavar="CHANNEL=DEVICE")
+    ap.add_argument("--pty", action="store_true", help="create a pseudo-terminal per other channel")
+    g = ap.add_mutually_exclusive_group()
+    g.add_argument("--speed", type=float, default=1.0, help="time scale (2 = twice as fast)")
+    g.add_argument("--fast", action="store_true", help="no pauses: as fast as the reader reads")
+    ap.add_argument("--wait-open", action="store_true", help="wait until every pty is opened")
+    ap.add_argument("--linger", type=float, default=1.0,
+                    help="seconds to keep ptys open after the last byte (default 1)")
+    ap.add_argument("--quiet", action="store_true")
+    a = ap.parse_args(argv)
+    if a.speed <= 0:
+        ap.error("--speed must be positive")
+    try:
+        ports = parse_ports(a.port)
+    except ValueError as exc:
+        ap.error(str(exc))
+
+    signal.signal(signal.SIGTERM, _raise_stop)
+    signal.signal(signal.SIGINT, _raise_stop)
+    outs: Dict[int, object] = {}
+    reader = None
+    records = nbytes = 0
+    t_first = t_last = None
+    try:
+        try:
+            reader = cap.CaptureReader(a.capture)
+        except (OSError, cap.CaptureError) as exc:
+            print(f"rsm-replay: cannot read {a.capture}: {exc}", file=sys.stderr)
+            return 2
+        hdr = reader.header
+        for name in ports:
+            try:
+                hdr.channel(name)
+            except KeyError as exc:
+                print(f"rsm-replay: {exc.args[0]}", file=sys.stderr)
+                return 2
+        for ch in hdr.channels:
+            if ch.name in ports:
+                try:
+                    outs[ch.id] = SerialOut(ch.name, ports[ch.name], ch.baud)
+                except Exception as exc:  # serial.SerialException, OSError
+                    print(f"rsm-replay: cannot open port {ch.name} ({ports[ch.name]}): {exc}",
+                          file=sys.stderr)
+                    return 2
+            elif a.pty:
+                outs[ch.id] = PtyOut(ch.name)
+        if not outs:
+            print("rsm-replay: nothing to play into: give --port CHANNEL=DEVICE or --pty",
+                  file=sys.stderr)
+            return 2
+        for o in outs.values():
+            print(f"{o.name} {o.path}", flush=True)
+        ptys = [o for o in outs.values() if isinstance(o, PtyOut)]
+        if a.wait_open and ptys:
+            for o in ptys:
+                o.release_slave()
+            if not a.quiet:
+                print("rsm-replay: waiting for a reader to open " +
+                      ", ".join(o.path for o in ptys), file=sys.stderr)
+            while not all(o.opened() for o in ptys):
+                time.sleep(0.02)
+        start = time.monotonic()
+        last_progress = 0.0
+        for rec in reader:
+            if rec.direction != cap.RX or rec.channel not in outs:
+                continue
+            if t_first is None:
+                t_first = rec.timestamp
+            if not a.fast:
+                due = start + (rec.timestamp - t_first) / 1e6 / a.speed
+                delay = due - time.monotonic()
+                if delay > 0:
+                    time.sleep(delay)
+            outs[rec.channel].write(rec.data)  # type: ignore[attr-defined]
+            records += 1
+            nbytes += len(rec.data)
+            t_last = rec.timestamp
+            now = time.monotonic()
+            if not a.quiet and now - last_progress >= 0.5:
+                last_progress = now
+                print(f"\rrsm-replay: {(t_last - t_first) / 1e6:8.1f} s of capture, "
+                      f"{records} records, {nbytes} bytes", end="", file=sys.stderr, flush=True)
+        if not a.quiet:
+            print(f"\rrsm-replay: done: {records} records, {nbytes} bytes"
+                  + (f", {(t_last - t_first) / 1e6:.1f} s of capture" if t_first is not None else ""),
+                  file=sys.stderr, flush=True)
+        if ptys and a.linger > 0:
+            time.sleep(a.linger)
+        return 0
+    except Stop as exc:
+        print(f"\nrsm-replay: stopped by {exc.args[0]} after {records} records, {nbytes} bytes",
+              file=sys.stderr, flush=True)
+        return 0
+    except cap.CaptureError as exc:
+        print(f"\nrsm-replay: capture problem after {records} records: {exc}", file=sys.stderr)
+        return 1
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        for o in outs.values():
+            try:
+                o.close()  # type: ignore[attr-defined]
+            except Exception:  # noqa: BLE001
+                pass
+        if reader is not None:
+            reader.close()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

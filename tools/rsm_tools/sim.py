@@ -1,0 +1,189 @@
+"""rsm-sim: a small 2-D world, a scripted drive, and the serial bytes a P3-DX and an LMS would send.
+
+    rsm-sim OUT.cap --truth OUT.txt [--world rooms|corridor|pillars] [--seconds N]
+            [--slip X] [--range-noise M] [--outliers P] [--seed S]
+
+The world is line segments and circles.  The robot follows a closed loop of
+waypoints at 0.4 m/s (turning on the spot at each corner), integrated at
+100 Hz.  Every 100 ms it emits an ENCODER packet (P3-DX, 128000 ticks/m,
+wheel base 0.357 m); every 200 ms a 181-reading LMS 0xB0 scan in mm (180 deg
+at 1 deg, max range 8 m, 0x1FF7 beyond) ray-cast from the true pose.
+
+Noise: ``--slip X`` scales each wheel's measured travel by (1 + N(0, X)) per
+step; ``--range-noise M`` adds N(0, M) metres to every reading;
+``--outliers P`` replaces a reading, with probability P, by a uniform range
+between 0.1 m and the true one (something in front of the wall).  Everything
+comes from one seeded generator, so a seed gives the same bytes.
+
+The truth file has one ``timestamp x y theta`` line per scan (seconds,
+metres, radians), the same timestamps as the scans' records.
+"""
+
+import argparse
+import math
+import random
+import sys
+from typing import List, Optional, Sequence, Tuple
+
+from . import capture as cap
+from . import protocols as proto
+from .convert import wrap
+
+Segment = Tuple[float, float, float, float]
+Circle = Tuple[float, float, float]
+
+TICKS_PER_M = 128000.0
+WHEEL_BASE = 0.357
+SPEED = 0.4
+TURN_RATE = 0.8
+DT = 0.01
+MAX_RANGE = 8.0
+T0_US = 1_000_000_000_000  # 1e6 s: an arbitrary epoch
+
+
+def _box(x0, y0, x1, y1) -> List[Segment]:
+    return [(x0, y0, x1, y0), (x1, y0, x1, y1), (x1, y1, x0, y1), (x0, y1, x0, y0)]
+
+
+def world(name: str) -> Tuple[List[Segment], List[Circle], List[Tuple[float, float]]]:
+    """(segments, circles, waypoints) of a named world."""
+    if name == "rooms":
+        segs = _box(0, 0, 10, 8)
+        segs += [(5, 0, 5, 3), (5, 5, 5, 8), (0, 4, 2, 4), (3, 4, 5, 4), (7, 4, 10, 4)]
+        circles = [(8, 6.5, 0.3), (2, 2, 0.25)]
+        path = [(1.5, 1.2), (3.5, 1.5), (4.0, 4.5), (6.0, 4.5), (8.5, 2.0), (8.0, 5.2),
+                (6.0, 6.5), (2.5, 6.5), (1.5, 5.0)]
+    elif name == "corridor":
+        segs = [(0, 0, 30, 0), (0, 2, 30, 2), (0, 0, 0, 2), (30, 0, 30, 2)]
+        segs += [(x, 0, x, 0.3) for x in range(3, 30, 4)] + [(x, 2, x, 1.7) for x in range(5, 30, 4)]
+        circles = []
+        path = [(1, 1), (29, 1)]
+    elif name == "pillars":
+        segs = _box(0, 0, 12, 12)
+        circles = [(3 + 3 * i, 3 + 3 * j, 0.3) for i in range(3) for j in range(3)]
+        path = [(1.5, 1.5), (10.5, 1.5), (10.5, 10.5), (1.5, 10.5)]
+    else:
+        raise ValueError(f"unknown world {name!r}")
+    return segs, circles, path
+
+
+def raycast(x: float, y: float, a: float, segs: Sequence[Segment], circles: Sequence[Circle],
+            max_range: float = 1e9) -> float:
+    dx, dy = math.cos(a), math.sin(a)
+    best = max_range
+    for x0, y0, x1, y1 in segs:
+        ex, ey = x1 - x0, y1 - y0
+        den = dx * ey - dy * ex
+        if abs(den) < 1e-12:
+            continue
+        wx, wy = x0 - x, y0 - y
+        t = (wx * ey - wy * ex) / den
+        u = (wx * dy - wy * dx) / den
+        if t > 1e-9 and -1e-12 <= u <= 1 + 1e-12 and t < best:
+            best = t
+    for cx, cy, r in circles:
+        fx, fy = x - cx, y - cy
+        b = fx * dx + fy * dy
+        c = fx * fx + fy * fy - r * r
+        disc = b * b - c
+        if disc >= 0:
+            t = -b - math.sqrt(disc)
+            if 1e-9 < t < best:
+                best = t
+    return best
+
+
+def simulate(out, truth, world_name: str = "rooms", seconds: float = 60.0, slip: float = 0.0,
+             range_noise: float = 0.0, outliers: float = 0.0, seed: int = 1) -> int:
+    """Write the capture and the truth file; returns the number of scans."""
+    segs, circles, path = world(world_name)
+    rng = random.Random(seed)
+    x, y = path[0]
+    th = math.atan2(path[1][1] - y, path[1][0] - x)
+    wp = 1
+    left = right = 0            # measured ticks (integers)
+    lacc = racc = 0.0           # fractional ticks carried over
+    channels = [cap.Channel(0, "robot", "aria", 38400), cap.Channel(1, "laser", "lms2xx", 38400)]
+    meta = {
+        "created_by": "rsm-sim", "source": f"rsm-sim world={world_name} seed={seed}",
+        "robot.model": "p3dx-sh", "robot.ticks_per_m": repr(TICKS_PER_M),
+        "robot.wheel_base_m": repr(WHEEL_BASE), "robot.kinematics": "midpoint",
+        "robot.initial_pose": f"{x!r} {y!r} {th!r}", "robot.start_ticks": "0",
+        "laser.model": "lms2xx", "laser.units": "mm", "laser.readings": "181",
+        "laser.fov_deg": "180", "laser.measuring_mode": "0x00", "laser.max_range_m": repr(MAX_RANGE),
+        "sim.slip": repr(slip), "sim.range_noise_m": repr(range_noise),
+        "sim.outliers": repr(outliers), "sim.seconds": repr(seconds),
+        "ground_truth": str(getattr(truth, "name", truth)).rsplit("/", 1)[-1],
+    }
+    steps = int(round(seconds / DT))
+    scans = 0
+    with cap.CaptureWriter(out, channels, meta) as w, open(truth, "w") as tf:
+        tf.write("# timestamp x y theta   (rsm-sim ground truth at each scan)\n")
+        for k in range(steps + 1):
+            t_us = T0_US + k * 10_000
+            if k % 10 == 0:
+                w.write(t_us, 0, proto.encode_encoder(left, right))
+            if k % 20 == 0:
+                vals = []
+                for j in range(181):
+                    r = raycast(x, y, th + math.radians(j - 90), segs, circles, MAX_RANGE + 1)
+                    if r <= MAX_RANGE:
+                        if outliers and rng.random() < outliers:
+                            r = rng.uniform(0.1, r)
+                        if range_noise:
+                            r = max(0.001, r + rng.gauss(0.0, range_noise))
+                    vals.append(proto.range_to_raw(r, "mm", MAX_RANGE))
+                w.write(t_us, 1, proto.encode_b0(vals, "mm"))
+                tf.write(f"{t_us / 1e6:.6f} {x:.6f} {y:.6f} {th:.6f}\n")
+                scans += 1
+            # motion for the next step: turn towards the waypoint, then drive
+            gx, gy = path[wp]
+            err = wrap(math.atan2(gy - y, gx - x) - th)
+            if math.hypot(gx - x, gy - y) < 0.05:
+                wp = (wp + 1) % len(path)
+                v = om = 0.0
+            elif abs(err) > 0.05:
+                v, om = 0.0, max(-TURN_RATE, min(TURN_RATE, 3.0 * err))
+            else:
+                v, om = SPEED, 2.0 * err
+            dl = (v - 0.5 * om * WHEEL_BASE) * DT
+            dr = (v + 0.5 * om * WHEEL_BASE) * DT
+            # truth: midpoint step
+            ds, dth = 0.5 * (dl + dr), (dr - dl) / WHEEL_BASE
+            x += ds * math.cos(th + 0.5 * dth)
+            y += ds * math.sin(th + 0.5 * dth)
+            th = wrap(th + dth)
+            # measured ticks with slip
+            ml = dl * (1.0 + rng.gauss(0.0, slip)) if slip else dl
+            mr = dr * (1.0 + rng.gauss(0.0, slip)) if slip else dr
+            lacc += ml * TICKS_PER_M
+            racc += mr * TICKS_PER_M
+            il, ir = int(math.floor(lacc)), int(math.floor(racc))
+            lacc -= il
+            racc -= ir
+            left += il
+            right += ir
+    return scans
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    ap = argparse.ArgumentParser(prog="rsm-sim", description=__doc__.split("\n\n")[0])
+    ap.add_argument("out", help="capture file to write")
+    ap.add_argument("--truth", required=True, help="ground-truth trajectory to write")
+    ap.add_argument("--world", choices=("rooms", "corridor", "pillars"), default="rooms")
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--slip", type=float, default=0.0)
+    ap.add_argument("--range-noise", type=float, default=0.0)
+    ap.add_argument("--outliers", type=float, default=0.0)
+    ap.add_argument("--seed", type=int, default=1)
+    a = ap.parse_args(argv)
+    if a.seconds <= 0 or a.slip < 0 or a.range_noise < 0 or not 0 <= a.outliers <= 1:
+        ap.error("--seconds > 0, --slip >= 0, --range-noise >= 0, 0 <= --outliers <= 1")
+    n = simulate(a.out, a.truth, a.world, a.seconds, a.slip, a.range_noise, a.outliers, a.seed)
+    print(f"rsm-sim: {n} scans, {a.seconds:g} s in world {a.world} -> {a.out}, truth {a.truth}",
+          file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
