@@ -1,8 +1,9 @@
 /* rsm-nav: runs the rsm localizer (or the ICP baseline, or odometry alone)
- * over a CARMEN log and writes the trajectory, the map and a summary.
+ * over a CARMEN log, a capture file, or live serial links, and writes the
+ * trajectory, the map and a summary.
  *
- *   rsm-nav --carmen LOG [--method rsm|icp|odometry] --trajectory OUT.txt
- *           [--map OUT.pgm] [--set key=value ...] [--quiet]
+ *   rsm-nav (--carmen LOG | --capture FILE | --robot DEV --lms DEV) [--method rsm|icp|odometry]
+ *           --trajectory OUT.txt [--map OUT.pgm] [--set key=value ...] [--quiet]
  */
 #include <errno.h>
 #include <math.h>
@@ -11,25 +12,32 @@
 #include <string.h>
 #include <time.h>
 
+#include "capture.h"
 #include "carmen.h"
+#include "live.h"
 #include "pgm.h"
+#include "stream.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"
 
-typedef struct options {
-    const char *carmen;
-    const char *trajectory;
-    const char *map;
-    int quiet;
-} options_t;
 
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: rsm-nav --carmen LOG [--method rsm|icp|odometry] --trajectory OUT.txt\n"
-            "               [--map OUT.pgm] [--fov179] [--set KEY=VALUE]... [--quiet]\n"
-            "Runs the localizer over a CARMEN log (FLASER/ROBOTLASER1 scans; odometry from the\n"
-            "pose fields of the laser lines) and writes one line per scan: timestamp x y theta.\n"
+            "usage: rsm-nav SOURCE [--method rsm|icp|odometry] --trajectory OUT.txt [--map OUT.pgm]\n"
+            "               [--set KEY=VALUE]... [--quiet]\n"
+            "SOURCE is one of:\n"
+            "  --carmen LOG [--fov179]   a CARMEN log, plain or gzip (FLASER/ROBOTLASER1 scans;\n"
+            "                            odometry from the pose fields of the laser lines)\n"
+            "  --capture FILE            a capture of the robot (ARIA) and laser (LMS) links\n"
+            "  --robot DEV --lms DEV     live serial links (devices or pseudo-terminals), with\n"
+            "     [--robot-baud N] [--lms-baud N] [--listen] [--seconds S] [--idle-exit S]\n"
+            "                            --listen sends nothing and decodes what arrives (replays)\n"
+            "  --ticks-per-m N --wheel-base M   odometry geometry for encoder packets\n"
+            "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
+            "                            the capture's robot.initial_pose, else zero)\n"
+            "                            (default: the capture's, else the P3-DX defaults)\n"
+            "Writes one line per scan: timestamp x y theta (s, m, m, rad).\n"
             "KEY is one of: cell, sigma, rule (0 inside, 1 touch, 2 nearest), min_hits, window,\n"
             "search_sigmas, search_min, search_max, gate, noise (0 residual, 1 fixed), r_min_xy,\n"
             "r_min_theta, inlier_tol, length_tol, iterations, min_support, seed, k_den, nms,\n"
@@ -106,62 +114,436 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-int main(int argc, char **argv)
+/* Everything one run accumulates, whatever the source. */
+typedef struct nav {
+    rsm_localizer_t loc;
+    rsm_localizer_config_t cfg;
+    int initialised;
+    int quiet;
+    FILE *traj;
+    const char *map_path;
+    hitlist_t hits;
+    double *times;
+    size_t ntimes;
+    size_t cap_times;
+    uint64_t last_us;
+    uint64_t clamped;
+    double t_start;
+    /* Capture mode: original stamps of scans whose stamp the converter clamped. */
+    uint64_t *restore_idx;
+    uint64_t *restore_us;
+    size_t nrestore;
+    uint64_t scan_index;
+    uint64_t encoders;
+    int have_x0;           /* --initial-pose given: overrides any other start */
+    rsm_pose_t x0;
+} nav_t;
+
+static int nav_start(nav_t *nav, const rsm_pose_t *x0)
 {
-    static rsm_localizer_t loc; /* about 55 KiB: keep it off the stack */
+    if (nav->initialised) {
+        return 0;
+    }
+    if (nav->have_x0) {
+        x0 = &nav->x0;
+    }
+    if (rsm_localizer_init(&nav->loc, &nav->cfg, x0, NULL) != RSM_OK) {
+        fprintf(stderr, "rsm-nav: invalid configuration\n");
+        return -1;
+    }
+    nav->initialised = 1;
+    return 0;
+}
+
+/* Runs one scan; file_stamp_s is what the trajectory line carries. */
+static void nav_scan(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us, double file_stamp_s)
+{
+    rsm_localizer_report_t rep;
+    double t0;
+    int rc;
+    if (!nav->initialised) {
+        const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+        if (nav_start(nav, &zero) != 0) {
+            return;
+        }
+    }
+    /* Log and capture timestamps can jitter backwards while the order of
+     * the records is the true order (the Intel log does so 631 times): feed
+     * a clamped stamp and count it; the trajectory keeps the original. */
+    if (stamp_us < nav->last_us) {
+        stamp_us = nav->last_us;
+        nav->clamped++;
+    }
+    nav->last_us = stamp_us;
+    scan->stamp_us = stamp_us;
+    t0 = now_s();
+    rc = rsm_localizer_scan(&nav->loc, scan, &rep);
+    if (nav->ntimes == nav->cap_times) {
+        double *nt;
+        nav->cap_times = nav->cap_times ? nav->cap_times * 2 : 4096;
+        nt = (double *)realloc(nav->times, nav->cap_times * sizeof *nt);
+        if (nt == NULL) {
+            fprintf(stderr, "rsm-nav: out of memory\n");
+            exit(1);
+        }
+        nav->times = nt;
+    }
+    nav->times[nav->ntimes++] = now_s() - t0;
+    if (rc != RSM_OK) {
+        fprintf(stderr, "rsm-nav: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
+        return;
+    }
+    fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, (double)rep.pose.x, (double)rep.pose.y,
+            (double)rep.pose.theta);
+    if (nav->map_path != NULL) {
+        (void)hitlist_add(&nav->hits, nav->loc.world, rep.points);
+    }
+    if (!nav->quiet && nav->ntimes % 1000 == 0) {
+        fprintf(stderr, "rsm-nav: %zu scans, %.1f s\n", nav->ntimes, now_s() - nav->t_start);
+    }
+}
+
+/* Stream sink callbacks (capture and live modes). */
+static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us)
+{
+    nav_t *nav = (nav_t *)ctx;
+    (void)stamp_us;
+    if (!nav->initialised) {
+        const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+        if (nav_start(nav, &zero) != 0) {
+            return;
+        }
+    }
+    nav->encoders++;
+    (void)rsm_localizer_ticks(&nav->loc, (uint32_t)left, (uint32_t)right);
+}
+
+static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
+{
+    static rsm_scan_t copy;
+    nav_t *nav = (nav_t *)ctx;
+    uint64_t file_us = stamp_us;
+    size_t k;
+    for (k = 0; k < nav->nrestore; ++k) {
+        if (nav->restore_idx[k] == nav->scan_index) {
+            file_us = nav->restore_us[k];
+            break;
+        }
+    }
+    nav->scan_index++;
+    copy = *scan;
+    nav_scan(nav, &copy, stamp_us, (double)file_us * 1e-6);
+}
+
+static int run_carmen(nav_t *nav, const char *path, int fov179)
+{
     static carmen_reader_t reader;
     static carmen_record_t rec;
     static rsm_scan_t scan;
-    rsm_localizer_config_t cfg = rsm_localizer_config_default();
-    options_t opt = {NULL, NULL, NULL, 0};
-    rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};
     rsm_pose_t last_odom = {0.0f, 0.0f, 0.0f};
     int have_odom = 0;
-    uint64_t last_us = 0;
-    uint64_t clamped = 0;
-    FILE *traj;
-    hitlist_t hits = {NULL, 0, 0};
-    double *times = NULL;
-    size_t ntimes = 0;
-    size_t cap_times = 0;
-    double t_start;
-    int i;
-    int initialised = 0;
+    reader.fov179 = fov179;
+    if (carmen_open(&reader, path) != 0) {
+        fprintf(stderr, "rsm-nav: cannot open %s: %s\n", path, strerror(errno));
+        return 1;
+    }
+    for (;;) {
+        const carmen_kind_t k = carmen_next(&reader, &rec);
+        size_t b;
+        if (k == CARMEN_EOF) {
+            break;
+        }
+        if (k != CARMEN_SCAN) {
+            continue; /* odometry comes from the pose carried by each laser line */
+        }
+        /* Start in the odometry frame so the trajectories are comparable. */
+        if (nav_start(nav, &rec.odom) != 0) {
+            carmen_close(&reader);
+            return 2;
+        }
+        if (have_odom) {
+            const rsm_motion_t u = rsm_odometry_from_poses(&last_odom, &rec.odom);
+            (void)rsm_localizer_motion(&nav->loc, &u);
+        }
+        last_odom = rec.odom;
+        have_odom = 1;
+        for (b = 0; b < rec.count; ++b) {
+            scan.range_m[b] = rec.range_m[b];
+        }
+        (void)rsm_scan_set_uniform(&scan, rec.count, rec.start_rad, rec.step_rad);
+        nav_scan(nav, &scan, (uint64_t)llround(rec.stamp_s * 1e6), rec.stamp_s);
+    }
+    carmen_close(&reader);
+    printf("rsm-nav summary\n");
+    printf("  source          CARMEN log %s\n", path);
+    printf("  lines           %llu (scans %llu, odometry %llu, comments %llu, unknown %llu, malformed %llu, too many beams %llu, too long %llu)\n",
+           (unsigned long long)reader.counts.lines, (unsigned long long)reader.counts.scans,
+           (unsigned long long)reader.counts.odoms, (unsigned long long)reader.counts.comments,
+           (unsigned long long)reader.counts.unknown, (unsigned long long)reader.counts.malformed,
+           (unsigned long long)reader.counts.too_many_beams, (unsigned long long)reader.counts.too_long);
+    return 0;
+}
 
+static const char *meta(const cap_reader *r, const char *key)
+{
+    size_t i;
+    for (i = 0; i < r->n_meta; ++i) {
+        if (strcmp(r->meta_keys[i], key) == 0) {
+            return r->meta_values[i];
+        }
+    }
+    return NULL;
+}
+
+/* Reads "FLASER index original_us written_us" lines of convert.clamped. */
+static void load_restore_table(nav_t *nav, const char *text)
+{
+    const char *p = text;
+    size_t cap = 0;
+    while (p != NULL && *p != '\0') {
+        char kind[32];
+        unsigned long long idx;
+        unsigned long long orig;
+        unsigned long long written;
+        if (sscanf(p, "%31s %llu %llu %llu", kind, &idx, &orig, &written) == 4 && strcmp(kind, "FLASER") == 0) {
+            if (nav->nrestore == cap) {
+                cap = cap ? cap * 2 : 256;
+                nav->restore_idx = (uint64_t *)realloc(nav->restore_idx, cap * sizeof *nav->restore_idx);
+                nav->restore_us = (uint64_t *)realloc(nav->restore_us, cap * sizeof *nav->restore_us);
+                if (nav->restore_idx == NULL || nav->restore_us == NULL) {
+                    fprintf(stderr, "rsm-nav: out of memory\n");
+                    exit(1);
+                }
+            }
+            nav->restore_idx[nav->nrestore] = idx;
+            nav->restore_us[nav->nrestore] = orig;
+            nav->nrestore++;
+        }
+        p = strchr(p, '\n');
+        if (p != NULL) {
+            ++p;
+        }
+    }
+}
+
+static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *sink)
+{
+    static cap_reader reader;
+    static nav_stream_t stream;
+    static uint8_t buf[CAP_MAX_CHUNK];
+    FILE *fp = fopen(path, "rb");
+    int robot_id = -1;
+    int laser_id = -1;
+    size_t i;
+    int rc;
+    const char *v;
+    if (fp == NULL) {
+        fprintf(stderr, "rsm-nav: cannot open %s: %s\n", path, strerror(errno));
+        return 1;
+    }
+    if (cap_open(&reader, fp, 1) != CAP_OK) {
+        fprintf(stderr, "rsm-nav: %s is not a readable capture: %s\n", path, reader.error);
+        fclose(fp);
+        return 1;
+    }
+    for (i = 0; i < reader.n_channels; ++i) {
+        if (reader.channels[i].protocol == CAP_PROTO_ARIA && robot_id < 0) {
+            robot_id = reader.channels[i].id;
+        } else if (reader.channels[i].protocol == CAP_PROTO_LMS2XX && laser_id < 0) {
+            laser_id = reader.channels[i].id;
+        }
+    }
+    /* Geometry recorded with the capture, unless given on the command line. */
+    if ((v = meta(&reader, "robot.ticks_per_m")) != NULL && nav->cfg.odometry.ticks_per_m_left == 0.0f) {
+        nav->cfg.odometry.ticks_per_m_left = nav->cfg.odometry.ticks_per_m_right = strtof(v, NULL);
+    }
+    if ((v = meta(&reader, "robot.wheel_base_m")) != NULL && nav->cfg.odometry.wheel_base_m == 0.0f) {
+        nav->cfg.odometry.wheel_base_m = strtof(v, NULL);
+    }
+    if ((v = meta(&reader, "convert.clamped")) != NULL) {
+        load_restore_table(nav, v);
+    }
+    {
+        rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};
+        float a, b, c;
+        if ((v = meta(&reader, "robot.initial_pose")) != NULL && sscanf(v, "%f %f %f", &a, &b, &c) == 3) {
+            x0.x = a;
+            x0.y = b;
+            x0.theta = c;
+        }
+        if (nav->cfg.odometry.ticks_per_m_left == 0.0f) {
+            const rsm_odometry_config_t d = rsm_odometry_config_default();
+            nav->cfg.odometry.ticks_per_m_left = d.ticks_per_m_left;
+            nav->cfg.odometry.ticks_per_m_right = d.ticks_per_m_right;
+        }
+        if (nav->cfg.odometry.wheel_base_m == 0.0f) {
+            nav->cfg.odometry.wheel_base_m = rsm_odometry_config_default().wheel_base_m;
+        }
+        if (nav_start(nav, &x0) != 0) {
+            cap_close(&reader);
+            return 2;
+        }
+    }
+    nav_stream_init(&stream);
+    for (;;) {
+        cap_record rec;
+        rc = cap_next(&reader, &rec, buf, sizeof buf);
+        if (rc == CAP_END) {
+            break;
+        }
+        if (rc != CAP_OK) {
+            continue; /* lenient: counted in reader.count */
+        }
+        if (rec.direction != CAP_RX) {
+            continue;
+        }
+        if ((int)rec.channel == robot_id) {
+            nav_stream_robot(&stream, buf, rec.length, rec.timestamp_us, sink);
+        } else if ((int)rec.channel == laser_id) {
+            nav_stream_laser(&stream, buf, rec.length, rec.timestamp_us, sink);
+        }
+    }
+    printf("rsm-nav summary\n");
+    printf("  source          capture %s\n", path);
+    printf("  records         %llu (corrupt %llu, truncated %llu, out of order %llu, unknown channel %llu)\n",
+           (unsigned long long)reader.count.records, (unsigned long long)reader.count.corrupt,
+           (unsigned long long)reader.count.truncated, (unsigned long long)reader.count.out_of_order,
+           (unsigned long long)reader.count.unknown_channel);
+    printf("  robot link      %llu encoder packets, %llu other; checksum errors %u, bytes skipped %u\n",
+           (unsigned long long)stream.encoder_packets, (unsigned long long)stream.other_packets,
+           (unsigned)stream.aria.stats.checksum_errors, (unsigned)stream.aria.stats.bytes_skipped);
+    printf("  laser link      %llu scans, %llu bad; CRC errors %u, bytes skipped %u\n",
+           (unsigned long long)stream.lms_scans, (unsigned long long)stream.bad_scans,
+           (unsigned)stream.lms.stats.crc_errors, (unsigned)stream.lms.stats.bytes_skipped);
+    cap_close(&reader);
+    return 0;
+}
+
+static void print_summary(nav_t *nav)
+{
+    const rsm_localizer_counters_t *c = &nav->loc.counters;
+    double median = 0.0;
+    double p95 = 0.0;
+    int o;
+    if (nav->ntimes > 0) {
+        qsort(nav->times, nav->ntimes, sizeof *nav->times, cmp_double);
+        median = nav->times[nav->ntimes / 2];
+        p95 = nav->times[(nav->ntimes * 95) / 100 < nav->ntimes ? (nav->ntimes * 95) / 100 : nav->ntimes - 1];
+    }
+    printf("  method          %s\n", nav->cfg.method == RSM_METHOD_RSM ? "rsm" : nav->cfg.method == RSM_METHOD_ICP ? "icp" : "odometry");
+    printf("  timestamps      %llu clamped (went backwards)\n", (unsigned long long)nav->clamped);
+    printf("  scans           %u\n", (unsigned)c->scans);
+    for (o = 0; o < RSM_SCAN_OUTCOMES; ++o) {
+        if (c->outcome[o] != 0) {
+            printf("    %-14s %u\n", rsm_outcome_name((rsm_outcome_t)o), (unsigned)c->outcome[o]);
+        }
+    }
+    printf("  readings dropped: nan %u, too short %u, too long %u\n", (unsigned)c->drops.nan,
+           (unsigned)c->drops.too_short, (unsigned)c->drops.too_long);
+    printf("  time per scan   median %.1f us, p95 %.1f us (this machine, wall clock)\n", median * 1e6, p95 * 1e6);
+}
+
+int main(int argc, char **argv)
+{
+    static nav_t nav; /* the localizer is about 48 KiB: keep it off the stack */
+    const char *carmen = NULL;
+    const char *capture = NULL;
+    const char *trajectory = NULL;
+    nav_live_options_t live;
+    nav_stream_sink_t sink;
+    float ticks_per_m = 0.0f;
+    float wheel_base = 0.0f;
+    int fov179 = 0;
+    int rc;
+    int i;
+
+    memset(&live, 0, sizeof live);
+    nav.cfg = rsm_localizer_config_default();
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *next = i + 1 < argc ? argv[i + 1] : NULL;
         if (strcmp(a, "--carmen") == 0 && next) {
-            opt.carmen = next;
-            ++i;
+            carmen = argv[++i];
+        } else if (strcmp(a, "--capture") == 0 && next) {
+            capture = argv[++i];
+        } else if (strcmp(a, "--robot") == 0 && next) {
+            live.robot = argv[++i];
+        } else if (strcmp(a, "--lms") == 0 && next) {
+            live.lms = argv[++i];
+        } else if ((strcmp(a, "--robot-baud") == 0 || strcmp(a, "--lms-baud") == 0) && next) {
+            const long v = strtol(argv[++i], NULL, 10);
+            if (v <= 0) {
+                fprintf(stderr, "rsm-nav: bad baud rate '%s'\n", argv[i]);
+                return 2;
+            }
+            if (a[2] == 'r') {
+                live.robot_baud = (uint32_t)v;
+            } else {
+                live.lms_baud = (uint32_t)v;
+            }
+        } else if (strcmp(a, "--listen") == 0) {
+            live.listen_only = 1;
+        } else if ((strcmp(a, "--seconds") == 0 || strcmp(a, "--idle-exit") == 0) && next) {
+            const double v = strtod(argv[++i], NULL);
+            if (!(v > 0.0)) {
+                fprintf(stderr, "rsm-nav: bad duration '%s'\n", argv[i]);
+                return 2;
+            }
+            if (a[2] == 's') {
+                live.seconds = v;
+            } else {
+                live.idle_exit_s = v;
+            }
+        } else if ((strcmp(a, "--ticks-per-m") == 0 || strcmp(a, "--wheel-base") == 0) && next) {
+            const float v = strtof(argv[++i], NULL);
+            if (!(v > 0.0f)) {
+                fprintf(stderr, "rsm-nav: bad value '%s' for %s\n", argv[i], a);
+                return 2;
+            }
+            if (a[2] == 't') {
+                ticks_per_m = v;
+            } else {
+                wheel_base = v;
+            }
+        } else if (strcmp(a, "--initial-pose") == 0 && i + 3 < argc) {
+            char *e1;
+            char *e2;
+            char *e3;
+            nav.x0.x = strtof(argv[i + 1], &e1);
+            nav.x0.y = strtof(argv[i + 2], &e2);
+            nav.x0.theta = strtof(argv[i + 3], &e3);
+            if (*e1 != '\0' || *e2 != '\0' || *e3 != '\0' || !isfinite(nav.x0.x) || !isfinite(nav.x0.y) ||
+                !isfinite(nav.x0.theta)) {
+                fprintf(stderr, "rsm-nav: bad --initial-pose\n");
+                return 2;
+            }
+            nav.have_x0 = 1;
+            i += 3;
         } else if (strcmp(a, "--trajectory") == 0 && next) {
-            opt.trajectory = next;
-            ++i;
+            trajectory = argv[++i];
         } else if (strcmp(a, "--map") == 0 && next) {
-            opt.map = next;
-            ++i;
+            nav.map_path = argv[++i];
         } else if (strcmp(a, "--method") == 0 && next) {
+            ++i;
             if (strcmp(next, "rsm") == 0) {
-                cfg.method = RSM_METHOD_RSM;
+                nav.cfg.method = RSM_METHOD_RSM;
             } else if (strcmp(next, "icp") == 0) {
-                cfg.method = RSM_METHOD_ICP;
+                nav.cfg.method = RSM_METHOD_ICP;
             } else if (strcmp(next, "odometry") == 0) {
-                cfg.method = RSM_METHOD_ODOMETRY;
+                nav.cfg.method = RSM_METHOD_ODOMETRY;
             } else {
                 fprintf(stderr, "rsm-nav: unknown method '%s'\n", next);
                 return 2;
             }
-            ++i;
         } else if (strcmp(a, "--set") == 0 && next) {
-            if (set_option(&cfg, next) != 0) {
-                fprintf(stderr, "rsm-nav: bad --set '%s'\n", next);
+            if (set_option(&nav.cfg, argv[++i]) != 0) {
+                fprintf(stderr, "rsm-nav: bad --set '%s'\n", argv[i]);
                 return 2;
             }
-            ++i;
         } else if (strcmp(a, "--fov179") == 0) {
-            reader.fov179 = 1;
+            fov179 = 1;
         } else if (strcmp(a, "--quiet") == 0) {
-            opt.quiet = 1;
+            nav.quiet = 1;
         } else if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
             usage(stdout);
             return 0;
@@ -171,130 +553,66 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (opt.carmen == NULL || opt.trajectory == NULL) {
+    if (((carmen != NULL) + (capture != NULL) + (live.robot != NULL || live.lms != NULL)) != 1 || trajectory == NULL) {
+        fprintf(stderr, "rsm-nav: give exactly one source (--carmen, --capture, or --robot/--lms) and --trajectory\n");
         usage(stderr);
         return 2;
     }
-    if (carmen_open(&reader, opt.carmen) != 0) {
-        fprintf(stderr, "rsm-nav: cannot open %s: %s\n", opt.carmen, strerror(errno));
-        return 1;
-    }
-    traj = fopen(opt.trajectory, "w");
-    if (traj == NULL) {
-        fprintf(stderr, "rsm-nav: cannot write %s: %s\n", opt.trajectory, strerror(errno));
-        carmen_close(&reader);
-        return 1;
-    }
-    fprintf(traj, "# rsm-nav trajectory: timestamp[s] x[m] y[m] theta[rad]\n# source: %s\n", opt.carmen);
-    t_start = now_s();
-    for (;;) {
-        const carmen_kind_t k = carmen_next(&reader, &rec);
-        rsm_localizer_report_t rep;
-        double t0;
-        int rc;
-        uint64_t us;
-        size_t b;
-        if (k == CARMEN_EOF) {
-            break;
-        }
-        if (k != CARMEN_SCAN) {
-            continue; /* odometry comes from the pose carried by each laser line */
-        }
-        if (!initialised) {
-            /* Start in the odometry frame so the trajectories are comparable. */
-            x0 = rec.odom;
-            if (rsm_localizer_init(&loc, &cfg, &x0, NULL) != RSM_OK) {
-                fprintf(stderr, "rsm-nav: invalid configuration\n");
-                fclose(traj);
-                carmen_close(&reader);
-                return 2;
+    live.quiet = nav.quiet;
+    /* Encoder geometry: command line first, then the capture's, then the defaults. */
+    if (carmen == NULL) {
+        nav.cfg.odometry.ticks_per_m_left = nav.cfg.odometry.ticks_per_m_right = ticks_per_m;
+        nav.cfg.odometry.wheel_base_m = wheel_base;
+        if (capture == NULL) {
+            const rsm_odometry_config_t d = rsm_odometry_config_default();
+            if (ticks_per_m == 0.0f) {
+                nav.cfg.odometry.ticks_per_m_left = nav.cfg.odometry.ticks_per_m_right = d.ticks_per_m_left;
             }
-            initialised = 1;
-        }
-        if (have_odom) {
-            const rsm_motion_t u = rsm_odometry_from_poses(&last_odom, &rec.odom);
-            (void)rsm_localizer_motion(&loc, &u);
-        }
-        last_odom = rec.odom;
-        have_odom = 1;
-        scan.count = rec.count;
-        for (b = 0; b < rec.count; ++b) {
-            scan.range_m[b] = rec.range_m[b];
-        }
-        (void)rsm_scan_set_uniform(&scan, rec.count, rec.start_rad, rec.step_rad);
-        /* Log timestamps jitter backwards while the file order is the true
-         * order (the Intel log does so 631 times): feed a clamped stamp and
-         * count it; the trajectory keeps the original stamp. */
-        us = (uint64_t)llround(rec.stamp_s * 1e6);
-        if (us < last_us) {
-            us = last_us;
-            ++clamped;
-        }
-        last_us = us;
-        scan.stamp_us = us;
-        t0 = now_s();
-        rc = rsm_localizer_scan(&loc, &scan, &rep);
-        if (ntimes == cap_times) {
-            cap_times = cap_times ? cap_times * 2 : 4096;
-            times = (double *)realloc(times, cap_times * sizeof *times);
-            if (times == NULL) {
-                fprintf(stderr, "rsm-nav: out of memory\n");
-                return 1;
+            if (wheel_base == 0.0f) {
+                nav.cfg.odometry.wheel_base_m = d.wheel_base_m;
             }
         }
-        times[ntimes++] = now_s() - t0;
-        if (rc != RSM_OK) {
-            fprintf(stderr, "rsm-nav: scan at %.6f: %s\n", rec.stamp_s, rsm_strerror(rc));
-            continue;
-        }
-        fprintf(traj, "%.6f %.6f %.6f %.6f\n", rec.stamp_s, (double)rep.pose.x, (double)rep.pose.y,
-                (double)rep.pose.theta);
-        if (opt.map != NULL) {
-            (void)hitlist_add(&hits, loc.world, rep.points);
-        }
-        if (!opt.quiet && ntimes % 1000 == 0) {
-            fprintf(stderr, "rsm-nav: %zu scans, %.1f s\n", ntimes, now_s() - t_start);
-        }
     }
-    if (fclose(traj) != 0) {
-        fprintf(stderr, "rsm-nav: error writing %s\n", opt.trajectory);
+    nav.traj = fopen(trajectory, "w");
+    if (nav.traj == NULL) {
+        fprintf(stderr, "rsm-nav: cannot write %s: %s\n", trajectory, strerror(errno));
         return 1;
     }
-    carmen_close(&reader);
-    if (opt.map != NULL && hits.count > 0) {
-        if (pgm_write_map(opt.map, &hits, cfg.grid.cell_m) != 0) {
-            fprintf(stderr, "rsm-nav: cannot write map %s\n", opt.map);
+    fprintf(nav.traj, "# rsm-nav trajectory: timestamp[s] x[m] y[m] theta[rad]\n# source: %s\n",
+            carmen ? carmen : capture ? capture : "live serial links");
+    nav.t_start = now_s();
+    sink.ctx = &nav;
+    sink.encoder = sink_encoder;
+    sink.scan = sink_scan;
+    if (carmen != NULL) {
+        rc = run_carmen(&nav, carmen, fov179);
+    } else if (capture != NULL) {
+        rc = run_capture(&nav, capture, &sink);
+    } else {
+        rc = nav_live_run(&live, &sink);
+        if (rc == 0) {
+            printf("rsm-nav summary\n");
+            printf("  source          live: robot %s, laser %s%s\n", live.robot ? live.robot : "-",
+                   live.lms ? live.lms : "-", live.listen_only ? " (listen-only)" : "");
+            printf("  robot link      %llu encoder packets\n", (unsigned long long)nav.encoders);
         }
     }
-    hitlist_free(&hits);
-    {
-        const rsm_localizer_counters_t *c = &loc.counters;
-        double median = 0.0;
-        double p95 = 0.0;
-        int o;
-        if (ntimes > 0) {
-            qsort(times, ntimes, sizeof *times, cmp_double);
-            median = times[ntimes / 2];
-            p95 = times[(ntimes * 95) / 100 < ntimes ? (ntimes * 95) / 100 : ntimes - 1];
-        }
-        printf("rsm-nav summary\n");
-        printf("  method          %s\n", cfg.method == RSM_METHOD_RSM ? "rsm" : cfg.method == RSM_METHOD_ICP ? "icp" : "odometry");
-        printf("  lines           %llu (scans %llu, odometry %llu, comments %llu, unknown %llu, malformed %llu, too many beams %llu, too long %llu)\n",
-               (unsigned long long)reader.counts.lines, (unsigned long long)reader.counts.scans,
-               (unsigned long long)reader.counts.odoms, (unsigned long long)reader.counts.comments,
-               (unsigned long long)reader.counts.unknown, (unsigned long long)reader.counts.malformed,
-               (unsigned long long)reader.counts.too_many_beams, (unsigned long long)reader.counts.too_long);
-        printf("  timestamps      %llu clamped (went backwards in the log)\n", (unsigned long long)clamped);
-        printf("  scans           %u\n", (unsigned)c->scans);
-        for (o = 0; o < RSM_SCAN_OUTCOMES; ++o) {
-            if (c->outcome[o] != 0) {
-                printf("    %-14s %u\n", rsm_outcome_name((rsm_outcome_t)o), (unsigned)c->outcome[o]);
-            }
-        }
-        printf("  readings dropped: nan %u, too short %u, too long %u\n", (unsigned)c->drops.nan,
-               (unsigned)c->drops.too_short, (unsigned)c->drops.too_long);
-        printf("  time per scan   median %.1f us, p95 %.1f us (this machine, wall clock)\n", median * 1e6, p95 * 1e6);
+    /* Whatever happened, keep what was written. */
+    if (fclose(nav.traj) != 0) {
+        fprintf(stderr, "rsm-nav: error writing %s\n", trajectory);
+        rc = rc ? rc : 1;
     }
-    free(times);
-    return 0;
+    if (rc == 0 && nav.map_path != NULL && nav.hits.count > 0 &&
+        pgm_write_map(nav.map_path, &nav.hits, nav.cfg.grid.cell_m) != 0) {
+        fprintf(stderr, "rsm-nav: cannot write map %s\n", nav.map_path);
+        rc = 1;
+    }
+    if (rc == 0) {
+        print_summary(&nav);
+    }
+    hitlist_free(&nav.hits);
+    free(nav.times);
+    free(nav.restore_idx);
+    free(nav.restore_us);
+    return rc;
 }

@@ -1,0 +1,254 @@
+#include "live.h"
+
+#include <errno.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "rsm/p3dx.h"
+#include "rsm/sicklms.h"
+#include "rsm/status.h"
+#include "rsm_posix.h"
+
+/* Set by the signal handler: the one piece of process-wide state a clean
+ * Ctrl-C needs (this is the host tool, not the library). */
+static volatile sig_atomic_t stop_requested;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_requested = 1;
+}
+
+static double mono_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+typedef struct endpoint {
+    const char *path;
+    rsm_posix_auto_link_t state;
+    rsm_link_t link;
+    int open;
+    int ended;
+} endpoint_t;
+
+static int open_endpoint(endpoint_t *e, const char *path, uint32_t baud)
+{
+    int rc;
+    e->path = path;
+    e->open = 0;
+    e->ended = 0;
+    if (path == NULL) {
+        e->ended = 1;
+        return 0;
+    }
+    rc = rsm_posix_link_open_auto(&e->state, path, baud, 0u, &e->link);
+    if (rc != RSM_OK) {
+        const int err = rsm_posix_auto_errno(&e->state);
+        fprintf(stderr, "rsm-nav: cannot open %s: %s%s%s\n", path, rsm_strerror(rc), err ? ": " : "",
+                err ? strerror(err) : "");
+        return -1;
+    }
+    e->open = 1;
+    return 0;
+}
+
+static int endpoint_fd(const endpoint_t *e)
+{
+    return (e->open && !e->ended && e->state.kind == RSM_POSIX_LINK_FD) ? e->state.fd.fd : -1;
+}
+
+/* Reads what is waiting on one link (no waiting); returns bytes fed or -1 at its end. */
+static int drain(endpoint_t *e, nav_stream_t *s, int robot, const nav_stream_sink_t *sink, uint64_t now_us)
+{
+    uint8_t buf[4096];
+    int total = 0;
+    for (;;) {
+        const int n = rsm_link_read(&e->link, buf, sizeof buf, 0u);
+        if (n < 0) {
+            e->ended = 1;
+            return total > 0 ? total : -1;
+        }
+        if (n == 0) {
+            return total;
+        }
+        if (robot) {
+            nav_stream_robot(s, buf, (size_t)n, now_us, sink);
+        } else {
+            nav_stream_laser(s, buf, (size_t)n, now_us, sink);
+        }
+        total += n;
+    }
+}
+
+static int run_listen(const nav_live_options_t *opt, endpoint_t *robot, endpoint_t *laser,
+                      const nav_stream_sink_t *sink)
+{
+    static nav_stream_t stream;
+    const double t0 = mono_s();
+    double last_data = 0.0;
+    uint64_t bytes = 0;
+    nav_stream_init(&stream);
+    while (!stop_requested && !(robot->ended && laser->ended)) {
+        struct pollfd pf[2];
+        nfds_t n = 0;
+        const int fr = endpoint_fd(robot);
+        const int fl = endpoint_fd(laser);
+        uint64_t now_us;
+        int got;
+        if (fr >= 0) {
+            pf[n].fd = fr;
+            pf[n].events = POLLIN;
+            pf[n].revents = 0;
+            ++n;
+        }
+        if (fl >= 0) {
+            pf[n].fd = fl;
+            pf[n].events = POLLIN;
+            pf[n].revents = 0;
+            ++n;
+        }
+        if (n > 0) {
+            (void)poll(pf, n, 50);
+        } else {
+            struct timespec ts = {0, 2000000L}; /* libserialport links: short naps */
+            nanosleep(&ts, NULL);
+        }
+        now_us = (uint64_t)((mono_s() - t0) * 1e6);
+        /* Robot before laser within one wake-up: a replayer writes an
+         * encoder packet before the scan it precedes, and this keeps that
+         * order whenever both have arrived. */
+        got = 0;
+        if (!robot->ended) {
+            const int r = drain(robot, &stream, 1, sink, now_us);
+            got += r > 0 ? r : 0;
+        }
+        if (!laser->ended) {
+            const int r = drain(laser, &stream, 0, sink, now_us);
+            got += r > 0 ? r : 0;
+        }
+        if (got > 0) {
+            bytes += (uint64_t)got;
+            last_data = mono_s();
+        }
+        if (opt->seconds > 0.0 && mono_s() - t0 >= opt->seconds) {
+            break;
+        }
+        if (opt->idle_exit_s > 0.0 && bytes > 0 && mono_s() - last_data >= opt->idle_exit_s) {
+            break;
+        }
+    }
+    if (!opt->quiet) {
+        fprintf(stderr, "rsm-nav: listen-only: %llu bytes, %llu encoder packets, %llu scans, %llu bad scans\n",
+                (unsigned long long)bytes, (unsigned long long)stream.encoder_packets,
+                (unsigned long long)stream.lms_scans, (unsigned long long)stream.bad_scans);
+    }
+    return 0;
+}
+
+static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint_t *laser,
+                      const nav_stream_sink_t *sink)
+{
+    static rsm_p3dx_t p3dx;
+    static rsm_sicklms_t lms;
+    rsm_p3dx_config_t pcfg;
+    rsm_sicklms_config_t lcfg;
+    rsm_clock_t clock;
+    const double t0 = mono_s();
+    (void)rsm_p3dx_config_default(&pcfg);
+    (void)rsm_sicklms_config_default(&lcfg);
+    (void)rsm_posix_clock_init(&clock);
+    if (opt->robot_baud != 0u) {
+        pcfg.baud = opt->robot_baud;
+    }
+    if (opt->lms_baud != 0u) {
+        lcfg.baud = opt->lms_baud;
+    }
+    if (robot->open && (rsm_p3dx_init(&p3dx, &robot->link, &clock, &pcfg) != RSM_OK || rsm_p3dx_connect(&p3dx) != RSM_OK)) {
+        fprintf(stderr, "rsm-nav: cannot start the P3-DX driver\n");
+        return 1;
+    }
+    if (laser->open && (rsm_sicklms_init(&lms, &laser->link, &clock, &lcfg) != RSM_OK || rsm_sicklms_connect(&lms) != RSM_OK)) {
+        fprintf(stderr, "rsm-nav: cannot start the LMS driver\n");
+        return 1;
+    }
+    while (!stop_requested) {
+        if (robot->open) {
+            rsm_p3dx_event_t ev;
+            if (rsm_p3dx_poll(&p3dx, &ev) == RSM_OK) {
+                if (ev.type == RSM_P3DX_EVENT_ENCODER) {
+                    sink->encoder(sink->ctx, ev.encoder.left, ev.encoder.right, ev.stamp_us);
+                } else if (ev.type == RSM_P3DX_EVENT_CONNECTED && !opt->quiet) {
+                    fprintf(stderr, "rsm-nav: robot connected\n");
+                } else if (ev.type == RSM_P3DX_EVENT_LINK_LOST) {
+                    fprintf(stderr, "rsm-nav: robot link lost, reconnecting\n");
+                }
+            }
+        }
+        if (laser->open) {
+            rsm_sicklms_event_t ev;
+            if (rsm_sicklms_poll(&lms, &ev) == RSM_OK) {
+                if (ev.type == RSM_SICKLMS_EVENT_SCAN && ev.scan != NULL) {
+                    sink->scan(sink->ctx, ev.scan, ev.stamp_us);
+                } else if (ev.type == RSM_SICKLMS_EVENT_CONNECTED && !opt->quiet) {
+                    fprintf(stderr, "rsm-nav: laser streaming\n");
+                } else if (ev.type == RSM_SICKLMS_EVENT_LINK_LOST) {
+                    fprintf(stderr, "rsm-nav: laser link lost, starting again\n");
+                } else if (ev.type == RSM_SICKLMS_EVENT_ERROR) {
+                    fprintf(stderr, "rsm-nav: laser start-up step failed: %s\n", rsm_strerror(ev.status));
+                }
+            }
+        }
+        if (opt->seconds > 0.0 && mono_s() - t0 >= opt->seconds) {
+            break;
+        }
+    }
+    if (robot->open) {
+        /* Stop, then let the driver send ENABLE 0 and CLOSE on its schedule. */
+        const double t_end = mono_s() + 0.5;
+        (void)rsm_p3dx_stop(&p3dx);
+        (void)rsm_p3dx_disconnect(&p3dx);
+        while (mono_s() < t_end) {
+            rsm_p3dx_event_t ev;
+            if (rsm_p3dx_poll(&p3dx, &ev) != RSM_OK || ev.type == RSM_P3DX_EVENT_DISCONNECTED) {
+                break;
+            }
+        }
+    }
+    return 0;
+}
+
+int nav_live_run(const nav_live_options_t *opt, const nav_stream_sink_t *sink)
+{
+    static endpoint_t robot;
+    static endpoint_t laser;
+    struct sigaction sa;
+    int rc;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    if (open_endpoint(&robot, opt->robot, opt->robot_baud ? opt->robot_baud : (opt->listen_only ? 38400u : 9600u)) != 0 ||
+        open_endpoint(&laser, opt->lms, opt->lms_baud ? opt->lms_baud : (opt->listen_only ? 38400u : 9600u)) != 0) {
+        if (robot.open) {
+            (void)rsm_posix_link_close(&robot.state);
+        }
+        return 1;
+    }
+    rc = opt->listen_only ? run_listen(opt, &robot, &laser, sink) : run_active(opt, &robot, &laser, sink);
+    if (stop_requested && !opt->quiet) {
+        fprintf(stderr, "rsm-nav: stopped by signal\n");
+    }
+    if (robot.open) {
+        (void)rsm_posix_link_close(&robot.state);
+    }
+    if (laser.open) {
+        (void)rsm_posix_link_close(&laser.state);
+    }
+    return rc;
+}
