@@ -34,6 +34,7 @@ static void usage(FILE *f)
             "     [--robot-baud N] [--lms-baud N] [--listen] [--seconds S] [--idle-exit S]\n"
             "                            --listen sends nothing and decodes what arrives (replays)\n"
             "  --ticks-per-m N --wheel-base M   odometry geometry for encoder packets\n"
+            "  --events FILE             write every decoded input (E left right / S count hash)\n"
             "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
             "                            the capture's robot.initial_pose, else zero)\n"
             "                            (default: the capture's, else the P3-DX defaults)\n"
@@ -135,6 +136,7 @@ typedef struct nav {
     size_t nrestore;
     uint64_t scan_index;
     uint64_t encoders;
+    FILE *events;          /* --events: decoded inputs, one line each, in processing order */
     int have_x0;           /* --initial-pose given: overrides any other start */
     rsm_pose_t x0;
 } nav_t;
@@ -215,6 +217,9 @@ static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_
         }
     }
     nav->encoders++;
+    if (nav->events != NULL) {
+        fprintf(nav->events, "E %ld %ld\n", (long)left, (long)right);
+    }
     (void)rsm_localizer_ticks(&nav->loc, (uint32_t)left, (uint32_t)right);
 }
 
@@ -231,6 +236,15 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
         }
     }
     nav->scan_index++;
+    if (nav->events != NULL) {
+        /* A fingerprint of the readings: any lost or changed byte shows. */
+        uint32_t h = 2166136261u;
+        for (k = 0; k < scan->count; ++k) {
+            const uint32_t mm = (uint32_t)lroundf(scan->range_m[k] * 1000.0f);
+            h = (h ^ mm) * 16777619u;
+        }
+        fprintf(nav->events, "S %zu %08lx\n", scan->count, (unsigned long)h);
+    }
     copy = *scan;
     nav_scan(nav, &copy, stamp_us, (double)file_us * 1e-6);
 }
@@ -521,6 +535,12 @@ int main(int argc, char **argv)
             i += 3;
         } else if (strcmp(a, "--trajectory") == 0 && next) {
             trajectory = argv[++i];
+        } else if (strcmp(a, "--events") == 0 && next) {
+            nav.events = fopen(argv[++i], "w");
+            if (nav.events == NULL) {
+                fprintf(stderr, "rsm-nav: cannot write %s: %s\n", argv[i], strerror(errno));
+                return 1;
+            }
         } else if (strcmp(a, "--map") == 0 && next) {
             nav.map_path = argv[++i];
         } else if (strcmp(a, "--method") == 0 && next) {
@@ -598,6 +618,10 @@ int main(int argc, char **argv)
         }
     }
     /* Whatever happened, keep what was written. */
+    if (nav.events != NULL && fclose(nav.events) != 0) {
+        fprintf(stderr, "rsm-nav: error writing the events file\n");
+        rc = rc ? rc : 1;
+    }
     if (fclose(nav.traj) != 0) {
         fprintf(stderr, "rsm-nav: error writing %s\n", trajectory);
         rc = rc ? rc : 1;
