@@ -248,6 +248,21 @@ def test_where_rsm_loses_lists_exactly_the_measures_where_the_others_are_lower(r
             assert len(line) == 1, (label, other)
             named = set(re.findall(r"((?:local|all) (?:translation|rotation) (?:mean|std|max)) \(", line[0]))
             assert named == expected, (label, other, line[0])
+    # robustness: the levels where icp's mean over the seeds is below rsm's
+    means = {}
+    for r in man["robustness"]["runs"]:
+        if r["level"] > 0:
+            res = scoped(r["trajectory"], rels)
+            for s in bench.SCOPES:
+                for q in bench.QUANTITIES:
+                    means.setdefault((r["method"], r["level"], s, q), []).append(res[s][q]["mean"])
+    expected = {f"{lv} % {s} {q}" for (m, lv, s, q), v in means.items()
+                if m == "icp" and sum(v) / len(v) < sum(means[("rsm", lv, s, q)]) / len(v)}
+    line = [l for l in text.splitlines() if l.startswith("- With outliers, icp's mean error over the seeds")]
+    assert len(line) == 1
+    named = set(re.findall(r"(\d+ % (?:local|all) (?:translation|rotation)) \(", line[0]))
+    assert named == expected, line[0]
+    assert bool(expected) != ("at no level" in line[0])
     assert "no scan matcher without loop closure gets them right" in text
 
 
