@@ -263,6 +263,17 @@ def test_where_rsm_loses_lists_exactly_the_measures_where_the_others_are_lower(r
     named = set(re.findall(r"(\d+ % (?:local|all) (?:translation|rotation)) \(", line[0]))
     assert named == expected, line[0]
     assert bool(expected) != ("at no level" in line[0])
+    # robustness: where rsm does worse than odometry alone
+    odo = scoped(man["accuracy"][man["logs"][0]["label"]]["runs"]["odometry"]["trajectory"], rels)
+    expected = {}
+    for (m, lv, s, q), v in sorted(means.items()):
+        if m == "rsm" and sum(v) / len(v) > odo[s][q]["mean"]:
+            expected.setdefault(f"{s} {q}", []).append(lv)
+    line = [l for l in text.splitlines() if l.startswith("- With outliers, rsm's mean error over the seeds")]
+    assert len(line) == 1
+    named = {k: [int(x) for x in lv.split(", ")]
+             for k, lv in re.findall(r"((?:local|all) (?:translation|rotation)) at ([\d, ]+) %", line[0])}
+    assert named == expected, line[0]
     assert "no scan matcher without loop closure gets them right" in text
 
 
