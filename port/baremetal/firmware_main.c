@@ -20,8 +20,9 @@
 #include <stdint.h>
 
 #include "rsm/hal.h"
-#include "rsm/lms.h"
 #include "rsm/localizer.h"
+#include "rsm/p3dx.h"
+#include "rsm/sicklms.h"
 #include "rsm/status.h"
 #include "tick_clock.h"
 #include "uart_ring.h"
@@ -65,24 +66,20 @@ static rsm_uart_link_t fw_robot_uart;
 static rsm_uart_link_t fw_laser_uart;
 static rsm_link_t fw_robot_link;          /* hand this to the ARIA driver */
 static rsm_link_t fw_laser_link;          /* hand this to the LMS driver */
-static uint8_t fw_chunk[64];              /* bytes moved per read */
 
 /* Counters for a debugger or a telemetry frame (count, don't print). */
 static struct fw_stats {
-    uint32_t robot_bytes;
-    uint32_t laser_bytes;
-    uint32_t link_errors;
     uint32_t robot_overflows;
     uint32_t laser_overflows;
 } fw_stats;
 
-/* The localizer and the laser telegram decoder (the ARIA side and the full
- * drivers come with the HAL drivers; the robot link is only drained now). */
+/* The two device drivers and the localizer they feed. */
 static rsm_localizer_config_t fw_loc_cfg;
 static rsm_localizer_t fw_localizer;
-static rsm_lms_parser_t fw_lms_parser;
-static rsm_lms_scan_t fw_lms_scan;
-static rsm_scan_t fw_scan;
+static rsm_p3dx_config_t fw_robot_cfg;
+static rsm_p3dx_t fw_robot;
+static rsm_sicklms_config_t fw_laser_cfg;
+static rsm_sicklms_t fw_laser;
 
 /* ---- board functions behind the HAL ---------------------------------------- */
 
@@ -175,47 +172,6 @@ static void fw_board_init(void)
     /* Placeholder: enable the two USART interrupts in the NVIC here. */
 }
 
-/* Moves what one link has received to its consumer; returns the bytes moved. */
-static int fw_service_link(const rsm_link_t *link, uint32_t *byte_count)
-{
-    const int n = rsm_link_read(link, fw_chunk, sizeof fw_chunk, 0u);
-    if (n < 0) {
-        fw_stats.link_errors++;
-        return 0;
-    }
-    *byte_count += (uint32_t)n;
-    return n;
-}
-
-/* Decodes laser bytes; each full 0xB0 scan goes to the localizer. Scanner
- * angles run 0..180 deg from the right; the robot frame has 0 ahead. */
-static void fw_feed_laser(size_t n, uint64_t now_us)
-{
-    size_t off = 0;
-    while (off < n) {
-        rsm_lms_event_t ev;
-        size_t used = 0;
-        const int got = rsm_lms_parser_feed(&fw_lms_parser, fw_chunk + off, n - off, &used, &ev);
-        off += used;
-        if (got <= 0) {
-            break;
-        }
-        if (ev.type == RSM_LMS_EVENT_TELEGRAM && ev.telegram.cmd == 0xB0u &&
-            rsm_lms_decode_b0(&ev.telegram, NULL, &fw_lms_scan) == RSM_OK && fw_lms_scan.step_cdeg != 0u) {
-            size_t i;
-            const float step = (float)fw_lms_scan.step_cdeg * (RSM_PI / 18000.0f);
-            const float start = (float)fw_lms_scan.start_cdeg * (RSM_PI / 18000.0f) - RSM_PI / 2.0f;
-            (void)rsm_scan_set_uniform(&fw_scan, fw_lms_scan.count, start, step);
-            for (i = 0; i < fw_lms_scan.count; ++i) {
-                /* Invalid readings carry 0 m, which the core drops and counts. */
-                fw_scan.range_m[i] = fw_lms_scan.reading[i].range_m;
-            }
-            fw_scan.stamp_us = now_us;
-            (void)rsm_localizer_scan(&fw_localizer, &fw_scan, NULL);
-        }
-    }
-}
-
 int main(void)
 {
     uint64_t now_us = 0u;
@@ -242,8 +198,13 @@ int main(void)
     {
         const rsm_pose_t start = {0.0f, 0.0f, 0.0f};
         fw_loc_cfg = rsm_localizer_config_default();
+        (void)rsm_p3dx_config_default(&fw_robot_cfg);
+        (void)rsm_sicklms_config_default(&fw_laser_cfg);
+        fw_laser_cfg.baud = 38400u; /* switch the laser up from its power-up 9600 */
         if (rsm_localizer_init(&fw_localizer, &fw_loc_cfg, &start, NULL) != RSM_OK ||
-            rsm_lms_parser_init(&fw_lms_parser) != RSM_OK) {
+            rsm_p3dx_init(&fw_robot, &fw_robot_link, &fw_clock, &fw_robot_cfg) != RSM_OK ||
+            rsm_sicklms_init(&fw_laser, &fw_laser_link, &fw_clock, &fw_laser_cfg) != RSM_OK ||
+            rsm_p3dx_connect(&fw_robot) != RSM_OK || rsm_sicklms_connect(&fw_laser) != RSM_OK) {
             for (;;) {
             }
         }
@@ -255,14 +216,20 @@ int main(void)
          * base for everything below. */
         (void)rsm_clock_now_us(&fw_clock, &now_us);
 
-        /* >>> RSM_FIRMWARE_LOOP: replace these two drains by the drivers'
-         *     poll functions (they read the links themselves), then feed
-         *     odometry and scans to the localizer at now_us. */
-        moved += fw_service_link(&fw_robot_link, &fw_stats.robot_bytes);
+        /* The drivers read their links themselves, never waiting longer
+         * than their read timeout; their events feed the localizer. */
         {
-            const int n = fw_service_link(&fw_laser_link, &fw_stats.laser_bytes);
-            fw_feed_laser((size_t)n, now_us);
-            moved += n;
+            rsm_p3dx_event_t rev;
+            rsm_sicklms_event_t lev;
+            if (rsm_p3dx_poll(&fw_robot, &rev) == RSM_OK && rev.type == RSM_P3DX_EVENT_ENCODER) {
+                (void)rsm_localizer_ticks(&fw_localizer, (uint32_t)rev.encoder.left, (uint32_t)rev.encoder.right);
+                moved = 1;
+            }
+            if (rsm_sicklms_poll(&fw_laser, &lev) == RSM_OK && lev.type == RSM_SICKLMS_EVENT_SCAN &&
+                lev.scan != NULL) {
+                (void)rsm_localizer_scan(&fw_localizer, lev.scan, NULL);
+                moved = 1;
+            }
         }
 
         fw_stats.robot_overflows = rsm_uart_ring_overflows(&fw_robot_rx);
