@@ -3,8 +3,8 @@
  * method switch also runs the ICP baseline or odometry alone through the
  * same filter and map, so all three are compared on equal terms.
  *
- * All state is caller-owned (rsm_localizer_t, about 55 KiB with the default
- * config.h; see docs/ for the breakdown). Two localizers never interfere.
+ * All state is caller-owned (rsm_localizer_t, about 48 KiB with the default
+ * config.h; docs/RESULTS.md has the breakdown). Two localizers never interfere.
  * Not reentrant for one state; no function blocks or allocates. */
 #ifndef RSM_LOCALIZER_H
 #define RSM_LOCALIZER_H
