@@ -1,4 +1,5 @@
 #include "synth.h"
+#include "test_support.h"
 
 #include <math.h>
 
@@ -13,12 +14,7 @@ void rsm_synth_rng_seed(rsm_synth_rng_t *rng, uint32_t seed)
 
 uint32_t rsm_synth_rng_next(rsm_synth_rng_t *rng)
 {
-    uint32_t x = rng->s;
-    x ^= x << 13;
-    x ^= x >> 17;
-    x ^= x << 5;
-    rng->s = x;
-    return x;
+    return rsm_test_rng_next(&rng->s);
 }
 
 float rsm_synth_rng_uniform(rsm_synth_rng_t *rng)

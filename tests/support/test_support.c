@@ -20,3 +20,19 @@ const char *rsm_test_shared_path(char *out, size_t cap, const char *rel)
 {
     return join(out, cap, RSM_SHARED_DIR, rel);
 }
+
+uint32_t rsm_test_rng_next(uint32_t *state)
+{
+    uint32_t x = *state;
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    *state = x;
+    return x;
+}
+
+float rsm_test_rng_uniform(uint32_t *state, float lo, float hi)
+{
+    const float u = (float)(rsm_test_rng_next(state) >> 8) / 16777216.0f;
+    return lo + (hi - lo) * u;
+}

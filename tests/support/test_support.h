@@ -3,11 +3,19 @@
 #define RSM_TEST_SUPPORT_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 /* Writes "<root>/<rel>" into out (cap bytes); returns out, or NULL if too long.
  * root is the source tree for rsm_test_source_path and the shared/ folder
  * beside it for rsm_test_shared_path. */
 const char *rsm_test_source_path(char *out, size_t cap, const char *rel);
 const char *rsm_test_shared_path(char *out, size_t cap, const char *rel);
+
+/* Small deterministic generator for randomised tests (xorshift32; the
+ * caller keeps the non-zero state, so every test is repeatable). */
+uint32_t rsm_test_rng_next(uint32_t *state);
+
+/* Uniform in [lo, hi) from rsm_test_rng_next. */
+float rsm_test_rng_uniform(uint32_t *state, float lo, float hi);
 
 #endif

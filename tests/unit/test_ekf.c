@@ -6,6 +6,7 @@
 
 #include "rsm/ekf.h"
 #include "rsm/status.h"
+#include "test_support.h"
 #include "unity.h"
 
 #define DEG (RSM_PI / 180.0f)
@@ -19,22 +20,6 @@ void setUp(void)
 
 void tearDown(void)
 {
-}
-
-static uint32_t rng_next(uint32_t *s)
-{
-    uint32_t x = *s;
-    x ^= x << 13;
-    x ^= x >> 17;
-    x ^= x << 5;
-    *s = x;
-    return x;
-}
-
-static float rng_uniform(uint32_t *s, float lo, float hi)
-{
-    const float u = (float)(rng_next(s) >> 8) / 16777216.0f;
-    return lo + (hi - lo) * u;
 }
 
 static void diag3(float m[9], float a, float b, float c)
@@ -442,24 +427,24 @@ void test_covariance_should_stay_symmetric_positive_definite_over_random_cycles(
         rsm_pose_t z;
         float q[9];
         float r[9];
-        const float qs = rng_uniform(&seed, -8.0f, -2.0f);
-        const float rs = rng_uniform(&seed, -8.0f, 0.0f);
-        u.dx = rng_uniform(&seed, -0.3f, 0.5f);
-        u.dy = rng_uniform(&seed, -0.05f, 0.05f);
-        u.dtheta = rng_uniform(&seed, -0.6f, 0.6f);
+        const float qs = rsm_test_rng_uniform(&seed, -8.0f, -2.0f);
+        const float rs = rsm_test_rng_uniform(&seed, -8.0f, 0.0f);
+        u.dx = rsm_test_rng_uniform(&seed, -0.3f, 0.5f);
+        u.dy = rsm_test_rng_uniform(&seed, -0.05f, 0.05f);
+        u.dtheta = rsm_test_rng_uniform(&seed, -0.6f, 0.6f);
         diag3(q, powf(10.0f, qs), powf(10.0f, qs), powf(10.0f, qs - 1.0f));
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ekf_predict(&ekf, &u, q));
         if (k % 3 != 2) {
             /* A measurement near the state, with correlated noise of a random
              * scale (as a residual-based R would be). */
             const float rxy = powf(10.0f, rs);
-            const float rho = rng_uniform(&seed, -0.9f, 0.9f);
-            diag3(r, rxy, rxy * rng_uniform(&seed, 0.1f, 10.0f), powf(10.0f, rs - 2.0f));
+            const float rho = rsm_test_rng_uniform(&seed, -0.9f, 0.9f);
+            diag3(r, rxy, rxy * rsm_test_rng_uniform(&seed, 0.1f, 10.0f), powf(10.0f, rs - 2.0f));
             r[1] = rho * sqrtf(r[0] * r[4]);
             r[3] = r[1];
-            z.x = ekf.x.x + rng_uniform(&seed, -0.05f, 0.05f);
-            z.y = ekf.x.y + rng_uniform(&seed, -0.05f, 0.05f);
-            z.theta = rsm_wrap_angle(ekf.x.theta + rng_uniform(&seed, -0.02f, 0.02f));
+            z.x = ekf.x.x + rsm_test_rng_uniform(&seed, -0.05f, 0.05f);
+            z.y = ekf.x.y + rsm_test_rng_uniform(&seed, -0.05f, 0.05f);
+            z.theta = rsm_wrap_angle(ekf.x.theta + rsm_test_rng_uniform(&seed, -0.02f, 0.02f));
             TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ekf_update(&ekf, &z, r, 0.0f));
         }
         TEST_ASSERT_EQUAL_FLOAT(ekf.p[1], ekf.p[3]);
@@ -484,7 +469,7 @@ void test_mat3_inverse_should_invert_and_detect_singularity(void)
         int r;
         int c;
         for (i = 0; i < 9; ++i) {
-            m[i] = rng_uniform(&seed, -1.0f, 1.0f);
+            m[i] = rsm_test_rng_uniform(&seed, -1.0f, 1.0f);
         }
         /* Diagonally dominant, hence well conditioned. */
         m[0] += 3.0f;

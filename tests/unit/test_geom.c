@@ -3,6 +3,7 @@
 #include <stdint.h>
 
 #include "rsm/geom.h"
+#include "test_support.h"
 #include "unity.h"
 
 void setUp(void)
@@ -13,28 +14,12 @@ void tearDown(void)
 {
 }
 
-static uint32_t rng_next(uint32_t *s)
-{
-    uint32_t x = *s;
-    x ^= x << 13;
-    x ^= x >> 17;
-    x ^= x << 5;
-    *s = x;
-    return x;
-}
-
-static float rng_uniform(uint32_t *s, float lo, float hi)
-{
-    const float u = (float)(rng_next(s) >> 8) / 16777216.0f;
-    return lo + (hi - lo) * u;
-}
-
 static rsm_pose_t random_pose(uint32_t *s)
 {
     rsm_pose_t p;
-    p.x = rng_uniform(s, -20.0f, 20.0f);
-    p.y = rng_uniform(s, -20.0f, 20.0f);
-    p.theta = rng_uniform(s, -RSM_PI, RSM_PI);
+    p.x = rsm_test_rng_uniform(s, -20.0f, 20.0f);
+    p.y = rsm_test_rng_uniform(s, -20.0f, 20.0f);
+    p.theta = rsm_test_rng_uniform(s, -RSM_PI, RSM_PI);
     return p;
 }
 
@@ -196,8 +181,8 @@ void test_pose_compose_should_be_associative_and_agree_with_apply(void)
         rsm_point_t q2;
         rsm_point_t tmp;
         assert_pose_near(&l, &r, 1e-4f, 1e-6f);
-        p.x = rng_uniform(&seed, -10.0f, 10.0f);
-        p.y = rng_uniform(&seed, -10.0f, 10.0f);
+        p.x = rsm_test_rng_uniform(&seed, -10.0f, 10.0f);
+        p.y = rsm_test_rng_uniform(&seed, -10.0f, 10.0f);
         q1 = rsm_pose_apply(&ab, &p);
         tmp = rsm_pose_apply(&b, &p);
         q2 = rsm_pose_apply(&a, &tmp);
@@ -216,10 +201,10 @@ void test_pose_apply_should_preserve_distances(void)
         rsm_point_t q;
         rsm_point_t pa;
         rsm_point_t qa;
-        p.x = rng_uniform(&seed, -10.0f, 10.0f);
-        p.y = rng_uniform(&seed, -10.0f, 10.0f);
-        q.x = rng_uniform(&seed, -10.0f, 10.0f);
-        q.y = rng_uniform(&seed, -10.0f, 10.0f);
+        p.x = rsm_test_rng_uniform(&seed, -10.0f, 10.0f);
+        p.y = rsm_test_rng_uniform(&seed, -10.0f, 10.0f);
+        q.x = rsm_test_rng_uniform(&seed, -10.0f, 10.0f);
+        q.y = rsm_test_rng_uniform(&seed, -10.0f, 10.0f);
         pa = rsm_pose_apply(&a, &p);
         qa = rsm_pose_apply(&a, &q);
         TEST_ASSERT_FLOAT_WITHIN(1e-4f, hypotf(p.x - q.x, p.y - q.y), hypotf(pa.x - qa.x, pa.y - qa.y));

@@ -7,6 +7,7 @@
 #include "rsm/config.h"
 #include "rsm/icp.h"
 #include "rsm/status.h"
+#include "test_support.h"
 #include "unity.h"
 
 #define DEG (RSM_PI / 180.0f)
@@ -27,22 +28,6 @@ void setUp(void)
 
 void tearDown(void)
 {
-}
-
-static uint32_t rng_next(uint32_t *s)
-{
-    uint32_t x = *s;
-    x ^= x << 13;
-    x ^= x >> 17;
-    x ^= x << 5;
-    *s = x;
-    return x;
-}
-
-static float rng_uniform(uint32_t *s, float lo, float hi)
-{
-    const float u = (float)(rng_next(s) >> 8) / 16777216.0f;
-    return lo + (hi - lo) * u;
 }
 
 /* The walls of an L-shaped room, corners (0,0) (6,0) (6,2) (3,2) (3,4)
@@ -100,17 +85,17 @@ void test_rigid_fit_should_recover_random_transforms(void)
     for (k = 0; k < 300; ++k) {
         rsm_pose_t truth;
         rsm_pose_t t;
-        const size_t n = 2u + (size_t)(rng_next(&seed) % 39u);
+        const size_t n = 2u + (size_t)(rsm_test_rng_next(&seed) % 39u);
         size_t i;
-        truth.x = rng_uniform(&seed, -10.0f, 10.0f);
-        truth.y = rng_uniform(&seed, -10.0f, 10.0f);
-        truth.theta = rng_uniform(&seed, -RSM_PI, RSM_PI);
+        truth.x = rsm_test_rng_uniform(&seed, -10.0f, 10.0f);
+        truth.y = rsm_test_rng_uniform(&seed, -10.0f, 10.0f);
+        truth.theta = rsm_test_rng_uniform(&seed, -RSM_PI, RSM_PI);
         if (k == 0) {
             truth.theta = RSM_PI; /* a half turn exactly */
         }
         for (i = 0; i < n; ++i) {
-            src[i].x = rng_uniform(&seed, -5.0f, 5.0f);
-            src[i].y = rng_uniform(&seed, -5.0f, 5.0f);
+            src[i].x = rsm_test_rng_uniform(&seed, -5.0f, 5.0f);
+            src[i].y = rsm_test_rng_uniform(&seed, -5.0f, 5.0f);
             dst[i] = rsm_pose_apply(&truth, &src[i]);
         }
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rigid_fit(src, dst, NULL, n, &t));
@@ -135,8 +120,8 @@ void test_rigid_fit_should_honour_weights(void)
     size_t n;
     uint32_t seed = 7u;
     for (i = 0; i < 6; ++i) {
-        src[i].x = rng_uniform(&seed, -3.0f, 3.0f);
-        src[i].y = rng_uniform(&seed, -3.0f, 3.0f);
+        src[i].x = rsm_test_rng_uniform(&seed, -3.0f, 3.0f);
+        src[i].y = rsm_test_rng_uniform(&seed, -3.0f, 3.0f);
         dst[i] = rsm_pose_apply(&truth, &src[i]);
     }
     /* A gross outlier with weight 0 has no influence at all. */
@@ -152,8 +137,8 @@ void test_rigid_fit_should_honour_weights(void)
     /* Integer weights equal repeating the pair: w = (1,2,3,1,2,0) with noisy
      * destinations against the same set written out. */
     for (i = 0; i < 6; ++i) {
-        dst[i].x += rng_uniform(&seed, -0.05f, 0.05f);
-        dst[i].y += rng_uniform(&seed, -0.05f, 0.05f);
+        dst[i].x += rsm_test_rng_uniform(&seed, -0.05f, 0.05f);
+        dst[i].y += rsm_test_rng_uniform(&seed, -0.05f, 0.05f);
     }
     w[0] = 1.0f;
     w[1] = 2.0f;
@@ -305,8 +290,8 @@ void test_rigid_fit_should_stay_accurate_far_from_the_origin(void)
     const rsm_pose_t shift = { 1000.0f, -800.0f, 0.0f };
     for (i = 0; i < 20; ++i) {
         rsm_point_t p;
-        p.x = rng_uniform(&seed, -5.0f, 5.0f);
-        p.y = rng_uniform(&seed, -5.0f, 5.0f);
+        p.x = rsm_test_rng_uniform(&seed, -5.0f, 5.0f);
+        p.y = rsm_test_rng_uniform(&seed, -5.0f, 5.0f);
         src[i] = rsm_pose_apply(&shift, &p);
         dst[i] = rsm_pose_apply(&truth, &src[i]);
     }
@@ -597,8 +582,8 @@ void test_align_should_be_biased_by_thirty_percent_outliers(void)
         if (i % 10u < 3u) {
             rsm_point_t w;
             /* Inside the lower arm of the L: x in [0.5, 5.5], y in [0.5, 1.5]. */
-            w.x = rng_uniform(&seed, 0.5f, 5.5f);
-            w.y = rng_uniform(&seed, 0.5f, 1.5f);
+            w.x = rsm_test_rng_uniform(&seed, 0.5f, 5.5f);
+            w.y = rsm_test_rng_uniform(&seed, 0.5f, 1.5f);
             scan[i] = rsm_pose_apply(&inv, &w);
         }
     }

@@ -6,6 +6,7 @@
 
 #include "rsm/odometry.h"
 #include "rsm/status.h"
+#include "test_support.h"
 #include "unity.h"
 
 static rsm_odometry_config_t cfg;
@@ -19,24 +20,6 @@ void setUp(void)
 
 void tearDown(void)
 {
-}
-
-/* Small deterministic generator for the randomised tests (xorshift32). */
-static uint32_t rng_next(uint32_t *s)
-{
-    uint32_t x = *s;
-    x ^= x << 13;
-    x ^= x >> 17;
-    x ^= x << 5;
-    *s = x;
-    return x;
-}
-
-/* Uniform in [lo, hi). */
-static float rng_uniform(uint32_t *s, float lo, float hi)
-{
-    const float u = (float)(rng_next(s) >> 8) / 16777216.0f;
-    return lo + (hi - lo) * u;
 }
 
 static int32_t ticks_for(float metres)
@@ -280,20 +263,20 @@ void test_from_poses_should_round_trip_through_apply(void)
         rsm_pose_t b;
         rsm_pose_t c;
         rsm_motion_t u;
-        a.x = rng_uniform(&seed, -50.0f, 50.0f);
-        a.y = rng_uniform(&seed, -50.0f, 50.0f);
-        b.x = a.x + rng_uniform(&seed, -2.0f, 2.0f);
-        b.y = a.y + rng_uniform(&seed, -2.0f, 2.0f);
+        a.x = rsm_test_rng_uniform(&seed, -50.0f, 50.0f);
+        a.y = rsm_test_rng_uniform(&seed, -50.0f, 50.0f);
+        b.x = a.x + rsm_test_rng_uniform(&seed, -2.0f, 2.0f);
+        b.y = a.y + rsm_test_rng_uniform(&seed, -2.0f, 2.0f);
         if (k % 4 == 0) {
             /* Headings straddling +-pi. */
-            a.theta = RSM_PI - rng_uniform(&seed, 0.0f, 0.01f);
-            b.theta = -RSM_PI + rng_uniform(&seed, 0.0f, 0.01f);
+            a.theta = RSM_PI - rsm_test_rng_uniform(&seed, 0.0f, 0.01f);
+            b.theta = -RSM_PI + rsm_test_rng_uniform(&seed, 0.0f, 0.01f);
         } else if (k % 4 == 1) {
-            a.theta = -RSM_PI + rng_uniform(&seed, 0.0f, 0.01f);
-            b.theta = RSM_PI - rng_uniform(&seed, 0.0f, 0.01f);
+            a.theta = -RSM_PI + rsm_test_rng_uniform(&seed, 0.0f, 0.01f);
+            b.theta = RSM_PI - rsm_test_rng_uniform(&seed, 0.0f, 0.01f);
         } else {
-            a.theta = rng_uniform(&seed, -RSM_PI, RSM_PI);
-            b.theta = rng_uniform(&seed, -RSM_PI, RSM_PI);
+            a.theta = rsm_test_rng_uniform(&seed, -RSM_PI, RSM_PI);
+            b.theta = rsm_test_rng_uniform(&seed, -RSM_PI, RSM_PI);
         }
         u = rsm_odometry_from_poses(&a, &b);
         TEST_ASSERT_TRUE(u.dtheta > -RSM_PI && u.dtheta <= RSM_PI);
@@ -354,12 +337,12 @@ void test_jacobians_should_match_finite_differences(void)
         float jv[9];
         float ju[9];
         int col;
-        p.x = rng_uniform(&seed, -5.0f, 5.0f);
-        p.y = rng_uniform(&seed, -5.0f, 5.0f);
-        p.theta = rng_uniform(&seed, -3.0f, 3.0f);
-        u.dx = rng_uniform(&seed, -0.5f, 0.5f);
-        u.dy = rng_uniform(&seed, -0.2f, 0.2f);
-        u.dtheta = rng_uniform(&seed, -0.5f, 0.5f);
+        p.x = rsm_test_rng_uniform(&seed, -5.0f, 5.0f);
+        p.y = rsm_test_rng_uniform(&seed, -5.0f, 5.0f);
+        p.theta = rsm_test_rng_uniform(&seed, -3.0f, 3.0f);
+        u.dx = rsm_test_rng_uniform(&seed, -0.5f, 0.5f);
+        u.dy = rsm_test_rng_uniform(&seed, -0.2f, 0.2f);
+        u.dtheta = rsm_test_rng_uniform(&seed, -0.5f, 0.5f);
         rsm_odometry_jacobians(&p, &u, jv, ju);
         for (col = 0; col < 3; ++col) {
             rsm_pose_t pp = p;
