@@ -290,30 +290,42 @@ static void step_done(rsm_sicklms_t *d, const rsm_lms_telegram_t *t, uint64_t no
     }
 }
 
-/* Converts d->raw into d->scan in the robot frame. */
-static int convert_scan(rsm_sicklms_t *d)
+int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan_t *out)
 {
-    const rsm_lms_scan_t *r = &d->raw;
     size_t i;
-    uint32_t invalid = 0u;
-    if (r->step_cdeg == 0u || r->count > RSM_MAX_BEAMS) {
+    int invalid = 0;
+    if (raw == NULL || out == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (raw->step_cdeg == 0u || raw->count > RSM_MAX_BEAMS) {
         return RSM_ERR_PROTO;
     }
-    for (i = 0u; i < r->count; i++) {
-        const int32_t cdeg = (int32_t)r->start_cdeg + (int32_t)(i * r->step_cdeg);
-        const int32_t bearing = d->cfg->upside_down ? 9000 - cdeg : cdeg - 9000;
-        d->scan.angle_rad[i] = (float)bearing * (PI_F / 18000.0f);
-        if (r->reading[i].code == RSM_LMS_READING_OK) {
-            d->scan.range_m[i] = r->reading[i].range_m;
+    for (i = 0u; i < raw->count; i++) {
+        const int32_t cdeg = (int32_t)raw->start_cdeg + (int32_t)(i * raw->step_cdeg);
+        const int32_t bearing = upside_down ? 9000 - cdeg : cdeg - 9000;
+        out->angle_rad[i] = (float)bearing * (PI_F / 18000.0f);
+        if (raw->reading[i].code == RSM_LMS_READING_OK) {
+            out->range_m[i] = raw->reading[i].range_m;
         } else {
-            d->scan.range_m[i] = 0.0f;
+            out->range_m[i] = 0.0f;
             invalid++;
         }
     }
-    d->scan.count = r->count;
+    out->count = raw->count;
+    return invalid;
+}
+
+/* Converts d->raw into d->scan in the robot frame, stamped with the
+ * receive time less the configured latency. */
+static int convert_scan(rsm_sicklms_t *d)
+{
+    const int invalid = rsm_sicklms_to_scan(&d->raw, d->cfg->upside_down, &d->scan);
+    if (invalid < 0) {
+        return invalid;
+    }
     d->scan.stamp_us = d->rx_stamp_us >= d->cfg->latency_us ? d->rx_stamp_us - d->cfg->latency_us
                                                             : 0u;
-    d->stats.invalid_readings += invalid;
+    d->stats.invalid_readings += (uint32_t)invalid;
     return RSM_OK;
 }
 

@@ -173,6 +173,15 @@ int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t
  * RSM_ERR_INVAL (d NULL). */
 int rsm_sicklms_connect(rsm_sicklms_t *d);
 
+/* Converts a decoded 0xB0 scan to a robot-frame scan: scanner angles run
+ * 0..180 deg from the right, the robot's 0 is ahead (mirrored when
+ * upside_down is 1); readings with an error code get range 0, which the
+ * core drops and counts. out->stamp_us is not touched. Returns the number
+ * of invalid readings (>= 0), RSM_ERR_PROTO if the scan's angles are unknown
+ * (step 0) or RSM_ERR_INVAL for NULL pointers (out untouched on error).
+ * Pure, reentrant; used by the driver and by log/capture readers alike. */
+int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan_t *out);
+
 /* Runs the state machine once: at most one link read of at most
  * cfg->read_timeout_us, then the timers. *ev receives the event (NONE if
  * nothing happened). Returns RSM_OK, RSM_ERR_INVAL (NULL pointers), or the

@@ -2,6 +2,7 @@
 
 #include <string.h>
 
+#include "rsm/sicklms.h"
 #include "rsm/status.h"
 
 void nav_stream_init(nav_stream_t *s)
@@ -51,23 +52,13 @@ void nav_stream_laser(nav_stream_t *s, const uint8_t *data, size_t n, uint64_t s
             s->other_packets++;
             continue;
         }
-        if (rsm_lms_decode_b0(&ev.telegram, NULL, &s->lms_scan) != RSM_OK || s->lms_scan.step_cdeg == 0u) {
+        if (rsm_lms_decode_b0(&ev.telegram, NULL, &s->lms_scan) != RSM_OK ||
+            rsm_sicklms_to_scan(&s->lms_scan, 0u, &s->scan) < 0) {
             s->bad_scans++;
             continue;
         }
-        {
-            /* Scanner angles run 0..180 deg from the right; the robot's 0 is ahead. */
-            const float step = (float)s->lms_scan.step_cdeg * (RSM_PI / 18000.0f);
-            const float start = (float)s->lms_scan.start_cdeg * (RSM_PI / 18000.0f) - RSM_PI / 2.0f;
-            size_t i;
-            (void)rsm_scan_set_uniform(&s->scan, s->lms_scan.count, start, step);
-            for (i = 0; i < s->lms_scan.count; ++i) {
-                /* Invalid readings carry 0 m: the core drops and counts them. */
-                s->scan.range_m[i] = s->lms_scan.reading[i].range_m;
-            }
-            s->scan.stamp_us = stamp_us;
-            s->lms_scans++;
-            sink->scan(sink->ctx, &s->scan, stamp_us);
-        }
+        s->scan.stamp_us = stamp_us;
+        s->lms_scans++;
+        sink->scan(sink->ctx, &s->scan, stamp_us);
     }
 }
