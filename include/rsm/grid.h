@@ -55,7 +55,7 @@ typedef struct rsm_image {
     uint32_t bits[RSM_BITMAP_WORDS];
     uint32_t cells[RSM_IMAGE_MAX_CELLS]; /* toroidal indices of the set cells */
     size_t count;          /* set cells listed in cells[] */
-    uint32_t outside;      /* points that fell outside the window (last mark call) */
+    uint32_t outside;      /* cells (or non-finite points) that fell outside the window since the last clear */
     uint32_t overflow;     /* cells not listed because cells[] was full */
 } rsm_image_t;
 

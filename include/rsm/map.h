@@ -62,6 +62,8 @@ typedef struct rsm_map_fit {
  * (min(hits, saturation) / saturation) interpolated bilinearly between cell
  * centres. The cost is flat far from walls, so stray (outlier) points have no
  * pull; the basin is about one cell, which is why this runs after RANSAC.
+ * A step that does not lower the cost is halved (a few times) before it is
+ * taken, so the fit settles instead of bouncing between two poses.
  * Returns RSM_OK, RSM_ERR_DEGENERATE when too few points touch the map or
  * the normal equations are singular (fit->pose = start), RSM_ERR_INVAL for
  * bad arguments. Reentrant. */

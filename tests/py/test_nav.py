@@ -68,6 +68,9 @@ def test_nav_counts_malformed_lines_and_bad_readings_without_stopping(tmp_path, 
     bad.insert(9, "ODOM x y z 0 0 0 1 host 1")              # not numbers
     bad.insert(12, "SOMETHING else entirely")               # unknown record type
     bad.insert(15, "# a comment")
+    wide = scans[3].split()                                  # more readings than RSM_MAX_BEAMS
+    wide = ["FLASER", "400"] + ["1.0"] * 400 + wide[182:]
+    bad.insert(17, " ".join(wide))
     f = scans[20].split()
     f[2:12] = ["nan"] * 10                                   # NaN readings
     bad[bad.index(scans[20])] = " ".join(f)
@@ -75,6 +78,7 @@ def test_nav_counts_malformed_lines_and_bad_readings_without_stopping(tmp_path, 
     log.write_text("\n".join(bad) + "\n")
     summary = run_nav(log, tmp_path / "t.txt")
     assert "malformed 2" in summary, summary
+    assert "too many beams 1" in summary, summary
     assert "unknown 1" in summary and "comments 1" in summary, summary
     assert "nan 10" in summary, summary
     rows = [l for l in (tmp_path / "t.txt").read_text().splitlines() if l and not l.startswith("#")]

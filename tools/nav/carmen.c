@@ -68,7 +68,7 @@ static carmen_kind_t parse_flaser(carmen_reader_t *r, char **f, size_t nf, carme
     }
     if (n > RSM_MAX_BEAMS) {
         r->counts.too_many_beams++;
-        return CARMEN_EOF;
+        return CARMEN_SKIPPED;
     }
     for (i = 0; i < n; ++i) {
         if (!num(f[2 + i], &v)) {
@@ -130,7 +130,7 @@ static carmen_kind_t parse_robotlaser(carmen_reader_t *r, char **f, size_t nf, c
     }
     if (n > RSM_MAX_BEAMS) {
         r->counts.too_many_beams++;
-        return CARMEN_EOF;
+        return CARMEN_SKIPPED;
     }
     for (i = 0; i < n; ++i) {
         if (!num(f[9 + i], &v)) {
@@ -217,6 +217,9 @@ carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec)
             k = parse_odom(f, nf, rec);
         } else {
             r->counts.unknown++;
+            continue;
+        }
+        if (k == CARMEN_SKIPPED) {
             continue;
         }
         if (k == CARMEN_EOF) {

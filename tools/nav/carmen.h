@@ -13,7 +13,8 @@
 typedef enum carmen_kind {
     CARMEN_EOF = 0,
     CARMEN_SCAN = 1,
-    CARMEN_ODOM = 2
+    CARMEN_ODOM = 2,
+    CARMEN_SKIPPED = 3   /* internal: a well-formed record the reader cannot hold (counted) */
 } carmen_kind_t;
 
 typedef struct carmen_counts {
