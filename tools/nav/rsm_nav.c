@@ -134,6 +134,7 @@ typedef struct nav {
     uint64_t *restore_idx;
     uint64_t *restore_us;
     size_t nrestore;
+    size_t restore_next;   /* the table is in scan order: a cursor, not a search */
     uint64_t scan_index;
     uint64_t encoders;
     FILE *events;          /* --events: decoded inputs, one line each, in processing order */
@@ -229,11 +230,11 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
     nav_t *nav = (nav_t *)ctx;
     uint64_t file_us = stamp_us;
     size_t k;
-    for (k = 0; k < nav->nrestore; ++k) {
-        if (nav->restore_idx[k] == nav->scan_index) {
-            file_us = nav->restore_us[k];
-            break;
-        }
+    while (nav->restore_next < nav->nrestore && nav->restore_idx[nav->restore_next] < nav->scan_index) {
+        nav->restore_next++;
+    }
+    if (nav->restore_next < nav->nrestore && nav->restore_idx[nav->restore_next] == nav->scan_index) {
+        file_us = nav->restore_us[nav->restore_next];
     }
     nav->scan_index++;
     if (nav->events != NULL) {
