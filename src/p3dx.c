@@ -6,6 +6,12 @@
 static const uint32_t probe_rates[5] = {9600u, 38400u, 19200u, 115200u, 57600u};
 #define N_PROBE_RATES 5u
 
+/* d->motion: the last motion command sent. */
+#define MOTION_NONE 0u
+#define MOTION_VEL 1u
+#define MOTION_VEL2 2u
+#define MOTION_STOP 3u
+
 int rsm_p3dx_config_default(rsm_p3dx_config_t *cfg)
 {
     if (cfg == NULL) {
@@ -26,17 +32,14 @@ int rsm_p3dx_config_default(rsm_p3dx_config_t *cfg)
     cfg->link_lost_us = 2000000u;
     cfg->disconnect_wait_us = 100000u;
     cfg->byte_timeout_us = 100000u;
+    cfg->host_baud = 0u;
+    cfg->baud_check_us = 1000000u;
+    cfg->resend_us = 500000u;
+    cfg->stop_repeats = 1u;
     cfg->ticks_mm = 128u;
     cfg->rev_count = 0u;
     cfg->watchdog_ms = 2000u;
     return RSM_OK;
-}
-
-static uint64_t now_of(const rsm_p3dx_t *d)
-{
-    uint64_t t = 0u;
-    (void)rsm_clock_now_us(d->clock, &t);
-    return t;
 }
 
 static int send_frame(rsm_p3dx_t *d, const uint8_t *buf, int n, uint64_t now)
@@ -59,11 +62,9 @@ static int send_frame(rsm_p3dx_t *d, const uint8_t *buf, int n, uint64_t now)
 static void drop_input(rsm_p3dx_t *d)
 {
     rsm_aria_parser_stats_t keep = d->parser.stats;
-    (void)rsm_link_flush(d->link);
+    rsm_link_rx_drop(&d->io);
     (void)rsm_aria_parser_init(&d->parser);
     d->parser.stats = keep;
-    d->rx_off = 0u;
-    d->rx_len = 0u;
 }
 
 static void send_sync(rsm_p3dx_t *d, uint8_t step, uint64_t now)
@@ -103,11 +104,23 @@ static void restart_handshake(rsm_p3dx_t *d, uint64_t now)
     send_sync(d, 0u, now);
 }
 
+/* Forgets queued and commanded motion (a new session starts at rest). */
+static void forget_motion(rsm_p3dx_t *d)
+{
+    d->pend_stop = 0u;
+    d->pend_vel = 0u;
+    d->pend_vel2 = 0u;
+    d->motion = MOTION_NONE;
+    d->stops_left = 0u;
+}
+
 static void begin_handshake(rsm_p3dx_t *d, uint64_t now)
 {
     size_t i;
     d->tries = 0u;
     d->have_enc = 0u;
+    d->auto_baud = 0u;
+    forget_motion(d);
     for (i = 0u; i < N_PROBE_RATES; i++) {
         if (probe_rates[i] == d->baud) {
             d->probe_idx = (uint8_t)i;
@@ -120,16 +133,20 @@ static void begin_handshake(rsm_p3dx_t *d, uint64_t now)
 int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
                   const rsm_p3dx_config_t *cfg)
 {
-    if (d == NULL || link == NULL || clock == NULL || cfg == NULL || link->read == NULL ||
-        link->write == NULL || clock->now_us == NULL || cfg->read_timeout_us == 0u ||
+    rsm_link_rx_t io;
+    if (d == NULL || cfg == NULL ||
+        rsm_link_rx_init(&io, link, clock, cfg->read_timeout_us, cfg->byte_timeout_us) != RSM_OK ||
         cfg->sync_tries == 0u || cfg->step_timeout_us == 0u || cfg->keepalive_us == 0u ||
-        cfg->link_lost_us == 0u || cfg->baud == 0u) {
+        cfg->link_lost_us == 0u || cfg->baud == 0u ||
+        (cfg->host_baud != 0u &&
+         (rsm_aria_baud_code(cfg->host_baud) < 0 || cfg->baud_check_us == 0u))) {
         return RSM_ERR_INVAL;
     }
     memset(d, 0, sizeof *d);
     d->cfg = cfg;
     d->link = link;
     d->clock = clock;
+    d->io = io;
     d->state = RSM_P3DX_IDLE;
     (void)rsm_aria_parser_init(&d->parser);
     d->ticks_mm = cfg->ticks_mm;
@@ -141,13 +158,11 @@ int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *cloc
 
 int rsm_p3dx_connect(rsm_p3dx_t *d)
 {
-    uint64_t now;
     if (d == NULL) {
         return RSM_ERR_INVAL;
     }
-    now = now_of(d);
     d->lost = 0u;
-    begin_handshake(d, now);
+    begin_handshake(d, rsm_link_rx_now(&d->io));
     return RSM_OK;
 }
 
@@ -165,7 +180,7 @@ static void open_session(rsm_p3dx_t *d, uint64_t now)
     }
 }
 
-static void finish_connect(rsm_p3dx_t *d, uint64_t now, rsm_p3dx_event_t *ev)
+static void finish_connect(rsm_p3dx_t *d, uint64_t now)
 {
     uint8_t buf[12];
     if (d->cfg->enable_motors) {
@@ -182,8 +197,42 @@ static void finish_connect(rsm_p3dx_t *d, uint64_t now, rsm_p3dx_event_t *ev)
         d->stats.reconnects++;
         d->lost = 0u;
     }
-    ev->type = RSM_P3DX_EVENT_CONNECTED;
-    ev->stamp_us = now;
+    d->out.type = RSM_P3DX_EVENT_CONNECTED;
+    d->out.stamp_us = now;
+}
+
+/* The CONFIGpac came or its wait ended: switch rates with HOSTBAUD when
+ * asked for and possible (as ARIA: only when the robot reported AutoBaud
+ * 2), else finish the connection. */
+static void after_config(rsm_p3dx_t *d, uint64_t now)
+{
+    uint8_t buf[12];
+    const uint32_t target = d->cfg->host_baud;
+    if (target == 0u || target == d->baud) {
+        finish_connect(d, now);
+        return;
+    }
+    if (d->auto_baud != 2u || d->link->set_baud == NULL) {
+        d->stats.host_baud_skipped++;
+        finish_connect(d, now);
+        return;
+    }
+    /* The command leaves at the old rate (set_baud drains pending output
+     * first, hal.h), then both ends move. */
+    (void)send_frame(d, buf,
+                     rsm_aria_encode_hostbaud((uint8_t)rsm_aria_baud_code(target), buf, sizeof buf),
+                     now);
+    if (rsm_link_set_baud(d->link, target) != RSM_OK) {
+        d->stats.host_baud_failures++;
+        finish_connect(d, now);
+        return;
+    }
+    d->prev_baud = d->baud;
+    d->baud = target;
+    drop_input(d);
+    (void)send_frame(d, buf, rsm_aria_encode_pulse(buf, sizeof buf), now);
+    d->state = RSM_P3DX_BAUD_CHECK;
+    d->deadline_us = now + d->cfg->baud_check_us;
 }
 
 static int is_session_packet(uint8_t id)
@@ -223,8 +272,9 @@ static void handle_handshake_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt,
     open_session(d, now);
 }
 
-static void handle_encoder(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, rsm_p3dx_event_t *ev)
+static void handle_encoder(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt)
 {
+    rsm_p3dx_event_t *ev = &d->out;
     rsm_aria_encoder_t enc;
     if (rsm_aria_decode_encoder(pkt, &enc) != RSM_OK) {
         d->stats.unknown_packets++;
@@ -232,10 +282,10 @@ static void handle_encoder(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, rsm_p3dx
     }
     d->stats.encoder_packets++;
     ev->type = RSM_P3DX_EVENT_ENCODER;
-    ev->stamp_us = d->rx_stamp_us;
+    ev->stamp_us = d->io.stamp_us;
     ev->encoder.left = enc.left;
     ev->encoder.right = enc.right;
-    ev->encoder.stamp_us = d->rx_stamp_us;
+    ev->encoder.stamp_us = d->io.stamp_us;
     if (d->have_enc) {
         ev->encoder.d_left = rsm_aria_count_delta(enc.left, d->last_left);
         ev->encoder.d_right = rsm_aria_count_delta(enc.right, d->last_right);
@@ -248,7 +298,7 @@ static void handle_encoder(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, rsm_p3dx
 
 static void handle_config(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt)
 {
-    /* Only three fields are kept, so the decoded CONFIGpac (a few hundred
+    /* Only a few fields are kept, so the decoded CONFIGpac (a few hundred
      * bytes) lives on the stack for this call instead of in the state. */
     rsm_aria_config_t c;
     if (rsm_aria_decode_config(pkt, &c) != RSM_OK) {
@@ -265,51 +315,58 @@ static void handle_config(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt)
     if (c.watchdog != 0u) {
         d->watchdog_ms = c.watchdog;
     }
+    d->auto_baud = c.auto_baud;
 }
 
-/* A packet while a session is open (CONFIG_WAIT, CONNECTED, DISCONNECTING). */
-static void handle_session_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t now,
-                                  rsm_p3dx_event_t *ev)
+/* A packet while a session is open (CONFIG_WAIT, BAUD_CHECK, CONNECTED,
+ * DISCONNECTING). Only CONNECTED gives SIP and ENCODER events. */
+static void handle_session_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t now)
 {
+    const rsm_p3dx_state_t before = d->state;
     if (pkt->id == RSM_ARIA_PAC_SIP_STOPPED || pkt->id == RSM_ARIA_PAC_SIP_MOVING) {
         if (rsm_aria_decode_sip(pkt, &d->sip) != RSM_OK) {
             d->stats.unknown_packets++;
-            return;
-        }
-        d->stats.sips++;
-        d->last_sip_us = d->rx_stamp_us;
-        if (d->state == RSM_P3DX_CONNECTED) {
-            ev->type = RSM_P3DX_EVENT_SIP;
-            ev->sip = &d->sip;
-            ev->stamp_us = d->rx_stamp_us;
+        } else {
+            d->stats.sips++;
+            d->last_sip_us = d->io.stamp_us;
+            if (before == RSM_P3DX_CONNECTED) {
+                d->out.type = RSM_P3DX_EVENT_SIP;
+                d->out.sip = &d->sip;
+                d->out.stamp_us = d->io.stamp_us;
+            }
         }
     } else if (pkt->id == RSM_ARIA_PAC_ENCODER) {
-        if (d->state == RSM_P3DX_CONNECTED) {
-            handle_encoder(d, pkt, ev);
+        if (before == RSM_P3DX_CONNECTED) {
+            handle_encoder(d, pkt);
         } else {
             d->stats.unknown_packets++;
         }
     } else if (pkt->id == RSM_ARIA_PAC_CONFIG) {
         handle_config(d, pkt);
-        if (d->state == RSM_P3DX_CONFIG_WAIT) {
-            finish_connect(d, now, ev);
+        if (before == RSM_P3DX_CONFIG_WAIT) {
+            after_config(d, now);
         }
     } else {
         d->stats.unknown_packets++;
     }
+    if (before == RSM_P3DX_BAUD_CHECK) {
+        /* Any packet that verified at the new rate proves both ends moved. */
+        d->stats.host_baud_switches++;
+        finish_connect(d, now);
+    }
 }
 
-static void handle_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t now,
-                          rsm_p3dx_event_t *ev)
+static void handle_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t now)
 {
     switch (d->state) {
     case RSM_P3DX_SYNC:
         handle_handshake_packet(d, pkt, now);
         break;
     case RSM_P3DX_CONFIG_WAIT:
+    case RSM_P3DX_BAUD_CHECK:
     case RSM_P3DX_CONNECTED:
     case RSM_P3DX_DISCONNECTING:
-        handle_session_packet(d, pkt, now, ev);
+        handle_session_packet(d, pkt, now);
         break;
     case RSM_P3DX_IDLE:
     case RSM_P3DX_CLOSE_WAIT:
@@ -319,54 +376,111 @@ static void handle_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t 
     }
 }
 
-/* Feeds held bytes until a packet yields an event or the chunk is used up. */
-static void drain(rsm_p3dx_t *d, uint64_t now, rsm_p3dx_event_t *ev)
+/* rsm_link_poll step 1/4: feeds the held bytes until a packet yields an
+ * event or the chunk is used up. */
+static int drain_cb(void *drv, uint64_t now)
 {
+    rsm_p3dx_t *d = (rsm_p3dx_t *)drv;
     rsm_aria_packet_t pkt;
     for (;;) {
         size_t used = 0u;
-        int r = rsm_aria_parser_feed(&d->parser, d->rx + d->rx_off, d->rx_len - d->rx_off, &used,
-                                     &pkt);
+        const int r = rsm_aria_parser_feed(&d->parser, d->io.buf + d->io.off,
+                                           d->io.len - d->io.off, &used, &pkt);
         if (r < 0) {
-            d->rx_off = d->rx_len;
-            return;
+            d->io.off = d->io.len;
+            return 0;
         }
-        d->rx_off += used;
+        d->io.off += used;
         if (r == 0) {
-            return;
+            return 0;
         }
-        handle_packet(d, &pkt, now, ev);
-        if (ev->type != RSM_P3DX_EVENT_NONE) {
-            return;
+        handle_packet(d, &pkt, now);
+        if (d->out.type != RSM_P3DX_EVENT_NONE) {
+            return 1;
         }
     }
 }
 
-static int send_pending(rsm_p3dx_t *d, uint64_t now)
+/* rsm_link_poll step 4, on silence: a packet cut short is abandoned, then
+ * what it held is looked at again. */
+static int silence_cb(void *drv, uint64_t now)
+{
+    rsm_p3dx_t *d = (rsm_p3dx_t *)drv;
+    if (rsm_aria_parser_pending(&d->parser) == 0u) {
+        return 0;
+    }
+    (void)rsm_aria_parser_timeout(&d->parser);
+    d->io.off = d->io.len;
+    return drain_cb(d, now);
+}
+
+static int is_stop_motion(const rsm_p3dx_t *d)
+{
+    return d->motion == MOTION_STOP ||
+           (d->motion == MOTION_VEL && d->vel_mm_s == 0 && d->rvel_deg_s == 0) ||
+           (d->motion == MOTION_VEL2 && d->vel2_left == 0 && d->vel2_right == 0);
+}
+
+/* Sends the motion command d->motion describes. */
+static void send_motion(rsm_p3dx_t *d, uint64_t now)
 {
     uint8_t buf[12];
-    if (d->pend_stop) {
-        d->pend_stop = 0u;
+    if (d->motion == MOTION_STOP) {
         d->stats.commands++;
-        return send_frame(d, buf, rsm_aria_encode_stop(buf, sizeof buf), now);
-    }
-    if (d->pend_vel) {
-        d->pend_vel = 0u;
+        (void)send_frame(d, buf, rsm_aria_encode_stop(buf, sizeof buf), now);
+    } else if (d->motion == MOTION_VEL) {
         d->stats.commands += 2u;
         (void)send_frame(d, buf, rsm_aria_encode_vel(d->vel_mm_s, buf, sizeof buf), now);
-        return send_frame(d, buf, rsm_aria_encode_rvel(d->rvel_deg_s, buf, sizeof buf), now);
-    }
-    if (d->pend_vel2) {
-        d->pend_vel2 = 0u;
+        (void)send_frame(d, buf, rsm_aria_encode_rvel(d->rvel_deg_s, buf, sizeof buf), now);
+    } else if (d->motion == MOTION_VEL2) {
         d->stats.commands++;
-        return send_frame(d, buf, rsm_aria_encode_vel2(d->vel2_left, d->vel2_right, buf, sizeof buf),
-                          now);
+        (void)send_frame(d, buf,
+                         rsm_aria_encode_vel2(d->vel2_left, d->vel2_right, buf, sizeof buf), now);
     }
-    return RSM_OK;
+    d->last_motion_us = now;
 }
 
-static void run_timers(rsm_p3dx_t *d, uint64_t now, rsm_p3dx_event_t *ev)
+/* Sends a queued motion command, or re-sends the commanded one when due. */
+static void run_motion(rsm_p3dx_t *d, uint64_t now)
 {
+    if (d->pend_stop || d->pend_vel || d->pend_vel2) {
+        d->motion = d->pend_stop ? MOTION_STOP : d->pend_vel ? MOTION_VEL : MOTION_VEL2;
+        d->pend_stop = 0u;
+        d->pend_vel = 0u;
+        d->pend_vel2 = 0u;
+        d->stops_left = d->cfg->stop_repeats;
+        send_motion(d, now);
+        return;
+    }
+    if (d->motion == MOTION_NONE || d->cfg->resend_us == 0u ||
+        now - d->last_motion_us < d->cfg->resend_us) {
+        return;
+    }
+    if (is_stop_motion(d)) {
+        if (d->stops_left == 0u) {
+            d->motion = MOTION_NONE; /* stopped for sure: PULSEs from now on */
+            return;
+        }
+        d->stops_left--;
+    }
+    d->stats.resends++;
+    send_motion(d, now);
+}
+
+/* One command at least every keepalive_us while a session is open. */
+static void keep_alive(rsm_p3dx_t *d, uint64_t now)
+{
+    uint8_t buf[8];
+    if (now - d->last_tx_us >= d->cfg->keepalive_us) {
+        d->stats.keepalives++;
+        (void)send_frame(d, buf, rsm_aria_encode_pulse(buf, sizeof buf), now);
+    }
+}
+
+/* rsm_link_poll steps 2 and 5. */
+static int timers_cb(void *drv, uint64_t now)
+{
+    rsm_p3dx_t *d = (rsm_p3dx_t *)drv;
     uint8_t buf[12];
     switch (d->state) {
     case RSM_P3DX_SYNC:
@@ -385,55 +499,81 @@ static void run_timers(rsm_p3dx_t *d, uint64_t now, rsm_p3dx_event_t *ev)
             if (d->cfg->request_config) {
                 d->stats.config_timeouts++;
             }
-            finish_connect(d, now, ev);
+            after_config(d, now);
+        } else {
+            keep_alive(d, now);
+        }
+        break;
+    case RSM_P3DX_BAUD_CHECK:
+        if (now >= d->deadline_us) {
+            /* Nothing verified at the new rate: go back (as ARIA does). A
+             * robot that did switch is found again by the link-loss path. */
+            d->stats.host_baud_failures++;
+            if (rsm_link_set_baud(d->link, d->prev_baud) == RSM_OK) {
+                d->baud = d->prev_baud;
+            }
+            drop_input(d);
+            finish_connect(d, now);
+        } else {
+            keep_alive(d, now);
         }
         break;
     case RSM_P3DX_CONNECTED:
         if (now - d->last_sip_us >= d->cfg->link_lost_us) {
             d->stats.link_lost++;
             d->lost = 1u;
-            ev->type = RSM_P3DX_EVENT_LINK_LOST;
-            ev->stamp_us = now;
+            d->out.type = RSM_P3DX_EVENT_LINK_LOST;
+            d->out.stamp_us = now;
             begin_handshake(d, now);
             break;
         }
-        (void)send_pending(d, now);
-        if (now - d->last_tx_us >= d->cfg->keepalive_us) {
-            d->stats.keepalives++;
-            (void)send_frame(d, buf, rsm_aria_encode_pulse(buf, sizeof buf), now);
-        }
+        run_motion(d, now);
+        keep_alive(d, now);
         break;
     case RSM_P3DX_DISCONNECTING:
         if (now >= d->deadline_us) {
             (void)send_frame(d, buf, rsm_aria_encode_close_int1(buf, sizeof buf), now);
             d->state = RSM_P3DX_IDLE;
-            ev->type = RSM_P3DX_EVENT_DISCONNECTED;
-            ev->stamp_us = now;
+            d->out.type = RSM_P3DX_EVENT_DISCONNECTED;
+            d->out.stamp_us = now;
         }
         break;
     case RSM_P3DX_IDLE:
     default:
         break;
     }
+    return d->out.type != RSM_P3DX_EVENT_NONE;
 }
 
-/* Time until the next timer of the current state fires (0 if due). */
-static uint64_t time_to_deadline(const rsm_p3dx_t *d, uint64_t now)
+static uint64_t earlier(uint64_t a, uint64_t b)
 {
+    return a < b ? a : b;
+}
+
+/* rsm_link_poll: time until the next timer of the current state fires. */
+static uint64_t until_due_cb(const void *drv, uint64_t now)
+{
+    const rsm_p3dx_t *d = (const rsm_p3dx_t *)drv;
+    const uint64_t ka = d->last_tx_us + d->cfg->keepalive_us;
     uint64_t due;
     switch (d->state) {
     case RSM_P3DX_SYNC:
     case RSM_P3DX_CLOSE_WAIT:
-    case RSM_P3DX_CONFIG_WAIT:
     case RSM_P3DX_DISCONNECTING:
         due = d->deadline_us;
         break;
-    case RSM_P3DX_CONNECTED: {
-        const uint64_t ka = d->last_tx_us + d->cfg->keepalive_us;
-        const uint64_t lost = d->last_sip_us + d->cfg->link_lost_us;
-        due = ka < lost ? ka : lost;
+    case RSM_P3DX_CONFIG_WAIT:
+    case RSM_P3DX_BAUD_CHECK:
+        due = earlier(d->deadline_us, ka);
         break;
-    }
+    case RSM_P3DX_CONNECTED:
+        due = earlier(ka, d->last_sip_us + d->cfg->link_lost_us);
+        if (d->pend_stop || d->pend_vel || d->pend_vel2) {
+            due = now;
+        } else if (d->motion != MOTION_NONE && d->cfg->resend_us != 0u) {
+            due = earlier(due, d->last_motion_us + d->cfg->resend_us);
+        }
+        break;
     case RSM_P3DX_IDLE:
     default:
         return UINT64_MAX;
@@ -441,61 +581,21 @@ static uint64_t time_to_deadline(const rsm_p3dx_t *d, uint64_t now)
     return due > now ? due - now : 0u;
 }
 
+static const rsm_link_poll_ops_t p3dx_poll_ops = {drain_cb, timers_cb, until_due_cb, silence_cb};
+
 int rsm_p3dx_poll(rsm_p3dx_t *d, rsm_p3dx_event_t *ev)
 {
-    uint64_t now;
-    uint64_t wait;
-    uint32_t timeout;
-    int n;
+    int st;
     if (d == NULL || ev == NULL) {
         return RSM_ERR_INVAL;
     }
-    memset(ev, 0, sizeof *ev);
-    now = now_of(d);
-
-    /* Bytes left over from the previous poll come first. */
-    drain(d, now, ev);
-    if (ev->type != RSM_P3DX_EVENT_NONE) {
-        return RSM_OK;
-    }
-    run_timers(d, now, ev);
-    if (ev->type != RSM_P3DX_EVENT_NONE) {
-        return RSM_OK;
-    }
-
-    wait = time_to_deadline(d, now);
-    timeout = d->cfg->read_timeout_us;
-    if (wait < (uint64_t)timeout) {
-        timeout = (uint32_t)wait;
-    }
-    n = rsm_link_read(d->link, d->rx, sizeof d->rx, timeout);
-    now = now_of(d);
-    if (n < 0) {
+    memset(&d->out, 0, sizeof d->out);
+    st = rsm_link_poll(&d->io, &p3dx_poll_ops, d);
+    if (st < 0) {
         d->stats.read_errors++;
-        return n;
     }
-    if (n > 0) {
-        d->rx_off = 0u;
-        d->rx_len = (size_t)n;
-        d->rx_stamp_us = now;
-        d->last_rx_us = now;
-        drain(d, now, ev);
-        if (ev->type != RSM_P3DX_EVENT_NONE) {
-            return RSM_OK;
-        }
-    } else if (rsm_aria_parser_pending(&d->parser) > 0u &&
-               now - d->last_rx_us >= d->cfg->byte_timeout_us) {
-        /* A packet cut short: abandon it, then look at what it held. */
-        (void)rsm_aria_parser_timeout(&d->parser);
-        d->rx_off = 0u;
-        d->rx_len = 0u;
-        drain(d, now, ev);
-        if (ev->type != RSM_P3DX_EVENT_NONE) {
-            return RSM_OK;
-        }
-    }
-    run_timers(d, now, ev);
-    return RSM_OK;
+    *ev = d->out;
+    return st;
 }
 
 int rsm_p3dx_set_vel(rsm_p3dx_t *d, int32_t mm_s, int32_t deg_s)
@@ -547,18 +647,22 @@ int rsm_p3dx_disconnect(rsm_p3dx_t *d)
 {
     uint8_t buf[12];
     uint64_t now;
+    int st;
+    int st2;
     if (d == NULL) {
         return RSM_ERR_INVAL;
     }
-    now = now_of(d);
-    d->pend_stop = 0u;
-    d->pend_vel = 0u;
-    d->pend_vel2 = 0u;
-    if (d->state != RSM_P3DX_CONNECTED) {
+    now = rsm_link_rx_now(&d->io);
+    forget_motion(d);
+    if (d->state != RSM_P3DX_CONNECTED && d->state != RSM_P3DX_CONFIG_WAIT &&
+        d->state != RSM_P3DX_BAUD_CHECK) {
         d->state = RSM_P3DX_IDLE;
         return RSM_OK;
     }
     d->state = RSM_P3DX_DISCONNECTING;
     d->deadline_us = now + d->cfg->disconnect_wait_us;
-    return send_frame(d, buf, rsm_aria_encode_enable(0, buf, sizeof buf), now);
+    d->stats.commands++;
+    st = send_frame(d, buf, rsm_aria_encode_stop(buf, sizeof buf), now);
+    st2 = send_frame(d, buf, rsm_aria_encode_enable(0, buf, sizeof buf), now);
+    return st != RSM_OK ? st : st2;
 }

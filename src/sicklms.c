@@ -6,7 +6,11 @@
 #define STEP_PROBE 0u   /* 0x20 0x25 at a candidate rate */
 #define STEP_BAUD 1u    /* 0x20 0x40/0x41/0x42 */
 #define STEP_VARIANT 2u /* 0x3B */
-#define STEP_STREAM 3u  /* 0x20 0x24 */
+#define STEP_CONFIG 3u  /* 0x74 */
+#define STEP_STREAM 4u  /* 0x20 0x24 */
+/* Shutdown steps, in order. */
+#define STEP_STOP 5u    /* 0x20 0x25 */
+#define STEP_RESTORE 6u /* 0x20 0x42/0x41/0x40 back to the power-up rate */
 
 /* What the request in flight waits for. */
 #define SUB_ACK 0u
@@ -53,6 +57,7 @@ int rsm_sicklms_config_default(rsm_sicklms_config_t *cfg)
     cfg->stream_timeout_us = 1000000u;
     cfg->byte_timeout_us = 100000u;
     cfg->latency_us = 0u;
+    cfg->read_config = 1u;
     (void)rsm_lms_b0_format_default(&cfg->format);
     return RSM_OK;
 }
@@ -61,8 +66,9 @@ int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t
                      const rsm_sicklms_config_t *cfg)
 {
     uint8_t probe[16];
-    if (d == NULL || link == NULL || clock == NULL || cfg == NULL || link->read == NULL ||
-        link->write == NULL || clock->now_us == NULL || cfg->read_timeout_us == 0u ||
+    rsm_link_rx_t io;
+    if (d == NULL || cfg == NULL ||
+        rsm_link_rx_init(&io, link, clock, cfg->read_timeout_us, cfg->byte_timeout_us) != RSM_OK ||
         cfg->ack_timeout_us == 0u || cfg->reply_timeout_us == 0u || cfg->mode_timeout_us == 0u ||
         cfg->max_tries == 0u || cfg->address > 0x7Fu || rate_index(cfg->power_up_baud) < 0 ||
         (cfg->baud != 0u && rate_index(cfg->baud) < 0) ||
@@ -74,26 +80,19 @@ int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t
     d->cfg = cfg;
     d->link = link;
     d->clock = clock;
+    d->io = io;
     d->state = RSM_SICKLMS_IDLE;
     d->baud = cfg->power_up_baud;
+    d->format = cfg->format;
     (void)rsm_lms_parser_init(&d->parser);
     return RSM_OK;
-}
-
-static uint64_t now_of(const rsm_sicklms_t *d)
-{
-    uint64_t t = 0u;
-    (void)rsm_clock_now_us(d->clock, &t);
-    return t;
 }
 
 /* Drops received input (link buffer, our chunk, the parser's bytes). */
 static void drop_input(rsm_sicklms_t *d)
 {
-    (void)rsm_link_flush(d->link);
+    rsm_link_rx_drop(&d->io);
     (void)rsm_lms_parser_flush(&d->parser);
-    d->rx_off = 0u;
-    d->rx_len = 0u;
 }
 
 static void send_request(rsm_sicklms_t *d, uint64_t now)
@@ -106,7 +105,7 @@ static void send_request(rsm_sicklms_t *d, uint64_t now)
     d->deadline_us = now + d->cfg->ack_timeout_us;
 }
 
-/* Builds and sends the request of a start-up step. */
+/* Builds and sends the request of a start-up or shutdown step. */
 static void start_step(rsm_sicklms_t *d, uint8_t step, uint64_t now)
 {
     const rsm_sicklms_config_t *c = d->cfg;
@@ -126,6 +125,18 @@ static void start_step(rsm_sicklms_t *d, uint8_t step, uint64_t now)
                                    c->resolution_cdeg);
         d->req_reply = RSM_LMS_REPLY_VARIANT;
         break;
+    case STEP_CONFIG:
+        n = rsm_lms_encode_request_config(d->req, sizeof d->req, c->address);
+        d->req_reply = RSM_LMS_REPLY_CONFIG;
+        break;
+    case STEP_STOP:
+        n = rsm_lms_encode_mode(d->req, sizeof d->req, c->address, RSM_LMS_MODE_ON_REQUEST);
+        d->req_reply = RSM_LMS_REPLY_MODE;
+        break;
+    case STEP_RESTORE:
+        n = rsm_lms_encode_mode_baud(d->req, sizeof d->req, c->address, c->power_up_baud);
+        d->req_reply = RSM_LMS_REPLY_MODE;
+        break;
     case STEP_STREAM:
     default:
         n = rsm_lms_encode_mode(d->req, sizeof d->req, c->address, RSM_LMS_MODE_CONTINUOUS);
@@ -136,7 +147,7 @@ static void start_step(rsm_sicklms_t *d, uint8_t step, uint64_t now)
     d->req_len = n > 0 ? (size_t)n : 0u;
     d->step = step;
     d->tries = 0u;
-    d->state = RSM_SICKLMS_STARTING;
+    d->state = step >= STEP_STOP ? RSM_SICKLMS_STOPPING : RSM_SICKLMS_STARTING;
     send_request(d, now);
 }
 
@@ -173,22 +184,52 @@ int rsm_sicklms_connect(rsm_sicklms_t *d)
         return RSM_ERR_INVAL;
     }
     d->lost = 0u;
-    begin_probing(d, d->cfg->power_up_baud, now_of(d));
+    d->format = d->cfg->format;
+    begin_probing(d, d->cfg->power_up_baud, rsm_link_rx_now(&d->io));
     return RSM_OK;
 }
 
-static void fail(rsm_sicklms_t *d, int status, uint64_t now, rsm_sicklms_event_t *ev)
+/* The shutdown is over (status RSM_OK) or given up. */
+static void end_shutdown(rsm_sicklms_t *d, int status, uint64_t now)
 {
+    if (status == RSM_OK) {
+        d->stats.disconnects++;
+    }
+    d->state = RSM_SICKLMS_IDLE;
+    d->out.type = RSM_SICKLMS_EVENT_DISCONNECTED;
+    d->out.status = status;
+    d->out.stamp_us = now;
+}
+
+/* A step failed: a start-up begins again after a pause, a shutdown ends. */
+static void fail(rsm_sicklms_t *d, int status, uint64_t now)
+{
+    if (d->state == RSM_SICKLMS_STOPPING) {
+        end_shutdown(d, status, now);
+        return;
+    }
     d->stats.errors++;
     d->state = RSM_SICKLMS_BACKOFF;
     d->deadline_us = now + d->cfg->retry_wait_us;
-    ev->type = RSM_SICKLMS_EVENT_ERROR;
-    ev->status = status;
-    ev->stamp_us = now;
+    d->out.type = RSM_SICKLMS_EVENT_ERROR;
+    d->out.status = status;
+    d->out.stamp_us = now;
+}
+
+int rsm_sicklms_disconnect(rsm_sicklms_t *d)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (d->state == RSM_SICKLMS_IDLE || d->state == RSM_SICKLMS_STOPPING) {
+        return RSM_OK;
+    }
+    start_step(d, STEP_STOP, rsm_link_rx_now(&d->io));
+    return RSM_OK;
 }
 
 /* No ACK or no reply in time. */
-static void request_timed_out(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
+static void request_timed_out(rsm_sicklms_t *d, uint64_t now)
 {
     if (d->sub == SUB_ACK) {
         d->stats.ack_timeouts++;
@@ -200,7 +241,7 @@ static void request_timed_out(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_
         d->probed++;
         if (!d->cfg->probe || d->link->set_baud == NULL || d->probed >= N_RATES) {
             d->probed = 0u;
-            fail(d, RSM_ERR_TIMEOUT, now, ev);
+            fail(d, RSM_ERR_TIMEOUT, now);
             return;
         }
         probe_at(d, (uint8_t)((d->probe_idx + 1u) % N_RATES), now);
@@ -212,8 +253,14 @@ static void request_timed_out(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_
         begin_probing(d, d->cfg->baud, now);
         return;
     }
+    if (d->step == STEP_RESTORE && d->sub == SUB_REPLY) {
+        /* Accepted, but did it switch? Not repeated blindly either: the
+         * next start-up probes. */
+        fail(d, RSM_ERR_TIMEOUT, now);
+        return;
+    }
     if (d->tries >= d->cfg->max_tries) {
-        fail(d, RSM_ERR_TIMEOUT, now, ev);
+        fail(d, RSM_ERR_TIMEOUT, now);
         return;
     }
     d->stats.retries++;
@@ -221,7 +268,7 @@ static void request_timed_out(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_
     send_request(d, now);
 }
 
-static void streaming_started(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
+static void streaming_started(rsm_sicklms_t *d, uint64_t now)
 {
     d->state = RSM_SICKLMS_STREAMING;
     d->last_tel_us = now;
@@ -230,20 +277,59 @@ static void streaming_started(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_
         d->stats.reconnects++;
         d->lost = 0u;
     }
-    ev->type = RSM_SICKLMS_EVENT_CONNECTED;
-    ev->stamp_us = now;
+    d->out.type = RSM_SICKLMS_EVENT_CONNECTED;
+    d->out.stamp_us = now;
+}
+
+/* The 0xF4 configuration block: keep it and decode 0xB0 as it says. A
+ * measuring mode that gives no ranges (reflectivity) cannot be used. */
+static int take_config(rsm_sicklms_t *d, const rsm_lms_telegram_t *t)
+{
+    rsm_lms_config_t c;
+    rsm_lms_b0_format_t f;
+    if (rsm_lms_decode_config(t, &c) != RSM_OK) {
+        return RSM_ERR_PROTO;
+    }
+    d->config = c;
+    d->have_config = 1u;
+    d->stats.config_reads++;
+    if (rsm_lms_b0_format_from_config(&c, &f) != RSM_OK) {
+        return RSM_ERR_PROTO;
+    }
+    d->format.distance_bits = f.distance_bits;
+    d->format.index_bytes = f.index_bytes;
+    return RSM_OK;
+}
+
+/* A mode-change reply (0xA0) that accepts the change. */
+static int mode_ok(const rsm_lms_telegram_t *t)
+{
+    rsm_lms_mode_reply_t mode;
+    return rsm_lms_decode_mode_reply(t, &mode) == RSM_OK && mode.result == RSM_LMS_MODE_RESULT_OK;
+}
+
+/* The reply of a baud change came at the old rate: now the link follows. */
+static int follow_baud(rsm_sicklms_t *d, uint32_t baud)
+{
+    if (rsm_link_set_baud(d->link, baud) != RSM_OK) {
+        return RSM_ERR_IO;
+    }
+    d->baud = baud;
+    d->stats.baud_changes++;
+    drop_input(d);
+    return RSM_OK;
 }
 
 /* The expected reply of the step in flight arrived. */
-static void step_done(rsm_sicklms_t *d, const rsm_lms_telegram_t *t, uint64_t now,
-                      rsm_sicklms_event_t *ev)
+static void step_done(rsm_sicklms_t *d, const rsm_lms_telegram_t *t, uint64_t now)
 {
     rsm_lms_mode_reply_t mode;
     rsm_lms_variant_reply_t var;
+    int st;
     switch (d->step) {
     case STEP_PROBE:
         if (rsm_lms_decode_mode_reply(t, &mode) != RSM_OK) {
-            fail(d, RSM_ERR_PROTO, now, ev);
+            fail(d, RSM_ERR_PROTO, now);
             return;
         }
         if (d->cfg->baud != 0u && d->cfg->baud != d->baud && d->link->set_baud != NULL) {
@@ -253,19 +339,15 @@ static void step_done(rsm_sicklms_t *d, const rsm_lms_telegram_t *t, uint64_t no
         }
         return;
     case STEP_BAUD:
-        if (rsm_lms_decode_mode_reply(t, &mode) != RSM_OK ||
-            mode.result != RSM_LMS_MODE_RESULT_OK) {
-            fail(d, RSM_ERR_PROTO, now, ev);
+        if (!mode_ok(t)) {
+            fail(d, RSM_ERR_PROTO, now);
             return;
         }
-        /* The reply came at the old rate; now both sides move. */
-        if (rsm_link_set_baud(d->link, d->cfg->baud) != RSM_OK) {
-            fail(d, RSM_ERR_IO, now, ev);
+        st = follow_baud(d, d->cfg->baud);
+        if (st != RSM_OK) {
+            fail(d, st, now);
             return;
         }
-        d->baud = d->cfg->baud;
-        d->stats.baud_changes++;
-        drop_input(d);
         d->state = RSM_SICKLMS_SETTLE;
         d->deadline_us = now + d->cfg->baud_settle_us;
         return;
@@ -273,19 +355,43 @@ static void step_done(rsm_sicklms_t *d, const rsm_lms_telegram_t *t, uint64_t no
         if (rsm_lms_decode_variant_reply(t, &var) != RSM_OK ||
             var.result != RSM_LMS_RESULT_ACCEPTED || var.angle_deg != d->cfg->angle_deg ||
             var.resolution_cdeg != d->cfg->resolution_cdeg) {
-            fail(d, RSM_ERR_PROTO, now, ev);
+            fail(d, RSM_ERR_PROTO, now);
+            return;
+        }
+        start_step(d, d->cfg->read_config ? STEP_CONFIG : STEP_STREAM, now);
+        return;
+    case STEP_CONFIG:
+        st = take_config(d, t);
+        if (st != RSM_OK) {
+            fail(d, st, now);
             return;
         }
         start_step(d, STEP_STREAM, now);
         return;
-    case STEP_STREAM:
-    default:
-        if (rsm_lms_decode_mode_reply(t, &mode) != RSM_OK ||
-            mode.result != RSM_LMS_MODE_RESULT_OK) {
-            fail(d, RSM_ERR_PROTO, now, ev);
+    case STEP_STOP:
+        if (!mode_ok(t)) {
+            fail(d, RSM_ERR_PROTO, now);
+        } else if (d->baud != d->cfg->power_up_baud && d->link->set_baud != NULL) {
+            start_step(d, STEP_RESTORE, now);
+        } else {
+            end_shutdown(d, RSM_OK, now);
+        }
+        return;
+    case STEP_RESTORE:
+        if (!mode_ok(t)) {
+            fail(d, RSM_ERR_PROTO, now);
             return;
         }
-        streaming_started(d, now, ev);
+        st = follow_baud(d, d->cfg->power_up_baud);
+        end_shutdown(d, st, now);
+        return;
+    case STEP_STREAM:
+    default:
+        if (!mode_ok(t)) {
+            fail(d, RSM_ERR_PROTO, now);
+            return;
+        }
+        streaming_started(d, now);
         return;
     }
 }
@@ -319,43 +425,47 @@ int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan
  * receive time less the configured latency. */
 static int convert_scan(rsm_sicklms_t *d)
 {
+    const uint64_t rx = d->io.stamp_us;
     const int invalid = rsm_sicklms_to_scan(&d->raw, d->cfg->upside_down, &d->scan);
     if (invalid < 0) {
         return invalid;
     }
-    d->scan.stamp_us = d->rx_stamp_us >= d->cfg->latency_us ? d->rx_stamp_us - d->cfg->latency_us
-                                                            : 0u;
+    d->scan.stamp_us = rx >= d->cfg->latency_us ? rx - d->cfg->latency_us : 0u;
     d->stats.invalid_readings += (uint32_t)invalid;
     return RSM_OK;
 }
 
-static void handle_event(rsm_sicklms_t *d, const rsm_lms_event_t *e, uint64_t now,
-                         rsm_sicklms_event_t *ev)
+static void handle_stream_telegram(rsm_sicklms_t *d, const rsm_lms_telegram_t *t)
+{
+    d->last_tel_us = d->io.stamp_us;
+    if (t->cmd != RSM_LMS_REPLY_VALUES) {
+        d->stats.unexpected++;
+        return;
+    }
+    if (rsm_lms_decode_b0(t, &d->format, &d->raw) != RSM_OK || convert_scan(d) != RSM_OK) {
+        d->stats.bad_scans++;
+        return;
+    }
+    d->stats.scans++;
+    d->out.type = RSM_SICKLMS_EVENT_SCAN;
+    d->out.scan = &d->scan;
+    d->out.stamp_us = d->scan.stamp_us;
+}
+
+static void handle_event(rsm_sicklms_t *d, const rsm_lms_event_t *e, uint64_t now)
 {
     if (e->type == RSM_LMS_EVENT_TELEGRAM) {
         d->stats.telegrams++;
     }
     if (d->state == RSM_SICKLMS_STREAMING) {
-        if (e->type != RSM_LMS_EVENT_TELEGRAM) {
-            return; /* 0x06/0x15 bytes mean nothing while streaming */
+        /* 0x06/0x15 bytes mean nothing while streaming. */
+        if (e->type == RSM_LMS_EVENT_TELEGRAM) {
+            handle_stream_telegram(d, &e->telegram);
         }
-        d->last_tel_us = d->rx_stamp_us;
-        if (e->telegram.cmd != RSM_LMS_REPLY_VALUES) {
-            d->stats.unexpected++;
-            return;
-        }
-        if (rsm_lms_decode_b0(&e->telegram, &d->cfg->format, &d->raw) != RSM_OK ||
-            convert_scan(d) != RSM_OK) {
-            d->stats.bad_scans++;
-            return;
-        }
-        d->stats.scans++;
-        ev->type = RSM_SICKLMS_EVENT_SCAN;
-        ev->scan = &d->scan;
-        ev->stamp_us = d->scan.stamp_us;
         return;
     }
-    if (d->state != RSM_SICKLMS_STARTING || d->sub == SUB_NAK_WAIT) {
+    if ((d->state != RSM_SICKLMS_STARTING && d->state != RSM_SICKLMS_STOPPING) ||
+        d->sub == SUB_NAK_WAIT) {
         if (e->type == RSM_LMS_EVENT_TELEGRAM) {
             d->stats.unexpected++;
         }
@@ -380,7 +490,7 @@ static void handle_event(rsm_sicklms_t *d, const rsm_lms_event_t *e, uint64_t no
             d->stats.rejected++;
         }
         if (d->tries >= d->cfg->max_tries) {
-            fail(d, RSM_ERR_PROTO, now, ev);
+            fail(d, RSM_ERR_PROTO, now);
             return;
         }
         /* The listing asks for at least 30 ms before the next request. */
@@ -390,39 +500,60 @@ static void handle_event(rsm_sicklms_t *d, const rsm_lms_event_t *e, uint64_t no
     }
     if (e->type == RSM_LMS_EVENT_TELEGRAM) {
         if (e->telegram.cmd == d->req_reply) {
-            step_done(d, &e->telegram, now, ev);
+            step_done(d, &e->telegram, now);
         } else {
             d->stats.unexpected++; /* e.g. 0xB0 of a stream left running */
         }
     }
 }
 
-static void drain(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
+/* rsm_link_poll step 1/4: feeds the held bytes until an event or until
+ * the chunk is used up. */
+static int drain_cb(void *drv, uint64_t now)
 {
+    rsm_sicklms_t *d = (rsm_sicklms_t *)drv;
     rsm_lms_event_t e;
     for (;;) {
         size_t used = 0u;
-        int r = rsm_lms_parser_feed(&d->parser, d->rx + d->rx_off, d->rx_len - d->rx_off, &used, &e);
+        const int r = rsm_lms_parser_feed(&d->parser, d->io.buf + d->io.off,
+                                          d->io.len - d->io.off, &used, &e);
         if (r < 0) {
-            d->rx_off = d->rx_len;
+            d->io.off = d->io.len;
             break;
         }
-        d->rx_off += used;
+        d->io.off += used;
         if (r == 0) {
             break;
         }
-        handle_event(d, &e, now, ev);
-        if (ev->type != RSM_SICKLMS_EVENT_NONE) {
+        handle_event(d, &e, now);
+        if (d->out.type != RSM_SICKLMS_EVENT_NONE) {
             break;
         }
     }
     d->stats.crc_errors = d->parser.stats.crc_errors;
+    return d->out.type != RSM_SICKLMS_EVENT_NONE;
 }
 
-static void run_timers(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
+/* rsm_link_poll step 4, on silence: a telegram cut short is abandoned and
+ * what it held looked at again. */
+static int silence_cb(void *drv, uint64_t now)
 {
+    rsm_sicklms_t *d = (rsm_sicklms_t *)drv;
+    rsm_lms_event_t e;
+    while (d->out.type == RSM_SICKLMS_EVENT_NONE && rsm_lms_parser_timeout(&d->parser, &e) == 1) {
+        handle_event(d, &e, now);
+    }
+    d->stats.crc_errors = d->parser.stats.crc_errors;
+    return d->out.type != RSM_SICKLMS_EVENT_NONE;
+}
+
+/* rsm_link_poll steps 2 and 5. */
+static int timers_cb(void *drv, uint64_t now)
+{
+    rsm_sicklms_t *d = (rsm_sicklms_t *)drv;
     switch (d->state) {
     case RSM_SICKLMS_STARTING:
+    case RSM_SICKLMS_STOPPING:
         if (now < d->deadline_us) {
             break;
         }
@@ -430,7 +561,7 @@ static void run_timers(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
             d->stats.retries++;
             send_request(d, now);
         } else {
-            request_timed_out(d, now, ev);
+            request_timed_out(d, now);
         }
         break;
     case RSM_SICKLMS_SETTLE:
@@ -447,8 +578,8 @@ static void run_timers(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
         if (now - d->last_tel_us >= d->cfg->stream_timeout_us) {
             d->stats.link_lost++;
             d->lost = 1u;
-            ev->type = RSM_SICKLMS_EVENT_LINK_LOST;
-            ev->stamp_us = now;
+            d->out.type = RSM_SICKLMS_EVENT_LINK_LOST;
+            d->out.stamp_us = now;
             begin_probing(d, d->baud, now);
         }
         break;
@@ -456,10 +587,13 @@ static void run_timers(rsm_sicklms_t *d, uint64_t now, rsm_sicklms_event_t *ev)
     default:
         break;
     }
+    return d->out.type != RSM_SICKLMS_EVENT_NONE;
 }
 
-static uint64_t time_to_deadline(const rsm_sicklms_t *d, uint64_t now)
+/* rsm_link_poll: time until the next timer of the current state fires. */
+static uint64_t until_due_cb(const void *drv, uint64_t now)
 {
+    const rsm_sicklms_t *d = (const rsm_sicklms_t *)drv;
     uint64_t due;
     if (d->state == RSM_SICKLMS_IDLE) {
         return UINT64_MAX;
@@ -469,56 +603,20 @@ static uint64_t time_to_deadline(const rsm_sicklms_t *d, uint64_t now)
     return due > now ? due - now : 0u;
 }
 
+static const rsm_link_poll_ops_t sicklms_poll_ops = {drain_cb, timers_cb, until_due_cb,
+                                                     silence_cb};
+
 int rsm_sicklms_poll(rsm_sicklms_t *d, rsm_sicklms_event_t *ev)
 {
-    uint64_t now;
-    uint64_t wait;
-    uint32_t timeout;
-    int n;
+    int st;
     if (d == NULL || ev == NULL) {
         return RSM_ERR_INVAL;
     }
-    memset(ev, 0, sizeof *ev);
-    now = now_of(d);
-    drain(d, now, ev);
-    if (ev->type != RSM_SICKLMS_EVENT_NONE) {
-        return RSM_OK;
-    }
-    run_timers(d, now, ev);
-    if (ev->type != RSM_SICKLMS_EVENT_NONE) {
-        return RSM_OK;
-    }
-    wait = time_to_deadline(d, now);
-    timeout = d->cfg->read_timeout_us;
-    if (wait < (uint64_t)timeout) {
-        timeout = (uint32_t)wait;
-    }
-    n = rsm_link_read(d->link, d->rx, sizeof d->rx, timeout);
-    now = now_of(d);
-    if (n < 0) {
+    memset(&d->out, 0, sizeof d->out);
+    st = rsm_link_poll(&d->io, &sicklms_poll_ops, d);
+    if (st < 0) {
         d->stats.read_errors++;
-        return n;
     }
-    if (n > 0) {
-        d->rx_off = 0u;
-        d->rx_len = (size_t)n;
-        d->rx_stamp_us = now;
-        d->last_rx_us = now;
-        drain(d, now, ev);
-        if (ev->type != RSM_SICKLMS_EVENT_NONE) {
-            return RSM_OK;
-        }
-    } else if (now - d->last_rx_us >= d->cfg->byte_timeout_us) {
-        rsm_lms_event_t e;
-        /* A telegram cut short: abandon it and look at what it held. */
-        while (ev->type == RSM_SICKLMS_EVENT_NONE && rsm_lms_parser_timeout(&d->parser, &e) == 1) {
-            handle_event(d, &e, now, ev);
-        }
-        d->stats.crc_errors = d->parser.stats.crc_errors;
-        if (ev->type != RSM_SICKLMS_EVENT_NONE) {
-            return RSM_OK;
-        }
-    }
-    run_timers(d, now, ev);
-    return RSM_OK;
+    *ev = d->out;
+    return st;
 }

@@ -91,6 +91,16 @@
 #define RSM_LMS_MAX_TELEGRAM 820
 #endif
 
+/* ---- drivers ----------------------------------------------------------- */
+
+/* Bytes one driver poll reads from its link at most (the receive chunk in
+ * rsm_link_rx_t, one per driver). Larger chunks mean fewer reads for the
+ * same traffic; any size >= 1 is correct, since the codecs take bytes in
+ * pieces of any size. */
+#ifndef RSM_LINK_RX_CHUNK
+#define RSM_LINK_RX_CHUNK 128
+#endif
+
 /* ---- derived values and compile-time checks ---------------------------- */
 
 #define RSM_MAP_SIZE (1 << RSM_MAP_SIZE_LOG2)
@@ -110,5 +120,6 @@ RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
 RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONAR <= 255);
 RSM_STATIC_ASSERT(aria_str_size, RSM_ARIA_STR_SIZE >= 8 && RSM_ARIA_STR_SIZE <= 256);
 RSM_STATIC_ASSERT(lms_telegram_size, RSM_LMS_MAX_TELEGRAM >= 812);
+RSM_STATIC_ASSERT(link_rx_chunk_range, RSM_LINK_RX_CHUNK >= 1 && RSM_LINK_RX_CHUNK <= 65536);
 
 #endif /* RSM_CONFIG_H */

@@ -1,24 +1,43 @@
 /* Pioneer P3-DX driver: the ARIA codec (rsm/aria.h) on an rsm_link_t.
  *
- * A non-blocking state machine driven by rsm_p3dx_poll. Each poll reads the
- * link at most once, with a timeout no longer than config.read_timeout_us
- * (shorter when a deadline is nearer), handles what arrived and the timers,
- * and returns at most one event. Deadlines are absolute times from the
- * driver's clock, so it does not matter how often poll is called.
+ * A non-blocking state machine driven by rsm_p3dx_poll. Each poll is the
+ * cycle of rsm_link_poll (rsm/hal.h): it reads the link at most once, with
+ * a timeout no longer than config.read_timeout_us (shorter when a deadline
+ * is nearer), handles what arrived and the timers, and returns at most one
+ * event. Deadlines are absolute times from the driver's clock, so it does
+ * not matter how often poll is called.
  *
  * Connect (protocols.md 1.6): SYNC0 -> SYNC1 -> SYNC2, each reply awaited
  * step_timeout_us; a wrong reply restarts at SYNC0; a SIP or ENCODER packet
  * during the handshake means an old session is open: CLOSE, wait
  * close_wait_us, flush, restart. Then OPEN, optionally CONFIG (TicksMM,
- * RevCount and the watchdog are taken from the CONFIGpac if it arrives within
- * config_timeout_us, else the config defaults stay), ENABLE 1, ENCODER 2.
- * After sync_tries failed attempts at one rate the next rate of the probe
- * list (9600, 38400, 19200, 115200, 57600) is tried, when probe_baud is set
- * and the link has set_baud.
+ * RevCount, the watchdog and AutoBaud are taken from the CONFIGpac if it
+ * arrives within config_timeout_us, else the config defaults stay), the
+ * optional rate switch below, ENABLE 1, ENCODER 2. After sync_tries failed
+ * attempts at one rate the next rate of the probe list (9600, 38400, 19200,
+ * 115200, 57600) is tried, when probe_baud is set and the link has
+ * set_baud.
  *
- * Connected: one command at least every keepalive_us (PULSE when idle);
- * queued velocity commands are sent by the next poll; no SIP for
- * link_lost_us gives a LINK_LOST event and a new handshake from SYNC0.
+ * Rate switch (protocols.md 1.1, as ARIA does it): when host_baud is set,
+ * the link can change rates, and the CONFIGpac reported AutoBaud 2, the
+ * driver sends HOSTBAUD at the old rate, moves the link to host_baud, sends
+ * a PULSE and waits up to baud_check_us for any packet at the new rate; if
+ * none comes, the link goes back to the old rate. ARIA's parameter file for
+ * the p3dx-sh asks for 38400; the library default is to stay at the
+ * connect rate (host_baud 0).
+ *
+ * Session (after OPEN): one command at least every keepalive_us (PULSE when
+ * nothing else went out), so that the robot's watchdog (protocols.md 1.7)
+ * never stops it. Queued motion commands are sent by the next poll; while
+ * motion is commanded the last motion command is re-sent every resend_us
+ * (ARIA re-sends every 500 ms), so a command lost on the line costs at most
+ * that long; a stop (STOP or zero speeds) is re-sent stop_repeats more times
+ * and then the keep-alive goes back to PULSE. Connected, no SIP for
+ * link_lost_us gives a LINK_LOST event, forgets the commanded motion (it is
+ * never resumed by itself) and starts a new handshake from SYNC0.
+ *
+ * Disconnect (ARIA's order, with a STOP first): STOP and ENABLE 0 at once,
+ * CLOSE disconnect_wait_us later, then a DISCONNECTED event and IDLE.
  *
  * All state is in the caller's rsm_p3dx_t; the driver keeps pointers to the
  * link, the clock and the config given to init, which must outlive it. One
@@ -38,9 +57,6 @@
 extern "C" {
 #endif
 
-/* Bytes read from the link per poll (one read call). */
-#define RSM_P3DX_RX_CHUNK 64u
-
 /* Runtime tuning. rsm_p3dx_config_default gives the values in brackets. */
 typedef struct rsm_p3dx_config {
     uint32_t baud;               /* first line rate tried, bit/s [9600] */
@@ -58,6 +74,13 @@ typedef struct rsm_p3dx_config {
                                     ARIA uses 8 s */
     uint32_t disconnect_wait_us; /* between ENABLE 0 and CLOSE [100 000] */
     uint32_t byte_timeout_us;    /* partial packet abandoned after this silence [100 000] */
+    uint32_t host_baud;          /* rate to switch to with HOSTBAUD after connecting:
+                                    9600, 19200, 38400, 57600 or 115200; 0 = stay [0] */
+    uint32_t baud_check_us;      /* after HOSTBAUD, wait this long for a packet at the
+                                    new rate, else go back [1 000 000] */
+    uint32_t resend_us;          /* re-send the motion command this often while motion
+                                    is commanded; 0 = never [500 000] */
+    uint8_t stop_repeats;        /* re-sends of a stop command after the first [1] */
     uint16_t ticks_mm;           /* TicksMM until a CONFIGpac says otherwise [128] */
     uint16_t rev_count;          /* RevCount until a CONFIGpac says otherwise [0 = unknown] */
     uint16_t watchdog_ms;        /* robot watchdog until a CONFIGpac says otherwise [2000] */
@@ -74,7 +97,8 @@ typedef enum rsm_p3dx_state {
     RSM_P3DX_CLOSE_WAIT = 2,    /* CLOSE sent to a stale session */
     RSM_P3DX_CONFIG_WAIT = 3,   /* OPEN (and CONFIG) sent, awaiting CONFIGpac */
     RSM_P3DX_CONNECTED = 4,
-    RSM_P3DX_DISCONNECTING = 5  /* ENABLE 0 sent, CLOSE follows */
+    RSM_P3DX_DISCONNECTING = 5, /* STOP and ENABLE 0 sent, CLOSE follows */
+    RSM_P3DX_BAUD_CHECK = 6     /* HOSTBAUD sent, awaiting a packet at the new rate */
 } rsm_p3dx_state_t;
 
 typedef enum rsm_p3dx_event_type {
@@ -122,15 +146,22 @@ typedef struct rsm_p3dx_stats {
     uint32_t connects;           /* handshakes completed */
     uint32_t link_lost;          /* LINK_LOST events */
     uint32_t reconnects;         /* handshakes completed after a link loss */
-    uint32_t keepalives;         /* PULSEs sent while connected */
-    uint32_t commands;           /* motion commands sent (VEL, RVEL, VEL2, STOP) */
+    uint32_t keepalives;         /* PULSEs sent while a session is open */
+    uint32_t commands;           /* motion commands sent (VEL, RVEL, VEL2, STOP),
+                                    re-sends included */
+    uint32_t resends;            /* motion commands re-sent (each VEL + RVEL pair once) */
+    uint32_t host_baud_switches; /* HOSTBAUD switches confirmed by a packet */
+    uint32_t host_baud_failures; /* no packet at the new rate (or the link refused
+                                    it): back at the old rate */
+    uint32_t host_baud_skipped;  /* host_baud set but not possible: no CONFIGpac,
+                                    AutoBaud not 2, or a link without set_baud */
     uint32_t write_errors;       /* link writes that failed */
     uint32_t read_errors;        /* link reads that failed */
 } rsm_p3dx_stats_t;
 
 /* Driver state, caller owned (about 1 KB). Members are read-only for the
- * caller; stats, state, robot, sip, ticks_mm, rev_count, watchdog_ms and
- * baud may be read at any time. */
+ * caller; stats, state, robot, sip, ticks_mm, rev_count, watchdog_ms,
+ * auto_baud and baud may be read at any time. */
 typedef struct rsm_p3dx {
     const rsm_p3dx_config_t *cfg;
     const rsm_link_t *link;
@@ -143,6 +174,7 @@ typedef struct rsm_p3dx {
     uint16_t ticks_mm;        /* from the CONFIGpac, else cfg->ticks_mm */
     uint16_t rev_count;       /* from the CONFIGpac, else cfg->rev_count */
     uint16_t watchdog_ms;     /* from the CONFIGpac, else cfg->watchdog_ms */
+    uint8_t auto_baud;        /* AutoBaud of this connection's CONFIGpac (0 if none) */
     uint32_t baud;            /* current line rate */
     /* private */
     uint8_t step;             /* handshake step awaited, 0..2 */
@@ -153,9 +185,8 @@ typedef struct rsm_p3dx {
     int32_t last_left;
     int32_t last_right;
     uint64_t deadline_us;
-    uint64_t last_tx_us;
+    uint64_t last_tx_us;      /* last command of any kind */
     uint64_t last_sip_us;
-    uint64_t last_rx_us;
     uint8_t pend_vel;         /* VEL + RVEL queued */
     uint8_t pend_vel2;
     uint8_t pend_stop;
@@ -163,17 +194,20 @@ typedef struct rsm_p3dx {
     int16_t rvel_deg_s;
     int8_t vel2_left;
     int8_t vel2_right;
-    uint8_t rx[RSM_P3DX_RX_CHUNK];
-    size_t rx_off;
-    size_t rx_len;
-    uint64_t rx_stamp_us;
+    uint8_t motion;           /* last motion command sent: none, VEL, VEL2, STOP */
+    uint8_t stops_left;       /* stop re-sends still due */
+    uint64_t last_motion_us;  /* when it was last sent */
+    uint32_t prev_baud;       /* rate before HOSTBAUD, restored if the check fails */
+    rsm_link_rx_t io;         /* link, clock and receive chunk (rsm_link_poll) */
+    rsm_p3dx_event_t out;     /* the event of the poll in progress */
 } rsm_p3dx_t;
 
 /* Initialises d in the IDLE state with zero counters. link, clock and cfg
  * are kept by pointer and must outlive d. Nothing is sent.
  * Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers, a link without read or
- * write, a clock without now_us, read_timeout_us 0, sync_tries 0 or a zero
- * timeout (d is then unchanged). */
+ * write, a clock without now_us, read_timeout_us 0, sync_tries 0, a zero
+ * timeout, a host_baud HOSTBAUD cannot select, or host_baud with
+ * baud_check_us 0 (d is then unchanged). */
 int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
                   const rsm_p3dx_config_t *cfg);
 
@@ -191,23 +225,26 @@ int rsm_p3dx_connect(rsm_p3dx_t *d);
 int rsm_p3dx_poll(rsm_p3dx_t *d, rsm_p3dx_event_t *ev);
 
 /* Queues VEL mm_s (|mm_s| <= 32767, mm/s) and RVEL deg_s (deg/s, CCW
- * positive); the next poll sends them while connected. Replaces a queued
- * VEL2 or STOP. Returns RSM_OK, RSM_ERR_INVAL or RSM_ERR_RANGE (nothing
- * queued). */
+ * positive); the next poll sends them while connected, and they are re-sent
+ * every resend_us until another motion command (zero speeds count as a
+ * stop). Replaces a queued VEL2 or STOP. Returns RSM_OK, RSM_ERR_INVAL or
+ * RSM_ERR_RANGE (nothing queued). */
 int rsm_p3dx_set_vel(rsm_p3dx_t *d, int32_t mm_s, int32_t deg_s);
 
 /* Queues VEL2 with wheel speeds in Vel2Divisor units (20 mm/s), each in
- * [-127, 127]. Replaces a queued VEL/RVEL or STOP. Returns RSM_OK,
- * RSM_ERR_INVAL or RSM_ERR_RANGE (nothing queued). */
+ * [-127, 127], re-sent like VEL. Replaces a queued VEL/RVEL or STOP.
+ * Returns RSM_OK, RSM_ERR_INVAL or RSM_ERR_RANGE (nothing queued). */
 int rsm_p3dx_set_vel2(rsm_p3dx_t *d, int32_t left, int32_t right);
 
 /* Queues STOP and drops queued velocity commands. RSM_OK or RSM_ERR_INVAL. */
 int rsm_p3dx_stop(rsm_p3dx_t *d);
 
-/* Starts an orderly disconnect when connected (ENABLE 0 now, CLOSE after
- * disconnect_wait_us, then a DISCONNECTED event and IDLE); in any other
- * state goes to IDLE at once. Returns RSM_OK, RSM_ERR_INVAL or a write
- * error. */
+/* Starts an orderly disconnect while a session is open (CONFIG_WAIT,
+ * BAUD_CHECK, CONNECTED): STOP and ENABLE 0 now, CLOSE after
+ * disconnect_wait_us, then a DISCONNECTED event and IDLE; queued and
+ * commanded motion is forgotten. In any other state goes to IDLE at once
+ * (no event). Returns RSM_OK, RSM_ERR_INVAL or a write error (the sequence
+ * still proceeds). */
 int rsm_p3dx_disconnect(rsm_p3dx_t *d);
 
 #ifdef __cplusplus

@@ -1,10 +1,11 @@
 /* SICK LMS 200/211/221/291 driver: the LMS codec (rsm/lms.h) on an
  * rsm_link_t, yielding rsm_scan_t scans in the robot frame.
  *
- * A non-blocking state machine driven by rsm_sicklms_poll. Each poll reads
- * the link at most once, with a timeout of at most config.read_timeout_us
- * (less when a deadline is nearer), handles what arrived and the timers, and
- * returns at most one event. Deadlines are absolute clock times.
+ * A non-blocking state machine driven by rsm_sicklms_poll. Each poll is the
+ * cycle of rsm_link_poll (rsm/hal.h): it reads the link at most once, with
+ * a timeout of at most config.read_timeout_us (less when a deadline is
+ * nearer), handles what arrived and the timers, and returns at most one
+ * event. Deadlines are absolute clock times.
  *
  * Start-up (protocols.md 2.10): probe with 0x20 0x25 (stop any stream) at
  * the power-up rate, then at the other rates (9600, 38400, 19200) when no
@@ -12,21 +13,31 @@
  * 0xA0 reply comes at the OLD rate, then the link's rate is changed; a lost
  * baud-change reply is never repeated blindly: the rates are probed again,
  * the target first); set the variant (0x3B, the 0xBB reply must accept and
- * echo it); start continuous output (0x20 0x24).
+ * echo it); read the configuration block (0x74, reply 0xF4; optional) to
+ * learn the measuring mode, units and index bytes that decoding 0xB0 needs;
+ * start continuous output (0x20 0x24).
  *
  * Every request (protocols.md 2.4): ACK awaited ack_timeout_us, then the
  * reply reply_timeout_us (mode_timeout_us after 0x20); a NAK is answered by
  * re-sending after nak_wait_us; at most max_tries sends, then an ERROR event
  * and a new start-up after retry_wait_us.
  *
- * Streaming: every 0xB0 telegram is decoded and converted into d->scan:
- * scanner angle a (0 right, 90 deg ahead, 180 left) becomes the robot-frame
- * bearing a - 90 deg (x forward, y left, CCW positive; 90 deg - a when
- * mounted upside down), ranges in metres, invalid readings (error codes)
- * stored as range 0 so that the core drops and counts them. The scan is
- * stamped with the receive time of the read that completed the telegram,
- * minus config.latency_us. No telegram for stream_timeout_us gives a
- * LINK_LOST event and a new start-up.
+ * Streaming: every 0xB0 telegram is decoded (with d->format) and converted
+ * into d->scan: scanner angle a (0 right, 90 deg ahead, 180 left) becomes
+ * the robot-frame bearing a - 90 deg (x forward, y left, CCW positive;
+ * 90 deg - a when mounted upside down), ranges in metres, invalid readings
+ * (error codes) stored as range 0 so that the core drops and counts them.
+ * The scan is stamped with the receive time of the read that completed the
+ * telegram, minus config.latency_us. No telegram for stream_timeout_us
+ * gives a LINK_LOST event and a new start-up.
+ *
+ * Shutdown (protocols.md 2.10 step 8), started by rsm_sicklms_disconnect
+ * and run by later polls like the start-up: 0x20 0x25 (stop the stream),
+ * then, unless the link is already at power_up_baud, the 0x20 baud change
+ * back to it (reply at the old rate, then the link follows), so that the
+ * next user finds the unit where a start-up probes first; then a
+ * DISCONNECTED event and IDLE. A step that fails (no ACK or reply after
+ * max_tries sends) ends the shutdown at once with the event's status set.
  *
  * All state is in the caller's rsm_sicklms_t (about 7 KB with the default
  * RSM_MAX_BEAMS); link, clock and config are kept by pointer and must
@@ -46,9 +57,6 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* Bytes read from the link per poll (one read call). */
-#define RSM_SICKLMS_RX_CHUNK 128u
 
 /* Runtime tuning; rsm_sicklms_config_default gives the values in brackets. */
 typedef struct rsm_sicklms_config {
@@ -71,7 +79,12 @@ typedef struct rsm_sicklms_config {
     uint32_t stream_timeout_us; /* silence while streaming = link lost [1 000 000] */
     uint32_t byte_timeout_us;   /* partial telegram abandoned after this silence [100 000] */
     uint32_t latency_us;        /* subtracted from the receive time of a scan [0] */
-    rsm_lms_b0_format_t format; /* 0xB0 decoding [rsm_lms_b0_format_default] */
+    uint8_t read_config;        /* 1: read the configuration block (0x74) at start-up
+                                   and decode 0xB0 with its distance bits and index
+                                   bytes [1] */
+    rsm_lms_b0_format_t format; /* 0xB0 decoding [rsm_lms_b0_format_default]; with
+                                   read_config only its units are kept (AUTO: the
+                                   count word of each telegram says) */
 } rsm_sicklms_config_t;
 
 /* Fills *cfg with the defaults above. RSM_OK or RSM_ERR_INVAL (NULL). Pure. */
@@ -82,7 +95,8 @@ typedef enum rsm_sicklms_state {
     RSM_SICKLMS_STARTING = 1,  /* a start-up request is in flight */
     RSM_SICKLMS_SETTLE = 2,    /* pause after a rate change */
     RSM_SICKLMS_BACKOFF = 3,   /* pause after an ERROR */
-    RSM_SICKLMS_STREAMING = 4
+    RSM_SICKLMS_STREAMING = 4,
+    RSM_SICKLMS_STOPPING = 5   /* a shutdown request is in flight */
 } rsm_sicklms_state_t;
 
 typedef enum rsm_sicklms_event_type {
@@ -90,13 +104,16 @@ typedef enum rsm_sicklms_event_type {
     RSM_SICKLMS_EVENT_CONNECTED = 1, /* streaming started; d->baud is the rate */
     RSM_SICKLMS_EVENT_SCAN = 2,      /* *ev->scan holds a new scan */
     RSM_SICKLMS_EVENT_LINK_LOST = 3, /* stream silent; starting again */
-    RSM_SICKLMS_EVENT_ERROR = 4      /* a start-up step failed (ev->status);
+    RSM_SICKLMS_EVENT_ERROR = 4,     /* a start-up step failed (ev->status);
                                         starting again after retry_wait_us */
+    RSM_SICKLMS_EVENT_DISCONNECTED = 5 /* shutdown done (ev->status RSM_OK) or
+                                          given up (RSM_ERR_TIMEOUT,
+                                          RSM_ERR_PROTO, RSM_ERR_IO); now IDLE */
 } rsm_sicklms_event_type_t;
 
 typedef struct rsm_sicklms_event {
     rsm_sicklms_event_type_t type;
-    int status;                /* ERROR: RSM_ERR_TIMEOUT or RSM_ERR_PROTO; else 0 */
+    int status;                /* ERROR, DISCONNECTED: see above; else 0 */
     const rsm_scan_t *scan;    /* SCAN: points to d->scan, valid until the next
                                   poll; NULL otherwise */
     uint64_t stamp_us;         /* receive/detection time */
@@ -123,12 +140,15 @@ typedef struct rsm_sicklms_stats {
     uint32_t bad_scans;        /* 0xB0 telegrams that did not decode */
     uint32_t invalid_readings; /* readings delivered as range 0 */
     uint32_t unexpected;       /* other telegrams, ignored */
+    uint32_t config_reads;     /* configuration blocks read (0xF4) */
+    uint32_t disconnects;      /* shutdowns completed (DISCONNECTED with RSM_OK) */
     uint32_t write_errors;
     uint32_t read_errors;
 } rsm_sicklms_stats_t;
 
 /* Driver state, caller owned. Read-only for the caller: state, stats, baud,
- * scan may be read at any time; the rest is private. */
+ * scan, format, config and have_config may be read at any time; the rest is
+ * private. */
 typedef struct rsm_sicklms {
     const rsm_sicklms_config_t *cfg;
     const rsm_link_t *link;
@@ -136,6 +156,10 @@ typedef struct rsm_sicklms {
     rsm_sicklms_state_t state;
     rsm_sicklms_stats_t stats;
     uint32_t baud;             /* current link rate */
+    rsm_lms_b0_format_t format; /* 0xB0 decoding in use: cfg->format, then
+                                  what the configuration block says */
+    rsm_lms_config_t config;   /* last configuration block read (0x74) */
+    uint8_t have_config;       /* 1 once config holds a block from this unit */
     rsm_lms_parser_t parser;
     rsm_lms_scan_t raw;        /* last decoded 0xB0 */
     rsm_scan_t scan;           /* last scan in the robot frame */
@@ -150,12 +174,9 @@ typedef struct rsm_sicklms {
     uint8_t req[16];
     size_t req_len;
     uint64_t deadline_us;
-    uint64_t last_rx_us;       /* last byte received */
     uint64_t last_tel_us;      /* last telegram while streaming */
-    uint8_t rx[RSM_SICKLMS_RX_CHUNK];
-    size_t rx_off;
-    size_t rx_len;
-    uint64_t rx_stamp_us;
+    rsm_link_rx_t io;          /* link, clock and receive chunk (rsm_link_poll) */
+    rsm_sicklms_event_t out;   /* the event of the poll in progress */
 } rsm_sicklms_t;
 
 /* Initialises d in the IDLE state with zero counters; nothing is sent.
@@ -187,6 +208,13 @@ int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan
  * nothing happened). Returns RSM_OK, RSM_ERR_INVAL (NULL pointers), or the
  * negative status of a failed read (ev NONE; the driver stays usable). */
 int rsm_sicklms_poll(rsm_sicklms_t *d, rsm_sicklms_event_t *ev);
+
+/* Starts the shutdown described above, from any state but IDLE (a start-up
+ * in progress is abandoned; the requests go out at the current rate).
+ * Never blocks: later polls send the requests and, at the end, give a
+ * DISCONNECTED event. In IDLE, or while already stopping, does nothing.
+ * Returns RSM_OK or RSM_ERR_INVAL (d NULL). */
+int rsm_sicklms_disconnect(rsm_sicklms_t *d);
 
 #ifdef __cplusplus
 }

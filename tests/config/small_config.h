@@ -9,4 +9,6 @@
 #define RSM_MAX_MATCHES 32
 #define RSM_ARIA_MAX_SONAR 8
 #define RSM_ARIA_STR_SIZE 12
+/* Odd and tiny: every frame reaches a driver in many pieces. */
+#define RSM_LINK_RX_CHUNK 7
 #endif

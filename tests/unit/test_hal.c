@@ -30,6 +30,7 @@ typedef struct fake_link {
     int set_baud_status;
     int flushes;
     uint64_t now;
+    uint64_t read_advance;   /* clock microseconds each read takes */
 } fake_link_t;
 
 static fake_link_t fake;
@@ -45,6 +46,7 @@ static int fake_read(void *ctx, uint8_t *buf, size_t cap, uint32_t timeout_us)
     size_t n;
     f->reads++;
     f->last_timeout_us = timeout_us;
+    f->now += f->read_advance;
     if (f->read_status != 0) {
         return f->read_status;
     }
@@ -307,6 +309,248 @@ void test_clock_now_us_should_leave_the_output_untouched_on_error(void)
     TEST_ASSERT_TRUE(t == 42u);
 }
 
+/* ---- the poll cycle: rsm_link_rx_*, rsm_link_poll ---------------------------- */
+
+/* A driver that only records what the cycle asks of it. */
+typedef struct trace_driver {
+    rsm_link_rx_t rx;
+    int drain_event_at;      /* 1-based call number of drain that reports an event */
+    int timers_event_at;
+    int silence_event;
+    int drain_drops;         /* drain calls rsm_link_rx_drop on a non-empty chunk */
+    uint64_t due_us;         /* what until_due returns */
+    uint64_t drain_now[4];
+    size_t drained;          /* bytes taken from the chunk in total */
+    int drains;
+    int timers;
+} trace_driver_t;
+
+static trace_driver_t drv;
+static char calls[32];  /* one letter per callback, in call order: D T U S */
+static size_t n_calls;
+
+static void trace(char c)
+{
+    if (n_calls + 1u < sizeof calls) {
+        calls[n_calls++] = c;
+        calls[n_calls] = '\0';
+    }
+}
+
+static int trace_drain(void *p, uint64_t now)
+{
+    trace_driver_t *d = (trace_driver_t *)p;
+    trace('D');
+    if (d->drains < 4) {
+        d->drain_now[d->drains] = now;
+    }
+    d->drains++;
+    d->drained += d->rx.len - d->rx.off;
+    d->rx.off = d->rx.len;
+    if (d->drain_drops && d->rx.len > 0u) {
+        rsm_link_rx_drop(&d->rx);
+    }
+    return d->drains == d->drain_event_at;
+}
+
+static int trace_timers(void *p, uint64_t now)
+{
+    trace_driver_t *d = (trace_driver_t *)p;
+    (void)now;
+    trace('T');
+    d->timers++;
+    return d->timers == d->timers_event_at;
+}
+
+static uint64_t trace_until_due(const void *p, uint64_t now)
+{
+    const trace_driver_t *d = (const trace_driver_t *)p;
+    (void)now;
+    trace('U');
+    return d->due_us;
+}
+
+static int trace_silence(void *p, uint64_t now)
+{
+    trace_driver_t *d = (trace_driver_t *)p;
+    (void)now;
+    trace('S');
+    return d->silence_event;
+}
+
+static const rsm_link_poll_ops_t trace_ops = {trace_drain, trace_timers, trace_until_due,
+                                              trace_silence};
+
+static void trace_setup(uint32_t read_timeout_us, uint32_t byte_timeout_us)
+{
+    memset(&drv, 0, sizeof drv);
+    memset(calls, 0, sizeof calls);
+    n_calls = 0u;
+    drv.due_us = UINT64_MAX;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_rx_init(&drv.rx, &the_link, &the_clock, read_timeout_us,
+                                                   byte_timeout_us));
+}
+
+static size_t min_chunk(size_t n)
+{
+    return n < (size_t)RSM_LINK_RX_CHUNK ? n : (size_t)RSM_LINK_RX_CHUNK;
+}
+
+void test_link_rx_init_should_check_its_arguments(void)
+{
+    rsm_link_rx_t rx;
+    rsm_link_t l = the_link;
+    rsm_clock_t c = the_clock;
+    memset(&rx, 0xA5, sizeof rx);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(NULL, &the_link, &the_clock, 10u, 0u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(&rx, NULL, &the_clock, 10u, 0u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(&rx, &the_link, NULL, 10u, 0u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(&rx, &the_link, &the_clock, 0u, 0u));
+    l.write = NULL;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(&rx, &l, &the_clock, 10u, 0u));
+    l = the_link;
+    l.read = NULL;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(&rx, &l, &the_clock, 10u, 0u));
+    c.now_us = NULL;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(&rx, &the_link, &c, 10u, 0u));
+    TEST_ASSERT_EQUAL_HEX8(0xA5u, rx.buf[0]); /* untouched on error */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_rx_init(&rx, &the_link, &the_clock, 10u, 20u));
+    TEST_ASSERT_EQUAL_PTR(&the_link, rx.link);
+    TEST_ASSERT_EQUAL_PTR(&the_clock, rx.clock);
+    TEST_ASSERT_EQUAL_UINT32(10u, rx.read_timeout_us);
+    TEST_ASSERT_EQUAL_UINT32(20u, rx.byte_timeout_us);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)rx.off);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)rx.len);
+    TEST_ASSERT_TRUE(rx.last_rx_us == 0u);
+    TEST_ASSERT_EQUAL_INT(0, fake.reads);
+    TEST_ASSERT_EQUAL_INT(0, fake.writes);
+}
+
+void test_link_poll_should_run_the_steps_in_order_and_stamp_what_it_read(void)
+{
+    fake.now = 5000u;
+    fake.read_advance = 700u;
+    trace_setup(1000u, 100000u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    /* drain (left-overs), timers, until_due, read, drain (new bytes), timers */
+    TEST_ASSERT_EQUAL_STRING("DTUDT", calls);
+    TEST_ASSERT_EQUAL_INT(1, fake.reads);
+    TEST_ASSERT_EQUAL_UINT32(1000u, fake.last_timeout_us);
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)min_chunk(sizeof input), (uint32_t)drv.rx.len);
+    TEST_ASSERT_EQUAL_MEMORY(input, drv.rx.buf, min_chunk(sizeof input));
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)min_chunk(sizeof input), (uint32_t)drv.drained);
+    TEST_ASSERT_TRUE(drv.rx.stamp_us == 5700u);
+    TEST_ASSERT_TRUE(drv.rx.last_rx_us == 5700u);
+    TEST_ASSERT_TRUE(drv.drain_now[0] == 5000u);
+    TEST_ASSERT_TRUE(drv.drain_now[1] == 5700u);
+}
+
+void test_link_poll_should_not_wait_past_the_next_deadline(void)
+{
+    trace_setup(1000u, 0u);
+    drv.due_us = 250u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_UINT32(250u, fake.last_timeout_us);
+    drv.due_us = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_UINT32(0u, fake.last_timeout_us);
+    drv.due_us = 1001u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_UINT32(1000u, fake.last_timeout_us);
+}
+
+void test_link_poll_should_stop_at_the_first_event(void)
+{
+    trace_setup(1000u, 0u);
+    drv.drain_event_at = 1; /* left-overs already make an event: no read */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_STRING("D", calls);
+    TEST_ASSERT_EQUAL_INT(0, fake.reads);
+
+    trace_setup(1000u, 0u);
+    drv.timers_event_at = 1; /* a timer fired: no read */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_STRING("DT", calls);
+    TEST_ASSERT_EQUAL_INT(0, fake.reads);
+
+    trace_setup(1000u, 0u);
+    drv.drain_event_at = 2; /* the new bytes make an event: no second timers run */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_STRING("DTUD", calls);
+    TEST_ASSERT_EQUAL_INT(1, fake.reads);
+}
+
+void test_link_poll_should_call_silence_only_after_the_byte_timeout(void)
+{
+    fake.now = 1000000u;
+    fake.read_advance = 0u;
+    trace_setup(1000u, 100000u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv)); /* bytes */
+    TEST_ASSERT_EQUAL_STRING("DTUDT", calls);
+    fake.in_len = fake.in_pos;                                              /* silence */
+    fake.now += 99999u;
+    n_calls = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_STRING("DTUT", calls);
+    fake.now += 1u;
+    n_calls = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_STRING("DTUST", calls);
+    drv.silence_event = 1;
+    n_calls = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_STRING("DTUS", calls);
+}
+
+void test_link_poll_should_return_a_read_error_and_stay_usable(void)
+{
+    trace_setup(1000u, 0u);
+    fake.read_status = RSM_ERR_IO;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_IO, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_STRING("DTU", calls);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)drv.rx.len);
+    fake.read_status = 0;
+    n_calls = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_STRING("DTUDT", calls);
+}
+
+void test_link_poll_should_refuse_null_arguments_and_missing_steps(void)
+{
+    rsm_link_poll_ops_t ops = trace_ops;
+    trace_setup(1000u, 0u);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_poll(NULL, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_poll(&drv.rx, NULL, &drv));
+    ops.silence = NULL;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_poll(&drv.rx, &ops, &drv));
+    ops = trace_ops;
+    ops.until_due = NULL;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_poll(&drv.rx, &ops, &drv));
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)n_calls);
+    TEST_ASSERT_EQUAL_INT(0, fake.reads);
+}
+
+void test_link_rx_drop_should_flush_the_link_and_empty_the_chunk_even_inside_a_step(void)
+{
+    uint8_t buf[4];
+    trace_setup(1000u, 0u);
+    fake.in_len = 3u;
+    drv.drain_drops = 1;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_STRING("DTUDT", calls);
+    TEST_ASSERT_EQUAL_UINT32(3u, (uint32_t)drv.drained);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)drv.rx.off);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)drv.rx.len);
+    TEST_ASSERT_EQUAL_INT(1, fake.flushes);
+    fake.in_len = sizeof input;             /* flush discards what the link holds */
+    rsm_link_rx_drop(&drv.rx);
+    TEST_ASSERT_EQUAL_INT(0, rsm_link_read(&the_link, buf, sizeof buf, 0u));
+    rsm_link_rx_drop(NULL);
+    TEST_ASSERT_TRUE(rsm_link_rx_now(NULL) == 0u);
+    fake.now = 77u;
+    TEST_ASSERT_TRUE(rsm_link_rx_now(&drv.rx) == 77u);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -330,5 +574,13 @@ int main(void)
     RUN_TEST(test_link_flush_should_report_nosys_or_inval);
     RUN_TEST(test_clock_now_us_should_read_the_clock);
     RUN_TEST(test_clock_now_us_should_leave_the_output_untouched_on_error);
+    RUN_TEST(test_link_rx_init_should_check_its_arguments);
+    RUN_TEST(test_link_poll_should_run_the_steps_in_order_and_stamp_what_it_read);
+    RUN_TEST(test_link_poll_should_not_wait_past_the_next_deadline);
+    RUN_TEST(test_link_poll_should_stop_at_the_first_event);
+    RUN_TEST(test_link_poll_should_call_silence_only_after_the_byte_timeout);
+    RUN_TEST(test_link_poll_should_return_a_read_error_and_stay_usable);
+    RUN_TEST(test_link_poll_should_refuse_null_arguments_and_missing_steps);
+    RUN_TEST(test_link_rx_drop_should_flush_the_link_and_empty_the_chunk_even_inside_a_step);
     return UNITY_END();
 }

@@ -18,6 +18,9 @@ typedef struct fake_robot {
     int enabled;
     int send_config;     /* answer CONFIG */
     int wrong_sync1;     /* answer the next SYNC1 with ID 0 */
+    uint8_t auto_baud;   /* AutoBaud byte of the CONFIGpac */
+    int ignore_hostbaud; /* accept HOSTBAUD but stay at the old rate */
+    uint32_t hostbauds;  /* HOSTBAUD commands seen */
     uint32_t reply_delay_us;
     uint64_t next_sip_us;
     int32_t left;
@@ -90,9 +93,11 @@ static void robot_send_config(void)
     for (i = 0; i < 16; i++) {
         at = put_u16(p, at, 7u);                 /* stall .. trans_ki */
     }
-    for (i = 0; i < 6; i++) {
-        p[at++] = 0u;                            /* bumps .. has_gyro */
+    for (i = 0; i < 4; i++) {
+        p[at++] = 0u;                            /* bumps, charger, sonar cycle */
     }
+    p[at++] = robot.auto_baud;                   /* AutoBaud */
+    p[at++] = 0u;                                /* has_gyro */
     at = put_u16(p, at, 0u);                     /* drift factor */
     p[at++] = 0u;                                /* aux2 */
     p[at++] = 0u;                                /* aux3 */
@@ -193,6 +198,17 @@ static void robot_handle(const rsm_aria_packet_t *pkt)
             robot.pulses_while_connected++;
         }
         break;
+    case RSM_ARIA_CMD_HOSTBAUD: {
+        /* Codes 0..4 = 9600, 19200, 38400, 57600, 115200; the robot moves
+         * once the command is in. */
+        static const uint32_t rates[5] = {9600u, 19200u, 38400u, 57600u, 115200u};
+        const int32_t code = int_arg(pkt);
+        robot.hostbauds++;
+        if (!robot.ignore_hostbaud && code >= 0 && code < 5) {
+            rsm_fakelink_set_peer_baud(&fl, rates[code]);
+        }
+        break;
+    }
     default:
         break;
     }
@@ -263,6 +279,23 @@ static void connect_ok(void)
     TEST_ASSERT_EQUAL_INT(RSM_P3DX_CONNECTED, drv.state);
 }
 
+/* The bytes a connect sends up to its CONFIG request: SYNC0, SYNC1, SYNC2,
+ * OPEN 1, CONFIG 1. Returns how many were written to out. */
+static size_t expect_session_start(uint8_t *out, size_t cap)
+{
+    static int (*const steps[5])(uint8_t *, size_t) = {
+        rsm_aria_encode_sync0, rsm_aria_encode_sync1, rsm_aria_encode_sync2,
+        rsm_aria_encode_open_int1, rsm_aria_encode_config};
+    size_t n = 0u;
+    size_t i;
+    for (i = 0u; i < 5u; i++) {
+        const int k = steps[i](out + n, cap - n);
+        TEST_ASSERT_GREATER_THAN_INT(0, k);
+        n += (size_t)k;
+    }
+    return n;
+}
+
 void setUp(void)
 {
     rsm_fakelink_init(&fl, T0_US, &link, &clk);
@@ -309,16 +342,7 @@ void test_p3dx_connect_should_complete_the_handshake_with_a_scripted_robot(void)
 
     connect_ok();
     /* SYNC0, SYNC1, SYNC2, OPEN 1, CONFIG 1, ENABLE 1, ENCODER 2, in order. */
-    k = rsm_aria_encode_sync0(expect + n, sizeof expect - n);
-    n += (size_t)k;
-    k = rsm_aria_encode_sync1(expect + n, sizeof expect - n);
-    n += (size_t)k;
-    k = rsm_aria_encode_sync2(expect + n, sizeof expect - n);
-    n += (size_t)k;
-    k = rsm_aria_encode_open_int1(expect + n, sizeof expect - n);
-    n += (size_t)k;
-    k = rsm_aria_encode_config(expect + n, sizeof expect - n);
-    n += (size_t)k;
+    n = expect_session_start(expect, sizeof expect);
     k = rsm_aria_encode_enable(1, expect + n, sizeof expect - n);
     n += (size_t)k;
     k = rsm_aria_encode_encoder(1, expect + n, sizeof expect - n);
@@ -551,26 +575,285 @@ void test_p3dx_connect_should_probe_the_baud_rate(void)
     TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.connects);
 }
 
-void test_p3dx_disconnect_should_disable_the_motors_then_close(void)
+void test_p3dx_disconnect_should_stop_disable_the_motors_then_close(void)
 {
     static const uint8_t close1[] = {0xFA, 0xFB, 0x06, 0x02, 0x3B, 0x01, 0x00, 0x03, 0x3B};
     uint8_t en0[12];
+    uint8_t stop[12];
     rsm_p3dx_event_t ev;
+    size_t mark;
+    long ws;
     long we;
     long wc;
     int n;
+    int ns;
     connect_ok();
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_set_vel(&drv, 200, 0));
+    run_for(20000u);
+    mark = fl.n_writes;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_disconnect(&drv));
     TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_DISCONNECTED, 1000000u, &ev));
     n = rsm_aria_encode_enable(0, en0, sizeof en0);
-    we = rsm_fakelink_find_write(&fl, 0u, en0, (size_t)n);
-    wc = rsm_fakelink_find_write(&fl, 0u, close1, sizeof close1);
-    TEST_ASSERT_GREATER_OR_EQUAL_INT32(0, (int32_t)we);
-    TEST_ASSERT_GREATER_THAN_INT32((int32_t)we, (int32_t)wc);
+    ns = rsm_aria_encode_stop(stop, sizeof stop);
+    ws = rsm_fakelink_find_write(&fl, mark, stop, (size_t)ns);
+    we = rsm_fakelink_find_write(&fl, mark, en0, (size_t)n);
+    wc = rsm_fakelink_find_write(&fl, mark, close1, sizeof close1);
+    /* STOP, ENABLE 0, CLOSE: the only writes, in this order. */
+    TEST_ASSERT_EQUAL_INT32((int32_t)mark, (int32_t)ws);
+    TEST_ASSERT_EQUAL_INT32((int32_t)mark + 1, (int32_t)we);
+    TEST_ASSERT_EQUAL_INT32((int32_t)mark + 2, (int32_t)wc);
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)mark + 3u, (uint32_t)fl.n_writes);
     TEST_ASSERT_EQUAL_UINT64(fl.writes[we].at_us + cfg.disconnect_wait_us, fl.writes[wc].at_us);
     TEST_ASSERT_EQUAL_INT(RSM_P3DX_IDLE, drv.state);
     TEST_ASSERT_EQUAL_INT(0, robot.connected);
     TEST_ASSERT_EQUAL_INT(0, robot.enabled);
+    /* Idle: the commanded motion is not re-sent, nothing else goes out. */
+    run_for(2000000u);
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)mark + 3u, (uint32_t)fl.n_writes);
+}
+
+void test_p3dx_disconnect_should_close_a_session_still_waiting_for_the_configpac(void)
+{
+    static const uint8_t close1[] = {0xFA, 0xFB, 0x06, 0x02, 0x3B, 0x01, 0x00, 0x03, 0x3B};
+    rsm_p3dx_event_t ev;
+    robot.send_config = 0;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_connect(&drv));
+    while (drv.state != RSM_P3DX_CONFIG_WAIT) {
+        (void)step(&ev);
+    }
+    TEST_ASSERT_EQUAL_INT(1, robot.connected);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_DISCONNECTED, 1000000u, &ev));
+    TEST_ASSERT_GREATER_OR_EQUAL_INT32(0, (int32_t)rsm_fakelink_find_write(&fl, 0u, close1,
+                                                                          sizeof close1));
+    TEST_ASSERT_EQUAL_INT(0, robot.connected);
+    TEST_ASSERT_EQUAL_UINT32(1u, robot.closes);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.connects);
+}
+
+void test_p3dx_connect_should_switch_the_robot_to_host_baud_when_autobaud_allows(void)
+{
+    uint8_t expect[80];
+    uint8_t hb[12];
+    size_t n = 0u;
+    long w;
+    rsm_p3dx_event_t ev;
+    int k;
+    cfg.host_baud = 38400u;
+    robot.auto_baud = 2u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 5000000u, &ev));
+    /* ... CONFIG, then HOSTBAUD 2 (at 9600), PULSE (at 38400), ENABLE 1, ENCODER 2. */
+    n = expect_session_start(expect, sizeof expect);
+    k = rsm_aria_encode_hostbaud(RSM_ARIA_BAUD_38400, expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_pulse(expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_enable(1, expect + n, sizeof expect - n);
+    n += (size_t)k;
+    k = rsm_aria_encode_encoder(1, expect + n, sizeof expect - n);
+    n += (size_t)k;
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)n, (uint32_t)fl.host_log_len);
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(expect, fl.host_log, n);
+    k = rsm_aria_encode_hostbaud(RSM_ARIA_BAUD_38400, hb, sizeof hb);
+    TEST_ASSERT_EQUAL_HEX8_ARRAY(((const uint8_t[]){0xFA, 0xFB, 0x06, 0x32, 0x3B, 0x02, 0x00}),
+                                 hb, 7);
+    w = rsm_fakelink_find_write(&fl, 0u, hb, (size_t)k);
+    TEST_ASSERT_GREATER_OR_EQUAL_INT32(0, (int32_t)w);
+    TEST_ASSERT_EQUAL_UINT32(1u, robot.hostbauds);
+    TEST_ASSERT_EQUAL_UINT32(38400u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(38400u, fl.host_baud);
+    TEST_ASSERT_EQUAL_UINT32(38400u, fl.peer_baud);
+    TEST_ASSERT_EQUAL_UINT32(1u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.host_baud_switches);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.host_baud_failures);
+    TEST_ASSERT_EQUAL_UINT8(2u, drv.auto_baud);
+    /* Confirmed by a SIP at the new rate, within one SIP cycle or so. */
+    TEST_ASSERT_LESS_OR_EQUAL_UINT64(fl.writes[w].at_us + 2u * SIP_CYCLE_US, ev.stamp_us);
+    /* And packets keep coming at 38400. */
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.parser.stats.checksum_errors);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.link_lost);
+}
+
+void test_p3dx_connect_should_go_back_to_the_old_rate_when_nothing_comes_at_host_baud(void)
+{
+    uint8_t hb[12];
+    long w;
+    rsm_p3dx_event_t ev;
+    const int k = rsm_aria_encode_hostbaud(RSM_ARIA_BAUD_57600, hb, sizeof hb);
+    cfg.host_baud = 57600u;
+    robot.auto_baud = 2u;
+    robot.ignore_hostbaud = 1;
+    connect_ok();
+    w = rsm_fakelink_find_write(&fl, 0u, hb, (size_t)k);
+    TEST_ASSERT_GREATER_OR_EQUAL_INT32(0, (int32_t)w);
+    TEST_ASSERT_EQUAL_UINT32(1u, robot.hostbauds);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.host_baud_failures);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.host_baud_switches);
+    TEST_ASSERT_EQUAL_UINT32(9600u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(9600u, fl.host_baud);
+    TEST_ASSERT_EQUAL_UINT32(2u, fl.set_baud_calls);
+    /* Connected only after the whole check time. */
+    TEST_ASSERT_EQUAL_UINT64(fl.writes[w].at_us + cfg.baud_check_us, drv.last_sip_us);
+    /* The check sent its keep-alive on time (at the rate it was trying). */
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.keepalives);
+    /* Back at 9600 the robot is heard again. */
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.link_lost);
+}
+
+void test_p3dx_connect_should_not_send_hostbaud_unless_the_robot_reports_autobaud_2(void)
+{
+    uint8_t hb[12];
+    const int k = rsm_aria_encode_hostbaud(RSM_ARIA_BAUD_38400, hb, sizeof hb);
+    cfg.host_baud = 38400u;
+    robot.auto_baud = 1u;
+    connect_ok();
+    TEST_ASSERT_EQUAL_INT32(-1, (int32_t)rsm_fakelink_find_write(&fl, 0u, hb, (size_t)k));
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.host_baud_skipped);
+    TEST_ASSERT_EQUAL_UINT32(9600u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_UINT32(0u, robot.hostbauds);
+}
+
+void test_p3dx_init_should_reject_a_host_baud_hostbaud_cannot_select(void)
+{
+    rsm_p3dx_config_t bad = cfg;
+    bad.host_baud = 14400u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &link, &clk, &bad));
+    bad.host_baud = 115200u;
+    bad.baud_check_us = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &link, &clk, &bad));
+    bad.baud_check_us = 1u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_init(&drv, &link, &clk, &bad));
+}
+
+/* Writes at or after write index from whose bytes equal frame, and the
+ * largest gap between two of them. */
+static size_t count_frame_writes(size_t from, const uint8_t *frame, size_t len, uint64_t *max_gap)
+{
+    size_t count = 0u;
+    long w = (long)from - 1;
+    uint64_t last = 0u;
+    *max_gap = 0u;
+    while ((w = rsm_fakelink_find_write(&fl, (size_t)(w + 1), frame, len)) >= 0) {
+        if (count > 0u && fl.writes[w].at_us - last > *max_gap) {
+            *max_gap = fl.writes[w].at_us - last;
+        }
+        last = fl.writes[w].at_us;
+        count++;
+    }
+    return count;
+}
+
+void test_p3dx_poll_should_resend_the_velocity_every_500_ms_while_moving(void)
+{
+    uint8_t vel[12];
+    uint8_t rvel[12];
+    uint8_t pulse[8];
+    size_t mark;
+    uint64_t gap;
+    uint32_t ka;
+    const int nv = rsm_aria_encode_vel(300, vel, sizeof vel);
+    const int nr = rsm_aria_encode_rvel(-10, rvel, sizeof rvel);
+    const int np = rsm_aria_encode_pulse(pulse, sizeof pulse);
+    connect_ok();
+    mark = fl.n_writes;
+    ka = drv.stats.keepalives;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_set_vel(&drv, 300, -10));
+    run_for(1700000u);
+    /* Sent at once, then at 0.5, 1.0 and 1.5 s: exactly resend_us apart. */
+    TEST_ASSERT_EQUAL_UINT32(4u, (uint32_t)count_frame_writes(mark, vel, (size_t)nv, &gap));
+    TEST_ASSERT_EQUAL_UINT64(cfg.resend_us, gap);
+    TEST_ASSERT_EQUAL_UINT32(4u, (uint32_t)count_frame_writes(mark, rvel, (size_t)nr, &gap));
+    TEST_ASSERT_EQUAL_UINT32(3u, drv.stats.resends);
+    /* The re-sends keep the watchdog fed: no PULSE while moving. */
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)count_frame_writes(mark, pulse, (size_t)np, &gap));
+    TEST_ASSERT_EQUAL_UINT32(ka, drv.stats.keepalives);
+}
+
+void test_p3dx_poll_should_resend_a_stop_once_then_go_back_to_pulses(void)
+{
+    uint8_t stop[8];
+    uint8_t vel2[12];
+    uint8_t pulse[8];
+    size_t mark;
+    long w;
+    uint64_t gap;
+    const int ns = rsm_aria_encode_stop(stop, sizeof stop);
+    const int nv = rsm_aria_encode_vel2(10, 12, vel2, sizeof vel2);
+    const int np = rsm_aria_encode_pulse(pulse, sizeof pulse);
+    connect_ok();
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_set_vel2(&drv, 10, 12));
+    run_for(1200000u);
+    TEST_ASSERT_EQUAL_UINT32(3u, (uint32_t)count_frame_writes(0u, vel2, (size_t)nv, &gap));
+    mark = fl.n_writes;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_stop(&drv));
+    run_for(1900000u);
+    /* STOP at once and once more 500 ms later; VEL2 no more. */
+    TEST_ASSERT_EQUAL_UINT32(2u, (uint32_t)count_frame_writes(mark, stop, (size_t)ns, &gap));
+    TEST_ASSERT_EQUAL_UINT64(cfg.resend_us, gap);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)count_frame_writes(mark, vel2, (size_t)nv, &gap));
+    /* Then a PULSE every 500 ms. */
+    TEST_ASSERT_EQUAL_UINT32(2u, (uint32_t)count_frame_writes(mark, pulse, (size_t)np, &gap));
+    w = rsm_fakelink_find_write(&fl, mark, pulse, (size_t)np);
+    TEST_ASSERT_EQUAL_UINT64(fl.writes[mark].at_us + 2u * cfg.resend_us, fl.writes[w].at_us);
+    TEST_ASSERT_EQUAL_UINT32(3u, drv.stats.resends); /* two VEL2, one STOP */
+    /* Zero speeds count as a stop too: sent, re-sent once, then PULSEs. */
+    mark = fl.n_writes;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_set_vel(&drv, 0, 0));
+    run_for(1900000u);
+    TEST_ASSERT_EQUAL_UINT32(4u, drv.stats.resends);
+    TEST_ASSERT_EQUAL_UINT32(2u, (uint32_t)count_frame_writes(mark, pulse, (size_t)np, &gap));
+}
+
+void test_p3dx_poll_should_forget_the_motion_when_the_link_is_lost(void)
+{
+    uint8_t vel[12];
+    rsm_p3dx_event_t ev;
+    size_t mark;
+    uint64_t gap;
+    const int nv = rsm_aria_encode_vel(250, vel, sizeof vel);
+    connect_ok();
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_set_vel(&drv, 250, 0));
+    run_for(100000u);
+    fl.silent = 1;
+    robot.connected = 0;
+    robot.sync_stage = 0;
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_LINK_LOST, 5000000u, &ev));
+    fl.silent = 0;
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 5000000u, &ev));
+    mark = fl.n_writes;
+    run_for(2000000u);
+    /* Never resumed by the driver itself after a reconnect. */
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)count_frame_writes(mark, vel, (size_t)nv, &gap));
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.reconnects);
+}
+
+void test_p3dx_session_should_never_leave_the_watchdog_without_a_command(void)
+{
+    rsm_p3dx_event_t ev;
+    uint8_t open1[12];
+    const int no = rsm_aria_encode_open_int1(open1, sizeof open1);
+    long w;
+    size_t i;
+    /* No CONFIGpac: the driver waits config_timeout_us (1 s) in CONFIG_WAIT. */
+    robot.send_config = 0;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_set_vel(&drv, 100, 0));
+    run_for(1300000u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_stop(&drv));
+    run_for(3000000u);
+    w = rsm_fakelink_find_write(&fl, 0u, open1, (size_t)no);
+    TEST_ASSERT_GREATER_OR_EQUAL_INT32(0, (int32_t)w);
+    for (i = (size_t)w + 1u; i < fl.n_writes; i++) {
+        TEST_ASSERT_LESS_OR_EQUAL_UINT64(cfg.keepalive_us, fl.writes[i].at_us - fl.writes[i - 1u].at_us);
+    }
+    TEST_ASSERT_LESS_OR_EQUAL_UINT64(cfg.keepalive_us, fl.now_us - fl.writes[fl.n_writes - 1u].at_us);
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT32(1u, drv.stats.keepalives);
 }
 
 int main(void)
@@ -587,6 +870,15 @@ int main(void)
     RUN_TEST(test_p3dx_set_vel_should_send_the_same_bytes_as_the_aria_encoder);
     RUN_TEST(test_p3dx_poll_should_count_garbage_and_bit_flips_and_keep_decoding);
     RUN_TEST(test_p3dx_connect_should_probe_the_baud_rate);
-    RUN_TEST(test_p3dx_disconnect_should_disable_the_motors_then_close);
+    RUN_TEST(test_p3dx_disconnect_should_stop_disable_the_motors_then_close);
+    RUN_TEST(test_p3dx_disconnect_should_close_a_session_still_waiting_for_the_configpac);
+    RUN_TEST(test_p3dx_connect_should_switch_the_robot_to_host_baud_when_autobaud_allows);
+    RUN_TEST(test_p3dx_connect_should_go_back_to_the_old_rate_when_nothing_comes_at_host_baud);
+    RUN_TEST(test_p3dx_connect_should_not_send_hostbaud_unless_the_robot_reports_autobaud_2);
+    RUN_TEST(test_p3dx_init_should_reject_a_host_baud_hostbaud_cannot_select);
+    RUN_TEST(test_p3dx_poll_should_resend_the_velocity_every_500_ms_while_moving);
+    RUN_TEST(test_p3dx_poll_should_resend_a_stop_once_then_go_back_to_pulses);
+    RUN_TEST(test_p3dx_poll_should_forget_the_motion_when_the_link_is_lost);
+    RUN_TEST(test_p3dx_session_should_never_leave_the_watchdog_without_a_command);
     return UNITY_END();
 }

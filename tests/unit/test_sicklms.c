@@ -20,7 +20,12 @@ typedef struct fake_lms {
     int nak_variant;       /* NAK this many variant requests */
     int ignore_variant;    /* never answer variant requests */
     int drop_baud_reply;   /* ACK a baud change, lose its 0xA0, switch anyway */
+    uint8_t config_mode;   /* configuration byte D (measuring mode) */
+    uint8_t config_units;  /* configuration byte E */
+    int bit13_reading;     /* reading 10 carries bit 13 (a flag or a distance
+                              bit, depending on the measuring mode) */
     uint32_t requests;     /* well-formed requests seen */
+    uint32_t config_reads; /* 0x74 requests answered */
     uint64_t next_scan_us;
 } fake_lms_t;
 
@@ -64,6 +69,8 @@ static void lms_send_scan(void)
             v = 0x1FFFu;
         } else if (i == 100u) {
             v = 0x1FFEu;
+        } else if (i == 10u && lms.bit13_reading) {
+            v = (uint16_t)(v | 0x2000u);
         }
         data[2u + 2u * i] = (uint8_t)(v & 0xFFu);
         data[3u + 2u * i] = (uint8_t)(v >> 8);
@@ -122,6 +129,19 @@ static void lms_handle(uint8_t cmd, const uint8_t *data, size_t len)
         memcpy(r + 1, data, 4u);
         r[5] = 0x10u;
         lms_reply(RSM_LMS_REPLY_VARIANT, r, 6u, REPLY_DELAY_US);
+        return;
+    }
+    if (cmd == RSM_LMS_CMD_GET_CONFIG && len == 0u) {
+        /* A 32-byte block: blanking 0, thresholds, no indices, then D and E. */
+        uint8_t block[RSM_LMS_CONFIG_SHORT + 1u];
+        memset(block, 0, sizeof block);
+        block[2] = 0x46u;
+        block[5] = lms.config_mode;
+        block[6] = lms.config_units;
+        block[RSM_LMS_CONFIG_SHORT] = 0x10u; /* status */
+        lms.config_reads++;
+        lms_ack();
+        lms_reply(RSM_LMS_REPLY_CONFIG, block, sizeof block, REPLY_DELAY_US);
         return;
     }
     lms_ack();
@@ -226,6 +246,8 @@ void setUp(void)
 {
     rsm_fakelink_init(&fl, T0_US, &link, &clk);
     memset(&lms, 0, sizeof lms);
+    lms.config_mode = RSM_LMS_MEAS_8M_FIELDS_AB_DAZZLE;
+    lms.config_units = RSM_LMS_UNITS_MM;
     rsm_fakelink_set_peer(&fl, lms_peer, NULL);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_config_default(&cfg));
     cfg.baud = 9600u; /* most tests stay at the power-up rate */
@@ -270,6 +292,8 @@ void test_sicklms_connect_should_set_the_variant_and_start_streaming(void)
     n += (size_t)k;
     k = rsm_lms_encode_variant(expect + n, sizeof expect - n, 0u, 180u, 100u);
     n += (size_t)k;
+    k = rsm_lms_encode_request_config(expect + n, sizeof expect - n, 0u);
+    n += (size_t)k;
     k = frame_mode(expect + n, sizeof expect - n, RSM_LMS_MODE_CONTINUOUS);
     n += (size_t)k;
     TEST_ASSERT_EQUAL_UINT32((uint32_t)n, (uint32_t)fl.host_log_len);
@@ -277,8 +301,14 @@ void test_sicklms_connect_should_set_the_variant_and_start_streaming(void)
     TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_STREAMING, drv.state);
     TEST_ASSERT_EQUAL_UINT16(180u, lms.angle_deg);
     TEST_ASSERT_EQUAL_UINT16(100u, lms.res_cdeg);
-    TEST_ASSERT_EQUAL_UINT32(3u, drv.stats.acks);
-    TEST_ASSERT_EQUAL_UINT32(3u, drv.stats.telegrams);
+    TEST_ASSERT_EQUAL_UINT32(4u, drv.stats.acks);
+    TEST_ASSERT_EQUAL_UINT32(4u, drv.stats.telegrams);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.config_reads);
+    TEST_ASSERT_EQUAL_UINT8(1u, drv.have_config);
+    TEST_ASSERT_EQUAL_HEX8(0x46u, drv.config.stop_threshold);
+    TEST_ASSERT_EQUAL_HEX8(RSM_LMS_UNITS_MM, drv.config.units);
+    TEST_ASSERT_EQUAL_UINT8(13u, drv.format.distance_bits);
+    TEST_ASSERT_EQUAL_UINT8(0u, drv.format.index_bytes);
     TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.probes);
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.retries);
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.naks);
@@ -359,7 +389,7 @@ void test_sicklms_connect_should_switch_to_38400_after_the_reply_at_the_old_rate
     TEST_ASSERT_EQUAL_UINT32(38400u, fl.peer_baud);
     TEST_ASSERT_EQUAL_UINT32(1u, (uint32_t)count_writes(b38, (size_t)n));
     TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.baud_changes);
-    TEST_ASSERT_EQUAL_UINT32(4u, drv.stats.acks);
+    TEST_ASSERT_EQUAL_UINT32(5u, drv.stats.acks);
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.retries);
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.ack_timeouts);
     TEST_ASSERT_EQUAL_UINT32(180u, lms.angle_deg);
@@ -451,6 +481,160 @@ void test_sicklms_poll_should_report_link_loss_and_reconnect(void)
     TEST_ASSERT_LESS_OR_EQUAL_UINT64((uint64_t)cfg.read_timeout_us, fl.max_read_wait_us);
 }
 
+void test_sicklms_connect_should_decode_scans_with_the_measuring_mode_read_from_the_unit(void)
+{
+    rsm_sicklms_event_t ev;
+    /* 16 m mode: bit 13 is a distance bit, so reading 10 is 0x2000 + 600 mm. */
+    lms.config_mode = RSM_LMS_MEAS_16M_REFLECTOR;
+    lms.bit13_reading = 1;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT8(RSM_LMS_MEAS_16M_REFLECTOR, drv.config.measuring_mode);
+    TEST_ASSERT_EQUAL_UINT8(14u, drv.format.distance_bits);
+    TEST_ASSERT_EQUAL_UINT8(RSM_LMS_UNITS_AUTO, drv.format.units);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 1000000u, &ev));
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 8.792f, ev.scan->range_m[10]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.610f, ev.scan->range_m[11]);
+    /* 0x1FFF is an ordinary distance in 14-bit modes (8.191 m). */
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 8.191f, ev.scan->range_m[3]);
+    TEST_ASSERT_EQUAL_UINT32(1u, lms.config_reads);
+}
+
+void test_sicklms_connect_should_keep_the_flag_bits_in_the_default_measuring_mode(void)
+{
+    rsm_sicklms_event_t ev;
+    lms.bit13_reading = 1;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT8(13u, drv.format.distance_bits);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.600f, ev.scan->range_m[10]);
+    TEST_ASSERT_EQUAL_HEX8(0x01u, drv.raw.reading[10].flags);
+}
+
+void test_sicklms_connect_should_refuse_a_unit_that_measures_reflectivity(void)
+{
+    uint8_t stream[16];
+    rsm_sicklms_event_t ev;
+    const int n = frame_mode(stream, sizeof stream, RSM_LMS_MODE_CONTINUOUS);
+    lms.config_mode = RSM_LMS_MEAS_REFLECTIVITY;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_ERROR, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_PROTO, ev.status);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.config_reads);
+    TEST_ASSERT_EQUAL_UINT8(RSM_LMS_MEAS_REFLECTIVITY, drv.config.measuring_mode);
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_BACKOFF, drv.state);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)count_writes(stream, (size_t)n));
+    TEST_ASSERT_EQUAL_INT(0, lms.streaming);
+}
+
+void test_sicklms_connect_should_not_read_the_configuration_when_told_not_to(void)
+{
+    uint8_t req[16];
+    rsm_sicklms_event_t ev;
+    const int n = rsm_lms_encode_request_config(req, sizeof req, 0u);
+    cfg.read_config = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)count_writes(req, (size_t)n));
+    TEST_ASSERT_EQUAL_UINT8(0u, drv.have_config);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.config_reads);
+}
+
+/* Connects with working rate baud and waits for the first scan. */
+static void streaming_at(uint32_t baud)
+{
+    rsm_sicklms_event_t ev;
+    cfg.baud = baud;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(baud, drv.baud);
+}
+
+void test_sicklms_disconnect_should_stop_the_stream_then_return_to_the_power_up_rate(void)
+{
+    uint8_t stop[16];
+    uint8_t b9600[16];
+    rsm_sicklms_event_t ev;
+    size_t mark;
+    long ws;
+    long wb;
+    uint32_t scans;
+    const int ns = frame_mode(stop, sizeof stop, RSM_LMS_MODE_ON_REQUEST);
+    const int nb = rsm_lms_encode_mode_baud(b9600, sizeof b9600, 0u, 9600u);
+    streaming_at(38400u);
+    TEST_ASSERT_EQUAL_UINT32(38400u, fl.peer_baud);
+    mark = fl.n_writes;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_STOPPING, drv.state);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_DISCONNECTED, 10000000u, &ev));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, ev.status);
+    /* 20 25 first, then 20 42, each once, and nothing else. */
+    ws = rsm_fakelink_find_write(&fl, mark, stop, (size_t)ns);
+    wb = rsm_fakelink_find_write(&fl, mark, b9600, (size_t)nb);
+    TEST_ASSERT_EQUAL_INT32((int32_t)mark, (int32_t)ws);
+    TEST_ASSERT_EQUAL_INT32((int32_t)mark + 1, (int32_t)wb);
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)mark + 2u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_INT(0, lms.streaming);
+    TEST_ASSERT_EQUAL_UINT32(9600u, fl.peer_baud);
+    TEST_ASSERT_EQUAL_UINT32(9600u, fl.host_baud);
+    TEST_ASSERT_EQUAL_UINT32(9600u, drv.baud);
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_IDLE, drv.state);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.disconnects);
+    /* Idle: no scans, no requests, no link-loss. */
+    scans = drv.stats.scans;
+    run_for(3000000u);
+    TEST_ASSERT_EQUAL_UINT32(scans, drv.stats.scans);
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)mark + 2u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.link_lost);
+    /* Already idle: nothing to do. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_IDLE, drv.state);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_disconnect(NULL));
+}
+
+void test_sicklms_disconnect_at_the_power_up_rate_should_only_stop_the_stream(void)
+{
+    uint8_t stop[16];
+    rsm_sicklms_event_t ev;
+    size_t mark;
+    const int ns = frame_mode(stop, sizeof stop, RSM_LMS_MODE_ON_REQUEST);
+    streaming_at(9600u);
+    mark = fl.n_writes;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_DISCONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, ev.status);
+    TEST_ASSERT_EQUAL_INT32((int32_t)mark, (int32_t)rsm_fakelink_find_write(&fl, mark, stop, (size_t)ns));
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)mark + 1u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_INT(0, lms.streaming);
+}
+
+void test_sicklms_disconnect_should_give_up_on_a_silent_unit_after_max_tries(void)
+{
+    uint8_t stop[16];
+    uint8_t b9600[16];
+    rsm_sicklms_event_t ev;
+    uint64_t started;
+    size_t mark;
+    const int ns = frame_mode(stop, sizeof stop, RSM_LMS_MODE_ON_REQUEST);
+    const int nb = rsm_lms_encode_mode_baud(b9600, sizeof b9600, 0u, 9600u);
+    streaming_at(38400u);
+    fl.silent = 1;
+    mark = fl.n_writes;
+    started = fl.now_us;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_DISCONNECTED, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_TIMEOUT, ev.status);
+    /* max_tries sends of 20 25, one ACK timeout each, and no baud change. */
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)mark + cfg.max_tries, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_INT32((int32_t)mark, (int32_t)rsm_fakelink_find_write(&fl, mark, stop, (size_t)ns));
+    TEST_ASSERT_EQUAL_INT32(-1, (int32_t)rsm_fakelink_find_write(&fl, mark, b9600, (size_t)nb));
+    TEST_ASSERT_EQUAL_UINT64(started + (uint64_t)cfg.max_tries * cfg.ack_timeout_us, ev.stamp_us);
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_IDLE, drv.state);
+    TEST_ASSERT_EQUAL_UINT32(38400u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.disconnects);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -464,5 +648,12 @@ int main(void)
     RUN_TEST(test_sicklms_poll_should_yield_robot_frame_scans_from_the_b0_stream);
     RUN_TEST(test_sicklms_poll_should_count_a_corrupted_telegram_and_keep_streaming);
     RUN_TEST(test_sicklms_poll_should_report_link_loss_and_reconnect);
+    RUN_TEST(test_sicklms_connect_should_decode_scans_with_the_measuring_mode_read_from_the_unit);
+    RUN_TEST(test_sicklms_connect_should_keep_the_flag_bits_in_the_default_measuring_mode);
+    RUN_TEST(test_sicklms_connect_should_refuse_a_unit_that_measures_reflectivity);
+    RUN_TEST(test_sicklms_connect_should_not_read_the_configuration_when_told_not_to);
+    RUN_TEST(test_sicklms_disconnect_should_stop_the_stream_then_return_to_the_power_up_rate);
+    RUN_TEST(test_sicklms_disconnect_at_the_power_up_rate_should_only_stop_the_stream);
+    RUN_TEST(test_sicklms_disconnect_should_give_up_on_a_silent_unit_after_max_tries);
     return UNITY_END();
 }
