@@ -243,6 +243,9 @@ static int is_session_packet(uint8_t id)
 static void handle_handshake_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t now)
 {
     uint8_t buf[12];
+    /* A packet that verified proves the rate right: whatever restart
+     * follows, it is not a reason to probe other rates. */
+    d->tries = 0u;
     if (is_session_packet(pkt->id)) {
         /* An old session is still streaming: close it, let its last packets
          * drain, then start again (ARIA and p2os do the same). */

@@ -856,6 +856,30 @@ void test_p3dx_session_should_never_leave_the_watchdog_without_a_command(void)
     TEST_ASSERT_GREATER_OR_EQUAL_UINT32(1u, drv.stats.keepalives);
 }
 
+void test_p3dx_poll_should_reconnect_at_the_same_rate_to_a_robot_whose_session_survived(void)
+{
+    rsm_p3dx_event_t ev;
+    connect_ok();
+    run_for(300000u);
+    /* The cable is out for 4.5 s; the robot keeps its session (and its SIP
+     * clock) all along, as a real one does. */
+    fl.silent = 1;
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_LINK_LOST, 5000000u, &ev));
+    run_for(2500000u);
+    TEST_ASSERT_EQUAL_UINT32(2u, drv.stats.handshake_timeouts);
+    fl.silent = 0;
+    /* SIPs during the handshake: CLOSE the old session, start again, at the
+     * rate that just carried a packet. */
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 3000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.stale_sessions);
+    TEST_ASSERT_EQUAL_UINT32(1u, robot.closes);
+    TEST_ASSERT_EQUAL_UINT32(2u, robot.opens);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.baud_changes);
+    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.reconnects);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -880,5 +904,6 @@ int main(void)
     RUN_TEST(test_p3dx_poll_should_resend_a_stop_once_then_go_back_to_pulses);
     RUN_TEST(test_p3dx_poll_should_forget_the_motion_when_the_link_is_lost);
     RUN_TEST(test_p3dx_session_should_never_leave_the_watchdog_without_a_command);
+    RUN_TEST(test_p3dx_poll_should_reconnect_at_the_same_rate_to_a_robot_whose_session_survived);
     return UNITY_END();
 }
