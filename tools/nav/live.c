@@ -151,6 +151,100 @@ static int run_listen(const nav_live_options_t *opt, endpoint_t *robot, endpoint
     return 0;
 }
 
+static void report_robot(const rsm_p3dx_t *d)
+{
+    const rsm_p3dx_stats_t *st = &d->stats;
+    fprintf(stderr,
+            "rsm-nav: robot: %u Bd, %u connects (%u after a link loss), %u link losses, %u SIPs, "
+            "%u encoder packets, %u keep-alives, %u motion commands, HOSTBAUD %u switched / "
+            "%u failed / %u skipped; checksum errors %u, bytes skipped %u\n",
+            (unsigned)d->baud, (unsigned)st->connects, (unsigned)st->reconnects,
+            (unsigned)st->link_lost, (unsigned)st->sips, (unsigned)st->encoder_packets,
+            (unsigned)st->keepalives, (unsigned)st->commands, (unsigned)st->host_baud_switches,
+            (unsigned)st->host_baud_failures, (unsigned)st->host_baud_skipped,
+            (unsigned)d->parser.stats.checksum_errors, (unsigned)d->parser.stats.bytes_skipped);
+}
+
+static void report_laser(const rsm_sicklms_t *d)
+{
+    const rsm_sicklms_stats_t *st = &d->stats;
+    fprintf(stderr,
+            "rsm-nav: laser: %u Bd, %u connects (%u after a link loss), %u link losses, %u scans, "
+            "%u bad scans, %u start-up errors, %u shutdowns; CRC errors %u, bytes skipped %u\n",
+            (unsigned)d->baud, (unsigned)st->connects, (unsigned)st->reconnects,
+            (unsigned)st->link_lost, (unsigned)st->scans, (unsigned)st->bad_scans,
+            (unsigned)st->errors, (unsigned)st->disconnects, (unsigned)d->parser.stats.crc_errors,
+            (unsigned)d->parser.stats.bytes_skipped);
+}
+
+/* One poll of the robot driver; encoder packets go to the sink. */
+static void poll_robot(rsm_p3dx_t *d, const nav_stream_sink_t *sink, int quiet)
+{
+    rsm_p3dx_event_t ev;
+    if (rsm_p3dx_poll(d, &ev) != RSM_OK) {
+        return;
+    }
+    switch (ev.type) {
+    case RSM_P3DX_EVENT_ENCODER:
+        sink->encoder(sink->ctx, ev.encoder.left, ev.encoder.right, ev.stamp_us);
+        break;
+    case RSM_P3DX_EVENT_CONNECTED:
+        if (!quiet) {
+            fprintf(stderr, "rsm-nav: robot connected: %s (%s %s) at %u Bd\n", d->robot.name,
+                    d->robot.robot_class, d->robot.subclass, (unsigned)d->baud);
+        }
+        break;
+    case RSM_P3DX_EVENT_LINK_LOST:
+        fprintf(stderr, "rsm-nav: robot link lost, reconnecting\n");
+        break;
+    case RSM_P3DX_EVENT_DISCONNECTED:
+        if (!quiet) {
+            fprintf(stderr, "rsm-nav: robot disconnected (STOP, ENABLE 0, CLOSE sent)\n");
+        }
+        break;
+    default:
+        break;
+    }
+}
+
+/* One poll of the laser driver; scans go to the sink. */
+static void poll_laser(rsm_sicklms_t *d, const nav_stream_sink_t *sink, int quiet)
+{
+    rsm_sicklms_event_t ev;
+    if (rsm_sicklms_poll(d, &ev) != RSM_OK) {
+        return;
+    }
+    switch (ev.type) {
+    case RSM_SICKLMS_EVENT_SCAN:
+        if (ev.scan != NULL) {
+            sink->scan(sink->ctx, ev.scan, ev.stamp_us);
+        }
+        break;
+    case RSM_SICKLMS_EVENT_CONNECTED:
+        if (!quiet) {
+            fprintf(stderr, "rsm-nav: laser streaming at %u Bd (measuring mode 0x%02X, %u distance bits)\n",
+                    (unsigned)d->baud, d->have_config ? (unsigned)d->config.measuring_mode : 0u,
+                    (unsigned)d->format.distance_bits);
+        }
+        break;
+    case RSM_SICKLMS_EVENT_LINK_LOST:
+        fprintf(stderr, "rsm-nav: laser link lost, starting again\n");
+        break;
+    case RSM_SICKLMS_EVENT_ERROR:
+        fprintf(stderr, "rsm-nav: laser start-up step failed: %s\n", rsm_strerror(ev.status));
+        break;
+    case RSM_SICKLMS_EVENT_DISCONNECTED:
+        if (ev.status != RSM_OK) {
+            fprintf(stderr, "rsm-nav: laser shutdown incomplete: %s\n", rsm_strerror(ev.status));
+        } else if (!quiet) {
+            fprintf(stderr, "rsm-nav: laser stopped and back at %u Bd\n", (unsigned)d->baud);
+        }
+        break;
+    default:
+        break;
+    }
+}
+
 static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint_t *laser,
                       const nav_stream_sink_t *sink)
 {
@@ -160,9 +254,13 @@ static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint
     rsm_sicklms_config_t lcfg;
     rsm_clock_t clock;
     const double t0 = mono_s();
+    double t_end;
     (void)rsm_p3dx_config_default(&pcfg);
     (void)rsm_sicklms_config_default(&lcfg);
     (void)rsm_posix_clock_init(&clock);
+    /* ARIA's parameter file for the p3dx-sh moves the robot to 38400 after
+     * connecting; the driver does so only when the robot allows it. */
+    pcfg.host_baud = 38400u;
     if (opt->robot_baud != 0u) {
         pcfg.baud = opt->robot_baud;
     }
@@ -179,45 +277,41 @@ static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint
     }
     while (!stop_requested) {
         if (robot->open) {
-            rsm_p3dx_event_t ev;
-            if (rsm_p3dx_poll(&p3dx, &ev) == RSM_OK) {
-                if (ev.type == RSM_P3DX_EVENT_ENCODER) {
-                    sink->encoder(sink->ctx, ev.encoder.left, ev.encoder.right, ev.stamp_us);
-                } else if (ev.type == RSM_P3DX_EVENT_CONNECTED && !opt->quiet) {
-                    fprintf(stderr, "rsm-nav: robot connected\n");
-                } else if (ev.type == RSM_P3DX_EVENT_LINK_LOST) {
-                    fprintf(stderr, "rsm-nav: robot link lost, reconnecting\n");
-                }
-            }
+            poll_robot(&p3dx, sink, opt->quiet);
         }
         if (laser->open) {
-            rsm_sicklms_event_t ev;
-            if (rsm_sicklms_poll(&lms, &ev) == RSM_OK) {
-                if (ev.type == RSM_SICKLMS_EVENT_SCAN && ev.scan != NULL) {
-                    sink->scan(sink->ctx, ev.scan, ev.stamp_us);
-                } else if (ev.type == RSM_SICKLMS_EVENT_CONNECTED && !opt->quiet) {
-                    fprintf(stderr, "rsm-nav: laser streaming\n");
-                } else if (ev.type == RSM_SICKLMS_EVENT_LINK_LOST) {
-                    fprintf(stderr, "rsm-nav: laser link lost, starting again\n");
-                } else if (ev.type == RSM_SICKLMS_EVENT_ERROR) {
-                    fprintf(stderr, "rsm-nav: laser start-up step failed: %s\n", rsm_strerror(ev.status));
-                }
-            }
+            poll_laser(&lms, sink, opt->quiet);
         }
         if (opt->seconds > 0.0 && mono_s() - t0 >= opt->seconds) {
             break;
         }
     }
+    /* Orderly shutdown of both, run by the drivers' own polls: the robot
+     * gets STOP and ENABLE 0, then CLOSE; the laser stops its stream and
+     * goes back to its power-up rate. Bounded in time whatever the
+     * devices do. */
     if (robot->open) {
-        /* Stop, then let the driver send ENABLE 0 and CLOSE on its schedule. */
-        const double t_end = mono_s() + 0.5;
-        (void)rsm_p3dx_stop(&p3dx);
         (void)rsm_p3dx_disconnect(&p3dx);
-        while (mono_s() < t_end) {
-            rsm_p3dx_event_t ev;
-            if (rsm_p3dx_poll(&p3dx, &ev) != RSM_OK || ev.type == RSM_P3DX_EVENT_DISCONNECTED) {
-                break;
-            }
+    }
+    if (laser->open) {
+        (void)rsm_sicklms_disconnect(&lms);
+    }
+    t_end = mono_s() + 5.0;
+    while (mono_s() < t_end && ((robot->open && p3dx.state != RSM_P3DX_IDLE) ||
+                                (laser->open && lms.state != RSM_SICKLMS_IDLE))) {
+        if (robot->open && p3dx.state != RSM_P3DX_IDLE) {
+            poll_robot(&p3dx, sink, opt->quiet);
+        }
+        if (laser->open && lms.state != RSM_SICKLMS_IDLE) {
+            poll_laser(&lms, sink, opt->quiet);
+        }
+    }
+    if (!opt->quiet) {
+        if (robot->open) {
+            report_robot(&p3dx);
+        }
+        if (laser->open) {
+            report_laser(&lms);
         }
     }
     return 0;
