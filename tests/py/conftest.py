@@ -8,8 +8,13 @@ repository root.  Tests that need it FAIL (they do not skip) when it is absent.
 """
 
 import gzip
+import json
 import os
+import select
+import signal
+import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -73,3 +78,57 @@ def subprocess_env() -> dict:
 def read_maybe_gz(path: Path) -> bytes:
     data = path.read_bytes()
     return gzip.decompress(data) if data[:2] == b"\x1f\x8b" else data
+
+
+def rsm_nav_binary() -> Path:
+    """The rsm-nav built by ctest's build directory (RSM_BUILD_DIR)."""
+    build = os.environ.get("RSM_BUILD_DIR")
+    if not build:
+        pytest.fail("RSM_BUILD_DIR is not set: run these tests through ctest", pytrace=False)
+    exe = Path(build) / "tools" / "nav" / "rsm-nav"
+    if not exe.is_file():
+        pytest.fail(f"rsm-nav not built at {exe}", pytrace=False)
+    return exe
+
+
+FAKEDEV_TIMEOUT = 30.0
+
+
+class FakeDevices:
+    """rsm-fakedev in a subprocess: ``paths`` maps ``robot``/``laser`` to its
+    pseudo-terminals; ``stop()`` ends it (SIGTERM) and returns its log, one
+    dict per JSON line."""
+
+    def __init__(self, tmp_path, *args):
+        self.log_path = tmp_path / "fakedev.log"
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "rsm_tools.fakedev", "--log", str(self.log_path), *args],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=subprocess_env())
+        want = 1 if ("--robot" in args) != ("--lms" in args) else 2
+        out = b""
+        end = time.monotonic() + FAKEDEV_TIMEOUT
+        # Raw reads: both lines may come in one piece.
+        while out.count(b"\n") < want and time.monotonic() < end:
+            r, _, _ = select.select([self.proc.stdout], [], [], 0.1)
+            if r:
+                chunk = os.read(self.proc.stdout.fileno(), 4096)
+                if not chunk:
+                    break
+                out += chunk
+        lines = out.decode().splitlines()
+        if len(lines) < want:
+            self.proc.kill()
+            self.proc.wait()
+            pytest.fail(f"rsm-fakedev printed no paths: {self.proc.stderr.read().decode()}")
+        self.paths = dict(line.split() for line in lines[:want])
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        try:
+            self.proc.wait(timeout=FAKEDEV_TIMEOUT)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+        assert self.proc.returncode == 0, self.proc.stderr.read().decode()
+        return [json.loads(line) for line in self.log_path.read_text().splitlines()]

@@ -30,9 +30,25 @@ ARIA_SIP_STOPPED = 0x32
 ARIA_SIP_MOVING = 0x33
 ARIA_ENCODER = 0x90
 
-# command numbers used by the tools
+ARIA_SYNC0, ARIA_SYNC1, ARIA_SYNC2 = 0x00, 0x01, 0x02
+ARIA_CONFIGPAC = 0x20
+
+# command numbers used by the tools (protocols.md 1.8)
 CMD_PULSE, CMD_OPEN, CMD_CLOSE, CMD_ENABLE = 0, 1, 2, 4
-CMD_CONFIG, CMD_ENCODER = 18, 19
+CMD_SETO, CMD_ROTATE, CMD_VEL = 7, 9, 11
+CMD_CONFIG, CMD_ENCODER, CMD_RVEL = 18, 19, 21
+CMD_STOP, CMD_VEL2, CMD_HOSTBAUD, CMD_ESTOP = 29, 32, 50, 55
+
+#: names of the commands above, for logs
+ARIA_COMMAND_NAMES = {
+    CMD_PULSE: "PULSE", CMD_OPEN: "OPEN", CMD_CLOSE: "CLOSE", CMD_ENABLE: "ENABLE",
+    CMD_SETO: "SETO", CMD_ROTATE: "ROTATE", CMD_VEL: "VEL", CMD_CONFIG: "CONFIG",
+    CMD_ENCODER: "ENCODER", CMD_RVEL: "RVEL", CMD_STOP: "STOP", CMD_VEL2: "VEL2",
+    CMD_HOSTBAUD: "HOSTBAUD", CMD_ESTOP: "ESTOP",
+}
+
+#: HOSTBAUD codes 0..4 (protocols.md 1.8)
+ARIA_BAUD_RATES = (9600, 19200, 38400, 57600, 115200)
 
 
 def aria_checksum(body: bytes) -> int:
@@ -78,6 +94,97 @@ def aria_command(cmd: int, arg: Optional[int] = None, string: Optional[bytes] = 
     else:
         payload = b""
     return aria_packet(cmd, payload)
+
+
+def aria_int_value(payload: bytes) -> Optional[int]:
+    """The integer argument of a command payload (0x3B/0x1B + u16 LE), or None."""
+    if len(payload) < 3 or payload[0] not in (ARIA_INTARG, ARIA_NINTARG):
+        return None
+    v = payload[1] | (payload[2] << 8)
+    return -v if payload[0] == ARIA_NINTARG else v
+
+
+def encode_sync2_reply(name: str = "rsm-fakedev", robot_class: str = "Pioneer",
+                       subclass: str = "p3dx-sh") -> bytes:
+    """The robot's SYNC2 reply: name, class and subclass, each NUL-terminated."""
+    text = b"".join(s.encode("ascii") + b"\x00" for s in (name, robot_class, subclass))
+    return aria_packet(ARIA_SYNC2, text)
+
+
+@dataclass
+class AriaConfig:
+    """Fields of a CONFIGpac (0x20) in wire order (protocols.md 1.12)."""
+
+    robot_type: str = "Pioneer"
+    subtype: str = "p3dx-sh"
+    serial: str = "FAKE0001"
+    four_mot: int = 0
+    rot_vel_top: int = 500
+    trans_vel_top: int = 2200
+    rot_acc_top: int = 300
+    trans_acc_top: int = 1000
+    pwm_max: int = 1000
+    name: str = "rsm-fakedev"
+    sip_cycle: int = 100            # ms
+    host_baud: int = 0              # HOSTBAUD code of the current rate
+    aux1_baud: int = 0
+    has_gripper: int = 0
+    front_sonar: int = 1
+    rear_sonar: int = 0
+    low_battery: int = 110          # 0.1 V
+    rev_count: int = 16570
+    watchdog: int = 2000            # ms
+    normal_mpacs: int = 0
+    stall_val: int = 200
+    stall_count: int = 100
+    joy_vel: int = 300
+    joy_rot_vel: int = 50
+    rot_vel_max: int = 300
+    trans_vel_max: int = 1200
+    rot_accel: int = 100
+    rot_decel: int = 100
+    rot_kp: int = 40
+    rot_kv: int = 20
+    rot_ki: int = 0
+    trans_accel: int = 300
+    trans_decel: int = 300
+    trans_kp: int = 40
+    trans_kv: int = 20
+    trans_ki: int = 0
+    front_bumps: int = 5
+    rear_bumps: int = 5
+    charger: int = 0
+    sonar_cycle: int = 40
+    auto_baud: int = 2              # 2: the host may switch rates with HOSTBAUD
+    has_gyro: int = 0
+    drift_factor: int = 0
+    aux2_baud: int = 0
+    aux3_baud: int = 0
+    ticks_mm: int = 128
+    shutdown_volts: int = 105
+    firmware: str = "fake-1.0"
+
+
+def encode_config_pac(c: AriaConfig) -> bytes:
+    """A CONFIGpac with the fields of ``c`` (little-endian integers, NUL-ended strings)."""
+    def z(text: str) -> bytes:
+        return text.encode("ascii") + b"\x00"
+
+    p = z(c.robot_type) + z(c.subtype) + z(c.serial)
+    p += struct.pack("<BHHHHH", c.four_mot, c.rot_vel_top, c.trans_vel_top, c.rot_acc_top,
+                     c.trans_acc_top, c.pwm_max)
+    p += z(c.name)
+    p += struct.pack("<BBBHHBHHHB", c.sip_cycle, c.host_baud, c.aux1_baud, c.has_gripper,
+                     c.front_sonar, c.rear_sonar, c.low_battery, c.rev_count, c.watchdog,
+                     c.normal_mpacs)
+    p += struct.pack("<16H", c.stall_val, c.stall_count, c.joy_vel, c.joy_rot_vel, c.rot_vel_max,
+                     c.trans_vel_max, c.rot_accel, c.rot_decel, c.rot_kp, c.rot_kv, c.rot_ki,
+                     c.trans_accel, c.trans_decel, c.trans_kp, c.trans_kv, c.trans_ki)
+    p += struct.pack("<BBBBBBhBBHH", c.front_bumps, c.rear_bumps, c.charger, c.sonar_cycle,
+                     c.auto_baud, c.has_gyro, c.drift_factor, c.aux2_baud, c.aux3_baud,
+                     c.ticks_mm, c.shutdown_volts)
+    p += z(c.firmware)
+    return aria_packet(ARIA_CONFIGPAC, p)
 
 
 def aria_vel2(left_units: int, right_units: int) -> bytes:
@@ -200,6 +307,33 @@ UNITS_MM = "mm"
 _UNIT_BITS = {UNITS_CM: 0x0000, UNITS_MM: 0x4000}
 _UNIT_SCALE = {UNITS_CM: 0.01, UNITS_MM: 0.001}
 
+# request codes (host -> LMS) and reply codes (LMS -> host), protocols.md 2.5/2.6
+LMS_CMD_RESET, LMS_CMD_MODE, LMS_CMD_GET_VALUES, LMS_CMD_GET_STATUS = 0x10, 0x20, 0x30, 0x31
+LMS_CMD_GET_TYPE, LMS_CMD_SET_VARIANT, LMS_CMD_GET_CONFIG, LMS_CMD_SET_CONFIG = 0x3A, 0x3B, 0x74, 0x77
+LMS_REPLY_POWER_ON, LMS_REPLY_RESET, LMS_REPLY_NOT_ACK = 0x90, 0x91, 0x92
+# 0x20 mode codes
+LMS_MODE_INSTALLATION, LMS_MODE_CONTINUOUS, LMS_MODE_ON_REQUEST = 0x00, 0x24, 0x25
+#: 0x20 baud-change modes and their rates
+LMS_MODE_BAUD = {0x40: 38400, 0x41: 19200, 0x42: 9600, 0x48: 500000}
+#: variants (angle deg, resolution 1/100 deg) -> (values per scan, angle of value 0 in 1/100 deg)
+LMS_VARIANTS = {(180, 100): (181, 0), (180, 50): (361, 0), (100, 100): (101, 4000),
+                (100, 50): (201, 4000), (100, 25): (401, 4000)}
+LMS_CONFIG_BLOCK_LEN = 32
+
+
+def lms_config_block(units: str = UNITS_MM, measuring_mode: int = 0x00,
+                     availability: int = 0x00) -> bytes:
+    """A 32-byte configuration block (0xF4/0x77, protocols.md 2.8): byte C
+    availability, D measuring mode, E units; the rest plausible defaults."""
+    b = bytearray(LMS_CONFIG_BLOCK_LEN)
+    b[2] = 0x46                     # B: stop threshold (LMS200)
+    b[3] = 0x00                     # B: peak threshold
+    b[4] = availability & 0xFF
+    b[5] = measuring_mode & 0xFF
+    b[6] = 0x01 if units == UNITS_MM else 0x00
+    return bytes(b)
+
+
 LMS_MAX_VALUE = 0x1FF6          # largest distance in the 13-bit (8 m / 80 m) modes
 LMS_NO_VALUE = 0x1FFF           # no valid measurement
 LMS_TOO_FAR = 0x1FF7            # value larger than the maximum
@@ -321,7 +455,9 @@ class FrameCounter:
     """Counts valid frames in a byte stream of one protocol, fed in chunks.
 
     ``protocol`` is ``"aria"`` or ``"lms2xx"``; other protocols count nothing.
-    ``types`` counts frames by packet type / reply code.
+    ``types`` counts frames by packet type / reply code; ``bad`` counts
+    candidates whose checksum or CRC failed.  With ``keep`` set, the frames
+    found are also appended to ``frames_seen`` (see :meth:`take`).
     """
 
     def __init__(self, protocol: str) -> None:
@@ -338,6 +474,11 @@ class FrameCounter:
         self.types[t] = self.types.get(t, 0) + 1
         if self.keep:
             self.frames_seen.append(bytes(frame))
+
+    def take(self) -> List[bytes]:
+        """The frames kept since the last call (``keep`` must be set)."""
+        out, self.frames_seen = self.frames_seen, []
+        return out
 
     def feed(self, data: bytes) -> None:
         if self.protocol == "aria":
@@ -393,6 +534,7 @@ class FrameCounter:
                 return
             frame = bytes(b[:ln + 6])
             if lms_crc(frame[:4 + ln]) != (frame[4 + ln] | (frame[5 + ln] << 8)):
+                self.bad += 1
                 del b[:1]
                 continue
             self._ok(frame, frame[4])

@@ -1,0 +1,245 @@
+"""rsm-fakedev on its own: the fake P3-DX and LMS 2xx answer a host that
+talks to their pseudo-terminals directly, as the real devices would
+(protocols.md), and they notice a host at the wrong rate.
+
+Waits are generous and never the thing being measured: every check is on
+what came back, not on how fast."""
+
+import json
+import os
+import select
+import struct
+import termios
+import time
+import tty
+
+from conftest import REPO_ROOT, FakeDevices
+from rsm_tools import protocols as p
+
+TIMEOUT = 30.0
+
+
+class Host:
+    """The host end of one pseudo-terminal: raw, at a given rate."""
+
+    def __init__(self, path, baud=9600):
+        self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY)
+        tty.setraw(self.fd)
+        self.set_baud(baud)
+        self.buf = bytearray()
+
+    def set_baud(self, baud):
+        attrs = termios.tcgetattr(self.fd)
+        attrs[4] = attrs[5] = getattr(termios, f"B{baud}")
+        termios.tcsetattr(self.fd, termios.TCSANOW, attrs)
+
+    def send(self, data):
+        os.write(self.fd, data)
+
+    def read_until(self, done, timeout=TIMEOUT):
+        """Reads until done(bytes so far) is true; returns the bytes."""
+        end = time.monotonic() + timeout
+        while not done(bytes(self.buf)) and time.monotonic() < end:
+            r, _, _ = select.select([self.fd], [], [], 0.1)
+            if r:
+                self.buf += os.read(self.fd, 4096)
+        out = bytes(self.buf)
+        self.buf.clear()
+        return out
+
+    def frames(self, protocol, data):
+        fc = p.FrameCounter(protocol)
+        fc.keep = True
+        fc.feed(data)
+        return fc.take()
+
+    def close(self):
+        os.close(self.fd)
+
+
+def aria_types(host, data):
+    return [p.aria_unframe(f)[0] for f in host.frames("aria", data)]
+
+
+def until_aria(want_type, count=1):
+    def done(data):
+        fc = p.FrameCounter("aria")
+        fc.feed(data)
+        return fc.types.get(want_type, 0) >= count
+    return done
+
+
+def until_lms(want_cmd):
+    def done(data):
+        fc = p.FrameCounter("lms2xx")
+        fc.feed(data)
+        return fc.types.get(want_cmd, 0) >= 1
+    return done
+
+
+def handshake(host):
+    """SYNC0, SYNC1, SYNC2 with their echoes; returns the SYNC2 reply."""
+    for step in range(3):
+        host.send(p.aria_packet(step))
+        data = host.read_until(until_aria(step))
+        frames = [f for f in host.frames("aria", data) if f[3] == step]
+        assert frames, f"no reply to SYNC{step}: {data.hex()}"
+    return frames[0]
+
+
+def sips(host, data):
+    return [p.decode_sip(f) for f in host.frames("aria", data) if f[3] in (0x32, 0x33)]
+
+
+def test_robot_handshake_config_sip_stream_motion_and_watchdog(tmp_path):
+    fake = FakeDevices(tmp_path, "--robot", "--watchdog-ms", "1500", "--ticks-mm", "131")
+    host = Host(fake.paths["robot"])
+    try:
+        # Before OPEN nothing streams.
+        assert host.read_until(lambda d: False, timeout=0.4) == b""
+        reply = handshake(host)
+        _, payload = p.aria_unframe(reply)
+        assert payload.split(b"\x00")[:3] == [b"rsm-fakedev", b"Pioneer", b"p3dx-sh"]
+
+        host.send(p.aria_command(p.CMD_OPEN, 1))
+        host.send(p.aria_command(p.CMD_CONFIG, 1))
+        data = host.read_until(until_aria(p.ARIA_CONFIGPAC))
+        config = [f for f in host.frames("aria", data) if f[3] == p.ARIA_CONFIGPAC][0]
+        assert config == p.encode_config_pac(p.AriaConfig(watchdog=1500, ticks_mm=131))
+
+        # SIPs every cycle; ENCODER packets only once asked for.
+        data = host.read_until(until_aria(0x32, 3))
+        assert p.ARIA_ENCODER not in aria_types(host, data)
+        host.send(p.aria_command(p.CMD_ENABLE, 1))
+        host.send(p.aria_command(p.CMD_ENCODER, 2))
+        host.send(p.aria_command(p.CMD_VEL, 200))
+        data = host.read_until(until_aria(0x33, 3))
+        moving = [s for s in sips(host, data) if s.moving]
+        assert moving[-1].lvel == 200 and moving[-1].rvel == 200 and moving[-1].flags & 1
+        encs = [p.decode_encoder(f) for f in host.frames("aria", data) if f[3] == p.ARIA_ENCODER]
+        assert len(encs) >= 2 and encs[-1][0] > encs[0][0] and encs[-1][1] > encs[0][1]
+
+        # Nothing from the host for longer than the watchdog: the robot stops ...
+        data = host.read_until(lambda d: any(not s.moving for s in sips(host, d)))
+        assert any(not s.moving for s in sips(host, data))
+        # ... and drives again once commands come back (motion resumes).
+        host.send(p.aria_command(p.CMD_PULSE))
+        data = host.read_until(until_aria(0x33, 1))
+        assert any(s.moving for s in sips(host, data))
+
+        # VEL2 -5/+5 turns on the spot; STOP stops; CLOSE ends the stream.
+        host.send(p.aria_vel2(-5, 5))
+        data = host.read_until(lambda d: any(s.lvel == -100 for s in sips(host, d)))
+        assert any(s.lvel == -100 and s.rvel == 100 for s in sips(host, data))
+        host.send(p.aria_command(p.CMD_STOP))
+        host.read_until(lambda d: any(not s.moving for s in sips(host, d)))
+        host.send(p.aria_command(p.CMD_CLOSE, 1))
+        host.read_until(lambda d: False, timeout=0.3)
+        assert host.read_until(lambda d: False, timeout=0.5) == b""
+    finally:
+        host.close()
+        log = fake.stop()
+    events = [e["ev"] for e in log if e["dev"] == "robot"]
+    assert events.count("watchdog_stop") >= 1 and events.count("watchdog_resume") >= 1
+    assert events.index("watchdog_stop") < events.index("watchdog_resume")
+    summary = [e for e in log if e["ev"] == "summary"][0]
+    assert summary["sessions"] == 1 and summary["closes"] == 1 and not summary["session"]
+
+
+def test_robot_hostbaud_moves_the_robot_and_a_host_left_behind_hears_noise(tmp_path):
+    fake = FakeDevices(tmp_path, "--robot")
+    host = Host(fake.paths["robot"])
+    try:
+        handshake(host)
+        host.send(p.aria_command(p.CMD_OPEN, 1))
+        host.read_until(until_aria(0x32, 1))
+        host.send(p.aria_command(p.CMD_HOSTBAUD, 2))      # 38400, host stays at 9600
+        host.read_until(lambda d: False, timeout=0.3)
+        noise = host.read_until(lambda d: len(d) >= 200)
+        assert len(noise) >= 200 and host.frames("aria", noise) == []
+        assert all(0xE0 <= b <= 0xEF for b in noise)
+        host.set_baud(38400)                                # now follow the robot
+        host.read_until(lambda d: False, timeout=0.3)
+        data = host.read_until(until_aria(0x32, 2))
+        assert len(sips(host, data)) >= 2
+    finally:
+        host.close()
+        log = fake.stop()
+    bauds = [(e["old"], e["new"]) for e in log if e["ev"] == "baud"]
+    assert bauds == [(9600, 38400)]
+
+
+def test_laser_acks_naks_switches_rate_streams_and_answers_status(tmp_path):
+    fake = FakeDevices(tmp_path, "--lms", "--units", "cm")
+    host = Host(fake.paths["laser"])
+    try:
+        # A request whose CRC is wrong gets a NAK and is not carried out.
+        bad = bytearray(p.lms_telegram(0x20, b"\x24"))
+        bad[-1] ^= 0x40
+        host.send(bytes(bad))
+        assert host.read_until(lambda d: len(d) >= 1) == bytes([p.LMS_NAK])
+        assert host.read_until(lambda d: False, timeout=0.5) == b""   # no stream started
+
+        # ACK, then the reply; a rate change answers at the old rate.
+        host.send(p.lms_telegram(0x20, b"\x40"))
+        data = host.read_until(until_lms(0xA0))
+        assert data[0] == p.LMS_ACK
+        assert p.lms_unframe(data[1:]) == (0x80, 0xA0, b"\x00\x10")
+        host.send(p.lms_telegram(0x3B, struct.pack("<HH", 180, 50)))   # host still at 9600
+        noise = host.read_until(lambda d: len(d) >= 1 + 13)
+        assert noise[0] != p.LMS_ACK and host.frames("lms2xx", noise) == []
+        host.set_baud(38400)
+
+        host.send(p.lms_telegram(0x3B, struct.pack("<HH", 180, 25)))   # not a variant
+        data = host.read_until(until_lms(0xBB))
+        assert p.lms_unframe(data[1:])[2] == b"\x00\xb4\x00\x32\x00\x10"
+        host.send(p.lms_telegram(0x74))
+        data = host.read_until(until_lms(0xF4))
+        block = p.lms_unframe(data[1:])[2]
+        assert len(block) == 33 and block[5] == 0x00 and block[6] == 0x00   # 8 m mode, cm
+        host.send(p.lms_telegram(0x31))
+        data = host.read_until(until_lms(0xB1))
+        status = p.lms_unframe(data[1:])[2]
+        assert status[7] == 0x25 and struct.unpack_from("<H", status, 115)[0] == 0x8019
+
+        # Continuous output: 0xB0 telegrams with no ACK in front, 361 values in cm.
+        host.send(p.lms_telegram(0x20, b"\x24"))
+        data = host.read_until(lambda d: len(host.frames("lms2xx", d)) >= 4)
+        scans = [p.decode_b0(f) for f in host.frames("lms2xx", data) if f[4] == 0xB0]
+        assert len(scans) >= 3
+        assert all(s.count == 361 and s.units == p.UNITS_CM for s in scans)
+        assert all(r is None or 0.05 < r <= 8.0 for r in scans[0].ranges())
+        host.send(p.lms_telegram(0x20, b"\x25"))
+        host.read_until(until_lms(0xA0))
+        host.read_until(lambda d: False, timeout=0.3)
+        assert host.read_until(lambda d: False, timeout=0.6) == b""      # stream stopped
+        host.send(p.lms_telegram(0x55))                                  # unknown request
+        data = host.read_until(until_lms(0x92))
+        assert data[0] == p.LMS_ACK and p.lms_unframe(data[1:])[1] == 0x92
+    finally:
+        host.close()
+        log = fake.stop()
+    summary = [e for e in log if e["ev"] == "summary"][0]
+    assert summary["naks"] == 1 and summary["baud"] == 38400 and summary["not_accepted"] == 1
+    assert summary["garbled_frames"] >= 1 and summary["stream_starts"] == 1
+
+
+def test_the_encoders_the_fakes_use_match_the_reference():
+    vectors = {v["name"]: bytes.fromhex(v["hex"]) for v in
+               json.loads((REPO_ROOT.parent / "shared" / "reference" / "vectors.json").read_text())}
+    assert p.encode_sync2_reply("Robot1", "Pioneer", "p3dx-sh") == vectors["aria_sync2_reply_example"]
+    _, payload = p.aria_unframe(vectors["aria_hostbaud_38400"])
+    assert p.aria_int_value(payload) == 2
+    _, payload = p.aria_unframe(vectors["aria_vel2_left-100_right+100"])
+    assert p.aria_int_value(payload) == -1275               # word 0xFB05: left -5, right +5
+    assert p.aria_int_value(b"") is None and p.aria_int_value(b"\x2b\x01A") is None
+    # CONFIGpac: the fields protocols.md 1.12 lists, in order; the C decoder
+    # reads it in test_live_active (TicksMM, watchdog, AutoBaud in rsm-nav's report).
+    pac = p.encode_config_pac(p.AriaConfig(ticks_mm=0x1234, watchdog=0x0ABC, auto_baud=2))
+    ptype, body = p.aria_unframe(pac)
+    assert ptype == 0x20 and body.startswith(b"Pioneer\x00p3dx-sh\x00FAKE0001\x00")
+    assert body.endswith(b"\x34\x12\x69\x00fake-1.0\x00")     # TicksMM, ShutdownVolts, firmware
+    assert b"\xbc\x0a" in body
+    block = p.lms_config_block(p.UNITS_MM, 0x03, 0x02)
+    assert len(block) == 32 and block[4:7] == b"\x02\x03\x01"
+    assert p.LMS_VARIANTS[(180, 50)] == (361, 0) and p.LMS_VARIANTS[(100, 25)] == (401, 4000)

@@ -1,0 +1,825 @@
+"""rsm-fakedev: a fake Pioneer P3-DX and a fake SICK LMS 2xx on pseudo-terminals.
+
+    rsm-fakedev [--robot] [--lms] [--capture CAP] [--log FILE] [--seconds S]
+                [--robot-drop AFTER:FOR] [--lms-drop AFTER:FOR]
+                [--watchdog-ms MS] [--ticks-mm N] [--no-autobaud] [--units mm|cm]
+                [--quiet]
+
+Creates one pseudo-terminal per device (both when neither ``--robot`` nor
+``--lms`` is given) and prints one ``robot PATH`` / ``laser PATH`` line per
+device on stdout, flushed, before anything else happens, so that another
+program (``rsm-nav --robot PATH --lms PATH``, a test) can open them.  The
+devices then answer like the real ones (protocols.md):
+
+* P3-DX (ARCOS): SYNC0/SYNC1/SYNC2 echo handshake (the SYNC2 reply names
+  the robot, class ``Pioneer``, subclass ``p3dx-sh``); on OPEN a standard SIP
+  every 100 ms, followed by an ENCODER packet once ENCODER > 0 was asked
+  for; CONFIG is answered with a CONFIGpac (AutoBaud 2 unless
+  ``--no-autobaud``); HOSTBAUD moves the robot to the new rate; ENABLE,
+  VEL, RVEL, ROTATE, VEL2, STOP, ESTOP drive it (motors only move while
+  enabled); PULSE and every other valid command feed the watchdog: with no
+  command for the watchdog time the robot stops, and moves again when
+  commands come back; CLOSE ends the session.  Packets with a bad checksum
+  are ignored, as ARCOS does.
+* LMS 2xx: starts at 9600 Bd, not streaming, variant 180 deg / 0.5 deg.  Every
+  request telegram is answered with ACK (0x06) then its reply, or with NAK
+  (0x15) when its CRC is wrong.  0x20 changes the mode (0x24 continuous
+  0xB0 output, 0x25 on request, 0x40/0x41/0x42 the rate: the 0xA0 reply
+  goes out at the old rate, then the unit switches; 0x00 installation mode
+  with the password); 0x3B sets the variant (0xBB); 0x74 reads the
+  configuration block (0xF4: measuring mode 0x00, units as ``--units``);
+  0x77 writes it (installation mode only); 0x31 status (0xB1), 0x3A type
+  (0xBA), 0x30 one scan, 0x10 reset (0x91, later 0x90 at 9600 Bd).  Others
+  get 0x92.  While streaming, one 0xB0 telegram goes out as soon as the
+  previous one has left at the current rate (a 181-value scan about every
+  96 ms at 38400 Bd, 385 ms at 9600).
+
+Data: without ``--capture`` the robot drives as commanded in the ``rooms``
+world of rsm-sim (128 encoder ticks per mm, wheel base 357 mm) and the
+laser ray-casts that world from the robot's pose.  With ``--capture`` the
+devices play a capture's ENCODER packets and 0xB0 telegrams (byte for byte)
+instead: scans in capture order, one per slot as above, and with every SIP
+the encoder counts of the last ENCODER packet recorded before the next
+scan to be sent (with no laser, the capture's own timing).  At the end of
+the capture the last counts and the last scan are repeated.
+
+Rates: a pseudo-terminal carries bytes at any rate, but both ends can see
+the rate the host set on it.  Each device keeps its own protocol rate and
+garbles every byte it sends while the host's port is at another rate (so a
+host that did not follow a rate change hears only noise); bytes from the
+host are taken as sent at the right rate (a pseudo-terminal cannot tell
+when the host changed its rate).
+
+Faults: ``--robot-drop AFTER:FOR`` cuts the robot's line FOR seconds,
+AFTER seconds after its first session opened (nothing is received or sent;
+the robot itself carries on, so its watchdog stops it and its session
+stays open); ``--lms-drop`` likewise, counted from its first stream start.
+
+``--log FILE`` writes one JSON object per line for everything the devices
+do (handshake steps, commands with their argument and the host's rate at
+that moment, rate changes, watchdog stops, requests, ACK/NAK, stream
+starts and stops, cuts), and a ``summary`` object per device at exit.
+SIGINT or SIGTERM (or ``--seconds``) ends the run, after the bytes the host
+had already written are handled; exit status 0, or 2 for bad arguments or
+an unreadable capture.
+"""
+
+import argparse
+import json
+import math
+import os
+import select
+import signal
+import struct
+import sys
+import termios
+import time
+import tty
+from typing import Dict, List, Optional, Sequence, Tuple
+
+from . import capture as cap
+from . import protocols as proto
+from . import sim
+
+TICKS_PER_MM = 128.0
+WHEEL_BASE_MM = 357.0
+VEL2_DIVISOR = 20.0              # mm/s per VEL2 unit (p3dx-sh)
+MAX_RANGE_M = 8.0
+LMS_TYPE = b"LMS200;301063;V02.10 "
+MIRROR_PERIOD_S = 1.0 / 75.0     # the LMS mirror turns at 75 Hz
+
+
+def _rate_codes() -> Dict[int, int]:
+    out = {}
+    for rate in (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 500000):
+        code = getattr(termios, f"B{rate}", None)
+        if code is not None:
+            out[code] = rate
+    return out
+
+
+RATE_OF_CODE = _rate_codes()
+
+
+def garble(data: bytes) -> bytes:
+    """What the far end hears at the wrong rate: bytes 0xE0..0xEF, never a
+    header, STX, ACK or NAK (the same mangling as the C tests' fake link)."""
+    return bytes(0xE0 | (b & 0x0F) for b in data)
+
+
+class Log:
+    """JSON lines, flushed one by one (a test may read them while we run)."""
+
+    def __init__(self, path: Optional[str]) -> None:
+        self.t0 = time.monotonic()
+        self.fh = open(path, "w", encoding="utf-8") if path else None
+
+    def __call__(self, dev: str, ev: str, **fields) -> None:
+        if self.fh is None:
+            return
+        rec = {"t": round(time.monotonic() - self.t0, 4), "dev": dev, "ev": ev}
+        rec.update(fields)
+        self.fh.write(json.dumps(rec) + "\n")
+        self.fh.flush()
+
+    def close(self) -> None:
+        if self.fh is not None:
+            self.fh.close()
+            self.fh = None
+
+
+class PtyPort:
+    """The device end of a pseudo-terminal; the slave stays open here too, so
+    the host may open and close it at will without hang-ups."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        os.set_blocking(self.master, False)
+        self.path = os.ttyname(self.slave)
+        self.garbled = 0        # frames sent while the host's rate differed
+        self.overflows = 0      # frames (partly) dropped because nobody read them
+
+    def host_baud(self) -> int:
+        """The rate the host has set on its end (0 if unknown)."""
+        try:
+            return RATE_OF_CODE.get(termios.tcgetattr(self.master)[5], 0)
+        except termios.error:
+            return 0
+
+    def read(self) -> bytes:
+        try:
+            return os.read(self.master, 4096)
+        except (BlockingIOError, InterruptedError):
+            return b""
+        except OSError:
+            return b""   # EIO while nobody has the slave open: nothing to read
+
+    def write(self, frame: bytes, baud: int) -> None:
+        if self.host_baud() != baud:
+            frame = garble(frame)
+            self.garbled += 1
+        view = memoryview(frame)
+        deadline = time.monotonic() + 0.2
+        while view:
+            try:
+                n = os.write(self.master, view)
+                view = view[n:]
+            except (BlockingIOError, InterruptedError):
+                if time.monotonic() >= deadline:
+                    self.overflows += 1   # the host stopped reading: drop the rest
+                    return
+                select.select([], [self.master], [], 0.02)
+
+    def close(self) -> None:
+        for fd in (self.master, self.slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+
+class Cut:
+    """A window during which a device's line is cut (``AFTER:FOR`` seconds)."""
+
+    def __init__(self, spec: Optional[Tuple[float, float]]) -> None:
+        self.spec = spec
+        self.start: Optional[float] = None
+        self.state = False
+
+    def arm(self, now: float) -> None:
+        if self.spec is not None and self.start is None:
+            self.start = now + self.spec[0]
+
+    def active(self, now: float) -> bool:
+        return (self.start is not None and self.spec is not None
+                and self.start <= now < self.start + self.spec[1])
+
+
+class Body:
+    """The simulated robot: pose (m, rad) in the rsm-sim ``rooms`` world and
+    its wheel encoder counts (fractional ticks kept)."""
+
+    def __init__(self) -> None:
+        self.segs, self.circles, path = sim.world("rooms")
+        self.x, self.y = path[0]
+        self.th = math.atan2(path[1][1] - self.y, path[1][0] - self.x)
+        self.left = 0.0
+        self.right = 0.0
+
+    def move(self, vl_mm_s: float, vr_mm_s: float, dt: float) -> None:
+        dl = vl_mm_s * dt
+        dr = vr_mm_s * dt
+        ds = 0.5 * (dl + dr) / 1000.0
+        dth = (dr - dl) / WHEEL_BASE_MM
+        self.x += ds * math.cos(self.th + 0.5 * dth)
+        self.y += ds * math.sin(self.th + 0.5 * dth)
+        self.th = math.atan2(math.sin(self.th + dth), math.cos(self.th + dth))
+        self.left += dl * TICKS_PER_MM
+        self.right += dr * TICKS_PER_MM
+
+
+class Playback:
+    """A capture's ENCODER packets and 0xB0 telegrams, in order."""
+
+    def __init__(self, path: str) -> None:
+        header, records, _ = cap.read_capture(path)
+        robot = next((c.id for c in header.channels if c.protocol == "aria"), None)
+        laser = next((c.id for c in header.channels if c.protocol == "lms2xx"), None)
+        aria = proto.FrameCounter("aria")
+        lms = proto.FrameCounter("lms2xx")
+        aria.keep = lms.keep = True
+        self.encoders: List[Tuple[int, int, int]] = []    # (time us, left, right)
+        self.scans: List[Tuple[int, bytes]] = []          # (time us, telegram)
+        for r in records:
+            if r.direction != cap.RX:
+                continue
+            if r.channel == robot:
+                aria.feed(r.data)
+                for f in aria.take():
+                    if f[3] == proto.ARIA_ENCODER:
+                        left, right = proto.decode_encoder(f)
+                        self.encoders.append((r.timestamp, left, right))
+            elif r.channel == laser:
+                lms.feed(r.data)
+                for f in lms.take():
+                    if f[4] == 0xB0:
+                        self.scans.append((r.timestamp, f))
+        if not self.encoders and not self.scans:
+            raise cap.CaptureError("no ENCODER packets and no 0xB0 telegrams in the capture")
+        stamps = [t for t, _, _ in self.encoders] + [t for t, _ in self.scans]
+        self.t_first = min(stamps)
+        self.next_scan = 0          # index of the next scan to send
+        self.enc_idx = 0
+        self.ended_logged = False
+        units = header.metadata.get("laser.units", "mm")
+        self.units = proto.UNITS_CM if units == "cm" else proto.UNITS_MM
+
+    def take_scan(self) -> Tuple[bytes, bool]:
+        """The next scan (the last one again once the capture is over) and
+        whether the capture is over."""
+        if not self.scans:
+            return b"", True
+        if self.next_scan < len(self.scans):
+            frame = self.scans[self.next_scan][1]
+            self.next_scan += 1
+            return frame, False
+        return self.scans[-1][1], True
+
+    def counts_until(self, t_us: int) -> Optional[Tuple[int, int]]:
+        """Counts of the last ENCODER packet recorded at or before t_us."""
+        while self.enc_idx + 1 < len(self.encoders) and self.encoders[self.enc_idx + 1][0] <= t_us:
+            self.enc_idx += 1
+        if not self.encoders or self.encoders[self.enc_idx][0] > t_us:
+            return None
+        _, left, right = self.encoders[self.enc_idx]
+        return left, right
+
+    def next_scan_time(self) -> int:
+        """Capture time of the scan to be sent next (the end once all are sent)."""
+        if self.next_scan < len(self.scans):
+            return self.scans[self.next_scan][0]
+        return max([t for t, _, _ in self.encoders[-1:]] + [t for t, _ in self.scans[-1:]])
+
+
+class Device:
+    """What the main loop needs of a fake device."""
+
+    dev = ""
+
+    def __init__(self, port: PtyPort, log: Log, body: Body, playback: Optional[Playback],
+                 cut: Cut, protocol: str) -> None:
+        self.port = port
+        self.log = log
+        self.body = body
+        self.playback = playback
+        self.cut = cut
+        self.baud = 9600          # the protocol rate; both devices power up at 9600
+        self.fc = proto.FrameCounter(protocol)
+        self.fc.keep = True
+        self.n: Dict[str, int] = {"dropped_rx_bytes": 0}
+
+    def send(self, frame: bytes, now: float) -> bool:
+        """Sends frame at the device's rate; False while the line is cut."""
+        if self.cut.active(now):
+            return False
+        self.port.write(frame, self.baud)
+        return True
+
+    def receive(self, data: bytes, now: float) -> None:
+        """Bytes from the host: framed, checked, handled (dropped while cut)."""
+        if self.cut.active(now):
+            self.n["dropped_rx_bytes"] += len(data)
+            return
+        bad = self.fc.bad
+        self.fc.feed(data)
+        if self.fc.bad != bad:
+            self.on_bad(self.fc.bad - bad, now)
+        for frame in self.fc.take():
+            self.on_frame(frame, now)
+
+    def on_bad(self, count: int, now: float) -> None:
+        """count frames failed their checksum or CRC."""
+        raise NotImplementedError
+
+    def on_frame(self, frame: bytes, now: float) -> None:
+        """A frame from the host whose checksum or CRC verified."""
+        raise NotImplementedError
+
+    def tick(self, now: float) -> None:
+        raise NotImplementedError
+
+    def due(self) -> float:
+        """When tick next has something to do."""
+        raise NotImplementedError
+
+    def state(self) -> Dict[str, object]:
+        """The device's state for its summary line."""
+        raise NotImplementedError
+
+    def summary(self) -> Dict[str, object]:
+        out: Dict[str, object] = dict(self.n)
+        out.update(baud=self.baud, garbled_frames=self.port.garbled, overflows=self.port.overflows)
+        out.update(self.state())
+        return out
+
+    def progress(self) -> Dict[str, int]:
+        """What a cut_start/cut_end log line says about the data sent so far."""
+        raise NotImplementedError
+
+
+class FakeRobot(Device):
+    """ARCOS on a P3-DX, as far as the host protocol shows."""
+
+    dev = "robot"
+
+    def __init__(self, port: PtyPort, log: Log, body: Body, playback: Optional[Playback],
+                 args: argparse.Namespace) -> None:
+        super().__init__(port, log, body, playback, Cut(args.robot_drop), "aria")
+        self.laser: Optional["FakeLaser"] = None
+        self.config = proto.AriaConfig(watchdog=args.watchdog_ms, ticks_mm=args.ticks_mm,
+                                       auto_baud=0 if args.no_autobaud else 2)
+        self.watchdog_s = args.watchdog_ms / 1000.0
+        self.cycle_s = self.config.sip_cycle / 1000.0
+        self.stage = 0
+        self.session = False
+        self.enabled = False
+        self.encoder_on = False
+        self.motion = ("vel", 0.0, 0.0)        # ("vel", mm/s, deg/s) or ("wheels", mm/s, mm/s)
+        self.tripped = False
+        now = time.monotonic()
+        self.last_cmd = now
+        self.last_tick = now
+        self.next_sip = now
+        self.t_open: Optional[float] = None
+        self.n.update(sips=0, encoders=0, pulses=0, commands=0, sessions=0, closes=0,
+                      watchdog_stops=0, bad_checksums=0)
+
+    # -- wire ---------------------------------------------------------------------
+    def on_bad(self, count: int, now: float) -> None:
+        self.n["bad_checksums"] += count       # ignored, as ARCOS does
+
+    def on_frame(self, frame: bytes, now: float) -> None:
+        ptype, payload = proto.aria_unframe(frame)
+        self.handle(ptype, payload, now)
+
+    # -- commands -------------------------------------------------------------------
+    def handle(self, cmd: int, payload: bytes, now: float) -> None:
+        arg = proto.aria_int_value(payload)
+        if not self.session and cmd <= 2:
+            name = f"SYNC{cmd}" if not (cmd == 1 and self.stage == 3) else "OPEN"
+        else:
+            name = proto.ARIA_COMMAND_NAMES.get(cmd, f"CMD{cmd}")
+        self.log(self.dev, "command", cmd=cmd, name=name, arg=arg, session=self.session,
+                 host_baud=self.port.host_baud(), baud=self.baud)
+        if not self.session:
+            self.handshake(cmd, now)
+            return
+        self.n["commands"] += 1
+        self.last_cmd = now
+        if self.tripped:
+            self.tripped = False
+            self.log(self.dev, "watchdog_resume")
+        if cmd == proto.CMD_PULSE:
+            self.n["pulses"] += 1
+        elif cmd == proto.CMD_CLOSE:
+            self.close_session(now)
+        elif cmd == proto.CMD_ENABLE:
+            self.enabled = bool(arg)
+            self.log(self.dev, "motors", enabled=self.enabled)
+        elif cmd == proto.CMD_CONFIG:
+            self.config.host_baud = proto.ARIA_BAUD_RATES.index(self.baud)
+            self.send(proto.encode_config_pac(self.config), now)
+        elif cmd == proto.CMD_ENCODER:
+            self.encoder_on = bool(arg and arg > 0)
+        elif cmd == proto.CMD_VEL:
+            self.motion = ("vel", float(arg or 0), self.motion[2] if self.motion[0] == "vel" else 0.0)
+        elif cmd in (proto.CMD_RVEL, proto.CMD_ROTATE):
+            self.motion = ("vel", self.motion[1] if self.motion[0] == "vel" else 0.0, float(arg or 0))
+        elif cmd == proto.CMD_VEL2:
+            word = (arg or 0) & 0xFFFF
+            left = struct.unpack("b", bytes([word >> 8]))[0]
+            right = struct.unpack("b", bytes([word & 0xFF]))[0]
+            self.motion = ("wheels", left * VEL2_DIVISOR, right * VEL2_DIVISOR)
+        elif cmd in (proto.CMD_STOP, proto.CMD_ESTOP):
+            self.motion = ("vel", 0.0, 0.0)
+        elif cmd == proto.CMD_SETO:
+            self.body.x = self.body.y = self.body.th = 0.0
+        elif cmd == proto.CMD_HOSTBAUD:
+            if arg is not None and 0 <= arg < len(proto.ARIA_BAUD_RATES):
+                old, self.baud = self.baud, proto.ARIA_BAUD_RATES[arg]
+                self.log(self.dev, "baud", old=old, new=self.baud)
+
+    def handshake(self, cmd: int, now: float) -> None:
+        if cmd == 0:
+            self.send(proto.aria_packet(proto.ARIA_SYNC0), now)
+            self.stage = 1
+        elif cmd == 1 and self.stage == 3:
+            self.open_session(now)
+        elif cmd == self.stage and cmd in (1, 2):
+            if cmd == 1:
+                self.send(proto.aria_packet(proto.ARIA_SYNC1), now)
+            else:
+                self.send(proto.encode_sync2_reply(self.config.name, self.config.robot_type,
+                                                   self.config.subtype), now)
+            self.stage += 1
+        else:
+            self.stage = 0
+        if not self.session:
+            self.log(self.dev, "sync", stage=self.stage)
+
+    def open_session(self, now: float) -> None:
+        self.session = True
+        self.enabled = False
+        self.encoder_on = False
+        self.motion = ("vel", 0.0, 0.0)
+        self.tripped = False
+        self.last_cmd = now
+        self.next_sip = now + self.cycle_s
+        self.n["sessions"] += 1
+        if self.t_open is None:
+            self.t_open = now
+            self.cut.arm(now)
+        self.log(self.dev, "open", baud=self.baud, host_baud=self.port.host_baud())
+
+    def close_session(self, now: float) -> None:
+        self.session = False
+        self.stage = 0
+        self.enabled = False
+        self.encoder_on = False
+        self.motion = ("vel", 0.0, 0.0)
+        self.n["closes"] += 1
+        self.log(self.dev, "close")
+
+    # -- time -------------------------------------------------------------------------
+    def wheel_speeds(self) -> Tuple[float, float]:
+        if not self.session or not self.enabled or self.tripped:
+            return 0.0, 0.0
+        kind, a, b = self.motion
+        if kind == "wheels":
+            return a, b
+        half = math.radians(b) * WHEEL_BASE_MM / 2.0
+        return a - half, a + half
+
+    def counts(self) -> Tuple[int, int]:
+        if self.playback is None:
+            return int(math.floor(self.body.left)), int(math.floor(self.body.right))
+        if self.laser is not None:
+            t = self.playback.next_scan_time()
+        else:
+            t = self.playback.t_first + int((time.monotonic() - (self.t_open or 0.0)) * 1e6)
+        got = self.playback.counts_until(t)
+        return got if got is not None else (self.playback.encoders[0][1],
+                                            self.playback.encoders[0][2])
+
+    def tick(self, now: float) -> None:
+        vl, vr = self.wheel_speeds()
+        if self.playback is None:
+            self.body.move(vl, vr, now - self.last_tick)
+        self.last_tick = now
+        if not self.session:
+            return
+        if not self.tripped and now - self.last_cmd > self.watchdog_s:
+            self.tripped = True
+            self.n["watchdog_stops"] += 1
+            self.log(self.dev, "watchdog_stop", silent_s=round(now - self.last_cmd, 3))
+        if now < self.next_sip:
+            return
+        self.next_sip += self.cycle_s
+        if self.next_sip < now:
+            self.next_sip = now + self.cycle_s
+        vl, vr = self.wheel_speeds()
+        b = self.body
+        sip = proto.Sip(xpos=int(round(b.x * 1000)), ypos=int(round(b.y * 1000)),
+                        thpos=int(round(b.th * 4096 / (2 * math.pi))), lvel=int(vl), rvel=int(vr),
+                        flags=0x0001 if self.enabled else 0x0000, moving=vl != 0.0 or vr != 0.0)
+        self.n["sips"] += self.send(proto.encode_sip(sip), now)
+        if self.encoder_on:
+            self.n["encoders"] += self.send(proto.encode_encoder(*self.counts()), now)
+
+    def due(self) -> float:
+        return self.next_sip if self.session else math.inf
+
+    def progress(self) -> Dict[str, int]:
+        return {"encoders": self.n["encoders"], "sips": self.n["sips"]}
+
+    def state(self) -> Dict[str, object]:
+        return {"session": self.session, "enabled": self.enabled, "encoder_on": self.encoder_on}
+
+
+class FakeLaser(Device):
+    """A SICK LMS 2xx in its binary telegram protocol."""
+
+    dev = "laser"
+
+    def __init__(self, port: PtyPort, log: Log, body: Body, playback: Optional[Playback],
+                 args: argparse.Namespace) -> None:
+        super().__init__(port, log, body, playback, Cut(args.lms_drop), "lms2xx")
+        self.units = playback.units if playback is not None else args.units
+        self.measuring_mode = 0x00
+        self.variant = (180, 50)
+        self.streaming = False
+        self.installation = False
+        self.next_scan = math.inf
+        self.power_on_at = math.inf
+        self.t_stream: Optional[float] = None
+        self.n.update(requests=0, acks=0, naks=0, not_accepted=0, scans=0, stream_starts=0)
+
+    # -- wire -------------------------------------------------------------------------
+    def reply(self, cmd: int, data: bytes, now: float) -> None:
+        self.send(proto.lms_reply(cmd, data), now)
+
+    def on_bad(self, count: int, now: float) -> None:
+        for _ in range(count):
+            # CRC or format error: NAK, and the request is not carried out.
+            self.n["naks"] += 1
+            self.log(self.dev, "nak")
+            self.send(bytes([proto.LMS_NAK]), now)
+
+    def on_frame(self, frame: bytes, now: float) -> None:
+        adr, cmd, body = proto.lms_unframe(frame)
+        if not adr & proto.LMS_REPLY_ADDR:     # a reply-shaped telegram is not for us
+            self.handle(cmd, body, now)
+
+    # -- requests -----------------------------------------------------------------------
+    def handle(self, cmd: int, data: bytes, now: float) -> None:
+        self.n["requests"] += 1
+        self.log(self.dev, "request", cmd=cmd, data=data.hex(), host_baud=self.port.host_baud(),
+                 baud=self.baud)
+        self.n["acks"] += 1
+        self.send(bytes([proto.LMS_ACK]), now)
+        if cmd == proto.LMS_CMD_MODE and data:
+            self.mode(data, now)
+        elif cmd == proto.LMS_CMD_SET_VARIANT and len(data) == 4:
+            angle, res = struct.unpack("<HH", data)
+            ok = (angle, res) in proto.LMS_VARIANTS
+            if ok:
+                self.variant = (angle, res)
+            self.log(self.dev, "variant", angle=angle, resolution=res, accepted=ok)
+            self.reply(0xBB, bytes([1 if ok else 0]) + struct.pack("<HH", *self.variant), now)
+        elif cmd == proto.LMS_CMD_GET_CONFIG and not data:
+            self.log(self.dev, "config_read")
+            self.reply(0xF4, self.config_block(), now)
+        elif cmd == proto.LMS_CMD_SET_CONFIG and len(data) == proto.LMS_CONFIG_BLOCK_LEN:
+            if not self.installation:
+                self.not_accepted(now)
+                return
+            self.measuring_mode = data[5]
+            self.units = proto.UNITS_MM if data[6] == 1 else proto.UNITS_CM
+            self.log(self.dev, "config_write", measuring_mode=data[5], units=self.units)
+            self.reply(0xF7, bytes([1]) + self.config_block(), now)
+        elif cmd == proto.LMS_CMD_GET_STATUS and not data:
+            self.reply(0xB1, self.status_block(), now)
+        elif cmd == proto.LMS_CMD_GET_TYPE and not data:
+            self.reply(0xBA, LMS_TYPE, now)
+        elif cmd == proto.LMS_CMD_GET_VALUES and data == b"\x01":
+            self.send(self.scan_frame(now), now)
+        elif cmd == proto.LMS_CMD_RESET and not data:
+            self.reply(proto.LMS_REPLY_RESET, b"", now)
+            self.reset(now)
+        else:
+            self.not_accepted(now)
+
+    def not_accepted(self, now: float) -> None:
+        self.n["not_accepted"] += 1
+        self.reply(proto.LMS_REPLY_NOT_ACK, b"", now)
+
+    def mode(self, data: bytes, now: float) -> None:
+        mode = data[0]
+        if mode in proto.LMS_MODE_BAUD and len(data) == 1:
+            new = proto.LMS_MODE_BAUD[mode]
+            if new == 500000:        # RS-422 only; this is RS-232
+                self.reply(0xA0, b"\x02", now)
+                return
+            self.reply(0xA0, b"\x00", now)   # at the old rate, then the switch
+            old, self.baud = self.baud, new
+            self.log(self.dev, "baud", old=old, new=new)
+        elif mode == proto.LMS_MODE_CONTINUOUS and len(data) == 1:
+            self.reply(0xA0, b"\x00", now)
+            self.start_stream(now)
+        elif mode == proto.LMS_MODE_ON_REQUEST and len(data) == 1:
+            self.reply(0xA0, b"\x00", now)
+            if self.streaming:
+                self.streaming = False
+                self.next_scan = math.inf
+                self.log(self.dev, "stream_stop", scans=self.n["scans"])
+        elif mode == proto.LMS_MODE_INSTALLATION and len(data) == 9:
+            ok = data[1:] == b"SICK_LMS"
+            self.installation = ok
+            self.reply(0xA0, b"\x00" if ok else b"\x01", now)
+        else:
+            self.not_accepted(now)
+
+    def start_stream(self, now: float) -> None:
+        if self.streaming:
+            return
+        self.streaming = True
+        self.next_scan = now
+        self.n["stream_starts"] += 1
+        if self.t_stream is None:
+            self.t_stream = now
+            self.cut.arm(now)
+        self.log(self.dev, "stream_start", baud=self.baud, host_baud=self.port.host_baud(),
+                 scans=self.n["scans"])
+
+    def reset(self, now: float) -> None:
+        self.streaming = False
+        self.next_scan = math.inf
+        self.installation = False
+        self.variant = (180, 50)
+        if self.baud != 9600:
+            self.log(self.dev, "baud", old=self.baud, new=9600)
+        self.baud = 9600
+        self.power_on_at = now + 1.0
+        self.log(self.dev, "reset")
+
+    def config_block(self) -> bytes:
+        return proto.lms_config_block(self.units, self.measuring_mode)
+
+    def status_block(self) -> bytes:
+        b = bytearray(152)
+        b[0:7] = b"V02.10 "
+        b[7] = proto.LMS_MODE_CONTINUOUS if self.streaming else proto.LMS_MODE_ON_REQUEST
+        b[101] = self.measuring_mode
+        struct.pack_into("<HH", b, 106, *self.variant)
+        struct.pack_into("<H", b, 115, {9600: 0x8067, 19200: 0x8033, 38400: 0x8019}.get(self.baud, 0))
+        b[121] = 1 if self.units == proto.UNITS_MM else 0
+        return bytes(b)
+
+    # -- scans ---------------------------------------------------------------------------
+    def scan_frame(self, now: float) -> bytes:
+        if self.playback is not None:
+            frame, over = self.playback.take_scan()
+            if over and not self.playback.ended_logged:
+                self.playback.ended_logged = True
+                self.log(self.dev, "capture_end")
+            return frame
+        count, start_cdeg = proto.LMS_VARIANTS[self.variant]
+        step = self.variant[1]
+        b = self.body
+        ranges = []
+        for i in range(count):
+            bearing = math.radians((start_cdeg + i * step) / 100.0 - 90.0)
+            ranges.append(sim.raycast(b.x, b.y, b.th + bearing, b.segs, b.circles, MAX_RANGE_M + 1.0))
+        return proto.encode_b0_ranges(ranges, self.units, MAX_RANGE_M)
+
+    def tick(self, now: float) -> None:
+        if now >= self.power_on_at:
+            self.power_on_at = math.inf
+            self.reply(proto.LMS_REPLY_POWER_ON, LMS_TYPE, now)
+        if not self.streaming or now < self.next_scan:
+            return
+        frame = self.scan_frame(now)
+        if frame:
+            self.n["scans"] += self.send(frame, now)
+        # The next one as soon as this one has left at the current rate.
+        self.next_scan = now + max(MIRROR_PERIOD_S, len(frame) * 10.0 / self.baud)
+
+    def due(self) -> float:
+        return min(self.next_scan, self.power_on_at)
+
+    def progress(self) -> Dict[str, int]:
+        return {"scans": self.n["scans"]}
+
+    def state(self) -> Dict[str, object]:
+        return {"streaming": self.streaming, "variant": list(self.variant), "units": self.units}
+
+
+def parse_drop(text: str) -> Tuple[float, float]:
+    try:
+        after, dur = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"want AFTER:FOR in seconds, got {text!r}") from None
+    if after < 0 or dur <= 0:
+        raise argparse.ArgumentTypeError("AFTER must be >= 0 and FOR > 0")
+    return after, dur
+
+
+class Stop(Exception):
+    pass
+
+
+def _raise_stop(signum, frame):  # noqa: ARG001
+    raise Stop(signal.Signals(signum).name)
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    ap = argparse.ArgumentParser(prog="rsm-fakedev", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--robot", action="store_true", help="a fake P3-DX (default: both devices)")
+    ap.add_argument("--lms", action="store_true", help="a fake LMS 2xx (default: both devices)")
+    ap.add_argument("--capture", help="play this capture's encoder packets and scans")
+    ap.add_argument("--log", help="write what the devices do, one JSON object per line")
+    ap.add_argument("--seconds", type=float, default=0.0, help="stop after this long (0: at a signal)")
+    ap.add_argument("--robot-drop", type=parse_drop, metavar="AFTER:FOR",
+                    help="cut the robot's line FOR s, AFTER s after its first session opened")
+    ap.add_argument("--lms-drop", type=parse_drop, metavar="AFTER:FOR",
+                    help="cut the laser's line FOR s, AFTER s after its first stream started")
+    ap.add_argument("--watchdog-ms", type=int, default=2000,
+                    help="robot watchdog: stop after this long without a command (default 2000)")
+    ap.add_argument("--ticks-mm", type=int, default=128, help="TicksMM in the CONFIGpac (default 128)")
+    ap.add_argument("--no-autobaud", action="store_true",
+                    help="CONFIGpac says AutoBaud 0 (the host should not send HOSTBAUD)")
+    ap.add_argument("--units", choices=("mm", "cm"), default="mm", help="laser units (default mm)")
+    ap.add_argument("--quiet", action="store_true")
+    a = ap.parse_args(argv)
+    if not 100 <= a.watchdog_ms <= 65535 or not 1 <= a.ticks_mm <= 65535:
+        ap.error("--watchdog-ms must be 100..65535 and --ticks-mm 1..65535")
+    if a.seconds < 0:
+        ap.error("--seconds must not be negative")
+    want_robot = a.robot or not a.lms
+    want_lms = a.lms or not a.robot
+
+    playback = None
+    if a.capture:
+        try:
+            playback = Playback(a.capture)
+        except (OSError, cap.CaptureError) as exc:
+            print(f"rsm-fakedev: cannot play {a.capture}: {exc}", file=sys.stderr)
+            return 2
+
+    signal.signal(signal.SIGTERM, _raise_stop)
+    signal.signal(signal.SIGINT, _raise_stop)
+    log = Log(a.log)
+    body = Body()
+    devices: List[Device] = []
+    try:
+        robot = FakeRobot(PtyPort("robot"), log, body, playback, a) if want_robot else None
+        laser = FakeLaser(PtyPort("laser"), log, body, playback, a) if want_lms else None
+        if robot is not None:
+            robot.laser = laser
+            devices.append(robot)
+        if laser is not None:
+            devices.append(laser)
+        for d in devices:
+            print(f"{d.port.name} {d.port.path}", flush=True)
+            log(d.dev, "start", path=d.port.path)
+        if not a.quiet:
+            print("rsm-fakedev: devices ready" + (f", playing {a.capture}" if a.capture else ""),
+                  file=sys.stderr, flush=True)
+        run(devices, log, time.monotonic() + a.seconds if a.seconds > 0 else math.inf)
+        return 0
+    except Stop as exc:
+        if not a.quiet:
+            print(f"rsm-fakedev: stopped by {exc.args[0]}", file=sys.stderr, flush=True)
+        return 0
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        for d in devices:
+            # What the host wrote before the end still counts (a host that
+            # sent CLOSE and exited may be faster than this loop).
+            for _ in range(64):
+                data = d.port.read()
+                if not data:
+                    break
+                d.receive(data, time.monotonic())
+            log(d.dev, "summary", **d.summary())
+            d.port.close()
+        log.close()
+
+
+def run(devices: Sequence[Device], log: Log, end: float) -> None:
+    """The devices' event loop: bytes from the host as they come, and each
+    device's timers, until ``end`` (monotonic seconds) or a Stop."""
+    by_fd = {d.port.master: d for d in devices}
+    while True:
+        now = time.monotonic()
+        if now >= end:
+            return
+        due = min([d.due() for d in devices] + [end])
+        ready, _, _ = select.select(list(by_fd), [], [], max(0.0, min(0.05, due - now)))
+        now = time.monotonic()
+        for fd in ready:
+            data = by_fd[fd].port.read()
+            if data:
+                by_fd[fd].receive(data, now)
+        for d in devices:
+            cut = d.cut.active(now)
+            if cut != d.cut.state:
+                d.cut.state = cut
+                log(d.dev, "cut_start" if cut else "cut_end", **d.progress())
+            d.tick(now)
+
+if __name__ == "__main__":
+    sys.exit(main())
