@@ -190,8 +190,11 @@ static void poll_robot(rsm_p3dx_t *d, const nav_stream_sink_t *sink, int quiet)
         break;
     case RSM_P3DX_EVENT_CONNECTED:
         if (!quiet) {
-            fprintf(stderr, "rsm-nav: robot connected: %s (%s %s) at %u Bd\n", d->robot.name,
-                    d->robot.robot_class, d->robot.subclass, (unsigned)d->baud);
+            fprintf(stderr,
+                    "rsm-nav: robot connected: %s (%s %s) at %u Bd; TicksMM %u, watchdog %u ms, "
+                    "AutoBaud %u\n",
+                    d->robot.name, d->robot.robot_class, d->robot.subclass, (unsigned)d->baud,
+                    (unsigned)d->ticks_mm, (unsigned)d->watchdog_ms, (unsigned)d->auto_baud);
         }
         break;
     case RSM_P3DX_EVENT_LINK_LOST:
