@@ -39,6 +39,7 @@ typedef struct fw_usart_regs {
 #define FW_USART_ROBOT ((fw_usart_regs_t *)0x40011000u) /* placeholder: P3-DX port */
 #define FW_USART_LASER ((fw_usart_regs_t *)0x40004400u) /* placeholder: LMS port */
 #define FW_SR_RXNE (1u << 5)
+#define FW_SR_TC (1u << 6)
 #define FW_SR_TXE (1u << 7)
 #define FW_CR1_RE (1u << 2)
 #define FW_CR1_TE (1u << 3)
@@ -106,8 +107,13 @@ static int fw_uart_set_baud(void *hw, uint32_t baud)
 {
     fw_usart_regs_t *usart = (fw_usart_regs_t *)hw;
     const uint32_t div = (FW_PCLK_HZ + baud / 2u) / baud;
+    uint32_t spins = FW_TX_SPIN_LIMIT;
     if (div < 16u || div > 0xFFFFu) {
         return RSM_ERR_RANGE;
+    }
+    /* The last byte written (e.g. the P3-DX's HOSTBAUD) leaves at the old
+     * rate first (hal.h): wait for transmission complete. */
+    while ((usart->sr & FW_SR_TC) == 0u && --spins != 0u) {
     }
     usart->brr = div;
     return RSM_OK;
