@@ -4,13 +4,17 @@ through the POSIX port, and we check that the serial transport loses
 nothing, that the result is as accurate as the core's floor, and that line
 noise costs only the frames it hits.
 
-The localizer's input order across the two links depends on scheduling when
-an encoder packet and a scan arrive within microseconds of each other
-(pseudo-terminals deliver asynchronously), "loses nothing" is checked on
-what each link delivered: every encoder reading and every scan, bit for
-bit, in order. The accuracy floor is checked on the deterministic capture
-path over the same bytes; the live run's own figure is printed. (Ordering
-the two links by time in live mode is open work: see the issue notes.)
+Two links do not keep the relative order of bytes written within a fraction
+of a millisecond of each other, so rsm-nav stamps what arrives and the
+aligner (src/sync.c) fuses each scan with the odometry of its own time; the
+converter spaces records 10 ms apart (1.25 ms at the 8x replay speed here).
+The live trajectory then equals the capture-mode one whenever the machine
+wakes rsm-nav within that spacing; a loaded machine may not, so equality is
+checked where it is deterministic: on every input, bit for bit, and on a
+capture whose laser records arrive up to 0.3 ms before or after their
+encoder packets (the jitter the aligner absorbs). The live run's error must
+still be within the core's floor, and how many of its poses equal the
+capture-mode ones is printed.
 """
 
 import os
@@ -119,7 +123,45 @@ def test_replay_over_ptys_delivers_every_frame_and_the_capture_tracks_within_the
         figures[name] = local
         print(f"\n{name}: local {local['translation']['mean']:.4f} m, {local['rotation']['mean']:.3f} deg")
     assert figures["capture"]["translation"]["mean"] <= 0.03
-    assert figures["live"]["translation"]["mean"] < 0.1, "live mode lost track"
+    assert figures["live"]["translation"]["mean"] <= 0.03
+    same = sum(a == b for a, b in zip(poses(cap_traj), poses(live_traj)))
+    print(f"live poses equal to capture mode: {same} of {len(stamps)}")
+
+
+def poses(path: Path):
+    return [l.split()[1:] for l in path.read_text().splitlines() if l and not l.startswith("#")]
+
+
+def test_arrival_jitter_within_the_snap_does_not_change_the_trajectory(tmp_path, excerpt_capture):
+    """Each scan telegram moved 0.3 ms after its encoder packet, or 0.3 ms
+    before it (and ahead of it in the file), as two links deliver them."""
+    header, records, _ = cap.read_capture(excerpt_capture)
+    laser = header.channel("laser").id
+    jittered = tmp_path / "jitter.cap"
+    out = []
+    flip = 0
+    for r in records:
+        if r.channel != laser:
+            out.append(r)
+            continue
+        flip ^= 1
+        if flip:
+            out.append(cap.Record(r.timestamp + 300, r.channel, r.direction, r.data))
+        else:
+            k = len(out)
+            while k > 0 and out[k - 1].timestamp == r.timestamp and out[k - 1].channel != laser:
+                k -= 1
+            out.insert(k, cap.Record(r.timestamp - 300, r.channel, r.direction, r.data))
+    with cap.CaptureWriter(jittered, header.channels, header.metadata) as w:
+        for r in out:
+            w.write(r.timestamp, r.channel, r.data, r.direction)
+    ref_traj, _, _ = run_capture_mode(excerpt_capture, tmp_path)
+    ref = poses(ref_traj)
+    res = subprocess.run([str(nav_binary()), "--capture", str(jittered), "--trajectory", str(tmp_path / "j.txt"),
+                          "--quiet"], capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    assert "600 exact" in res.stdout, res.stdout
+    assert poses(tmp_path / "j.txt") == ref
 
 
 def test_line_noise_costs_only_the_frames_it_hits(tmp_path, excerpt_capture):

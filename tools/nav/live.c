@@ -135,6 +135,8 @@ static int run_listen(const nav_live_options_t *opt, endpoint_t *robot, endpoint
         if (got > 0) {
             bytes += (uint64_t)got;
             last_data = mono_s();
+        } else if (sink->tick != NULL) {
+            sink->tick(sink->ctx, now_us); /* a scan waiting for odometry may time out */
         }
         if (opt->seconds > 0.0 && mono_s() - t0 >= opt->seconds) {
             break;
