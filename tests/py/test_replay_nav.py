@@ -55,18 +55,6 @@ def per_channel(events: Path):
     return enc, scans
 
 
-def original_scan_stamps(path: Path):
-    """Scan timestamps as the log had them (the converter clamps some)."""
-    header, records, _ = cap.read_capture(path)
-    laser = header.channel("laser").id
-    stamps = [r.timestamp for r in records if r.channel == laser]
-    for line in header.metadata.get("convert.clamped", "").splitlines():
-        kind, idx, orig, _written = line.split()
-        if kind == "FLASER":
-            stamps[int(idx)] = int(orig)
-    return [s / 1e6 for s in stamps]
-
-
 def run_capture_mode(capture: Path, tmp: Path):
     traj, events = tmp / "cap.txt", tmp / "cap.events"
     res = subprocess.run([str(nav_binary()), "--capture", str(capture), "--trajectory", str(traj),
@@ -111,7 +99,7 @@ def test_replay_over_ptys_delivers_every_frame_and_the_capture_tracks_within_the
     assert live_scans == cap_scans, "the laser link lost or changed scans"
 
     # Accuracy against the ground truth, with the log's own timestamps per scan.
-    stamps = original_scan_stamps(excerpt_capture)
+    stamps = [t / 1e6 for t in convert.original_scan_stamps(excerpt_capture)]
     rels = ev.load_relations(head_relations)
     figures = {}
     for name, path in (("capture", cap_traj), ("live", live_traj)):

@@ -310,6 +310,20 @@ def convert(log, out, units: str = "mm", readings: int = 181,
     return st
 
 
+def original_scan_stamps(path) -> List[int]:
+    """Stamps (us) of the scans of a capture made by rsm-convert, as the log had
+    them: one per laser record, with the stamps the converter moved restored
+    from ``convert.clamped``."""
+    header, records, _ = cap.read_capture(path)
+    laser = header.channel("laser").id
+    stamps = [r.timestamp for r in records if r.channel == laser and r.is_rx]
+    for line in header.metadata.get("convert.clamped", "").splitlines():
+        kind, idx, orig, _written = line.split()
+        if kind == "FLASER" and int(idx) < len(stamps):
+            stamps[int(idx)] = int(orig)
+    return stamps
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-convert", description=__doc__.split("\n\n")[0])
     ap.add_argument("log", help="CARMEN log (plain or gzip)")
