@@ -196,3 +196,48 @@ def test_line_noise_costs_only_the_frames_it_hits(tmp_path, excerpt_capture):
     assert len(noisy_enc) == len(clean_enc) - hit_encoders
     assert "CRC errors 1" in summary, summary
     assert "checksum errors" in summary
+
+
+def test_missing_devices_and_a_corrupt_capture_get_a_clear_message(tmp_path):
+    res = subprocess.run([str(nav_binary()), "--robot", str(tmp_path / "no-such-tty"), "--lms",
+                          str(tmp_path / "no-such-tty2"), "--listen", "--trajectory", str(tmp_path / "t.txt")],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 1 and "cannot open" in res.stderr and "no-such-tty" in res.stderr
+    bad = tmp_path / "bad.cap"
+    bad.write_bytes(b"\x89RSMCAP\n\x01\x00" + b"\xff" * 40)  # right magic, garbage after it
+    res = subprocess.run([str(nav_binary()), "--capture", str(bad), "--trajectory", str(tmp_path / "t.txt")],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 1 and "not a readable capture" in res.stderr
+
+
+def test_links_vanishing_mid_run_keep_what_was_written(tmp_path, excerpt_capture):
+    header, _, _ = cap.read_capture(excerpt_capture)
+    x0 = header.metadata.get("robot.initial_pose", "0 0 0").split()
+    replay = subprocess.Popen([sys.executable, "-m", "rsm_tools.replay", str(excerpt_capture), "--pty",
+                               "--wait-open", "--speed", "4", "--quiet"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=subprocess_env(),
+                              cwd=REPO_ROOT)
+    paths = {}
+    try:
+        while len(paths) < 2:
+            line = replay.stdout.readline()
+            assert line, replay.stderr.read()
+            name, path = line.split()
+            paths[name] = path
+        traj = tmp_path / "t.txt"
+        nav = subprocess.Popen([str(nav_binary()), "--robot", paths["robot"], "--lms", paths["laser"], "--listen",
+                                "--initial-pose", *x0, "--trajectory", str(traj)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(4.0)
+        replay.kill()  # both pseudo-terminals vanish at once
+        out, err = nav.communicate(timeout=60)
+    finally:
+        if replay.poll() is None:
+            replay.kill()
+        replay.wait(timeout=30)
+    assert nav.returncode == 0, err
+    assert "robot link" in err and "laser link" in err and "ended" in err
+    rows = [l.split() for l in traj.read_text().splitlines() if l and not l.startswith("#")]
+    assert 10 < len(rows) < 600, len(rows)
+    assert all(len(r) == 4 for r in rows)
+    assert "rsm-nav summary" in out and f"scans           {len(rows)}" in out
