@@ -507,6 +507,11 @@ int rsm_lms_parser_flush(rsm_lms_parser_t *p)
     return (int)held;
 }
 
+size_t rsm_lms_parser_pending(const rsm_lms_parser_t *p)
+{
+    return p == NULL ? 0u : p->wr - p->head;
+}
+
 /* ---- decoders ------------------------------------------------------------ */
 
 int rsm_lms_decode_status_byte(uint8_t status, rsm_lms_status_byte_t *out)

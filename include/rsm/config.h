@@ -101,6 +101,16 @@
 #define RSM_LINK_RX_CHUNK 128
 #endif
 
+/* ---- time alignment (sync.h) ----------------------------------------- */
+
+/* Encoder samples the odometry/scan aligner holds back so that a scan
+ * stamped before they arrived (a telegram still on the wire) is fused with
+ * odometry interpolated at its own time. 16 bytes each; at the P3-DX's
+ * 10 Hz, 16 covers 1.6 s of latency. */
+#ifndef RSM_SYNC_DEPTH
+#define RSM_SYNC_DEPTH 16
+#endif
+
 /* ---- derived values and compile-time checks ---------------------------- */
 
 #define RSM_MAP_SIZE (1 << RSM_MAP_SIZE_LOG2)
@@ -121,5 +131,6 @@ RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONA
 RSM_STATIC_ASSERT(aria_str_size, RSM_ARIA_STR_SIZE >= 8 && RSM_ARIA_STR_SIZE <= 256);
 RSM_STATIC_ASSERT(lms_telegram_size, RSM_LMS_MAX_TELEGRAM >= 812);
 RSM_STATIC_ASSERT(link_rx_chunk_range, RSM_LINK_RX_CHUNK >= 1 && RSM_LINK_RX_CHUNK <= 65536);
+RSM_STATIC_ASSERT(sync_depth_range, RSM_SYNC_DEPTH >= 2 && RSM_SYNC_DEPTH <= 1024);
 
 #endif /* RSM_CONFIG_H */

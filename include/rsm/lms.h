@@ -338,6 +338,11 @@ int rsm_lms_parser_timeout(rsm_lms_parser_t *p, rsm_lms_event_t *out);
  * Returns the number of bytes dropped (>= 0), RSM_ERR_INVAL if p is NULL. */
 int rsm_lms_parser_flush(rsm_lms_parser_t *p);
 
+/* Bytes held: the start of a telegram not yet complete (0 between
+ * telegrams). Lets a caller stamp a telegram with the arrival of its first
+ * byte. Returns 0 for NULL. */
+size_t rsm_lms_parser_pending(const rsm_lms_parser_t *p);
+
 /* ---- decoders ---------------------------------------------------------- */
 /* Every decoder takes a verified telegram (parser event or
  * rsm_lms_telegram_view), checks CMD and the data length, and fills *out.

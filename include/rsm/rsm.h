@@ -20,5 +20,6 @@
 #include "rsm/scan.h"
 #include "rsm/sicklms.h"
 #include "rsm/status.h"
+#include "rsm/sync.h"
 
 #endif /* RSM_RSM_H */

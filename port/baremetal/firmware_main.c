@@ -24,6 +24,7 @@
 #include "rsm/p3dx.h"
 #include "rsm/sicklms.h"
 #include "rsm/status.h"
+#include "rsm/sync.h"
 #include "tick_clock.h"
 #include "uart_ring.h"
 
@@ -77,6 +78,8 @@ static struct fw_stats {
 /* The two device drivers and the localizer they feed. */
 static rsm_localizer_config_t fw_loc_cfg;
 static rsm_localizer_t fw_localizer;
+static rsm_sync_config_t fw_sync_cfg;
+static rsm_sync_t fw_sync;                /* fuses each scan with odometry at its own time */
 static rsm_p3dx_config_t fw_robot_cfg;
 static rsm_p3dx_t fw_robot;
 static rsm_sicklms_config_t fw_laser_cfg;
@@ -207,7 +210,9 @@ int main(void)
         (void)rsm_p3dx_config_default(&fw_robot_cfg);
         (void)rsm_sicklms_config_default(&fw_laser_cfg);
         fw_laser_cfg.baud = 38400u; /* switch the laser up from its power-up 9600 */
+        fw_sync_cfg = rsm_sync_config_default();
         if (rsm_localizer_init(&fw_localizer, &fw_loc_cfg, &start, NULL) != RSM_OK ||
+            rsm_sync_init(&fw_sync, &fw_localizer, &fw_sync_cfg, NULL, NULL) != RSM_OK ||
             rsm_p3dx_init(&fw_robot, &fw_robot_link, &fw_clock, &fw_robot_cfg) != RSM_OK ||
             rsm_sicklms_init(&fw_laser, &fw_laser_link, &fw_clock, &fw_laser_cfg) != RSM_OK ||
             rsm_p3dx_connect(&fw_robot) != RSM_OK || rsm_sicklms_connect(&fw_laser) != RSM_OK) {
@@ -228,16 +233,18 @@ int main(void)
             rsm_p3dx_event_t rev;
             rsm_sicklms_event_t lev;
             if (rsm_p3dx_poll(&fw_robot, &rev) == RSM_OK && rev.type == RSM_P3DX_EVENT_ENCODER) {
-                (void)rsm_localizer_ticks(&fw_localizer, (uint32_t)rev.encoder.left, (uint32_t)rev.encoder.right);
+                (void)rsm_sync_encoder(&fw_sync, (uint32_t)rev.encoder.left, (uint32_t)rev.encoder.right,
+                                       rev.stamp_us);
                 moved = 1;
             }
             if (rsm_sicklms_poll(&fw_laser, &lev) == RSM_OK && lev.type == RSM_SICKLMS_EVENT_SCAN &&
                 lev.scan != NULL) {
-                (void)rsm_localizer_scan(&fw_localizer, lev.scan, NULL);
+                (void)rsm_sync_scan(&fw_sync, lev.scan);
                 moved = 1;
             }
         }
 
+        (void)rsm_sync_poll(&fw_sync, now_us); /* a scan waits at most max_wait_us for odometry */
         fw_stats.robot_overflows = rsm_uart_ring_overflows(&fw_robot_rx);
         fw_stats.laser_overflows = rsm_uart_ring_overflows(&fw_laser_rx);
         if (moved == 0) {

@@ -63,19 +63,22 @@ def test_encoder_packets_reproduce_log_odometry(tmp_path, head_log, start_ticks)
         assert any(l < 0 for l, _ in enc) or any(r < 0 for _, r in enc)
 
 
-def test_timestamps_clamped_monotonic_and_recoverable(tmp_path, head_log):
+def test_timestamps_monotonic_spread_and_recoverable(tmp_path, head_log):
     out = tmp_path / "h.cap"
     st = cv.convert(head_log, out)
     recs = log_records(head_log)
     h, got, _ = cap.read_capture(out)  # strict reader: would raise on disorder
     ts = [r.timestamp for r in got]
     assert ts == sorted(ts)
+    # records of different log lines are at least the default gap apart
+    distinct = sorted(set(ts))
+    assert min(b - a for a, b in zip(distinct, distinct[1:])) >= cv.DEFAULT_MIN_GAP_US
     assert st.clamped == int(h.metadata["convert.clamped_total"]) > 0
     table = {}
     for line in h.metadata["convert.clamped"].splitlines():
         kind, idx, orig, written = line.split()
         table[(kind, int(idx))] = (int(orig), int(written))
-    # laser telegram k carries scan k's stamp, or its clamp recorded in the table
+    # laser telegram k carries scan k's stamp, or its new stamp recorded in the table
     scans = [r for r in recs if r.kind == "FLASER"]
     laser = [r for r in got if r.channel == 1]
     assert len(laser) == len(scans) == 600
@@ -117,7 +120,7 @@ def test_command_line(tmp_path, head_log):
                           "--wheel-base", "0.4", "--max-range", "30"],
                          capture_output=True, text=True, env=subprocess_env())
     assert res.returncode == 0, res.stderr
-    assert "600 0xB0 telegrams" in res.stderr and "timestamps clamped" in res.stderr
+    assert "600 0xB0 telegrams" in res.stderr and "timestamps re-placed" in res.stderr
     h, got, _ = cap.read_capture(out)
     assert h.metadata["laser.units"] == "cm" and h.metadata["robot.ticks_per_m"] == "100000.0"
     assert h.metadata["source"] == "intel_head.clf.gz"
@@ -125,3 +128,19 @@ def test_command_line(tmp_path, head_log):
     res = subprocess.run([sys.executable, "-m", "rsm_tools.convert", str(tmp_path / "missing.clf"),
                           str(out)], capture_output=True, text=True, env=subprocess_env())
     assert res.returncode == 2 and "missing.clf" in res.stderr
+
+
+def test_monotonic_stamps_keep_the_longest_run_and_re_place_the_glitches():
+    # one stamp jumped ahead (at 2), one fell behind (at 6): only they move
+    got = cv.monotonic_stamps([100, 200, 900, 300, 400, 500, 50, 700])
+    assert got == [100, 200, 250, 300, 400, 500, 600, 700]
+    assert cv.monotonic_stamps([]) == []
+    assert cv.monotonic_stamps([5, 5, 5]) == [5, 5, 5]
+    # glitches at the ends take the nearest kept stamp
+    assert cv.monotonic_stamps([900, 100, 200, 300, 10]) == [100, 100, 200, 300, 300]
+
+
+def test_spread_stamps_keeps_a_least_gap_and_catches_up():
+    assert cv.spread_stamps([0, 1, 2, 100, 200], 10) == [0, 10, 20, 100, 200]
+    assert cv.spread_stamps([0, 0, 0, 25], 10) == [0, 10, 20, 30]
+    assert cv.spread_stamps([3, 4, 5], 0) == [3, 4, 5]

@@ -46,3 +46,23 @@ def test_missing_matplotlib_names_the_extra(tmp_path):
     assert res.returncode == 2
     assert "matplotlib" in res.stderr and "rsm-tools[plot]" in res.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def test_corrected_poses_load_and_align_rigidly_onto_a_trajectory(tmp_path):
+    import math
+    # ground truth in another frame: rotated by 90 deg and shifted
+    (tmp_path / "gt5.txt").write_text("# ts idx x y th\n10.0 3 5.0 5.0 1.5707963\n20.0 7 5.0 6.0 1.5707963\n")
+    truth = plot.load_trajectory(str(tmp_path / "gt5.txt"))
+    assert truth[0] == (10.0, 5.0, 5.0, 1.5707963)
+    traj = [(t * 1.0, 0.1 * t, 0.0, 0.0) for t in range(30)]
+    got = plot.align_to(truth, traj)
+    assert abs(got[0][1] - 1.0) < 1e-9 and abs(got[0][2]) < 1e-9 and abs(got[0][3]) < 1e-7
+    # one metre along the ground truth's heading is one metre along +x here
+    assert abs(got[1][1] - 2.0) < 1e-6 and abs(got[1][2]) < 1e-6
+    assert abs(math.hypot(got[1][1] - got[0][1], got[1][2] - got[0][2]) - 1.0) < 1e-9
+    try:
+        plot.align_to(truth, [(99.0, 0.0, 0.0, 0.0)])
+    except plot.PlotError as exc:
+        assert "no ground-truth stamp" in str(exc)
+    else:
+        raise AssertionError("aligning without a common stamp must fail")

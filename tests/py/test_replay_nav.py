@@ -4,13 +4,17 @@ through the POSIX port, and we check that the serial transport loses
 nothing, that the result is as accurate as the core's floor, and that line
 noise costs only the frames it hits.
 
-The localizer's input order across the two links depends on scheduling when
-an encoder packet and a scan arrive within microseconds of each other
-(pseudo-terminals deliver asynchronously), "loses nothing" is checked on
-what each link delivered: every encoder reading and every scan, bit for
-bit, in order. The accuracy floor is checked on the deterministic capture
-path over the same bytes; the live run's own figure is printed. (Ordering
-the two links by time in live mode is open work: see the issue notes.)
+Two links do not keep the relative order of bytes written within a fraction
+of a millisecond of each other, so rsm-nav stamps what arrives and the
+aligner (src/sync.c) fuses each scan with the odometry of its own time; the
+converter spaces records 10 ms apart (1.25 ms at the 8x replay speed here).
+The live trajectory then equals the capture-mode one whenever the machine
+wakes rsm-nav within that spacing; a loaded machine may not, so equality is
+checked where it is deterministic: on every input, bit for bit, and on a
+capture whose laser records arrive up to 0.3 ms before or after their
+encoder packets (the jitter the aligner absorbs). The live run's error must
+still be within the core's floor, and how many of its poses equal the
+capture-mode ones is printed.
 """
 
 import os
@@ -49,18 +53,6 @@ def per_channel(events: Path):
     for line in events.read_text().splitlines():
         (enc if line.startswith("E ") else scans).append(line)
     return enc, scans
-
-
-def original_scan_stamps(path: Path):
-    """Scan timestamps as the log had them (the converter clamps some)."""
-    header, records, _ = cap.read_capture(path)
-    laser = header.channel("laser").id
-    stamps = [r.timestamp for r in records if r.channel == laser]
-    for line in header.metadata.get("convert.clamped", "").splitlines():
-        kind, idx, orig, _written = line.split()
-        if kind == "FLASER":
-            stamps[int(idx)] = int(orig)
-    return [s / 1e6 for s in stamps]
 
 
 def run_capture_mode(capture: Path, tmp: Path):
@@ -107,7 +99,7 @@ def test_replay_over_ptys_delivers_every_frame_and_the_capture_tracks_within_the
     assert live_scans == cap_scans, "the laser link lost or changed scans"
 
     # Accuracy against the ground truth, with the log's own timestamps per scan.
-    stamps = original_scan_stamps(excerpt_capture)
+    stamps = [t / 1e6 for t in convert.original_scan_stamps(excerpt_capture)]
     rels = ev.load_relations(head_relations)
     figures = {}
     for name, path in (("capture", cap_traj), ("live", live_traj)):
@@ -119,7 +111,45 @@ def test_replay_over_ptys_delivers_every_frame_and_the_capture_tracks_within_the
         figures[name] = local
         print(f"\n{name}: local {local['translation']['mean']:.4f} m, {local['rotation']['mean']:.3f} deg")
     assert figures["capture"]["translation"]["mean"] <= 0.03
-    assert figures["live"]["translation"]["mean"] < 0.1, "live mode lost track"
+    assert figures["live"]["translation"]["mean"] <= 0.03
+    same = sum(a == b for a, b in zip(poses(cap_traj), poses(live_traj)))
+    print(f"live poses equal to capture mode: {same} of {len(stamps)}")
+
+
+def poses(path: Path):
+    return [l.split()[1:] for l in path.read_text().splitlines() if l and not l.startswith("#")]
+
+
+def test_arrival_jitter_within_the_snap_does_not_change_the_trajectory(tmp_path, excerpt_capture):
+    """Each scan telegram moved 0.3 ms after its encoder packet, or 0.3 ms
+    before it (and ahead of it in the file), as two links deliver them."""
+    header, records, _ = cap.read_capture(excerpt_capture)
+    laser = header.channel("laser").id
+    jittered = tmp_path / "jitter.cap"
+    out = []
+    flip = 0
+    for r in records:
+        if r.channel != laser:
+            out.append(r)
+            continue
+        flip ^= 1
+        if flip:
+            out.append(cap.Record(r.timestamp + 300, r.channel, r.direction, r.data))
+        else:
+            k = len(out)
+            while k > 0 and out[k - 1].timestamp == r.timestamp and out[k - 1].channel != laser:
+                k -= 1
+            out.insert(k, cap.Record(r.timestamp - 300, r.channel, r.direction, r.data))
+    with cap.CaptureWriter(jittered, header.channels, header.metadata) as w:
+        for r in out:
+            w.write(r.timestamp, r.channel, r.data, r.direction)
+    ref_traj, _, _ = run_capture_mode(excerpt_capture, tmp_path)
+    ref = poses(ref_traj)
+    res = subprocess.run([str(nav_binary()), "--capture", str(jittered), "--trajectory", str(tmp_path / "j.txt"),
+                          "--quiet"], capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    assert "600 exact" in res.stdout, res.stdout
+    assert poses(tmp_path / "j.txt") == ref
 
 
 def test_line_noise_costs_only_the_frames_it_hits(tmp_path, excerpt_capture):
@@ -166,3 +196,48 @@ def test_line_noise_costs_only_the_frames_it_hits(tmp_path, excerpt_capture):
     assert len(noisy_enc) == len(clean_enc) - hit_encoders
     assert "CRC errors 1" in summary, summary
     assert "checksum errors" in summary
+
+
+def test_missing_devices_and_a_corrupt_capture_get_a_clear_message(tmp_path):
+    res = subprocess.run([str(nav_binary()), "--robot", str(tmp_path / "no-such-tty"), "--lms",
+                          str(tmp_path / "no-such-tty2"), "--listen", "--trajectory", str(tmp_path / "t.txt")],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 1 and "cannot open" in res.stderr and "no-such-tty" in res.stderr
+    bad = tmp_path / "bad.cap"
+    bad.write_bytes(b"\x89RSMCAP\n\x01\x00" + b"\xff" * 40)  # right magic, garbage after it
+    res = subprocess.run([str(nav_binary()), "--capture", str(bad), "--trajectory", str(tmp_path / "t.txt")],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 1 and "not a readable capture" in res.stderr
+
+
+def test_links_vanishing_mid_run_keep_what_was_written(tmp_path, excerpt_capture):
+    header, _, _ = cap.read_capture(excerpt_capture)
+    x0 = header.metadata.get("robot.initial_pose", "0 0 0").split()
+    replay = subprocess.Popen([sys.executable, "-m", "rsm_tools.replay", str(excerpt_capture), "--pty",
+                               "--wait-open", "--speed", "4", "--quiet"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=subprocess_env(),
+                              cwd=REPO_ROOT)
+    paths = {}
+    try:
+        while len(paths) < 2:
+            line = replay.stdout.readline()
+            assert line, replay.stderr.read()
+            name, path = line.split()
+            paths[name] = path
+        traj = tmp_path / "t.txt"
+        nav = subprocess.Popen([str(nav_binary()), "--robot", paths["robot"], "--lms", paths["laser"], "--listen",
+                                "--initial-pose", *x0, "--trajectory", str(traj)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(4.0)
+        replay.kill()  # both pseudo-terminals vanish at once
+        out, err = nav.communicate(timeout=60)
+    finally:
+        if replay.poll() is None:
+            replay.kill()
+        replay.wait(timeout=30)
+    assert nav.returncode == 0, err
+    assert "robot link" in err and "laser link" in err and "ended" in err
+    rows = [l.split() for l in traj.read_text().splitlines() if l and not l.startswith("#")]
+    assert 10 < len(rows) < 600, len(rows)
+    assert all(len(r) == 4 for r in rows)
+    assert "rsm-nav summary" in out and f"scans           {len(rows)}" in out

@@ -1470,8 +1470,12 @@ void test_rsm_lms_parser_flush_should_drop_held_bytes_as_skipped(void)
     rsm_lms_event_t ev;
     size_t used = 0;
     (void)rsm_lms_parser_init(&p);
+    TEST_ASSERT_EQUAL_size_t(0, rsm_lms_parser_pending(&p));
     TEST_ASSERT_EQUAL_INT(0, rsm_lms_parser_feed(&p, v_b0_short_mm, 9, &used, &ev));
+    TEST_ASSERT_EQUAL_size_t(9, rsm_lms_parser_pending(&p));
+    TEST_ASSERT_EQUAL_size_t(0, rsm_lms_parser_pending(NULL));
     TEST_ASSERT_EQUAL_INT(9, rsm_lms_parser_flush(&p));
+    TEST_ASSERT_EQUAL_size_t(0, rsm_lms_parser_pending(&p));
     TEST_ASSERT_EQUAL_UINT32(9, p.stats.bytes_skipped);
     TEST_ASSERT_EQUAL_INT(0, rsm_lms_parser_flush(&p));
     TEST_ASSERT_EQUAL_INT(0, rsm_lms_parser_timeout(&p, &ev));

@@ -71,7 +71,11 @@ static int drain(endpoint_t *e, nav_stream_t *s, int robot, const nav_stream_sin
     for (;;) {
         const int n = rsm_link_read(&e->link, buf, sizeof buf, 0u);
         if (n < 0) {
+            /* The far end closed (a replay finished) or the device went away:
+             * what was decoded so far stays written. */
             e->ended = 1;
+            fprintf(stderr, "rsm-nav: %s link %s ended (%s)\n", robot ? "robot" : "laser", e->path,
+                    rsm_strerror(n));
             return total > 0 ? total : -1;
         }
         if (n == 0) {
@@ -135,6 +139,8 @@ static int run_listen(const nav_live_options_t *opt, endpoint_t *robot, endpoint
         if (got > 0) {
             bytes += (uint64_t)got;
             last_data = mono_s();
+        } else if (sink->tick != NULL) {
+            sink->tick(sink->ctx, now_us); /* a scan waiting for odometry may time out */
         }
         if (opt->seconds > 0.0 && mono_s() - t0 >= opt->seconds) {
             break;

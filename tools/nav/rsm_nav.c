@@ -19,6 +19,7 @@
 #include "stream.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"
+#include "rsm/sync.h"
 
 
 static void usage(FILE *f)
@@ -140,7 +141,16 @@ typedef struct nav {
     FILE *events;          /* --events: decoded inputs, one line each, in processing order */
     int have_x0;           /* --initial-pose given: overrides any other start */
     rsm_pose_t x0;
+    /* Capture and live modes: odometry and scans aligned in time (sync.h). */
+    rsm_sync_config_t sync_cfg;
+    rsm_sync_t sync;
+    double call_t0;        /* when the sync call that is fusing scans began */
+    double file_s[4];      /* trajectory stamps of scans waiting in the aligner, FIFO */
+    unsigned file_head;
+    unsigned file_count;
 } nav_t;
+
+static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep);
 
 static int nav_start(nav_t *nav, const rsm_pose_t *x0)
 {
@@ -150,7 +160,8 @@ static int nav_start(nav_t *nav, const rsm_pose_t *x0)
     if (nav->have_x0) {
         x0 = &nav->x0;
     }
-    if (rsm_localizer_init(&nav->loc, &nav->cfg, x0, NULL) != RSM_OK) {
+    if (rsm_localizer_init(&nav->loc, &nav->cfg, x0, NULL) != RSM_OK ||
+        rsm_sync_init(&nav->sync, &nav->loc, &nav->sync_cfg, on_fused, nav) != RSM_OK) {
         fprintf(stderr, "rsm-nav: invalid configuration\n");
         return -1;
     }
@@ -158,7 +169,49 @@ static int nav_start(nav_t *nav, const rsm_pose_t *x0)
     return 0;
 }
 
-/* Runs one scan; file_stamp_s is what the trajectory line carries. */
+/* Log and capture timestamps can jitter backwards while the order of the
+ * records is the true order (the Intel log does so 631 times): the
+ * localizer gets a clamped stamp, counted; the trajectory keeps the original. */
+static void nav_clamp(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us)
+{
+    if (stamp_us < nav->last_us) {
+        stamp_us = nav->last_us;
+        nav->clamped++;
+    }
+    nav->last_us = stamp_us;
+    scan->stamp_us = stamp_us;
+}
+
+/* Records one fused scan: time taken, trajectory line, map points. */
+static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, double elapsed_s,
+                       double file_stamp_s)
+{
+    if (nav->ntimes == nav->cap_times) {
+        double *nt;
+        nav->cap_times = nav->cap_times ? nav->cap_times * 2 : 4096;
+        nt = (double *)realloc(nav->times, nav->cap_times * sizeof *nt);
+        if (nt == NULL) {
+            fprintf(stderr, "rsm-nav: out of memory\n");
+            exit(1);
+        }
+        nav->times = nt;
+    }
+    nav->times[nav->ntimes++] = elapsed_s;
+    if (rc != RSM_OK) {
+        fprintf(stderr, "rsm-nav: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
+        return;
+    }
+    fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, (double)rep->pose.x, (double)rep->pose.y,
+            (double)rep->pose.theta);
+    if (nav->map_path != NULL) {
+        (void)hitlist_add(&nav->hits, nav->loc.world, rep->points);
+    }
+    if (!nav->quiet && nav->ntimes % 1000 == 0) {
+        fprintf(stderr, "rsm-nav: %zu scans, %.1f s\n", nav->ntimes, now_s() - nav->t_start);
+    }
+}
+
+/* Runs one scan directly (CARMEN logs carry the odometry of each scan). */
 static void nav_scan(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us, double file_stamp_s)
 {
     rsm_localizer_report_t rep;
@@ -170,47 +223,31 @@ static void nav_scan(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us, double fil
             return;
         }
     }
-    /* Log and capture timestamps can jitter backwards while the order of
-     * the records is the true order (the Intel log does so 631 times): feed
-     * a clamped stamp and count it; the trajectory keeps the original. */
-    if (stamp_us < nav->last_us) {
-        stamp_us = nav->last_us;
-        nav->clamped++;
-    }
-    nav->last_us = stamp_us;
-    scan->stamp_us = stamp_us;
+    nav_clamp(nav, scan, stamp_us);
     t0 = now_s();
     rc = rsm_localizer_scan(&nav->loc, scan, &rep);
-    if (nav->ntimes == nav->cap_times) {
-        double *nt;
-        nav->cap_times = nav->cap_times ? nav->cap_times * 2 : 4096;
-        nt = (double *)realloc(nav->times, nav->cap_times * sizeof *nt);
-        if (nt == NULL) {
-            fprintf(stderr, "rsm-nav: out of memory\n");
-            exit(1);
-        }
-        nav->times = nt;
+    nav_result(nav, rc, &rep, now_s() - t0, file_stamp_s);
+}
+
+/* The aligner fused a scan (capture and live modes). */
+static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep)
+{
+    nav_t *nav = (nav_t *)ctx;
+    const double now = now_s();
+    double file_s = (double)scan->stamp_us * 1e-6;
+    if (nav->file_count > 0u) {
+        file_s = nav->file_s[nav->file_head];
+        nav->file_head = (nav->file_head + 1u) % 4u;
+        nav->file_count--;
     }
-    nav->times[nav->ntimes++] = now_s() - t0;
-    if (rc != RSM_OK) {
-        fprintf(stderr, "rsm-nav: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
-        return;
-    }
-    fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, (double)rep.pose.x, (double)rep.pose.y,
-            (double)rep.pose.theta);
-    if (nav->map_path != NULL) {
-        (void)hitlist_add(&nav->hits, nav->loc.world, rep.points);
-    }
-    if (!nav->quiet && nav->ntimes % 1000 == 0) {
-        fprintf(stderr, "rsm-nav: %zu scans, %.1f s\n", nav->ntimes, now_s() - nav->t_start);
-    }
+    nav_result(nav, status, rep, now - nav->call_t0, file_s);
+    nav->call_t0 = now;
 }
 
 /* Stream sink callbacks (capture and live modes). */
 static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us)
 {
     nav_t *nav = (nav_t *)ctx;
-    (void)stamp_us;
     if (!nav->initialised) {
         const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
         if (nav_start(nav, &zero) != 0) {
@@ -221,7 +258,17 @@ static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_
     if (nav->events != NULL) {
         fprintf(nav->events, "E %ld %ld\n", (long)left, (long)right);
     }
-    (void)rsm_localizer_ticks(&nav->loc, (uint32_t)left, (uint32_t)right);
+    nav->call_t0 = now_s();
+    (void)rsm_sync_encoder(&nav->sync, (uint32_t)left, (uint32_t)right, stamp_us);
+}
+
+static void sink_tick(void *ctx, uint64_t now_us)
+{
+    nav_t *nav = (nav_t *)ctx;
+    if (nav->initialised) {
+        nav->call_t0 = now_s();
+        (void)rsm_sync_poll(&nav->sync, now_us);
+    }
 }
 
 static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
@@ -246,8 +293,21 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
         }
         fprintf(nav->events, "S %zu %08lx\n", scan->count, (unsigned long)h);
     }
+    if (!nav->initialised) {
+        const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+        if (nav_start(nav, &zero) != 0) {
+            return;
+        }
+    }
     copy = *scan;
-    nav_scan(nav, &copy, stamp_us, (double)file_us * 1e-6);
+    nav_clamp(nav, &copy, stamp_us);
+    /* At most two scans are ever inside the aligner (one waiting, one new). */
+    nav->file_s[(nav->file_head + nav->file_count) % 4u] = (double)file_us * 1e-6;
+    nav->file_count++;
+    nav->call_t0 = now_s();
+    if (rsm_sync_scan(&nav->sync, &copy) != RSM_OK) {
+        nav->file_count--; /* refused: never fused */
+    }
 }
 
 static int run_carmen(nav_t *nav, const char *path, int fov179)
@@ -453,6 +513,13 @@ static void print_summary(nav_t *nav)
             printf("    %-14s %u\n", rsm_outcome_name((rsm_outcome_t)o), (unsigned)c->outcome[o]);
         }
     }
+    if (nav->sync.counters.scans > 0u || nav->sync.counters.encoders > 0u) {
+        const rsm_sync_counters_t *a = &nav->sync.counters;
+        printf("  alignment       %u interpolated, %u exact, %u late, %u timed out, %u superseded;\n"
+               "                  encoder stamps backwards %u, applied early %u\n",
+               (unsigned)a->interpolated, (unsigned)a->exact, (unsigned)a->late, (unsigned)a->timed_out,
+               (unsigned)a->superseded, (unsigned)a->encoder_backwards, (unsigned)a->encoder_overflow);
+    }
     printf("  readings dropped: nan %u, too short %u, too long %u\n", (unsigned)c->drops.nan,
            (unsigned)c->drops.too_short, (unsigned)c->drops.too_long);
     printf("  time per scan   median %.1f us, p95 %.1f us (this machine, wall clock)\n", median * 1e6, p95 * 1e6);
@@ -605,12 +672,20 @@ int main(int argc, char **argv)
     sink.ctx = &nav;
     sink.encoder = sink_encoder;
     sink.scan = sink_scan;
+    sink.tick = sink_tick;
+    nav.sync_cfg = rsm_sync_config_default();
     if (carmen != NULL) {
         rc = run_carmen(&nav, carmen, fov179);
     } else if (capture != NULL) {
         rc = run_capture(&nav, capture, &sink);
     } else {
         rc = nav_live_run(&live, &sink);
+    }
+    if (nav.initialised) {
+        nav.call_t0 = now_s();
+        (void)rsm_sync_flush(&nav.sync); /* a scan may still wait for odometry */
+    }
+    if (carmen == NULL && capture == NULL) {
         if (rc == 0) {
             printf("rsm-nav summary\n");
             printf("  source          live: robot %s, laser %s%s\n", live.robot ? live.robot : "-",

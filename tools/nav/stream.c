@@ -34,20 +34,30 @@ void nav_stream_robot(nav_stream_t *s, const uint8_t *data, size_t n, uint64_t s
             }
         }
     } while (off < n || rsm_aria_parser_pending(&s->aria) > 0u);
+    /* After the packets: one past a waiting scan releases it exactly. */
+    if (sink->tick != NULL) {
+        sink->tick(sink->ctx, stamp_us);
+    }
 }
 
 void nav_stream_laser(nav_stream_t *s, const uint8_t *data, size_t n, uint64_t stamp_us,
                       const nav_stream_sink_t *sink)
 {
     size_t off = 0;
+    /* A telegram is stamped when its first byte arrived: at 38400 baud a
+     * 361-reading telegram is on the wire for about 0.2 s after the scan. */
+    uint64_t start_us = rsm_lms_parser_pending(&s->lms) > 0u ? s->lms_start_us : stamp_us;
     while (off < n) {
         rsm_lms_event_t ev;
+        uint64_t t_us;
         size_t used = 0;
         const int got = rsm_lms_parser_feed(&s->lms, data + off, n - off, &used, &ev);
         off += used;
         if (got != 1) {
             break;
         }
+        t_us = start_us;
+        start_us = stamp_us; /* what follows in this chunk starts the next one */
         if (ev.type != RSM_LMS_EVENT_TELEGRAM || ev.telegram.cmd != 0xB0u) {
             s->other_packets++;
             continue;
@@ -57,8 +67,12 @@ void nav_stream_laser(nav_stream_t *s, const uint8_t *data, size_t n, uint64_t s
             s->bad_scans++;
             continue;
         }
-        s->scan.stamp_us = stamp_us;
+        s->scan.stamp_us = t_us;
         s->lms_scans++;
-        sink->scan(sink->ctx, &s->scan, stamp_us);
+        sink->scan(sink->ctx, &s->scan, t_us);
+    }
+    s->lms_start_us = start_us;
+    if (sink->tick != NULL) {
+        sink->tick(sink->ctx, stamp_us);
     }
 }

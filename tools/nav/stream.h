@@ -17,8 +17,11 @@ typedef struct nav_stream_sink {
     void *ctx;
     /* An ENCODER packet: raw 32-bit counters. */
     void (*encoder)(void *ctx, int32_t left, int32_t right, uint64_t stamp_us);
-    /* A complete 0xB0 scan converted to the robot frame. */
+    /* A complete 0xB0 scan converted to the robot frame, stamped with the
+     * arrival of its telegram's first byte. */
     void (*scan)(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us);
+    /* Time passes (called before each input, and while a live link idles). */
+    void (*tick)(void *ctx, uint64_t now_us);
 } nav_stream_sink_t;
 
 typedef struct nav_stream {
@@ -30,6 +33,7 @@ typedef struct nav_stream {
     uint64_t other_packets;   /* SIPs and other ARIA packets, ACK/NAK and other LMS telegrams */
     uint64_t lms_scans;
     uint64_t bad_scans;       /* 0xB0 telegrams that did not decode or had unknown angles */
+    uint64_t lms_start_us;    /* arrival of the first byte of the telegram being received */
 } nav_stream_t;
 
 void nav_stream_init(nav_stream_t *s);

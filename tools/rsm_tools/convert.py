@@ -2,6 +2,7 @@
 
     rsm-convert LOG OUT.cap [--units mm|cm] [--readings 180|181|361]
                 [--ticks-per-m 128000] [--wheel-base 0.357] [--max-range 8.0]
+                [--start-ticks N] [--min-gap-ms 10] [--ground-truth NAME]
 
 * Every odometry pose of the log (each ODOM line and the odometry triple of
   each FLASER line) becomes one ARIA ENCODER packet (0x90) on channel
@@ -10,15 +11,23 @@
   as integers from the reconstructed pose, so quantisation never drifts.
 * Every FLASER scan becomes one LMS 0xB0 telegram on channel ``laser``
   right after its ENCODER packet, at the same timestamp.
-* File order is kept; a timestamp earlier than the previous record's is
-  clamped to it.  The clamps are counted, reported and listed in the
-  header metadata ``convert.clamped`` (``kind index original_us
-  written_us`` per line), so every original stamp can be recovered.
+* File order is kept.  The log's stamps go backwards at times because single
+  records carry a stamp far off their neighbours'; the longest
+  non-decreasing run of stamps is kept as it is and every stamp off it is
+  re-placed by linear interpolation (by position) between its kept
+  neighbours (see :func:`monotonic_stamps`).  Clamping instead would carry
+  one stamp that jumped ahead onto every record after it, and a replay would
+  deliver those records in one burst, losing their timing.  Records are then
+  spaced ``--min-gap-ms`` apart (see :func:`spread_stamps`).  Moved stamps
+  are counted, reported and listed in the header metadata
+  ``convert.clamped`` (``kind index original_us written_us`` per line), so
+  every original stamp can be recovered.
 
 Details (beam resampling, range codes) are in docs/capture.md.
 """
 
 import argparse
+import bisect
 import math
 import os
 import sys
@@ -34,6 +43,7 @@ Pose = Tuple[float, float, float]
 DEFAULT_TICKS_PER_M = 128000.0
 DEFAULT_WHEEL_BASE = 0.357
 DEFAULT_MAX_RANGE = 8.0
+DEFAULT_MIN_GAP_US = 10000
 ROBOT, LASER = 0, 1
 
 
@@ -145,6 +155,71 @@ def resample(ranges: Sequence[float], n: int) -> List[float]:
     return [ranges[int(math.floor(j * (m - 1) / (n - 1) + 0.5))] for j in range(n)]
 
 
+def monotonic_stamps(stamps: Sequence[int]) -> List[int]:
+    """Non-decreasing stamps that change as few of ``stamps`` as possible.
+
+    The longest non-decreasing subsequence keeps its stamps; each other
+    stamp is interpolated linearly (by position, rounded down) between the
+    kept stamps before and after it, or takes the nearest kept stamp at
+    either end.  O(n log n).
+    """
+    n = len(stamps)
+    if n == 0:
+        return []
+    tails: List[int] = []      # tails[k]: index ending the best run of length k + 1
+    tail_vals: List[int] = []
+    prev = [-1] * n
+    for i, t in enumerate(stamps):
+        k = bisect.bisect_right(tail_vals, t)
+        prev[i] = tails[k - 1] if k > 0 else -1
+        if k == len(tails):
+            tails.append(i)
+            tail_vals.append(t)
+        else:
+            tails[k] = i
+            tail_vals[k] = t
+    keep = [False] * n
+    i = tails[-1]
+    while i >= 0:
+        keep[i] = True
+        i = prev[i]
+    out = list(stamps)
+    kept = [i for i in range(n) if keep[i]]
+    j = 0  # kept[j] is the first kept index >= i
+    for i in range(kept[-1] + 1):
+        while kept[j] < i:
+            j += 1
+        if keep[i]:
+            continue
+        b = kept[j]
+        a = kept[j - 1] if j > 0 else None
+        if a is None:
+            out[i] = stamps[b]
+        else:
+            out[i] = stamps[a] + (stamps[b] - stamps[a]) * (i - a) // (b - a)
+    for i in range(kept[-1] + 1, n):
+        out[i] = stamps[kept[-1]]
+    return out
+
+
+def spread_stamps(stamps: Sequence[int], min_gap_us: int) -> List[int]:
+    """Non-decreasing ``stamps`` moved later where needed so that records are
+    at least ``min_gap_us`` apart (0: unchanged).
+
+    The logger stamped some runs of records within a millisecond although
+    they are a robot cycle apart; two serial links do not keep the order of
+    bytes written that close together, so a replay would mix the robot's and
+    the laser's records up.  A record is never moved earlier, and the
+    stamps catch up with the log at the next pause.
+    """
+    out: List[int] = []
+    for t in stamps:
+        if out and t < out[-1] + min_gap_us:
+            t = out[-1] + min_gap_us
+        out.append(t)
+    return out
+
+
 @dataclass
 class ConvertStats:
     odom: int = 0
@@ -157,15 +232,15 @@ class ConvertStats:
 
     def summary(self) -> str:
         return (f"{self.odom} ODOM + {self.scans} FLASER -> {self.packets} ENCODER "
-                f"packets and {self.scans} 0xB0 telegrams; {self.clamped} timestamps clamped "
-                f"({self.clamped_scans} of scans, by at most {self.max_clamp_us / 1e6:.6f} s); "
+                f"packets and {self.scans} 0xB0 telegrams; {self.clamped} timestamps re-placed "
+                f"({self.clamped_scans} of scans, moved by at most {self.max_clamp_us / 1e6:.6f} s); "
                 f"{self.split} odometry steps sent as 3 packets (sideways motion)")
 
 
 def convert(log, out, units: str = "mm", readings: int = 181,
             ticks_per_m: float = DEFAULT_TICKS_PER_M, wheel_base: float = DEFAULT_WHEEL_BASE,
             max_range: float = DEFAULT_MAX_RANGE, start_ticks: int = 0,
-            ground_truth: Optional[str] = None) -> ConvertStats:
+            ground_truth: Optional[str] = None, min_gap_us: int = DEFAULT_MIN_GAP_US) -> ConvertStats:
     """Convert the CARMEN log ``log`` to the capture ``out``; returns the counts."""
     if readings not in (180, 181, 361):
         raise ValueError("readings must be 180, 181 or 361")
@@ -173,24 +248,20 @@ def convert(log, out, units: str = "mm", readings: int = 181,
         raise ValueError("units must be mm or cm")
     recs = [r for r in read_log(log, types=("ODOM", "FLASER"))]
     st = ConvertStats()
-    # pass 1: timestamps and clamps (the side table goes into the header)
-    stamps = []
+    # pass 1: monotonic timestamps (the table of re-placed ones goes into the header)
     clamped_lines = []
-    last = None
+    original = [time_key(r.timestamp) for r in recs]
+    stamps = spread_stamps(monotonic_stamps(original), min_gap_us)
     counters = {"ODOM": 0, "FLASER": 0}
-    for r in recs:
-        t = time_key(r.timestamp)
+    for r, t, w in zip(recs, original, stamps):
         idx = counters[r.kind]
         counters[r.kind] += 1
-        if last is not None and t < last:
+        if w != t:
             st.clamped += 1
-            st.max_clamp_us = max(st.max_clamp_us, last - t)
+            st.max_clamp_us = max(st.max_clamp_us, abs(w - t))
             if r.kind == "FLASER":
                 st.clamped_scans += 1
-            clamped_lines.append(f"{r.kind} {idx} {t} {last}")
-            t = last
-        last = t
-        stamps.append(t)
+            clamped_lines.append(f"{r.kind} {idx} {t} {w}")
     first = next((r.odom_pose if isinstance(r, FLaser) else r.pose for r in recs), (0.0, 0.0, 0.0))
     meta = {
         "source": os.path.basename(str(log)),
@@ -239,6 +310,20 @@ def convert(log, out, units: str = "mm", readings: int = 181,
     return st
 
 
+def original_scan_stamps(path) -> List[int]:
+    """Stamps (us) of the scans of a capture made by rsm-convert, as the log had
+    them: one per laser record, with the stamps the converter moved restored
+    from ``convert.clamped``."""
+    header, records, _ = cap.read_capture(path)
+    laser = header.channel("laser").id
+    stamps = [r.timestamp for r in records if r.channel == laser and r.is_rx]
+    for line in header.metadata.get("convert.clamped", "").splitlines():
+        kind, idx, orig, _written = line.split()
+        if kind == "FLASER" and int(idx) < len(stamps):
+            stamps[int(idx)] = int(orig)
+    return stamps
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-convert", description=__doc__.split("\n\n")[0])
     ap.add_argument("log", help="CARMEN log (plain or gzip)")
@@ -249,15 +334,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--wheel-base", type=float, default=DEFAULT_WHEEL_BASE)
     ap.add_argument("--max-range", type=float, default=DEFAULT_MAX_RANGE,
                     help="longer ranges are sent as the LMS 'too far' code 0x1FF7 (default 8.0 m)")
+    ap.add_argument("--min-gap-ms", type=float, default=DEFAULT_MIN_GAP_US / 1000.0,
+                    help="least time between two records, so a replay keeps their order "
+                         f"(default {DEFAULT_MIN_GAP_US / 1000.0:g}; 0 keeps the log's stamps)")
     ap.add_argument("--start-ticks", type=int, default=0,
                     help="initial value of both tick counters (wraps modulo 2^32)")
     ap.add_argument("--ground-truth", help="name of a ground-truth file to note in the metadata")
     a = ap.parse_args(argv)
+    if a.min_gap_ms < 0:
+        ap.error("--min-gap-ms must not be negative")
     if a.ticks_per_m <= 0 or a.wheel_base <= 0 or a.max_range <= 0:
         ap.error("--ticks-per-m, --wheel-base and --max-range must be positive")
     try:
         st = convert(a.log, a.out, a.units, a.readings, a.ticks_per_m, a.wheel_base,
-                     a.max_range, a.start_ticks, a.ground_truth)
+                     a.max_range, a.start_ticks, a.ground_truth, int(round(a.min_gap_ms * 1000.0)))
     except OSError as exc:
         print(f"rsm-convert: {exc}", file=sys.stderr)
         return 2

@@ -1,17 +1,24 @@
 """rsm-plot: trajectories drawn over an occupancy map image.
 
     rsm-plot [--map MAP.pgm|MAP.yaml] --trajectory LABEL=FILE ... [--ground-truth FILE]
-             -o OUT.png [--title T]
+             [--align-ground-truth LABEL] -o OUT.png [--title T]
 
 The map is a PGM (P5 or P2) with a map_server YAML beside it (same stem,
 ``.yaml``) or given directly; ``resolution`` (m/pixel) and ``origin`` (x, y
 of the lower-left pixel) place it in world coordinates.  Trajectory files
-have ``timestamp x y theta`` lines (``#`` comments).
+have ``timestamp x y theta`` lines (``#`` comments); the ground truth may
+also be the dataset's corrected poses, ``timestamp scan_index x y theta``
+(five columns).  Corrected poses live in another frame: with
+``--align-ground-truth LABEL`` they are moved rigidly so that the first one
+whose stamp is in trajectory LABEL (within 1 ms) coincides with LABEL's pose
+there, and the drift after it shows.
 
 Needs matplotlib, the optional extra ``plot``: ``pip install 'rsm-tools[plot]'``.
 """
 
 import argparse
+import bisect
+import math
 import sys
 from pathlib import Path
 from typing import List, Optional, Sequence, Tuple
@@ -94,17 +101,44 @@ def load_map(arg: str):
     return rows, [x0, x0 + w * res, y0, y0 + h * res]
 
 
-def load_trajectory(path: str) -> List[Tuple[float, float, float, float]]:
+Pose = Tuple[float, float, float, float]
+
+
+def load_trajectory(path: str) -> List[Pose]:
+    """(t, x, y, theta) rows of a trajectory or of a five-column corrected-pose file."""
     rows = []
     for n, line in enumerate(Path(path).read_text().splitlines(), 1):
         s = line.strip()
         if not s or s.startswith("#"):
             continue
         f = s.split()
+        if len(f) == 5:
+            f = [f[0]] + f[2:]
         if len(f) < 4:
             raise PlotError(f"{path}:{n}: want 'timestamp x y theta'")
         rows.append(tuple(float(v) for v in f[:4]))
     return rows  # type: ignore[return-value]
+
+
+def align_to(truth: Sequence[Pose], traj: Sequence[Pose], tolerance: float = 1e-3) -> List[Pose]:
+    """``truth`` moved rigidly so that its first pose with a stamp in ``traj``
+    coincides with the trajectory's pose at that stamp."""
+    times = sorted((r[0], i) for i, r in enumerate(traj))
+    keys = [t for t, _ in times]
+    for g in truth:
+        k = bisect.bisect_left(keys, g[0] - tolerance)
+        if k < len(keys) and abs(keys[k] - g[0]) <= tolerance:
+            e = traj[times[k][1]]
+            break
+    else:
+        raise PlotError("no ground-truth stamp is in the trajectory to align to")
+    dth = e[3] - g[3]
+    c, s = math.cos(dth), math.sin(dth)
+    out = []
+    for t, x, y, th in truth:
+        dx, dy = x - g[1], y - g[2]
+        out.append((t, e[1] + c * dx - s * dy, e[2] + s * dx + c * dy, th + dth))
+    return out
 
 
 def _matplotlib():
@@ -118,19 +152,26 @@ def _matplotlib():
 
 
 def plot(out: str, trajectories: Sequence[Tuple[str, str]], map_arg: Optional[str] = None,
-         ground_truth: Optional[str] = None, title: Optional[str] = None) -> None:
+         ground_truth: Optional[str] = None, title: Optional[str] = None,
+         align_label: Optional[str] = None) -> None:
+    loaded = [(label, load_trajectory(path)) for label, path in trajectories]
+    truth = load_trajectory(ground_truth) if ground_truth else None
+    if truth is not None and align_label is not None:
+        ref = [t for label, t in loaded if label == align_label]
+        if not ref:
+            raise PlotError(f"--align-ground-truth {align_label}: no trajectory has that label")
+        truth = align_to(truth, ref[0])
     plt = _matplotlib()
     fig, ax = plt.subplots(figsize=(8, 8), dpi=100)
     if map_arg:
         rows, extent = load_map(map_arg)
         ax.imshow(rows, cmap="gray", vmin=0.0, vmax=1.0, extent=extent, origin="upper",
                   interpolation="nearest")
-    if ground_truth:
-        g = load_trajectory(ground_truth)
-        ax.plot([r[1] for r in g], [r[2] for r in g], "k--", lw=1.5, label="ground truth")
-    for label, path in trajectories:
-        t = load_trajectory(path)
+    for label, t in loaded:
         ax.plot([r[1] for r in t], [r[2] for r in t], lw=1.2, label=label)
+    if truth is not None:
+        ax.plot([r[1] for r in truth], [r[2] for r in truth], "k--o", lw=1.0, ms=3, mfc="none",
+                label="ground truth" + (f" (anchored to {align_label})" if align_label else ""))
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -147,6 +188,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--map", help="PGM map (YAML beside it) or map_server YAML")
     ap.add_argument("--trajectory", action="append", default=[], metavar="LABEL=FILE")
     ap.add_argument("--ground-truth", metavar="FILE")
+    ap.add_argument("--align-ground-truth", metavar="LABEL",
+                    help="move the ground truth onto trajectory LABEL at their first common stamp")
     ap.add_argument("-o", "--output", required=True, metavar="OUT.png")
     ap.add_argument("--title")
     a = ap.parse_args(argv)
@@ -158,7 +201,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if not trajs and not a.ground_truth:
         ap.error("nothing to plot: give --trajectory LABEL=FILE and/or --ground-truth FILE")
     try:
-        plot(a.output, trajs, a.map, a.ground_truth, a.title)
+        plot(a.output, trajs, a.map, a.ground_truth, a.title, a.align_ground_truth)
     except (PlotError, OSError, ValueError) as exc:
         print(f"rsm-plot: {exc}", file=sys.stderr)
         return 2

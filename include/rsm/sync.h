@@ -1,0 +1,120 @@
+/* Time alignment of wheel odometry and laser scans.
+ *
+ * The robot and the laser talk over two links that deliver independently:
+ * an encoder packet may arrive before or after a scan taken at the same
+ * moment, and a long LMS telegram is still on the wire for a large part of a
+ * second at 38400 baud while encoder packets keep coming. Feeding the
+ * localizer in arrival order then fuses scans with odometry from the wrong
+ * time. The aligner stands between the links and the localizer: it holds the
+ * latest encoder samples back (up to RSM_SYNC_DEPTH), and fuses each scan with
+ * odometry interpolated at the scan's own timestamp (counts split linearly in
+ * time between the samples around it, which is exact for a constant-velocity
+ * arc). A scan whose time is past the newest sample waits for a later one, at
+ * most max_wait_us.
+ *
+ * Timestamps of both inputs must come from one clock (the HAL clock in a
+ * driver, arrival times in a host tool, record times in a capture). A scan
+ * stamp should be the time of the measurement, e.g. the arrival of the
+ * telegram's first byte; scan_offset_us corrects a known fixed latency.
+ *
+ * Results are delivered through a callback, in scan order, once per scan.
+ * All state is caller-owned (about one rsm_scan_t plus 16 bytes per held
+ * sample); nothing blocks or allocates. */
+#ifndef RSM_SYNC_H
+#define RSM_SYNC_H
+
+#include <stdint.h>
+
+#include "rsm/config.h"
+#include "rsm/geom.h"
+#include "rsm/localizer.h"
+#include "rsm/scan.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct rsm_sync_config {
+    uint32_t max_wait_us;     /* longest a scan waits for odometry past its time; default 250000 */
+    uint32_t hold_us;         /* encoder samples older than the newest by this much are applied
+                               * at once (they cannot bracket a scan still to come); default 500000 */
+    int32_t scan_offset_us;   /* added to every scan stamp (negative: measured earlier); default 0 */
+    uint32_t snap_us;         /* a sample this close to the scan time counts as taken with it:
+                               * its counts are used as they are, and a scan does not wait for
+                               * a later sample (arrival jitter of two links); default 1000 */
+} rsm_sync_config_t;
+
+rsm_sync_config_t rsm_sync_config_default(void);
+
+/* How each scan was aligned, and what went wrong with the inputs. */
+typedef struct rsm_sync_counters {
+    uint32_t scans;             /* scans offered */
+    uint32_t interpolated;      /* odometry interpolated between samples around the scan time */
+    uint32_t exact;             /* a sample within snap_us of the scan time, or no odometry at all */
+    uint32_t late;              /* scan older than odometry already applied: fused with it */
+    uint32_t timed_out;         /* no sample past the scan time within max_wait_us */
+    uint32_t superseded;        /* a newer scan arrived while this one waited */
+    uint32_t encoders;          /* encoder samples offered */
+    uint32_t encoder_backwards; /* sample stamped before the previous one: taken in arrival order */
+    uint32_t encoder_overflow;  /* held samples applied early because the buffer was full */
+} rsm_sync_counters_t;
+
+/* Called once per fused scan with the localizer's status and report. */
+typedef void (*rsm_sync_result_fn)(void *ctx, const rsm_scan_t *scan, int status,
+                                   const rsm_localizer_report_t *rep);
+
+typedef struct rsm_sync_sample {
+    uint64_t stamp_us;
+    uint32_t left;
+    uint32_t right;
+} rsm_sync_sample_t;
+
+typedef struct rsm_sync {
+    rsm_localizer_t *loc;
+    const rsm_sync_config_t *cfg;     /* kept by pointer */
+    rsm_sync_result_fn on_result;
+    void *ctx;
+    rsm_sync_sample_t ring[RSM_SYNC_DEPTH]; /* samples not yet applied, oldest first */
+    uint32_t head;
+    uint32_t count;
+    rsm_sync_sample_t base;           /* the last counts applied to the localizer */
+    uint8_t have_base;
+    uint8_t holding;                  /* a scan waits in held */
+    uint64_t held_since_us;           /* its (offset) stamp: the wait runs from here */
+    rsm_scan_t held;
+    rsm_sync_counters_t counters;
+} rsm_sync_t;
+
+/* Binds the aligner to an initialised localizer (which must outlive it) and
+ * validates cfg. on_result may be NULL. Returns RSM_OK or RSM_ERR_INVAL. */
+int rsm_sync_init(rsm_sync_t *s, rsm_localizer_t *loc, const rsm_sync_config_t *cfg,
+                  rsm_sync_result_fn on_result, void *ctx);
+
+/* An encoder sample: raw counters (as rsm_localizer_ticks takes them) read at
+ * stamp_us. May fuse a waiting scan. Returns RSM_OK or RSM_ERR_INVAL. */
+int rsm_sync_encoder(rsm_sync_t *s, uint32_t left, uint32_t right, uint64_t stamp_us);
+
+/* A scan, stamped in scan->stamp_us (copied; the caller's buffer is free on
+ * return). Fuses it now when odometry past its time is already held, or
+ * when no encoder sample was ever seen; otherwise it waits. A scan already
+ * waiting is fused first with the odometry there is. Returns RSM_OK or
+ * RSM_ERR_INVAL (NULL, or more than RSM_MAX_BEAMS readings: dropped). */
+int rsm_sync_scan(rsm_sync_t *s, const rsm_scan_t *scan);
+
+/* Fuses a waiting scan whose wait has expired at now_us (call it from the
+ * main loop). Returns 1 if a scan was fused, else 0; RSM_ERR_INVAL for NULL. */
+int rsm_sync_poll(rsm_sync_t *s, uint64_t now_us);
+
+/* End of input: fuses a waiting scan with the odometry there is, then
+ * applies every held encoder sample. Returns 1 if a scan was fused, else 0. */
+int rsm_sync_flush(rsm_sync_t *s);
+
+/* Best current pose: the localizer's estimate moved on by the odometry
+ * still held back. */
+rsm_pose_t rsm_sync_pose(const rsm_sync_t *s);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_SYNC_H */

@@ -1,0 +1,267 @@
+#include "rsm/sync.h"
+
+#include <stddef.h>
+#include <string.h>
+
+#include "rsm/odometry.h"
+#include "rsm/status.h"
+
+typedef enum fuse_class {
+    FUSE_ON_TIME = 0, /* interpolated or exact, decided in fuse() */
+    FUSE_LATE,
+    FUSE_TIMED_OUT,
+    FUSE_SUPERSEDED
+} fuse_class_t;
+
+rsm_sync_config_t rsm_sync_config_default(void)
+{
+    rsm_sync_config_t c;
+    c.max_wait_us = 250000u;
+    c.hold_us = 500000u;
+    c.scan_offset_us = 0;
+    c.snap_us = 1000u;
+    return c;
+}
+
+static uint32_t counter_mask(const rsm_sync_t *s)
+{
+    const unsigned bits = s->loc->cfg->odometry.counter_bits;
+    return bits >= 32u ? 0xFFFFFFFFu : ((1u << bits) - 1u);
+}
+
+/* Signed difference to - from of two counters, modulo their width. */
+static int64_t counter_diff(uint32_t mask, uint32_t from, uint32_t to)
+{
+    const int64_t d = (int64_t)((to - from) & mask);
+    return d > (int64_t)(mask >> 1) ? d - ((int64_t)mask + 1) : d;
+}
+
+/* from + (to - from) * num / den, rounded to nearest; den > 0, num <= den.
+ * |diff| < 2^31 and num < 2^32 keep the product inside int64. */
+static uint32_t counter_lerp(uint32_t mask, uint32_t from, uint32_t to, uint64_t num, uint64_t den)
+{
+    const int64_t d = counter_diff(mask, from, to);
+    const int64_t p = d * (int64_t)num;
+    const int64_t half = (int64_t)(den / 2u);
+    const int64_t part = p >= 0 ? (p + half) / (int64_t)den : -((-p + half) / (int64_t)den);
+    return (uint32_t)((uint32_t)((int64_t)from + part) & mask);
+}
+
+static void apply(rsm_sync_t *s, const rsm_sync_sample_t *smp)
+{
+    /* The first sample only latches the counters (RSM_ERR_AGAIN). */
+    (void)rsm_localizer_ticks(s->loc, smp->left, smp->right);
+    s->base = *smp;
+    s->have_base = 1u;
+}
+
+static const rsm_sync_sample_t *front(const rsm_sync_t *s)
+{
+    return s->count > 0u ? &s->ring[s->head] : NULL;
+}
+
+static const rsm_sync_sample_t *newest(const rsm_sync_t *s)
+{
+    if (s->count > 0u) {
+        return &s->ring[(s->head + s->count - 1u) % RSM_SYNC_DEPTH];
+    }
+    return s->have_base ? &s->base : NULL;
+}
+
+static void apply_front(rsm_sync_t *s)
+{
+    const rsm_sync_sample_t smp = s->ring[s->head];
+    s->head = (s->head + 1u) % RSM_SYNC_DEPTH;
+    s->count--;
+    apply(s, &smp);
+}
+
+static uint64_t scan_time(const rsm_sync_t *s, const rsm_scan_t *scan)
+{
+    const int64_t off = (int64_t)s->cfg->scan_offset_us;
+    if (off < 0 && scan->stamp_us < (uint64_t)(-off)) {
+        return 0u;
+    }
+    return (uint64_t)((int64_t)scan->stamp_us + off);
+}
+
+/* Brings the odometry up to time t and runs the scan. */
+static void fuse(rsm_sync_t *s, const rsm_scan_t *scan, uint64_t t, fuse_class_t cls)
+{
+    rsm_localizer_report_t rep;
+    const rsm_sync_sample_t *next;
+    int rc;
+    while ((next = front(s)) != NULL && next->stamp_us <= t) {
+        apply_front(s);
+    }
+    if (cls == FUSE_ON_TIME) {
+        /* A sample within snap_us of t (before it, or else just after it)
+         * counts as taken with the scan: the two links' arrival jitter. */
+        const uint32_t snap = s->cfg->snap_us;
+        if (next == NULL || (s->have_base && t - s->base.stamp_us <= snap)) {
+            s->counters.exact++;
+        } else if (next->stamp_us - t <= snap || !s->have_base) {
+            apply_front(s);
+            s->counters.exact++;
+        } else {
+            /* next is past t: split the step between base and next at t. */
+            const uint32_t mask = counter_mask(s);
+            const uint64_t den = next->stamp_us - s->base.stamp_us;
+            const uint64_t num = t - s->base.stamp_us;
+            rsm_sync_sample_t mid;
+            if (den > 0xFFFFFFFFu) {
+                mid = s->base; /* over an hour between samples: nothing to interpolate */
+            } else {
+                mid.stamp_us = t;
+                mid.left = counter_lerp(mask, s->base.left, next->left, num, den);
+                mid.right = counter_lerp(mask, s->base.right, next->right, num, den);
+            }
+            apply(s, &mid);
+            s->counters.interpolated++;
+        }
+    } else if (cls == FUSE_LATE) {
+        s->counters.late++;
+    } else if (cls == FUSE_TIMED_OUT) {
+        s->counters.timed_out++;
+    } else {
+        s->counters.superseded++;
+    }
+    rc = rsm_localizer_scan(s->loc, scan, &rep);
+    if (s->on_result != NULL) {
+        s->on_result(s->ctx, scan, rc, &rep);
+    }
+}
+
+static void fuse_held(rsm_sync_t *s, fuse_class_t cls)
+{
+    s->holding = 0u;
+    fuse(s, &s->held, s->held_since_us, cls);
+}
+
+int rsm_sync_init(rsm_sync_t *s, rsm_localizer_t *loc, const rsm_sync_config_t *cfg,
+                  rsm_sync_result_fn on_result, void *ctx)
+{
+    if (s == NULL || loc == NULL || loc->cfg == NULL || cfg == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (cfg->max_wait_us == 0u && cfg->hold_us == 0u) {
+        /* Both zero would still work, but means "no alignment": say so. */
+        return RSM_ERR_INVAL;
+    }
+    memset(s, 0, sizeof *s);
+    s->loc = loc;
+    s->cfg = cfg;
+    s->on_result = on_result;
+    s->ctx = ctx;
+    return RSM_OK;
+}
+
+int rsm_sync_encoder(rsm_sync_t *s, uint32_t left, uint32_t right, uint64_t stamp_us)
+{
+    const rsm_sync_sample_t *last;
+    rsm_sync_sample_t smp;
+    if (s == NULL || s->loc == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    s->counters.encoders++;
+    last = newest(s);
+    if (last != NULL && stamp_us < last->stamp_us) {
+        /* Arrival order is the true order of one link's packets. */
+        stamp_us = last->stamp_us;
+        s->counters.encoder_backwards++;
+    }
+    smp.stamp_us = stamp_us;
+    smp.left = left;
+    smp.right = right;
+    if (s->count == RSM_SYNC_DEPTH) {
+        apply_front(s);
+        s->counters.encoder_overflow++;
+    }
+    s->ring[(s->head + s->count) % RSM_SYNC_DEPTH] = smp;
+    s->count++;
+    if (s->holding) {
+        if (stamp_us + s->cfg->snap_us >= s->held_since_us) {
+            fuse_held(s, FUSE_ON_TIME);
+        } else {
+            apply_front(s); /* before the waiting scan: apply it now */
+        }
+    }
+    while (s->count > 0u && s->ring[s->head].stamp_us + s->cfg->hold_us < stamp_us) {
+        apply_front(s);
+    }
+    return RSM_OK;
+}
+
+int rsm_sync_scan(rsm_sync_t *s, const rsm_scan_t *scan)
+{
+    const rsm_sync_sample_t *last;
+    uint64_t t;
+    if (s == NULL || s->loc == NULL || scan == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    s->counters.scans++;
+    if (scan->count > RSM_MAX_BEAMS) {
+        return RSM_ERR_INVAL;
+    }
+    if (s->holding) {
+        fuse_held(s, FUSE_SUPERSEDED);
+    }
+    t = scan_time(s, scan);
+    last = newest(s);
+    if (last == NULL || last->stamp_us + s->cfg->snap_us >= t) {
+        /* No odometry at all, or some at or past the scan's time. */
+        fuse(s, scan, t, (s->have_base && t < s->base.stamp_us) ? FUSE_LATE : FUSE_ON_TIME);
+        return RSM_OK;
+    }
+    /* Every held sample predates the scan: apply them and wait for one past it. */
+    while (s->count > 0u) {
+        apply_front(s);
+    }
+    s->held = *scan;
+    s->held_since_us = t;
+    s->holding = 1u;
+    return RSM_OK;
+}
+
+int rsm_sync_poll(rsm_sync_t *s, uint64_t now_us)
+{
+    if (s == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (s->holding && now_us >= s->held_since_us && now_us - s->held_since_us >= s->cfg->max_wait_us) {
+        fuse_held(s, FUSE_TIMED_OUT);
+        return 1;
+    }
+    return 0;
+}
+
+int rsm_sync_flush(rsm_sync_t *s)
+{
+    int fused = 0;
+    if (s == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (s->holding) {
+        fuse_held(s, FUSE_TIMED_OUT);
+        fused = 1;
+    }
+    while (s->count > 0u) {
+        apply_front(s);
+    }
+    return fused;
+}
+
+rsm_pose_t rsm_sync_pose(const rsm_sync_t *s)
+{
+    rsm_pose_t pose = rsm_localizer_pose(s->loc);
+    const rsm_sync_sample_t *from = s->have_base ? &s->base : front(s);
+    const rsm_sync_sample_t *to = newest(s);
+    if (from != NULL && to != NULL && from != to) {
+        const uint32_t mask = counter_mask(s);
+        const int64_t dl = counter_diff(mask, from->left, to->left);
+        const int64_t dr = counter_diff(mask, from->right, to->right);
+        const rsm_motion_t u = rsm_odometry_from_ticks(&s->loc->cfg->odometry, (int32_t)dl, (int32_t)dr);
+        pose = rsm_odometry_apply(&pose, &u);
+    }
+    return pose;
+}

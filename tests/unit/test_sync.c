@@ -1,0 +1,383 @@
+/* Unit tests for src/sync.c: scans fused with odometry interpolated at their
+ * own time, whatever order the two links delivered them in. The localizer
+ * runs odometry-only, so every reported pose is the prediction and shows
+ * exactly which encoder counts were applied before the scan. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "rsm/localizer.h"
+#include "rsm/status.h"
+#include "rsm/sync.h"
+#include "test_support.h"
+#include "unity.h"
+
+#define TICKS_PER_M 128000.0f
+#define MAX_RESULTS 64
+
+static rsm_localizer_config_t lcfg;
+static rsm_sync_config_t scfg;
+static rsm_localizer_t loc;
+static rsm_sync_t sync;
+static rsm_scan_t scan;
+
+typedef struct results {
+    size_t n;
+    uint64_t stamp[MAX_RESULTS];
+    float x[MAX_RESULTS];
+    int status[MAX_RESULTS];
+} results_t;
+
+static results_t res;
+
+static void on_result(void *ctx, const rsm_scan_t *s, int status, const rsm_localizer_report_t *rep)
+{
+    results_t *r = (results_t *)ctx;
+    TEST_ASSERT_TRUE_MESSAGE(r->n < MAX_RESULTS, "more results than the test expects");
+    r->stamp[r->n] = s->stamp_us;
+    r->x[r->n] = rep->pose.x;
+    r->status[r->n] = status;
+    r->n++;
+}
+
+void setUp(void)
+{
+    const rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};
+    size_t k;
+    lcfg = rsm_localizer_config_default();
+    lcfg.method = RSM_METHOD_ODOMETRY;
+    scfg = rsm_sync_config_default();
+    scfg.snap_us = 0u; /* the tests below use stamps 100 us apart; snapping has its own tests */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &lcfg, &x0, NULL));
+    memset(&res, 0, sizeof res);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_init(&sync, &loc, &scfg, on_result, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_scan_set_uniform(&scan, 181, -1.5707963f, 0.017453292f));
+    for (k = 0; k < scan.count; ++k) {
+        scan.range_m[k] = 2.0f;
+    }
+}
+
+void tearDown(void)
+{
+}
+
+/* Straight-line odometry: both wheels at the same count. */
+static void enc(uint32_t ticks, uint64_t stamp_us)
+{
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_encoder(&sync, ticks, ticks, stamp_us));
+}
+
+static void scan_at(uint64_t stamp_us)
+{
+    scan.stamp_us = stamp_us;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_scan(&sync, &scan));
+}
+
+static float metres(double ticks)
+{
+    return (float)(ticks / (double)TICKS_PER_M);
+}
+
+void test_init_should_reject_bad_arguments(void)
+{
+    rsm_sync_config_t none = scfg;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(NULL, &loc, &scfg, NULL, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(&sync, NULL, &scfg, NULL, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(&sync, &loc, NULL, NULL, NULL));
+    none.max_wait_us = 0u;
+    none.hold_us = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(&sync, &loc, &none, NULL, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_encoder(NULL, 0u, 0u, 0u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_scan(&sync, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_poll(NULL, 0u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_flush(NULL));
+}
+
+void test_scan_without_any_odometry_should_be_fused_at_once(void)
+{
+    scan_at(1000u);
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, res.status[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.exact);
+}
+
+void test_scan_stamped_with_its_encoder_packet_should_see_exactly_those_counts(void)
+{
+    /* Capture order: ENC(t) then SCAN(t) at the same stamp. */
+    enc(0u, 100u);
+    enc(12800u, 200u);
+    scan_at(200u);
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.1f, res.x[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.exact);
+    /* A packet with the same stamp after the scan comes after it. */
+    enc(25600u, 200u);
+    enc(38400u, 300u);
+    scan_at(300u);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.3f, res.x[1]);
+}
+
+void test_scan_arriving_before_its_odometry_should_wait_and_interpolate(void)
+{
+    enc(0u, 100u);
+    enc(12800u, 200u);
+    scan_at(250u);
+    TEST_ASSERT_EQUAL_size_t(0, res.n); /* waits for a sample past 250 */
+    enc(25600u, 300u);
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(19200.0), res.x[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.interpolated);
+    /* The rest of the step is held back, and shown by rsm_sync_pose. */
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(19200.0), rsm_localizer_pose(&loc).x);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.2f, rsm_sync_pose(&sync).x);
+    TEST_ASSERT_EQUAL_INT(0, rsm_sync_flush(&sync));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.2f, rsm_localizer_pose(&loc).x);
+}
+
+void test_scan_arriving_after_later_odometry_should_be_fused_at_its_own_time(void)
+{
+    /* A long telegram: stamped at its first byte, complete 2 packets later. */
+    enc(0u, 100u);
+    enc(12800u, 200u);
+    enc(25600u, 300u);
+    enc(38400u, 400u);
+    scan_at(225u);
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(16000.0), res.x[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.interpolated);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.3f, rsm_sync_pose(&sync).x);
+}
+
+void test_interpolation_should_not_depend_on_which_link_arrived_first(void)
+{
+    float a;
+    enc(0u, 100u);
+    scan_at(150u);
+    enc(12800u, 200u);
+    a = res.x[0];
+    setUp();
+    enc(0u, 100u);
+    enc(12800u, 200u);
+    scan_at(150u);
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_EQUAL_FLOAT(a, res.x[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.05f, a);
+}
+
+void test_interpolation_should_follow_counter_wrap_around(void)
+{
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_encoder(&sync, 0xFFFFF000u, 0x00000800u, 100u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_encoder(&sync, 0x00001000u, 0x00002800u, 300u));
+    scan_at(200u);
+    /* Each wheel moves 8192 counts (the left one through zero); half by t = 200. */
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(4096.0), res.x[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.0f, res.x[0] - rsm_localizer_pose(&loc).x);
+}
+
+void test_waiting_scan_should_time_out_with_the_odometry_there_is(void)
+{
+    enc(0u, 100u);
+    enc(12800u, 200u);
+    scan_at(1000u);
+    TEST_ASSERT_EQUAL_INT(0, rsm_sync_poll(&sync, 1000u + scfg.max_wait_us - 1u));
+    TEST_ASSERT_EQUAL_size_t(0, res.n);
+    TEST_ASSERT_EQUAL_INT(1, rsm_sync_poll(&sync, 1000u + scfg.max_wait_us));
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.1f, res.x[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.timed_out);
+    TEST_ASSERT_EQUAL_INT(0, rsm_sync_poll(&sync, 10000000u));
+}
+
+void test_newer_scan_should_release_a_waiting_one_first(void)
+{
+    enc(0u, 100u);
+    scan_at(150u);
+    scan_at(160u);
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_EQUAL_UINT64(150u, res.stamp[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.superseded);
+    enc(12800u, 200u);
+    TEST_ASSERT_EQUAL_size_t(2, res.n);
+    TEST_ASSERT_EQUAL_UINT64(160u, res.stamp[1]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(7680.0), res.x[1]);
+}
+
+void test_flush_should_fuse_the_waiting_scan_and_apply_all_odometry(void)
+{
+    enc(0u, 100u);
+    scan_at(150u);
+    TEST_ASSERT_EQUAL_INT(1, rsm_sync_flush(&sync));
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    enc(12800u, 200u);
+    enc(25600u, 300u);
+    TEST_ASSERT_EQUAL_INT(0, rsm_sync_flush(&sync));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.2f, rsm_localizer_pose(&loc).x);
+}
+
+void test_scan_older_than_applied_odometry_should_count_as_late(void)
+{
+    enc(0u, 100u);
+    enc(12800u, 200u);
+    enc(25600u, 300u);
+    scan_at(300u);
+    scan_at(250u); /* stamped before odometry already applied */
+    TEST_ASSERT_EQUAL_size_t(2, res.n);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.late);
+    /* The localizer itself refuses a scan older than the previous one. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_ORDER, res.status[1]);
+}
+
+void test_backwards_encoder_stamp_should_be_taken_in_arrival_order(void)
+{
+    enc(0u, 100u);
+    enc(12800u, 300u);
+    enc(25600u, 200u); /* stamped 200, treated as 300 */
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.encoder_backwards);
+    scan_at(300u);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.2f, res.x[0]);
+}
+
+void test_old_samples_should_be_applied_after_the_hold_time(void)
+{
+    enc(0u, 0u);
+    enc(12800u, 100000u);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, rsm_localizer_pose(&loc).x);
+    enc(25600u, 100000u + scfg.hold_us + 1u);
+    /* The first two are older than the hold time: applied. */
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.1f, rsm_localizer_pose(&loc).x);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.2f, rsm_sync_pose(&sync).x);
+}
+
+void test_full_buffer_should_apply_the_oldest_sample_and_count_it(void)
+{
+    uint32_t k;
+    scfg.hold_us = 0xFFFFFFFFu;
+    for (k = 0; k < RSM_SYNC_DEPTH + 2u; ++k) {
+        enc(k * 1280u, 100u + k);
+    }
+    TEST_ASSERT_EQUAL_UINT32(2u, sync.counters.encoder_overflow);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(1280.0), rsm_localizer_pose(&loc).x);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(1280.0 * (RSM_SYNC_DEPTH + 1)), rsm_sync_pose(&sync).x);
+}
+
+void test_scan_offset_should_move_the_alignment_time(void)
+{
+    scfg.scan_offset_us = -100;
+    enc(0u, 100u);
+    enc(12800u, 200u);
+    enc(25600u, 300u);
+    scan_at(250u); /* measured at 150 */
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.05f, res.x[0]);
+    TEST_ASSERT_EQUAL_UINT64(250u, res.stamp[0]); /* the scan keeps its own stamp */
+}
+
+void test_default_config_should_snap_within_a_millisecond(void)
+{
+    TEST_ASSERT_EQUAL_UINT32(1000u, rsm_sync_config_default().snap_us);
+    TEST_ASSERT_EQUAL_UINT32(250000u, rsm_sync_config_default().max_wait_us);
+    TEST_ASSERT_EQUAL_UINT32(500000u, rsm_sync_config_default().hold_us);
+    TEST_ASSERT_EQUAL_INT32(0, rsm_sync_config_default().scan_offset_us);
+}
+
+void test_scan_just_after_its_packet_should_snap_to_it_without_waiting(void)
+{
+    scfg.snap_us = 1000u;
+    enc(0u, 100u);
+    enc(12800u, 10000u);
+    scan_at(10300u); /* the laser link delivered 0.3 ms after the robot link */
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_EQUAL_FLOAT(0.1f, res.x[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.exact);
+    TEST_ASSERT_EQUAL_UINT32(0u, sync.counters.interpolated);
+}
+
+void test_scan_just_before_its_packet_should_snap_to_it(void)
+{
+    scfg.snap_us = 1000u;
+    enc(0u, 100u);
+    scan_at(9800u); /* the laser link won the race by 0.2 ms */
+    TEST_ASSERT_EQUAL_size_t(0, res.n);
+    enc(12800u, 10000u);
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_EQUAL_FLOAT(0.1f, res.x[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.exact);
+}
+
+void test_scan_between_packets_beyond_the_snap_should_interpolate(void)
+{
+    scfg.snap_us = 1000u;
+    enc(0u, 100u);
+    enc(12800u, 10100u);
+    enc(25600u, 20100u);
+    scan_at(12600u); /* a quarter into the second step */
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(16000.0), res.x[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.interpolated);
+}
+
+void test_oversized_scan_should_be_refused_and_not_fused(void)
+{
+    scan.count = RSM_MAX_BEAMS + 1u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_scan(&sync, &scan));
+    TEST_ASSERT_EQUAL_size_t(0, res.n);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.scans);
+}
+
+void test_every_scan_should_be_fused_once_in_order_whatever_the_arrival_order(void)
+{
+    /* Two links shuffled over 50 steps: each scan (stamped halfway between
+     * two packets) arrives before or after the packet that follows it. */
+    uint32_t i;
+    uint32_t fused;
+    uint32_t rng = 7u;
+    enc(0u, 100u);
+    for (i = 1; i <= 50u; ++i) {
+        const uint64_t t = 100u + 100u * i;
+        if (rsm_test_rng_next(&rng) & 1u) {
+            scan_at(t - 50u);
+            enc(i * 1280u, t);
+        } else {
+            enc(i * 1280u, t);
+            scan_at(t - 50u);
+        }
+    }
+    (void)rsm_sync_flush(&sync);
+    fused = sync.counters.interpolated + sync.counters.exact + sync.counters.late + sync.counters.timed_out +
+            sync.counters.superseded;
+    TEST_ASSERT_EQUAL_UINT32(50u, sync.counters.scans);
+    TEST_ASSERT_EQUAL_UINT32(50u, fused);
+    TEST_ASSERT_EQUAL_UINT32(50u, sync.counters.interpolated);
+    TEST_ASSERT_EQUAL_size_t(50, res.n);
+    for (i = 0; i < 50u; ++i) {
+        TEST_ASSERT_EQUAL_UINT64(150u + 100u * i, res.stamp[i]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-5f, metres(1280.0 * (i + 0.5)), res.x[i]);
+    }
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.outcome[RSM_SCAN_OUT_OF_ORDER]);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_init_should_reject_bad_arguments);
+    RUN_TEST(test_scan_without_any_odometry_should_be_fused_at_once);
+    RUN_TEST(test_scan_stamped_with_its_encoder_packet_should_see_exactly_those_counts);
+    RUN_TEST(test_scan_arriving_before_its_odometry_should_wait_and_interpolate);
+    RUN_TEST(test_scan_arriving_after_later_odometry_should_be_fused_at_its_own_time);
+    RUN_TEST(test_interpolation_should_not_depend_on_which_link_arrived_first);
+    RUN_TEST(test_interpolation_should_follow_counter_wrap_around);
+    RUN_TEST(test_waiting_scan_should_time_out_with_the_odometry_there_is);
+    RUN_TEST(test_newer_scan_should_release_a_waiting_one_first);
+    RUN_TEST(test_flush_should_fuse_the_waiting_scan_and_apply_all_odometry);
+    RUN_TEST(test_scan_older_than_applied_odometry_should_count_as_late);
+    RUN_TEST(test_backwards_encoder_stamp_should_be_taken_in_arrival_order);
+    RUN_TEST(test_old_samples_should_be_applied_after_the_hold_time);
+    RUN_TEST(test_full_buffer_should_apply_the_oldest_sample_and_count_it);
+    RUN_TEST(test_scan_offset_should_move_the_alignment_time);
+    RUN_TEST(test_default_config_should_snap_within_a_millisecond);
+    RUN_TEST(test_scan_just_after_its_packet_should_snap_to_it_without_waiting);
+    RUN_TEST(test_scan_just_before_its_packet_should_snap_to_it);
+    RUN_TEST(test_scan_between_packets_beyond_the_snap_should_interpolate);
+    RUN_TEST(test_oversized_scan_should_be_refused_and_not_fused);
+    RUN_TEST(test_every_scan_should_be_fused_once_in_order_whatever_the_arrival_order);
+    return UNITY_END();
+}
