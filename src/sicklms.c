@@ -425,7 +425,7 @@ int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan
  * receive time less the configured latency. */
 static int convert_scan(rsm_sicklms_t *d)
 {
-    const uint64_t rx = d->io.stamp_us;
+    const uint64_t rx = d->tel_start_us;
     const int invalid = rsm_sicklms_to_scan(&d->raw, d->cfg->upside_down, &d->scan);
     if (invalid < 0) {
         return invalid;
@@ -515,8 +515,15 @@ static int drain_cb(void *drv, uint64_t now)
     rsm_lms_event_t e;
     for (;;) {
         size_t used = 0u;
-        const int r = rsm_lms_parser_feed(&d->parser, d->io.buf + d->io.off,
-                                          d->io.len - d->io.off, &used, &e);
+        int r;
+        if (rsm_lms_parser_pending(&d->parser) == 0u && d->io.off < d->io.len) {
+            /* Whatever telegram comes next starts in this read: its scan is
+             * stamped with the arrival of its first byte, not of its last
+             * (a 361-value telegram is on the wire for 0.2 s at 38400 Bd). */
+            d->tel_start_us = d->io.stamp_us;
+        }
+        r = rsm_lms_parser_feed(&d->parser, d->io.buf + d->io.off, d->io.len - d->io.off, &used,
+                                &e);
         if (r < 0) {
             d->io.off = d->io.len;
             break;

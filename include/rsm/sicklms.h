@@ -27,9 +27,11 @@
  * the robot-frame bearing a - 90 deg (x forward, y left, CCW positive;
  * 90 deg - a when mounted upside down), ranges in metres, invalid readings
  * (error codes) stored as range 0 so that the core drops and counts them.
- * The scan is stamped with the receive time of the read that completed the
- * telegram, minus config.latency_us. No telegram for stream_timeout_us
- * gives a LINK_LOST event and a new start-up.
+ * The scan is stamped with the receive time of the read that brought the
+ * telegram's first byte (the scan was measured before it was sent; a
+ * 361-value telegram takes 0.2 s at 38400 Bd), minus config.latency_us, as
+ * rsm/sync.h expects. No telegram for stream_timeout_us gives a LINK_LOST
+ * event and a new start-up.
  *
  * Shutdown (protocols.md 2.10 step 8), started by rsm_sicklms_disconnect
  * and run by later polls like the start-up: 0x20 0x25 (stop the stream),
@@ -78,7 +80,7 @@ typedef struct rsm_sicklms_config {
     uint32_t retry_wait_us;     /* pause after an ERROR before starting again [1 000 000] */
     uint32_t stream_timeout_us; /* silence while streaming = link lost [1 000 000] */
     uint32_t byte_timeout_us;   /* partial telegram abandoned after this silence [100 000] */
-    uint32_t latency_us;        /* subtracted from the receive time of a scan [0] */
+    uint32_t latency_us;        /* subtracted from the arrival of a scan's first byte [0] */
     uint8_t read_config;        /* 1: read the configuration block (0x74) at start-up
                                    and decode 0xB0 with its distance bits and index
                                    bytes [1] */
@@ -175,6 +177,7 @@ typedef struct rsm_sicklms {
     size_t req_len;
     uint64_t deadline_us;
     uint64_t last_tel_us;      /* last telegram while streaming */
+    uint64_t tel_start_us;     /* arrival of the first byte of the telegram in progress */
     rsm_link_rx_t io;          /* link, clock and receive chunk (rsm_link_poll) */
     rsm_sicklms_event_t out;   /* the event of the poll in progress */
 } rsm_sicklms_t;

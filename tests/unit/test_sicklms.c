@@ -26,6 +26,8 @@ typedef struct fake_lms {
                               bit, depending on the measuring mode) */
     uint32_t requests;     /* well-formed requests seen */
     uint32_t config_reads; /* 0x74 requests answered */
+    uint32_t split_scan_us; /* the second half of each scan arrives this much later */
+    uint64_t scan_sent_us;  /* when the last scan was sent */
     uint64_t next_scan_us;
 } fake_lms_t;
 
@@ -76,7 +78,16 @@ static void lms_send_scan(void)
         data[3u + 2u * i] = (uint8_t)(v >> 8);
     }
     data[sizeof data - 1u] = 0x10u;
-    lms_reply(RSM_LMS_REPLY_VALUES, data, sizeof data, 0u);
+    lms.scan_sent_us = fl.now_us;
+    if (lms.split_scan_us == 0u) {
+        lms_reply(RSM_LMS_REPLY_VALUES, data, sizeof data, 0u);
+    } else {
+        uint8_t buf[RSM_LMS_MAX_TELEGRAM];
+        const int n = rsm_lms_encode(buf, sizeof buf, 0x80u, RSM_LMS_REPLY_VALUES, data, sizeof data);
+        TEST_ASSERT_GREATER_THAN_INT(0, n);
+        rsm_fakelink_send(&fl, buf, 100u, 0u);
+        rsm_fakelink_send(&fl, buf + 100, (size_t)n - 100u, lms.split_scan_us);
+    }
 }
 
 static void lms_handle(uint8_t cmd, const uint8_t *data, size_t len)
@@ -635,6 +646,21 @@ void test_sicklms_disconnect_should_give_up_on_a_silent_unit_after_max_tries(voi
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.disconnects);
 }
 
+void test_sicklms_poll_should_stamp_a_scan_with_the_arrival_of_its_first_byte(void)
+{
+    rsm_sicklms_event_t ev;
+    lms.split_scan_us = 40000u; /* the rest of the telegram is 40 ms behind */
+    cfg.latency_us = 1500u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT64(lms.scan_sent_us + lms.split_scan_us, fl.now_us);
+    TEST_ASSERT_EQUAL_UINT64(lms.scan_sent_us - cfg.latency_us, ev.scan->stamp_us);
+    TEST_ASSERT_EQUAL_UINT64(ev.scan->stamp_us, ev.stamp_us);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 1000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT64(lms.scan_sent_us - cfg.latency_us, ev.scan->stamp_us);
+    TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.bad_scans);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -655,5 +681,6 @@ int main(void)
     RUN_TEST(test_sicklms_disconnect_should_stop_the_stream_then_return_to_the_power_up_rate);
     RUN_TEST(test_sicklms_disconnect_at_the_power_up_rate_should_only_stop_the_stream);
     RUN_TEST(test_sicklms_disconnect_should_give_up_on_a_silent_unit_after_max_tries);
+    RUN_TEST(test_sicklms_poll_should_stamp_a_scan_with_the_arrival_of_its_first_byte);
     return UNITY_END();
 }

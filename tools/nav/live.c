@@ -183,16 +183,20 @@ static void report_laser(const rsm_sicklms_t *d)
             (unsigned)d->parser.stats.bytes_skipped);
 }
 
-/* One poll of the robot driver; encoder packets go to the sink. */
-static void poll_robot(rsm_p3dx_t *d, const nav_stream_sink_t *sink, int quiet)
+/* One poll of the robot driver; encoder packets go to the sink. Returns 1
+ * if the poll gave an event. */
+static int poll_robot(rsm_p3dx_t *d, const nav_stream_sink_t *sink, int quiet)
 {
     rsm_p3dx_event_t ev;
     if (rsm_p3dx_poll(d, &ev) != RSM_OK) {
-        return;
+        return 0;
     }
     switch (ev.type) {
     case RSM_P3DX_EVENT_ENCODER:
         sink->encoder(sink->ctx, ev.encoder.left, ev.encoder.right, ev.stamp_us);
+        if (sink->tick != NULL) {
+            sink->tick(sink->ctx, ev.stamp_us); /* a scan waiting for this sample goes on */
+        }
         break;
     case RSM_P3DX_EVENT_CONNECTED:
         if (!quiet) {
@@ -214,14 +218,16 @@ static void poll_robot(rsm_p3dx_t *d, const nav_stream_sink_t *sink, int quiet)
     default:
         break;
     }
+    return ev.type != RSM_P3DX_EVENT_NONE;
 }
 
-/* One poll of the laser driver; scans go to the sink. */
-static void poll_laser(rsm_sicklms_t *d, const nav_stream_sink_t *sink, int quiet)
+/* One poll of the laser driver; scans go to the sink. Returns 1 if the poll
+ * gave an event. */
+static int poll_laser(rsm_sicklms_t *d, const nav_stream_sink_t *sink, int quiet)
 {
     rsm_sicklms_event_t ev;
     if (rsm_sicklms_poll(d, &ev) != RSM_OK) {
-        return;
+        return 0;
     }
     switch (ev.type) {
     case RSM_SICKLMS_EVENT_SCAN:
@@ -252,6 +258,7 @@ static void poll_laser(rsm_sicklms_t *d, const nav_stream_sink_t *sink, int quie
     default:
         break;
     }
+    return ev.type != RSM_SICKLMS_EVENT_NONE;
 }
 
 static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint_t *laser,
@@ -285,11 +292,17 @@ static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint
         return 1;
     }
     while (!stop_requested) {
+        int events = 0;
         if (robot->open) {
-            poll_robot(&p3dx, sink, opt->quiet);
+            events += poll_robot(&p3dx, sink, opt->quiet);
         }
         if (laser->open) {
-            poll_laser(&lms, sink, opt->quiet);
+            events += poll_laser(&lms, sink, opt->quiet);
+        }
+        if (events == 0 && sink->tick != NULL) {
+            /* Idle: a scan waiting for odometry may time out. The drivers
+             * stamp with this clock, so the aligner's times agree. */
+            sink->tick(sink->ctx, rsm_posix_clock_now_us(NULL));
         }
         if (opt->seconds > 0.0 && mono_s() - t0 >= opt->seconds) {
             break;
@@ -309,10 +322,10 @@ static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint
     while (mono_s() < t_end && ((robot->open && p3dx.state != RSM_P3DX_IDLE) ||
                                 (laser->open && lms.state != RSM_SICKLMS_IDLE))) {
         if (robot->open && p3dx.state != RSM_P3DX_IDLE) {
-            poll_robot(&p3dx, sink, opt->quiet);
+            (void)poll_robot(&p3dx, sink, opt->quiet);
         }
         if (laser->open && lms.state != RSM_SICKLMS_IDLE) {
-            poll_laser(&lms, sink, opt->quiet);
+            (void)poll_laser(&lms, sink, opt->quiet);
         }
     }
     if (!opt->quiet) {
