@@ -33,6 +33,8 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.refine_iterations = 10u;
     c.refine_saturation = 2u;
     c.refine_noise_scale = 10.0f;
+    c.clock_fn = NULL;
+    c.clock_ctx = NULL;
     return c;
 }
 
@@ -50,6 +52,70 @@ const char *rsm_outcome_name(rsm_outcome_t o)
     case RSM_SCAN_FILTER: return "filter";
     case RSM_SCAN_OUT_OF_ORDER: return "out_of_order";
     default: return "unknown";
+    }
+}
+
+const char *rsm_stage_name(rsm_stage_t s)
+{
+    switch (s) {
+    case RSM_STAGE_POINTS: return "points";
+    case RSM_STAGE_GRID: return "grid";
+    case RSM_STAGE_HARRIS: return "harris";
+    case RSM_STAGE_MATCH: return "match";
+    case RSM_STAGE_RANSAC: return "ransac";
+    case RSM_STAGE_REFINE: return "refine";
+    case RSM_STAGE_ICP: return "icp";
+    case RSM_STAGE_EKF: return "ekf";
+    case RSM_STAGE_MAP: return "map";
+    default: return "unknown";
+    }
+}
+
+/* The optional timing hook, on the stack of one rsm_localizer_scan call:
+ * the stage running now and the clock reading when it started. Without a
+ * clock_fn every operation is a single test. */
+typedef struct stage_clock {
+    uint32_t (*fn)(void *ctx);
+    void *ctx;
+    uint32_t start;
+    uint32_t last;
+    rsm_stage_t stage;
+    rsm_localizer_report_t *rep;
+} stage_clock_t;
+
+static void stage_begin(stage_clock_t *c, const rsm_localizer_config_t *cfg, rsm_localizer_report_t *rep)
+{
+    c->fn = cfg->clock_fn;
+    c->ctx = cfg->clock_ctx;
+    c->rep = rep;
+    c->stage = RSM_STAGE_POINTS;
+    c->start = 0u;
+    c->last = 0u;
+    if (c->fn != NULL) {
+        c->start = c->fn(c->ctx);
+        c->last = c->start;
+    }
+}
+
+/* Charges the time since the last switch to the running stage and starts s. */
+static void stage_switch(stage_clock_t *c, rsm_stage_t s)
+{
+    if (c->fn != NULL) {
+        const uint32_t now = c->fn(c->ctx);
+        c->rep->stage_time[c->stage] += now - c->last;
+        c->last = now;
+    }
+    c->stage = s;
+}
+
+/* Charges the running stage and the whole call. */
+static void stage_end(stage_clock_t *c)
+{
+    if (c->fn != NULL) {
+        const uint32_t now = c->fn(c->ctx);
+        c->rep->stage_time[c->stage] += now - c->last;
+        c->rep->step_time = now - c->start;
+        c->last = now;
     }
 }
 
@@ -321,7 +387,7 @@ static rsm_outcome_t fuse(rsm_localizer_t *loc, const rsm_pose_t *z, const float
     return rc == RSM_OK ? RSM_SCAN_ACCEPTED : RSM_SCAN_FILTER;
 }
 
-static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep)
+static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const float a = cfg->grid.cell_m;
@@ -334,6 +400,7 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     float r[9];
     int32_t radius_cells;
 
+    stage_switch(clk, RSM_STAGE_GRID);
     (void)rsm_map_recenter(&loc->map, pred.x, pred.y);
     to_world(loc, &pred, npts);
     rsm_image_clear(&loc->image);
@@ -341,6 +408,7 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     if (!loc->have_scan) {
         return RSM_SCAN_FIRST;
     }
+    stage_switch(clk, RSM_STAGE_HARRIS);
     nkc = current_keypoints(loc);
     rep->keypoints_cur = (uint32_t)nkc;
     if (nkc < cfg->min_keypoints) {
@@ -353,6 +421,7 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     if (nkr < cfg->min_keypoints) {
         return RSM_SCAN_FEW_KEYPOINTS;
     }
+    stage_switch(clk, RSM_STAGE_MATCH);
     keypoints_to_points(loc->kp_cur, nkc, a, &pred, loc->pt_cur);
     keypoints_to_points(loc->kp_ref, nkr, a, &pred, loc->pt_ref);
     nm = rsm_match_tentative(loc->pt_ref, nkr, loc->pt_cur, nkc, radius_m, cfg->match_window_m, loc->matches,
@@ -361,6 +430,7 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     if (nm < 2 || (uint32_t)nm < cfg->ransac.min_support) {
         return RSM_SCAN_FEW_MATCHES;
     }
+    stage_switch(clk, RSM_STAGE_RANSAC);
     if (rsm_ransac_estimate(&loc->ransac, loc->pt_ref, loc->pt_cur, loc->matches, (size_t)nm, &rr) != RSM_OK) {
         rep->inliers = rr.support;
         rep->iterations = rr.iterations;
@@ -388,6 +458,7 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         z.y = pred.y + rr.t.y;
         z.theta = rsm_wrap_angle(pred.theta + rr.t.theta);
         measurement_noise(cfg, rr.rms_m, rr.support, spread2, r);
+        stage_switch(clk, RSM_STAGE_REFINE);
         if (cfg->refine_iterations > 0u) {
             rsm_map_fit_t fit;
             if (rsm_map_align(&loc->map, loc->pts, npts, &z, cfg->refine_saturation, cfg->refine_iterations, &fit) ==
@@ -397,11 +468,12 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
                 refined_noise(cfg, &fit, r);
             }
         }
+        stage_switch(clk, RSM_STAGE_EKF);
         return fuse(loc, &z, r, rep);
     }
 }
 
-static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep)
+static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
 {
     const rsm_pose_t pred = loc->ekf.x;
     rsm_icp_result_t res;
@@ -411,6 +483,7 @@ static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     if (!loc->have_scan) {
         return RSM_SCAN_FIRST;
     }
+    stage_switch(clk, RSM_STAGE_ICP);
     rc = rsm_icp_align(&loc->work.icp, loc->pts, npts, &pred, &res);
     rep->iterations = res.iterations;
     rep->inliers = res.pairs;
@@ -418,6 +491,7 @@ static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         return RSM_SCAN_LOW_SUPPORT;
     }
     rep->residual_m = res.rms_m;
+    stage_switch(clk, RSM_STAGE_EKF);
     measurement_noise(loc->cfg, res.rms_m, res.pairs, 4.0f, r);
     out = fuse(loc, &res.pose, r, rep);
     return out;
@@ -426,6 +500,7 @@ static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
 int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep)
 {
     rsm_localizer_report_t local;
+    stage_clock_t clk;
     rsm_outcome_t outcome;
     rsm_pose_t est;
     size_t npts;
@@ -437,12 +512,14 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     if (loc == NULL || scan == NULL || scan->count > RSM_MAX_BEAMS) {
         return RSM_ERR_INVAL;
     }
+    stage_begin(&clk, loc->cfg, rep);
     loc->counters.scans++;
     if (loc->have_scan && scan->stamp_us < loc->last_stamp_us) {
         loc->counters.outcome[RSM_SCAN_OUT_OF_ORDER]++;
         rep->outcome = RSM_SCAN_OUT_OF_ORDER;
         rep->pose = loc->ekf.x;
         memcpy(rep->cov, loc->ekf.p, sizeof rep->cov);
+        stage_end(&clk);
         return RSM_ERR_ORDER;
     }
     n = rsm_scan_to_points(scan, &loc->cfg->limits, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
@@ -453,10 +530,11 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     } else if (loc->cfg->method == RSM_METHOD_ODOMETRY) {
         outcome = RSM_SCAN_ODOMETRY;
     } else if (loc->cfg->method == RSM_METHOD_ICP) {
-        outcome = step_icp(loc, npts, rep);
+        outcome = step_icp(loc, npts, rep, &clk);
     } else {
-        outcome = step_rsm(loc, npts, rep);
+        outcome = step_rsm(loc, npts, rep, &clk);
     }
+    stage_switch(&clk, RSM_STAGE_MAP);
     est = loc->ekf.x;
     if (npts >= loc->cfg->min_points) {
         const int fused = outcome == RSM_SCAN_ACCEPTED || outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_ODOMETRY;
@@ -475,6 +553,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     rep->outcome = outcome;
     rep->pose = est;
     memcpy(rep->cov, loc->ekf.p, sizeof rep->cov);
+    stage_end(&clk);
     loc->last = *rep;
     return RSM_OK;
 }

@@ -49,6 +49,23 @@ typedef enum rsm_outcome {
     RSM_SCAN_OUTCOMES = 10
 } rsm_outcome_t;
 
+/* The stages of one rsm_localizer_scan call, as the optional timing hook
+ * (rsm_localizer_config_t.clock_fn) reports them. Each stage is charged the
+ * time from its start to the start of the next; a stage a scan never reaches
+ * (rejected early, other method) gets 0. */
+typedef enum rsm_stage {
+    RSM_STAGE_POINTS = 0,  /* readings -> points in the robot frame (every method) */
+    RSM_STAGE_GRID = 1,    /* map recentred, points -> scan image in the map frame */
+    RSM_STAGE_HARRIS = 2,  /* key points of the scan image and of the map near it */
+    RSM_STAGE_MATCH = 3,   /* tentative matches */
+    RSM_STAGE_RANSAC = 4,  /* two-point RANSAC pose and its noise */
+    RSM_STAGE_REFINE = 5,  /* sub-cell alignment of the points to the map (rsm_map_align) */
+    RSM_STAGE_ICP = 6,     /* the ICP baseline's alignment */
+    RSM_STAGE_EKF = 7,     /* measurement noise, gate and update */
+    RSM_STAGE_MAP = 8,     /* the scan superimposed on the map (and the ICP reference) */
+    RSM_STAGE_COUNT = 9
+} rsm_stage_t;
+
 /* Measurement noise model for the EKF update. */
 typedef enum rsm_noise_model {
     RSM_NOISE_RESIDUAL = 0, /* from the match residuals, floored */
@@ -80,6 +97,15 @@ typedef struct rsm_localizer_config {
                                      * default 10 */
     uint8_t refine_saturation;      /* map hits that count as fully occupied; default 2 */
     float refine_noise_scale;       /* scales the fit's covariance into R; default 10 */
+    /* Optional timing hook; NULL by default, and then it costs one test per
+     * stage. clock_fn(clock_ctx) returns a free-running counter in any unit
+     * (microseconds, CPU cycles, nanoseconds, ...); differences are taken
+     * modulo 2^32, so one scan must take less than one wrap. When set,
+     * rsm_localizer_scan fills the report's stage_time and step_time in that
+     * unit. It is called from inside rsm_localizer_scan and must not call
+     * back into the localizer. */
+    uint32_t (*clock_fn)(void *clock_ctx);
+    void *clock_ctx;                /* passed to clock_fn; may be NULL */
 } rsm_localizer_config_t;
 
 rsm_localizer_config_t rsm_localizer_config_default(void);
@@ -98,6 +124,11 @@ typedef struct rsm_localizer_report {
     uint32_t iterations;      /* RANSAC hypotheses or ICP iterations */
     float residual_m;         /* RMS residual of the accepted fit */
     float mahalanobis_d2;     /* of the measurement against the prediction */
+    /* With a clock_fn: time per stage and of the whole call (first to last
+     * clock reading), in clock_fn's unit; the stages tile the call, so their
+     * sum is step_time (modulo 2^32). All 0 without a clock_fn. */
+    uint32_t stage_time[RSM_STAGE_COUNT];
+    uint32_t step_time;
 } rsm_localizer_report_t;
 
 typedef struct rsm_localizer_counters {
@@ -163,6 +194,10 @@ rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc);
 
 /* Short name of an outcome, for logs ("accepted", "few_keypoints", ...). */
 const char *rsm_outcome_name(rsm_outcome_t o);
+
+/* Short name of a stage, for logs ("grid", "harris", ...; "unknown" past
+ * the last). */
+const char *rsm_stage_name(rsm_stage_t s);
 
 #ifdef __cplusplus
 }

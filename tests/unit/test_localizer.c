@@ -651,6 +651,194 @@ void test_localizer_scan_should_not_interfere_with_another_localizer(void)
     TEST_ASSERT_TRUE(memcmp(&track_a[path_len - 1], &track_b[path_len - 1], sizeof track_a[0]) != 0);
 }
 
+/* ---- the optional timing hook ---------------------------------------------------- */
+
+/* A fake clock for the timing hook: each call advances the time by step,
+ * then the step by growth, so that every stage gets a different, known
+ * charge. Deterministic; no real time is read. */
+typedef struct fake_clock {
+    uint32_t now;
+    uint32_t step;
+    uint32_t growth;
+    uint32_t calls;
+} fake_clock_t;
+
+static uint32_t fake_clock_read(void *ctx)
+{
+    fake_clock_t *c = (fake_clock_t *)ctx;
+    c->now += c->step;
+    c->step += c->growth;
+    c->calls++;
+    return c->now;
+}
+
+static uint32_t stage_sum(const rsm_localizer_report_t *rep)
+{
+    uint32_t sum = 0u;
+    size_t s;
+    for (s = 0; s < RSM_STAGE_COUNT; ++s) {
+        sum += rep->stage_time[s];
+    }
+    return sum;
+}
+
+/* The stages a scan of method m with outcome o enters, in pipeline order
+ * (a rejected scan stops where it was rejected, then the map); returns how
+ * many. */
+static size_t stages_run(rsm_method_t m, rsm_outcome_t o, rsm_stage_t *out)
+{
+    size_t n = 0;
+    out[n++] = RSM_STAGE_POINTS;
+    if (o != RSM_SCAN_FEW_POINTS && m == RSM_METHOD_RSM) {
+        out[n++] = RSM_STAGE_GRID;
+        if (o != RSM_SCAN_FIRST) {
+            out[n++] = RSM_STAGE_HARRIS;
+        }
+        if (o != RSM_SCAN_FIRST && o != RSM_SCAN_FEW_KEYPOINTS) {
+            out[n++] = RSM_STAGE_MATCH;
+        }
+        if (o != RSM_SCAN_FIRST && o != RSM_SCAN_FEW_KEYPOINTS && o != RSM_SCAN_FEW_MATCHES) {
+            out[n++] = RSM_STAGE_RANSAC;
+        }
+        if (o == RSM_SCAN_ACCEPTED || o == RSM_SCAN_JUMP || o == RSM_SCAN_FILTER) {
+            out[n++] = RSM_STAGE_REFINE;
+            out[n++] = RSM_STAGE_EKF;
+        }
+    } else if (o != RSM_SCAN_FEW_POINTS && m == RSM_METHOD_ICP && o != RSM_SCAN_FIRST) {
+        out[n++] = RSM_STAGE_ICP;
+        if (o != RSM_SCAN_LOW_SUPPORT) {
+            out[n++] = RSM_STAGE_EKF;
+        }
+    }
+    out[n++] = RSM_STAGE_MAP;
+    return n;
+}
+
+/* Runs the loop with method m twice side by side, with and without a
+ * clock; checks every report's stage times against the fake clock and that
+ * timing changes nothing else. Returns the accepted scans. */
+static uint32_t run_timed(rsm_method_t m, uint32_t start)
+{
+    rsm_localizer_config_t cfg_plain;
+    fake_clock_t fc;
+    rsm_localizer_report_t ra;
+    rsm_localizer_report_t rb;
+    uint32_t accepted = 0u;
+    uint32_t first = 0u;
+    size_t k;
+    char msg[96];
+    cfg.method = m;
+    cfg_plain = cfg;
+    TEST_ASSERT_NULL(cfg_plain.clock_fn); /* the default */
+    fc.now = start;
+    fc.step = 0u;
+    fc.growth = 0u;
+    fc.calls = 0u;
+    cfg.clock_fn = fake_clock_read;
+    cfg.clock_ctx = &fc;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &path[0], p0_track));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc2, &cfg_plain, &path[0], p0_track));
+    for (k = 0; k < path_len; ++k) {
+        rsm_stage_t seq[RSM_STAGE_COUNT];
+        size_t n;
+        size_t s;
+        uint32_t calls0;
+        if (k > 0) {
+            const rsm_motion_t u = rsm_synth_motion(&path[k - 1], &path[k], &odo_err);
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc2, &u));
+        }
+        make_scan(&path[k], NULL, (uint64_t)k * STEP_US);
+        /* Within a scan the clock steps 1, 2, 3, ..., so each stage's
+         * charge tells which reading ended it. */
+        fc.step = 1u;
+        fc.growth = 1u;
+        calls0 = fc.calls;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &ra));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc2, &scan, &rb));
+        snprintf(msg, sizeof msg, "scan %u, outcome %s", (unsigned)k, rsm_outcome_name(ra.outcome));
+        /* Timing changes nothing else. */
+        TEST_ASSERT_EQUAL_INT_MESSAGE((int)rb.outcome, (int)ra.outcome, msg);
+        TEST_ASSERT_EQUAL_MEMORY_MESSAGE(&rb.pose, &ra.pose, sizeof ra.pose, msg);
+        TEST_ASSERT_EQUAL_MEMORY_MESSAGE(rb.cov, ra.cov, sizeof ra.cov, msg);
+        /* Without a clock: all zero. */
+        for (s = 0; s < RSM_STAGE_COUNT; ++s) {
+            TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, rb.stage_time[s], msg);
+        }
+        TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, rb.step_time, msg);
+        /* With it: one reading at the start, one per stage entered after the
+         * first, one at the end; stage i of the sequence is charged i + 2. */
+        n = stages_run(m, ra.outcome, seq);
+        TEST_ASSERT_EQUAL_UINT32_MESSAGE((uint32_t)(n + 1u), fc.calls - calls0, msg);
+        for (s = 0; s < RSM_STAGE_COUNT; ++s) {
+            uint32_t want = 0u;
+            size_t i;
+            for (i = 0; i < n; ++i) {
+                if (seq[i] == (rsm_stage_t)s) {
+                    want = (uint32_t)i + 2u;
+                }
+            }
+            TEST_ASSERT_EQUAL_UINT32_MESSAGE(want, ra.stage_time[s], msg);
+        }
+        /* Readings 1 + 2 + ... + n after the start. */
+        TEST_ASSERT_EQUAL_UINT32_MESSAGE((uint32_t)((n + 1u) * (n + 2u) / 2u - 1u), ra.step_time, msg);
+        TEST_ASSERT_TRUE_MESSAGE(stage_sum(&ra) <= ra.step_time, msg);
+        TEST_ASSERT_EQUAL_MEMORY(&ra, &loc.last, sizeof ra);
+        accepted += ra.outcome == RSM_SCAN_ACCEPTED ? 1u : 0u;
+        first += ra.outcome == RSM_SCAN_FIRST ? 1u : 0u;
+    }
+    TEST_ASSERT_EQUAL_UINT32(1u, first);
+    return accepted;
+}
+
+void test_localizer_scan_should_charge_each_rsm_stage_through_the_clock_hook(void)
+{
+    TEST_ASSERT_GREATER_THAN_UINT32(path_len / 2u, run_timed(RSM_METHOD_RSM, 1000u));
+}
+
+void test_localizer_scan_should_charge_the_icp_stages_through_the_clock_hook(void)
+{
+    TEST_ASSERT_GREATER_THAN_UINT32(path_len / 2u, run_timed(RSM_METHOD_ICP, 5u));
+}
+
+void test_localizer_scan_should_time_stages_across_a_clock_wrap(void)
+{
+    /* The counter wraps during the run: differences are modulo 2^32. */
+    TEST_ASSERT_GREATER_THAN_UINT32(0u, run_timed(RSM_METHOD_RSM, UINT32_MAX - 40u));
+}
+
+void test_localizer_scan_should_time_an_out_of_order_scan_as_a_whole(void)
+{
+    fake_clock_t fc = {0u, 5u, 0u, 0u};
+    rsm_localizer_report_t rep;
+    cfg.clock_fn = fake_clock_read;
+    cfg.clock_ctx = &fc;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &path[0], p0_track));
+    make_scan(&path[0], NULL, 2u * STEP_US);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    make_scan(&path[0], NULL, STEP_US);
+    fc.calls = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_ORDER, rsm_localizer_scan(&loc, &scan, &rep));
+    TEST_ASSERT_EQUAL_UINT32(2u, fc.calls);
+    TEST_ASSERT_EQUAL_UINT32(5u, rep.step_time);
+    TEST_ASSERT_EQUAL_UINT32(5u, rep.stage_time[RSM_STAGE_POINTS]);
+    TEST_ASSERT_EQUAL_UINT32(5u, stage_sum(&rep));
+}
+
+void test_localizer_stage_names_should_be_distinct(void)
+{
+    size_t i;
+    size_t j;
+    for (i = 0; i < RSM_STAGE_COUNT; ++i) {
+        TEST_ASSERT_TRUE(strcmp(rsm_stage_name((rsm_stage_t)i), "unknown") != 0);
+        for (j = 0; j < i; ++j) {
+            TEST_ASSERT_TRUE(strcmp(rsm_stage_name((rsm_stage_t)i), rsm_stage_name((rsm_stage_t)j)) != 0);
+        }
+    }
+    TEST_ASSERT_EQUAL_STRING("grid", rsm_stage_name(RSM_STAGE_GRID));
+    TEST_ASSERT_EQUAL_STRING("unknown", rsm_stage_name(RSM_STAGE_COUNT));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -670,5 +858,10 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_reject_invalid_arguments);
     RUN_TEST(test_localizer_scan_should_be_bit_identical_side_by_side);
     RUN_TEST(test_localizer_scan_should_not_interfere_with_another_localizer);
+    RUN_TEST(test_localizer_scan_should_charge_each_rsm_stage_through_the_clock_hook);
+    RUN_TEST(test_localizer_scan_should_charge_the_icp_stages_through_the_clock_hook);
+    RUN_TEST(test_localizer_scan_should_time_stages_across_a_clock_wrap);
+    RUN_TEST(test_localizer_scan_should_time_an_out_of_order_scan_as_a_whole);
+    RUN_TEST(test_localizer_stage_names_should_be_distinct);
     return UNITY_END();
 }
