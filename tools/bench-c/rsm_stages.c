@@ -1,0 +1,572 @@
+/* rsm-stages: measures one localizer step on a CARMEN log for ./tools/bench.
+ *
+ *   rsm-stages --carmen LOG [--method rsm|icp] [--beams N] [--limit N] [--fov179]
+ *              [--clock ns|none] [--trajectory OUT] [--stack]
+ *
+ * Runs the localizer over the log exactly as rsm-nav does (same start pose,
+ * odometry increments from the poses of the laser lines, the same clamping
+ * of timestamps that go backwards) and prints one JSON object: the build's
+ * capacities and sizes, scan outcomes, and
+ *   - with --clock ns (default): per-stage times from the localizer's timing
+ *     hook (rsm_localizer_config_t.clock_fn reading CLOCK_MONOTONIC in ns),
+ *     the whole call timed from outside, and rsm_localizer_motion; median,
+ *     95th percentile, mean and maximum over the scans, in microseconds;
+ *   - with --stack: the stack high-water mark of rsm_localizer_scan, by
+ *     painting. Each scan runs in a fresh thread whose stack (a buffer of
+ *     this program) was filled with a pattern; after the thread ends, the
+ *     lowest byte no longer holding the pattern gives the depth the thread
+ *     reached. A thread that calls an empty function with the same arguments
+ *     gives the baseline (thread start-up, TLS, the call itself); the
+ *     difference is the stack of one rsm_localizer_scan call, maximum over
+ *     the scans. Not available under AddressSanitizer (it moves frames off
+ *     the stack).
+ * --beams N resamples every scan to N readings over the same field of view:
+ * linear in range between two neighbouring usable readings less than 0.1 m
+ * apart, otherwise the nearer reading (so no point is invented between an
+ * edge and the background). It adds readings, not information.
+ * --trajectory writes rsm-nav's trajectory format (one line per scan).
+ * The CARMEN reader is rsm-nav's (tools/nav/carmen.c, compiled in). */
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "carmen.h"
+#include "rsm/localizer.h"
+#include "rsm/status.h"
+
+#if defined(__SANITIZE_ADDRESS__)
+#define STAGES_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define STAGES_ASAN 1
+#endif
+#endif
+#ifndef STAGES_ASAN
+#define STAGES_ASAN 0
+#endif
+
+#if defined(__GNUC__)
+#define STAGES_NOINLINE __attribute__((noinline))
+#else
+#define STAGES_NOINLINE
+#endif
+
+#define STACK_BYTES (256u * 1024u)
+#define STACK_PATTERN 0xA5u
+#define RESAMPLE_JUMP_M 0.1f
+
+typedef struct options {
+    const char *carmen;
+    const char *trajectory;
+    rsm_method_t method;
+    size_t beams;      /* 0: as in the log */
+    size_t limit;      /* 0: every scan */
+    int fov179;
+    int clock_ns;
+    int stack;
+} options_t;
+
+/* Growing arrays of per-scan samples (host tool: the heap is fine here). */
+typedef struct samples {
+    double *v;
+    size_t n;
+    size_t cap;
+} samples_t;
+
+typedef struct stack_probe {
+    unsigned char *buf;         /* the threads' stack */
+    size_t size;
+    size_t peak;                /* deepest use seen with rsm_localizer_scan */
+    size_t baseline;            /* deepest use of the empty call */
+    size_t measured;            /* scans measured */
+} stack_probe_t;
+
+typedef struct run {
+    options_t opt;
+    rsm_localizer_t loc;
+    rsm_localizer_config_t cfg;
+    carmen_reader_t reader;
+    carmen_record_t rec;
+    rsm_scan_t scan;
+    int initialised;
+    uint64_t last_us;
+    uint64_t clamped;
+    size_t scans;
+    size_t beams_in;
+    size_t beams_out;
+    samples_t stage[RSM_STAGE_COUNT];
+    samples_t step;
+    samples_t call;
+    samples_t motion;
+    FILE *traj;
+    stack_probe_t probe;
+} run_t;
+
+static run_t g_run; /* one run per process; too big for a thread's stack */
+
+static void die(const char *msg)
+{
+    fprintf(stderr, "rsm-stages: %s\n", msg);
+    exit(2);
+}
+
+static void push(samples_t *s, double v)
+{
+    if (s->n == s->cap) {
+        size_t cap = s->cap ? s->cap * 2u : 16384u;
+        double *nv = (double *)realloc(s->v, cap * sizeof *nv);
+        if (nv == NULL) {
+            die("out of memory");
+        }
+        s->v = nv;
+        s->cap = cap;
+    }
+    s->v[s->n++] = v;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a;
+    const double y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static uint64_t now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
+/* The timing hook: nanoseconds, modulo 2^32 (a wrap every 4.3 s; one scan
+ * takes far less). */
+static uint32_t hook_clock_ns(void *ctx)
+{
+    (void)ctx;
+    return (uint32_t)now_ns();
+}
+
+/* ---- resampling -------------------------------------------------------------- */
+
+static int usable(float r, const rsm_scan_limits_t *lim)
+{
+    return isfinite(r) && r > lim->min_range_m && r < lim->max_range_m;
+}
+
+/* Fills scan with n readings spread over the record's field of view. */
+static void resample(const carmen_record_t *rec, size_t n, const rsm_scan_limits_t *lim, rsm_scan_t *scan)
+{
+    const size_t m = rec->count;
+    const float span = rec->step_rad * (float)(m - 1u);
+    const float step = span / (float)(n - 1u);
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        const float u = (float)k * (float)(m - 1u) / (float)(n - 1u);
+        size_t i0 = (size_t)u;
+        float f;
+        float r0;
+        float r1;
+        if (i0 >= m - 1u) {
+            i0 = m - 2u;
+        }
+        f = u - (float)i0;
+        r0 = rec->range_m[i0];
+        r1 = rec->range_m[i0 + 1u];
+        if (usable(r0, lim) && usable(r1, lim) && fabsf(r0 - r1) < RESAMPLE_JUMP_M) {
+            scan->range_m[k] = r0 + f * (r1 - r0);
+        } else {
+            scan->range_m[k] = f < 0.5f ? r0 : r1;
+        }
+    }
+    (void)rsm_scan_set_uniform(scan, n, rec->start_rad, step);
+}
+
+/* ---- stack painting ------------------------------------------------------------- */
+
+typedef struct scan_call {
+    rsm_localizer_t *loc;
+    const rsm_scan_t *scan;
+    rsm_localizer_report_t *rep;
+    int rc;
+    int empty;
+} scan_call_t;
+
+static STAGES_NOINLINE int empty_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep)
+{
+    /* Same signature as rsm_localizer_scan; touches nothing. */
+    return loc != NULL && scan != NULL && rep != NULL ? RSM_OK : RSM_ERR_INVAL;
+}
+
+static void *scan_thread(void *arg)
+{
+    scan_call_t *c = (scan_call_t *)arg;
+    c->rc = c->empty ? empty_scan(c->loc, c->scan, c->rep) : rsm_localizer_scan(c->loc, c->scan, c->rep);
+    return NULL;
+}
+
+/* Depth the last thread reached: from the top of the buffer down to the
+ * lowest byte that lost the pattern. Repaints what was used. */
+static size_t stack_used_and_repaint(stack_probe_t *p)
+{
+    size_t i = 0;
+    size_t used;
+    while (i < p->size && p->buf[i] == (unsigned char)STACK_PATTERN) {
+        ++i;
+    }
+    used = p->size - i;
+    memset(p->buf + i, STACK_PATTERN, used);
+    return used;
+}
+
+static int call_in_thread(stack_probe_t *p, scan_call_t *c, size_t *used)
+{
+    pthread_attr_t attr;
+    pthread_t th;
+    int rc = pthread_attr_init(&attr);
+    if (rc == 0) {
+        rc = pthread_attr_setstack(&attr, p->buf, p->size);
+    }
+    if (rc == 0) {
+        rc = pthread_create(&th, &attr, scan_thread, c);
+    }
+    if (rc == 0) {
+        rc = pthread_join(th, NULL);
+    }
+    (void)pthread_attr_destroy(&attr);
+    if (rc != 0) {
+        return rc;
+    }
+    *used = stack_used_and_repaint(p);
+    if (*used >= p->size) {
+        die("the stack probe's buffer was used up: enlarge STACK_BYTES");
+    }
+    return 0;
+}
+
+static int painted_scan(run_t *r, rsm_localizer_report_t *rep)
+{
+    scan_call_t c;
+    size_t used = 0;
+    c.loc = &r->loc;
+    c.scan = &r->scan;
+    c.rep = rep;
+    c.rc = RSM_ERR_INVAL;
+    c.empty = 1;
+    if (call_in_thread(&r->probe, &c, &used) != 0) {
+        die("cannot run a thread on the painted stack");
+    }
+    if (used > r->probe.baseline) {
+        r->probe.baseline = used;
+    }
+    c.empty = 0;
+    if (call_in_thread(&r->probe, &c, &used) != 0) {
+        die("cannot run a thread on the painted stack");
+    }
+    if (used > r->probe.peak) {
+        r->probe.peak = used;
+    }
+    r->probe.measured++;
+    return c.rc;
+}
+
+/* ---- the run ----------------------------------------------------------------------- */
+
+static void run_scan(run_t *r, uint64_t stamp_us, double file_stamp_s)
+{
+    rsm_localizer_report_t rep;
+    uint64_t t0;
+    uint64_t t1;
+    int rc;
+    size_t s;
+    if (stamp_us < r->last_us) { /* as rsm-nav: feed a clamped stamp, keep the original */
+        stamp_us = r->last_us;
+        r->clamped++;
+    }
+    r->last_us = stamp_us;
+    r->scan.stamp_us = stamp_us;
+    if (r->opt.stack) {
+        rc = painted_scan(r, &rep);
+    } else {
+        t0 = now_ns();
+        rc = rsm_localizer_scan(&r->loc, &r->scan, &rep);
+        t1 = now_ns();
+        push(&r->call, (double)(t1 - t0) * 1e-3);
+        if (r->opt.clock_ns) {
+            for (s = 0; s < RSM_STAGE_COUNT; ++s) {
+                push(&r->stage[s], (double)rep.stage_time[s] * 1e-3);
+            }
+            push(&r->step, (double)rep.step_time * 1e-3);
+        }
+    }
+    r->scans++;
+    if (rc != RSM_OK) {
+        fprintf(stderr, "rsm-stages: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
+        return;
+    }
+    if (r->traj != NULL) {
+        fprintf(r->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, (double)rep.pose.x, (double)rep.pose.y,
+                (double)rep.pose.theta);
+    }
+}
+
+static int run_log(run_t *r)
+{
+    rsm_pose_t last_odom = {0.0f, 0.0f, 0.0f};
+    int have_odom = 0;
+    r->reader.fov179 = r->opt.fov179;
+    if (carmen_open(&r->reader, r->opt.carmen) != 0) {
+        fprintf(stderr, "rsm-stages: cannot open %s: %s\n", r->opt.carmen, strerror(errno));
+        return 1;
+    }
+    for (;;) {
+        const carmen_kind_t k = carmen_next(&r->reader, &r->rec);
+        size_t b;
+        if (k == CARMEN_EOF || (r->opt.limit > 0u && r->scans >= r->opt.limit)) {
+            break;
+        }
+        if (k != CARMEN_SCAN || (r->opt.beams > 0u && r->rec.count < 2u)) {
+            continue;
+        }
+        if (!r->initialised) {
+            if (rsm_localizer_init(&r->loc, &r->cfg, &r->rec.odom, NULL) != RSM_OK) {
+                fprintf(stderr, "rsm-stages: invalid configuration\n");
+                carmen_close(&r->reader);
+                return 2;
+            }
+            r->initialised = 1;
+            r->beams_in = r->rec.count;
+        }
+        if (have_odom) {
+            const rsm_motion_t u = rsm_odometry_from_poses(&last_odom, &r->rec.odom);
+            const uint64_t t0 = now_ns();
+            (void)rsm_localizer_motion(&r->loc, &u);
+            if (!r->opt.stack) {
+                push(&r->motion, (double)(now_ns() - t0) * 1e-3);
+            }
+        }
+        last_odom = r->rec.odom;
+        have_odom = 1;
+        if (r->opt.beams > 0u) {
+            resample(&r->rec, r->opt.beams, &r->cfg.limits, &r->scan);
+        } else {
+            for (b = 0; b < r->rec.count; ++b) {
+                r->scan.range_m[b] = r->rec.range_m[b];
+            }
+            (void)rsm_scan_set_uniform(&r->scan, r->rec.count, r->rec.start_rad, r->rec.step_rad);
+        }
+        r->beams_out = r->scan.count;
+        run_scan(r, (uint64_t)llround(r->rec.stamp_s * 1e6), r->rec.stamp_s);
+    }
+    carmen_close(&r->reader);
+    return 0;
+}
+
+/* ---- output ----------------------------------------------------------------------- */
+
+static void print_stats(const char *name, samples_t *s, int last)
+{
+    double sum = 0.0;
+    size_t reached = 0;
+    size_t i;
+    double *nz;
+    size_t nnz = 0;
+    if (s->n == 0) {
+        printf("    \"%s\": null%s\n", name, last ? "" : ",");
+        return;
+    }
+    nz = (double *)malloc(s->n * sizeof *nz);
+    if (nz == NULL) {
+        die("out of memory");
+    }
+    for (i = 0; i < s->n; ++i) {
+        sum += s->v[i];
+        if (s->v[i] > 0.0) {
+            nz[nnz++] = s->v[i];
+            ++reached;
+        }
+    }
+    qsort(s->v, s->n, sizeof *s->v, cmp_double);
+    qsort(nz, nnz, sizeof *nz, cmp_double);
+    /* Percentiles as rsm-nav takes them: element n/2 and n*95/100 of the sorted samples. */
+    printf("    \"%s\": {\"n\": %zu, \"reached\": %zu, \"mean_us\": %.4f, \"median_us\": %.4f, \"p95_us\": %.4f, "
+           "\"max_us\": %.4f, \"median_reached_us\": %.4f, \"p95_reached_us\": %.4f}%s\n",
+           name, s->n, reached, sum / (double)s->n, s->v[s->n / 2u], s->v[(s->n * 95u) / 100u], s->v[s->n - 1u],
+           nnz ? nz[nnz / 2u] : 0.0, nnz ? nz[(nnz * 95u) / 100u] : 0.0, last ? "" : ",");
+    free(nz);
+}
+
+#define LOC_PART(name, expr) printf("    \"%s\": %lu,\n", name, (unsigned long)(expr))
+
+static void print_json(run_t *r)
+{
+    const rsm_localizer_t *loc = &r->loc;
+    size_t s;
+    printf("{\n  \"tool\": \"rsm-stages\",\n");
+    printf("  \"method\": \"%s\",\n", r->cfg.method == RSM_METHOD_ICP ? "icp" : "rsm");
+    printf("  \"scans\": %zu,\n  \"beams_in\": %zu,\n  \"beams\": %zu,\n  \"clamped\": %llu,\n", r->scans, r->beams_in,
+           r->beams_out, (unsigned long long)r->clamped);
+    printf("  \"config\": {\"RSM_MAX_BEAMS\": %d, \"RSM_MAP_SIZE_LOG2\": %d, \"RSM_MAP_SIZE\": %d, "
+           "\"RSM_IMAGE_MAX_CELLS\": %d, \"RSM_MAX_KEYPOINTS\": %d, \"RSM_MAX_CANDIDATES\": %d, "
+           "\"RSM_MAX_MATCHES\": %d, \"RSM_ICP_MAX_POINTS\": %d, \"cell_m\": %.6f},\n",
+           (int)RSM_MAX_BEAMS, (int)RSM_MAP_SIZE_LOG2, (int)RSM_MAP_SIZE, (int)RSM_IMAGE_MAX_CELLS,
+           (int)RSM_MAX_KEYPOINTS, (int)RSM_MAX_CANDIDATES, (int)RSM_MAX_MATCHES, (int)RSM_ICP_MAX_POINTS,
+           (double)r->cfg.grid.cell_m);
+    printf("  \"sizes\": {\n");
+    LOC_PART("rsm_localizer_t", sizeof *loc);
+    LOC_PART("ekf", sizeof loc->ekf);
+    LOC_PART("odo", sizeof loc->odo);
+    LOC_PART("map", sizeof loc->map);
+    LOC_PART("image", sizeof loc->image);
+    LOC_PART("ransac", sizeof loc->ransac);
+    LOC_PART("work", sizeof loc->work);
+    LOC_PART("work.rsm", sizeof loc->work.rsm);
+    LOC_PART("work.icp", sizeof loc->work.icp);
+    LOC_PART("keypoints", sizeof loc->kp_cur + sizeof loc->kp_ref + sizeof loc->pt_cur + sizeof loc->pt_ref);
+    LOC_PART("matches", sizeof loc->matches);
+    LOC_PART("points", sizeof loc->pts + sizeof loc->world);
+    LOC_PART("rsm_scan_t", sizeof(rsm_scan_t));
+    printf("    \"rsm_localizer_config_t\": %lu\n  },\n", (unsigned long)sizeof(rsm_localizer_config_t));
+    printf("  \"outcomes\": {");
+    for (s = 0; s < RSM_SCAN_OUTCOMES; ++s) {
+        printf("\"%s\": %lu%s", rsm_outcome_name((rsm_outcome_t)s), (unsigned long)loc->counters.outcome[s],
+               s + 1u < RSM_SCAN_OUTCOMES ? ", " : "");
+    }
+    printf("},\n");
+    if (r->opt.stack) {
+        printf("  \"stack\": {\"buffer_bytes\": %zu, \"scans\": %zu, \"peak_bytes\": %zu, \"baseline_bytes\": %zu, "
+               "\"scan_bytes\": %zu},\n",
+               r->probe.size, r->probe.measured, r->probe.peak, r->probe.baseline,
+               r->probe.peak > r->probe.baseline ? r->probe.peak - r->probe.baseline : (size_t)0);
+    } else {
+        printf("  \"stack\": null,\n");
+    }
+    printf("  \"clock\": \"%s\",\n", r->opt.stack ? "none (stack run)" : r->opt.clock_ns ? "CLOCK_MONOTONIC ns" : "none");
+    printf("  \"timing\": {\n");
+    for (s = 0; s < RSM_STAGE_COUNT; ++s) {
+        print_stats(rsm_stage_name((rsm_stage_t)s), &r->stage[s], 0);
+    }
+    print_stats("step", &r->step, 0);
+    print_stats("call", &r->call, 0);
+    print_stats("motion", &r->motion, 1);
+    printf("  }\n}\n");
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: rsm-stages --carmen LOG [--method rsm|icp] [--beams N] [--limit N] [--fov179]\n"
+               "                  [--clock ns|none] [--trajectory OUT] [--stack]\n");
+}
+
+static size_t parse_count(const char *s, size_t lo, size_t hi)
+{
+    char *end;
+    unsigned long v;
+    errno = 0;
+    v = strtoul(s, &end, 10);
+    if (*end != '\0' || end == s || errno != 0 || v < lo || v > hi) {
+        usage(stderr);
+        die("bad number");
+    }
+    return (size_t)v;
+}
+
+int main(int argc, char **argv)
+{
+    run_t *r = &g_run;
+    int i;
+    int rc;
+    r->opt.method = RSM_METHOD_RSM;
+    r->opt.clock_ns = 1;
+    for (i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const char *next = i + 1 < argc ? argv[i + 1] : NULL;
+        if (strcmp(a, "--carmen") == 0 && next) {
+            r->opt.carmen = argv[++i];
+        } else if (strcmp(a, "--trajectory") == 0 && next) {
+            r->opt.trajectory = argv[++i];
+        } else if (strcmp(a, "--method") == 0 && next) {
+            ++i;
+            if (strcmp(next, "rsm") == 0) {
+                r->opt.method = RSM_METHOD_RSM;
+            } else if (strcmp(next, "icp") == 0) {
+                r->opt.method = RSM_METHOD_ICP;
+            } else {
+                usage(stderr);
+                return 2;
+            }
+        } else if (strcmp(a, "--beams") == 0 && next) {
+            r->opt.beams = parse_count(argv[++i], 2u, (size_t)RSM_MAX_BEAMS);
+        } else if (strcmp(a, "--limit") == 0 && next) {
+            r->opt.limit = parse_count(argv[++i], 1u, (size_t)-1);
+        } else if (strcmp(a, "--clock") == 0 && next) {
+            ++i;
+            if (strcmp(next, "ns") == 0) {
+                r->opt.clock_ns = 1;
+            } else if (strcmp(next, "none") == 0) {
+                r->opt.clock_ns = 0;
+            } else {
+                usage(stderr);
+                return 2;
+            }
+        } else if (strcmp(a, "--fov179") == 0) {
+            r->opt.fov179 = 1;
+        } else if (strcmp(a, "--stack") == 0) {
+            r->opt.stack = 1;
+        } else if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            usage(stdout);
+            return 0;
+        } else {
+            usage(stderr);
+            return 2;
+        }
+    }
+    if (r->opt.carmen == NULL) {
+        usage(stderr);
+        return 2;
+    }
+    if (r->opt.stack && STAGES_ASAN) {
+        die("--stack cannot measure under AddressSanitizer (frames live off the stack)");
+    }
+    r->cfg = rsm_localizer_config_default();
+    r->cfg.method = r->opt.method;
+    if (r->opt.clock_ns && !r->opt.stack) {
+        r->cfg.clock_fn = hook_clock_ns;
+        r->cfg.clock_ctx = NULL;
+    }
+    if (r->opt.stack) {
+        void *buf = NULL;
+        r->probe.size = STACK_BYTES;
+        if (posix_memalign(&buf, 4096u, r->probe.size) != 0) {
+            die("out of memory");
+        }
+        r->probe.buf = (unsigned char *)buf;
+        memset(r->probe.buf, STACK_PATTERN, r->probe.size);
+    }
+    if (r->opt.trajectory != NULL) {
+        r->traj = fopen(r->opt.trajectory, "w");
+        if (r->traj == NULL) {
+            fprintf(stderr, "rsm-stages: cannot write %s: %s\n", r->opt.trajectory, strerror(errno));
+            return 1;
+        }
+        fprintf(r->traj, "# rsm-stages trajectory: timestamp[s] x[m] y[m] theta[rad]\n# source: %s\n",
+                r->opt.carmen);
+    }
+    rc = run_log(r);
+    if (r->traj != NULL && fclose(r->traj) != 0) {
+        fprintf(stderr, "rsm-stages: cannot write %s\n", r->opt.trajectory);
+        rc = rc ? rc : 1;
+    }
+    if (rc == 0) {
+        if (r->scans == 0) {
+            fprintf(stderr, "rsm-stages: no scan in %s\n", r->opt.carmen);
+            return 1;
+        }
+        print_json(r);
+    }
+    return rc;
+}
