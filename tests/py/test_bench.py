@@ -1,11 +1,14 @@
 """Tests of rsm-bench's report machinery on the shipped excerpt.
 
 The bench runs once (module fixture) in quick settings on
-tests/data/intel_head.clf.gz with rsm-nav from RSM_BUILD_DIR (ctest sets it),
-plus one extra log made here (the excerpt with 10 % outliers). The tests then
-read the report back and check every figure against what evaluate() computes
-from the trajectories the bench kept, and against the raw outputs of rsm-nav
-and callgrind: no expected number is typed into this file.
+tests/data/intel_head.clf.gz with rsm-nav and rsm-stages from RSM_BUILD_DIR
+(ctest sets it), plus one extra log made here (the excerpt with 10 %
+outliers), one Cortex-M4F configuration (the small one) and the scaling
+section with the default build only. The tests then read the report back and
+check every figure against what evaluate() computes from the trajectories the
+bench kept, and against the raw outputs of rsm-nav, rsm-stages and callgrind:
+no expected number is typed into this file. The parsers and the pure helpers
+are tested on small inputs made here.
 """
 
 import json
@@ -52,7 +55,8 @@ def run(tmp_path_factory, head_log, head_relations):
            "--real-log", str(head_log), "--real-relations", str(head_relations),
            "--log", str(extra), "--relations", str(head_relations),
            "--quick", "--levels", ",".join(map(str, LEVELS)), "--seeds", str(SEEDS),
-           "--no-cross-check", "--output", str(d / "RESULTS.md"), "--plots-dir", str(d / "results"),
+           "--no-cross-check", "--arm-configs", "small", "--output", str(d / "RESULTS.md"),
+           "--plots-dir", str(d / "results"),
            "--work-dir", str(d / "work"), "--cache-dir", str(d / "cache")]
     # Valgrind cannot run an ASan binary; the instruction counts are then left out.
     if sanitized(build) or shutil.which("valgrind") is None:
@@ -236,7 +240,7 @@ def test_memory_table_adds_up(run):
 
 def test_where_rsm_loses_lists_exactly_the_measures_where_the_others_are_lower(run):
     man, rels = run["manifest"], run["relations"]
-    text = section(run["report"], bench.SECTION_TITLES[4])
+    text = section(run["report"], bench.SECTION_TITLES[-1])
     for entry in man["logs"]:
         label = entry["label"]
         res = {m: scoped(man["accuracy"][label]["runs"][m]["trajectory"], rels) for m in bench.METHODS}
@@ -319,3 +323,347 @@ def test_summary_parser_reads_outcomes_and_times():
     assert math.isclose(bench.fused_percent(s), 75.0)
     with pytest.raises(bench.BenchError):
         bench.parse_summary("no summary here")
+
+
+# ---------------------------------------------------------------------------
+# sharp turns (the paper's Fig. 8)
+
+
+def _between(a, b):
+    """inverse(a) o b, written out here independently of rsm_tools.evaluate."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    d = b[2] - a[2]
+    return (c * dx + s * dy, -s * dx + c * dy, math.atan2(math.sin(d), math.cos(d)))
+
+
+def _deg(yaw):
+    return abs(math.degrees(math.atan2(math.sin(yaw), math.cos(yaw))))
+
+
+def test_turns_are_the_fastest_local_turns_with_the_residuals_of_the_kept_trajectories(run):
+    man, rels = run["manifest"], run["relations"]
+    tn = man["turns"]
+    cell = man["stages"]["config"]["cell_m"]
+    assert tn["cell_m"] == cell > 0
+    assert f"cells of {cell * 100:g} cm" in section(run["report"], bench.SECTION_TITLES[2])
+    runs = man["accuracy"][man["logs"][0]["label"]]["runs"]
+    # the scan order: the odometry run writes one line per scan of the log
+    order = {}
+    for k, line in enumerate(l for l in Path(runs["odometry"]["trajectory"]).read_text().splitlines()
+                             if l and not l.startswith("#")):
+        order.setdefault(round(float(line.split()[0]), 6), k)
+    cands = []
+    for r in rels:
+        i1, i2 = order.get(round(r.t1, 6)), order.get(round(r.t2, 6))
+        if r.span <= bench.LOCAL_SPAN and i1 is not None and i2 is not None and i1 != i2:
+            cands.append((_deg(r.yaw) / abs(i2 - i1), r, 0.5 * (i1 + i2)))
+    picked = tn["turns"]
+    assert 0 < len(picked) <= bench.TURNS
+    rates = [t["rate_deg_per_scan"] for t in picked]
+    mids = [0.5 * (t["i1"] + t["i2"]) for t in picked]
+    assert rates == sorted(rates, reverse=True)
+    assert all(abs(a - b) >= tn["separation"] for i, a in enumerate(mids) for b in mids[:i])
+    keys = {(t["t1"], t["t2"]) for t in picked}
+    for rate, r, mid in cands:
+        if (r.t1, r.t2) in keys:
+            assert any(math.isclose(rate, x) for x in rates)
+        elif len(picked) < bench.TURNS or rate > rates[-1]:
+            # left out only because a faster turn already covers its stretch of the log
+            assert any(abs(mid - m) < tn["separation"] and x >= rate for m, x in zip(mids, rates)), r
+    trajs = {m: ev.load_trajectory(runs[m]["trajectory"]) for m in bench.METHODS}
+    _, rows = table(run["report"], "turns")
+    assert len(rows) == len(picked)
+    for row, t in zip(rows, picked):
+        rel = next(r for r in rels if (r.t1, r.t2) == (t["t1"], t["t2"]))
+        assert int(row[3]) == abs(order[round(rel.t2, 6)] - order[round(rel.t1, 6)])
+        assert shows(row[4], _deg(rel.yaw)) and shows(row[5], math.hypot(rel.x, rel.y))
+        for k, m in enumerate(bench.METHODS):
+            p1, p2 = trajs[m].find(rel.t1, 0.0)[0], trajs[m].find(rel.t2, 0.0)[0]
+            e = _between((rel.x, rel.y, rel.yaw), _between(p1, p2))
+            dx, dy = row[6 + 2 * k].split(", ")
+            assert shows(dx, abs(e[0]) / cell) and shows(dy, abs(e[1]) / cell), (row, m)
+            assert shows(row[7 + 2 * k], abs(math.degrees(e[2]))), (row, m)
+    # the summary: means over the turns
+    _, rows = table(run["report"], "turns summary")
+    for row in rows:
+        vals = [t["residual"][row[0]] for t in picked]
+        assert int(row[1]) == len(vals)
+        assert shows(row[4], sum(v["translation_cells"] for v in vals) / len(vals))
+        assert shows(row[6], sum(v["rotation_deg"] for v in vals) / len(vals))
+    # by true rotation: every local relation once; the means are evaluate()'s
+    local = [r for r in rels if r.span <= bench.LOCAL_SPAN]
+    _, rows = table(run["report"], "turns by rotation")
+    assert sum(int(r[1]) for r in rows) == len(local)
+    edges = list(bench.ROTATION_BINS) + [math.inf]
+    for k, row in enumerate(rows):
+        sel = [r for r in local if edges[k] <= _deg(r.yaw) < edges[k + 1]]
+        assert int(row[1]) == len(sel)
+        for j, m in enumerate(bench.METHODS):
+            if not sel:
+                assert row[2 + 2 * j] == "n/a"
+                continue
+            res = ev.evaluate(trajs[m], sel, tolerance=0.0)
+            assert shows(row[2 + 2 * j], res["translation"]["mean"] / cell), (row, m)
+            assert shows(row[3 + 2 * j], res["rotation"]["mean"]), (row, m)
+
+
+# ---------------------------------------------------------------------------
+# per-stage times, rsm-stages itself, callgrind by stage
+
+
+def test_stage_table_is_the_median_over_the_rsm_stages_runs(run):
+    st = run["manifest"]["stages"]
+    _, rows = table(run["report"], "speed stages")
+    by = {r[0]: r for r in rows}
+    for k, m in enumerate(bench.ROBUST_METHODS):
+        res = [r["result"] for r in st["runs"] if r["method"] == m]
+        assert len(res) == st["repeats"] >= 1
+        for one in res:
+            tm = one["timing"]
+            assert tm["step"]["n"] == tm["call"]["n"] == one["scans"] > 0
+            # the stages tile each step, so their means add up to the step's mean
+            assert math.isclose(sum(tm[s]["mean_us"] for s in bench.STAGES), tm["step"]["mean_us"],
+                                rel_tol=1e-6, abs_tol=1e-3)
+            # every step lies inside its call, so the order statistics do too
+            assert tm["step"]["median_us"] <= tm["call"]["median_us"]
+            assert tm["step"]["p95_us"] <= tm["call"]["p95_us"]
+        off = 2 + 5 * k
+        for s in bench.STAGES:
+            cells = by[s][off:off + 5]
+            reached = res[0]["timing"][s]["reached"]
+            assert int(cells[0]) == reached
+            if reached == 0:
+                assert cells[1:4] == ["-", "-", "-"]
+                continue
+            for cell, stat in zip(cells[1:4], ("median_reached_us", "p95_reached_us", "mean_us")):
+                vals = sorted(r["timing"][s][stat] for r in res)
+                assert shows(cell, vals[len(vals) // 2]), (m, s, stat)
+        call = sorted(r["timing"]["call"]["median_us"] for r in res)
+        assert shows(by["whole call (timed outside)"][off + 1], call[len(call) // 2])
+    reached = {m: {s for s in bench.STAGES if st["methods"][m]["timing"][s]["reached"]} for m in bench.ROBUST_METHODS}
+    assert {"grid", "harris", "match", "ransac", "refine", "ekf", "map"} <= reached["rsm"]
+    assert "icp" not in reached["rsm"]
+    assert reached["icp"] == {"points", "icp", "ekf", "map"}
+    assert shows(by["icp / rsm"][3], st["methods"]["icp"]["timing"]["call"]["median_us"]
+                 / st["methods"]["rsm"]["timing"]["call"]["median_us"])
+
+
+def test_rsm_stages_runs_the_log_exactly_as_rsm_nav(run, head_log, tmp_path):
+    exe = bench.stages_exe(build_dir())
+    runs = run["manifest"]["accuracy"][run["manifest"]["logs"][0]["label"]]["runs"]
+
+    def data(p):
+        return [l for l in Path(p).read_text().splitlines() if l and not l.startswith("#")]
+
+    for m in bench.ROBUST_METHODS:
+        for clock in ("ns", "none"):
+            res = bench.run_stages(exe, head_log, m, ["--clock", clock], tmp_path / f"{m}-{clock}.txt")
+            assert data(res["trajectory"]) == data(runs[m]["trajectory"]), (m, clock)
+            assert (res["timing"]["step"] is None) == (clock == "none")
+            assert res["timing"]["call"]["n"] == res["scans"]
+    res = bench.run_stages(exe, head_log, "rsm", ["--beams", "361", "--limit", "50"])
+    assert (res["scans"], res["beams_in"], res["beams"]) == (50, 180, 361)
+
+
+def test_callgrind_stages_add_up_to_the_collected_instructions(run):
+    cg = run["manifest"]["callgrind"]
+    if "skipped" in cg:
+        assert "speed callgrind stages" not in run["report"]
+        return
+    _, rows = table(run["report"], "speed callgrind stages")
+    for k, m in enumerate(bench.ROBUST_METHODS):
+        assert cg[m]["breakdown"]["total"] == cg[m]["ir"]
+        assert sum(v["ir"] for v in cg[m]["stages"].values()) == cg[m]["ir"]
+        for row in rows:
+            v = cg[m]["stages"].get(row[0])
+            assert number(row[2 + 2 * k]) == (round(v["ir_per_scan"]) if v else 0)
+    assert cg["icp"]["stages"]["icp"]["ir"] > cg["icp"]["ir"] / 2
+    assert "harris" in cg["rsm"]["stages"] and "harris" not in cg["icp"]["stages"]
+
+
+def test_callgrind_parser_and_localizer_breakdown_on_a_made_up_profile():
+    text = "\n".join([
+        "events: Ir", "", "fn=(1) rsm_localizer_scan", "0 100",
+        "cfn=(2) rsm_harris_detect", "calls=2 0", "0 500",
+        "cfn=(3) step_rsm.isra.0", "calls=1 0", "0 300",
+        "fn=(3)", "0 50", "cfn=(4) rsm_map_align", "calls=1 0", "0 250",
+        "fn=(2)", "0 380", "cfn=(5) patch_map", "calls=10 0", "0 120",
+        "fn=(5)", "+1 70", "-1 50", ""])
+    cg = bench.parse_callgrind(text)
+    assert cg["self"] == {"rsm_localizer_scan": 100, "step_rsm.isra.0": 50, "rsm_harris_detect": 380,
+                          "patch_map": 120}
+    assert cg["calls"][("rsm_harris_detect", "patch_map")] == [10, 120]
+    # patch_map is a localizer helper, but called from inside Harris: not the localizer's own code
+    br = bench.localizer_breakdown(cg, ["step_rsm", "patch_map", "fuse"])
+    assert br["group"] == ["rsm_localizer_scan", "step_rsm"]
+    assert (br["own"], br["callees"], br["total"]) == (150, {"rsm_harris_detect": 500, "rsm_map_align": 250}, 900)
+    st = bench.callgrind_stages(br, 3)
+    assert st["harris"]["ir"] == 500 and st["refine"]["ir"] == 250 and st["localizer"]["ir"] == 150
+    assert math.isclose(st["harris"]["ir_per_scan"], 500 / 3)
+    assert bench.base_name("rsm_harris_response.part.0") == "rsm_harris_response"
+    assert bench.base_name("to_world.constprop.0.isra.0") == "to_world"
+    assert bench.base_name("walk'2") == "walk"
+    src = ("static int a(void)\n{\n    return 1;\n}\nint b(void);\nstatic const char *\nname_of(int x,\n"
+           "        int y)\n{\n    return 0;\n}\nstatic int table[3];\n")
+    assert bench.static_functions(src) == ["a", "name_of"]
+
+
+# ---------------------------------------------------------------------------
+# memory: Cortex-M4F per configuration, stack
+
+
+def test_stack_depths_are_reported_and_consistent(run):
+    man = run["manifest"]
+    st = man["stages"]
+    text = section(run["report"], bench.SECTION_TITLES[4])
+    if sanitized(build_dir()):
+        assert "stack" not in st and "Painted measurement not made" in text
+    else:
+        _, rows = table(run["report"], "memory stack")
+        painted = [r for r in rows if r[1] == "painted"]
+        assert len(painted) == len(bench.ROBUST_METHODS)
+        for m, row in zip(bench.ROBUST_METHODS, painted):
+            s = st["stack"][m]
+            assert s["scan_bytes"] == s["peak_bytes"] - s["baseline_bytes"] > 0
+            assert s["scans"] == st["methods"][m]["scans"]
+            assert int(number(row[3])) == s["scan_bytes"]
+    for where in [man["host_stack"]] + [c for c in (man["arm_memory"].get("configs") or {}).values()]:
+        if "skipped" in where:
+            continue
+        for fn, s in where["stack"].items():
+            assert s["path"][0][0] == fn
+            assert sum(b for _, b in s["path"]) == s["bytes"] > 0
+            assert not s["recursion"]
+
+
+def test_arm_memory_of_the_small_configuration(run):
+    am = run["manifest"]["arm_memory"]
+    if "skipped" in am:
+        assert "Per-configuration Cortex-M4F sizes not measured" in run["report"]
+        return
+    assert list(am["configs"]) == ["small"]
+    c = am["configs"]["small"]
+    assert c["header"] == "tests/config/small_config.h"
+    sources = {p.name + ".obj" for p in (REPO_ROOT / "src").glob("*.c")}
+    assert {o["object"] for o in c["objects"]} == sources
+    for o in c["objects"]:
+        assert o["flash"] == o["text"] + o["rodata"] > 0 and o["ram"] == 0
+    state = {s["label"].strip(): s["bytes"] for s in c["state"]}
+    total = state["rsm_localizer_t (all of the below)"]
+    assert c["firmware_statics"]["fw_localizer"] == total
+    parts = [v for k, v in state.items() if c["state"][[s["label"].strip() for s in c["state"]].index(k)]["label"]
+             .startswith("  ") and "shares" not in k]
+    assert sum(parts) <= total and all(p > 0 for p in parts)
+    assert c["firmware"]["bss"] >= sum(c["firmware_statics"].values()) > total
+    _, rows = table(run["report"], "memory arm configs flash")
+    by = {r[0]: r for r in rows}
+    assert int(number(by["TOTAL core + drivers"][2])) == sum(o["flash"] for o in c["objects"])
+    _, rows = table(run["report"], "memory arm configs state")
+    assert int(number(rows[0][2])) == total
+    # the small config really is smaller than the default one (same compiler, this host's sizes)
+    assert total < run["manifest"]["memory"]["sizes"]["rsm_localizer_t"]
+
+
+def test_size_and_nm_parsers_on_made_up_output():
+    text = "\n".join([
+        "a.c.obj   (ex build/librsm.a):", "section      size   addr", ".text           0      0",
+        ".text.f       120      0", ".rodata.x      12      0", ".bss            0      0",
+        ".comment       50      0", "Total         182", "",
+        "b.c.obj   (ex build/librsm.a):", "section      size   addr", ".text.g        40      0",
+        ".data.v         4      0", ".bss.w          8      0", "Total          52", ""])
+    objs = bench.parse_size_archive(text)
+    assert [o["object"] for o in objs] == ["a.c.obj", "b.c.obj"]
+    assert (objs[0]["text"], objs[0]["rodata"], objs[0]["flash"], objs[0]["ram"]) == (120, 12, 132, 0)
+    assert (objs[1]["flash"], objs[1]["data"], objs[1]["bss"], objs[1]["ram"]) == (40, 4, 8, 12)
+    nm = "00005f6c 00003b70 B rsm_size_0\n00005f30 0000003c B rsm_size_12\n00000000 00000010 B other\n"
+    assert bench.parse_nm_sizes(nm) == {0: 0x3b70, 12: 0x3c}
+
+
+def test_worst_stack_path_on_a_made_up_call_graph():
+    a = "\n".join([
+        'graph: { title: "a.c"',
+        'node: { title: "top" label: "top\\na.c:1:1\\n100 bytes (static)" }',
+        'node: { title: "a.c:helper" label: "helper\\na.c:9:1\\n40 bytes (static)" }',
+        'node: { title: "memset" label: "__builtin_memset\\n<built-in>" shape : ellipse }',
+        'node: { title: "deep" label: "deep\\nb.h:1:1" shape : ellipse }',
+        'edge: { sourcename: "top" targetname: "a.c:helper" label: "a.c:3:5" }',
+        'edge: { sourcename: "top" targetname: "deep" label: "a.c:4:5" }',
+        'edge: { sourcename: "a.c:helper" targetname: "memset" }', "}"])
+    b = "\n".join([
+        'graph: { title: "b.c"',
+        'node: { title: "deep" label: "deep\\nb.c:1:1\\n30 bytes (dynamic,bounded)" }',
+        'node: { title: "__indirect_call" label: "Indirect Call Placeholder" shape : ellipse }',
+        'node: { title: "b.c:cb_small" label: "cb_small\\nb.c:7:1\\n8 bytes (static)" }',
+        'node: { title: "cb_big" label: "cb_big\\nb.c:9:1\\n50 bytes (static)" }',
+        'edge: { sourcename: "deep" targetname: "__indirect_call" label: "b.c:2:3" }', "}"])
+    g = bench.parse_callgraph_info([a, b])
+    assert g["nodes"]["deep"]["bytes"] == 30 and "memset" not in g["nodes"]
+    res = bench.worst_stack_path(g, "top", {"deep": ("cb_small", "cb_big")})
+    assert res["bytes"] == 180 and [n for n, _ in res["path"]] == ["top", "deep", "cb_big"]
+    assert res["unresolved"] == ["memset"] and res["dynamic"] == ["deep"] and not res["unknown_indirect"]
+    res = bench.worst_stack_path(g, "top")
+    assert res["bytes"] == 140 and [n for n, _ in res["path"]] == ["top", "helper"]
+    assert res["unknown_indirect"] == ["deep"]
+    # recursion is reported, not followed
+    c = 'edge: { sourcename: "cb_big" targetname: "top" }'
+    res = bench.worst_stack_path(bench.parse_callgraph_info([a, b, c]), "top", {"deep": ("cb_big",)})
+    assert res["recursion"] == ["top"] and res["bytes"] == 180
+    with pytest.raises(bench.BenchError):
+        bench.worst_stack_path(g, "missing")
+
+
+# ---------------------------------------------------------------------------
+# scaling
+
+
+def test_scaling_runs_of_the_default_build(run):
+    man = run["manifest"]
+    sc = man["scaling"]
+    rels = run["relations"]
+    assert [v["name"] for v in sc["variants"]] == ["beams361", "map7"]
+    assert all(not v["macros"] for v in sc["variants"])
+    acc = man["accuracy"][man["logs"][0]["label"]]["runs"]
+    _, rows = table(run["report"], "scaling time")
+    assert len(rows) == len(sc["rows"]) == 4
+    for r in sc["rows"]:
+        res = ev.evaluate(ev.load_trajectory(r["trajectory"]), rels, max_span=bench.LOCAL_SPAN, tolerance=0.0)
+        for q in bench.QUANTITIES:
+            assert math.isclose(r["local"][q], res[q]["mean"])
+        row = [x for x in rows if x[0] == r["kind"] and x[4] == r["method"]]
+        assert len(row) == 1
+        assert int(row[0][2]) == r["beams"]
+        assert shows(row[0][5], r["call"]["median_us"]) and shows(row[0][7], res["translation"]["mean"])
+        if r["kind"] == "map":  # the log's own readings in the default build: the accuracy run's trajectory
+            assert r["beams"] == 180
+            assert Path(r["trajectory"]).read_text().splitlines()[2:] == \
+                Path(acc[r["method"]]["trajectory"]).read_text().splitlines()[2:]
+        else:
+            assert r["beams"] == 361 and r["config"]["RSM_MAX_BEAMS"] >= 361
+
+
+def test_scaling_variants_headers_and_growth(tmp_path):
+    v = {x["name"]: x for x in bench.scaling_variants((181, 361, 721), (6, 7, 8))}
+    assert list(v) == ["beams181", "beams361", "beams721", "map6", "map7", "map8"]
+    assert v["beams361"]["macros"] == {} and v["map7"]["macros"] == {}
+    assert v["beams721"]["macros"] == {"RSM_MAX_BEAMS": 721} and v["beams721"]["resample"] == 721
+    assert v["map6"]["macros"] == {"RSM_MAP_SIZE_LOG2": 6} and v["map6"]["resample"] is None
+    # the generated header really overrides config.h's defaults
+    header = tmp_path / "variant.h"
+    header.write_text(bench.variant_header({"RSM_MAX_BEAMS": 721, "RSM_MAP_SIZE_LOG2": 8}))
+    probe = tmp_path / "probe.c"
+    probe.write_text('#include "rsm/config.h"\n'
+                     "typedef char beams_ok[(RSM_MAX_BEAMS == 721 && RSM_MAP_SIZE == 256) ? 1 : -1];\n"
+                     "typedef char cells_ok[(RSM_IMAGE_MAX_CELLS == 2 * 721) ? 1 : -1];\n")
+    cc = bench.cmake_cache(build_dir()).get("CMAKE_C_COMPILER") or "cc"
+    res = subprocess.run([cc, "-std=c99", "-fsyntax-only", f"-I{REPO_ROOT / 'include'}",
+                          f"-DRSM_USER_CONFIG={header}", str(probe)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    rows = [{"kind": "beams", "config": {"RSM_MAX_BEAMS": b, "RSM_MAP_SIZE": 128}, "sizes": {"rsm_localizer_t": s}}
+            for b, s in ((181, 30000), (721, 43500))]
+    rows += [{"kind": "map", "config": {"RSM_MAX_BEAMS": 361, "RSM_MAP_SIZE": m}, "sizes": {"rsm_localizer_t": s}}
+             for m, s in ((64, 10000), (256, 90000))]
+    g = bench.memory_growth(rows)
+    assert math.isclose(g["beams"]["bytes_per_unit"], 13500 / 540)
+    assert math.isclose(g["map"]["bytes_per_unit"], 80000 / (256 ** 2 - 64 ** 2))
+    assert bench.memory_growth(rows[:1]) == {}

@@ -1,7 +1,7 @@
 """rsm-bench: measures rsm against its ICP baseline and odometry and writes a report.
 
 Every figure in the report is measured by this command; none is typed in.
-The report (``docs/RESULTS.md`` by default) has five sections:
+The report (``docs/RESULTS.md`` by default) has seven sections:
 
 1. Accuracy: relative-pose error (Kuemmerle et al. 2009, :mod:`rsm_tools.evaluate`)
    of rsm, icp and odometry on the real log (and on any extra ``--log`` /
@@ -9,19 +9,30 @@ The report (``docs/RESULTS.md`` by default) has five sections:
 2. Robustness, the paper's experiment: a share of every scan's readings is
    replaced by random ranges (:mod:`rsm_tools.outliers`), several seeds per
    level; errors per level with their spread and their ratio to the clean run.
-3. Speed: wall time per scan from rsm-nav's summary (rsm and icp, the same
-   bench run, one process at a time) and instructions per scan counted by
-   callgrind inside ``rsm_localizer_scan`` on the shipped excerpt.
-4. Memory: ``sizeof(rsm_localizer_t)`` and its parts from a small C program
-   built against the library, and the Cortex-M4F sizes printed by
-   ``tools/cross-check``.
-5. Where rsm loses: generated from the numbers above.
+3. Sharp turns, the paper's Fig. 8: the residuals (cells and degrees) of the
+   three trajectories at the local relations with the fastest true turn, and
+   over all local relations binned by their true rotation.
+4. Speed: wall time per scan from rsm-nav's summary (rsm and icp, the same
+   bench run, one process at a time); per-stage times from ``rsm-stages``
+   (tools/bench-c), which runs the log with the localizer's timing hook;
+   instructions per scan counted by callgrind inside ``rsm_localizer_scan``
+   on the shipped excerpt, in total and by the functions it calls.
+5. Memory: ``sizeof(rsm_localizer_t)`` and its parts from a small C program
+   built against the library; the Cortex-M4F sizes printed by
+   ``tools/cross-check``; per module and per configuration (default and
+   ``tests/config/small_config.h``) from Cortex-M4F builds of this bench;
+   the stack of one localizer step, statically (``-fstack-usage
+   -fcallgraph-info=su`` and the call graph) and by painting a thread's stack
+   (``rsm-stages --stack``).
+6. Scaling: time per scan against readings per scan (the log resampled) and
+   map size, each a build with its own ``RSM_USER_CONFIG``; the state's size.
+7. Where rsm loses: generated from the numbers above.
 
 Trajectories, summaries and a manifest (``bench.json``) are kept in the work
 directory, so that the report can be checked against them; outlier logs are
 cached and reused.  ``tools/bench`` sets up, builds ``build-release/`` and
 runs this module with the full settings.  Python standard library only;
-matplotlib, if installed, draws the robustness curves.
+matplotlib, if installed, draws the plots.
 """
 
 import argparse
@@ -56,9 +67,11 @@ UNITS = {"translation": "m", "rotation": "deg"}
 SECTION_TITLES = (
     "1. Accuracy on the real log",
     "2. Robustness to outliers",
-    "3. Speed",
-    "4. Memory",
-    "5. Where rsm loses",
+    "3. Sharp turns (the paper's Fig. 8)",
+    "4. Speed",
+    "5. Memory",
+    "6. Scaling",
+    "7. Where rsm loses",
 )
 
 
@@ -459,10 +472,11 @@ def callgrind_ir(out_file: Path) -> int:
     return int(m.group(1))
 
 
-def run_callgrind(nav: Path, log: Path, work: Path, jobs: int) -> dict:
+def run_callgrind(nav: Path, log: Path, work: Path, jobs: int, root: Optional[Path] = None) -> dict:
     valgrind = shutil.which("valgrind")
     if valgrind is None:
         return {"skipped": "valgrind is not installed"}
+    helpers = static_functions((root / "src" / "localizer.c").read_text()) if root else []
 
     def one(m):
         out = work / "callgrind" / f"{m}.callgrind.out"
@@ -476,7 +490,14 @@ def run_callgrind(nav: Path, log: Path, work: Path, jobs: int) -> dict:
         if ir == 0:
             raise BenchError(f"callgrind collected nothing in rsm_localizer_scan for {m} "
                              "(is the symbol in the binary?)")
-        return m, {"out": str(out), "scans": s["scans"], "ir": ir, "ir_per_scan": ir / s["scans"]}
+        res = {"out": str(out), "scans": s["scans"], "ir": ir, "ir_per_scan": ir / s["scans"]}
+        br = localizer_breakdown(parse_callgrind(out.read_text(errors="replace")), helpers)
+        if br["total"] == ir:  # the breakdown accounts for every instruction collected
+            res["breakdown"] = br
+            res["stages"] = callgrind_stages(br, s["scans"])
+        else:
+            res["breakdown_note"] = f"the call graph accounts for {br['total']} of {ir} instructions"
+        return m, res
 
     res = dict(parallel(one, ROBUST_METHODS, jobs))
     res["ratio"] = ratio(res["icp"]["ir_per_scan"], res["rsm"]["ir_per_scan"])
@@ -621,6 +642,823 @@ def run_cross_check(root: Path) -> dict:
         raise BenchError(f"tools/cross-check failed ({res.returncode}):\n{res.stdout}\n{res.stderr}")
     parsed["compiler"] = first_line(["arm-none-eabi-gcc", "--version"]) or "arm-none-eabi-gcc"
     return parsed
+
+
+# ---------------------------------------------------------------------------
+# rsm-stages (tools/bench-c): stage times, stack depth, sizes
+
+
+STAGES = ("points", "grid", "harris", "match", "ransac", "refine", "icp", "ekf", "map")
+STAGE_WHAT = {
+    "points": "readings -> robot-frame points",
+    "grid": "map recentred, points -> scan image",
+    "harris": "key points of scan and map",
+    "match": "tentative matches",
+    "ransac": "two-point RANSAC",
+    "refine": "sub-cell alignment to the map",
+    "icp": "ICP alignment (baseline)",
+    "ekf": "measurement noise, gate, update",
+    "map": "scan superimposed on the map",
+}
+TIMING_STATS = ("mean_us", "median_us", "p95_us", "max_us", "median_reached_us", "p95_reached_us")
+
+
+def stages_exe(build: Path) -> Path:
+    return build / "tools" / "bench-c" / "rsm-stages"
+
+
+def run_stages(exe: Path, log: Path, method: str, extra: Sequence[str] = (),
+               traj: Optional[Path] = None) -> dict:
+    """Runs rsm-stages once; returns its JSON (and the wall time of the process)."""
+    cmd = [str(exe), "--carmen", str(log), "--method", method, *extra]
+    if traj is not None:
+        traj.parent.mkdir(parents=True, exist_ok=True)
+        cmd += ["--trajectory", str(traj)]
+    t0 = time.monotonic()
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    if res.returncode != 0:
+        raise BenchError(f"{' '.join(cmd)} failed ({res.returncode}):\n{res.stderr}")
+    try:
+        out = json.loads(res.stdout)
+    except ValueError as exc:
+        raise BenchError(f"rsm-stages printed no JSON ({exc}):\n{res.stdout[:2000]}") from None
+    out["seconds"] = time.monotonic() - t0
+    if traj is not None:
+        out["trajectory"] = str(traj)
+    return out
+
+
+def median_of(values: Sequence[float]) -> float:
+    """The middle element of the sorted values (the upper one of an even count),
+    as rsm-nav and rsm-stages take medians."""
+    vals = sorted(values)
+    return vals[len(vals) // 2] if vals else float("nan")
+
+
+def combine_timing(results: Sequence[dict]) -> dict:
+    """Per timing key (stages, step, call, motion): the median over the runs of
+    each statistic; counts from the first run (every run sees the same scans)."""
+    out = {}
+    for key in STAGES + ("step", "call", "motion"):
+        stats = [r["timing"][key] for r in results if r["timing"].get(key)]
+        if not stats:
+            continue
+        row = {s: median_of([st[s] for st in stats]) for s in TIMING_STATS}
+        row["min_median_us"] = min(st["median_us"] for st in stats)
+        row["max_median_us"] = max(st["median_us"] for st in stats)
+        row["n"] = stats[0]["n"]
+        row["reached"] = stats[0]["reached"]
+        out[key] = row
+    return out
+
+
+def run_stage_speed(exe: Path, log: Path, repeats: int, stack: bool) -> dict:
+    """rsm and icp alternately through rsm-stages with the clock hook,
+    ``repeats`` times each; then one painted-stack run per method."""
+    runs = []
+    for k in range(repeats):
+        for m in ROBUST_METHODS:
+            runs.append({"method": m, "repeat": k + 1, "result": run_stages(exe, log, m, ["--clock", "ns"])})
+    out = {"log": str(log), "repeats": repeats, "runs": runs, "methods": {}}
+    for m in ROBUST_METHODS:
+        sel = [r["result"] for r in runs if r["method"] == m]
+        out["methods"][m] = {"timing": combine_timing(sel), "scans": sel[0]["scans"],
+                             "beams": sel[0]["beams"], "outcomes": sel[0]["outcomes"]}
+    out["config"] = runs[0]["result"]["config"]
+    out["sizes"] = runs[0]["result"]["sizes"]
+    r_, i_ = out["methods"]["rsm"]["timing"]["call"], out["methods"]["icp"]["timing"]["call"]
+    out["ratio_median"] = ratio(i_["median_us"], r_["median_us"])
+    out["ratio_p95"] = ratio(i_["p95_us"], r_["p95_us"])
+    out["ratio_mean"] = ratio(i_["mean_us"], r_["mean_us"])
+    if stack:
+        out["stack"] = {m: run_stages(exe, log, m, ["--stack"])["stack"] for m in ROBUST_METHODS}
+    return out
+
+
+# ---------------------------------------------------------------------------
+# callgrind: instructions per function called from rsm_localizer_scan
+
+
+def parse_callgrind(text: str) -> dict:
+    """Self cost per function and inclusive cost per call edge (caller, callee)
+    from a callgrind output file (first event only, name compression resolved)."""
+    names: Dict[str, str] = {}
+    self_cost: Dict[str, int] = {}
+    calls: Dict[Tuple[str, str], List[int]] = {}
+    fn = None
+    pending = None  # (callee, count) after a calls= line: the next cost line is the call's
+    cfn = None
+
+    def name_of(spec: str) -> str:
+        m = re.match(r"^\((\d+)\)(?:\s+(.*))?$", spec.strip())
+        if not m:
+            return spec.strip()
+        if m.group(2) is not None:
+            names[m.group(1)] = m.group(2)
+        return names.get(m.group(1), f"({m.group(1)})")
+
+    for line in text.splitlines():
+        if not line:
+            continue
+        if line.startswith("fn="):
+            fn = name_of(line[3:])
+            pending = None
+        elif line.startswith("cfn="):
+            cfn = name_of(line[4:])
+        elif line.startswith("calls="):
+            pending = (cfn, int(line[6:].split()[0]))
+        elif line[0].isdigit() or line[0] in "+-*":
+            parts = line.split()
+            cost = int(parts[1]) if len(parts) > 1 else 0
+            if fn is None:
+                continue
+            if pending is not None:
+                e = calls.setdefault((fn, pending[0]), [0, 0])
+                e[0] += pending[1]
+                e[1] += cost
+                pending = None
+            else:
+                self_cost[fn] = self_cost.get(fn, 0) + cost
+    return {"self": self_cost, "calls": calls}
+
+
+def base_name(fn: str) -> str:
+    """A function's name without GCC's clone suffixes and callgrind's recursion mark."""
+    fn = fn.split("'")[0]
+    return re.sub(r"\.(?:isra|part|constprop|cold|lto_priv|localalias)(?:\.\d+)*.*$", "", fn)
+
+
+def static_functions(source: str) -> List[str]:
+    """Names of the file-scope static functions defined in a C source."""
+    return re.findall(r"^static\s+(?:inline\s+)?[A-Za-z_][\w\s\*]*?\b([A-Za-z_]\w*)\s*\([^;]*?\)\s*\{",
+                      source, re.M | re.S)
+
+
+def localizer_breakdown(cg: dict, helpers: Iterable[str], root: str = "rsm_localizer_scan") -> dict:
+    """Instructions of one rsm_localizer_scan call tree, split into the code of
+    the localizer itself (root and the static helpers it calls directly, wherever
+    the compiler left them out of line) and the inclusive cost of every other
+    function it calls. The parts add up to the root's inclusive cost."""
+    helpers = set(helpers)
+    group = {root}
+    changed = True
+    while changed:
+        changed = False
+        for (caller, callee) in cg["calls"]:
+            if base_name(caller) in group and base_name(callee) in helpers and base_name(callee) not in group:
+                group.add(base_name(callee))
+                changed = True
+    own = sum(c for f, c in cg["self"].items() if base_name(f) in group)
+    callees: Dict[str, int] = {}
+    counts: Dict[str, int] = {}
+    for (caller, callee), (n, ir) in cg["calls"].items():
+        if base_name(caller) in group and base_name(callee) not in group:
+            k = base_name(callee)
+            callees[k] = callees.get(k, 0) + ir
+            counts[k] = counts.get(k, 0) + n
+    return {"group": sorted(group), "own": own, "callees": callees, "calls": counts,
+            "total": own + sum(callees.values())}
+
+
+# Stage of each function rsm_localizer_scan calls (by name); functions called
+# from two stages are shown as such.
+CALLEE_STAGE = {
+    "rsm_scan_to_points": "points",
+    "rsm_image_clear": "grid",
+    "rsm_image_mark_points": "grid",
+    "rsm_map_recenter": "grid + map",
+    "cosf": "grid + map",
+    "sinf": "grid + map",
+    "sincosf": "grid + map",
+    "rsm_harris_detect": "harris",
+    "ceilf": "harris",
+    "rsm_match_tentative": "match",
+    "rsm_ransac_estimate": "ransac",
+    "rsm_wrap_angle": "ransac",
+    "rsm_map_align": "refine",
+    "rsm_mat3_inverse": "refine",
+    "rsm_icp_align": "icp",
+    "rsm_ekf_mahalanobis": "ekf",
+    "rsm_ekf_update": "ekf",
+    "rsm_map_add_points": "map",
+    "rsm_icp_set_reference": "map",
+}
+CG_STAGE_ORDER = ("points", "grid", "grid + map", "harris", "match", "ransac", "refine", "icp", "ekf", "map",
+                  "other", "localizer")
+
+
+def callgrind_stages(breakdown: dict, scans: int) -> Dict[str, dict]:
+    """Instructions per scan by stage (CALLEE_STAGE; unknown callees: other;
+    the localizer's own code: localizer), with the functions counted."""
+    out: Dict[str, dict] = {}
+    for fn, ir in breakdown["callees"].items():
+        plain = re.sub(r"_(?:fma4?|avx2?|avx512\w*|sse\d*)$", "", fn.lstrip("_"))
+        st = CALLEE_STAGE.get(fn, CALLEE_STAGE.get(plain, "other"))
+        row = out.setdefault(st, {"ir": 0, "functions": []})
+        row["ir"] += ir
+        row["functions"].append(fn)
+    out["localizer"] = {"ir": breakdown["own"], "functions": ["rsm_localizer_scan"] + [
+        g for g in breakdown["group"] if g != "rsm_localizer_scan"]}
+    for row in out.values():
+        row["ir_per_scan"] = row["ir"] / scans if scans else float("nan")
+        row["functions"] = sorted(set(row["functions"]))
+    return out
+
+
+# ---------------------------------------------------------------------------
+# sharp turns (the paper's Fig. 8)
+
+
+TURNS = 12
+TURN_SEPARATION_SCANS = 25
+ROTATION_BINS = (0.0, 2.0, 5.0, 10.0, 20.0, 30.0)  # degrees; the last bin is open
+
+
+def scan_order(traj: Path) -> Dict[float, int]:
+    """Scan index (file order) of every timestamp of a trajectory that has one
+    line per scan (rsm-nav writes one); the first occurrence counts."""
+    out: Dict[float, int] = {}
+    k = 0
+    with open(traj, encoding="utf-8") as fh:
+        for line in fh:
+            s = line.strip()
+            if not s or s.startswith("#"):
+                continue
+            t = round(float(s.split()[0]), 6)
+            out.setdefault(t, k)
+            k += 1
+    return out
+
+
+def sharpest_turns(relations: Sequence[ev.Relation], order: Dict[float, int], n: int,
+                   max_span: float = LOCAL_SPAN, separation: int = TURN_SEPARATION_SCANS) -> List[dict]:
+    """The n local relations with the fastest true turn, in degrees of true
+    rotation per scan between their two scans (scan counts, not timestamps:
+    the log's timestamps jitter), at most one per stretch of ``separation``
+    scans; fastest first."""
+    cands = []
+    for r in relations:
+        if r.span > max_span:
+            continue
+        i1, i2 = order.get(round(r.t1, 6)), order.get(round(r.t2, 6))
+        if i1 is None or i2 is None or i1 == i2:
+            continue
+        gap = abs(i2 - i1)
+        rot = abs(math.degrees(ev.wrap_angle(r.yaw)))
+        cands.append({"relation": r, "i1": min(i1, i2), "i2": max(i1, i2), "gap": gap, "rotation_deg": rot,
+                      "rate_deg_per_scan": rot / gap, "translation_m": math.hypot(r.x, r.y)})
+    cands.sort(key=lambda c: (-c["rate_deg_per_scan"], c["i1"]))
+    picked: List[dict] = []
+    for c in cands:
+        mid = 0.5 * (c["i1"] + c["i2"])
+        if all(abs(mid - 0.5 * (p["i1"] + p["i2"])) >= separation for p in picked):
+            picked.append(c)
+            if len(picked) == n:
+                break
+    return picked
+
+
+def relation_residual(traj: ev.Trajectory, rel: ev.Relation) -> Optional[Tuple[float, float, float]]:
+    """(dx, dy, dtheta) of inverse(true) o estimated for one relation: metres in
+    the frame of the relation's second pose, degrees; None if an end is missing."""
+    p1, ok1 = traj.find(rel.t1, 0.0)
+    p2, ok2 = traj.find(rel.t2, 0.0)
+    if p1 is None or p2 is None:
+        return None
+    est = ev.between(p1, p2)
+    e = ev.between((rel.x, rel.y, rel.yaw), est)
+    return e[0], e[1], math.degrees(e[2])
+
+
+def _rot_bin(deg: float) -> int:
+    k = 0
+    for i, lo in enumerate(ROTATION_BINS):
+        if deg >= lo:
+            k = i
+    return k
+
+
+def bin_label(k: int) -> str:
+    lo = ROTATION_BINS[k]
+    return f">= {lo:g}" if k == len(ROTATION_BINS) - 1 else f"{lo:g}-{ROTATION_BINS[k + 1]:g}"
+
+
+def run_turns(runs: dict, relations_path: Path, cell_m: float, n: int = TURNS) -> dict:
+    """Residuals of rsm, icp and odometry at the n sharpest turns of the log and
+    over every local relation binned by its true rotation."""
+    relations = ev.load_relations(relations_path)
+    trajs = {m: ev.load_trajectory(runs[m]["trajectory"]) for m in METHODS}
+    order = scan_order(Path(runs["odometry"]["trajectory"]))
+    t0 = min(order) if order else 0.0
+    turns = sharpest_turns(relations, order, n)
+    rows = []
+    for c in turns:
+        r = c["relation"]
+        res = {}
+        for m in METHODS:
+            e = relation_residual(trajs[m], r)
+            res[m] = None if e is None else {
+                "dx_cells": abs(e[0]) / cell_m, "dy_cells": abs(e[1]) / cell_m,
+                "translation_cells": math.hypot(e[0], e[1]) / cell_m, "rotation_deg": abs(e[2])}
+        rows.append({"t1": r.t1, "t2": r.t2, "t1_rel": r.t1 - t0, "span": r.span, "i1": c["i1"], "i2": c["i2"],
+                     "gap": c["gap"], "rotation_deg": c["rotation_deg"], "translation_m": c["translation_m"],
+                     "rate_deg_per_scan": c["rate_deg_per_scan"], "residual": res})
+    summary = {}
+    for m in METHODS:
+        vals = [row["residual"][m] for row in rows if row["residual"][m] is not None]
+        summary[m] = {k: spread([v[k] for v in vals]) for k in ("dx_cells", "dy_cells", "translation_cells",
+                                                                 "rotation_deg")}
+    wins = {q: sum(1 for row in rows if row["residual"]["rsm"] and row["residual"]["icp"]
+                   and row["residual"]["rsm"][q] < row["residual"]["icp"][q])
+            for q in ("translation_cells", "rotation_deg")}
+    bins = []
+    for k in range(len(ROTATION_BINS)):
+        sel = [r for r in relations if r.span <= LOCAL_SPAN
+               and _rot_bin(abs(math.degrees(ev.wrap_angle(r.yaw)))) == k]
+        row = {"bin": bin_label(k), "relations": len(sel), "methods": {}}
+        for m in METHODS:
+            errs = [relation_residual(trajs[m], r) for r in sel]
+            errs = [e for e in errs if e is not None]
+            row["methods"][m] = {"translation_cells": spread([math.hypot(e[0], e[1]) / cell_m for e in errs]),
+                                 "rotation_deg": spread([abs(e[2]) for e in errs])}
+        bins.append(row)
+    return {"relations": str(relations_path), "cell_m": cell_m, "n": n, "separation": TURN_SEPARATION_SCANS,
+            "turns": rows, "summary": summary, "rsm_better": wins, "bins": bins}
+
+
+def plot_turns(turns: dict, path: Path, prov: dict) -> Optional[str]:
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return "matplotlib is not installed (it is the optional extra `rsm-tools[bench]`)"
+    rows = turns["turns"]
+    if not rows:
+        return "no turn was found"
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    x = list(range(1, len(rows) + 1))
+    w = 0.27
+    for j, (key, unit) in enumerate((("translation_cells", "cells"), ("rotation_deg", "deg"))):
+        ax = axes[0][j]
+        for k, m in enumerate(METHODS):
+            vals = [r["residual"][m][key] if r["residual"][m] else float("nan") for r in rows]
+            ax.bar([v + (k - 1) * w for v in x], vals, width=w, label=m)
+        ax.set_xticks(x)
+        ax.set_xticklabels([f"{i}\n{r['rotation_deg']:.0f}°" for i, r in zip(x, rows)], fontsize=7)
+        ax.set_xlabel("turn (fastest first) and its true rotation")
+        ax.set_ylabel(f"residual [{unit}]")
+        ax.set_title(f"{'translation' if j == 0 else 'rotation'} residual at the {len(rows)} sharpest turns",
+                     fontsize=10)
+        ax.grid(True, axis="y", alpha=0.3)
+        ax.legend(fontsize=8)
+        ax = axes[1][j]
+        labels = [b["bin"] for b in turns["bins"]]
+        for m, style in zip(METHODS, ("o-", "s--", "^:")):
+            ax.plot(range(len(labels)), [b["methods"][m][key]["mean"] for b in turns["bins"]], style, label=m)
+        ax.set_xticks(range(len(labels)))
+        ax.set_xticklabels([f"{lab}\n(n={b['relations']})" for lab, b in zip(labels, turns["bins"])], fontsize=7)
+        ax.set_xlabel(f"true rotation of the relation [deg] (local relations, span <= {LOCAL_SPAN:g} s)")
+        ax.set_ylabel(f"mean residual [{unit}]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(f"Residuals at sharp turns (cf. the paper's Fig. 8); 1 cell = {turns['cell_m'] * 100:g} cm",
+                 fontsize=11)
+    fig.text(0.01, 0.005, provenance_line(prov).replace("`", ""), fontsize=6.5, ha="left", va="bottom")
+    fig.tight_layout(rect=(0, 0.03, 1, 0.96))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100, metadata={"Software": None})
+    plt.close(fig)
+    return None
+
+
+# ---------------------------------------------------------------------------
+# Cortex-M4F memory per module and configuration; static stack bound
+
+
+ARM_CONFIGS = (("default", None), ("small", "tests/config/small_config.h"))
+ARM_CPU = ("-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard")
+# Caller-owned state per module: (module, label, C expression); the localizer's
+# parts are members of rsm_localizer_t, which also holds the reports.
+STATE_SIZES = (
+    ("localizer.c", "rsm_localizer_t (all of the below)", "sizeof(rsm_localizer_t)"),
+    ("ekf.c", "  ekf", "sizeof(((rsm_localizer_t *)0)->ekf)"),
+    ("odometry.c", "  odo", "sizeof(((rsm_localizer_t *)0)->odo)"),
+    ("map.c", "  map", "sizeof(((rsm_localizer_t *)0)->map)"),
+    ("grid.c", "  image", "sizeof(((rsm_localizer_t *)0)->image)"),
+    ("ransac.c", "  ransac", "sizeof(((rsm_localizer_t *)0)->ransac)"),
+    ("harris.c", "  work.rsm (harris + candidates)", "sizeof(((rsm_localizer_t *)0)->work.rsm)"),
+    ("icp.c", "  work.icp (shares work.rsm's memory)", "sizeof(((rsm_localizer_t *)0)->work.icp)"),
+    ("match.c", "  key points and matches",
+     "sizeof(((rsm_localizer_t *)0)->kp_cur) * 2 + sizeof(((rsm_localizer_t *)0)->pt_cur) * 2"
+     " + sizeof(((rsm_localizer_t *)0)->matches)"),
+    ("scan.c", "  points (robot and world frame)", "sizeof(((rsm_localizer_t *)0)->pts) * 2"),
+    ("localizer.c", "rsm_localizer_config_t", "sizeof(rsm_localizer_config_t)"),
+    ("scan.c", "rsm_scan_t (one scan buffer)", "sizeof(rsm_scan_t)"),
+    ("p3dx.c", "rsm_p3dx_t", "sizeof(rsm_p3dx_t)"),
+    ("p3dx.c", "rsm_p3dx_config_t", "sizeof(rsm_p3dx_config_t)"),
+    ("sicklms.c", "rsm_sicklms_t", "sizeof(rsm_sicklms_t)"),
+    ("sicklms.c", "rsm_sicklms_config_t", "sizeof(rsm_sicklms_config_t)"),
+)
+# Callbacks the core calls through a pointer (for the static stack bound).
+INDIRECT_TARGETS = {"rsm_harris_detect": ("patch_map", "rsm_harris_patch_image")}
+
+
+def state_probe(names: Sequence[Tuple[str, str, str]]) -> str:
+    lines = ["/* Generated by rsm_tools.bench: sizes of the caller-owned state on the target. */",
+             '#include "rsm/localizer.h"', '#include "rsm/p3dx.h"', '#include "rsm/sicklms.h"', ""]
+    for k, (_, _, expr) in enumerate(names):
+        lines.append(f"char rsm_size_{k}[{expr}];")
+    return "\n".join(lines) + "\n"
+
+
+def parse_nm_sizes(text: str, prefix: str = "rsm_size_") -> Dict[int, int]:
+    """{k: size} of the symbols ``prefix<k>`` in ``nm -S`` output."""
+    out = {}
+    for line in text.splitlines():
+        f = line.split()
+        if len(f) == 4 and f[3].startswith(prefix) and f[3][len(prefix):].isdigit():
+            out[int(f[3][len(prefix):])] = int(f[1], 16)
+    return out
+
+
+def parse_size_archive(text: str) -> List[dict]:
+    """Per member of ``size -A -d ARCHIVE`` output: text, rodata, data, bss."""
+    out, cur = [], None
+    for line in text.splitlines():
+        m = re.match(r"^(\S+)\s+\(ex\s", line)
+        if m:
+            cur = {"object": m.group(1), "text": 0, "rodata": 0, "data": 0, "bss": 0}
+            out.append(cur)
+            continue
+        f = line.split()
+        if cur is None or len(f) < 2 or not f[0].startswith(".") or not f[1].isdigit():
+            continue
+        sec, size = f[0], int(f[1])
+        for kind, pat in (("text", r"^\.text(\.|$)"), ("rodata", r"^\.rodata(\.|$)"),
+                          ("data", r"^\.(s|t)?data(\.|$)"), ("bss", r"^\.(s|t)?bss(\.|$)")):
+            if re.match(pat, sec):
+                cur[kind] += size
+    for o in out:
+        o["flash"] = o["text"] + o["rodata"]
+        o["ram"] = o["data"] + o["bss"]
+    return out
+
+
+_CI_NODE = re.compile(r'^node:\s*\{\s*title:\s*"([^"]*)"\s*label:\s*"([^"]*)"(.*)\}\s*$')
+_CI_EDGE = re.compile(r'^edge:\s*\{\s*sourcename:\s*"([^"]*)"\s*targetname:\s*"([^"]*)"')
+_CI_BYTES = re.compile(r"(\d+) bytes \(([a-z,]+)\)")
+
+
+def parse_callgraph_info(texts: Iterable[str]) -> dict:
+    """Merges GCC -fcallgraph-info=su files: {title: {name, bytes, kind}} for the
+    functions defined, and the call edges; titles of static functions carry
+    their file, external callees only their name."""
+    nodes: Dict[str, dict] = {}
+    edges: Dict[str, List[str]] = {}
+    for text in texts:
+        for line in text.splitlines():
+            m = _CI_NODE.match(line.strip())
+            if m:
+                title, label = m.group(1), m.group(2)
+                b = _CI_BYTES.search(label)
+                if b:
+                    nodes[title] = {"name": label.split("\\n")[0], "bytes": int(b.group(1)), "kind": b.group(2)}
+                continue
+            m = _CI_EDGE.match(line.strip())
+            if m:
+                edges.setdefault(m.group(1), [])
+                if m.group(2) not in edges[m.group(1)]:
+                    edges[m.group(1)].append(m.group(2))
+    return {"nodes": nodes, "edges": edges}
+
+
+def worst_stack_path(graph: dict, root: str, indirect: Optional[Dict[str, Sequence[str]]] = None) -> dict:
+    """Deepest stack over the call graph from ``root``: the sum of the frames on
+    the worst path. Calls to functions outside the graph (libc, libm) count 0
+    and are listed; indirect calls resolve through ``indirect`` (by caller
+    name) or count 0 and are listed; recursion is reported."""
+    nodes, edges = graph["nodes"], graph["edges"]
+    indirect = indirect or {}
+    by_name: Dict[str, List[str]] = {}
+    for t, nd in nodes.items():
+        by_name.setdefault(nd["name"], []).append(t)
+    unresolved, unknown_indirect, dynamic, recursion = set(), set(), set(), set()
+    memo: Dict[str, Tuple[int, List[str]]] = {}
+
+    def depth(t: str, stack: Tuple[str, ...]) -> Tuple[int, List[str]]:
+        if t in memo:
+            return memo[t]
+        if t in stack:
+            recursion.add(nodes[t]["name"] if t in nodes else t)
+            return 0, []
+        nd = nodes[t]
+        if nd["kind"] != "static":
+            dynamic.add(nd["name"])
+        best, best_path = 0, []
+        for callee in edges.get(t, []):
+            targets = []
+            if callee == "__indirect_call":
+                names = indirect.get(nd["name"])
+                if not names:
+                    unknown_indirect.add(nd["name"])
+                    continue
+                for nm in names:
+                    targets += by_name.get(nm, [])
+            elif callee in nodes:
+                targets = [callee]
+            elif by_name.get(callee):
+                targets = by_name[callee]
+            else:
+                unresolved.add(callee)
+                continue
+            for c in targets:
+                d, p = depth(c, stack + (t,))
+                if d > best:
+                    best, best_path = d, p
+        memo[t] = (nd["bytes"] + best, [t] + best_path)
+        return memo[t]
+
+    roots = [root] if root in nodes else by_name.get(root, [])
+    if not roots:
+        raise BenchError(f"{root} is not in the call graph")
+    total, path = depth(roots[0], ())
+    return {"bytes": total, "path": [(nodes[t]["name"], nodes[t]["bytes"]) for t in path],
+            "unresolved": sorted(unresolved), "unknown_indirect": sorted(unknown_indirect),
+            "dynamic": sorted(dynamic), "recursion": sorted(recursion)}
+
+
+def read_callgraph_dir(d: Path) -> dict:
+    files = sorted(d.rglob("*.ci"))
+    if not files:
+        raise BenchError(f"no -fcallgraph-info output under {d}")
+    return parse_callgraph_info(f.read_text(errors="replace") for f in files)
+
+
+def _config_flag(root: Path, header: Optional[str]) -> List[str]:
+    return [f"-DRSM_USER_CONFIG={(root / header).resolve()}"] if header else []
+
+
+def run_arm_memory(root: Path, work: Path, configs: Sequence[Tuple[str, Optional[str]]] = ARM_CONFIGS) -> dict:
+    """Per configuration: a Cortex-M4F MinSizeRel build with -fstack-usage and
+    -fcallgraph-info=su; flash per object, state sizes on the target, the example
+    firmware image and its static RAM, and the static stack bound of
+    rsm_localizer_scan."""
+    for tool in ("arm-none-eabi-gcc", "arm-none-eabi-size", "arm-none-eabi-nm", "cmake", "ninja"):
+        if shutil.which(tool) is None:
+            return {"skipped": f"{tool} is not installed"}
+    out = {"compiler": first_line(["arm-none-eabi-gcc", "--version"]) or "arm-none-eabi-gcc", "configs": {}}
+    for name, header in configs:
+        b = work / f"arm-{name}"
+        cmd = ["cmake", "-S", str(root), "-B", str(b), "-G", "Ninja",
+               f"-DCMAKE_TOOLCHAIN_FILE={root / 'cmake' / 'toolchain-arm-none-eabi.cmake'}",
+               "-DCMAKE_BUILD_TYPE=MinSizeRel", "-DCMAKE_C_FLAGS_MINSIZEREL=-Os -DNDEBUG -fstack-usage "
+               "-fcallgraph-info=su", f"-DRSM_USER_CONFIG={(root / header).resolve() if header else ''}"]
+        for c in (cmd, ["cmake", "--build", str(b), "--target", "rsm", "rsm_port_baremetal", "rsm_firmware"]):
+            res = subprocess.run(c, capture_output=True, text=True)
+            if res.returncode != 0:
+                raise BenchError(f"{' '.join(c)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
+        cfg = {"header": header or "include/rsm/config.h (defaults)"}
+        res = subprocess.run(["arm-none-eabi-size", "-A", "-d", str(b / "librsm.a")], capture_output=True, text=True)
+        cfg["objects"] = parse_size_archive(res.stdout)
+        probe = b / "rsm_state_probe.c"
+        probe.write_text(state_probe(STATE_SIZES))
+        obj = b / "rsm_state_probe.o"
+        c = ["arm-none-eabi-gcc", *ARM_CPU, "-std=c99", "-Os", "-fno-common", f"-I{root / 'include'}",
+             *_config_flag(root, header), "-c", str(probe), "-o", str(obj)]
+        res = subprocess.run(c, capture_output=True, text=True)
+        if res.returncode != 0:
+            cfg["state"] = None
+            cfg["state_note"] = "the state probe did not compile: " + res.stderr.strip().splitlines()[-1]
+        else:
+            nm = subprocess.run(["arm-none-eabi-nm", "-S", str(obj)], capture_output=True, text=True).stdout
+            sizes = parse_nm_sizes(nm)
+            cfg["state"] = [{"module": mod, "label": lab, "bytes": sizes.get(k)}
+                            for k, (mod, lab, _) in enumerate(STATE_SIZES)]
+        fw = b / "port" / "baremetal" / "rsm_firmware.elf"
+        size = subprocess.run(["arm-none-eabi-size", str(fw)], capture_output=True, text=True).stdout
+        f = size.splitlines()[1].split() if len(size.splitlines()) > 1 else []
+        cfg["firmware"] = dict(zip(("text", "data", "bss", "dec"), map(int, f[:4]))) if len(f) >= 4 else None
+        fw_obj = b / "port" / "baremetal" / "CMakeFiles" / "rsm_firmware.dir" / "firmware_main.c.obj"
+        own = {l.split()[-1] for l in subprocess.run(["arm-none-eabi-nm", str(fw_obj)], capture_output=True,
+                                                     text=True).stdout.splitlines()
+               if len(l.split()) >= 2 and l.split()[-2] in ("b", "B", "d", "D")}
+        statics = {}
+        for line in subprocess.run(["arm-none-eabi-nm", "-S", str(fw)], capture_output=True,
+                                   text=True).stdout.splitlines():
+            p = line.split()
+            if len(p) == 4 and p[2] in ("b", "B", "d", "D") and p[3] in own:
+                statics[p[3]] = int(p[1], 16)
+        cfg["firmware_statics"] = statics
+        graph = read_callgraph_dir(b / "CMakeFiles" / "rsm.dir")
+        cfg["stack"] = {m: worst_stack_path(graph, m, INDIRECT_TARGETS)
+                        for m in ("rsm_localizer_scan", "rsm_localizer_motion")}
+        out["configs"][name] = cfg
+    return out
+
+
+def run_host_stack(root: Path, build_dir: Path, work: Path, jobs: int = 2) -> dict:
+    """The static stack bound of rsm_localizer_scan for the host build: the
+    core's sources (not the drivers') compiled with the build's compiler and
+    flags plus -fstack-usage -fcallgraph-info=su (objects for the analysis only)."""
+    cache = cmake_cache(build_dir)
+    cc = cache.get("CMAKE_C_COMPILER") or shutil.which("cc") or "cc"
+    bt = cache.get("CMAKE_BUILD_TYPE", "")
+    flags = (cache.get("CMAKE_C_FLAGS", "") + " " + cache.get(f"CMAKE_C_FLAGS_{bt.upper()}", "")).split()
+    d = work / "host-stack"
+    if d.exists():
+        shutil.rmtree(d)
+    d.mkdir(parents=True)
+    user = [f"-DRSM_USER_CONFIG={cache['RSM_USER_CONFIG']}"] if cache.get("RSM_USER_CONFIG") else []
+
+    def compile_one(src: Path):
+        c = [cc, *flags, "-std=c99", "-fstack-usage", "-fcallgraph-info=su", f"-I{root / 'include'}", *user,
+             "-c", str(src), "-o", str(d / (src.stem + ".o"))]
+        return src, subprocess.run(c, capture_output=True, text=True, cwd=d)
+
+    core = [f for f in sorted((root / "src").glob("*.c")) if f.stem not in DRIVER_OBJECTS]
+    for src, res in parallel(compile_one, core, jobs):
+        if res.returncode != 0:
+            return {"skipped": f"compiling {src.name} with -fcallgraph-info failed: "
+                               + (res.stderr.strip().splitlines() or ["?"])[-1]}
+    graph = read_callgraph_dir(d)
+    return {"flags": " ".join(flags), "compiler": first_line([cc, "--version"]) or cc,
+            "stack": {m: worst_stack_path(graph, m, INDIRECT_TARGETS)
+                      for m in ("rsm_localizer_scan", "rsm_localizer_motion")}}
+
+
+# ---------------------------------------------------------------------------
+# scaling: readings per scan and map size
+
+
+SCALING_BEAMS = (181, 361, 721)
+SCALING_MAP_LOG2 = (6, 7, 8)
+DEFAULT_MAX_BEAMS = 361
+DEFAULT_MAP_LOG2 = 7
+
+
+def scaling_variants(beams: Sequence[int] = SCALING_BEAMS, maps: Sequence[int] = SCALING_MAP_LOG2) -> List[dict]:
+    """The builds and runs of the scaling section. Readings: the log's scans
+    resampled to N readings, RSM_MAX_BEAMS = N (the default 361 is the default
+    build). Map: the log's own readings, RSM_MAP_SIZE_LOG2 = L."""
+    out = []
+    for n in beams:
+        macros = {} if n == DEFAULT_MAX_BEAMS else {"RSM_MAX_BEAMS": n}
+        out.append({"name": f"beams{n}", "kind": "beams", "value": n, "macros": macros, "resample": n})
+    for lg in maps:
+        macros = {} if lg == DEFAULT_MAP_LOG2 else {"RSM_MAP_SIZE_LOG2": lg}
+        out.append({"name": f"map{lg}", "kind": "map", "value": lg, "macros": macros, "resample": None})
+    return out
+
+
+def variant_header(macros: Dict[str, int]) -> str:
+    lines = ["/* Generated by rsm_tools.bench: a scaling variant of config.h. */",
+             "#ifndef RSM_BENCH_VARIANT_H", "#define RSM_BENCH_VARIANT_H"]
+    lines += [f"#define {k} {v}" for k, v in sorted(macros.items())]
+    lines += ["#endif", ""]
+    return "\n".join(lines)
+
+
+def build_variant(root: Path, work: Path, main_build: Path, variant: dict) -> Path:
+    """rsm-stages for a variant: the main build's when the variant is the
+    default, else a Release build of its own with a generated RSM_USER_CONFIG."""
+    if not variant["macros"]:
+        return stages_exe(main_build)
+    d = work / "variants" / variant["name"]
+    d.mkdir(parents=True, exist_ok=True)
+    header = d / "rsm_bench_variant.h"
+    text = variant_header(variant["macros"])
+    if not header.is_file() or header.read_text() != text:
+        header.write_text(text)
+    b = d / "build"
+    cache = cmake_cache(main_build)
+    cmd = ["cmake", "-S", str(root), "-B", str(b), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
+           "-DRSM_BUILD_TESTS=OFF", f"-DRSM_USER_CONFIG={header}"]
+    if cache.get("CMAKE_C_COMPILER"):
+        cmd.append(f"-DCMAKE_C_COMPILER={cache['CMAKE_C_COMPILER']}")
+    for c in (cmd, ["cmake", "--build", str(b), "--target", "rsm-stages"]):
+        res = subprocess.run(c, capture_output=True, text=True)
+        if res.returncode != 0:
+            raise BenchError(f"{' '.join(c)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
+    return stages_exe(b)
+
+
+def run_scaling(root: Path, main_build: Path, log: Path, relations_path: Path, work: Path,
+                variants: Optional[List[dict]] = None) -> dict:
+    variants = variants if variants is not None else scaling_variants()
+    relations = ev.load_relations(relations_path)
+    rows = []
+    for v in variants:
+        exe = build_variant(root, work, main_build, v)
+        for m in ROBUST_METHODS:
+            extra = ["--clock", "ns"] + (["--beams", str(v["resample"])] if v["resample"] else [])
+            traj = work / "scaling" / f"{v['name']}-{m}.txt"
+            j = run_stages(exe, log, m, extra, traj)
+            err = ev.evaluate(ev.load_trajectory(traj), relations, max_span=LOCAL_SPAN, tolerance=0.0)
+            rows.append({"variant": v["name"], "kind": v["kind"], "value": v["value"], "macros": v["macros"],
+                         "method": m, "beams": j["beams"], "config": j["config"], "sizes": j["sizes"],
+                         "call": j["timing"]["call"], "scans": j["scans"], "trajectory": str(traj),
+                         "fused": 100.0 * j["outcomes"]["accepted"] / j["scans"] if j["scans"] else float("nan"),
+                         "local": {q: err[q]["mean"] for q in QUANTITIES}, "matched": err["matched"]})
+    return {"log": str(log), "variants": variants, "rows": rows, "growth": memory_growth(rows)}
+
+
+def memory_growth(rows: Sequence[dict]) -> dict:
+    """Bytes of rsm_localizer_t per reading of RSM_MAX_BEAMS and per map cell,
+    from the smallest and largest variant of each kind."""
+    out = {}
+    for kind, x in (("beams", lambda r: r["config"]["RSM_MAX_BEAMS"]),
+                    ("map", lambda r: r["config"]["RSM_MAP_SIZE"] ** 2)):
+        sel = sorted({(x(r), r["sizes"]["rsm_localizer_t"]) for r in rows if r["kind"] == kind})
+        if len(sel) >= 2 and sel[-1][0] != sel[0][0]:
+            out[kind] = {"from": sel[0], "to": sel[-1],
+                         "bytes_per_unit": (sel[-1][1] - sel[0][1]) / (sel[-1][0] - sel[0][0])}
+    return out
+
+
+def plot_scaling(sc: dict, path: Path, prov: dict) -> Optional[str]:
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return "matplotlib is not installed (it is the optional extra `rsm-tools[bench]`)"
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
+    for ax, kind, xlabel in ((axes[0], "beams", "readings per scan"),
+                             (axes[1], "map", "map side [cells]")):
+        for m, style in zip(ROBUST_METHODS, ("o-", "s--")):
+            sel = sorted((r for r in sc["rows"] if r["kind"] == kind and r["method"] == m),
+                         key=lambda r: r["value"])
+            xs = [r["beams"] if kind == "beams" else r["config"]["RSM_MAP_SIZE"] for r in sel]
+            ax.plot(xs, [r["call"]["median_us"] for r in sel], style, label=f"{m} median")
+            ax.plot(xs, [r["call"]["p95_us"] for r in sel], style, alpha=0.4, label=f"{m} p95")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("time per scan [us]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    ax = axes[2]
+    for kind, style, xlabel in (("beams", "o-", "RSM_MAX_BEAMS"), ("map", "s--", "map cells / 100")):
+        sel = sorted({(r["config"]["RSM_MAX_BEAMS"] if kind == "beams" else r["config"]["RSM_MAP_SIZE"] ** 2 / 100,
+                       r["sizes"]["rsm_localizer_t"]) for r in sc["rows"] if r["kind"] == kind})
+        ax.plot([s[0] for s in sel], [s[1] / 1024 for s in sel], style, label=xlabel)
+    ax.set_xlabel("capacity")
+    ax.set_ylabel("sizeof(rsm_localizer_t) [KiB]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.suptitle("Scaling: time per scan against readings and map size; state size against capacities",
+                 fontsize=11)
+    fig.text(0.01, 0.005, provenance_line(prov).replace("`", ""), fontsize=6.5, ha="left", va="bottom")
+    fig.tight_layout(rect=(0, 0.04, 1, 0.94))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100, metadata={"Software": None})
+    plt.close(fig)
+    return None
+
+
+def plot_stages(st: dict, path: Path, prov: dict) -> Optional[str]:
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return "matplotlib is not installed (it is the optional extra `rsm-tools[bench]`)"
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
+    ax = axes[0]
+    for k, m in enumerate(ROBUST_METHODS):
+        left = 0.0
+        for s in STAGES:
+            v = st["methods"][m]["timing"][s]["mean_us"]
+            if v <= 0:
+                continue
+            ax.barh(k, v, left=left, label=s if k == 0 or s == "icp" else None,
+                    color=f"C{STAGES.index(s)}")
+            left += v
+    ax.set_yticks(range(len(ROBUST_METHODS)))
+    ax.set_yticklabels(ROBUST_METHODS)
+    ax.set_xlabel("mean time per scan [us] (stages stacked)")
+    ax.legend(fontsize=7, ncol=3)
+    ax.grid(True, axis="x", alpha=0.3)
+    ax = axes[1]
+    shown = [s for s in STAGES if any(st["methods"][m]["timing"][s]["reached"] for m in ROBUST_METHODS)]
+    w = 0.2
+    for k, (m, q) in enumerate((("rsm", "median_reached_us"), ("rsm", "p95_reached_us"),
+                                 ("icp", "median_reached_us"), ("icp", "p95_reached_us"))):
+        ax.bar([i + (k - 1.5) * w for i in range(len(shown))],
+               [st["methods"][m]["timing"][s][q] for s in shown], width=w,
+               label=f"{m} {'median' if q.startswith('median') else 'p95'}")
+    ax.set_xticks(range(len(shown)))
+    ax.set_xticklabels(shown, fontsize=8)
+    ax.set_yscale("log")
+    ax.set_ylabel("time per scan that reached the stage [us]")
+    ax.legend(fontsize=7)
+    ax.grid(True, axis="y", alpha=0.3)
+    fig.suptitle("Time per stage of rsm_localizer_scan (timing hook, CLOCK_MONOTONIC)", fontsize=11)
+    fig.text(0.01, 0.005, provenance_line(prov).replace("`", ""), fontsize=6.5, ha="left", va="bottom")
+    fig.tight_layout(rect=(0, 0.04, 1, 0.94))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100, metadata={"Software": None})
+    plt.close(fig)
+    return None
 
 
 # ---------------------------------------------------------------------------
@@ -810,6 +1648,81 @@ def losses(acc: dict, main_label: str, rob: Optional[dict], speed: Optional[dict
     return items
 
 
+def more_losses(turns: Optional[dict], st: Optional[dict], sc: Optional[dict], am: Optional[dict],
+                hs: Optional[dict]) -> List[str]:
+    """Items of "where rsm loses" from the sections added for issue 6."""
+    items = []
+    if turns and turns["turns"]:
+        n = len(turns["turns"])
+        sm = turns["summary"]
+        for other in ("icp", "odometry"):
+            lost = []
+            for q, label in (("translation_cells", "translation"), ("rotation_deg", "rotation")):
+                idx = [str(k) for k, r in enumerate(turns["turns"], 1)
+                       if r["residual"]["rsm"] and r["residual"][other]
+                       and r["residual"][other][q] < r["residual"]["rsm"][q]]
+                if idx:
+                    lost.append(f"{label} at {len(idx)} of {n} (turn{'s' if len(idx) > 1 else ''} "
+                                f"{', '.join(idx)})")
+            means = [q for q in ("translation_cells", "rotation_deg")
+                     if _better(sm[other][q]["mean"], sm["rsm"][q]["mean"])]
+            if lost:
+                items.append(f"At the {n} sharpest turns, {other}'s residual is below rsm's in "
+                             + "; ".join(lost) + (f"; its mean is lower in {', '.join(m_.split('_')[0] for m_ in means)}"
+                                                  if means else "; rsm's means are still lower") + ".")
+        for other in ("icp", "odometry"):
+            worse = [b for b in turns["bins"] if b["relations"]
+                     and _better(b["methods"][other]["translation_cells"]["mean"],
+                                 b["methods"]["rsm"]["translation_cells"]["mean"])]
+            if worse:
+                items.append(f"By true rotation, {other}'s mean translation residual is below rsm's for the "
+                             "local relations turning " + "; ".join(
+                                 f"{b['bin']} deg ({_cells(b['methods'][other]['translation_cells']['mean'])} vs "
+                                 f"{_cells(b['methods']['rsm']['translation_cells']['mean'])} cells, "
+                                 f"{b['relations']} relations)" for b in worse) + ".")
+    if st:
+        t = st["methods"]["rsm"]["timing"]
+        top = max(STAGES, key=lambda s_: t[s_]["mean_us"] if s_ in t else 0.0)
+        share = 100.0 * t[top]["mean_us"] / t["step"]["mean_us"] if t["step"]["mean_us"] else float("nan")
+        items.append(f"Speed: one stage dominates rsm's time per scan: {top} ({fmt_pct(share)} % of the mean "
+                     f"step); rsm's 95th percentile is {fmt_ratio(ratio(t['call']['p95_us'], t['call']['median_us']))} "
+                     "times its median.")
+        if st.get("stack") and hs and "skipped" not in hs:
+            bound = hs["stack"]["rsm_localizer_scan"]["bytes"]
+            painted = max(st["stack"][m]["scan_bytes"] for m in ROBUST_METHODS)
+            if painted > bound:
+                items.append(f"Stack: the painted depth ({fmt_int(painted)} bytes) exceeds the host's static "
+                             f"bound ({fmt_int(bound)} bytes, libc/libm calls not counted): those calls add "
+                             "the difference.")
+    if sc:
+        rows = [r for r in sc["rows"] if r["method"] == "rsm"]
+        for kind, default in (("map", DEFAULT_MAP_LOG2), ("beams", DEFAULT_MAX_BEAMS)):
+            base = [r for r in rows if r["kind"] == kind and r["value"] == default]
+            if not base:
+                continue
+            b0 = base[0]
+            for r in sorted((r for r in rows if r["kind"] == kind and r["value"] != default), key=lambda r: r["value"]):
+                worse = [q for q in QUANTITIES if r["local"][q] > 1.05 * b0["local"][q]]
+                what = (f"a {r['config']['RSM_MAP_SIZE']}-cell map" if kind == "map"
+                        else f"{r['beams']} resampled readings")
+                dflt = (f"{b0['config']['RSM_MAP_SIZE']} cells" if kind == "map" else f"{b0['beams']} readings")
+                if worse:
+                    items.append(f"Scaling: with {what} rsm's local error is more than 5 % above that with "
+                                 f"{dflt}: " + "; ".join(f"{q} {fmt_q(q, r['local'][q])} vs "
+                                                         f"{fmt_q(q, b0['local'][q])} {UNITS[q]}" for q in worse) + ".")
+        beams = sorted((r for r in rows if r["kind"] == "beams"), key=lambda r: r["beams"])
+        if len(beams) >= 2:
+            lo, hi = beams[0], beams[-1]
+            tr = ratio(hi["call"]["median_us"], lo["call"]["median_us"])
+            rr = hi["beams"] / lo["beams"]
+            better = all(hi["local"][q] < lo["local"][q] for q in QUANTITIES)
+            items.append(f"Scaling: {hi['beams']} readings per scan cost {fmt_ratio(tr)} times the median time "
+                         f"of {lo['beams']} ({rr:.2f} times the readings)"
+                         + ("" if better else " and do not lower both local errors (the resampled readings "
+                                              "carry no new information)") + ".")
+    return items
+
+
 def _range(vals: Sequence[float]) -> str:
     lo, hi = min(vals), max(vals)
     return fmt_ratio(lo) if fmt_ratio(lo) == fmt_ratio(hi) else f"{fmt_ratio(lo)}..{fmt_ratio(hi)}"
@@ -822,6 +1735,326 @@ def _per_seed(rob: dict, m: str, level: int, s: str, q: str) -> List[float]:
 
 
 # ---------------------------------------------------------------------------
+# report parts of the sections added for issue 6
+
+
+def _us(v: Optional[float]) -> str:
+    return "n/a" if v is None or not math.isfinite(v) else f"{v:.1f}"
+
+
+def _us2(v: Optional[float]) -> str:
+    """Microseconds with two decimals under 10 us (stages can be that short)."""
+    if v is None or not math.isfinite(v):
+        return "n/a"
+    return f"{v:.2f}" if v < 10 else f"{v:.1f}"
+
+
+def _cells(v: Optional[float]) -> str:
+    return "n/a" if v is None or not math.isfinite(v) else f"{v:.2f}"
+
+
+def _deg(v: Optional[float]) -> str:
+    return "n/a" if v is None or not math.isfinite(v) else f"{v:.2f}"
+
+
+def report_turns(tn: Optional[dict], main: str, root: Path) -> List[str]:
+    if not tn:
+        return ["Not measured in this run.", ""]
+    cell_cm = tn["cell_m"] * 100
+    L = [f"The paper's Fig. 8 is one scan pair at a sharp turn, (Δx, Δy, Δθ) = (43 mm, 27 mm, 14.63°) "
+         "between the two scans: ICP (30 iterations) ends in a local minimum, the proposed method's "
+         "residual is (1 cell, 1 cell, 0.25°). Here the same question is asked of the whole "
+         f"`{main}` log: the {len(tn['turns'])} local relations (span <= {LOCAL_SPAN:g} s) with the fastest "
+         "true turn, in degrees of true rotation per scan between the relation's two scans (counted in "
+         "scans because the log's timestamps jitter), at most one per "
+         f"{tn['separation']} scans; for each, the residual inverse(true) ∘ estimated of the trajectories of "
+         f"section 1, as absolute values: Δx and Δy (in the frame of the true end pose) in cells of "
+         f"{cell_cm:g} cm (the default `grid.cell_m`, as `rsm-stages` reports it) and Δθ in degrees; "
+         "translation is the length of (Δx, Δy). Each method runs its whole filter along the relation's scans, so these are residuals "
+         "of the tracked motion over the turn, not of one isolated scan match as in the paper.", ""]
+    rows = []
+    for k, r in enumerate(tn["turns"], 1):
+        cells = [str(k), f"{r['t1_rel']:.1f}", f"{r['span']:.2f}", str(r["gap"]), f"{r['rotation_deg']:.1f}",
+                 f"{r['translation_m']:.3f}"]
+        for m in METHODS:
+            e = r["residual"][m]
+            cells += (["n/a", "n/a"] if e is None else
+                      [f"{_cells(e['dx_cells'])}, {_cells(e['dy_cells'])}", _deg(e["rotation_deg"])])
+        rows.append(cells)
+    L += md_table(["turn", "t1 [s]", "span [s]", "scans", "true rotation [deg]", "true translation [m]",
+                   "rsm Δx, Δy [cells]", "rsm Δθ [deg]", "icp Δx, Δy [cells]", "icp Δθ [deg]",
+                   "odometry Δx, Δy [cells]", "odometry Δθ [deg]"], rows, "turns")
+    rows = []
+    for m in METHODS:
+        s = tn["summary"][m]
+        rows.append([m, str(s["translation_cells"]["n"]), _cells(s["dx_cells"]["mean"]), _cells(s["dy_cells"]["mean"]),
+                     _cells(s["translation_cells"]["mean"]), _cells(s["translation_cells"]["max"]),
+                     _deg(s["rotation_deg"]["mean"]), _deg(s["rotation_deg"]["max"])])
+    L += [f"Over these {len(tn['turns'])} turns (t1 counted from the log's first scan):", ""]
+    L += md_table(["method", "turns", "mean Δx [cells]", "mean Δy [cells]", "mean translation [cells]",
+                   "max translation [cells]", "mean Δθ [deg]", "max Δθ [deg]"], rows, "turns summary")
+    n = len(tn["turns"])
+    L += [f"rsm's residual is below icp's at {tn['rsm_better']['translation_cells']} of {n} turns in "
+          f"translation and at {tn['rsm_better']['rotation_deg']} of {n} in rotation.", ""]
+    L += [f"Every local relation of `{main}`, by its true rotation: mean translation residual in cells and "
+          "mean rotation residual in degrees.", ""]
+    rows = []
+    for b in tn["bins"]:
+        cells = [b["bin"], str(b["relations"])]
+        for m in METHODS:
+            cells += [_cells(b["methods"][m]["translation_cells"]["mean"]), _deg(b["methods"][m]["rotation_deg"]["mean"])]
+        rows.append(cells)
+    L += md_table(["true rotation [deg]", "relations", "rsm [cells]", "rsm [deg]", "icp [cells]", "icp [deg]",
+                   "odometry [cells]", "odometry [deg]"], rows, "turns by rotation")
+    return L
+
+
+def report_stage_speed(st: Optional[dict], speed: Optional[dict], main: str) -> List[str]:
+    if not st:
+        return ["Per-stage times not measured in this run.", ""]
+    L = ["### Per stage", "",
+         f"`rsm-stages` (tools/bench-c) runs `{main}` as rsm-nav does (same trajectory, bit for bit) with "
+         "the localizer's timing hook set: `rsm_localizer_config_t.clock_fn` reads CLOCK_MONOTONIC in "
+         "nanoseconds and `rsm_localizer_scan` charges each stage the time from its start to the next "
+         f"stage's. rsm and icp ran alternately, one process at a time, {st['repeats']} time(s) each, in "
+         "this bench run; every figure is the median over the repeats. A stage's median and 95th "
+         "percentile are over the scans that reached it (*scans*); its mean is over all scans, so the "
+         "stage means add up to the whole step's mean (*share*). *whole step* is the hook's own total "
+         "(first to last clock reading), *whole call* the call timed from outside.", ""]
+    rows = []
+    mt = {m: st["methods"][m]["timing"] for m in ROBUST_METHODS}
+    for s in STAGES + ("step", "call"):
+        label = {"step": "whole step (hook)", "call": "whole call (timed outside)"}.get(s, s)
+        cells = [label, STAGE_WHAT.get(s, "")]
+        for m in ROBUST_METHODS:
+            t = mt[m].get(s)
+            if t is None or t["reached"] == 0:
+                cells += ["0", "-", "-", "-", "-"]
+                continue
+            whole = s in ("step", "call")
+            share = 100.0 * t["mean_us"] / mt[m]["step"]["mean_us"] if mt[m]["step"]["mean_us"] else float("nan")
+            cells += [str(t["reached"]), _us2(t["median_us"] if whole else t["median_reached_us"]),
+                      _us2(t["p95_us"] if whole else t["p95_reached_us"]), _us2(t["mean_us"]),
+                      "" if s == "call" else fmt_pct(share)]
+        rows.append(cells)
+    rows.append(["icp / rsm", "whole call", "", fmt_ratio(st["ratio_median"]), fmt_ratio(st["ratio_p95"]),
+                 fmt_ratio(st["ratio_mean"]), "", "", "", "", "", ""])
+    L += md_table(["stage", "what", "rsm scans", "rsm median [us]", "rsm p95 [us]", "rsm mean [us]", "rsm share %",
+                   "icp scans", "icp median [us]", "icp p95 [us]", "icp mean [us]", "icp share %"], rows,
+                  "speed stages")
+    mo = mt["rsm"].get("motion")
+    if mo:
+        L += [f"Odometry prediction (`rsm_localizer_motion`, the EKF predict, once per scan): median "
+              f"{_us2(mo['median_us'])} us, p95 {_us2(mo['p95_us'])} us (rsm run).", ""]
+    if speed:
+        a, b = speed["methods"]["rsm"]["median_us"], mt["rsm"]["call"]["median_us"]
+        c, d = speed["methods"]["icp"]["median_us"], mt["icp"]["call"]["median_us"]
+        L += [f"With the hook the whole call's median is {_us(b)} us for rsm and {_us(d)} us for icp; "
+              f"rsm-nav, which leaves the hook NULL, measured {_us(a)} and {_us(c)} us above "
+              f"({fmt_ratio(ratio(b, a))} and {fmt_ratio(ratio(d, c))} times): the clock readings cost little "
+              "next to the stages, but two processes measured minutes apart differ by a few per cent anyway.", ""]
+    if st.get("plot"):
+        L += [f"![Time per stage, rsm and icp]({st['plot']})", ""]
+    elif st.get("plot_note"):
+        L += [f"No plot: {st['plot_note']}.", ""]
+    return L
+
+
+def report_callgrind_stages(cg: Optional[dict]) -> List[str]:
+    if not cg or "skipped" in cg or "stages" not in cg.get("rsm", {}):
+        return []
+    L = ["Instructions per scan by stage, from the same callgrind runs: the inclusive count of every "
+         "function `rsm_localizer_scan` calls, grouped by the stage that calls it (`rsm_map_recenter` and "
+         "the sine/cosine of `to_world` run in both the grid and the map stage). *localizer* is "
+         "`rsm_localizer_scan`'s own code with the static helpers the compiler inlined into it: the listing "
+         "of the map cells near the scan that are Harris candidates, the candidate copies, `to_world`, the "
+         "noise models and the stage bookkeeping. Callgrind counts functions, not stages, so that part "
+         "cannot be split further; the wall-time table above has the exact split.", ""]
+    rows = []
+    for stg in CG_STAGE_ORDER:
+        if not any(stg in cg[m]["stages"] for m in ROBUST_METHODS):
+            continue
+        fns = sorted({f for m in ROBUST_METHODS for f in cg[m]["stages"].get(stg, {}).get("functions", [])})
+        cells = [stg, ", ".join(f"`{f}`" for f in fns)]
+        for m in ROBUST_METHODS:
+            row = cg[m]["stages"].get(stg)
+            if row is None:
+                cells += ["0", "0.0"]
+            else:
+                cells += [fmt_int(round(row["ir_per_scan"])), fmt_pct(100.0 * row["ir"] / cg[m]["ir"])]
+        rows.append(cells)
+    L += md_table(["stage", "functions", "rsm Ir per scan", "rsm %", "icp Ir per scan", "icp %"], rows,
+                  "speed callgrind stages")
+    return L
+
+
+def _kib(v: Optional[int]) -> str:
+    return "n/a" if v is None else f"{v / 1024:.1f}"
+
+
+DRIVER_OBJECTS = ("aria", "lms", "p3dx", "sicklms", "hal")
+
+
+def object_kind(obj: str) -> str:
+    stem = obj.split(".")[0]
+    return "driver" if stem in DRIVER_OBJECTS else "core"
+
+
+def report_arm_memory(am: Optional[dict], root: Path) -> List[str]:
+    if not am:
+        return ["Per-configuration Cortex-M4F sizes not measured in this run.", ""]
+    if "skipped" in am:
+        return [f"Per-configuration Cortex-M4F sizes not measured: {am['skipped']}.", ""]
+    names = list(am["configs"])
+    L = ["### Cortex-M4F per module and configuration", "",
+         f"{am['compiler']}, MinSizeRel (-Os), cross-built by this bench for each configuration: "
+         + "; ".join(f"*{n}* = `{am['configs'][n]['header']}`" for n in names)
+         + ". Flash is text + rodata per object of `librsm.a`; *core* is the localizer pipeline, "
+         "*driver* the P3-DX and LMS drivers with their protocol codecs and the HAL helpers. No object has "
+         "static RAM (.data/.bss); all RAM is caller-owned state, listed below by module.", ""]
+    objs = {}
+    for n in names:
+        for o in am["configs"][n]["objects"]:
+            objs.setdefault(o["object"], {})[n] = o
+    rows = []
+    totals = {n: {"core": 0, "driver": 0, "ram": 0} for n in names}
+    for obj in sorted(objs, key=lambda o: (object_kind(o), o)):
+        cells = [obj, object_kind(obj)]
+        for n in names:
+            o = objs[obj].get(n)
+            cells.append("n/a" if o is None else fmt_int(o["flash"]))
+            if o is not None:
+                totals[n][object_kind(obj)] += o["flash"]
+                totals[n]["ram"] += o["ram"]
+        cells.append(fmt_int(sum(objs[obj][n]["ram"] for n in names if n in objs[obj])))
+        rows.append(cells)
+    for kind in ("core", "driver"):
+        rows.append([f"TOTAL {kind}", ""] + [fmt_int(totals[n][kind]) for n in names] + [""])
+    rows.append(["TOTAL core + drivers", ""] + [fmt_int(totals[n]["core"] + totals[n]["driver"]) for n in names]
+                + [fmt_int(sum(totals[n]["ram"] for n in names))])
+    L += md_table(["object", "kind"] + [f"flash {n} [bytes]" for n in names] + ["static RAM (all configs)"],
+                  rows, "memory arm configs flash")
+    if all(am["configs"][n].get("state") for n in names):
+        rows = []
+        for k, item in enumerate(am["configs"][names[0]]["state"]):
+            cells = [f"`{item['module']}`", item["label"].replace("  ", "&nbsp;&nbsp;")]
+            for n in names:
+                v = am["configs"][n]["state"][k]["bytes"]
+                cells += [fmt_int(v) if v is not None else "n/a"]
+            rows.append(cells)
+        L += ["Caller-owned state on the target (`sizeof`, from a probe object built with the same compiler "
+              "and configuration). The indented rows are the parts of `rsm_localizer_t`; `work.rsm` and "
+              "`work.icp` share one union.", ""]
+        L += md_table(["module", "state"] + [f"{n} [bytes]" for n in names], rows, "memory arm configs state")
+    else:
+        L += ["State sizes on the target not measured: "
+              + "; ".join(am["configs"][n].get("state_note", "") for n in names) + ".", ""]
+    rows = []
+    for n in names:
+        fw = am["configs"][n]["firmware"]
+        if fw:
+            stat = am["configs"][n]["firmware_statics"]
+            rows.append([n, fmt_int(fw["text"]), fmt_int(fw["data"]), fmt_int(fw["bss"]), fmt_int(fw["dec"]),
+                         fmt_int(sum(stat.values())), fmt_int(stat.get("fw_localizer", 0))])
+    L += ["The example firmware (`port/baremetal`, one localizer, both drivers, two UART rings; "
+          "`--gc-sections`, newlib-nano) per configuration:", ""]
+    L += md_table(["config", "text", "data", "bss", "total", "firmware statics", "of which fw_localizer"], rows,
+                  "memory arm configs firmware")
+    return L
+
+
+def report_stack(am: Optional[dict], hs: Optional[dict], st: Optional[dict], stack_note: Optional[str]) -> List[str]:
+    L = ["### Stack of one localizer step", "",
+         "Measured two ways. *Static*: every library source compiled with `-fstack-usage "
+         "-fcallgraph-info=su` (GCC writes each function's frame size and its calls); the deepest path "
+         "from `rsm_localizer_scan` through that call graph, summing the frames. Calls into libc/libm "
+         "(listed) count 0, and so does the optional timing hook (the user's clock); the Harris patch "
+         "callback, called through a pointer, is resolved to the two functions the localizer passes "
+         "(`patch_map`, `rsm_harris_patch_image`). *Painted* (host only): `rsm-stages --stack` runs every "
+         "scan of the log in a fresh thread whose stack buffer was filled with a pattern, finds the "
+         "lowest byte that lost it, and subtracts the same measure for a thread that calls an empty "
+         "function with the same arguments; the maximum over all scans.", ""]
+    rows = []
+    if am and "skipped" not in am:
+        for n, c in am["configs"].items():
+            for fn in ("rsm_localizer_scan", "rsm_localizer_motion"):
+                s = c["stack"][fn]
+                rows.append([f"Cortex-M4F -Os, {n}", "static", f"`{fn}`", fmt_int(s["bytes"]),
+                             " → ".join(f"{a} {b}" for a, b in s["path"]),
+                             ", ".join(s["unresolved"]) or "none"])
+    if hs and "skipped" not in hs:
+        for fn in ("rsm_localizer_scan", "rsm_localizer_motion"):
+            s = hs["stack"][fn]
+            rows.append([f"host `{hs['flags']}`", "static", f"`{fn}`", fmt_int(s["bytes"]),
+                         " → ".join(f"{a} {b}" for a, b in s["path"]), ", ".join(s["unresolved"]) or "none"])
+    if st and st.get("stack"):
+        for m in ROBUST_METHODS:
+            s = st["stack"][m]
+            rows.append(["host, this build", "painted", f"`rsm_localizer_scan` ({m})", fmt_int(s["scan_bytes"]),
+                         f"max over {fmt_int(s['scans'])} scans; thread peak {fmt_int(s['peak_bytes'])} minus "
+                         f"baseline {fmt_int(s['baseline_bytes'])}", "counted (they ran)"])
+    if rows:
+        L += md_table(["build", "method", "function", "bytes", "deepest path (frame bytes)",
+                       "calls not counted (static)"], rows, "memory stack")
+    if stack_note:
+        L += [f"Painted measurement not made: {stack_note}.", ""]
+    if hs and "skipped" in hs:
+        L += [f"Host static bound not computed: {hs['skipped']}.", ""]
+    return L
+
+
+def report_scaling(sc: Optional[dict], main: str) -> List[str]:
+    if not sc:
+        return ["Not measured in this run.", ""]
+    L = [f"Time per scan (whole call, rsm-stages, one run each) on `{main}` against readings per scan and "
+         "map size, each variant a Release build of its own with a generated `RSM_USER_CONFIG` (the "
+         "default values come from the main build). Readings: the log's 180-beam scans are resampled to N "
+         "readings over the same 179° field (linear in range between neighbouring readings closer than "
+         "0.1 m, otherwise the nearer reading) with `RSM_MAX_BEAMS` = N; they add readings, not "
+         "information. Map: the log's own 180 readings with `RSM_MAP_SIZE_LOG2` = L. The local error "
+         "(relations spanning at most 2 s) shows what each variant does to accuracy.", ""]
+    rows = []
+    for r in sorted(sc["rows"], key=lambda r: (r["kind"], r["value"], r["method"])):
+        c = r["config"]
+        cfg = ", ".join(f"{k} {v}" for k, v in sorted(r["macros"].items())) or "defaults"
+        rows.append([r["kind"], cfg, str(r["beams"]), f"{c['RSM_MAP_SIZE']} x {c['RSM_MAP_SIZE']}", r["method"],
+                     _us(r["call"]["median_us"]), _us(r["call"]["p95_us"]), fmt_q("translation", r["local"]["translation"]),
+                     fmt_q("rotation", r["local"]["rotation"]), fmt_pct(r["fused"]), fmt_int(r["sizes"]["rsm_localizer_t"])])
+    L += md_table(["varies", "config", "readings", "map [cells]", "method", "median [us]", "p95 [us]",
+                   "local translation [m]", "local rotation [deg]", "fused %", "sizeof(rsm_localizer_t)"], rows,
+                  "scaling time")
+    seen = {}
+    for r in sc["rows"]:
+        seen.setdefault(r["variant"], r)
+    rows = []
+    for v in sorted(seen.values(), key=lambda r: (r["kind"], r["value"])):
+        c, s = v["config"], v["sizes"]
+        rows.append([v["variant"], str(c["RSM_MAX_BEAMS"]), str(c["RSM_MAP_SIZE"]), fmt_int(s["rsm_localizer_t"]),
+                     fmt_int(s["map"]), fmt_int(s["image"]), fmt_int(s["work"]), fmt_int(s["ransac"]),
+                     fmt_int(s["points"]), fmt_int(s["rsm_scan_t"])])
+    L += ["How the state grows with the capacities (bytes on this host):", ""]
+    L += md_table(["variant", "RSM_MAX_BEAMS", "map side", "rsm_localizer_t", "map", "image", "work", "ransac",
+                   "points", "rsm_scan_t"], rows, "scaling memory")
+    g = sc.get("growth", {})
+    parts = []
+    if "beams" in g:
+        parts.append(f"{g['beams']['bytes_per_unit']:.1f} bytes of `rsm_localizer_t` per unit of RSM_MAX_BEAMS "
+                     "(the members it sizes: `pts` and `world`, the image's cell list through "
+                     "RSM_IMAGE_MAX_CELLS = 2 x RSM_MAX_BEAMS, and the ICP points inside the work union), and "
+                     "every `rsm_scan_t` grows with it too")
+    if "map" in g:
+        parts.append(f"{g['map']['bytes_per_unit']:.3f} bytes per map cell (the members it sizes: the map's hit "
+                     "counts, the scan image's bitmap and the bitmap of listed reference candidates)")
+    if parts:
+        L += ["Growth between the smallest and largest variant: " + "; ".join(parts) + ".", ""]
+    if sc.get("plot"):
+        L += [f"![Scaling of time per scan and state size]({sc['plot']})", ""]
+    elif sc.get("plot_note"):
+        L += [f"No plot: {sc['plot_note']}.", ""]
+    return L
+
+
+# ---------------------------------------------------------------------------
 # the report
 
 
@@ -831,6 +2064,37 @@ def md_table(header: Sequence[str], rows: Iterable[Sequence[str]], anchor: str) 
            "|" + "|".join("---" for _ in header) + "|"]
     out += ["| " + " | ".join(r) + " |" for r in rows]
     out.append("")
+    return out
+
+
+def headline_extras(ctx: dict) -> List[str]:
+    """Headline sentences from the sections added for issue 6."""
+    out = []
+    tn = ctx.get("turns")
+    if tn and tn["turns"]:
+        sm = tn["summary"]
+        out.append(f"at the {len(tn['turns'])} sharpest turns rsm's mean residual is "
+                   f"{_cells(sm['rsm']['translation_cells']['mean'])} cells and {_deg(sm['rsm']['rotation_deg']['mean'])} deg "
+                   f"(icp {_cells(sm['icp']['translation_cells']['mean'])} cells, {_deg(sm['icp']['rotation_deg']['mean'])} deg; "
+                   f"odometry {_cells(sm['odometry']['translation_cells']['mean'])} cells, "
+                   f"{_deg(sm['odometry']['rotation_deg']['mean'])} deg)")
+    st = ctx.get("stages")
+    if st:
+        t = st["methods"]["rsm"]["timing"]
+        top = max(STAGES, key=lambda s_: t[s_]["mean_us"] if s_ in t else 0.0)
+        out.append(f"rsm's slowest stage is {top} ({fmt_pct(100.0 * t[top]['mean_us'] / t['step']['mean_us'])} % "
+                   f"of the mean step, median {_us2(t[top]['median_reached_us'])} us)")
+    am = ctx.get("arm_memory")
+    if am and "skipped" not in am:
+        c = am["configs"]
+        if "default" in c:
+            out.append(f"one localizer step needs at most {fmt_int(c['default']['stack']['rsm_localizer_scan']['bytes'])} "
+                       "bytes of stack on Cortex-M4F (static bound, libm calls not counted)")
+        if "small" in c and c["small"].get("firmware") and c["small"].get("state"):
+            out.append(f"with `{c['small']['header']}` the state is "
+                       f"{fmt_int(c['small']['state'][0]['bytes'])} bytes and the example firmware "
+                       f"{fmt_int(c['small']['firmware']['bss'] + c['small']['firmware']['data'])} bytes of RAM and "
+                       f"{fmt_int(c['small']['firmware']['text'])} bytes of flash")
     return out
 
 
@@ -888,6 +2152,7 @@ def write_report(ctx: dict) -> str:
         extra.append(f"the localizer state is {fmt_int(mem['sizes']['rsm_localizer_t'])} bytes on "
                      "this host" + (f" and {fmt_int(xc['statics']['fw_localizer'])} bytes on Cortex-M4F"
                                     if xc and "skipped" not in xc and "fw_localizer" in xc["statics"] else ""))
+    extra += headline_extras(ctx)
     if extra:
         L += ["In this run: " + "; ".join(extra) + ".", ""]
 
@@ -954,8 +2219,17 @@ def write_report(ctx: dict) -> str:
         elif ctx.get("plot_note"):
             L += [f"No plot: {ctx['plot_note']}.", ""]
 
-    # 3. speed
+    # 3. sharp turns
     L += [f"## {SECTION_TITLES[2]}", "", pl, ""]
+    L += report_turns(ctx.get("turns"), main, root)
+    if ctx.get("turns") and ctx.get("turns_plot"):
+        L += [f"![Residuals of rsm, icp and odometry at the sharpest turns and by true rotation]"
+              f"({ctx['turns_plot']})", ""]
+    elif ctx.get("turns_plot_note"):
+        L += [f"No plot: {ctx['turns_plot_note']}.", ""]
+
+    # 4. speed
+    L += [f"## {SECTION_TITLES[3]}", "", pl, ""]
     if speed:
         L += [f"Wall time of `rsm_localizer_scan` per scan, from rsm-nav's summary, on `{main}` "
               f"({speed['methods']['rsm']['scans']} scans). rsm and icp ran alternately, one process at "
@@ -984,11 +2258,13 @@ def write_report(ctx: dict) -> str:
                 for m in ROBUST_METHODS]
         rows.append(["icp / rsm", "", "", fmt_ratio(cg["ratio"])])
         L += md_table(["method", "scans", "Ir collected", "Ir per scan"], rows, "speed callgrind")
+        L += report_callgrind_stages(cg)
     else:
         L += [f"Instruction counts not measured: {(cg or {}).get('skipped', 'disabled')}.", ""]
+    L += report_stage_speed(ctx.get("stages"), speed, main)
 
-    # 4. memory
-    L += [f"## {SECTION_TITLES[3]}", "", pl, ""]
+    # 5. memory
+    L += [f"## {SECTION_TITLES[4]}", "", pl, ""]
     if mem and "skipped" not in mem:
         mac = mem["macros"]
         L += [f"`sizeof` on this host ({mem['compiler']}), default `config.h` (beams "
@@ -1004,6 +2280,7 @@ def write_report(ctx: dict) -> str:
         L += md_table(["part", "bytes", "KiB"], rows, "memory host")
     else:
         L += [f"Host sizes not measured: {(mem or {}).get('skipped', 'disabled')}.", ""]
+    am = ctx.get("arm_memory")
     if xc and "skipped" not in xc:
         L += [f"Cortex-M4F (`tools/cross-check`, {xc['compiler']}, -Os): flash (text + rodata) per "
               "object of the library and the bare-metal port.", ""]
@@ -1024,9 +2301,15 @@ def write_report(ctx: dict) -> str:
                   "Checks: " + "; ".join(xc["checks"]) + ".", ""]
     else:
         L += [f"Cortex-M4F sizes not measured: {(xc or {}).get('skipped', 'disabled')}.", ""]
+    L += report_arm_memory(am, root)
+    L += report_stack(am, ctx.get("host_stack"), ctx.get("stages"), ctx.get("stack_note"))
 
-    # 5. losses
-    L += [f"## {SECTION_TITLES[4]}", "", pl, ""]
+    # 6. scaling
+    L += [f"## {SECTION_TITLES[5]}", "", pl, ""]
+    L += report_scaling(ctx.get("scaling"), main)
+
+    # 7. losses
+    L += [f"## {SECTION_TITLES[6]}", "", pl, ""]
     L += [f"- {item}" for item in ctx["losses"]]
     L.append("")
     return "\n".join(L)
@@ -1043,6 +2326,14 @@ def _levels(text: str) -> List[int]:
         raise argparse.ArgumentTypeError(f"not a comma-separated list of integers: {text!r}") from None
     if not vals or any(v < 0 or v > 100 for v in vals):
         raise argparse.ArgumentTypeError(f"levels must be within 0..100: {text!r}")
+    return vals
+
+
+def _names(text: str) -> List[str]:
+    known = [n for n, _ in ARM_CONFIGS]
+    vals = [v.strip() for v in text.split(",") if v.strip()]
+    if not vals or any(v not in known for v in vals):
+        raise argparse.ArgumentTypeError(f"configurations are among {', '.join(known)}: {text!r}")
     return vals
 
 
@@ -1071,6 +2362,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-callgrind", action="store_true", help="skip the instruction counts")
     p.add_argument("--no-cross-check", action="store_true", help="skip tools/cross-check")
     p.add_argument("--no-plots", action="store_true", help="draw no plot")
+    p.add_argument("--turns", type=int, default=TURNS, help=f"sharpest turns in the Fig. 8 table (default {TURNS})")
+    p.add_argument("--no-stack", action="store_true", help="skip the painted stack measurement")
+    p.add_argument("--no-arm-memory", action="store_true", help="skip the per-configuration Cortex-M4F builds")
+    p.add_argument("--arm-configs", type=_names, help="Cortex-M4F configurations to build (default "
+                   + ",".join(n for n, _ in ARM_CONFIGS) + ")")
+    p.add_argument("--no-scaling", action="store_true", help="skip the scaling section")
+    p.add_argument("--scaling-beams", type=_levels, help="readings per scan of the scaling runs (default "
+                   + ",".join(map(str, SCALING_BEAMS)) + f"; quick {DEFAULT_MAX_BEAMS})")
+    p.add_argument("--scaling-maps", type=_levels, help="RSM_MAP_SIZE_LOG2 values of the scaling runs (default "
+                   + ",".join(map(str, SCALING_MAP_LOG2)) + f"; quick {DEFAULT_MAP_LOG2})")
     p.add_argument("--output", type=Path, help="report (default: ROOT/docs/RESULTS.md)")
     p.add_argument("--plots-dir", type=Path, help="plots (default: ROOT/docs/results)")
     p.add_argument("--work-dir", type=Path, help="trajectories and manifest (default: BUILD/bench-work)")
@@ -1091,6 +2392,9 @@ def run(args: argparse.Namespace) -> Path:
     nav = build / "tools" / "nav" / "rsm-nav"
     if not nav.is_file():
         raise BenchError(f"rsm-nav is not built: {nav} (run ./tools/bench, which builds it)")
+    stages_bin = stages_exe(build)
+    if not stages_bin.is_file():
+        raise BenchError(f"rsm-stages is not built: {stages_bin} (run ./tools/bench, which builds it)")
     real_log = (args.real_log or root.parent / "shared" / "data" / "intel" / "intel.clf.gz").resolve()
     real_rel = (args.real_relations or real_log.parent / "intel.relations").resolve()
     for f, what in ((real_log, "the real log"), (real_rel, "its relations")):
@@ -1134,13 +2438,35 @@ def run(args: argparse.Namespace) -> Path:
     ctx["speed"] = stage("speed", run_speed, nav, real_log, repeats, work)
     ctx["robustness"] = stage("robustness", run_robustness, nav, real_log, real_rel,
                               ctx["accuracy"][main_label]["runs"], levels, seeds, work, cache, args.jobs)
+    sanitized = cmake_cache(build).get("RSM_SANITIZE", "OFF").upper() in ("ON", "TRUE", "1", "YES")
+    painted = not (args.no_stack or sanitized)
+    if not painted:
+        ctx["stack_note"] = ("--no-stack" if args.no_stack else
+                             "the build is instrumented by AddressSanitizer, which moves frames off the stack")
+    ctx["stages"] = stage("stages", run_stage_speed, stages_bin, real_log, repeats, painted)
+    ctx["turns"] = stage("turns", run_turns, ctx["accuracy"][main_label]["runs"], real_rel,
+                         ctx["stages"]["config"]["cell_m"], args.turns)
     ctx["callgrind"] = ({"skipped": "--no-callgrind"} if args.no_callgrind
-                        else stage("callgrind", run_callgrind, nav, cg_log, work, args.jobs))
+                        else stage("callgrind", run_callgrind, nav, cg_log, work, args.jobs, root))
     ctx["memory"] = stage("memory", run_memory, root, build, work)
     ctx["cross_check"] = ({"skipped": "--no-cross-check"} if args.no_cross_check
                           else stage("cross-check", run_cross_check, root))
+    if args.no_arm_memory:
+        ctx["arm_memory"] = {"skipped": "--no-arm-memory"}
+    else:
+        wanted = args.arm_configs or [n for n, _ in ARM_CONFIGS]
+        ctx["arm_memory"] = stage("arm-memory", run_arm_memory, root, work,
+                                  [c for c in ARM_CONFIGS if c[0] in wanted])
+    ctx["host_stack"] = stage("host-stack", run_host_stack, root, build, work, args.jobs)
+    if not args.no_scaling:
+        beams = args.scaling_beams or ([DEFAULT_MAX_BEAMS] if args.quick else list(SCALING_BEAMS))
+        maps = args.scaling_maps or ([DEFAULT_MAP_LOG2] if args.quick else list(SCALING_MAP_LOG2))
+        ctx["scaling"] = stage("scaling", run_scaling, root, build, real_log, real_rel, work,
+                               scaling_variants(beams, maps))
     if args.no_plots:
-        ctx["plot_note"] = "--no-plots"
+        ctx["plot_note"] = ctx["turns_plot_note"] = ctx["stages"]["plot_note"] = "--no-plots"
+        if ctx.get("scaling"):
+            ctx["scaling"]["plot_note"] = "--no-plots"
     else:
         png = plots / "robustness.png"
         note = plot_robustness(ctx["robustness"], png, prov,
@@ -1149,8 +2475,29 @@ def run(args: argparse.Namespace) -> Path:
             ctx["plot_note"] = note
         else:
             ctx["plot"] = os.path.relpath(png, output.parent).replace(os.sep, "/")
+        png = plots / "turns.png"
+        note = plot_turns(ctx["turns"], png, prov)
+        if note:
+            ctx["turns_plot_note"] = note
+        else:
+            ctx["turns_plot"] = os.path.relpath(png, output.parent).replace(os.sep, "/")
+        png = plots / "stages.png"
+        note = plot_stages(ctx["stages"], png, prov)
+        if note:
+            ctx["stages"]["plot_note"] = note
+        else:
+            ctx["stages"]["plot"] = os.path.relpath(png, output.parent).replace(os.sep, "/")
+        if ctx.get("scaling"):
+            png = plots / "scaling.png"
+            note = plot_scaling(ctx["scaling"], png, prov)
+            if note:
+                ctx["scaling"]["plot_note"] = note
+            else:
+                ctx["scaling"]["plot"] = os.path.relpath(png, output.parent).replace(os.sep, "/")
     ctx["losses"] = losses(ctx["accuracy"], main_label, ctx["robustness"], ctx["speed"],
                            ctx["callgrind"], ctx["memory"])
+    ctx["losses"] += more_losses(ctx["turns"], ctx["stages"], ctx.get("scaling"), ctx.get("arm_memory"),
+                                 ctx.get("host_stack"))
     ctx["elapsed"] = time.monotonic() - t_start
     ctx["stage_seconds"] = stage_seconds
     text = write_report(ctx)
