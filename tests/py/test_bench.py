@@ -643,8 +643,9 @@ def test_scaling_runs_of_the_default_build(run):
 
 
 def test_scaling_variants_headers_and_growth(tmp_path):
-    v = {x["name"]: x for x in bench.scaling_variants((181, 361, 721), (6, 7, 8))}
-    assert list(v) == ["beams181", "beams361", "beams721", "map6", "map7", "map8"]
+    v = {x["name"]: x for x in bench.scaling_variants((181, 361, 721), (6, 7, 8), ("rsm/config_host.h",))}
+    assert list(v) == ["beams181", "beams361", "beams721", "map6", "map7", "map8", "config_host"]
+    assert v["config_host"]["header"] == "rsm/config_host.h" and v["config_host"]["resample"] is None
     assert v["beams361"]["macros"] == {} and v["map7"]["macros"] == {}
     assert v["beams721"]["macros"] == {"RSM_MAX_BEAMS": 721} and v["beams721"]["resample"] == 721
     assert v["map6"]["macros"] == {"RSM_MAP_SIZE_LOG2": 6} and v["map6"]["resample"] is None

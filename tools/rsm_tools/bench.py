@@ -1295,12 +1295,16 @@ SCALING_BEAMS = (181, 361, 721)
 SCALING_MAP_LOG2 = (6, 7, 8)
 DEFAULT_MAX_BEAMS = 361
 DEFAULT_MAP_LOG2 = 7
+# Shipped configuration presets (include paths) run as they are.
+SCALING_PRESETS = ("rsm/config_host.h",)
 
 
-def scaling_variants(beams: Sequence[int] = SCALING_BEAMS, maps: Sequence[int] = SCALING_MAP_LOG2) -> List[dict]:
+def scaling_variants(beams: Sequence[int] = SCALING_BEAMS, maps: Sequence[int] = SCALING_MAP_LOG2,
+                     presets: Sequence[str] = SCALING_PRESETS) -> List[dict]:
     """The builds and runs of the scaling section. Readings: the log's scans
     resampled to N readings, RSM_MAX_BEAMS = N (the default 361 is the default
-    build). Map: the log's own readings, RSM_MAP_SIZE_LOG2 = L."""
+    build). Map: the log's own readings, RSM_MAP_SIZE_LOG2 = L. Presets: a
+    shipped config header, the log's own readings."""
     out = []
     for n in beams:
         macros = {} if n == DEFAULT_MAX_BEAMS else {"RSM_MAX_BEAMS": n}
@@ -1308,6 +1312,9 @@ def scaling_variants(beams: Sequence[int] = SCALING_BEAMS, maps: Sequence[int] =
     for lg in maps:
         macros = {} if lg == DEFAULT_MAP_LOG2 else {"RSM_MAP_SIZE_LOG2": lg}
         out.append({"name": f"map{lg}", "kind": "map", "value": lg, "macros": macros, "resample": None})
+    for k, h in enumerate(presets):
+        out.append({"name": Path(h).stem, "kind": "preset", "value": k, "macros": {}, "header": h,
+                    "resample": None})
     return out
 
 
@@ -1322,14 +1329,17 @@ def variant_header(macros: Dict[str, int]) -> str:
 def build_variant(root: Path, work: Path, main_build: Path, variant: dict) -> Path:
     """rsm-stages for a variant: the main build's when the variant is the
     default, else a Release build of its own with a generated RSM_USER_CONFIG."""
-    if not variant["macros"]:
+    if not variant["macros"] and not variant.get("header"):
         return stages_exe(main_build)
     d = work / "variants" / variant["name"]
     d.mkdir(parents=True, exist_ok=True)
-    header = d / "rsm_bench_variant.h"
-    text = variant_header(variant["macros"])
-    if not header.is_file() or header.read_text() != text:
-        header.write_text(text)
+    if variant.get("header"):
+        header = variant["header"]  # on the library's include path
+    else:
+        header = d / "rsm_bench_variant.h"
+        text = variant_header(variant["macros"])
+        if not header.is_file() or header.read_text() != text:
+            header.write_text(text)
     b = d / "build"
     cache = cmake_cache(main_build)
     cmd = ["cmake", "-S", str(root), "-B", str(b), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
@@ -1358,6 +1368,7 @@ def run_scaling(root: Path, main_build: Path, log: Path, relations_path: Path, w
             rows.append({"variant": v["name"], "kind": v["kind"], "value": v["value"], "macros": v["macros"],
                          "method": m, "beams": j["beams"], "config": j["config"], "sizes": j["sizes"],
                          "call": j["timing"]["call"], "scans": j["scans"], "trajectory": str(traj),
+                         "header": v.get("header"), "outcomes": j["outcomes"],
                          "fused": 100.0 * j["outcomes"]["accepted"] / j["scans"] if j["scans"] else float("nan"),
                          "local": {q: err[q]["mean"] for q in QUANTITIES}, "matched": err["matched"]})
     return {"log": str(log), "variants": variants, "rows": rows, "growth": memory_growth(rows)}
@@ -1710,6 +1721,15 @@ def more_losses(turns: Optional[dict], st: Optional[dict], sc: Optional[dict], a
                     items.append(f"Scaling: with {what} rsm's local error is more than 5 % above that with "
                                  f"{dflt}: " + "; ".join(f"{q} {fmt_q(q, r['local'][q])} vs "
                                                          f"{fmt_q(q, b0['local'][q])} {UNITS[q]}" for q in worse) + ".")
+        base = [r for r in rows if r["kind"] == "map" and r["value"] == DEFAULT_MAP_LOG2]
+        for r in (r for r in rows if r["kind"] == "preset"):
+            if base:
+                worse = [q for q in QUANTITIES if r["local"][q] > 1.05 * base[0]["local"][q]]
+                if worse:
+                    items.append(f"Scaling: the preset `{r['header']}` has a local error more than 5 % above the "
+                                 "default configuration's: " + "; ".join(
+                                     f"{q} {fmt_q(q, r['local'][q])} vs {fmt_q(q, base[0]['local'][q])} {UNITS[q]}"
+                                     for q in worse) + ".")
         beams = sorted((r for r in rows if r["kind"] == "beams"), key=lambda r: r["beams"])
         if len(beams) >= 2:
             lo, hi = beams[0], beams[-1]
@@ -2011,18 +2031,22 @@ def report_scaling(sc: Optional[dict], main: str) -> List[str]:
          "default values come from the main build). Readings: the log's 180-beam scans are resampled to N "
          "readings over the same 179° field (linear in range between neighbouring readings closer than "
          "0.1 m, otherwise the nearer reading) with `RSM_MAX_BEAMS` = N; they add readings, not "
-         "information. Map: the log's own 180 readings with `RSM_MAP_SIZE_LOG2` = L. The local error "
-         "(relations spanning at most 2 s) shows what each variant does to accuracy.", ""]
+         "information. Map: the log's own 180 readings with `RSM_MAP_SIZE_LOG2` = L. *preset*: a shipped "
+         "configuration header as it is, with the log's own readings. The local error (relations spanning "
+         "at most 2 s), the share of scans fused and the scans refused by the gate (*jump*) show what each "
+         "variant does to accuracy.", ""]
     rows = []
     for r in sorted(sc["rows"], key=lambda r: (r["kind"], r["value"], r["method"])):
         c = r["config"]
-        cfg = ", ".join(f"{k} {v}" for k, v in sorted(r["macros"].items())) or "defaults"
+        cfg = (f"`{r['header']}`" if r.get("header") else
+               ", ".join(f"{k} {v}" for k, v in sorted(r["macros"].items())) or "defaults")
         rows.append([r["kind"], cfg, str(r["beams"]), f"{c['RSM_MAP_SIZE']} x {c['RSM_MAP_SIZE']}", r["method"],
                      _us(r["call"]["median_us"]), _us(r["call"]["p95_us"]), fmt_q("translation", r["local"]["translation"]),
-                     fmt_q("rotation", r["local"]["rotation"]), fmt_pct(r["fused"]), fmt_int(r["sizes"]["rsm_localizer_t"])])
+                     fmt_q("rotation", r["local"]["rotation"]), fmt_pct(r["fused"]), str(r["outcomes"].get("jump", 0)),
+                     fmt_int(r["sizes"]["rsm_localizer_t"])])
     L += md_table(["varies", "config", "readings", "map [cells]", "method", "median [us]", "p95 [us]",
-                   "local translation [m]", "local rotation [deg]", "fused %", "sizeof(rsm_localizer_t)"], rows,
-                  "scaling time")
+                   "local translation [m]", "local rotation [deg]", "fused %", "gated (jump)",
+                   "sizeof(rsm_localizer_t)"], rows, "scaling time")
     seen = {}
     for r in sc["rows"]:
         seen.setdefault(r["variant"], r)
@@ -2035,6 +2059,13 @@ def report_scaling(sc: Optional[dict], main: str) -> List[str]:
     L += ["How the state grows with the capacities (bytes on this host):", ""]
     L += md_table(["variant", "RSM_MAX_BEAMS", "map side", "rsm_localizer_t", "map", "image", "work", "ransac",
                    "points", "rsm_scan_t"], rows, "scaling memory")
+    gated = sorted((r for r in sc["rows"] if r["kind"] == "beams" and r["method"] == "rsm"), key=lambda r: r["beams"])
+    if len(gated) >= 2 and gated[-1]["outcomes"].get("jump", 0) > gated[0]["outcomes"].get("jump", 0):
+        L += ["With more readings rsm refuses more scans at the gate ("
+              + ", ".join(f"{fmt_int(r['outcomes'].get('jump', 0))} at {r['beams']}" for r in gated)
+              + " readings): the refined measurement's covariance is the map fit's cost times the inverse of "
+              "JᵀJ, a sum over the points, so it shrinks as points are added, while interpolated readings "
+              "are not independent of their neighbours. The measurement noise was tuned with 180 readings.", ""]
     g = sc.get("growth", {})
     parts = []
     if "beams" in g:
@@ -2371,7 +2402,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scaling-beams", type=_levels, help="readings per scan of the scaling runs (default "
                    + ",".join(map(str, SCALING_BEAMS)) + f"; quick {DEFAULT_MAX_BEAMS})")
     p.add_argument("--scaling-maps", type=_levels, help="RSM_MAP_SIZE_LOG2 values of the scaling runs (default "
-                   + ",".join(map(str, SCALING_MAP_LOG2)) + f"; quick {DEFAULT_MAP_LOG2})")
+                   + ",".join(map(str, SCALING_MAP_LOG2)) + f"; quick {DEFAULT_MAP_LOG2}); the presets "
+                   + ", ".join(SCALING_PRESETS) + " run too, except in quick mode")
     p.add_argument("--output", type=Path, help="report (default: ROOT/docs/RESULTS.md)")
     p.add_argument("--plots-dir", type=Path, help="plots (default: ROOT/docs/results)")
     p.add_argument("--work-dir", type=Path, help="trajectories and manifest (default: BUILD/bench-work)")
@@ -2462,7 +2494,7 @@ def run(args: argparse.Namespace) -> Path:
         beams = args.scaling_beams or ([DEFAULT_MAX_BEAMS] if args.quick else list(SCALING_BEAMS))
         maps = args.scaling_maps or ([DEFAULT_MAP_LOG2] if args.quick else list(SCALING_MAP_LOG2))
         ctx["scaling"] = stage("scaling", run_scaling, root, build, real_log, real_rel, work,
-                               scaling_variants(beams, maps))
+                               scaling_variants(beams, maps, () if args.quick else SCALING_PRESETS))
     if args.no_plots:
         ctx["plot_note"] = ctx["turns_plot_note"] = ctx["stages"]["plot_note"] = "--no-plots"
         if ctx.get("scaling"):
