@@ -1405,7 +1405,8 @@ def plot_scaling(sc: dict, path: Path, prov: dict) -> Optional[str]:
             ax.plot(xs, [r["call"]["p95_us"] for r in sel], style, alpha=0.4, label=f"{m} p95")
         ax.set_xlabel(xlabel)
         ax.set_ylabel("time per scan [us]")
-        ax.grid(True, alpha=0.3)
+        ax.set_yscale("log")
+        ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
     ax = axes[2]
     for kind, style, xlabel in (("beams", "o-", "RSM_MAX_BEAMS"), ("map", "s--", "map cells / 100")):
