@@ -986,13 +986,34 @@ def run_turns(runs: dict, relations_path: Path, cell_m: float, n: int = TURNS) -
             "turns": rows, "summary": summary, "rsm_better": wins, "bins": bins}
 
 
-def plot_turns(turns: dict, path: Path, prov: dict) -> Optional[str]:
+NO_MATPLOTLIB = "matplotlib is not installed (it is the optional extra `rsm-tools[bench]`)"
+
+
+def _pyplot():
+    """matplotlib.pyplot on the file-only backend, or None without matplotlib."""
     try:
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        return "matplotlib is not installed (it is the optional extra `rsm-tools[bench]`)"
+        return None
+    return plt
+
+
+def _save(plt, fig, path: Path, prov: dict, rect) -> None:
+    """Stamps the provenance line at the bottom and writes the PNG (no software tag,
+    so reruns on the same data give the same bytes)."""
+    fig.text(0.01, 0.005, provenance_line(prov).replace("`", ""), fontsize=6.5, ha="left", va="bottom")
+    fig.tight_layout(rect=rect)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100, metadata={"Software": None})
+    plt.close(fig)
+
+
+def plot_turns(turns: dict, path: Path, prov: dict) -> Optional[str]:
+    plt = _pyplot()
+    if plt is None:
+        return NO_MATPLOTLIB
     rows = turns["turns"]
     if not rows:
         return "no turn was found"
@@ -1024,11 +1045,7 @@ def plot_turns(turns: dict, path: Path, prov: dict) -> Optional[str]:
         ax.legend(fontsize=8)
     fig.suptitle(f"Residuals at sharp turns (cf. the paper's Fig. 8); 1 cell = {turns['cell_m'] * 100:g} cm",
                  fontsize=11)
-    fig.text(0.01, 0.005, provenance_line(prov).replace("`", ""), fontsize=6.5, ha="left", va="bottom")
-    fig.tight_layout(rect=(0, 0.03, 1, 0.96))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100, metadata={"Software": None})
-    plt.close(fig)
+    _save(plt, fig, path, prov, (0, 0.03, 1, 0.96))
     return None
 
 
@@ -1395,12 +1412,9 @@ def memory_growth(rows: Sequence[dict]) -> dict:
 
 
 def plot_scaling(sc: dict, path: Path, prov: dict) -> Optional[str]:
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        return "matplotlib is not installed (it is the optional extra `rsm-tools[bench]`)"
+    plt = _pyplot()
+    if plt is None:
+        return NO_MATPLOTLIB
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
     for ax, kind, xlabel in ((axes[0], "beams", "readings per scan"),
                              (axes[1], "map", "map side [cells]")):
@@ -1426,21 +1440,14 @@ def plot_scaling(sc: dict, path: Path, prov: dict) -> Optional[str]:
     ax.legend(fontsize=8)
     fig.suptitle("Scaling: time per scan against readings and map size; state size against capacities",
                  fontsize=11)
-    fig.text(0.01, 0.005, provenance_line(prov).replace("`", ""), fontsize=6.5, ha="left", va="bottom")
-    fig.tight_layout(rect=(0, 0.04, 1, 0.94))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100, metadata={"Software": None})
-    plt.close(fig)
+    _save(plt, fig, path, prov, (0, 0.04, 1, 0.94))
     return None
 
 
 def plot_stages(st: dict, path: Path, prov: dict) -> Optional[str]:
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        return "matplotlib is not installed (it is the optional extra `rsm-tools[bench]`)"
+    plt = _pyplot()
+    if plt is None:
+        return NO_MATPLOTLIB
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
     ax = axes[0]
     for k, m in enumerate(ROBUST_METHODS):
@@ -1472,11 +1479,7 @@ def plot_stages(st: dict, path: Path, prov: dict) -> Optional[str]:
     ax.legend(fontsize=7)
     ax.grid(True, axis="y", alpha=0.3)
     fig.suptitle("Time per stage of rsm_localizer_scan (timing hook, CLOCK_MONOTONIC)", fontsize=11)
-    fig.text(0.01, 0.005, provenance_line(prov).replace("`", ""), fontsize=6.5, ha="left", va="bottom")
-    fig.tight_layout(rect=(0, 0.04, 1, 0.94))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100, metadata={"Software": None})
-    plt.close(fig)
+    _save(plt, fig, path, prov, (0, 0.04, 1, 0.94))
     return None
 
 
@@ -1486,12 +1489,9 @@ def plot_stages(st: dict, path: Path, prov: dict) -> Optional[str]:
 
 def plot_robustness(rob: dict, path: Path, prov: dict, odometry: Optional[dict] = None) -> Optional[str]:
     """Draws the robustness curves; returns None or why there is no plot."""
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        return "matplotlib is not installed (it is the optional extra `rsm-tools[bench]`)"
+    plt = _pyplot()
+    if plt is None:
+        return NO_MATPLOTLIB
     levels = rob["levels"]
     fig, axes = plt.subplots(2, 2, figsize=(10, 7.5), sharex=True)
     for i, s in enumerate(SCOPES):
@@ -1515,11 +1515,7 @@ def plot_robustness(rob: dict, path: Path, prov: dict, odometry: Optional[dict] 
     n = len(rob["seeds"])
     fig.suptitle(f"Robustness: relative-pose error vs outliers (mean over {n} seed"
                  f"{'s' if n != 1 else ''}, bars min..max)", fontsize=11)
-    fig.text(0.01, 0.005, provenance_line(prov).replace("`", ""), fontsize=6.5, ha="left", va="bottom")
-    fig.tight_layout(rect=(0, 0.03, 1, 0.96))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100, metadata={"Software": None})
-    plt.close(fig)
+    _save(plt, fig, path, prov, (0, 0.03, 1, 0.96))
     return None
 
 
