@@ -80,15 +80,24 @@ def read_maybe_gz(path: Path) -> bytes:
     return gzip.decompress(data) if data[:2] == b"\x1f\x8b" else data
 
 
-def rsm_nav_binary() -> Path:
-    """The rsm-nav built by ctest's build directory (RSM_BUILD_DIR)."""
+def build_dir() -> Path:
+    """ctest's build directory (RSM_BUILD_DIR)."""
     build = os.environ.get("RSM_BUILD_DIR")
     if not build:
         pytest.fail("RSM_BUILD_DIR is not set: run these tests through ctest", pytrace=False)
-    exe = Path(build) / "tools" / "nav" / "rsm-nav"
+    return Path(build)
+
+
+def built_tool(relpath: str) -> Path:
+    """A program built in the build directory, e.g. ``tools/nav/rsm-nav``."""
+    exe = build_dir() / relpath
     if not exe.is_file():
-        pytest.fail(f"rsm-nav not built at {exe}", pytrace=False)
+        pytest.fail(f"{exe.name} not built at {exe}", pytrace=False)
     return exe
+
+
+def rsm_nav_binary() -> Path:
+    return built_tool("tools/nav/rsm-nav")
 
 
 FAKEDEV_TIMEOUT = 30.0

@@ -22,23 +22,13 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO_ROOT, subprocess_env
+from conftest import REPO_ROOT, build_dir, rsm_nav_binary, subprocess_env
 from rsm_tools import bench
 from rsm_tools import evaluate as ev
 from rsm_tools import outliers
 
 LEVELS = (0, 43)
 SEEDS = 2
-
-
-def build_dir() -> Path:
-    build = os.environ.get("RSM_BUILD_DIR")
-    if not build:
-        pytest.fail("RSM_BUILD_DIR is not set: run these tests through ctest", pytrace=False)
-    exe = Path(build) / "tools" / "nav" / "rsm-nav"
-    if not exe.is_file():
-        pytest.fail(f"rsm-nav not built at {exe}", pytrace=False)
-    return Path(build)
 
 
 def sanitized(build: Path) -> bool:
@@ -48,6 +38,7 @@ def sanitized(build: Path) -> bool:
 @pytest.fixture(scope="module")
 def run(tmp_path_factory, head_log, head_relations):
     build = build_dir()
+    rsm_nav_binary()  # the bench drives it: say so clearly if it is missing
     d = tmp_path_factory.mktemp("bench")
     extra = d / "head_o10.clf.gz"
     outliers.inject_file(head_log, extra, 10, seed=7)

@@ -15,22 +15,12 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO_ROOT
+from conftest import REPO_ROOT, built_tool
 
 VECTORS = REPO_ROOT.parent / "shared" / "reference" / "vectors.json"
 
 
 # ---- helpers -----------------------------------------------------------------
-
-
-def dump_binary() -> Path:
-    build = os.environ.get("RSM_BUILD_DIR")
-    if not build:
-        pytest.fail("RSM_BUILD_DIR is not set: run these tests through ctest", pytrace=False)
-    exe = Path(build) / "tools" / "dump" / "rsm-dump"
-    if not exe.is_file():
-        pytest.fail(f"rsm-dump not built at {exe}", pytrace=False)
-    return exe
 
 
 def load_vectors() -> list:
@@ -66,7 +56,7 @@ def parse_lines(text: str) -> list:
 
 
 def run_dump(args, data=None, timeout=60):
-    res = subprocess.run([str(dump_binary()), *args], input=data, capture_output=True, timeout=timeout)
+    res = subprocess.run([str(built_tool("tools/dump/rsm-dump")), *args], input=data, capture_output=True, timeout=timeout)
     return res
 
 
@@ -321,7 +311,7 @@ def test_dump_through_a_pty_matches_the_file(tmp_path, protocol, stream):
     master, slave = pty.openpty()
     try:
         tty.setraw(slave)  # bytes written before rsm-dump sets raw mode must pass untouched
-        proc = subprocess.Popen([str(dump_binary()), "--protocol", protocol, "--baud", "38400",
+        proc = subprocess.Popen([str(built_tool("tools/dump/rsm-dump")), "--protocol", protocol, "--baud", "38400",
                                  "--timeout-ms", "700", os.ttyname(slave)],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         time.sleep(0.2)
@@ -387,7 +377,7 @@ def test_dump_exits_2_for_bad_arguments(args):
 def test_dump_survives_the_pty_master_closing(tmp_path):
     master, slave = pty.openpty()
     tty.setraw(slave)
-    proc = subprocess.Popen([str(dump_binary()), "--protocol", "aria", os.ttyname(slave)],
+    proc = subprocess.Popen([str(built_tool("tools/dump/rsm-dump")), "--protocol", "aria", os.ttyname(slave)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     os.close(slave)
     time.sleep(0.2)

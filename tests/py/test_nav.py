@@ -14,19 +14,9 @@ from pathlib import Path
 
 import pytest
 
-from conftest import INTEL_DIR, REPO_ROOT, require_intel_dir
+from conftest import INTEL_DIR, REPO_ROOT, require_intel_dir, rsm_nav_binary as nav_binary
 from rsm_tools import evaluate as ev
 from rsm_tools import outliers
-
-
-def nav_binary() -> Path:
-    build = os.environ.get("RSM_BUILD_DIR")
-    if not build:
-        pytest.fail("RSM_BUILD_DIR is not set: run these tests through ctest", pytrace=False)
-    exe = Path(build) / "tools" / "nav" / "rsm-nav"
-    if not exe.is_file():
-        pytest.fail(f"rsm-nav not built at {exe}", pytrace=False)
-    return exe
 
 
 def run_nav(log: Path, out: Path, method: str = "rsm", *extra: str) -> str:

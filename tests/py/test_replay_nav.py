@@ -25,20 +25,10 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO_ROOT, subprocess_env
+from conftest import REPO_ROOT, rsm_nav_binary as nav_binary, subprocess_env
 from rsm_tools import capture as cap
 from rsm_tools import convert
 from rsm_tools import evaluate as ev
-
-
-def nav_binary() -> Path:
-    build = os.environ.get("RSM_BUILD_DIR")
-    if not build:
-        pytest.fail("RSM_BUILD_DIR is not set: run these tests through ctest", pytrace=False)
-    exe = Path(build) / "tools" / "nav" / "rsm-nav"
-    if not exe.is_file():
-        pytest.fail(f"rsm-nav not built at {exe}", pytrace=False)
-    return exe
 
 
 @pytest.fixture(scope="module")
@@ -55,6 +45,25 @@ def per_channel(events: Path):
     return enc, scans
 
 
+def start_replay(capture: Path, speed: str):
+    """rsm-replay playing ``capture`` into two new ptys; returns the process and
+    the ``{"robot": path, "laser": path}`` it printed."""
+    replay = subprocess.Popen([sys.executable, "-m", "rsm_tools.replay", str(capture), "--pty",
+                               "--wait-open", "--speed", speed, "--quiet"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=subprocess_env(),
+                              cwd=REPO_ROOT)
+    paths = {}
+    while len(paths) < 2:
+        line = replay.stdout.readline()
+        if not line:
+            replay.kill()
+            pytest.fail(f"rsm-replay printed no pty paths: {replay.stderr.read()}", pytrace=False)
+        name, path = line.split()
+        paths[name] = path
+    assert set(paths) == {"robot", "laser"}, paths
+    return replay, paths
+
+
 def run_capture_mode(capture: Path, tmp: Path):
     traj, events = tmp / "cap.txt", tmp / "cap.events"
     res = subprocess.run([str(nav_binary()), "--capture", str(capture), "--trajectory", str(traj),
@@ -69,20 +78,8 @@ def test_replay_over_ptys_delivers_every_frame_and_the_capture_tracks_within_the
     header, _, _ = cap.read_capture(excerpt_capture)
     x0 = header.metadata.get("robot.initial_pose", "0 0 0").split()
 
-    replay = subprocess.Popen([sys.executable, "-m", "rsm_tools.replay", str(excerpt_capture), "--pty",
-                               "--wait-open", "--speed", "8", "--quiet"],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=subprocess_env(),
-                              cwd=REPO_ROOT)
+    replay, paths = start_replay(excerpt_capture, "8")
     try:
-        paths = {}
-        deadline = time.time() + 30
-        while len(paths) < 2 and time.time() < deadline:
-            line = replay.stdout.readline()
-            if not line:
-                break
-            name, path = line.split()
-            paths[name] = path
-        assert set(paths) == {"robot", "laser"}, (paths, replay.stderr.read() if replay.poll() is not None else "")
         live_traj, live_events = tmp_path / "live.txt", tmp_path / "live.events"
         res = subprocess.run([str(nav_binary()), "--robot", paths["robot"], "--lms", paths["laser"], "--listen",
                               "--initial-pose", *x0, "--trajectory", str(live_traj), "--events", str(live_events),
@@ -213,17 +210,8 @@ def test_missing_devices_and_a_corrupt_capture_get_a_clear_message(tmp_path):
 def test_links_vanishing_mid_run_keep_what_was_written(tmp_path, excerpt_capture):
     header, _, _ = cap.read_capture(excerpt_capture)
     x0 = header.metadata.get("robot.initial_pose", "0 0 0").split()
-    replay = subprocess.Popen([sys.executable, "-m", "rsm_tools.replay", str(excerpt_capture), "--pty",
-                               "--wait-open", "--speed", "4", "--quiet"],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=subprocess_env(),
-                              cwd=REPO_ROOT)
-    paths = {}
+    replay, paths = start_replay(excerpt_capture, "4")
     try:
-        while len(paths) < 2:
-            line = replay.stdout.readline()
-            assert line, replay.stderr.read()
-            name, path = line.split()
-            paths[name] = path
         traj = tmp_path / "t.txt"
         nav = subprocess.Popen([str(nav_binary()), "--robot", paths["robot"], "--lms", paths["laser"], "--listen",
                                 "--initial-pose", *x0, "--trajectory", str(traj)],
