@@ -152,13 +152,18 @@ typedef struct nav {
 
 static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep);
 
+/* Starts the localizer once, at x0 (NULL: zero) unless --initial-pose
+ * gave the start. */
 static int nav_start(nav_t *nav, const rsm_pose_t *x0)
 {
+    static const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
     if (nav->initialised) {
         return 0;
     }
     if (nav->have_x0) {
         x0 = &nav->x0;
+    } else if (x0 == NULL) {
+        x0 = &zero;
     }
     if (rsm_localizer_init(&nav->loc, &nav->cfg, x0, NULL) != RSM_OK ||
         rsm_sync_init(&nav->sync, &nav->loc, &nav->sync_cfg, on_fused, nav) != RSM_OK) {
@@ -217,11 +222,8 @@ static void nav_scan(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us, double fil
     rsm_localizer_report_t rep;
     double t0;
     int rc;
-    if (!nav->initialised) {
-        const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
-        if (nav_start(nav, &zero) != 0) {
-            return;
-        }
+    if (nav_start(nav, NULL) != 0) {
+        return;
     }
     nav_clamp(nav, scan, stamp_us);
     t0 = now_s();
@@ -248,11 +250,8 @@ static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_lo
 static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us)
 {
     nav_t *nav = (nav_t *)ctx;
-    if (!nav->initialised) {
-        const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
-        if (nav_start(nav, &zero) != 0) {
-            return;
-        }
+    if (nav_start(nav, NULL) != 0) {
+        return;
     }
     nav->encoders++;
     if (nav->events != NULL) {
@@ -293,11 +292,8 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
         }
         fprintf(nav->events, "S %zu %08lx\n", scan->count, (unsigned long)h);
     }
-    if (!nav->initialised) {
-        const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
-        if (nav_start(nav, &zero) != 0) {
-            return;
-        }
+    if (nav_start(nav, NULL) != 0) {
+        return;
     }
     copy = *scan;
     nav_clamp(nav, &copy, stamp_us);
