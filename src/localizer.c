@@ -9,7 +9,7 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
 {
     rsm_localizer_config_t c;
     memset(&c, 0, sizeof c);
-    c.method = RSM_METHOD_RSM;
+    c.method = RSM_METHOD_MAP;
     c.limits = rsm_scan_limits_default();
     c.grid = rsm_grid_config_default();
     c.harris = rsm_harris_config_default();
@@ -33,6 +33,14 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.refine_iterations = 10u;
     c.refine_saturation = 2u;
     c.refine_noise_scale = 10.0f;
+    c.laser_mount.x = 0.0f;
+    c.laser_mount.y = 0.0f;
+    c.laser_mount.theta = 0.0f;
+    c.laser_upside_down = 0u;
+    c.tmap = rsm_tmap_config_default();
+    c.mapmatch = rsm_mapmatch_config_default();
+    c.map_update_m = 0.1f;
+    c.map_update_rad = 0.1f;
     c.clock_fn = NULL;
     c.clock_ctx = NULL;
     return c;
@@ -67,6 +75,7 @@ const char *rsm_stage_name(rsm_stage_t s)
     case RSM_STAGE_ICP: return "icp";
     case RSM_STAGE_EKF: return "ekf";
     case RSM_STAGE_MAP: return "map";
+    case RSM_STAGE_MAPMATCH: return "mapmatch";
     default: return "unknown";
     }
 }
@@ -123,7 +132,7 @@ int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, 
                        const float p0[9])
 {
     int rc;
-    if (loc == NULL || cfg == NULL || x0 == NULL || cfg->method > RSM_METHOD_ODOMETRY ||
+    if (loc == NULL || cfg == NULL || x0 == NULL || cfg->method > RSM_METHOD_MAP ||
         !(cfg->limits.max_range_m > cfg->limits.min_range_m) || !(cfg->grid.cell_m > 0.0f) ||
         !(cfg->grid.sigma_m >= 0.0f) || cfg->grid.sigma_m * 2.0f >= cfg->grid.cell_m || cfg->map_min_hits < 1u ||
         cfg->min_points < 2u || cfg->min_keypoints < 2u || !(cfg->match_window_m >= 0.0f) ||
@@ -141,7 +150,8 @@ int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, 
     loc->cfg = cfg;
     if ((rc = rsm_ekf_init(&loc->ekf, x0, p0)) != RSM_OK || (rc = rsm_odometry_init(&loc->odo, &cfg->odometry)) != RSM_OK ||
         (rc = rsm_ransac_init(&loc->ransac, &cfg->ransac)) != RSM_OK || (cfg->method == RSM_METHOD_ICP && (rc = rsm_icp_init(&loc->work.icp, &cfg->icp)) != RSM_OK) ||
-        (rc = rsm_map_init(&loc->map, cfg->grid.cell_m, x0->x, x0->y)) != RSM_OK) {
+        (rc = rsm_map_init(&loc->map, cfg->grid.cell_m, x0->x, x0->y)) != RSM_OK ||
+        (cfg->method == RSM_METHOD_MAP && (rc = rsm_tmap_init(&loc->tmap, &cfg->tmap)) != RSM_OK)) {
         return rc;
     }
     rsm_image_reset(&loc->image);
@@ -473,6 +483,77 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     }
 }
 
+/* Robot-frame points from laser-frame ones: the mounting pose (and a
+ * mirror for an upside-down laser). */
+static void apply_mount(rsm_localizer_t *loc, size_t n)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_pose_t *m = &cfg->laser_mount;
+    size_t k;
+    if (m->x == 0.0f && m->y == 0.0f && m->theta == 0.0f && !cfg->laser_upside_down) {
+        return;
+    }
+    {
+        const float c = cosf(m->theta);
+        const float s = sinf(m->theta);
+        for (k = 0; k < n; ++k) {
+            const float lx = loc->pts[k].x;
+            const float ly = cfg->laser_upside_down ? -loc->pts[k].y : loc->pts[k].y;
+            loc->pts[k].x = m->x + c * lx - s * ly;
+            loc->pts[k].y = m->y + s * lx + c * ly;
+        }
+    }
+}
+
+static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_pose_t pred = loc->ekf.x;
+    rsm_mapmatch_result_t res;
+    int rc;
+    if (!loc->have_scan) {
+        return RSM_SCAN_FIRST;
+    }
+    stage_switch(clk, RSM_STAGE_MAPMATCH);
+    rc = rsm_mapmatch(&loc->tmap, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, &res);
+    rep->inliers = res.used;
+    rep->iterations = res.iterations;
+    rep->measured = res.pose;
+    rep->mahalanobis_d2 = res.d2;
+    if (rc != RSM_OK || res.used < cfg->min_points / 2u) {
+        return RSM_SCAN_LOW_SUPPORT;
+    }
+    rep->residual_m = sqrtf(res.cost);
+    stage_switch(clk, RSM_STAGE_EKF);
+    if (cfg->gate_d2 > 0.0f && res.d2 > cfg->gate_d2) {
+        loc->ekf.rejected++;
+        return RSM_SCAN_JUMP;
+    }
+    loc->ekf.x = res.pose;
+    memcpy(loc->ekf.p, res.cov, sizeof loc->ekf.p);
+    loc->ekf.updates++;
+    return RSM_SCAN_ACCEPTED;
+}
+
+/* Writes the scan into the persistent map at est once the robot has moved
+ * far enough since the last write (or for the first scan). */
+static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, int first)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_pose_t d = rsm_pose_between(&loc->map_pose, est);
+    rsm_point_t origin;
+    if (!first && sqrtf(d.x * d.x + d.y * d.y) < cfg->map_update_m && fabsf(d.theta) < cfg->map_update_rad) {
+        return;
+    }
+    to_world(loc, est, npts);
+    origin.x = cfg->laser_mount.x;
+    origin.y = cfg->laser_mount.y;
+    origin = rsm_pose_apply(est, &origin);
+    if (rsm_tmap_update(&loc->tmap, &origin, loc->world, npts) == RSM_OK) {
+        loc->map_pose = *est;
+    }
+}
+
 static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
 {
     const rsm_pose_t pred = loc->ekf.x;
@@ -524,6 +605,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     }
     n = rsm_scan_to_points(scan, &loc->cfg->limits, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
     npts = n > 0 ? (size_t)n : 0u;
+    apply_mount(loc, npts);
     rep->points = (uint32_t)npts;
     if (npts < loc->cfg->min_points) {
         outcome = RSM_SCAN_FEW_POINTS;
@@ -531,12 +613,19 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         outcome = RSM_SCAN_ODOMETRY;
     } else if (loc->cfg->method == RSM_METHOD_ICP) {
         outcome = step_icp(loc, npts, rep, &clk);
+    } else if (loc->cfg->method == RSM_METHOD_MAP) {
+        outcome = step_map(loc, npts, rep, &clk);
     } else {
         outcome = step_rsm(loc, npts, rep, &clk);
     }
     stage_switch(&clk, RSM_STAGE_MAP);
     est = loc->ekf.x;
-    if (npts >= loc->cfg->min_points) {
+    if (npts >= loc->cfg->min_points && loc->cfg->method == RSM_METHOD_MAP) {
+        if (outcome == RSM_SCAN_ACCEPTED || outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_LOW_SUPPORT) {
+            write_tmap(loc, &est, npts, outcome == RSM_SCAN_FIRST);
+        }
+        loc->have_scan = 1u;
+    } else if (npts >= loc->cfg->min_points) {
         const int fused = outcome == RSM_SCAN_ACCEPTED || outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_ODOMETRY;
         if (fused || loc->cfg->map_on_reject) {
             (void)rsm_map_recenter(&loc->map, est.x, est.y);

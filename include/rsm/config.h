@@ -39,6 +39,29 @@
 #define RSM_IMAGE_MAX_CELLS (2 * RSM_MAX_BEAMS)
 #endif
 
+/* ---- persistent map (tilemap.h) ---------------------------------------- */
+
+/* log2 of a map tile's side in cells: 4 -> 16 x 16 cells (0.8 m at 5 cm on
+ * the finest level). 4 bits per cell: 128 bytes a tile, plus 8 of header. */
+#ifndef RSM_TMAP_TILE_LOG2
+#define RSM_TMAP_TILE_LOG2 4
+#endif
+
+/* Resolutions the map keeps (cells of 1, 2, 4, ... times the finest). */
+#ifndef RSM_TMAP_LEVELS
+#define RSM_TMAP_LEVELS 4
+#endif
+
+/* Tiles in the pool, all levels together. */
+#ifndef RSM_TMAP_TILES
+#define RSM_TMAP_TILES 4000
+#endif
+
+/* log2 of the tile index's slots (2 bytes each); at least twice the tiles. */
+#ifndef RSM_TMAP_HASH_LOG2
+#define RSM_TMAP_HASH_LOG2 13
+#endif
+
 /* ---- key points and matches ------------------------------------------- */
 
 /* Harris key points kept per image (strongest first). 8 bytes each. */
@@ -126,6 +149,10 @@ RSM_STATIC_ASSERT(keypoints_fit_grid, RSM_MAX_KEYPOINTS >= 2 && RSM_MAX_KEYPOINT
 RSM_STATIC_ASSERT(candidates_hold_keypoints, RSM_MAX_CANDIDATES >= RSM_MAX_KEYPOINTS);
 RSM_STATIC_ASSERT(matches_positive, RSM_MAX_MATCHES >= 2);
 RSM_STATIC_ASSERT(image_cells_positive, RSM_IMAGE_MAX_CELLS >= RSM_MAX_BEAMS);
+RSM_STATIC_ASSERT(tmap_tile_range, RSM_TMAP_TILE_LOG2 >= 2 && RSM_TMAP_TILE_LOG2 <= 7);
+RSM_STATIC_ASSERT(tmap_levels_range, RSM_TMAP_LEVELS >= 1 && RSM_TMAP_LEVELS <= 4);
+RSM_STATIC_ASSERT(tmap_tiles_range, RSM_TMAP_TILES >= 4 && RSM_TMAP_TILES < 65535);
+RSM_STATIC_ASSERT(tmap_hash_room, RSM_TMAP_HASH_LOG2 <= 16 && (1L << RSM_TMAP_HASH_LOG2) >= 2L * RSM_TMAP_TILES);
 RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
 RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONAR <= 255);
 RSM_STATIC_ASSERT(aria_str_size, RSM_ARIA_STR_SIZE >= 8 && RSM_ARIA_STR_SIZE <= 256);

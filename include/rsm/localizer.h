@@ -19,19 +19,22 @@
 #include "rsm/harris.h"
 #include "rsm/icp.h"
 #include "rsm/map.h"
+#include "rsm/mapmatch.h"
 #include "rsm/match.h"
 #include "rsm/odometry.h"
 #include "rsm/ransac.h"
 #include "rsm/scan.h"
+#include "rsm/tilemap.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 typedef enum rsm_method {
-    RSM_METHOD_RSM = 0,      /* robust scan matching (this library's method) */
+    RSM_METHOD_PAPER = 0,    /* the paper's method: key points + RANSAC against a scrolling window */
     RSM_METHOD_ICP = 1,      /* the paper's baseline: point-to-point ICP, scan to scan */
-    RSM_METHOD_ODOMETRY = 2  /* dead reckoning only */
+    RSM_METHOD_ODOMETRY = 2, /* dead reckoning only */
+    RSM_METHOD_MAP = 3       /* the default: coarse-to-fine matching against the persistent map */
 } rsm_method_t;
 
 /* What a scan did to the estimate. */
@@ -63,7 +66,8 @@ typedef enum rsm_stage {
     RSM_STAGE_ICP = 6,     /* the ICP baseline's alignment */
     RSM_STAGE_EKF = 7,     /* measurement noise, gate and update */
     RSM_STAGE_MAP = 8,     /* the scan superimposed on the map (and the ICP reference) */
-    RSM_STAGE_COUNT = 9
+    RSM_STAGE_MAPMATCH = 9, /* coarse-to-fine alignment to the persistent map (RSM_METHOD_MAP) */
+    RSM_STAGE_COUNT = 10
 } rsm_stage_t;
 
 /* Measurement noise model for the EKF update. */
@@ -80,6 +84,13 @@ typedef struct rsm_localizer_config {
     rsm_ransac_config_t ransac;
     rsm_icp_config_t icp;
     rsm_odometry_config_t odometry; /* geometry for ticks, and process noise */
+    rsm_pose_t laser_mount;         /* the laser's pose in the robot frame; default zero */
+    uint8_t laser_upside_down;      /* 1: the laser is mounted upside down (beam angles mirrored) */
+    rsm_tmap_config_t tmap;         /* persistent map (RSM_METHOD_MAP) */
+    rsm_mapmatch_config_t mapmatch; /* matching against it */
+    float map_update_m;             /* write a scan into the persistent map after this much travel
+                                     * since the last write; default 0.1 */
+    float map_update_rad;           /* ... or this much turning; default 0.1 */
     uint8_t map_min_hits;           /* map cells with this many hits are occupied; default 1 */
     uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
     uint16_t min_points;            /* usable readings needed; default 20 */
@@ -164,6 +175,8 @@ typedef struct rsm_localizer {
     rsm_point_t world[RSM_MAX_BEAMS];    /* the same in the world frame */
     uint64_t last_stamp_us;
     uint8_t have_scan;
+    rsm_tmap_t tmap;                     /* persistent map (RSM_METHOD_MAP) */
+    rsm_pose_t map_pose;                 /* pose of the last write into tmap */
     rsm_localizer_counters_t counters;
     rsm_localizer_report_t last;
 } rsm_localizer_t;

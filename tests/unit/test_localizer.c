@@ -227,7 +227,7 @@ void test_localizer_config_default_should_be_valid(void)
     const rsm_pose_t x0 = {1.0f, -2.0f, 0.5f};
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &x0, NULL));
     TEST_ASSERT_EQUAL_MEMORY(&x0, &loc.ekf.x, sizeof x0);
-    TEST_ASSERT_EQUAL_INT((int)RSM_METHOD_RSM, (int)cfg.method);
+    TEST_ASSERT_EQUAL_INT((int)RSM_METHOD_PAPER, (int)cfg.method);
     TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.scans);
     TEST_ASSERT_EQUAL_INT(0, strcmp("accepted", rsm_outcome_name(RSM_SCAN_ACCEPTED)));
     TEST_ASSERT_EQUAL_INT(0, strcmp("few_points", rsm_outcome_name(RSM_SCAN_FEW_POINTS)));
@@ -309,7 +309,7 @@ void test_localizer_scan_should_beat_odometry_on_a_synthetic_loop(void)
     TEST_ASSERT_GREATER_THAN_size_t(150, path_len);
     odo = run(&loc, RSM_METHOD_ODOMETRY, NULL);
     TEST_ASSERT_EQUAL_UINT32((uint32_t)path_len, loc.counters.outcome[RSM_SCAN_ODOMETRY]);
-    rsm = run(&loc, RSM_METHOD_RSM, NULL);
+    rsm = run(&loc, RSM_METHOD_PAPER, NULL);
     snprintf(msg, sizeof msg,
              "final position error: rsm %.3f m (heading %.2f deg, max on the way %.3f m, %u accepted of %u), "
              "odometry only %.3f m (heading %.2f deg)",
@@ -357,7 +357,7 @@ void test_localizer_scan_should_track_with_30_percent_outliers(void)
     scan_cfg.outlier_fraction = 0.3f;
     scan_cfg.sigma_m = 0.005f;
     rsm_synth_rng_seed(&rng, 3030u);
-    rsm = run(&loc, RSM_METHOD_RSM, &rng);
+    rsm = run(&loc, RSM_METHOD_PAPER, &rng);
     snprintf(msg, sizeof msg,
              "30%% outliers, 5 mm noise: rsm final %.3f m (%.2f deg, max %.3f m, %u accepted of %u), odometry %.3f m",
              (double)rsm.final_err_m, (double)(rsm.final_err_rad / DEG), (double)rsm.max_err_m,
@@ -689,7 +689,7 @@ static size_t stages_run(rsm_method_t m, rsm_outcome_t o, rsm_stage_t *out)
 {
     size_t n = 0;
     out[n++] = RSM_STAGE_POINTS;
-    if (o != RSM_SCAN_FEW_POINTS && m == RSM_METHOD_RSM) {
+    if (o != RSM_SCAN_FEW_POINTS && m == RSM_METHOD_PAPER) {
         out[n++] = RSM_STAGE_GRID;
         if (o != RSM_SCAN_FIRST) {
             out[n++] = RSM_STAGE_HARRIS;
@@ -793,7 +793,7 @@ static uint32_t run_timed(rsm_method_t m, uint32_t start)
 
 void test_localizer_scan_should_charge_each_rsm_stage_through_the_clock_hook(void)
 {
-    TEST_ASSERT_GREATER_THAN_UINT32(path_len / 2u, run_timed(RSM_METHOD_RSM, 1000u));
+    TEST_ASSERT_GREATER_THAN_UINT32(path_len / 2u, run_timed(RSM_METHOD_PAPER, 1000u));
 }
 
 void test_localizer_scan_should_charge_the_icp_stages_through_the_clock_hook(void)
@@ -804,7 +804,7 @@ void test_localizer_scan_should_charge_the_icp_stages_through_the_clock_hook(voi
 void test_localizer_scan_should_time_stages_across_a_clock_wrap(void)
 {
     /* The counter wraps during the run: differences are modulo 2^32. */
-    TEST_ASSERT_GREATER_THAN_UINT32(0u, run_timed(RSM_METHOD_RSM, UINT32_MAX - 40u));
+    TEST_ASSERT_GREATER_THAN_UINT32(0u, run_timed(RSM_METHOD_PAPER, UINT32_MAX - 40u));
 }
 
 void test_localizer_scan_should_time_an_out_of_order_scan_as_a_whole(void)

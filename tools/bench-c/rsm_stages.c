@@ -480,7 +480,7 @@ int main(int argc, char **argv)
     run_t *r = &g_run;
     int i;
     int rc;
-    r->opt.method = RSM_METHOD_RSM;
+    r->opt.method = RSM_METHOD_PAPER;
     r->opt.clock_ns = 1;
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i];
@@ -492,7 +492,7 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--method") == 0 && next) {
             ++i;
             if (strcmp(next, "rsm") == 0) {
-                r->opt.method = RSM_METHOD_RSM;
+                r->opt.method = RSM_METHOD_PAPER;
             } else if (strcmp(next, "icp") == 0) {
                 r->opt.method = RSM_METHOD_ICP;
             } else {

@@ -97,6 +97,20 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     U("refine", refine_iterations, uint32_t)
     U("refine_sat", refine_saturation, uint8_t)
     F("refine_scale", refine_noise_scale)
+    F("mount_x", laser_mount.x)
+    F("mount_y", laser_mount.y)
+    F("mount_theta", laser_mount.theta)
+    U("upside_down", laser_upside_down, uint8_t)
+    F("map_cell", tmap.cell_m)
+    U("map_levels", tmap.levels, uint8_t)
+    U("map_hit", tmap.hit_inc, uint8_t)
+    U("map_miss", tmap.miss_dec, uint8_t)
+    U("map_sat", tmap.saturation, uint8_t)
+    U("map_margin", tmap.clear_margin, uint8_t)
+    U("mm_iterations", mapmatch.iterations, uint8_t)
+    F("mm_sigma", mapmatch.sigma)
+    F("map_update_m", map_update_m)
+    F("map_update_rad", map_update_rad)
 #undef F
 #undef U
     return -1;
@@ -490,6 +504,16 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
     return 0;
 }
 
+static const char *method_name(rsm_method_t m)
+{
+    switch (m) {
+    case RSM_METHOD_MAP: return "rsm (persistent map)";
+    case RSM_METHOD_PAPER: return "paper (key points + RANSAC)";
+    case RSM_METHOD_ICP: return "icp";
+    default: return "odometry";
+    }
+}
+
 static void print_summary(nav_t *nav)
 {
     const rsm_localizer_counters_t *c = &nav->loc.counters;
@@ -501,7 +525,14 @@ static void print_summary(nav_t *nav)
         median = nav->times[nav->ntimes / 2];
         p95 = nav->times[(nav->ntimes * 95) / 100 < nav->ntimes ? (nav->ntimes * 95) / 100 : nav->ntimes - 1];
     }
-    printf("  method          %s\n", nav->cfg.method == RSM_METHOD_RSM ? "rsm" : nav->cfg.method == RSM_METHOD_ICP ? "icp" : "odometry");
+    printf("  method          %s\n", method_name(nav->cfg.method));
+    if (nav->cfg.method == RSM_METHOD_MAP) {
+        const rsm_tmap_t *m = &nav->loc.tmap;
+        printf("  persistent map  %u writes, tiles %u/%u/%u per level, %u taken, %u evicted, %u returns dropped\n",
+               (unsigned)m->counters.updates, (unsigned)rsm_tmap_tiles(m, 0), (unsigned)rsm_tmap_tiles(m, 1),
+               (unsigned)rsm_tmap_tiles(m, 2), (unsigned)m->counters.allocated, (unsigned)m->counters.evicted,
+               (unsigned)m->counters.dropped);
+    }
     printf("  timestamps      %llu clamped (went backwards)\n", (unsigned long long)nav->clamped);
     printf("  scans           %u\n", (unsigned)c->scans);
     for (o = 0; o < RSM_SCAN_OUTCOMES; ++o) {
@@ -609,8 +640,10 @@ int main(int argc, char **argv)
             nav.map_path = argv[++i];
         } else if (strcmp(a, "--method") == 0 && next) {
             ++i;
-            if (strcmp(next, "rsm") == 0) {
-                nav.cfg.method = RSM_METHOD_RSM;
+            if (strcmp(next, "rsm") == 0 || strcmp(next, "map") == 0) {
+                nav.cfg.method = RSM_METHOD_MAP;
+            } else if (strcmp(next, "paper") == 0) {
+                nav.cfg.method = RSM_METHOD_PAPER;
             } else if (strcmp(next, "icp") == 0) {
                 nav.cfg.method = RSM_METHOD_ICP;
             } else if (strcmp(next, "odometry") == 0) {

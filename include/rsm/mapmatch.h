@@ -1,0 +1,60 @@
+/* Scan-to-map matching against the persistent map (tilemap.h), coarse to
+ * fine, with the odometry prediction as a prior.
+ *
+ * The pose x minimises
+ *     sum_i (1 - M(x (+) p_i))^2 / sigma^2  +  (x - x0)^T P0^-1 (x - x0)
+ * where M is a level's occupancy interpolated bilinearly (so the sum pulls
+ * each point onto the nearest wall within about one cell of that level) and
+ * (x0, P0) is the prediction. Gauss-Newton runs on the coarsest level first,
+ * whose wide cells give a wide basin, then on each finer one. Because the
+ * prior is part of the cost, a scan that pins only some directions (a
+ * corridor pins the sideways position and the heading, not the position
+ * along it) moves the estimate only in those, and the posterior covariance
+ * (J^T J / sigma^2 + P0^-1)^-1 says so: this is an iterated EKF update with
+ * the map as the measurement. Points far from any wall have no gradient and
+ * no pull, so outliers and things not yet in the map are ignored. */
+#ifndef RSM_MAPMATCH_H
+#define RSM_MAPMATCH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/geom.h"
+#include "rsm/tilemap.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct rsm_mapmatch_config {
+    uint8_t iterations;     /* Gauss-Newton steps per level at most; default 6 */
+    float sigma;            /* std of one point's occupancy residual (unitless); default 1 */
+    float min_step_m;       /* converged when a step is below this (and min_step_rad); default 1e-4 */
+    float min_step_rad;     /* default 1e-4 */
+} rsm_mapmatch_config_t;
+
+rsm_mapmatch_config_t rsm_mapmatch_config_default(void);
+
+typedef struct rsm_mapmatch_result {
+    rsm_pose_t pose;        /* the estimate */
+    float cov[9];           /* its covariance (posterior), row-major */
+    float info[9];          /* the scan's information J^T J / sigma^2 at the finest level */
+    float cost;             /* mean (1 - M)^2 over the points with a gradient, finest level */
+    float hit;              /* mean M over all points at the finest level, in [0, 1] */
+    uint32_t used;          /* points with a gradient at the finest level */
+    uint32_t iterations;    /* steps taken, all levels */
+    float d2;               /* (x - x0)^T P0^-1 (x - x0): how far the scan moved the estimate */
+} rsm_mapmatch_result_t;
+
+/* Aligns the robot-frame points to the map from the prediction (x0, p0).
+ * Returns RSM_OK (res filled), RSM_ERR_DEGENERATE when the prior covariance
+ * cannot be inverted or no point touches the map (res->pose = x0),
+ * RSM_ERR_INVAL for bad arguments. Reentrant; the map is not changed. */
+int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                 const rsm_pose_t *x0, const float p0[9], rsm_mapmatch_result_t *res);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_MAPMATCH_H */

@@ -1,0 +1,221 @@
+/* Coarse-to-fine Gauss-Newton of a scan against the tile map with the
+ * prediction as a prior; see include/rsm/mapmatch.h. */
+#include "rsm/mapmatch.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "rsm/ekf.h"
+#include "rsm/status.h"
+
+/* Smallest prior variance used, so that a filter that starts with a zero
+ * covariance still has an invertible prior (m^2 and rad^2). */
+#define PRIOR_FLOOR 1.0e-8f
+
+rsm_mapmatch_config_t rsm_mapmatch_config_default(void)
+{
+    rsm_mapmatch_config_t c;
+    c.iterations = 6u;
+    c.sigma = 1.0f;
+    c.min_step_m = 1.0e-4f;
+    c.min_step_rad = 1.0e-4f;
+    return c;
+}
+
+/* Sums of one level at pose x: h (upper triangle of J^T J, order 00 01 02 11
+ * 12 22), b = J^T r, cost = sum r^2 over all points, used = points with a
+ * gradient, hit = sum of M. */
+typedef struct sums {
+    float h[6];
+    float b[3];
+    float cost;
+    float cost_used;
+    float hit;
+    uint32_t used;
+} sums_t;
+
+static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, const rsm_pose_t *x,
+                       sums_t *s)
+{
+    const float c = cosf(x->theta);
+    const float sn = sinf(x->theta);
+    size_t k;
+    memset(s, 0, sizeof *s);
+    for (k = 0; k < n; ++k) {
+        const float px = pts[k].x;
+        const float py = pts[k].y;
+        const float wx = x->x + c * px - sn * py;
+        const float wy = x->y + sn * px + c * py;
+        float gx;
+        float gy;
+        const float m = rsm_tmap_sample(map, level, wx, wy, &gx, &gy);
+        const float r = 1.0f - m;
+        float gt;
+        s->cost += r * r;
+        s->hit += m;
+        if (gx == 0.0f && gy == 0.0f) {
+            continue;
+        }
+        /* d(world)/d(theta) = (-s px - c py, c px - s py). */
+        gt = gx * (-sn * px - c * py) + gy * (c * px - sn * py);
+        s->h[0] += gx * gx;
+        s->h[1] += gx * gy;
+        s->h[2] += gx * gt;
+        s->h[3] += gy * gy;
+        s->h[4] += gy * gt;
+        s->h[5] += gt * gt;
+        s->b[0] += gx * r;
+        s->b[1] += gy * r;
+        s->b[2] += gt * r;
+        s->cost_used += r * r;
+        s->used++;
+    }
+}
+
+static void diff(const rsm_pose_t *x, const rsm_pose_t *x0, float e[3])
+{
+    e[0] = x->x - x0->x;
+    e[1] = x->y - x0->y;
+    e[2] = rsm_wrap_angle(x->theta - x0->theta);
+}
+
+static float quad(const float m[9], const float e[3])
+{
+    float q = 0.0f;
+    int i;
+    int j;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) {
+            q += e[i] * m[i * 3 + j] * e[j];
+        }
+    }
+    return q;
+}
+
+static void full(const float h[6], float w, float out[9])
+{
+    out[0] = h[0] * w;
+    out[1] = h[1] * w;
+    out[2] = h[2] * w;
+    out[3] = out[1];
+    out[4] = h[3] * w;
+    out[5] = h[4] * w;
+    out[6] = out[2];
+    out[7] = out[5];
+    out[8] = h[5] * w;
+}
+
+int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                 const rsm_pose_t *x0, const float p0[9], rsm_mapmatch_result_t *res)
+{
+    float pf[9];
+    float lam[9];
+    float w;
+    rsm_pose_t x;
+    int level;
+    sums_t s;
+    int k;
+    if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || p0 == NULL || res == NULL ||
+        !(cfg->sigma > 0.0f)) {
+        return RSM_ERR_INVAL;
+    }
+    memset(res, 0, sizeof *res);
+    res->pose = *x0;
+    memcpy(res->cov, p0, sizeof res->cov);
+    memcpy(pf, p0, sizeof pf);
+    for (k = 0; k < 3; ++k) {
+        if (!(pf[k * 4] >= PRIOR_FLOOR)) {
+            pf[k * 4] = PRIOR_FLOOR;
+        }
+    }
+    if (rsm_mat3_inverse(pf, lam) != RSM_OK) {
+        return RSM_ERR_DEGENERATE;
+    }
+    w = 1.0f / (cfg->sigma * cfg->sigma);
+    x = *x0;
+    for (level = (int)map->cfg.levels - 1; level >= 0; --level) {
+        float f;
+        float e[3];
+        uint32_t it;
+        level_sums(map, (uint32_t)level, pts, n, &x, &s);
+        diff(&x, x0, e);
+        f = s.cost * w + quad(lam, e);
+        for (it = 0; it < cfg->iterations; ++it) {
+            float a[9];
+            float ai[9];
+            float g[3];
+            float step[3];
+            int halvings;
+            int accepted = 0;
+            if (s.used < 3u) {
+                break;
+            }
+            full(s.h, w, a);
+            for (k = 0; k < 9; ++k) {
+                a[k] += lam[k];
+            }
+            if (rsm_mat3_inverse(a, ai) != RSM_OK) {
+                break;
+            }
+            for (k = 0; k < 3; ++k) {
+                g[k] = s.b[k] * w - (lam[k * 3] * e[0] + lam[k * 3 + 1] * e[1] + lam[k * 3 + 2] * e[2]);
+            }
+            for (k = 0; k < 3; ++k) {
+                step[k] = ai[k * 3] * g[0] + ai[k * 3 + 1] * g[1] + ai[k * 3 + 2] * g[2];
+            }
+            res->iterations++;
+            /* The interpolated occupancy has kinks at cell borders where a full
+             * step can overshoot: take it only where it lowers the cost. */
+            for (halvings = 0; halvings < 5 && !accepted; ++halvings) {
+                rsm_pose_t cand;
+                sums_t cs;
+                float ce[3];
+                float cf;
+                cand.x = x.x + step[0];
+                cand.y = x.y + step[1];
+                cand.theta = rsm_wrap_angle(x.theta + step[2]);
+                level_sums(map, (uint32_t)level, pts, n, &cand, &cs);
+                diff(&cand, x0, ce);
+                cf = cs.cost * w + quad(lam, ce);
+                if (cf < f) {
+                    x = cand;
+                    s = cs;
+                    memcpy(e, ce, sizeof e);
+                    f = cf;
+                    accepted = 1;
+                } else {
+                    step[0] *= 0.5f;
+                    step[1] *= 0.5f;
+                    step[2] *= 0.5f;
+                }
+            }
+            if (!accepted || (fabsf(step[0]) < cfg->min_step_m && fabsf(step[1]) < cfg->min_step_m &&
+                              fabsf(step[2]) < cfg->min_step_rad)) {
+                break;
+            }
+        }
+    }
+    /* s holds the finest level's sums at x. */
+    if (s.used < 3u) {
+        return RSM_ERR_DEGENERATE;
+    }
+    {
+        float a[9];
+        float e[3];
+        full(s.h, w, res->info);
+        for (k = 0; k < 9; ++k) {
+            a[k] = res->info[k] + lam[k];
+        }
+        if (rsm_mat3_inverse(a, res->cov) != RSM_OK) {
+            memcpy(res->cov, p0, sizeof res->cov);
+            return RSM_ERR_DEGENERATE;
+        }
+        diff(&x, x0, e);
+        res->d2 = quad(lam, e);
+    }
+    res->pose = x;
+    res->used = s.used;
+    res->cost = s.cost_used / (float)s.used;
+    res->hit = n > 0u ? s.hit / (float)n : 0.0f;
+    return RSM_OK;
+}

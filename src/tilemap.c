@@ -1,0 +1,399 @@
+/* Persistent multi-resolution occupancy map in a fixed tile pool; see
+ * include/rsm/tilemap.h for the contract and docs/map.md for the design. */
+#include "rsm/tilemap.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "rsm/status.h"
+
+#define STAMP_MASK 0x3FFFFFFFu
+#define TILE_MASK ((int32_t)RSM_TMAP_TILE_SIDE - 1)
+/* Cells beyond this from the origin (at any level) are refused, so that tile
+ * coordinates fit int16 and cell arithmetic never overflows. */
+#define CELL_LIMIT (32000 * RSM_TMAP_TILE_SIDE)
+
+rsm_tmap_config_t rsm_tmap_config_default(void)
+{
+    rsm_tmap_config_t c;
+    c.cell_m = 0.05f;
+    c.levels = (uint8_t)RSM_TMAP_LEVELS;
+    c.hit_inc = 4u;
+    c.miss_dec = 1u;
+    c.saturation = 8u;
+    c.clear_margin = 1u;
+    return c;
+}
+
+static uint32_t tile_level(const rsm_tile_t *t)
+{
+    return t->stamp >> 30;
+}
+
+static uint32_t hash_key(uint32_t level, int32_t tx, int32_t ty)
+{
+    /* Multiplicative mixing of the packed key; the top bits index the table. */
+    const uint32_t k = ((uint32_t)(uint16_t)tx | ((uint32_t)(uint16_t)ty << 16)) ^ (level * 0x9E3779B9u);
+    return (k * 2654435761u) >> (32 - RSM_TMAP_HASH_LOG2);
+}
+
+int rsm_tmap_init(rsm_tmap_t *map, const rsm_tmap_config_t *cfg)
+{
+    uint32_t v;
+    if (map == NULL || cfg == NULL || !(cfg->cell_m > 0.0f) || !(cfg->cell_m < 1.0e3f) || cfg->levels < 1u ||
+        cfg->levels > RSM_TMAP_LEVELS || cfg->hit_inc < 1u || cfg->hit_inc > RSM_TMAP_MAX_VALUE ||
+        cfg->miss_dec > RSM_TMAP_MAX_VALUE || cfg->saturation < 1u || cfg->saturation > RSM_TMAP_MAX_VALUE) {
+        return RSM_ERR_INVAL;
+    }
+    memset(map, 0, sizeof *map);
+    map->cfg = *cfg;
+    for (v = 0; v <= RSM_TMAP_MAX_VALUE; ++v) {
+        map->occ[v] = v >= cfg->saturation ? 1.0f : (float)v / (float)cfg->saturation;
+    }
+    memset(map->hash, 0xFF, sizeof map->hash);
+    return RSM_OK;
+}
+
+float rsm_tmap_cell(const rsm_tmap_t *map, uint32_t level)
+{
+    return map->cfg.cell_m * (float)(1u << level);
+}
+
+/* Slot of a tile, or RSM_TMAP_NONE. */
+static uint32_t find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
+{
+    uint32_t h = hash_key(level, tx, ty);
+    for (;;) {
+        const uint32_t s = map->hash[h];
+        const rsm_tile_t *t;
+        if (s == RSM_TMAP_NONE) {
+            return RSM_TMAP_NONE;
+        }
+        t = &map->tile[s];
+        if (t->tx == tx && t->ty == ty && tile_level(t) == level) {
+            return s;
+        }
+        h = (h + 1u) & (RSM_TMAP_HASH - 1u);
+    }
+}
+
+/* Removes the tile in slot s from the hash (backward-shift deletion keeps
+ * every other key reachable without tombstones). */
+static void hash_remove(rsm_tmap_t *map, uint32_t s)
+{
+    const rsm_tile_t *t = &map->tile[s];
+    uint32_t i = hash_key(tile_level(t), t->tx, t->ty);
+    uint32_t j;
+    while (map->hash[i] != s) {
+        i = (i + 1u) & (RSM_TMAP_HASH - 1u);
+    }
+    j = i;
+    for (;;) {
+        uint32_t home;
+        const rsm_tile_t *u;
+        j = (j + 1u) & (RSM_TMAP_HASH - 1u);
+        if (map->hash[j] == RSM_TMAP_NONE) {
+            break;
+        }
+        u = &map->tile[map->hash[j]];
+        home = hash_key(tile_level(u), u->tx, u->ty);
+        /* Move j's entry into the hole at i unless its home lies in (i, j]. */
+        if (((j - home) & (RSM_TMAP_HASH - 1u)) >= ((j - i) & (RSM_TMAP_HASH - 1u))) {
+            map->hash[i] = map->hash[j];
+            i = j;
+        }
+    }
+    map->hash[i] = (uint16_t)RSM_TMAP_NONE;
+}
+
+/* Slot for a tile that is not held: a free one, else the least recently
+ * written one not written by this update. RSM_TMAP_NONE if none. */
+static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
+{
+    uint32_t s;
+    uint32_t h;
+    rsm_tile_t *t;
+    if (map->used < (uint32_t)RSM_TMAP_TILES) {
+        s = map->used++;
+        map->counters.allocated++;
+    } else {
+        uint32_t best_age = 0;
+        uint32_t k;
+        s = RSM_TMAP_NONE;
+        for (k = 0; k < (uint32_t)RSM_TMAP_TILES; ++k) {
+            const uint32_t age = (map->stamp - (map->tile[k].stamp & STAMP_MASK)) & STAMP_MASK;
+            if (age > best_age) {
+                best_age = age;
+                s = k;
+            }
+        }
+        if (s == RSM_TMAP_NONE) {
+            return RSM_TMAP_NONE;
+        }
+        hash_remove(map, s);
+        map->counters.evicted++;
+    }
+    t = &map->tile[s];
+    t->tx = (int16_t)tx;
+    t->ty = (int16_t)ty;
+    t->stamp = (level << 30) | map->stamp;
+    memset(t->cell, 0, sizeof t->cell);
+    h = hash_key(level, tx, ty);
+    while (map->hash[h] != RSM_TMAP_NONE) {
+        h = (h + 1u) & (RSM_TMAP_HASH - 1u);
+    }
+    map->hash[h] = (uint16_t)s;
+    return s;
+}
+
+/* Tile lookups in a loop mostly hit the tile of the previous cell. */
+typedef struct cursor {
+    uint32_t level;
+    int32_t tx;
+    int32_t ty;
+    uint32_t slot;  /* RSM_TMAP_NONE: the tile is not held */
+    int valid;
+} cursor_t;
+
+static void cursor_start(cursor_t *c, uint32_t level)
+{
+    c->level = level;
+    c->valid = 0;
+    c->tx = 0;
+    c->ty = 0;
+    c->slot = RSM_TMAP_NONE;
+}
+
+static uint32_t cursor_slot(const rsm_tmap_t *map, cursor_t *c, int32_t gx, int32_t gy)
+{
+    const int32_t tx = gx >> RSM_TMAP_TILE_LOG2;
+    const int32_t ty = gy >> RSM_TMAP_TILE_LOG2;
+    if (!c->valid || tx != c->tx || ty != c->ty) {
+        c->tx = tx;
+        c->ty = ty;
+        c->valid = 1;
+        c->slot = find_slot(map, c->level, tx, ty);
+    }
+    return c->slot;
+}
+
+static uint32_t cell_index(int32_t gx, int32_t gy)
+{
+    return ((uint32_t)(gy & TILE_MASK) << RSM_TMAP_TILE_LOG2) | (uint32_t)(gx & TILE_MASK);
+}
+
+static uint32_t get_cell(const rsm_tile_t *t, uint32_t i)
+{
+    return ((uint32_t)t->cell[i >> 1] >> ((i & 1u) << 2)) & 15u;
+}
+
+static void set_cell(rsm_tile_t *t, uint32_t i, uint32_t v)
+{
+    const uint32_t sh = (i & 1u) << 2;
+    t->cell[i >> 1] = (uint8_t)(((uint32_t)t->cell[i >> 1] & ~(15u << sh)) | (v << sh));
+}
+
+static int in_range(int32_t gx, int32_t gy)
+{
+    return gx > -CELL_LIMIT && gx < CELL_LIMIT && gy > -CELL_LIMIT && gy < CELL_LIMIT;
+}
+
+uint8_t rsm_tmap_value(const rsm_tmap_t *map, uint32_t level, int32_t gx, int32_t gy)
+{
+    uint32_t s;
+    if (map == NULL || level >= map->cfg.levels || !in_range(gx, gy)) {
+        return 0;
+    }
+    s = find_slot(map, level, gx >> RSM_TMAP_TILE_LOG2, gy >> RSM_TMAP_TILE_LOG2);
+    return s == RSM_TMAP_NONE ? 0u : (uint8_t)get_cell(&map->tile[s], cell_index(gx, gy));
+}
+
+uint32_t rsm_tmap_tiles(const rsm_tmap_t *map, uint32_t level)
+{
+    uint32_t k;
+    uint32_t n = 0;
+    for (k = 0; k < map->used; ++k) {
+        n += tile_level(&map->tile[k]) == level ? 1u : 0u;
+    }
+    return n;
+}
+
+int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t *gy0, int32_t *gx1, int32_t *gy1)
+{
+    uint32_t k;
+    int any = 0;
+    for (k = 0; k < map->used; ++k) {
+        const rsm_tile_t *t = &map->tile[k];
+        const int32_t x0 = (int32_t)t->tx * RSM_TMAP_TILE_SIDE;
+        const int32_t y0 = (int32_t)t->ty * RSM_TMAP_TILE_SIDE;
+        if (tile_level(t) != level) {
+            continue;
+        }
+        if (!any || x0 < *gx0) {
+            *gx0 = x0;
+        }
+        if (!any || y0 < *gy0) {
+            *gy0 = y0;
+        }
+        if (!any || x0 + TILE_MASK > *gx1) {
+            *gx1 = x0 + TILE_MASK;
+        }
+        if (!any || y0 + TILE_MASK > *gy1) {
+            *gy1 = y0 + TILE_MASK;
+        }
+        any = 1;
+    }
+    return any;
+}
+
+/* Cell of a world coordinate at a level: floor, not truncation. */
+static int32_t cell_of(float v, float inv_a)
+{
+    return (int32_t)floorf(v * inv_a);
+}
+
+/* Lowers the cells from (x0, y0) towards (x1, y1), stopping margin + 1
+ * cells short of the end (Bresenham). */
+static void clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t dec,
+                       uint32_t margin)
+{
+    const int32_t dx = x1 > x0 ? x1 - x0 : x0 - x1;
+    const int32_t dy = y1 > y0 ? y1 - y0 : y0 - y1;
+    const int32_t sx = x1 > x0 ? 1 : -1;
+    const int32_t sy = y1 > y0 ? 1 : -1;
+    const int32_t steps = dx > dy ? dx : dy;
+    int32_t err = dx - dy;
+    int32_t k;
+    for (k = 0; k < steps - (int32_t)margin; ++k) {
+        const uint32_t s = cursor_slot(map, c, x0, y0);
+        int32_t e2;
+        if (s != RSM_TMAP_NONE) {
+            rsm_tile_t *t = &map->tile[s];
+            const uint32_t i = cell_index(x0, y0);
+            const uint32_t v = get_cell(t, i);
+            if (v != 0u) {
+                set_cell(t, i, v > dec ? v - dec : 0u);
+            }
+        }
+        /* One step along the major axis, and along the minor when due. */
+        e2 = 2 * err;
+        if (e2 > -dy) {
+            err -= dy;
+            x0 += sx;
+        }
+        if (e2 < dx) {
+            err += dx;
+            y0 += sy;
+        }
+    }
+}
+
+int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n)
+{
+    uint32_t level;
+    if (map == NULL || origin == NULL || (n > 0u && points == NULL) || !isfinite(origin->x) || !isfinite(origin->y)) {
+        return RSM_ERR_INVAL;
+    }
+    map->stamp = (map->stamp + 1u) & STAMP_MASK;
+    map->counters.updates++;
+    for (level = 0; level < map->cfg.levels; ++level) {
+        const float inv_a = 1.0f / rsm_tmap_cell(map, level);
+        const int32_t ox = cell_of(origin->x, inv_a);
+        const int32_t oy = cell_of(origin->y, inv_a);
+        cursor_t c;
+        size_t k;
+        if (!in_range(ox, oy)) {
+            return RSM_ERR_INVAL;
+        }
+        cursor_start(&c, level);
+        if (map->cfg.miss_dec > 0u) {
+            for (k = 0; k < n; ++k) {
+                int32_t gx;
+                int32_t gy;
+                if (!(fabsf(points[k].x) < 1.0e6f && fabsf(points[k].y) < 1.0e6f)) {
+                    continue;
+                }
+                gx = cell_of(points[k].x, inv_a);
+                gy = cell_of(points[k].y, inv_a);
+                if (in_range(gx, gy)) {
+                    clear_beam(map, &c, ox, oy, gx, gy, map->cfg.miss_dec, map->cfg.clear_margin);
+                }
+            }
+        }
+        cursor_start(&c, level);
+        for (k = 0; k < n; ++k) {
+            int32_t gx;
+            int32_t gy;
+            uint32_t s;
+            uint32_t i;
+            uint32_t v;
+            rsm_tile_t *t;
+            if (!(fabsf(points[k].x) < 1.0e6f && fabsf(points[k].y) < 1.0e6f)) {
+                continue;
+            }
+            gx = cell_of(points[k].x, inv_a);
+            gy = cell_of(points[k].y, inv_a);
+            if (!in_range(gx, gy)) {
+                map->counters.outside++;
+                continue;
+            }
+            s = cursor_slot(map, &c, gx, gy);
+            if (s == RSM_TMAP_NONE) {
+                s = take_slot(map, level, gx >> RSM_TMAP_TILE_LOG2, gy >> RSM_TMAP_TILE_LOG2);
+                c.valid = 0;
+                if (s == RSM_TMAP_NONE) {
+                    map->counters.dropped++;
+                    continue;
+                }
+            }
+            t = &map->tile[s];
+            t->stamp = (level << 30) | map->stamp;
+            i = cell_index(gx, gy);
+            v = get_cell(t, i) + map->cfg.hit_inc;
+            set_cell(t, i, v > RSM_TMAP_MAX_VALUE ? RSM_TMAP_MAX_VALUE : v);
+        }
+    }
+    return RSM_OK;
+}
+
+static float occ_at(const rsm_tmap_t *map, cursor_t *c, int32_t gx, int32_t gy)
+{
+    const uint32_t s = cursor_slot(map, c, gx, gy);
+    if (s == RSM_TMAP_NONE) {
+        return 0.0f;
+    }
+    return map->occ[get_cell(&map->tile[s], cell_index(gx, gy))];
+}
+
+float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy)
+{
+    const float a = rsm_tmap_cell(map, level);
+    const float inv_a = 1.0f / a;
+    /* Cell centres sit at integer coordinates of u, v. */
+    const float u = x * inv_a - 0.5f;
+    const float v = y * inv_a - 0.5f;
+    const float fu = floorf(u);
+    const float fv = floorf(v);
+    const int32_t i = (int32_t)fu;
+    const int32_t j = (int32_t)fv;
+    const float du = u - fu;
+    const float dv = v - fv;
+    float m00;
+    float m10;
+    float m01;
+    float m11;
+    cursor_t c;
+    if (!in_range(i, j) || !in_range(i + 1, j + 1)) {
+        *dx = 0.0f;
+        *dy = 0.0f;
+        return 0.0f;
+    }
+    cursor_start(&c, level);
+    m00 = occ_at(map, &c, i, j);
+    m10 = occ_at(map, &c, i + 1, j);
+    m01 = occ_at(map, &c, i, j + 1);
+    m11 = occ_at(map, &c, i + 1, j + 1);
+    *dx = ((m10 - m00) * (1.0f - dv) + (m11 - m01) * dv) * inv_a;
+    *dy = ((m01 - m00) * (1.0f - du) + (m11 - m10) * du) * inv_a;
+    return (m00 * (1.0f - du) + m10 * du) * (1.0f - dv) + (m01 * (1.0f - du) + m11 * du) * dv;
+}
