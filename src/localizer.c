@@ -16,8 +16,11 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.ransac = rsm_ransac_config_default();
     c.icp = rsm_icp_config_default();
     c.odometry = rsm_odometry_config_default();
-    /* Measured on the Intel log (tools/bench): heading drift dominates. */
+    /* Measured on the Intel and ACES logs (tools/bench): heading drift
+     * dominates, and heading errors grow with turning faster than the
+     * generic 5 % (fast turns). */
     c.odometry.sigma_rot_per_m = 0.2f;
+    c.odometry.sigma_rot_per_rad = 0.1f;
     c.map_min_hits = 1u;
     c.map_on_reject = 1u;
     c.min_points = 20u;
@@ -39,8 +42,8 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.laser_upside_down = 0u;
     c.tmap = rsm_tmap_config_default();
     c.mapmatch = rsm_mapmatch_config_default();
-    c.map_update_m = 0.1f;
-    c.map_update_rad = 0.1f;
+    c.map_update_m = 0.4f;
+    c.map_update_rad = 0.5f;
     c.clock_fn = NULL;
     c.clock_ctx = NULL;
     return c;
@@ -148,14 +151,29 @@ int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, 
     }
     memset(loc, 0, sizeof *loc);
     loc->cfg = cfg;
-    if ((rc = rsm_ekf_init(&loc->ekf, x0, p0)) != RSM_OK || (rc = rsm_odometry_init(&loc->odo, &cfg->odometry)) != RSM_OK ||
-        (rc = rsm_ransac_init(&loc->ransac, &cfg->ransac)) != RSM_OK || (cfg->method == RSM_METHOD_ICP && (rc = rsm_icp_init(&loc->work.icp, &cfg->icp)) != RSM_OK) ||
-        (rc = rsm_map_init(&loc->map, cfg->grid.cell_m, x0->x, x0->y)) != RSM_OK ||
-        (cfg->method == RSM_METHOD_MAP && (rc = rsm_tmap_init(&loc->tmap, &cfg->tmap)) != RSM_OK)) {
+    if ((rc = rsm_ekf_init(&loc->ekf, x0, p0)) != RSM_OK || (rc = rsm_odometry_init(&loc->odo, &cfg->odometry)) != RSM_OK) {
         return rc;
     }
-    rsm_image_reset(&loc->image);
-    return RSM_OK;
+    /* Each method initialises only its own member of the state union. */
+    switch (cfg->method) {
+    case RSM_METHOD_PAPER:
+        if ((rc = rsm_ransac_init(&loc->state.paper.ransac, &cfg->ransac)) != RSM_OK ||
+            (rc = rsm_map_init(&loc->state.paper.map, cfg->grid.cell_m, x0->x, x0->y)) != RSM_OK) {
+            return rc;
+        }
+        rsm_image_reset(&loc->state.paper.image);
+        break;
+    case RSM_METHOD_ICP:
+        rc = rsm_icp_init(&loc->state.icp, &cfg->icp);
+        break;
+    case RSM_METHOD_MAP:
+        rc = rsm_tmap_init(&loc->state.persistent.map, &cfg->tmap);
+        loc->state.persistent.written = *x0;
+        break;
+    default:
+        break;
+    }
+    return rc;
 }
 
 int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
@@ -249,18 +267,18 @@ static uint32_t patch_map(const void *ctx, int32_t gx, int32_t gy)
 /* Key points of the current image. */
 static size_t current_keypoints(rsm_localizer_t *loc)
 {
-    const rsm_window_t *w = &loc->map.win;
+    const rsm_window_t *w = &loc->state.paper.map.win;
     rsm_harris_image_src_t src;
-    size_t n = loc->image.count < RSM_MAX_CANDIDATES ? loc->image.count : RSM_MAX_CANDIDATES;
+    size_t n = loc->state.paper.image.count < RSM_MAX_CANDIDATES ? loc->state.paper.image.count : RSM_MAX_CANDIDATES;
     size_t k;
     int got;
     for (k = 0; k < n; ++k) {
-        loc->work.rsm.cands[k] = rsm_window_cell(w, loc->image.cells[k]);
+        loc->state.paper.cands[k] = rsm_window_cell(w, loc->state.paper.image.cells[k]);
     }
-    src.img = &loc->image;
+    src.img = &loc->state.paper.image;
     src.win = w;
-    got = rsm_harris_detect(&loc->cfg->harris, &loc->work.rsm.harris, rsm_harris_patch_image, &src, loc->work.rsm.cands, n,
-                            loc->kp_cur, RSM_MAX_KEYPOINTS, NULL);
+    got = rsm_harris_detect(&loc->cfg->harris, &loc->state.paper.harris, rsm_harris_patch_image, &src, loc->state.paper.cands, n,
+                            loc->state.paper.kp_cur, RSM_MAX_KEYPOINTS, NULL);
     return got > 0 ? (size_t)got : 0u;
 }
 
@@ -268,26 +286,26 @@ static size_t current_keypoints(rsm_localizer_t *loc)
  * cells within radius cells of an occupied current cell are candidates. */
 static size_t reference_keypoints(rsm_localizer_t *loc, int32_t radius)
 {
-    const rsm_window_t *w = &loc->map.win;
+    const rsm_window_t *w = &loc->state.paper.map.win;
     const uint8_t min_hits = loc->cfg->map_min_hits;
-    uint32_t *visited = loc->work.rsm.visited;
+    uint32_t *visited = loc->state.paper.visited;
     map_src_t src;
     size_t n = 0;
     size_t k;
     int got;
-    for (k = 0; k < loc->image.count && n < RSM_MAX_CANDIDATES; ++k) {
-        const rsm_cell_t c = rsm_window_cell(w, loc->image.cells[k]);
+    for (k = 0; k < loc->state.paper.image.count && n < RSM_MAX_CANDIDATES; ++k) {
+        const rsm_cell_t c = rsm_window_cell(w, loc->state.paper.image.cells[k]);
         int32_t dy;
         int32_t dx;
         for (dy = -radius; dy <= radius && n < RSM_MAX_CANDIDATES; ++dy) {
             for (dx = -radius; dx <= radius && n < RSM_MAX_CANDIDATES; ++dx) {
-                if (rsm_map_hits(&loc->map, c.gx + dx, c.gy + dy) >= min_hits) {
+                if (rsm_map_hits(&loc->state.paper.map, c.gx + dx, c.gy + dy) >= min_hits) {
                     const uint32_t i = rsm_window_index(c.gx + dx, c.gy + dy);
                     const uint32_t bit = 1u << (i & 31u);
                     if ((visited[i >> 5] & bit) == 0u) {
                         visited[i >> 5] |= bit;
-                        loc->work.rsm.cands[n].gx = c.gx + dx;
-                        loc->work.rsm.cands[n].gy = c.gy + dy;
+                        loc->state.paper.cands[n].gx = c.gx + dx;
+                        loc->state.paper.cands[n].gy = c.gy + dy;
                         ++n;
                     }
                 }
@@ -296,12 +314,12 @@ static size_t reference_keypoints(rsm_localizer_t *loc, int32_t radius)
     }
     /* Candidates are the only bits set: clearing them empties the set. */
     for (k = 0; k < n; ++k) {
-        const uint32_t i = rsm_window_index(loc->work.rsm.cands[k].gx, loc->work.rsm.cands[k].gy);
+        const uint32_t i = rsm_window_index(loc->state.paper.cands[k].gx, loc->state.paper.cands[k].gy);
         visited[i >> 5] &= ~(1u << (i & 31u));
     }
-    src.map = &loc->map;
+    src.map = &loc->state.paper.map;
     src.min_hits = min_hits;
-    got = rsm_harris_detect(&loc->cfg->harris, &loc->work.rsm.harris, patch_map, &src, loc->work.rsm.cands, n, loc->kp_ref,
+    got = rsm_harris_detect(&loc->cfg->harris, &loc->state.paper.harris, patch_map, &src, loc->state.paper.cands, n, loc->state.paper.kp_ref,
                             RSM_MAX_KEYPOINTS, NULL);
     return got > 0 ? (size_t)got : 0u;
 }
@@ -411,10 +429,10 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     int32_t radius_cells;
 
     stage_switch(clk, RSM_STAGE_GRID);
-    (void)rsm_map_recenter(&loc->map, pred.x, pred.y);
+    (void)rsm_map_recenter(&loc->state.paper.map, pred.x, pred.y);
     to_world(loc, &pred, npts);
-    rsm_image_clear(&loc->image);
-    (void)rsm_image_mark_points(&loc->image, &loc->map.win, &cfg->grid, loc->world, npts);
+    rsm_image_clear(&loc->state.paper.image);
+    (void)rsm_image_mark_points(&loc->state.paper.image, &loc->state.paper.map.win, &cfg->grid, loc->world, npts);
     if (!loc->have_scan) {
         return RSM_SCAN_FIRST;
     }
@@ -432,16 +450,16 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         return RSM_SCAN_FEW_KEYPOINTS;
     }
     stage_switch(clk, RSM_STAGE_MATCH);
-    keypoints_to_points(loc->kp_cur, nkc, a, &pred, loc->pt_cur);
-    keypoints_to_points(loc->kp_ref, nkr, a, &pred, loc->pt_ref);
-    nm = rsm_match_tentative(loc->pt_ref, nkr, loc->pt_cur, nkc, radius_m, cfg->match_window_m, loc->matches,
+    keypoints_to_points(loc->state.paper.kp_cur, nkc, a, &pred, loc->state.paper.pt_cur);
+    keypoints_to_points(loc->state.paper.kp_ref, nkr, a, &pred, loc->state.paper.pt_ref);
+    nm = rsm_match_tentative(loc->state.paper.pt_ref, nkr, loc->state.paper.pt_cur, nkc, radius_m, cfg->match_window_m, loc->state.paper.matches,
                              RSM_MAX_MATCHES, NULL);
     rep->matches = nm > 0 ? (uint32_t)nm : 0u;
     if (nm < 2 || (uint32_t)nm < cfg->ransac.min_support) {
         return RSM_SCAN_FEW_MATCHES;
     }
     stage_switch(clk, RSM_STAGE_RANSAC);
-    if (rsm_ransac_estimate(&loc->ransac, loc->pt_ref, loc->pt_cur, loc->matches, (size_t)nm, &rr) != RSM_OK) {
+    if (rsm_ransac_estimate(&loc->state.paper.ransac, loc->state.paper.pt_ref, loc->state.paper.pt_cur, loc->state.paper.matches, (size_t)nm, &rr) != RSM_OK) {
         rep->inliers = rr.support;
         rep->iterations = rr.iterations;
         return RSM_SCAN_LOW_SUPPORT;
@@ -457,8 +475,8 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         uint32_t cnt = 0;
         rsm_pose_t z;
         for (k = 0; k < (size_t)nm; ++k) {
-            if (loc->ransac.inlier[k]) {
-                const rsm_point_t *p = &loc->pt_cur[loc->matches[k].cur];
+            if (loc->state.paper.ransac.inlier[k]) {
+                const rsm_point_t *p = &loc->state.paper.pt_cur[loc->state.paper.matches[k].cur];
                 spread2 += p->x * p->x + p->y * p->y;
                 ++cnt;
             }
@@ -471,7 +489,7 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         stage_switch(clk, RSM_STAGE_REFINE);
         if (cfg->refine_iterations > 0u) {
             rsm_map_fit_t fit;
-            if (rsm_map_align(&loc->map, loc->pts, npts, &z, cfg->refine_saturation, cfg->refine_iterations, &fit) ==
+            if (rsm_map_align(&loc->state.paper.map, loc->pts, npts, &z, cfg->refine_saturation, cfg->refine_iterations, &fit) ==
                     RSM_OK &&
                 fit.iterations > 0u) {
                 z = fit.pose;
@@ -515,7 +533,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         return RSM_SCAN_FIRST;
     }
     stage_switch(clk, RSM_STAGE_MAPMATCH);
-    rc = rsm_mapmatch(&loc->tmap, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, &res);
+    rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, &res);
     rep->inliers = res.used;
     rep->iterations = res.iterations;
     rep->measured = res.pose;
@@ -525,7 +543,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     }
     rep->residual_m = sqrtf(res.cost);
     stage_switch(clk, RSM_STAGE_EKF);
-    if (cfg->gate_d2 > 0.0f && res.d2 > cfg->gate_d2) {
+    if (cfg->mapmatch.gate_d2 > 0.0f && res.d2 > cfg->mapmatch.gate_d2) {
         loc->ekf.rejected++;
         return RSM_SCAN_JUMP;
     }
@@ -540,7 +558,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
 static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, int first)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
-    const rsm_pose_t d = rsm_pose_between(&loc->map_pose, est);
+    const rsm_pose_t d = rsm_pose_between(&loc->state.persistent.written, est);
     rsm_point_t origin;
     if (!first && sqrtf(d.x * d.x + d.y * d.y) < cfg->map_update_m && fabsf(d.theta) < cfg->map_update_rad) {
         return;
@@ -549,8 +567,8 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
     origin.x = cfg->laser_mount.x;
     origin.y = cfg->laser_mount.y;
     origin = rsm_pose_apply(est, &origin);
-    if (rsm_tmap_update(&loc->tmap, &origin, loc->world, npts) == RSM_OK) {
-        loc->map_pose = *est;
+    if (rsm_tmap_update(&loc->state.persistent.map, &origin, loc->world, npts) == RSM_OK) {
+        loc->state.persistent.written = *est;
     }
 }
 
@@ -565,7 +583,7 @@ static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         return RSM_SCAN_FIRST;
     }
     stage_switch(clk, RSM_STAGE_ICP);
-    rc = rsm_icp_align(&loc->work.icp, loc->pts, npts, &pred, &res);
+    rc = rsm_icp_align(&loc->state.icp, loc->pts, npts, &pred, &res);
     rep->iterations = res.iterations;
     rep->inliers = res.pairs;
     if (rc != RSM_OK) {
@@ -620,20 +638,32 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     }
     stage_switch(&clk, RSM_STAGE_MAP);
     est = loc->ekf.x;
-    if (npts >= loc->cfg->min_points && loc->cfg->method == RSM_METHOD_MAP) {
-        if (outcome == RSM_SCAN_ACCEPTED || outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_LOW_SUPPORT) {
-            write_tmap(loc, &est, npts, outcome == RSM_SCAN_FIRST);
-        }
-        loc->have_scan = 1u;
-    } else if (npts >= loc->cfg->min_points) {
+    if (npts >= loc->cfg->min_points) {
         const int fused = outcome == RSM_SCAN_ACCEPTED || outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_ODOMETRY;
-        if (fused || loc->cfg->map_on_reject) {
-            (void)rsm_map_recenter(&loc->map, est.x, est.y);
-            to_world(loc, &est, npts);
-            (void)rsm_map_add_points(&loc->map, loc->world, npts);
-            if (loc->cfg->method == RSM_METHOD_ICP) {
-                (void)rsm_icp_set_reference(&loc->work.icp, loc->world, npts);
+        switch (loc->cfg->method) {
+        case RSM_METHOD_MAP:
+            /* A scan that found too little map to match (new ground, or the
+             * map there was evicted) is written at the prediction, or the
+             * map could never grow back; one that was refused is not. */
+            if (fused || outcome == RSM_SCAN_LOW_SUPPORT) {
+                write_tmap(loc, &est, npts, outcome == RSM_SCAN_FIRST);
             }
+            break;
+        case RSM_METHOD_PAPER:
+            if (fused || loc->cfg->map_on_reject) {
+                (void)rsm_map_recenter(&loc->state.paper.map, est.x, est.y);
+                to_world(loc, &est, npts);
+                (void)rsm_map_add_points(&loc->state.paper.map, loc->world, npts);
+            }
+            break;
+        case RSM_METHOD_ICP:
+            if (fused || loc->cfg->map_on_reject) {
+                to_world(loc, &est, npts);
+                (void)rsm_icp_set_reference(&loc->state.icp, loc->world, npts);
+            }
+            break;
+        default:
+            break;
         }
         loc->have_scan = 1u;
     }

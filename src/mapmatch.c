@@ -16,9 +16,12 @@ rsm_mapmatch_config_t rsm_mapmatch_config_default(void)
 {
     rsm_mapmatch_config_t c;
     c.iterations = 6u;
-    c.sigma = 1.0f;
+    c.sigma = 0.3f;
     c.min_step_m = 1.0e-4f;
     c.min_step_rad = 1.0e-4f;
+    c.search_rad = 0.1f;
+    c.search_step_rad = 0.01f;
+    c.gate_d2 = 0.0f;
     return c;
 }
 
@@ -70,6 +73,47 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
         s->cost_used += r * r;
         s->used++;
     }
+}
+
+/* Sum of (1 - M)^2 over the points at pose x on a level, each point read
+ * at its nearest cell centre (no interpolation: a coarse score). */
+static float coarse_cost(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, const rsm_pose_t *x)
+{
+    const float c = cosf(x->theta);
+    const float sn = sinf(x->theta);
+    float cost = 0.0f;
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        const float wx = x->x + c * pts[k].x - sn * pts[k].y;
+        const float wy = x->y + sn * pts[k].x + c * pts[k].y;
+        const float r = 1.0f - rsm_tmap_occupancy(map, level, wx, wy);
+        cost += r * r;
+    }
+    return cost;
+}
+
+/* The heading of the fan around x0 with the lowest coarse cost plus the
+ * prior's heading term (lam_tt = P0^-1's heading entry). */
+static float best_heading(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                          const rsm_pose_t *x0, float w, float lam_tt)
+{
+    const uint32_t level = (uint32_t)map->cfg.levels - 1u;
+    const int32_t half = (int32_t)(cfg->search_rad / cfg->search_step_rad);
+    float best = x0->theta;
+    float best_cost = 0.0f;
+    int32_t k;
+    for (k = -half; k <= half; ++k) {
+        const float d = (float)k * cfg->search_step_rad;
+        rsm_pose_t x = *x0;
+        float f;
+        x.theta = rsm_wrap_angle(x0->theta + d);
+        f = coarse_cost(map, level, pts, n, &x) * w + d * d * lam_tt;
+        if (k == -half || f < best_cost) {
+            best_cost = f;
+            best = x.theta;
+        }
+    }
+    return best;
 }
 
 static void diff(const rsm_pose_t *x, const rsm_pose_t *x0, float e[3])
@@ -133,6 +177,9 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
     }
     w = 1.0f / (cfg->sigma * cfg->sigma);
     x = *x0;
+    if (cfg->search_rad > 0.0f && cfg->search_step_rad > 0.0f) {
+        x.theta = best_heading(map, cfg, pts, n, x0, w, lam[8]);
+    }
     for (level = (int)map->cfg.levels - 1; level >= 0; --level) {
         float f;
         float e[3];

@@ -16,7 +16,7 @@
 rsm_tmap_config_t rsm_tmap_config_default(void)
 {
     rsm_tmap_config_t c;
-    c.cell_m = 0.05f;
+    c.cell_m = 0.1f;
     c.levels = (uint8_t)RSM_TMAP_LEVELS;
     c.hit_inc = 4u;
     c.miss_dec = 1u;
@@ -363,6 +363,12 @@ static float occ_at(const rsm_tmap_t *map, cursor_t *c, int32_t gx, int32_t gy)
         return 0.0f;
     }
     return map->occ[get_cell(&map->tile[s], cell_index(gx, gy))];
+}
+
+float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y)
+{
+    const float inv_a = 1.0f / rsm_tmap_cell(map, level);
+    return map->occ[rsm_tmap_value(map, level, cell_of(x, inv_a), cell_of(y, inv_a))];
 }
 
 float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy)

@@ -41,25 +41,28 @@
 
 /* ---- persistent map (tilemap.h) ---------------------------------------- */
 
-/* log2 of a map tile's side in cells: 4 -> 16 x 16 cells (0.8 m at 5 cm on
- * the finest level). 4 bits per cell: 128 bytes a tile, plus 8 of header. */
+/* log2 of a map tile's side in cells: 3 -> 8 x 8 cells (0.8 m at the
+ * default 10 cm). 4 bits per cell: 32 bytes a tile plus 8 of header. Small
+ * tiles waste less on space without walls (docs/map.md). */
 #ifndef RSM_TMAP_TILE_LOG2
-#define RSM_TMAP_TILE_LOG2 4
+#define RSM_TMAP_TILE_LOG2 3
 #endif
 
 /* Resolutions the map keeps (cells of 1, 2, 4, ... times the finest). */
 #ifndef RSM_TMAP_LEVELS
-#define RSM_TMAP_LEVELS 4
+#define RSM_TMAP_LEVELS 3
 #endif
 
-/* Tiles in the pool, all levels together. */
+/* Tiles in the pool, all levels together: 40 bytes each at 8 x 8 cells.
+ * 2600 hold the whole Intel lab (1234 used) and the ACES building (2431). */
 #ifndef RSM_TMAP_TILES
-#define RSM_TMAP_TILES 4000
+#define RSM_TMAP_TILES 2600
 #endif
 
-/* log2 of the tile index's slots (2 bytes each); at least twice the tiles. */
+/* log2 of the tile index's slots (2 bytes each); at least 4/3 of the
+ * tiles, so that linear probing stays short. */
 #ifndef RSM_TMAP_HASH_LOG2
-#define RSM_TMAP_HASH_LOG2 13
+#define RSM_TMAP_HASH_LOG2 12
 #endif
 
 /* ---- key points and matches ------------------------------------------- */
@@ -152,7 +155,7 @@ RSM_STATIC_ASSERT(image_cells_positive, RSM_IMAGE_MAX_CELLS >= RSM_MAX_BEAMS);
 RSM_STATIC_ASSERT(tmap_tile_range, RSM_TMAP_TILE_LOG2 >= 2 && RSM_TMAP_TILE_LOG2 <= 7);
 RSM_STATIC_ASSERT(tmap_levels_range, RSM_TMAP_LEVELS >= 1 && RSM_TMAP_LEVELS <= 4);
 RSM_STATIC_ASSERT(tmap_tiles_range, RSM_TMAP_TILES >= 4 && RSM_TMAP_TILES < 65535);
-RSM_STATIC_ASSERT(tmap_hash_room, RSM_TMAP_HASH_LOG2 <= 16 && (1L << RSM_TMAP_HASH_LOG2) >= 2L * RSM_TMAP_TILES);
+RSM_STATIC_ASSERT(tmap_hash_room, RSM_TMAP_HASH_LOG2 <= 16 && (1L << RSM_TMAP_HASH_LOG2) * 3L >= 4L * RSM_TMAP_TILES);
 RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
 RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONAR <= 255);
 RSM_STATIC_ASSERT(aria_str_size, RSM_ARIA_STR_SIZE >= 8 && RSM_ARIA_STR_SIZE <= 256);

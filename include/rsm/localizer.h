@@ -89,8 +89,8 @@ typedef struct rsm_localizer_config {
     rsm_tmap_config_t tmap;         /* persistent map (RSM_METHOD_MAP) */
     rsm_mapmatch_config_t mapmatch; /* matching against it */
     float map_update_m;             /* write a scan into the persistent map after this much travel
-                                     * since the last write; default 0.1 */
-    float map_update_rad;           /* ... or this much turning; default 0.1 */
+                                     * since the last write; default 0.4 */
+    float map_update_rad;           /* ... or this much turning; default 0.5 */
     uint8_t map_min_hits;           /* map cells with this many hits are occupied; default 1 */
     uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
     uint16_t min_points;            /* usable readings needed; default 20 */
@@ -154,29 +154,31 @@ typedef struct rsm_localizer {
     const rsm_localizer_config_t *cfg;   /* kept by pointer */
     rsm_ekf_t ekf;
     rsm_odometry_t odo;
-    rsm_map_t map;
-    rsm_image_t image;                   /* current scan image */
-    rsm_ransac_t ransac;
-    /* Only one method runs per localizer, so their scratch shares memory. */
+    /* Only one method runs per localizer, so their states share memory. */
     union {
         struct {
+            rsm_map_t map;                        /* scrolling window of hit counts */
+            rsm_image_t image;                    /* current scan image */
+            rsm_ransac_t ransac;
             uint32_t visited[RSM_BITMAP_WORDS];   /* reference candidates already listed */
             rsm_harris_work_t harris;
             rsm_cell_t cands[RSM_MAX_CANDIDATES];
-        } rsm;
-        rsm_icp_t icp;                            /* reference scan of the ICP baseline */
-    } work;
-    rsm_keypoint_t kp_cur[RSM_MAX_KEYPOINTS];
-    rsm_keypoint_t kp_ref[RSM_MAX_KEYPOINTS];
-    rsm_point_t pt_cur[RSM_MAX_KEYPOINTS];
-    rsm_point_t pt_ref[RSM_MAX_KEYPOINTS];
-    rsm_match_t matches[RSM_MAX_MATCHES];
+            rsm_keypoint_t kp_cur[RSM_MAX_KEYPOINTS];
+            rsm_keypoint_t kp_ref[RSM_MAX_KEYPOINTS];
+            rsm_point_t pt_cur[RSM_MAX_KEYPOINTS];
+            rsm_point_t pt_ref[RSM_MAX_KEYPOINTS];
+            rsm_match_t matches[RSM_MAX_MATCHES];
+        } paper;                                  /* RSM_METHOD_PAPER */
+        rsm_icp_t icp;                            /* RSM_METHOD_ICP: its reference scan */
+        struct {
+            rsm_tmap_t map;                       /* the persistent map */
+            rsm_pose_t written;                   /* pose of the last write into it */
+        } persistent;                             /* RSM_METHOD_MAP */
+    } state;
     rsm_point_t pts[RSM_MAX_BEAMS];      /* usable readings, robot frame */
     rsm_point_t world[RSM_MAX_BEAMS];    /* the same in the world frame */
     uint64_t last_stamp_us;
     uint8_t have_scan;
-    rsm_tmap_t tmap;                     /* persistent map (RSM_METHOD_MAP) */
-    rsm_pose_t map_pose;                 /* pose of the last write into tmap */
     rsm_localizer_counters_t counters;
     rsm_localizer_report_t last;
 } rsm_localizer_t;

@@ -12,7 +12,12 @@
  * along it) moves the estimate only in those, and the posterior covariance
  * (J^T J / sigma^2 + P0^-1)^-1 says so: this is an iterated EKF update with
  * the map as the measurement. Points far from any wall have no gradient and
- * no pull, so outliers and things not yet in the map are ignored. */
+ * no pull, so outliers and things not yet in the map are ignored.
+ *
+ * Odometry's heading can be off by several degrees after a fast turn, which
+ * moves distant points beyond even the coarsest level's basin; so the descent
+ * starts from the best of a fan of headings around the prediction, scored on
+ * the coarsest level with the prior's heading term. */
 #ifndef RSM_MAPMATCH_H
 #define RSM_MAPMATCH_H
 
@@ -28,9 +33,19 @@ extern "C" {
 
 typedef struct rsm_mapmatch_config {
     uint8_t iterations;     /* Gauss-Newton steps per level at most; default 6 */
-    float sigma;            /* std of one point's occupancy residual (unitless); default 1 */
+    float sigma;            /* std of one point's occupancy residual (unitless); smaller
+                             * trusts the scan more against odometry; default 0.3 */
     float min_step_m;       /* converged when a step is below this (and min_step_rad); default 1e-4 */
     float min_step_rad;     /* default 1e-4 */
+    float search_rad;       /* before Gauss-Newton, headings within +-search_rad of the
+                             * prediction are scored on the coarsest level and the best
+                             * starts the descent (odometry's heading can be off by more than
+                             * any level's basin after a fast turn); 0 = off; default 0.1 */
+    float search_step_rad;  /* spacing of those headings; default 0.01 */
+    float gate_d2;          /* refuse a result farther than this from the prediction
+                             * ((x - x0)^T P0^-1 (x - x0)); 0 = off, the default: the prior
+                             * is already part of the cost, and refusing scans lets the map
+                             * and the estimate part ways (measured in docs/map.md) */
 } rsm_mapmatch_config_t;
 
 rsm_mapmatch_config_t rsm_mapmatch_config_default(void);

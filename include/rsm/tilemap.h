@@ -44,7 +44,7 @@ typedef struct rsm_tile {
 } rsm_tile_t;
 
 typedef struct rsm_tmap_config {
-    float cell_m;          /* finest cell side; default 0.05 */
+    float cell_m;          /* finest cell side, metres; default 0.1 */
     uint8_t levels;        /* resolutions in use, 1..RSM_TMAP_LEVELS; default RSM_TMAP_LEVELS */
     uint8_t hit_inc;       /* added by a return; default 4 */
     uint8_t miss_dec;      /* taken by a beam passing through; default 1 */
@@ -94,6 +94,9 @@ uint32_t rsm_tmap_tiles(const rsm_tmap_t *map, uint32_t level);
 
 /* Bounding box (cells, inclusive) of the tiles held at a level; 0 if none. */
 int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t *gy0, int32_t *gx1, int32_t *gy1);
+
+/* Occupancy in [0, 1] of the cell holding world (x, y) on a level. */
+float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y);
 
 /* Occupancy interpolated bilinearly between cell centres at world (x, y) on
  * a level, and its gradient per metre. Reentrant. */

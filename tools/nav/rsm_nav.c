@@ -109,6 +109,9 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     U("map_margin", tmap.clear_margin, uint8_t)
     U("mm_iterations", mapmatch.iterations, uint8_t)
     F("mm_sigma", mapmatch.sigma)
+    F("mm_search", mapmatch.search_rad)
+    F("mm_gate", mapmatch.gate_d2)
+    F("mm_search_step", mapmatch.search_step_rad)
     F("map_update_m", map_update_m)
     F("map_update_rad", map_update_rad)
 #undef F
@@ -527,7 +530,7 @@ static void print_summary(nav_t *nav)
     }
     printf("  method          %s\n", method_name(nav->cfg.method));
     if (nav->cfg.method == RSM_METHOD_MAP) {
-        const rsm_tmap_t *m = &nav->loc.tmap;
+        const rsm_tmap_t *m = &nav->loc.state.persistent.map;
         printf("  persistent map  %u writes, tiles %u/%u/%u per level, %u taken, %u evicted, %u returns dropped\n",
                (unsigned)m->counters.updates, (unsigned)rsm_tmap_tiles(m, 0), (unsigned)rsm_tmap_tiles(m, 1),
                (unsigned)rsm_tmap_tiles(m, 2), (unsigned)m->counters.allocated, (unsigned)m->counters.evicted,
