@@ -44,6 +44,8 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.mapmatch = rsm_mapmatch_config_default();
     c.map_update_m = 0.4f;
     c.map_update_rad = 0.5f;
+    c.recover_ratio = 0.6f;
+    c.recover_m = 1.0f;
     c.clock_fn = NULL;
     c.clock_ctx = NULL;
     return c;
@@ -533,7 +535,28 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         return RSM_SCAN_FIRST;
     }
     stage_switch(clk, RSM_STAGE_MAPMATCH);
-    rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, &res);
+    rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &res);
+    if (rc == RSM_OK && cfg->recover_m > 0.0f && res.hit < cfg->recover_ratio * loc->state.persistent.fit) {
+        /* Far worse than recent scans: odometry may be off by more than any
+         * basin. Search wide, then descend from the best candidate under a
+         * prior widened by the search radius; keep it only if it fits. */
+        rsm_mapmatch_result_t alt;
+        rsm_pose_t best;
+        float wide[9];
+        loc->counters.searches++;
+        memcpy(wide, loc->ekf.p, sizeof wide);
+        wide[0] += cfg->recover_m * cfg->recover_m;
+        wide[4] += cfg->recover_m * cfg->recover_m;
+        wide[8] += cfg->mapmatch.search_rad * cfg->mapmatch.search_rad;
+        if (rsm_mapmatch_search(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, cfg->recover_m,
+                                &best) == RSM_OK &&
+            rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, wide, &best, &alt) ==
+                RSM_OK &&
+            alt.hit >= cfg->recover_ratio * loc->state.persistent.fit && alt.hit > res.hit) {
+            loc->counters.recovered++;
+            res = alt;
+        }
+    }
     rep->inliers = res.used;
     rep->iterations = res.iterations;
     rep->measured = res.pose;
@@ -550,6 +573,12 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     loc->ekf.x = res.pose;
     memcpy(loc->ekf.p, res.cov, sizeof loc->ekf.p);
     loc->ekf.updates++;
+    /* A slow mean, so that a few poor scans do not lower the bar. */
+    if (loc->state.persistent.fit > 0.0f) {
+        loc->state.persistent.fit += 0.05f * (res.hit - loc->state.persistent.fit);
+    } else {
+        loc->state.persistent.fit = res.hit;
+    }
     return RSM_SCAN_ACCEPTED;
 }
 

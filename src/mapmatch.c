@@ -149,8 +149,55 @@ static void full(const float h[6], float w, float out[9])
     out[8] = h[5] * w;
 }
 
+int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                        const rsm_pose_t *x0, float radius_m, rsm_pose_t *best)
+{
+    const uint32_t level = (uint32_t)map->cfg.levels - 1u;
+    const float step = rsm_tmap_cell(map, level);
+    const int32_t half = (int32_t)(radius_m / step);
+    const int32_t fan = cfg->search_step_rad > 0.0f ? (int32_t)(cfg->search_rad / cfg->search_step_rad) : 0;
+    /* Every stride-th point: the score only ranks candidates. */
+    const size_t stride = n > 64u ? (n + 63u) / 64u : 1u;
+    float best_cost = 0.0f;
+    int any = 0;
+    int32_t a;
+    int32_t i;
+    int32_t j;
+    if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || best == NULL || !(radius_m >= 0.0f) ||
+        radius_m > 100.0f * step) {
+        return RSM_ERR_INVAL;
+    }
+    *best = *x0;
+    for (a = -fan; a <= fan; ++a) {
+        const float th = rsm_wrap_angle(x0->theta + (float)a * cfg->search_step_rad);
+        const float c = cosf(th);
+        const float sn = sinf(th);
+        for (j = -half; j <= half; ++j) {
+            for (i = -half; i <= half; ++i) {
+                const float tx = x0->x + (float)i * step;
+                const float ty = x0->y + (float)j * step;
+                float cost = 0.0f;
+                size_t k;
+                for (k = 0; k < n; k += stride) {
+                    const float r = 1.0f - rsm_tmap_occupancy(map, level, tx + c * pts[k].x - sn * pts[k].y,
+                                                              ty + sn * pts[k].x + c * pts[k].y);
+                    cost += r * r;
+                }
+                if (!any || cost < best_cost) {
+                    any = 1;
+                    best_cost = cost;
+                    best->x = tx;
+                    best->y = ty;
+                    best->theta = th;
+                }
+            }
+        }
+    }
+    return RSM_OK;
+}
+
 int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                 const rsm_pose_t *x0, const float p0[9], rsm_mapmatch_result_t *res)
+                 const rsm_pose_t *x0, const float p0[9], const rsm_pose_t *start, rsm_mapmatch_result_t *res)
 {
     float pf[9];
     float lam[9];
@@ -177,7 +224,9 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
     }
     w = 1.0f / (cfg->sigma * cfg->sigma);
     x = *x0;
-    if (cfg->search_rad > 0.0f && cfg->search_step_rad > 0.0f) {
+    if (start != NULL) {
+        x = *start;
+    } else if (cfg->search_rad > 0.0f && cfg->search_step_rad > 0.0f) {
         x.theta = best_heading(map, cfg, pts, n, x0, w, lam[8]);
     }
     for (level = (int)map->cfg.levels - 1; level >= 0; --level) {

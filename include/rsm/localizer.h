@@ -91,6 +91,10 @@ typedef struct rsm_localizer_config {
     float map_update_m;             /* write a scan into the persistent map after this much travel
                                      * since the last write; default 0.4 */
     float map_update_rad;           /* ... or this much turning; default 0.5 */
+    float recover_ratio;            /* a match whose mean occupancy under its points falls below
+                                     * this share of the recent mean (odometry far off: a slip, a
+                                     * bump, a kidnap) triggers a search of +-recover_m; default 0.6 */
+    float recover_m;                /* 0 = never search; default 1.0 */
     uint8_t map_min_hits;           /* map cells with this many hits are occupied; default 1 */
     uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
     uint16_t min_points;            /* usable readings needed; default 20 */
@@ -148,6 +152,8 @@ typedef struct rsm_localizer_counters {
     rsm_scan_drops_t drops;                  /* unusable readings by reason */
     uint32_t motions;                        /* odometry increments applied */
     uint32_t bad_motions;                    /* non-finite increments refused */
+    uint32_t searches;                       /* recovery searches run (RSM_METHOD_MAP) */
+    uint32_t recovered;                      /* ... whose pose was taken */
 } rsm_localizer_counters_t;
 
 typedef struct rsm_localizer {
@@ -173,6 +179,7 @@ typedef struct rsm_localizer {
         struct {
             rsm_tmap_t map;                       /* the persistent map */
             rsm_pose_t written;                   /* pose of the last write into it */
+            float fit;                            /* recent mean occupancy under a scan's points */
         } persistent;                             /* RSM_METHOD_MAP */
     } state;
     rsm_point_t pts[RSM_MAX_BEAMS];      /* usable readings, robot frame */

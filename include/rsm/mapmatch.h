@@ -61,12 +61,23 @@ typedef struct rsm_mapmatch_result {
     float d2;               /* (x - x0)^T P0^-1 (x - x0): how far the scan moved the estimate */
 } rsm_mapmatch_result_t;
 
-/* Aligns the robot-frame points to the map from the prediction (x0, p0).
- * Returns RSM_OK (res filled), RSM_ERR_DEGENERATE when the prior covariance
- * cannot be inverted or no point touches the map (res->pose = x0),
- * RSM_ERR_INVAL for bad arguments. Reentrant; the map is not changed. */
+/* Aligns the robot-frame points to the map with the prediction (x0, p0) as
+ * prior. The descent starts at *start when it is given, else at the best
+ * heading of the fan around x0. Returns RSM_OK (res filled),
+ * RSM_ERR_DEGENERATE when the prior covariance cannot be inverted or fewer
+ * than 3 points touch the map (res->pose = x0), RSM_ERR_INVAL for bad
+ * arguments. Reentrant; the map is not changed. */
 int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                 const rsm_pose_t *x0, const float p0[9], rsm_mapmatch_result_t *res);
+                 const rsm_pose_t *x0, const float p0[9], const rsm_pose_t *start, rsm_mapmatch_result_t *res);
+
+/* Exhaustive search on the coarsest level for the pose that best fits the
+ * points: positions on that level's cell grid within +-radius_m of x0, each
+ * with the heading fan of cfg; points are subsampled to at most 64. For
+ * recovery after a large odometry error (about (2r/cell)^2 x fan x 64 cell
+ * reads). Writes *best (x0 if nothing fits). RSM_OK or RSM_ERR_INVAL
+ * (radius negative or above 100 cells). */
+int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                        const rsm_pose_t *x0, float radius_m, rsm_pose_t *best);
 
 #ifdef __cplusplus
 }

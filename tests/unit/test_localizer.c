@@ -227,7 +227,7 @@ void test_localizer_config_default_should_be_valid(void)
     const rsm_pose_t x0 = {1.0f, -2.0f, 0.5f};
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &x0, NULL));
     TEST_ASSERT_EQUAL_MEMORY(&x0, &loc.ekf.x, sizeof x0);
-    TEST_ASSERT_EQUAL_INT((int)RSM_METHOD_PAPER, (int)cfg.method);
+    TEST_ASSERT_EQUAL_INT((int)RSM_METHOD_MAP, (int)cfg.method);
     TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.scans);
     TEST_ASSERT_EQUAL_INT(0, strcmp("accepted", rsm_outcome_name(RSM_SCAN_ACCEPTED)));
     TEST_ASSERT_EQUAL_INT(0, strcmp("few_points", rsm_outcome_name(RSM_SCAN_FEW_POINTS)));
@@ -260,7 +260,7 @@ void test_localizer_init_should_reject_bad_configs(void)
         c.field = value;           \
         assert_rejected(&c, #field); \
     } while (0)
-    BAD(method, (rsm_method_t)3);
+    BAD(method, (rsm_method_t)4);
     BAD(limits.max_range_m, 0.01f);
     BAD(limits.max_range_m, NAN);
     BAD(grid.cell_m, 0.0f);
@@ -603,7 +603,7 @@ void test_localizer_scan_should_be_bit_identical_side_by_side(void)
         TEST_ASSERT_EQUAL_INT((int)ra.outcome, (int)rb.outcome);
     }
     TEST_ASSERT_EQUAL_MEMORY(&loc.counters, &loc2.counters, sizeof loc.counters);
-    TEST_ASSERT_EQUAL_MEMORY(loc.map.hits, loc2.map.hits, sizeof loc.map.hits);
+    TEST_ASSERT_EQUAL_MEMORY(&loc.state.persistent.map, &loc2.state.persistent.map, sizeof loc.state.persistent.map);
     TEST_ASSERT_GREATER_THAN_UINT32(path_len / 2u, loc.counters.outcome[RSM_SCAN_ACCEPTED]);
 }
 

@@ -1,6 +1,6 @@
 /* rsm-stages: measures one localizer step on a CARMEN log for ./tools/bench.
  *
- *   rsm-stages --carmen LOG [--method rsm|icp] [--beams N] [--limit N] [--fov179]
+ *   rsm-stages --carmen LOG [--method rsm|paper|icp] [--beams N] [--limit N] [--fov179]
  *              [--clock ns|none] [--trajectory OUT] [--stack]
  *
  * Runs the localizer over the log exactly as rsm-nav does (same start pose,
@@ -407,7 +407,8 @@ static void print_json(run_t *r)
     const rsm_localizer_t *loc = &r->loc;
     size_t s;
     printf("{\n  \"tool\": \"rsm-stages\",\n");
-    printf("  \"method\": \"%s\",\n", r->cfg.method == RSM_METHOD_ICP ? "icp" : "rsm");
+    printf("  \"method\": \"%s\",\n",
+           r->cfg.method == RSM_METHOD_ICP ? "icp" : r->cfg.method == RSM_METHOD_PAPER ? "paper" : "rsm");
     printf("  \"scans\": %zu,\n  \"beams_in\": %zu,\n  \"beams\": %zu,\n  \"clamped\": %llu,\n", r->scans, r->beams_in,
            r->beams_out, (unsigned long long)r->clamped);
     printf("  \"config\": {\"RSM_MAX_BEAMS\": %d, \"RSM_MAP_SIZE_LOG2\": %d, \"RSM_MAP_SIZE\": %d, "
@@ -420,14 +421,20 @@ static void print_json(run_t *r)
     LOC_PART("rsm_localizer_t", sizeof *loc);
     LOC_PART("ekf", sizeof loc->ekf);
     LOC_PART("odo", sizeof loc->odo);
-    LOC_PART("map", sizeof loc->map);
-    LOC_PART("image", sizeof loc->image);
-    LOC_PART("ransac", sizeof loc->ransac);
-    LOC_PART("work", sizeof loc->work);
-    LOC_PART("work.rsm", sizeof loc->work.rsm);
-    LOC_PART("work.icp", sizeof loc->work.icp);
-    LOC_PART("keypoints", sizeof loc->kp_cur + sizeof loc->kp_ref + sizeof loc->pt_cur + sizeof loc->pt_ref);
-    LOC_PART("matches", sizeof loc->matches);
+    LOC_PART("state", sizeof loc->state);
+    LOC_PART("state.persistent", sizeof loc->state.persistent);
+    LOC_PART("state.persistent.map.tile", sizeof loc->state.persistent.map.tile);
+    LOC_PART("state.persistent.map.hash", sizeof loc->state.persistent.map.hash);
+    LOC_PART("state.paper", sizeof loc->state.paper);
+    LOC_PART("state.paper.map", sizeof loc->state.paper.map);
+    LOC_PART("state.paper.image", sizeof loc->state.paper.image);
+    LOC_PART("state.paper.ransac", sizeof loc->state.paper.ransac);
+    LOC_PART("state.paper.harris", sizeof loc->state.paper.visited + sizeof loc->state.paper.harris +
+                                       sizeof loc->state.paper.cands);
+    LOC_PART("state.paper.keypoints", sizeof loc->state.paper.kp_cur + sizeof loc->state.paper.kp_ref +
+                                          sizeof loc->state.paper.pt_cur + sizeof loc->state.paper.pt_ref);
+    LOC_PART("state.paper.matches", sizeof loc->state.paper.matches);
+    LOC_PART("state.icp", sizeof loc->state.icp);
     LOC_PART("points", sizeof loc->pts + sizeof loc->world);
     LOC_PART("rsm_scan_t", sizeof(rsm_scan_t));
     printf("    \"rsm_localizer_config_t\": %lu\n  },\n", (unsigned long)sizeof(rsm_localizer_config_t));
@@ -458,7 +465,7 @@ static void print_json(run_t *r)
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: rsm-stages --carmen LOG [--method rsm|icp] [--beams N] [--limit N] [--fov179]\n"
+    fprintf(f, "usage: rsm-stages --carmen LOG [--method rsm|paper|icp] [--beams N] [--limit N] [--fov179]\n"
                "                  [--clock ns|none] [--trajectory OUT] [--stack]\n");
 }
 
@@ -480,7 +487,7 @@ int main(int argc, char **argv)
     run_t *r = &g_run;
     int i;
     int rc;
-    r->opt.method = RSM_METHOD_PAPER;
+    r->opt.method = RSM_METHOD_MAP;
     r->opt.clock_ns = 1;
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i];
@@ -492,6 +499,8 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--method") == 0 && next) {
             ++i;
             if (strcmp(next, "rsm") == 0) {
+                r->opt.method = RSM_METHOD_MAP;
+            } else if (strcmp(next, "paper") == 0) {
                 r->opt.method = RSM_METHOD_PAPER;
             } else if (strcmp(next, "icp") == 0) {
                 r->opt.method = RSM_METHOD_ICP;

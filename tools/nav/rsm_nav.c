@@ -111,6 +111,8 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     F("mm_sigma", mapmatch.sigma)
     F("mm_search", mapmatch.search_rad)
     F("mm_gate", mapmatch.gate_d2)
+    F("recover_ratio", recover_ratio)
+    F("recover_m", recover_m)
     F("mm_search_step", mapmatch.search_step_rad)
     F("map_update_m", map_update_m)
     F("map_update_rad", map_update_rad)
@@ -535,6 +537,7 @@ static void print_summary(nav_t *nav)
                (unsigned)m->counters.updates, (unsigned)rsm_tmap_tiles(m, 0), (unsigned)rsm_tmap_tiles(m, 1),
                (unsigned)rsm_tmap_tiles(m, 2), (unsigned)m->counters.allocated, (unsigned)m->counters.evicted,
                (unsigned)m->counters.dropped);
+        printf("  recovery        %u searches, %u taken\n", (unsigned)c->searches, (unsigned)c->recovered);
     }
     printf("  timestamps      %llu clamped (went backwards)\n", (unsigned long long)nav->clamped);
     printf("  scans           %u\n", (unsigned)c->scans);
