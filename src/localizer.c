@@ -145,7 +145,9 @@ int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, 
         !(cfg->r_min_xy_m > 0.0f) || !(cfg->r_min_theta_rad > 0.0f) || cfg->noise > RSM_NOISE_FIXED ||
         cfg->refine_saturation < 1u || !(cfg->refine_noise_scale > 0.0f) || cfg->harris.k_den <= 0 ||
         cfg->harris.k_num < 0 || cfg->harris.nms_radius < 0 || cfg->min_keypoints > RSM_MAX_KEYPOINTS ||
-        cfg->min_points > RSM_MAX_BEAMS) {
+        cfg->min_points > RSM_MAX_BEAMS || !(fabsf(cfg->laser_mount.x) < 100.0f) ||
+        !(fabsf(cfg->laser_mount.y) < 100.0f) || !(fabsf(cfg->laser_mount.theta) <= RSM_TWO_PI) ||
+        cfg->laser_upside_down > 1u) {
         /* (The Harris part has no init of its own: a bad one would make
          * every detection fail with RSM_ERR_INVAL, read as no key points;
          * thresholds beyond the capacities could never be met.) */
@@ -169,6 +171,11 @@ int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, 
         rc = rsm_icp_init(&loc->state.icp, &cfg->icp);
         break;
     case RSM_METHOD_MAP:
+        if (rsm_mapmatch_check(&cfg->mapmatch) != RSM_OK || !(cfg->map_update_m >= 0.0f) ||
+            !(cfg->map_update_rad >= 0.0f) || !(cfg->recover_ratio >= 0.0f && cfg->recover_ratio <= 1.0f) ||
+            !(cfg->recover_m >= 0.0f) || !(cfg->recover_m <= 50.0f * cfg->tmap.cell_m)) {
+            return RSM_ERR_INVAL;
+        }
         rc = rsm_tmap_init(&loc->state.persistent.map, &cfg->tmap);
         loc->state.persistent.written = *x0;
         break;

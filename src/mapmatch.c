@@ -25,6 +25,17 @@ rsm_mapmatch_config_t rsm_mapmatch_config_default(void)
     return c;
 }
 
+int rsm_mapmatch_check(const rsm_mapmatch_config_t *cfg)
+{
+    if (cfg == NULL || cfg->iterations < 1u || !(cfg->sigma > 0.0f) || !(cfg->min_step_m >= 0.0f) ||
+        !(cfg->min_step_rad >= 0.0f) || !(cfg->search_rad >= 0.0f) || !(cfg->search_rad <= 1.0f) ||
+        !(cfg->gate_d2 >= 0.0f) ||
+        (cfg->search_rad > 0.0f && !(cfg->search_step_rad > 0.0f && cfg->search_rad <= 64.0f * cfg->search_step_rad))) {
+        return RSM_ERR_INVAL;
+    }
+    return RSM_OK;
+}
+
 /* Sums of one level at pose x: h (upper triangle of J^T J, order 00 01 02 11
  * 12 22), b = J^T r, cost = sum r^2 over all points, used = points with a
  * gradient, hit = sum of M. */

@@ -50,6 +50,11 @@ typedef struct rsm_mapmatch_config {
 
 rsm_mapmatch_config_t rsm_mapmatch_config_default(void);
 
+/* RSM_OK if cfg is usable: iterations >= 1, sigma > 0, search_rad within
+ * [0, 1] rad and at most 64 steps each side, no negative value. Else
+ * RSM_ERR_INVAL. */
+int rsm_mapmatch_check(const rsm_mapmatch_config_t *cfg);
+
 typedef struct rsm_mapmatch_result {
     rsm_pose_t pose;        /* the estimate */
     float cov[9];           /* its covariance (posterior), row-major */

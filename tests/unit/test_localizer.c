@@ -280,15 +280,43 @@ void test_localizer_init_should_reject_bad_configs(void)
     BAD(refine_noise_scale, 0.0f);
     /* Each module's own part is validated too. */
     BAD(harris.k_den, 0);
-    BAD(ransac.confidence, 1.0f);
-    BAD(ransac.min_support, 1u);
+    BAD(odometry.wheel_base_m, 0.0f);
+    BAD(laser_mount.x, NAN);
+    BAD(laser_mount.theta, 7.0f);
+    BAD(laser_upside_down, 2u);
+    /* The persistent map's parts are checked for its method (the default). */
+    TEST_ASSERT_EQUAL_INT((int)RSM_METHOD_MAP, (int)cfg.method);
+    BAD(tmap.cell_m, 0.0f);
+    BAD(tmap.levels, 0u);
+    BAD(tmap.levels, (uint8_t)(RSM_TMAP_LEVELS + 1));
+    BAD(tmap.hit_inc, 0u);
+    BAD(tmap.saturation, 16u);
+    BAD(mapmatch.iterations, 0u);
+    BAD(mapmatch.sigma, 0.0f);
+    BAD(mapmatch.search_rad, 2.0f);
+    BAD(mapmatch.search_step_rad, 0.0f);
+    BAD(mapmatch.search_step_rad, 0.001f); /* 100 headings each side */
+    BAD(mapmatch.gate_d2, -1.0f);
+    BAD(map_update_m, -0.1f);
+    BAD(map_update_rad, NAN);
+    BAD(recover_ratio, 1.5f);
+    BAD(recover_m, 100.0f);
+    /* The paper's RANSAC part only for the paper's method. */
+    c = cfg;
+    c.ransac.confidence = 1.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &c, &x0, NULL));
+    c.method = RSM_METHOD_PAPER;
+    assert_rejected(&c, "ransac.confidence");
+    c = cfg;
+    c.method = RSM_METHOD_PAPER;
+    c.ransac.min_support = 1u;
+    assert_rejected(&c, "ransac.min_support");
     /* The ICP part only matters (and is only checked) for the ICP method. */
     c = cfg;
     c.icp.max_iterations = 0u;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &c, &x0, NULL));
     c.method = RSM_METHOD_ICP;
     assert_rejected(&c, "icp.max_iterations");
-    BAD(odometry.wheel_base_m, 0.0f);
     /* Thresholds the capacities could never meet. */
     BAD(min_keypoints, (uint16_t)(RSM_MAX_KEYPOINTS + 1));
     BAD(min_points, (uint16_t)(RSM_MAX_BEAMS + 1));
