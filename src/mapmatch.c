@@ -207,46 +207,28 @@ int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg,
     return RSM_OK;
 }
 
-int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                 const rsm_pose_t *x0, const float p0[9], const rsm_pose_t *start, rsm_mapmatch_result_t *res)
-{
-    float pf[9];
+/* The prior of a descent: its mean, information and the residual weight. */
+typedef struct prior {
+    const rsm_pose_t *x0;
     float lam[9];
     float w;
-    rsm_pose_t x;
+} prior_t;
+
+/* Gauss-Newton from x on every level, coarse to fine. On return x is the
+ * estimate, s the finest level's sums there and the result the objective
+ * (residuals plus prior) on the finest level. */
+static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                     const prior_t *pr, rsm_pose_t *x, sums_t *s, uint32_t *iterations)
+{
+    float f = 0.0f;
     int level;
-    sums_t s;
     int k;
-    if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || p0 == NULL || res == NULL ||
-        !(cfg->sigma > 0.0f)) {
-        return RSM_ERR_INVAL;
-    }
-    memset(res, 0, sizeof *res);
-    res->pose = *x0;
-    memcpy(res->cov, p0, sizeof res->cov);
-    memcpy(pf, p0, sizeof pf);
-    for (k = 0; k < 3; ++k) {
-        if (!(pf[k * 4] >= PRIOR_FLOOR)) {
-            pf[k * 4] = PRIOR_FLOOR;
-        }
-    }
-    if (rsm_mat3_inverse(pf, lam) != RSM_OK) {
-        return RSM_ERR_DEGENERATE;
-    }
-    w = 1.0f / (cfg->sigma * cfg->sigma);
-    x = *x0;
-    if (start != NULL) {
-        x = *start;
-    } else if (cfg->search_rad > 0.0f && cfg->search_step_rad > 0.0f) {
-        x.theta = best_heading(map, cfg, pts, n, x0, w, lam[8]);
-    }
     for (level = (int)map->cfg.levels - 1; level >= 0; --level) {
-        float f;
         float e[3];
         uint32_t it;
-        level_sums(map, (uint32_t)level, pts, n, &x, &s);
-        diff(&x, x0, e);
-        f = s.cost * w + quad(lam, e);
+        level_sums(map, (uint32_t)level, pts, n, x, s);
+        diff(x, pr->x0, e);
+        f = s->cost * pr->w + quad(pr->lam, e);
         for (it = 0; it < cfg->iterations; ++it) {
             float a[9];
             float ai[9];
@@ -254,23 +236,23 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
             float step[3];
             int halvings;
             int accepted = 0;
-            if (s.used < 3u) {
+            if (s->used < 3u) {
                 break;
             }
-            full(s.h, w, a);
+            full(s->h, pr->w, a);
             for (k = 0; k < 9; ++k) {
-                a[k] += lam[k];
+                a[k] += pr->lam[k];
             }
             if (rsm_mat3_inverse(a, ai) != RSM_OK) {
                 break;
             }
             for (k = 0; k < 3; ++k) {
-                g[k] = s.b[k] * w - (lam[k * 3] * e[0] + lam[k * 3 + 1] * e[1] + lam[k * 3 + 2] * e[2]);
+                g[k] = s->b[k] * pr->w - (pr->lam[k * 3] * e[0] + pr->lam[k * 3 + 1] * e[1] + pr->lam[k * 3 + 2] * e[2]);
             }
             for (k = 0; k < 3; ++k) {
                 step[k] = ai[k * 3] * g[0] + ai[k * 3 + 1] * g[1] + ai[k * 3 + 2] * g[2];
             }
-            res->iterations++;
+            ++*iterations;
             /* The interpolated occupancy has kinks at cell borders where a full
              * step can overshoot: take it only where it lowers the cost. */
             for (halvings = 0; halvings < 5 && !accepted; ++halvings) {
@@ -278,15 +260,15 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
                 sums_t cs;
                 float ce[3];
                 float cf;
-                cand.x = x.x + step[0];
-                cand.y = x.y + step[1];
-                cand.theta = rsm_wrap_angle(x.theta + step[2]);
+                cand.x = x->x + step[0];
+                cand.y = x->y + step[1];
+                cand.theta = rsm_wrap_angle(x->theta + step[2]);
                 level_sums(map, (uint32_t)level, pts, n, &cand, &cs);
-                diff(&cand, x0, ce);
-                cf = cs.cost * w + quad(lam, ce);
+                diff(&cand, pr->x0, ce);
+                cf = cs.cost * pr->w + quad(pr->lam, ce);
                 if (cf < f) {
-                    x = cand;
-                    s = cs;
+                    *x = cand;
+                    *s = cs;
                     memcpy(e, ce, sizeof e);
                     f = cf;
                     accepted = 1;
@@ -302,6 +284,53 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
             }
         }
     }
+    return f;
+}
+
+int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                 const rsm_pose_t *x0, const float p0[9], const rsm_pose_t *start, rsm_mapmatch_result_t *res)
+{
+    float pf[9];
+    prior_t pr;
+    rsm_pose_t x;
+    sums_t s;
+    int k;
+    if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || p0 == NULL || res == NULL ||
+        !(cfg->sigma > 0.0f)) {
+        return RSM_ERR_INVAL;
+    }
+    memset(res, 0, sizeof *res);
+    res->pose = *x0;
+    memcpy(res->cov, p0, sizeof res->cov);
+    memcpy(pf, p0, sizeof pf);
+    for (k = 0; k < 3; ++k) {
+        if (!(pf[k * 4] >= PRIOR_FLOOR)) {
+            pf[k * 4] = PRIOR_FLOOR;
+        }
+    }
+    if (rsm_mat3_inverse(pf, pr.lam) != RSM_OK) {
+        return RSM_ERR_DEGENERATE;
+    }
+    pr.x0 = x0;
+    pr.w = 1.0f / (cfg->sigma * cfg->sigma);
+    x = start != NULL ? *start : *x0;
+    {
+        const float f = descend(map, cfg, pts, n, &pr, &x, &s, &res->iterations);
+        if (start == NULL && cfg->search_rad > 0.0f && cfg->search_step_rad > 0.0f) {
+            /* The fan's best heading is only a coarse guess: descend from it
+             * too and keep whichever ends lower on the finest level. */
+            rsm_pose_t alt = *x0;
+            alt.theta = best_heading(map, cfg, pts, n, x0, pr.w, pr.lam[8]);
+            if (fabsf(rsm_wrap_angle(alt.theta - x0->theta)) > 0.5f * cfg->search_step_rad) {
+                sums_t as;
+                const float af = descend(map, cfg, pts, n, &pr, &alt, &as, &res->iterations);
+                if (af < f && as.used >= 3u) {
+                    x = alt;
+                    s = as;
+                }
+            }
+        }
+    }
     /* s holds the finest level's sums at x. */
     if (s.used < 3u) {
         return RSM_ERR_DEGENERATE;
@@ -309,16 +338,16 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
     {
         float a[9];
         float e[3];
-        full(s.h, w, res->info);
+        full(s.h, pr.w, res->info);
         for (k = 0; k < 9; ++k) {
-            a[k] = res->info[k] + lam[k];
+            a[k] = res->info[k] + pr.lam[k];
         }
         if (rsm_mat3_inverse(a, res->cov) != RSM_OK) {
             memcpy(res->cov, p0, sizeof res->cov);
             return RSM_ERR_DEGENERATE;
         }
         diff(&x, x0, e);
-        res->d2 = quad(lam, e);
+        res->d2 = quad(pr.lam, e);
     }
     res->pose = x;
     res->used = s.used;

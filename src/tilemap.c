@@ -22,6 +22,7 @@ rsm_tmap_config_t rsm_tmap_config_default(void)
     c.miss_dec = 1u;
     c.saturation = 8u;
     c.clear_margin = 1u;
+    c.splat_from = 1u;
     return c;
 }
 
@@ -288,6 +289,32 @@ static void clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0, int
     }
 }
 
+/* Adds inc to a cell, taking a tile for it if needed. */
+static void add_hit(rsm_tmap_t *map, cursor_t *c, uint32_t level, int32_t gx, int32_t gy, uint32_t inc)
+{
+    uint32_t s;
+    uint32_t i;
+    uint32_t v;
+    rsm_tile_t *t;
+    if (inc == 0u) {
+        return;
+    }
+    s = cursor_slot(map, c, gx, gy);
+    if (s == RSM_TMAP_NONE) {
+        s = take_slot(map, level, gx >> RSM_TMAP_TILE_LOG2, gy >> RSM_TMAP_TILE_LOG2);
+        c->valid = 0;
+        if (s == RSM_TMAP_NONE) {
+            map->counters.dropped++;
+            return;
+        }
+    }
+    t = &map->tile[s];
+    t->stamp = (level << 30) | map->stamp;
+    i = cell_index(gx, gy);
+    v = get_cell(t, i) + inc;
+    set_cell(t, i, v > RSM_TMAP_MAX_VALUE ? RSM_TMAP_MAX_VALUE : v);
+}
+
 int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n)
 {
     uint32_t level;
@@ -322,35 +349,39 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
         }
         cursor_start(&c, level);
         for (k = 0; k < n; ++k) {
-            int32_t gx;
-            int32_t gy;
-            uint32_t s;
-            uint32_t i;
-            uint32_t v;
-            rsm_tile_t *t;
             if (!(fabsf(points[k].x) < 1.0e6f && fabsf(points[k].y) < 1.0e6f)) {
                 continue;
             }
-            gx = cell_of(points[k].x, inv_a);
-            gy = cell_of(points[k].y, inv_a);
-            if (!in_range(gx, gy)) {
-                map->counters.outside++;
-                continue;
-            }
-            s = cursor_slot(map, &c, gx, gy);
-            if (s == RSM_TMAP_NONE) {
-                s = take_slot(map, level, gx >> RSM_TMAP_TILE_LOG2, gy >> RSM_TMAP_TILE_LOG2);
-                c.valid = 0;
-                if (s == RSM_TMAP_NONE) {
-                    map->counters.dropped++;
+            if (level >= map->cfg.splat_from) {
+                /* Share the increment among the four cells around the point
+                 * by bilinear weights, so that the interpolated occupancy
+                 * peaks where the returns are, not at cell centres. */
+                const float u = points[k].x * inv_a - 0.5f;
+                const float v = points[k].y * inv_a - 0.5f;
+                const float fu = floorf(u);
+                const float fv = floorf(v);
+                const int32_t gx = (int32_t)fu;
+                const int32_t gy = (int32_t)fv;
+                const float du = u - fu;
+                const float dv = v - fv;
+                const float inc = (float)map->cfg.hit_inc;
+                if (!in_range(gx, gy) || !in_range(gx + 1, gy + 1)) {
+                    map->counters.outside++;
                     continue;
                 }
+                add_hit(map, &c, level, gx, gy, (uint32_t)(inc * (1.0f - du) * (1.0f - dv) + 0.5f));
+                add_hit(map, &c, level, gx + 1, gy, (uint32_t)(inc * du * (1.0f - dv) + 0.5f));
+                add_hit(map, &c, level, gx, gy + 1, (uint32_t)(inc * (1.0f - du) * dv + 0.5f));
+                add_hit(map, &c, level, gx + 1, gy + 1, (uint32_t)(inc * du * dv + 0.5f));
+            } else {
+                const int32_t gx = cell_of(points[k].x, inv_a);
+                const int32_t gy = cell_of(points[k].y, inv_a);
+                if (!in_range(gx, gy)) {
+                    map->counters.outside++;
+                    continue;
+                }
+                add_hit(map, &c, level, gx, gy, map->cfg.hit_inc);
             }
-            t = &map->tile[s];
-            t->stamp = (level << 30) | map->stamp;
-            i = cell_index(gx, gy);
-            v = get_cell(t, i) + map->cfg.hit_inc;
-            set_cell(t, i, v > RSM_TMAP_MAX_VALUE ? RSM_TMAP_MAX_VALUE : v);
         }
     }
     return RSM_OK;

@@ -15,6 +15,10 @@
  * update in progress; if every slot was, the return is dropped and counted.
  * Travel is unbounded: the oldest places are forgotten first.
  *
+ * A return adds hit_inc to its own cell on the finest level; on coarser
+ * levels (from splat_from) it is shared among the four nearest cells by
+ * bilinear weights (rounded), which keeps the coarse levels unbiased.
+ *
  * RAM: RSM_TMAP_TILES * (RSM_TMAP_TILE_BYTES + 8) + 2 * RSM_TMAP_HASH bytes. */
 #ifndef RSM_TILEMAP_H
 #define RSM_TILEMAP_H
@@ -50,6 +54,11 @@ typedef struct rsm_tmap_config {
     uint8_t miss_dec;      /* taken by a beam passing through; default 1 */
     uint8_t saturation;    /* value read as fully occupied; default 8 */
     uint8_t clear_margin;  /* cells before a return that its beam does not clear; default 1 */
+    uint8_t splat_from;    /* on this level and coarser ones a return's increment is shared
+                            * among the four cells around it by bilinear weights, so that a
+                            * wall reads where it is, not at a cell centre up to half a
+                            * (coarse) cell away; finer levels give it all to the return's
+                            * cell, which keeps walls one cell thick. Default 1 */
 } rsm_tmap_config_t;
 
 rsm_tmap_config_t rsm_tmap_config_default(void);

@@ -3,7 +3,8 @@
  * trajectory, the map and a summary.
  *
  *   rsm-nav (--carmen LOG | --capture FILE | --robot DEV --lms DEV) [--method rsm|icp|odometry]
- *           --trajectory OUT.txt [--map OUT.pgm] [--set key=value ...] [--quiet]
+ *           --trajectory OUT.txt [--map OUT.pgm] [--laser-pose X Y THETA] [--upside-down]
+ *           [--set key=value ...] [--quiet]
  */
 #include <errno.h>
 #include <math.h>
@@ -26,7 +27,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: rsm-nav SOURCE [--method rsm|icp|odometry] --trajectory OUT.txt [--map OUT.pgm]\n"
-            "               [--set KEY=VALUE]... [--quiet]\n"
+            "               [--laser-pose X Y THETA] [--upside-down] [--set KEY=VALUE]... [--quiet]\n"
             "SOURCE is one of:\n"
             "  --carmen LOG [--fov179]   a CARMEN log, plain or gzip (FLASER/ROBOTLASER1 scans;\n"
             "                            odometry from the pose fields of the laser lines)\n"
@@ -35,16 +36,24 @@ static void usage(FILE *f)
             "     [--robot-baud N] [--lms-baud N] [--listen] [--seconds S] [--idle-exit S]\n"
             "                            --listen sends nothing and decodes what arrives (replays)\n"
             "  --ticks-per-m N --wheel-base M   odometry geometry for encoder packets\n"
+            "                            (default: the capture's, else the P3-DX defaults)\n"
             "  --events FILE             write every decoded input (E left right / S count hash)\n"
             "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
             "                            the capture's robot.initial_pose, else zero)\n"
-            "                            (default: the capture's, else the P3-DX defaults)\n"
+            "  --laser-pose X Y THETA    the laser's pose on the robot (m, m, rad; x forward,\n"
+            "                            y left, theta CCW). Default: with --carmen the laser pose\n"
+            "                            of the log's first ROBOTLASER1 line (or of a FLASER line\n"
+            "                            whose laser pose differs from its odometry), else zero.\n"
+            "                            Given, it overrides the log (as --set mount_x= etc. do)\n"
+            "  --upside-down             the laser is mounted upside down (beam angles mirrored;\n"
+            "                            no log says so)\n"
             "Writes one line per scan: timestamp x y theta (s, m, m, rad).\n"
             "KEY is one of: cell, sigma, rule (0 inside, 1 touch, 2 nearest), min_hits, window,\n"
             "search_sigmas, search_min, search_max, gate, noise (0 residual, 1 fixed), r_min_xy,\n"
             "r_min_theta, inlier_tol, length_tol, iterations, min_support, seed, k_den, nms,\n"
             "max_range, min_range, icp_iterations, icp_pair_dist, trans_per_m, rot_per_rad, rot_per_m,\n"
-            "map_on_reject, refine (iterations, 0 = off), refine_sat, refine_scale.\n");
+            "map_on_reject, refine (iterations, 0 = off), refine_sat, refine_scale,\n"
+            "mount_x, mount_y, mount_theta, upside_down (as --laser-pose and --upside-down).\n");
 }
 
 static int set_option(rsm_localizer_config_t *c, const char *kv)
@@ -107,6 +116,7 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     U("map_miss", tmap.miss_dec, uint8_t)
     U("map_sat", tmap.saturation, uint8_t)
     U("map_margin", tmap.clear_margin, uint8_t)
+    U("map_splat_from", tmap.splat_from, uint8_t)
     U("mm_iterations", mapmatch.iterations, uint8_t)
     F("mm_sigma", mapmatch.sigma)
     F("mm_search", mapmatch.search_rad)
@@ -167,6 +177,11 @@ typedef struct nav {
     double file_s[4];      /* trajectory stamps of scans waiting in the aligner, FIFO */
     unsigned file_head;
     unsigned file_count;
+    /* The laser's mount (cfg.laser_mount, cfg.laser_upside_down) and where it came from. */
+    int mount_flag;        /* --laser-pose or --set mount_*: overrides the log */
+    const char *mount_source;   /* "flag", "log ROBOTLASER1", "log FLASER" or "default zero" */
+    char mount_note[224];  /* the log's mount when a flag overrode it, or why it was not used */
+    uint64_t mount_disagree;    /* later log laser poses off the first by more than the tolerance */
 } nav_t;
 
 static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep);
@@ -325,13 +340,61 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
     }
 }
 
+/* A laser pose in a log farther than this from the robot's pose is not a
+ * mount (the two triples are then in different frames). */
+#define NAV_MOUNT_MAX_M 10.0f
+/* Later laser poses within this of the first are the same mount (the log
+ * writes 1 um / 1 urad). */
+#define NAV_MOUNT_TOL_M 0.001f
+#define NAV_MOUNT_TOL_RAD 0.001f
+
+/* The mount from the log's first scan record that carries a laser pose
+ * (looked up before the run: the localizer keeps its configuration), unless
+ * a flag gave one. */
+static void carmen_mount(nav_t *nav, const char *path, int fov179, rsm_pose_t *log_mount, int *have_log)
+{
+    static carmen_reader_t ahead;
+    static carmen_record_t rec;
+    *have_log = 0;
+    nav->mount_source = nav->mount_flag ? "flag" : "default zero";
+    ahead.fov179 = fov179;
+    if (carmen_open(&ahead, path) != 0) {
+        return; /* the real pass says why */
+    }
+    if (carmen_next_mount(&ahead, &rec) == CARMEN_SCAN) {
+        const float d = sqrtf(rec.mount.x * rec.mount.x + rec.mount.y * rec.mount.y);
+        const unsigned long long line = (unsigned long long)ahead.counts.lines;
+        if (!(d <= NAV_MOUNT_MAX_M)) {
+            snprintf(nav->mount_note, sizeof nav->mount_note,
+                     "the %s laser pose on line %llu is %.1f m from the robot: not a mount, ignored", rec.type,
+                     line, (double)d);
+        } else {
+            *have_log = 1;
+            *log_mount = rec.mount;
+            if (nav->mount_flag) {
+                snprintf(nav->mount_note, sizeof nav->mount_note,
+                         "overrides the log's %s mount x %.3f y %.3f theta %.4f, line %llu", rec.type,
+                         (double)rec.mount.x, (double)rec.mount.y, (double)rec.mount.theta, line);
+            } else {
+                nav->cfg.laser_mount = rec.mount;
+                nav->mount_source = strcmp(rec.type, "ROBOTLASER1") == 0 ? "log ROBOTLASER1" : "log FLASER";
+                snprintf(nav->mount_note, sizeof nav->mount_note, "line %llu", line);
+            }
+        }
+    }
+    carmen_close(&ahead);
+}
+
 static int run_carmen(nav_t *nav, const char *path, int fov179)
 {
     static carmen_reader_t reader;
     static carmen_record_t rec;
     static rsm_scan_t scan;
     rsm_pose_t last_odom = {0.0f, 0.0f, 0.0f};
+    rsm_pose_t log_mount = {0.0f, 0.0f, 0.0f};
+    int have_log_mount;
     int have_odom = 0;
+    carmen_mount(nav, path, fov179, &log_mount, &have_log_mount);
     reader.fov179 = fov179;
     if (carmen_open(&reader, path) != 0) {
         fprintf(stderr, "rsm-nav: cannot open %s: %s\n", path, strerror(errno));
@@ -345,6 +408,11 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
         }
         if (k != CARMEN_SCAN) {
             continue; /* odometry comes from the pose carried by each laser line */
+        }
+        if (have_log_mount && rec.has_mount &&
+            (fabsf(rec.mount.x - log_mount.x) > NAV_MOUNT_TOL_M || fabsf(rec.mount.y - log_mount.y) > NAV_MOUNT_TOL_M ||
+             fabsf(rsm_wrap_angle(rec.mount.theta - log_mount.theta)) > NAV_MOUNT_TOL_RAD)) {
+            nav->mount_disagree++;
         }
         /* Start in the odometry frame so the trajectories are comparable. */
         if (nav_start(nav, &rec.odom) != 0) {
@@ -371,6 +439,14 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
            (unsigned long long)reader.counts.odoms, (unsigned long long)reader.counts.comments,
            (unsigned long long)reader.counts.unknown, (unsigned long long)reader.counts.malformed,
            (unsigned long long)reader.counts.too_many_beams, (unsigned long long)reader.counts.too_long);
+    if (reader.counts.bad_pose != 0u) {
+        printf("                  malformed with a NaN or infinite pose or stamp: %llu\n",
+               (unsigned long long)reader.counts.bad_pose);
+    }
+    if (reader.counts.flaser_offset != 0u) {
+        printf("                  FLASER lines whose laser pose differs from their odometry pose: %llu\n",
+               (unsigned long long)reader.counts.flaser_offset);
+    }
     return 0;
 }
 
@@ -519,6 +595,20 @@ static const char *method_name(rsm_method_t m)
     }
 }
 
+static void print_mount(const nav_t *nav)
+{
+    const rsm_pose_t *m = &nav->cfg.laser_mount;
+    printf("  laser mount     x %.3f m, y %.3f m, theta %.4f rad, %s (%s%s%s)\n", (double)m->x, (double)m->y,
+           (double)m->theta, nav->cfg.laser_upside_down ? "upside down (flag)" : "upright",
+           nav->mount_source != NULL ? nav->mount_source : "default zero", nav->mount_note[0] != '\0' ? "; " : "",
+           nav->mount_note);
+    if (nav->mount_disagree != 0u) {
+        printf("                  %llu later laser poses in the log differ from the first by more than"
+               " %.0f mm / %.3f rad (the first kept)\n",
+               (unsigned long long)nav->mount_disagree, (double)NAV_MOUNT_TOL_M * 1000.0, (double)NAV_MOUNT_TOL_RAD);
+    }
+}
+
 static void print_summary(nav_t *nav)
 {
     const rsm_localizer_counters_t *c = &nav->loc.counters;
@@ -531,6 +621,7 @@ static void print_summary(nav_t *nav)
         p95 = nav->times[(nav->ntimes * 95) / 100 < nav->ntimes ? (nav->ntimes * 95) / 100 : nav->ntimes - 1];
     }
     printf("  method          %s\n", method_name(nav->cfg.method));
+    print_mount(nav);
     if (nav->cfg.method == RSM_METHOD_MAP) {
         const rsm_tmap_t *m = &nav->loc.state.persistent.map;
         printf("  persistent map  %u writes, tiles %u/%u/%u per level, %u taken, %u evicted, %u returns dropped\n",
@@ -634,6 +725,28 @@ int main(int argc, char **argv)
             }
             nav.have_x0 = 1;
             i += 3;
+        } else if (strcmp(a, "--laser-pose") == 0) {
+            char *e1;
+            char *e2;
+            char *e3;
+            if (i + 3 >= argc) {
+                fprintf(stderr, "rsm-nav: --laser-pose needs three numbers: x y theta\n");
+                return 2;
+            }
+            nav.cfg.laser_mount.x = strtof(argv[i + 1], &e1);
+            nav.cfg.laser_mount.y = strtof(argv[i + 2], &e2);
+            nav.cfg.laser_mount.theta = strtof(argv[i + 3], &e3);
+            if (e1 == argv[i + 1] || e2 == argv[i + 2] || e3 == argv[i + 3] || *e1 != '\0' || *e2 != '\0' ||
+                *e3 != '\0' || !isfinite(nav.cfg.laser_mount.x) || !isfinite(nav.cfg.laser_mount.y) ||
+                !isfinite(nav.cfg.laser_mount.theta)) {
+                fprintf(stderr, "rsm-nav: bad --laser-pose (three numbers: x y theta)\n");
+                return 2;
+            }
+            nav.cfg.laser_mount.theta = rsm_wrap_angle(nav.cfg.laser_mount.theta);
+            nav.mount_flag = 1;
+            i += 3;
+        } else if (strcmp(a, "--upside-down") == 0) {
+            nav.cfg.laser_upside_down = 1u;
         } else if (strcmp(a, "--trajectory") == 0 && next) {
             trajectory = argv[++i];
         } else if (strcmp(a, "--events") == 0 && next) {
@@ -663,6 +776,9 @@ int main(int argc, char **argv)
                 fprintf(stderr, "rsm-nav: bad --set '%s'\n", argv[i]);
                 return 2;
             }
+            if (strncmp(argv[i], "mount_", 6) == 0) {
+                nav.mount_flag = 1;
+            }
         } else if (strcmp(a, "--fov179") == 0) {
             fov179 = 1;
         } else if (strcmp(a, "--quiet") == 0) {
@@ -682,6 +798,8 @@ int main(int argc, char **argv)
         return 2;
     }
     live.quiet = nav.quiet;
+    /* Captures and live links carry no mount: the flags or zero (--carmen may take the log's). */
+    nav.mount_source = nav.mount_flag ? "flag" : "default zero";
     /* Encoder geometry: command line first, then the capture's, then the defaults. */
     if (carmen == NULL) {
         nav.cfg.odometry.ticks_per_m_left = nav.cfg.odometry.ticks_per_m_right = ticks_per_m;

@@ -1,0 +1,303 @@
+/* Matching a scan to the persistent map: convergence from a wrong
+ * prediction, the heading fan, the corridor (only the constrained
+ * directions move, and the covariance says so), large heading errors
+ * with and without the heading fan, the wide recovery search,
+ * an empty map, configuration checks and determinism. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "rsm/config.h"
+#include "rsm/mapmatch.h"
+#include "rsm/scan.h"
+#include "rsm/status.h"
+#include "rsm/tilemap.h"
+#include "synth.h"
+#include "unity.h"
+
+#define DEG (RSM_PI / 180.0f)
+
+static rsm_tmap_t map;
+static rsm_tmap_config_t mcfg;
+static rsm_mapmatch_config_t cfg;
+static rsm_scan_t scan;
+static rsm_point_t pts[RSM_MAX_BEAMS];
+static rsm_point_t world_pts[RSM_MAX_BEAMS];
+static rsm_synth_world_t world;
+static rsm_synth_scan_config_t scfg;
+
+/* The map frame is the synthetic world's shifted by half a cell, so that
+ * the walls (on multiples of 5 cm) run through cell centres instead of
+ * along cell borders, where each wall would read half a cell off (that
+ * quantisation is what real walls average over). */
+#define SHIFT 0.05f
+
+static rsm_pose_t in_map(const rsm_pose_t *p)
+{
+    rsm_pose_t q = *p;
+    q.x += SHIFT;
+    q.y += SHIFT;
+    return q;
+}
+
+/* A generous prior: 0.3 m and 10 degrees (std). */
+static const float p_wide[9] = {0.09f, 0.0f, 0.0f, 0.0f, 0.09f, 0.0f, 0.0f, 0.0f, 0.0305f};
+
+void setUp(void)
+{
+    mcfg = rsm_tmap_config_default();
+    cfg = rsm_mapmatch_config_default();
+    world = rsm_synth_world_room();
+    scfg = rsm_synth_scan_config_default();
+}
+
+void tearDown(void)
+{
+}
+
+/* Robot-frame points of an exact scan from pose. */
+static size_t points_at(const rsm_pose_t *pose)
+{
+    const rsm_scan_limits_t lim = rsm_scan_limits_default();
+    int n;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, pose, &scfg, NULL, 0u, &scan));
+    n = rsm_scan_to_points(&scan, &lim, pts, RSM_MAX_BEAMS, NULL);
+    TEST_ASSERT_GREATER_THAN_INT(20, n);
+    return (size_t)n;
+}
+
+/* Writes exact scans from each pose into the map, twice. */
+static void build_map(const rsm_pose_t *poses, size_t count)
+{
+    size_t i;
+    int rep;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &mcfg));
+    for (rep = 0; rep < 2; ++rep) {
+        for (i = 0; i < count; ++i) {
+            const size_t n = points_at(&poses[i]);
+            const rsm_pose_t m = in_map(&poses[i]);
+            const rsm_point_t o = {m.x, m.y};
+            size_t k;
+            for (k = 0; k < n; ++k) {
+                world_pts[k] = rsm_pose_apply(&m, &pts[k]);
+            }
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, world_pts, n));
+        }
+    }
+}
+
+static const rsm_pose_t room_poses[] = {{-1.2f, 0.6f, 0.0f}, {0.0f, -0.6f, 1.2f}, {1.5f, -0.9f, 2.5f},
+                                        {-1.5f, -1.0f, -0.7f}, {0.2f, 1.0f, -2.0f}};
+
+static void assert_converges(const rsm_pose_t *truth_w, const rsm_pose_t *pred_w, float tol_m, float tol_rad)
+{
+    char msg[160];
+    rsm_mapmatch_result_t res;
+    const size_t n = points_at(truth_w);
+    const rsm_pose_t t = in_map(truth_w);
+    const rsm_pose_t pr = in_map(pred_w);
+    const rsm_pose_t *truth = &t;
+    const rsm_pose_t *pred = &pr;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, pred, p_wide, NULL, &res));
+    snprintf(msg, sizeof msg, "from %.3f %.3f %.2f deg: got %.4f %.4f %.3f deg, truth %.3f %.3f %.2f deg",
+             (double)pred->x, (double)pred->y, (double)(pred->theta / DEG), (double)res.pose.x, (double)res.pose.y,
+             (double)(res.pose.theta / DEG), (double)truth->x, (double)truth->y, (double)(truth->theta / DEG));
+    TEST_ASSERT_TRUE_MESSAGE(rsm_synth_pos_error(&res.pose, truth) < tol_m, msg);
+    TEST_ASSERT_TRUE_MESSAGE(rsm_synth_angle_error(&res.pose, truth) < tol_rad, msg);
+    TEST_ASSERT_TRUE_MESSAGE(res.hit > 0.6f, msg);
+    TEST_ASSERT_GREATER_THAN_UINT32(20u, res.used);
+    /* The posterior is tighter than the prior in every direction. */
+    TEST_ASSERT_TRUE_MESSAGE(res.cov[0] < 0.1f * p_wide[0] && res.cov[4] < 0.1f * p_wide[4] &&
+                                 res.cov[8] < 0.1f * p_wide[8],
+                             msg);
+}
+
+void test_mapmatch_should_converge_from_a_wrong_prediction(void)
+{
+    const rsm_pose_t truth = {-0.3f, 0.1f, 0.4f};
+    rsm_pose_t pred;
+    build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
+    assert_converges(&truth, &truth, 0.02f, 0.5f * DEG);
+    /* Within the coarsest level's basin: 15 cm and 3 degrees off. */
+    pred.x = truth.x + 0.15f;
+    pred.y = truth.y - 0.1f;
+    pred.theta = truth.theta + 3.0f * DEG;
+    assert_converges(&truth, &pred, 0.02f, 0.5f * DEG);
+    pred.x = truth.x - 0.1f;
+    pred.y = truth.y + 0.12f;
+    pred.theta = truth.theta - 2.0f * DEG;
+    assert_converges(&truth, &pred, 0.02f, 0.5f * DEG);
+}
+
+/* A 16 m x 10 m hall with four boxes: far walls, where a heading error of
+ * a few degrees moves the points by more than the coarsest cell; the boxes
+ * nearby still lead the coarse levels there. */
+static const rsm_synth_segment_t hall[] = {
+    {-8.0f, -5.0f, 8.0f, -5.0f}, {8.0f, -5.0f, 8.0f, 5.0f},   {8.0f, 5.0f, -8.0f, 5.0f},   {-8.0f, 5.0f, -8.0f, -5.0f},
+    {3.0f, 2.0f, 4.0f, 2.0f},    {4.0f, 2.0f, 4.0f, 3.0f},    {4.0f, 3.0f, 3.0f, 3.0f},    {3.0f, 3.0f, 3.0f, 2.0f},
+    {-5.0f, -3.0f, -4.0f, -3.0f}, {-4.0f, -3.0f, -4.0f, -2.0f}, {-4.0f, -2.0f, -5.0f, -2.0f}, {-5.0f, -2.0f, -5.0f, -3.0f},
+    {-2.0f, 3.0f, -1.0f, 3.0f},  {-1.0f, 3.0f, -1.0f, 3.5f},  {-1.0f, 3.5f, -2.0f, 3.5f},  {-2.0f, 3.5f, -2.0f, 3.0f},
+    {5.0f, -4.0f, 6.0f, -4.0f},  {6.0f, -4.0f, 6.0f, -3.0f},  {6.0f, -3.0f, 5.0f, -3.0f},  {5.0f, -3.0f, 5.0f, -4.0f}};
+
+void test_mapmatch_should_recover_large_heading_errors_in_a_hall(void)
+{
+    const rsm_pose_t poses[] = {{0.0f, 0.0f, 0.0f}, {0.5f, 0.5f, 1.6f}, {-0.5f, -0.5f, 3.1f}, {0.0f, 0.5f, -1.6f}};
+    const rsm_pose_t truth = {0.2f, -0.1f, 0.3f};
+    rsm_pose_t pred = truth;
+    const rsm_synth_world_t w = {hall, sizeof hall / sizeof hall[0]};
+    world = w;
+    build_map(poses, sizeof poses / sizeof poses[0]);
+    pred.theta = truth.theta + 5.0f * DEG;
+    assert_converges(&truth, &pred, 0.02f, 0.3f * DEG);
+    pred.theta = truth.theta - 5.0f * DEG;
+    assert_converges(&truth, &pred, 0.02f, 0.3f * DEG);
+    /* Ten degrees: the fan reaches 5.7 of them, the descent the rest. */
+    pred.theta = truth.theta + 10.0f * DEG;
+    assert_converges(&truth, &pred, 0.02f, 0.3f * DEG);
+    cfg.search_rad = 0.0f;
+    assert_converges(&truth, &pred, 0.02f, 0.3f * DEG);
+}
+
+void test_mapmatch_should_move_only_across_a_corridor(void)
+{
+    /* In a straight corridor the scan pins the sideways position and the
+     * heading; along it the prediction stays within its uncertainty (5 cm
+     * here, as the filter would have it), and so does its variance: the
+     * walls' uneven hit counts are all the scan has to say along it. */
+    const float p_corr[9] = {0.0025f, 0.0f, 0.0f, 0.0f, 0.09f, 0.0f, 0.0f, 0.0f, 0.0305f};
+    static const rsm_synth_segment_t walls[] = {{-20.0f, -0.6f, 20.0f, -0.6f}, {-20.0f, 0.6f, 20.0f, 0.6f}};
+    const rsm_synth_world_t corridor = {walls, 2u};
+    rsm_pose_t poses[13];
+    size_t i;
+    const rsm_pose_t truth_w = {0.5f, 0.05f, 0.02f};
+    const rsm_pose_t truth = in_map(&truth_w);
+    rsm_pose_t pred;
+    rsm_mapmatch_result_t res;
+    size_t n;
+    world = corridor;
+    scfg.max_range_m = 8.0f; /* the corridor's ends are out of sight */
+    for (i = 0; i < 13u; ++i) {
+        poses[i].x = -6.0f + (float)i;
+        poses[i].y = 0.1f * (float)((int)(i % 3u) - 1);
+        poses[i].theta = 0.05f * (float)((int)(i % 5u) - 2);
+    }
+    build_map(poses, 13u);
+    pred.x = truth.x + 0.2f;
+    pred.y = truth.y + 0.08f;
+    pred.theta = truth.theta + 1.5f * DEG;
+    n = points_at(&truth_w);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_corr, NULL, &res));
+    TEST_ASSERT_FLOAT_WITHIN(0.01f, truth.y, res.pose.y);
+    TEST_ASSERT_FLOAT_WITHIN(0.3f * DEG, truth.theta, res.pose.theta);
+    TEST_ASSERT_FLOAT_WITHIN(0.1f, pred.x, res.pose.x);
+    TEST_ASSERT_TRUE(res.cov[0] > 0.5f * p_corr[0]);
+    TEST_ASSERT_TRUE(res.cov[4] < 0.01f * p_corr[4]);
+    TEST_ASSERT_TRUE(res.info[0] < 0.1f * res.info[4]);
+}
+
+void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
+{
+    const rsm_pose_t truth_w = {-0.5f, 0.3f, 0.3f};
+    const rsm_pose_t truth = in_map(&truth_w);
+    rsm_pose_t pred = truth;
+    rsm_pose_t best;
+    rsm_mapmatch_result_t res;
+    size_t n;
+    float coarse;
+    build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
+    coarse = rsm_tmap_cell(&map, (uint32_t)mcfg.levels - 1u);
+    pred.x += 0.7f;
+    pred.y -= 0.5f;
+    pred.theta += 4.0f * DEG;
+    n = points_at(&truth_w);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, &best));
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&best, &truth) < coarse);
+    TEST_ASSERT_TRUE(rsm_synth_angle_error(&best, &truth) < 2.0f * DEG);
+    /* and the descent from there lands on it, under the prior widened by
+     * the search radius as the localizer does */
+    {
+        float wide[9];
+        memcpy(wide, p_wide, sizeof wide);
+        wide[0] += 1.0f;
+        wide[4] += 1.0f;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, wide, &best, &res));
+    }
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&res.pose, &truth) < 0.02f);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, -1.0f, &best));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 200.0f * coarse, &best));
+}
+
+void test_mapmatch_should_report_an_empty_map_as_degenerate(void)
+{
+    const rsm_pose_t pred = {1.0f, 2.0f, 0.5f};
+    rsm_mapmatch_result_t res;
+    size_t n;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &mcfg));
+    n = points_at(&pred);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_DEGENERATE, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_wide, NULL, &res));
+    TEST_ASSERT_EQUAL_MEMORY(&pred, &res.pose, sizeof pred);
+    TEST_ASSERT_EQUAL_MEMORY(p_wide, res.cov, sizeof res.cov);
+    /* A zero prior covariance is floored, not inverted as it is. */
+    {
+        const float zero[9] = {0};
+        build_map(room_poses, 2u);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, zero, NULL, &res));
+        TEST_ASSERT_TRUE(rsm_synth_pos_error(&res.pose, &pred) < 1e-3f);
+    }
+}
+
+void test_mapmatch_should_check_its_arguments_and_config(void)
+{
+    const rsm_pose_t pred = {0.0f, 0.0f, 0.0f};
+    rsm_mapmatch_result_t res;
+    rsm_mapmatch_config_t c;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &mcfg));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch_check(&cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(NULL));
+    c = cfg;
+    c.sigma = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(&c));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &c, pts, 1u, &pred, p_wide, NULL, &res));
+    c = cfg;
+    c.iterations = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(&c));
+    c = cfg;
+    c.search_rad = 0.5f;
+    c.search_step_rad = 0.001f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(&c));
+    c.search_rad = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch_check(&c));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(NULL, &cfg, pts, 1u, &pred, p_wide, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, NULL, 1u, &pred, p_wide, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, pts, 1u, NULL, p_wide, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, pts, 1u, &pred, NULL, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, pts, 1u, &pred, p_wide, NULL, NULL));
+}
+
+void test_mapmatch_should_be_deterministic(void)
+{
+    const rsm_pose_t truth = {0.1f, 0.2f, -0.3f};
+    const rsm_pose_t pred = {0.25f, 0.15f, -0.25f};
+    rsm_mapmatch_result_t a;
+    rsm_mapmatch_result_t b;
+    size_t n;
+    build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
+    n = points_at(&truth);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_wide, NULL, &a));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_wide, NULL, &b));
+    TEST_ASSERT_EQUAL_MEMORY(&a, &b, sizeof a);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_mapmatch_should_converge_from_a_wrong_prediction);
+    RUN_TEST(test_mapmatch_should_recover_large_heading_errors_in_a_hall);
+    RUN_TEST(test_mapmatch_should_move_only_across_a_corridor);
+    RUN_TEST(test_mapmatch_search_should_find_a_pose_a_metre_off);
+    RUN_TEST(test_mapmatch_should_report_an_empty_map_as_degenerate);
+    RUN_TEST(test_mapmatch_should_check_its_arguments_and_config);
+    RUN_TEST(test_mapmatch_should_be_deterministic);
+    return UNITY_END();
+}

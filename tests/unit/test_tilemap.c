@@ -1,0 +1,378 @@
+/* The persistent tile map: configuration checks, hits and misses along a
+ * beam, tiles taken only for returns, the index against a reference model
+ * through allocation and eviction, what happens when the pool is full, and
+ * the interpolated occupancy and its gradient. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "rsm/config.h"
+#include "rsm/status.h"
+#include "rsm/tilemap.h"
+#include "synth.h"
+#include "unity.h"
+
+static rsm_tmap_t map;
+static rsm_tmap_config_t cfg;
+
+void setUp(void)
+{
+    memset(&map, 0xA5, sizeof map); /* init must not rely on zeroed storage */
+    cfg = rsm_tmap_config_default();
+    cfg.levels = 1u;
+}
+
+void tearDown(void)
+{
+}
+
+static void init(void)
+{
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &cfg));
+}
+
+/* Cell of a world coordinate on level 0. */
+static int32_t cell(float v)
+{
+    return (int32_t)floorf(v / cfg.cell_m);
+}
+
+static void update_one(float ox, float oy, float px, float py)
+{
+    const rsm_point_t o = {ox, oy};
+    const rsm_point_t p = {px, py};
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, &p, 1u));
+}
+
+void test_tmap_init_should_reject_bad_configs(void)
+{
+    rsm_tmap_config_t c;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tmap_init(NULL, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tmap_init(&map, NULL));
+#define BAD(field, value)                                                   \
+    do {                                                                    \
+        c = cfg;                                                            \
+        c.field = value;                                                    \
+        TEST_ASSERT_EQUAL_INT_MESSAGE(RSM_ERR_INVAL, rsm_tmap_init(&map, &c), #field); \
+    } while (0)
+    BAD(cell_m, 0.0f);
+    BAD(cell_m, NAN);
+    BAD(levels, 0u);
+    BAD(levels, (uint8_t)(RSM_TMAP_LEVELS + 1));
+    BAD(hit_inc, 0u);
+    BAD(hit_inc, 16u);
+    BAD(miss_dec, 16u);
+    BAD(saturation, 0u);
+    BAD(saturation, 16u);
+#undef BAD
+    c = rsm_tmap_config_default();
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &c));
+    TEST_ASSERT_EQUAL_UINT32(0u, map.used);
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, 3, -7));
+}
+
+void test_tmap_update_should_add_hits_and_saturate(void)
+{
+    int i;
+    init();
+    update_one(0.05f, 0.05f, 1.03f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(1.03f), cell(0.05f)));
+    TEST_ASSERT_EQUAL_UINT32(1u, map.used);
+    TEST_ASSERT_EQUAL_UINT32(1u, map.counters.allocated);
+    for (i = 0; i < 10; ++i) {
+        update_one(0.05f, 0.05f, 1.03f, 0.05f);
+    }
+    TEST_ASSERT_EQUAL_UINT8(RSM_TMAP_MAX_VALUE, rsm_tmap_value(&map, 0u, cell(1.03f), cell(0.05f)));
+    TEST_ASSERT_EQUAL_UINT32(11u, map.counters.updates);
+    TEST_ASSERT_EQUAL_FLOAT(1.0f, rsm_tmap_occupancy(&map, 0u, 1.03f, 0.05f));
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, rsm_tmap_occupancy(&map, 0u, 0.95f, 0.05f));
+}
+
+void test_tmap_update_should_clear_along_the_beam_but_not_near_the_return(void)
+{
+    int32_t gx;
+    int i;
+    init();
+    /* A wall of returns along x = 2.05 from the origin: then move it to x = 3.05
+     * so that beams pass through the old one. */
+    for (i = 0; i < 2; ++i) {
+        update_one(0.05f, 0.05f, 2.05f, 0.05f);
+    }
+    TEST_ASSERT_EQUAL_UINT8(2u * cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(2.05f), 0));
+    for (i = 0; i < 3; ++i) {
+        update_one(0.05f, 0.05f, 3.05f, 0.05f);
+    }
+    /* The old return lost one per beam through it; the new one gained. */
+    TEST_ASSERT_EQUAL_UINT8(2u * cfg.hit_inc - 3u * cfg.miss_dec, rsm_tmap_value(&map, 0u, cell(2.05f), 0));
+    TEST_ASSERT_EQUAL_UINT8(3u * cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(3.05f), 0));
+    /* clear_margin cells before the return keep their value: put a return
+     * there first, then one just behind it. */
+    init();
+    update_one(0.05f, 0.05f, 1.95f, 0.05f);
+    update_one(0.05f, 0.05f, 2.05f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(1.95f), 0));
+    update_one(0.05f, 0.05f, 2.25f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc - cfg.miss_dec, rsm_tmap_value(&map, 0u, cell(1.95f), 0));
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc - cfg.miss_dec, rsm_tmap_value(&map, 0u, cell(2.05f), 0));
+    /* Values never go below 0, and cells along the way stay at 0. */
+    for (gx = 1; gx < cell(1.95f); ++gx) {
+        TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, gx, 0));
+    }
+}
+
+void test_tmap_update_should_take_tiles_only_for_returns(void)
+{
+    init();
+    /* A long beam through space that holds no tile takes only the tile of
+     * its return. */
+    update_one(-5.0f, -5.0f, 5.0f, 5.0f);
+    TEST_ASSERT_EQUAL_UINT32(1u, map.used);
+    TEST_ASSERT_EQUAL_UINT32(1u, rsm_tmap_tiles(&map, 0u));
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(5.0f), cell(5.0f)));
+}
+
+void test_tmap_update_should_write_every_level(void)
+{
+    uint32_t level;
+    cfg.levels = (uint8_t)RSM_TMAP_LEVELS;
+    cfg.splat_from = (uint8_t)RSM_TMAP_LEVELS; /* whole increments everywhere */
+    init();
+    update_one(0.0f, 0.0f, 1.23f, -0.77f);
+    for (level = 0; level < (uint32_t)RSM_TMAP_LEVELS; ++level) {
+        const float a = rsm_tmap_cell(&map, level);
+        TEST_ASSERT_EQUAL_FLOAT(cfg.cell_m * (float)(1u << level), a);
+        TEST_ASSERT_EQUAL_UINT32(1u, rsm_tmap_tiles(&map, level));
+        TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, level, (int32_t)floorf(1.23f / a),
+                                                            (int32_t)floorf(-0.77f / a)));
+    }
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, (uint32_t)RSM_TMAP_LEVELS, 0, 0));
+}
+
+void test_tmap_update_should_share_a_return_among_four_cells_on_coarse_levels(void)
+{
+    /* Level 1 has 0.2 m cells with centres at 0.1 + 0.2 k. */
+    cfg.levels = 2u;
+    cfg.splat_from = 1u;
+    init();
+    /* At a cell centre: all of it to that cell. */
+    update_one(0.0f, 0.0f, 1.1f, 0.5f);
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 1u, 5, 2));
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 1u, 6, 2));
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 1u, 5, 3));
+    /* Half-way between two centres in x: half to each. */
+    update_one(0.0f, 0.0f, 2.2f, -0.3f);
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc / 2u, rsm_tmap_value(&map, 1u, 10, -2));
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc / 2u, rsm_tmap_value(&map, 1u, 11, -2));
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 1u, 10, -1));
+    /* The interpolated occupancy there is symmetric about the return. */
+    {
+        float dx;
+        float dy;
+        const float a = rsm_tmap_sample(&map, 1u, 2.15f, -0.3f, &dx, &dy);
+        const float b = rsm_tmap_sample(&map, 1u, 2.25f, -0.3f, &dx, &dy);
+        TEST_ASSERT_FLOAT_WITHIN(1e-5f, a, b);
+    }
+    /* The finest level still takes whole increments. */
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(2.2f), cell(-0.3f)));
+}
+
+void test_tmap_update_should_skip_non_finite_points_and_refuse_bad_arguments(void)
+{
+    const rsm_point_t o = {0.0f, 0.0f};
+    const rsm_point_t bad_o = {NAN, 0.0f};
+    rsm_point_t p[3] = {{NAN, 1.0f}, {INFINITY, 0.0f}, {1.0f, 1.0f}};
+    init();
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, p, 3u));
+    TEST_ASSERT_EQUAL_UINT32(1u, map.used);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tmap_update(&map, &bad_o, p, 3u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tmap_update(&map, &o, NULL, 3u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tmap_update(NULL, &o, p, 3u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, NULL, 0u));
+    /* Beyond the tile coordinate range: counted, not written. */
+    p[0].x = 5.0e5f;
+    p[0].y = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, p, 1u));
+    TEST_ASSERT_EQUAL_UINT32(1u, map.counters.outside);
+    TEST_ASSERT_EQUAL_UINT32(1u, map.used);
+}
+
+/* Reference model of which tiles the map holds: key and last write. */
+typedef struct model_tile {
+    int32_t tx;
+    int32_t ty;
+    uint32_t written;
+    int held;
+} model_tile_t;
+
+#define MODEL_KEYS 400
+
+void test_tmap_pool_should_match_a_model_through_eviction(void)
+{
+    static model_tile_t model[MODEL_KEYS];
+    rsm_synth_rng_t rng;
+    uint32_t held = 0;
+    uint32_t step;
+    const float tile_m = cfg.cell_m * (float)RSM_TMAP_TILE_SIDE;
+    const rsm_point_t o = {0.0f, 0.0f};
+    size_t k;
+    cfg.miss_dec = 0u; /* only the index is under test */
+    init();
+    rsm_synth_rng_seed(&rng, 77u);
+    for (k = 0; k < MODEL_KEYS; ++k) {
+        /* Keys over all four quadrants, some sharing hash neighbourhoods. */
+        model[k].tx = (int32_t)(k % 23u) - 11;
+        model[k].ty = (int32_t)(k / 23u) - 9;
+        model[k].held = 0;
+    }
+    for (step = 1; step <= 3000u; ++step) {
+        const size_t i = (size_t)(rsm_synth_rng_next(&rng) % MODEL_KEYS);
+        rsm_point_t p;
+        p.x = ((float)model[i].tx + 0.5f) * tile_m;
+        p.y = ((float)model[i].ty + 0.5f) * tile_m;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, &p, 1u));
+        if (!model[i].held) {
+            if (held == (uint32_t)RSM_TMAP_TILES) {
+                /* The model evicts the least recently written tile. */
+                size_t j;
+                size_t oldest = MODEL_KEYS;
+                for (j = 0; j < MODEL_KEYS; ++j) {
+                    if (model[j].held && (oldest == MODEL_KEYS || model[j].written < model[oldest].written)) {
+                        oldest = j;
+                    }
+                }
+                model[oldest].held = 0;
+                --held;
+            }
+            model[i].held = 1;
+            ++held;
+        }
+        model[i].written = step;
+        if (step % 97u == 0u || step == 3000u) {
+            for (k = 0; k < MODEL_KEYS; ++k) {
+                const float x = ((float)model[k].tx + 0.5f) * tile_m;
+                const float y = ((float)model[k].ty + 0.5f) * tile_m;
+                char msg[80];
+                snprintf(msg, sizeof msg, "step %u key %u", (unsigned)step, (unsigned)k);
+                TEST_ASSERT_EQUAL_INT_MESSAGE(model[k].held, rsm_tmap_occupancy(&map, 0u, x, y) > 0.0f, msg);
+            }
+        }
+    }
+    TEST_ASSERT_EQUAL_UINT32(held, map.used);
+    TEST_ASSERT_EQUAL_UINT32(0u, map.counters.dropped);
+#if RSM_TMAP_TILES < MODEL_KEYS
+    TEST_ASSERT_GREATER_THAN_UINT32(0u, map.counters.evicted);
+#endif
+    TEST_ASSERT_EQUAL_UINT32(map.counters.allocated, map.used);
+}
+
+void test_tmap_update_should_drop_returns_when_every_tile_is_written_by_it(void)
+{
+    /* One scan with returns in more tiles than the pool holds: the tiles it
+     * wrote itself are never taken back, the rest is dropped and counted. */
+    static rsm_point_t p[RSM_TMAP_TILES + 5];
+    const float tile_m = cfg.cell_m * (float)RSM_TMAP_TILE_SIDE;
+    const rsm_point_t o = {0.0f, 0.0f};
+    size_t k;
+    init();
+    for (k = 0; k < (size_t)RSM_TMAP_TILES + 5u; ++k) {
+        p[k].x = ((float)(k % 64u) + 0.5f) * tile_m;
+        p[k].y = ((float)(k / 64u) + 0.5f) * tile_m;
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, p, (size_t)RSM_TMAP_TILES + 5u));
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)RSM_TMAP_TILES, map.used);
+    TEST_ASSERT_EQUAL_UINT32(5u, map.counters.dropped);
+    TEST_ASSERT_EQUAL_UINT32(0u, map.counters.evicted);
+    /* The next scan may take the oldest slots again. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, &p[RSM_TMAP_TILES], 5u));
+    TEST_ASSERT_EQUAL_UINT32(5u, map.counters.evicted);
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(p[RSM_TMAP_TILES + 4].x),
+                                                        cell(p[RSM_TMAP_TILES + 4].y)));
+}
+
+void test_tmap_sample_should_interpolate_and_give_the_gradient(void)
+{
+    int i;
+    init();
+    /* A short wall along y at x in cell 10 (1.0 .. 1.1 m), fully occupied. */
+    for (i = 0; i < 3; ++i) {
+        rsm_point_t w[5];
+        const rsm_point_t o = {0.05f, 0.25f};
+        size_t k;
+        for (k = 0; k < 5u; ++k) {
+            w[k].x = 1.05f;
+            w[k].y = 0.05f + 0.1f * (float)k;
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, w, 5u));
+    }
+    {
+        float dx;
+        float dy;
+        float m;
+        /* At the cell centre: fully occupied, flat along y. */
+        m = rsm_tmap_sample(&map, 0u, 1.05f, 0.25f, &dx, &dy);
+        TEST_ASSERT_FLOAT_WITHIN(1e-5f, 1.0f, m);
+        TEST_ASSERT_FLOAT_WITHIN(1e-3f, 0.0f, dy);
+        /* Half-way to the free cell centre in front: 0.5, rising at 1/a. */
+        m = rsm_tmap_sample(&map, 0u, 1.0f, 0.25f, &dx, &dy);
+        TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.5f, m);
+        TEST_ASSERT_FLOAT_WITHIN(1e-3f, 1.0f / cfg.cell_m, dx);
+        /* Behind the wall the slope falls. */
+        m = rsm_tmap_sample(&map, 0u, 1.12f, 0.25f, &dx, &dy);
+        TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.3f, m);
+        TEST_ASSERT_FLOAT_WITHIN(1e-3f, -1.0f / cfg.cell_m, dx);
+        /* Gradient against a finite difference at an arbitrary point. */
+        {
+            const float x = 1.013f;
+            const float y = 0.171f;
+            const float h = 1e-3f;
+            float gx;
+            float gy;
+            float u1;
+            float u2;
+            (void)rsm_tmap_sample(&map, 0u, x, y, &gx, &gy);
+            u1 = rsm_tmap_sample(&map, 0u, x + h, y, &dx, &dy);
+            u2 = rsm_tmap_sample(&map, 0u, x - h, y, &dx, &dy);
+            TEST_ASSERT_FLOAT_WITHIN(0.05f, (u1 - u2) / (2.0f * h), gx);
+        }
+        /* Far away: nothing. */
+        m = rsm_tmap_sample(&map, 0u, -30.0f, 12.0f, &dx, &dy);
+        TEST_ASSERT_EQUAL_FLOAT(0.0f, m);
+        TEST_ASSERT_EQUAL_FLOAT(0.0f, dx);
+        TEST_ASSERT_EQUAL_FLOAT(0.0f, dy);
+    }
+}
+
+void test_tmap_bounds_should_cover_the_held_tiles(void)
+{
+    int32_t x0 = 0;
+    int32_t y0 = 0;
+    int32_t x1 = 0;
+    int32_t y1 = 0;
+    init();
+    TEST_ASSERT_EQUAL_INT(0, rsm_tmap_bounds(&map, 0u, &x0, &y0, &x1, &y1));
+    update_one(0.0f, 0.0f, -1.01f, 2.03f);
+    update_one(0.0f, 0.0f, 0.42f, -0.33f);
+    TEST_ASSERT_EQUAL_INT(1, rsm_tmap_bounds(&map, 0u, &x0, &y0, &x1, &y1));
+    TEST_ASSERT_TRUE(x0 <= cell(-1.01f) && x1 >= cell(0.42f));
+    TEST_ASSERT_TRUE(y0 <= cell(-0.33f) && y1 >= cell(2.03f));
+    TEST_ASSERT_EQUAL_INT32(0, x0 % RSM_TMAP_TILE_SIDE);
+    TEST_ASSERT_EQUAL_INT32(RSM_TMAP_TILE_SIDE - 1, (x1 - x0) % RSM_TMAP_TILE_SIDE);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_tmap_init_should_reject_bad_configs);
+    RUN_TEST(test_tmap_update_should_add_hits_and_saturate);
+    RUN_TEST(test_tmap_update_should_clear_along_the_beam_but_not_near_the_return);
+    RUN_TEST(test_tmap_update_should_take_tiles_only_for_returns);
+    RUN_TEST(test_tmap_update_should_write_every_level);
+    RUN_TEST(test_tmap_update_should_share_a_return_among_four_cells_on_coarse_levels);
+    RUN_TEST(test_tmap_update_should_skip_non_finite_points_and_refuse_bad_arguments);
+    RUN_TEST(test_tmap_pool_should_match_a_model_through_eviction);
+    RUN_TEST(test_tmap_update_should_drop_returns_when_every_tile_is_written_by_it);
+    RUN_TEST(test_tmap_sample_should_interpolate_and_give_the_gradient);
+    RUN_TEST(test_tmap_bounds_should_cover_the_held_tiles);
+    return UNITY_END();
+}
