@@ -218,3 +218,31 @@ def test_real_log_counts():
     assert st.comments == 4
     assert n_ranges == 13631 * 180
     assert backwards == 631  # the ordering quirk documented in SOURCE.md
+
+
+# The robot at (1, 2, pi/2) with its laser 0.22 m ahead, 0.05 m to the left and
+# turned 0.1 rad: in the odometry frame the laser sits at (1 - 0.05, 2 + 0.22).
+RL1_MOUNTED = ("ROBOTLASER1 0 -1.570796 3.141593 0.785398 81.900000 0.010000 0 "
+               "5 1.00 2.00 3.00 2.00 1.00 0 "
+               "0.950000 2.220000 1.670796 1.000000 2.000000 1.570796 "
+               "0.000000 0.000000 0.550000 0.250000 0.000000 100.000000 robot 0.000000")
+
+
+def test_robotlaser1_mount_is_the_laser_pose_seen_from_the_robot():
+    rec = parse_line(RL1_MOUNTED)
+    assert rec.mount == pytest.approx((0.22, 0.05, 0.1), abs=2e-6)
+    # RL1_OK: laser (1.0, 2.0, 0.1), robot (1.1, 2.1, 0.2): behind and to the right, turned back
+    c, s = math.cos(0.2), math.sin(0.2)
+    want = (c * -0.1 + s * -0.1, -s * -0.1 + c * -0.1, -0.1)
+    assert parse_line(RL1_OK).mount == pytest.approx(want, abs=1e-9)
+
+
+def test_flaser_mount_only_when_its_two_triples_differ(head_log):
+    # FLASER_OK's triples differ: laser (0.1, 0.2, 0.3), odometry (0.4, 0.5, 0.6)
+    m = parse_line(FLASER_OK).mount
+    c, s = math.cos(0.6), math.sin(0.6)
+    assert m == pytest.approx((c * -0.3 + s * -0.3, -s * -0.3 + c * -0.3, -0.3), abs=1e-9)
+    same = parse_line("FLASER 2 1.00 2.00 0.5 -1.0 3.0 0.5 -1.0 3.0 10.0 host 0.0")
+    assert same.mount is None
+    # the shipped excerpt repeats the odometry pose in the laser triple
+    assert all(r.mount is None for r in read_log(head_log, types=["FLASER"]))

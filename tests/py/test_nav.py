@@ -1,4 +1,4 @@
-"""End-to-end tests of rsm-nav (offline CARMEN mode) and the accuracy floors.
+"""End-to-end tests of rsm-nav (offline CARMEN mode), the laser mount, and the accuracy floors.
 
 rsm-nav comes from the CMake build named by RSM_BUILD_DIR (ctest sets it).
 The floors on the real Intel log are the ones the core issue names: rsm more
@@ -8,6 +8,7 @@ translation error at most 0.03 m; with 43 % outliers its local translational
 error within 1.25 times the clean one; two runs bit-identical.
 """
 
+import math
 import os
 import subprocess
 from pathlib import Path
@@ -15,8 +16,10 @@ from pathlib import Path
 import pytest
 
 from conftest import INTEL_DIR, REPO_ROOT, require_intel_dir, rsm_nav_binary as nav_binary
+from rsm_tools import carmen as cm
 from rsm_tools import evaluate as ev
 from rsm_tools import outliers
+from rsm_tools import sim
 
 
 def run_nav(log: Path, out: Path, method: str = "rsm", *extra: str) -> str:
@@ -43,6 +46,8 @@ def test_nav_runs_on_the_shipped_excerpt_and_writes_all_outputs(tmp_path, head_l
     yaml = (tmp_path / "map.yaml").read_text()
     assert "image: map.pgm" in yaml and "resolution: 0.05" in yaml
     assert "scans           600" in summary
+    # its FLASER lines repeat the odometry pose as the laser pose: no mount in the log
+    assert "laser mount     x 0.000 m, y 0.000 m, theta 0.0000 rad, upright (default zero)" in summary
     res = errors(traj, head_relations)
     assert res["matched"] == 47
     assert res["translation"]["mean"] < 0.05, res
@@ -80,6 +85,161 @@ def test_nav_rejects_a_missing_log_with_a_clear_message(tmp_path):
                           str(tmp_path / "t.txt")], capture_output=True, text=True)
     assert res.returncode == 1
     assert "cannot open" in res.stderr
+
+
+# ---------------------------------------------------------------------------
+# The laser's mount (its pose on the robot): from the log's ROBOTLASER1 laser
+# pose, or from --laser-pose / --upside-down, and the summary says which.
+
+# Hand-written: the robot at (1, 2, pi/2), its laser 0.22 m ahead, 0.05 m to
+# the left and turned 0.1 rad, so in the odometry frame at (0.95, 2.22, pi/2 + 0.1).
+RL1_MOUNTED = ("ROBOTLASER1 0 -1.570796 3.141593 0.785398 81.900000 0.010000 0 "
+               "5 1.00 2.00 3.00 2.00 1.00 0 "
+               "0.950000 2.220000 1.670796 1.000000 2.000000 1.570796 "
+               "0.000000 0.000000 0.550000 0.250000 0.000000 100.000000 robot 0.000000")
+
+
+def mount_line(summary: str) -> str:
+    lines = [l.strip() for l in summary.splitlines() if l.strip().startswith("laser mount")]
+    assert len(lines) == 1, summary
+    return lines[0]
+
+
+def robotlaser(stamp: float, robot, mount) -> str:
+    return cm.format_record(cm.RobotLaser1(
+        0, -math.pi / 2, math.pi, math.pi / 4, 81.9, 0.01, 0, [1.0, 2.0, 3.0, 2.0, 1.0], [],
+        cm.pose_compose(robot, mount), robot, 0.0, 0.0, 0.0, 0.0, 0.0, stamp, "robot", stamp - 100.0))
+
+
+def write_log(path: Path, lines) -> Path:
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_mount_from_a_hand_written_robotlaser1_line(tmp_path):
+    log = write_log(tmp_path / "h.clf", ["# hand-written", RL1_MOUNTED])
+    summary = run_nav(log, tmp_path / "t.txt")
+    assert mount_line(summary) == ("laser mount     x 0.220 m, y 0.050 m, theta 0.1000 rad, upright "
+                                   "(log ROBOTLASER1; line 2)")
+
+
+def test_mount_skips_a_nan_pose_and_counts_later_disagreement(tmp_path):
+    nan = RL1_MOUNTED.replace("0.950000 2.220000", "nan 2.220000")
+    robot = (3.0, -1.0, 2.5)
+    lines = [nan, RL1_MOUNTED]
+    lines += [robotlaser(100.2 + 0.2 * k, robot, (0.22, 0.05, 0.1)) for k in range(3)]   # the same mount
+    lines += [robotlaser(101.0, robot, (0.225, 0.05, 0.1)),                             # 5 mm further ahead
+              robotlaser(101.2, robot, (0.22, 0.05, 0.105))]                            # 5 mrad more
+    summary = run_nav(write_log(tmp_path / "d.clf", lines), tmp_path / "t.txt")
+    assert "malformed 1" in summary and "NaN or infinite pose or stamp: 1" in summary, summary
+    assert mount_line(summary).endswith("x 0.220 m, y 0.050 m, theta 0.1000 rad, upright (log ROBOTLASER1; line 2)")
+    assert "2 later laser poses in the log differ from the first by more than 1 mm / 0.001 rad (the first kept)" \
+        in summary, summary
+
+
+def test_flaser_gives_a_mount_only_when_its_triples_differ(tmp_path):
+    ranges = " ".join(["2.00"] * 180)
+    same = f"FLASER 180 {ranges} 1.0 2.0 0.5 1.0 2.0 0.5 100.0 h 0.0"
+    moved = f"FLASER 180 {ranges} 1.1 2.0 0.0 1.0 2.0 0.0 100.2 h 0.2"   # laser 0.1 m ahead
+    far = f"FLASER 180 {ranges} 41.0 2.0 0.0 1.0 2.0 0.0 100.2 h 0.2"    # 40 m away: another frame
+    s = run_nav(write_log(tmp_path / "a.clf", [same, same.replace("100.0", "100.2")]), tmp_path / "t.txt")
+    assert mount_line(s).endswith("upright (default zero)"), s
+    s = run_nav(write_log(tmp_path / "b.clf", [same, moved]), tmp_path / "t.txt")
+    assert mount_line(s) == "laser mount     x 0.100 m, y 0.000 m, theta 0.0000 rad, upright (log FLASER; line 2)"
+    assert "FLASER lines whose laser pose differs from their odometry pose: 1" in s
+    s = run_nav(write_log(tmp_path / "c.clf", [far]), tmp_path / "t.txt")
+    assert mount_line(s) == ("laser mount     x 0.000 m, y 0.000 m, theta 0.0000 rad, upright (default zero; "
+                             "the FLASER laser pose on line 1 is 40.0 m from the robot: not a mount, ignored)"), s
+
+
+def test_flag_overrides_the_log_and_the_summary_says_so(tmp_path):
+    log = write_log(tmp_path / "h.clf", [RL1_MOUNTED])
+    s = run_nav(log, tmp_path / "t.txt", "rsm", "--laser-pose", "0.1", "-0.2", "0.3", "--upside-down")
+    assert mount_line(s) == ("laser mount     x 0.100 m, y -0.200 m, theta 0.3000 rad, upside down (flag) "
+                             "(flag; overrides the log's ROBOTLASER1 mount x 0.220 y 0.050 theta 0.1000, line 1)")
+    s = run_nav(log, tmp_path / "t.txt", "rsm", "--set", "mount_x=0.3")
+    assert mount_line(s).startswith("laser mount     x 0.300 m, y 0.000 m, theta 0.0000 rad, upright (flag; overrides")
+    s = run_nav(log, tmp_path / "t.txt", "rsm", "--upside-down")    # the log has no say on that
+    assert mount_line(s) == ("laser mount     x 0.220 m, y 0.050 m, theta 0.1000 rad, upside down (flag) "
+                             "(log ROBOTLASER1; line 1)")
+    for bad in (["0.1", "nan", "0"], ["0.1", "0"], ["a", "0", "0"]):
+        res = subprocess.run([str(nav_binary()), "--carmen", str(log), "--trajectory", str(tmp_path / "t.txt"),
+                              "--laser-pose", *bad], capture_output=True, text=True)
+        assert res.returncode == 2, res.stderr
+        assert "--laser-pose" in res.stderr
+
+
+def position_error(traj: Path, truth: Path) -> float:
+    """Mean distance from the truth at the scans' stamps (rsm-nav starts at the
+    first odometry pose, which rsm-sim sets to the true start)."""
+    def load(p):
+        rows = [l.split() for l in p.read_text().splitlines() if l.strip() and not l.startswith("#")]
+        return {round(float(r[0]) * 1e6): (float(r[1]), float(r[2])) for r in rows}
+    est, true = load(traj), load(truth)
+    assert len(est) == len(true) and est.keys() == true.keys()
+    return sum(math.hypot(est[k][0] - true[k][0], est[k][1] - true[k][1]) for k in est) / len(est)
+
+
+@pytest.fixture(scope="module")
+def mounted_logs(tmp_path_factory):
+    """Three simulated drives through the rooms world (60 s, 5 % wheel slip): the
+    laser centred, 0.22 m ahead of the centre, and 0.22 m ahead upside down."""
+    d = tmp_path_factory.mktemp("mount")
+    out = {}
+    for name, pose, upside in (("centred", (0.0, 0.0, 0.0), False), ("ahead", (0.22, 0.0, 0.0), False),
+                               ("upside", (0.22, 0.0, 0.0), True)):
+        log, truth = d / f"{name}.clf", d / f"{name}.txt"
+        sim.simulate(log, truth, "rooms", seconds=60, slip=0.05, seed=1, carmen=True, laser_pose=pose,
+                     upside_down=upside)
+        out[name] = (log, truth)
+    return out
+
+
+def test_offset_laser_tracked_as_well_as_centred_with_the_logs_mount(mounted_logs, tmp_path):
+    def run(name, *extra):
+        log, truth = mounted_logs[name]
+        traj = tmp_path / f"{name}{len(extra)}.txt"
+        summary = run_nav(log, traj, "rsm", *extra)
+        return position_error(traj, truth), mount_line(summary)
+
+    centred, m = run("centred")
+    assert m.endswith("(log ROBOTLASER1; line 4)") and "x 0.000 m" in m
+    ahead, m = run("ahead")
+    assert "x 0.220 m, y 0.000 m, theta 0.0000 rad, upright (log ROBOTLASER1" in m
+    ahead_zero, m = run("ahead", "--laser-pose", "0", "0", "0")
+    assert "(flag; overrides the log's ROBOTLASER1 mount x 0.220" in m
+    upside, m = run("upside", "--upside-down")
+    assert "x 0.220 m" in m and "upside down (flag) (log ROBOTLASER1" in m
+    upside_ignored, _ = run("upside")
+    print(f"\nmean position error: centred {centred:.4f} m, 0.22 m ahead with the log's mount {ahead:.4f} m, "
+          f"with the mount overridden to zero {ahead_zero:.4f} m; upside down with --upside-down {upside:.4f} m, "
+          f"without {upside_ignored:.4f} m")
+    # as well as centred (within 25 % or 1 cm) with the right mount ...
+    for good in (ahead, upside):
+        assert good <= max(1.25 * centred, centred + 0.01)
+    # ... and clearly worse with the wrong one
+    assert ahead_zero >= 2.0 * ahead and ahead_zero - ahead >= 0.1
+    assert upside_ignored >= 2.0 * upside and upside_ignored - upside >= 0.1
+
+
+def test_capture_takes_the_mount_from_the_flags(tmp_path):
+    """A capture carries no mount: zero unless --laser-pose gives it."""
+    capf, truth = tmp_path / "s.cap", tmp_path / "t.txt"
+    sim.simulate(capf, truth, "rooms", seconds=60, slip=0.05, seed=1, laser_pose=(0.22, 0.0, 0.0))
+
+    def run(*extra):
+        traj = tmp_path / f"c{len(extra)}.txt"
+        res = subprocess.run([str(nav_binary()), "--capture", str(capf), "--trajectory", str(traj), "--quiet",
+                              *extra], capture_output=True, text=True, timeout=600)
+        assert res.returncode == 0, res.stderr
+        return position_error(traj, truth), mount_line(res.stdout)
+
+    zero, m = run()
+    assert m == "laser mount     x 0.000 m, y 0.000 m, theta 0.0000 rad, upright (default zero)"
+    given, m = run("--laser-pose", "0.22", "0", "0")
+    assert m == "laser mount     x 0.220 m, y 0.000 m, theta 0.0000 rad, upright (flag)"
+    print(f"\ncapture, laser 0.22 m ahead: mean position error {given:.4f} m with --laser-pose, {zero:.4f} m without")
+    assert zero >= 2.0 * given and zero - given >= 0.1
 
 
 @pytest.fixture(scope="module")

@@ -4,6 +4,8 @@ import math
 import subprocess
 import sys
 
+import pytest
+
 from conftest import subprocess_env
 from rsm_tools import capture as cap
 from rsm_tools import convert as cv
@@ -85,3 +87,69 @@ def test_command_line_worlds(tmp_path):
         h, recs, _ = cap.read_capture(tmp_path / f"{w}.cap")
         assert h.metadata["ground_truth"] == f"{w}.txt"
         assert sum(r.channel == 0 for r in recs) == 21
+
+
+def test_carmen_log_with_a_mounted_laser(tmp_path):
+    """--carmen: the same drive as the capture; ROBOTLASER1 lines carry the odometry
+    pose and the laser pose composed from it, and the ranges are ray-cast from the
+    laser, mirrored when it is upside down."""
+    from rsm_tools import carmen as cm
+
+    mount = (0.22, 0.05, 0.1)
+    segs, circles, _ = sim.world("rooms")
+    sim.simulate(tmp_path / "c.cap", tmp_path / "c.txt", "rooms", seconds=8)
+    plain = load_truth(tmp_path / "c.txt")
+    for upside in (False, True):
+        log, truth = tmp_path / f"m{upside}.clf", tmp_path / f"m{upside}.txt"
+        n = sim.simulate(log, truth, "rooms", seconds=8, carmen=True, laser_pose=mount, upside_down=upside)
+        rows = load_truth(truth)
+        assert n == 41 and rows == plain
+        st = cm.LogStats()
+        recs = list(cm.read_log(log, stats=st))
+        assert st.malformed_total == 0 and dict(st.records) == {"ODOM": 81, "ROBOTLASER1": 41}
+        scans = [r for r in recs if r.kind == "ROBOTLASER1"]
+        for (t, x, y, th), r in zip(rows, scans):
+            assert r.timestamp == pytest.approx(t, abs=1e-6)
+            assert r.mount == pytest.approx(mount, abs=2e-5)
+            rx, ry, rth = r.robot_pose   # odometry, exact here but for tick quantisation
+            assert math.hypot(rx - x, ry - y) < 0.002 and abs(cv.wrap(rth - th)) < 0.001
+            assert r.num_readings == 181 and r.start_angle == pytest.approx(-math.pi / 2, abs=1e-6)
+        for (t, x, y, th), r in zip(rows[::10], scans[::10]):
+            lx = x + math.cos(th) * mount[0] - math.sin(th) * mount[1]
+            ly = y + math.sin(th) * mount[0] + math.cos(th) * mount[1]
+            for j, got in enumerate(r.ranges):
+                a = math.radians(j - 90) * (-1 if upside else 1)
+                true = sim.raycast(lx, ly, th + mount[2] + a, segs, circles)
+                if true <= sim.MAX_RANGE:
+                    assert got == pytest.approx(true, abs=0.0005 + 1e-9)
+                else:
+                    assert got == sim.CARMEN_NO_RETURN
+
+
+def test_mount_recorded_in_a_capture_only_when_off_centre(tmp_path):
+    sim.simulate(tmp_path / "a.cap", tmp_path / "a.txt", "pillars", seconds=2)
+    sim.simulate(tmp_path / "b.cap", tmp_path / "b.txt", "pillars", seconds=2,
+                 laser_pose=(0.22, 0.0, 0.0), upside_down=True)
+    ha, ra, _ = cap.read_capture(tmp_path / "a.cap")
+    hb, rb, _ = cap.read_capture(tmp_path / "b.cap")
+    assert "sim.laser_pose" not in ha.metadata
+    assert hb.metadata["sim.laser_upside_down"] == "1"
+    assert [float(v) for v in hb.metadata["sim.laser_pose"].split()] == [0.22, 0.0, 0.0]
+    # the robot's bytes are the same, the laser's are not
+    assert [r.data for r in ra if r.channel == 0] == [r.data for r in rb if r.channel == 0]
+    assert [r.data for r in ra if r.channel == 1] != [r.data for r in rb if r.channel == 1]
+
+
+def test_command_line_carmen_and_bad_laser_pose(tmp_path):
+    base = [sys.executable, "-m", "rsm_tools.sim", str(tmp_path / "s.clf.gz"), "--truth", str(tmp_path / "t.txt"),
+            "--seconds", "2", "--carmen"]
+    res = subprocess.run(base + ["--laser-pose", "0.22", "0", "0", "--upside-down"],
+                         capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 0, res.stderr
+    assert "11 scans" in res.stderr and "(CARMEN)" in res.stderr
+    from rsm_tools import carmen as cm
+    scans = [r for r in cm.read_log(tmp_path / "s.clf.gz") if r.kind == "ROBOTLASER1"]
+    assert len(scans) == 11 and scans[0].mount == pytest.approx((0.22, 0.0, 0.0), abs=2e-6)
+    for bad in (["nan", "0", "0"], ["9", "0", "0"], ["0.2", "x", "0"]):
+        res = subprocess.run(base + ["--laser-pose", *bad], capture_output=True, text=True, env=subprocess_env())
+        assert res.returncode == 2 and "--laser-pose" in res.stderr, res.stderr

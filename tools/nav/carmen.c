@@ -52,6 +52,35 @@ static int num(const char *s, double *out)
     return end != s && *end == '\0' && errno == 0;
 }
 
+/* Three numbers from f[0..2]: 1 finite, 0 not numbers, -1 NaN or infinite. */
+static int pose3(char **f, double v[3])
+{
+    int i;
+    for (i = 0; i < 3; ++i) {
+        if (!num(f[i], &v[i])) {
+            return 0;
+        }
+    }
+    return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]) ? 1 : -1;
+}
+
+/* The laser's pose in the robot frame, both given in the same (odometry)
+ * frame. Doubles: log poses can be hundreds of metres from the origin, where
+ * a float keeps only about 0.1 mm. */
+static rsm_pose_t mount_from(const double robot[3], const double laser[3])
+{
+    const double dx = laser[0] - robot[0];
+    const double dy = laser[1] - robot[1];
+    const double c = cos(robot[2]);
+    const double s = sin(robot[2]);
+    const double dt = laser[2] - robot[2];
+    rsm_pose_t m;
+    m.x = (float)(c * dx + s * dy);
+    m.y = (float)(-s * dx + c * dy);
+    m.theta = (float)atan2(sin(dt), cos(dt));
+    return m;
+}
+
 #define MAX_FIELDS 4096
 
 static carmen_kind_t parse_flaser(carmen_reader_t *r, char **f, size_t nf, carmen_record_t *rec)
@@ -78,18 +107,27 @@ static carmen_kind_t parse_flaser(carmen_reader_t *r, char **f, size_t nf, carme
         rec->range_m[i] = (float)v;
     }
     {
-        double ox;
-        double oy;
-        double ot;
+        double laser[3];
+        double odom[3];
         double ts;
-        if (!num(f[2 + n + 3], &ox) || !num(f[2 + n + 4], &oy) || !num(f[2 + n + 5], &ot) || !num(f[2 + n + 6], &ts) ||
-            !isfinite(ox) || !isfinite(oy) || !isfinite(ot) || !isfinite(ts)) {
+        const int lp = pose3(&f[2 + n], laser);
+        const int op = pose3(&f[2 + n + 3], odom);
+        if (lp == 0 || op == 0 || !num(f[2 + n + 6], &ts)) {
             return CARMEN_EOF;
         }
-        rec->odom.x = (float)ox;
-        rec->odom.y = (float)oy;
-        rec->odom.theta = (float)ot;
+        if (lp < 0 || op < 0 || !isfinite(ts)) {
+            return CARMEN_BAD_POSE;
+        }
+        rec->odom.x = (float)odom[0];
+        rec->odom.y = (float)odom[1];
+        rec->odom.theta = (float)odom[2];
         rec->stamp_s = ts;
+        /* Identical triples (Intel, ACES) say nothing about the mount. */
+        rec->has_mount = laser[0] != odom[0] || laser[1] != odom[1] || laser[2] != odom[2];
+        if (rec->has_mount) {
+            r->counts.flaser_offset++;
+            rec->mount = mount_from(odom, laser);
+        }
     }
     rec->count = n;
     rec->start_rad = -RSM_PI / 2.0f;
@@ -100,7 +138,9 @@ static carmen_kind_t parse_flaser(carmen_reader_t *r, char **f, size_t nf, carme
     return CARMEN_SCAN;
 }
 
-/* ROBOTLASER1 type start fov res maxrange acc remmode n r... m rem... lx ly lt rx ry rt tv rv fs ss ta ts host lts */
+/* ROBOTLASER1 type start fov res maxrange acc remmode n r... m rem... lx ly lt rx ry rt tv rv fs ss ta ts host lts
+ * (base+0..2: the laser's pose, base+3..5: the robot's, both in the odometry
+ * frame; the mount is the first seen from the second). */
 static carmen_kind_t parse_robotlaser(carmen_reader_t *r, char **f, size_t nf, carmen_record_t *rec)
 {
     double start;
@@ -113,6 +153,7 @@ static carmen_kind_t parse_robotlaser(carmen_reader_t *r, char **f, size_t nf, c
     size_t i;
     size_t base;
     if (nf < 9 || !num(f[2], &start) || !num(f[3], &fov) || !num(f[4], &res) || !num(f[5], &maxr) ||
+        !isfinite(start) || !isfinite(fov) || !isfinite(res) || !isfinite(maxr) ||
         !num(f[8], &v) || v < 0.0 || v > 100000.0) {
         return CARMEN_EOF;
     }
@@ -139,18 +180,23 @@ static carmen_kind_t parse_robotlaser(carmen_reader_t *r, char **f, size_t nf, c
         rec->range_m[i] = (float)v;
     }
     {
-        double rx;
-        double ry;
-        double rt;
+        double laser[3];
+        double robot[3];
         double ts;
-        if (!num(f[base + 3], &rx) || !num(f[base + 4], &ry) || !num(f[base + 5], &rt) || !num(f[base + 11], &ts) ||
-            !isfinite(rx) || !isfinite(ry) || !isfinite(rt) || !isfinite(ts)) {
+        const int lp = pose3(&f[base], laser);
+        const int rp = pose3(&f[base + 3], robot);
+        if (lp == 0 || rp == 0 || !num(f[base + 11], &ts)) {
             return CARMEN_EOF;
         }
-        rec->odom.x = (float)rx;
-        rec->odom.y = (float)ry;
-        rec->odom.theta = (float)rt;
+        if (lp < 0 || rp < 0 || !isfinite(ts)) {
+            return CARMEN_BAD_POSE;
+        }
+        rec->odom.x = (float)robot[0];
+        rec->odom.y = (float)robot[1];
+        rec->odom.theta = (float)robot[2];
         rec->stamp_s = ts;
+        rec->has_mount = 1;
+        rec->mount = mount_from(robot, laser);
     }
     rec->count = n;
     rec->start_rad = (float)start;
@@ -166,29 +212,30 @@ static carmen_kind_t parse_odom(char **f, size_t nf, carmen_record_t *rec)
     double y;
     double t;
     double ts;
-    if (nf < 8 || !num(f[1], &x) || !num(f[2], &y) || !num(f[3], &t) || !num(f[7], &ts) || !isfinite(x) ||
-        !isfinite(y) || !isfinite(t) || !isfinite(ts)) {
+    if (nf < 8 || !num(f[1], &x) || !num(f[2], &y) || !num(f[3], &t) || !num(f[7], &ts)) {
         return CARMEN_EOF;
+    }
+    if (!isfinite(x) || !isfinite(y) || !isfinite(t) || !isfinite(ts)) {
+        return CARMEN_BAD_POSE;
     }
     rec->odom.x = (float)x;
     rec->odom.y = (float)y;
     rec->odom.theta = (float)t;
     rec->stamp_s = ts;
     rec->count = 0;
+    rec->has_mount = 0;
     rec->kind = CARMEN_ODOM;
     return CARMEN_ODOM;
 }
 
-carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec)
+/* Reads the next line into r->line; 0 at the end. Over-long lines are
+ * counted and skipped. */
+static int read_line(carmen_reader_t *r)
 {
-    static const size_t cap = MAX_FIELDS;
-    char *f[MAX_FIELDS];
     for (;;) {
-        size_t nf;
         size_t len;
-        carmen_kind_t k;
         if (gzgets((gzFile)r->gz, r->line, (int)sizeof r->line) == NULL) {
-            return CARMEN_EOF;
+            return 0;
         }
         r->counts.lines++;
         len = strlen(r->line);
@@ -200,30 +247,92 @@ carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec)
             }
             continue;
         }
-        nf = split(r->line, f, cap);
-        if (nf == 0 || f[0][0] == '#') {
-            r->counts.comments++;
-            continue;
+        return 1;
+    }
+}
+
+static int is_space(char c)
+{
+    return c == ' ' || c == '\t' || c == '\r' || c == '\n';
+}
+
+/* 1 when a FLASER line's two pose triples differ (or cannot be told apart
+ * cheaply), 0 when they are equal. Looks only at the line's last nine fields
+ * (laser pose, odometry pose, stamp, host, logger stamp), so that a log whose
+ * triples are all equal is checked without parsing its readings. */
+static int flaser_triples_differ(const char *line)
+{
+    char tail[512];
+    char *f[10];
+    const char *p = line + strlen(line);
+    double a[3];
+    double b[3];
+    size_t k;
+    for (k = 0; k < 9; ++k) {
+        while (p > line && is_space(p[-1])) {
+            --p;
         }
-        if (nf > cap) {
-            r->counts.malformed++;
-            continue;
+        while (p > line && !is_space(p[-1])) {
+            --p;
         }
-        if (strcmp(f[0], "FLASER") == 0) {
-            k = parse_flaser(r, f, nf, rec);
-        } else if (strcmp(f[0], "ROBOTLASER1") == 0) {
-            k = parse_robotlaser(r, f, nf, rec);
-        } else if (strcmp(f[0], "ODOM") == 0) {
-            k = parse_odom(f, nf, rec);
-        } else {
-            r->counts.unknown++;
-            continue;
+    }
+    if (strlen(p) >= sizeof tail) {
+        return 1;
+    }
+    memcpy(tail, p, strlen(p) + 1);
+    if (split(tail, f, 10) != 9 || pose3(&f[0], a) != 1 || pose3(&f[3], b) != 1) {
+        return 1; /* the full parser decides */
+    }
+    return a[0] != b[0] || a[1] != b[1] || a[2] != b[2];
+}
+
+/* Parses the line in r->line; CARMEN_EOF for a malformed one. */
+static carmen_kind_t parse_line(carmen_reader_t *r, carmen_record_t *rec, size_t *nfields)
+{
+    static const size_t cap = MAX_FIELDS;
+    char *f[MAX_FIELDS];
+    const size_t nf = split(r->line, f, cap);
+    *nfields = nf;
+    if (nf == 0 || f[0][0] == '#') {
+        r->counts.comments++;
+        return CARMEN_SKIPPED;
+    }
+    if (nf > cap) {
+        return CARMEN_EOF;
+    }
+    if (strcmp(f[0], "FLASER") == 0) {
+        rec->type = "FLASER";
+        return parse_flaser(r, f, nf, rec);
+    }
+    if (strcmp(f[0], "ROBOTLASER1") == 0) {
+        rec->type = "ROBOTLASER1";
+        return parse_robotlaser(r, f, nf, rec);
+    }
+    if (strcmp(f[0], "ODOM") == 0) {
+        rec->type = "ODOM";
+        return parse_odom(f, nf, rec);
+    }
+    r->counts.unknown++;
+    return CARMEN_SKIPPED;
+}
+
+carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec)
+{
+    for (;;) {
+        size_t nf;
+        carmen_kind_t k;
+        if (!read_line(r)) {
+            return CARMEN_EOF;
         }
+        k = parse_line(r, rec, &nf);
         if (k == CARMEN_SKIPPED) {
             continue;
         }
-        if (k == CARMEN_EOF) {
+        if (k == CARMEN_EOF || k == CARMEN_BAD_POSE) {
             r->counts.malformed++;
+            if (k == CARMEN_BAD_POSE) {
+                r->counts.bad_pose++;
+            }
             continue;
         }
         if (k == CARMEN_SCAN) {
@@ -232,5 +341,26 @@ carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec)
             r->counts.odoms++;
         }
         return k;
+    }
+}
+
+carmen_kind_t carmen_next_mount(carmen_reader_t *r, carmen_record_t *rec)
+{
+    for (;;) {
+        size_t nf;
+        const char *p;
+        if (!read_line(r)) {
+            return CARMEN_EOF;
+        }
+        p = r->line;
+        while (is_space(*p)) {
+            ++p;
+        }
+        if (strncmp(p, "ROBOTLASER1", 11) == 0 ||
+            (strncmp(p, "FLASER", 6) == 0 && flaser_triples_differ(p))) {
+            if (parse_line(r, rec, &nf) == CARMEN_SCAN && rec->has_mount) {
+                return CARMEN_SCAN;
+            }
+        }
     }
 }

@@ -1,6 +1,7 @@
 /* CARMEN log reader for rsm-nav: FLASER and ROBOTLASER1 scans with the
- * odometry pose they carry, and ODOM lines. Plain or gzip files (zlib reads
- * both). Malformed lines are counted by reason, never fatal. */
+ * odometry pose they carry (and the laser's mount where the line gives it),
+ * and ODOM lines. Plain or gzip files (zlib reads both). Malformed lines are
+ * counted by reason, never fatal. */
 #ifndef RSM_NAV_CARMEN_H
 #define RSM_NAV_CARMEN_H
 
@@ -14,7 +15,8 @@ typedef enum carmen_kind {
     CARMEN_EOF = 0,
     CARMEN_SCAN = 1,
     CARMEN_ODOM = 2,
-    CARMEN_SKIPPED = 3   /* internal: a well-formed record the reader cannot hold (counted) */
+    CARMEN_SKIPPED = 3,  /* internal: a well-formed record the reader cannot hold (counted) */
+    CARMEN_BAD_POSE = 4  /* internal: a pose or timestamp is NaN or infinite (counted as malformed) */
 } carmen_kind_t;
 
 typedef struct carmen_counts {
@@ -23,13 +25,16 @@ typedef struct carmen_counts {
     uint64_t odoms;
     uint64_t comments;
     uint64_t unknown;          /* other record types, skipped */
-    uint64_t malformed;        /* wrong field count or bad number */
+    uint64_t malformed;        /* wrong field count or bad number (bad_pose included) */
+    uint64_t bad_pose;         /* of those: a pose or timestamp that is NaN or infinite */
+    uint64_t flaser_offset;    /* FLASER lines whose laser pose differs from their odometry pose */
     uint64_t too_many_beams;   /* more readings than RSM_MAX_BEAMS */
     uint64_t too_long;         /* line longer than the reader's buffer */
 } carmen_counts_t;
 
 typedef struct carmen_record {
     carmen_kind_t kind;
+    const char *type;          /* the record's keyword: "FLASER", "ROBOTLASER1" or "ODOM" */
     double stamp_s;            /* ipc timestamp */
     rsm_pose_t odom;           /* odometry pose (FLASER odom triple, or ODOM x y theta) */
     size_t count;              /* readings (scans) */
@@ -37,6 +42,14 @@ typedef struct carmen_record {
     float start_rad;           /* angle of reading 0 */
     float step_rad;            /* angle between readings */
     float max_range_m;         /* sensor's maximum range if the record says (ROBOTLASER1), else 0 */
+    /* The laser's pose in the robot frame, between(robot pose, laser pose),
+     * when the record carries one: always for ROBOTLASER1; for FLASER only
+     * when its laser triple differs from its odometry triple (CARMEN's robot
+     * module writes odometry composed with the laser offset there; logs
+     * rebuilt without it, like Intel and ACES, repeat the odometry pose,
+     * which says nothing about the mount). */
+    int has_mount;
+    rsm_pose_t mount;
 } carmen_record_t;
 
 typedef struct carmen_reader {
@@ -51,5 +64,11 @@ void carmen_close(carmen_reader_t *r);
 
 /* Next scan or odometry record; CARMEN_EOF at the end. */
 carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec);
+
+/* Next well-formed scan record that carries a mount (has_mount), skipping
+ * everything else without parsing readings it need not; CARMEN_EOF if none.
+ * For a look ahead before the real pass: only counts.lines is meaningful
+ * (it is then the record's line number). */
+carmen_kind_t carmen_next_mount(carmen_reader_t *r, carmen_record_t *rec);
 
 #endif

@@ -34,6 +34,14 @@ these buckets, counted in :class:`LogStats`:
       ``nan`` for "no return"); poses, velocities, angles and timestamps
       may not.
 
+The laser's mount (its pose in the robot frame, x forward, y left, theta
+counter-clockwise) is ``mount`` on a scan record: the laser pose seen from the
+robot pose of the same line.  ROBOTLASER1 always carries it.  A FLASER line
+carries it only when its two triples differ: CARMEN writes the odometry pose
+composed with the laser offset in the first, but logs rebuilt without it (the
+Intel and ACES logs) repeat the odometry pose there, which says nothing about
+the mount, so ``mount`` is None for them.  rsm-nav reads it the same way.
+
 The writer formats ODOM, FLASER and ROBOTLASER1 records with fixed decimals
 (6 for poses, velocities and timestamps, 2 for ranges by default), so a line
 printed with those precisions is reproduced exactly by ``format_record``.
@@ -47,6 +55,21 @@ from typing import IO, Iterable, Iterator, List, Optional, Sequence, Tuple, Unio
 from .fileio import PathLike, open_text
 
 Pose = Tuple[float, float, float]
+
+
+def pose_in_frame(frame: Pose, pose: Pose) -> Pose:
+    """``pose`` seen from ``frame`` (both in one frame): R(-t) (p - f), angle wrapped."""
+    dx, dy = pose[0] - frame[0], pose[1] - frame[1]
+    c, s = math.cos(frame[2]), math.sin(frame[2])
+    dt = pose[2] - frame[2]
+    return (c * dx + s * dy, -s * dx + c * dy, math.atan2(math.sin(dt), math.cos(dt)))
+
+
+def pose_compose(a: Pose, b: Pose) -> Pose:
+    """``b`` (given in ``a``'s frame) in the frame ``a`` is given in; angle wrapped."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    t = a[2] + b[2]
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], math.atan2(math.sin(t), math.cos(t)))
 
 
 @dataclass
@@ -89,6 +112,14 @@ class FLaser:
     def num_readings(self) -> int:
         return len(self.ranges)
 
+    @property
+    def mount(self) -> Optional[Pose]:
+        """The laser's pose in the robot frame, or None when the two triples
+        are equal (then the line says nothing about the mount)."""
+        if self.laser_pose == self.odom_pose:
+            return None
+        return pose_in_frame(self.odom_pose, self.laser_pose)
+
 
 @dataclass
 class RobotLaser1:
@@ -125,6 +156,11 @@ class RobotLaser1:
     def odom_pose(self) -> Pose:
         """The robot pose, which CARMEN fills from odometry."""
         return self.robot_pose
+
+    @property
+    def mount(self) -> Pose:
+        """The laser's pose in the robot frame."""
+        return pose_in_frame(self.robot_pose, self.laser_pose)
 
 
 Record = Union[Odom, FLaser, RobotLaser1]

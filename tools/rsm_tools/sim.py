@@ -2,6 +2,7 @@
 
     rsm-sim OUT.cap --truth OUT.txt [--world rooms|corridor|pillars] [--seconds N]
             [--slip X] [--range-noise M] [--outliers P] [--seed S]
+            [--carmen] [--laser-pose X Y THETA] [--upside-down]
 
 The world is line segments and circles.  The robot follows a closed loop of
 waypoints at 0.4 m/s (turning on the spot at each corner), integrated at
@@ -17,6 +18,21 @@ comes from one seeded generator, so a seed gives the same bytes.
 
 The truth file has one ``timestamp x y theta`` line per scan (seconds,
 metres, radians), the same timestamps as the scans' records.
+
+``--carmen`` writes a CARMEN log instead of a capture (gzip if OUT ends in
+``.gz``): an ODOM line at every encoder packet's time with the pose
+integrated from the measured ticks, and a ROBOTLASER1 line per scan (181
+readings in metres to 1 mm, 81.9 for no return as CARMEN writes for a SICK)
+whose robot pose is that odometry pose and whose laser pose is it composed
+with the mount, as CARMEN's robot module writes them.
+
+``--laser-pose X Y THETA`` puts the laser off the robot's centre (metres,
+radians, robot frame: x forward, y left, theta counter-clockwise) and
+``--upside-down`` turns it over (a reading at angle a in the laser's own frame
+then points at -a): the scans are ray-cast from there.  A capture records the
+mount only as metadata (``sim.laser_pose``, ``sim.laser_upside_down``); a
+CARMEN log carries the pose in its ROBOTLASER1 lines and nothing says
+"upside down", as in real logs.  The truth stays the robot's centre.
 """
 
 import argparse
@@ -26,8 +42,10 @@ import sys
 from typing import List, Optional, Sequence, Tuple
 
 from . import capture as cap
+from . import carmen as cm
 from . import protocols as proto
-from .convert import wrap
+from .convert import integrate, wrap
+from .fileio import open_text_output
 
 Segment = Tuple[float, float, float, float]
 Circle = Tuple[float, float, float]
@@ -38,6 +56,7 @@ SPEED = 0.4
 TURN_RATE = 0.8
 DT = 0.01
 MAX_RANGE = 8.0
+CARMEN_NO_RETURN = 81.9     # what CARMEN writes (and gives as max range) for a SICK
 T0_US = 1_000_000_000_000  # 1e6 s: an arbitrary epoch
 
 
@@ -93,9 +112,56 @@ def raycast(x: float, y: float, a: float, segs: Sequence[Segment], circles: Sequ
     return best
 
 
+class _CarmenOut:
+    """The CARMEN log writer: ODOM per encoder packet, ROBOTLASER1 per scan,
+    with the odometry integrated from the ticks as rsm-nav would."""
+
+    def __init__(self, path, pose: cm.Pose, mount: cm.Pose, header: str) -> None:
+        self.fh = open_text_output(path)
+        self.w = cm.LogWriter(self.fh, range_decimals=3)
+        self.w.comment(header)
+        self.odom = pose
+        self.prev_odom = pose
+        self.ticks = None
+        self.mount = mount
+        self.t0 = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.fh.close()
+
+    def encoder(self, t: float, left: int, right: int) -> None:
+        if self.t0 is None:
+            self.t0 = t
+        if self.ticks is not None:
+            self.prev_odom = self.odom
+            self.odom = integrate(self.odom, left - self.ticks[0], right - self.ticks[1],
+                                  TICKS_PER_M, WHEEL_BASE)
+        self.ticks = (left, right)
+        x, y, th = self.odom
+        self.w.write(cm.Odom(x, y, th, *self._velocity(), 0.0, t, "rsm-sim", t - self.t0))
+
+    def _velocity(self) -> Tuple[float, float]:
+        d = cm.pose_in_frame(self.prev_odom, self.odom)
+        return d[0] / (10 * DT), d[2] / (10 * DT)
+
+    def scan(self, t: float, ranges: List[float]) -> None:
+        tv, rv = self._velocity()
+        self.w.write(cm.RobotLaser1(
+            0, -math.pi / 2, math.pi, math.radians(1.0), CARMEN_NO_RETURN, 0.01, 0,
+            ranges, [], cm.pose_compose(self.odom, self.mount), self.odom,
+            tv, rv, 0.0, 0.0, 0.0, t, "rsm-sim", t - self.t0))
+
+
 def simulate(out, truth, world_name: str = "rooms", seconds: float = 60.0, slip: float = 0.0,
-             range_noise: float = 0.0, outliers: float = 0.0, seed: int = 1) -> int:
-    """Write the capture and the truth file; returns the number of scans."""
+             range_noise: float = 0.0, outliers: float = 0.0, seed: int = 1,
+             carmen: bool = False, laser_pose: cm.Pose = (0.0, 0.0, 0.0),
+             upside_down: bool = False) -> int:
+    """Write the capture (or with ``carmen`` the CARMEN log) and the truth
+    file; returns the number of scans.  ``laser_pose`` and ``upside_down``
+    mount the laser (see the module's text)."""
     segs, circles, path = world(world_name)
     rng = random.Random(seed)
     x, y = path[0]
@@ -103,6 +169,8 @@ def simulate(out, truth, world_name: str = "rooms", seconds: float = 60.0, slip:
     wp = 1
     left = right = 0            # measured ticks (integers)
     lacc = racc = 0.0           # fractional ticks carried over
+    mx, my, mt = laser_pose
+    flip = -1.0 if upside_down else 1.0
     channels = [cap.Channel(0, "robot", "aria", 38400), cap.Channel(1, "laser", "lms2xx", 38400)]
     meta = {
         "created_by": "rsm-sim", "source": f"rsm-sim world={world_name} seed={seed}",
@@ -115,25 +183,51 @@ def simulate(out, truth, world_name: str = "rooms", seconds: float = 60.0, slip:
         "sim.outliers": repr(outliers), "sim.seconds": repr(seconds),
         "ground_truth": str(getattr(truth, "name", truth)).rsplit("/", 1)[-1],
     }
+    mounted = tuple(laser_pose) != (0.0, 0.0, 0.0) or upside_down
+    if mounted:  # only then, so that a centred laser gives the same bytes as ever
+        meta["sim.laser_pose"] = f"{mx!r} {my!r} {mt!r}"
+        meta["sim.laser_upside_down"] = "1" if upside_down else "0"
+    if carmen:
+        header = (f"rsm-sim world={world_name} seed={seed} seconds={seconds!r} slip={slip!r} "
+                  f"range_noise_m={range_noise!r} outliers={outliers!r}\n"
+                  f"laser pose on the robot {mx!r} {my!r} {mt!r}"
+                  + (", upside down" if upside_down else ""))
+        sink = _CarmenOut(out, (x, y, th), (mx, my, mt), header)
+    else:
+        sink = cap.CaptureWriter(out, channels, meta)
     steps = int(round(seconds / DT))
     scans = 0
-    with cap.CaptureWriter(out, channels, meta) as w, open(truth, "w") as tf:
+    with sink as w, open(truth, "w") as tf:
         tf.write("# timestamp x y theta   (rsm-sim ground truth at each scan)\n")
         for k in range(steps + 1):
             t_us = T0_US + k * 10_000
             if k % 10 == 0:
-                w.write(t_us, 0, proto.encode_encoder(left, right))
+                if carmen:
+                    w.encoder(t_us / 1e6, left, right)
+                else:
+                    w.write(t_us, 0, proto.encode_encoder(left, right))
             if k % 20 == 0:
                 vals = []
+                ranges = []
+                # the laser's own pose; beam j sits at (j - 90) deg in its own frame
+                c, s = math.cos(th), math.sin(th)
+                lx, ly = x + c * mx - s * my, y + s * mx + c * my
                 for j in range(181):
-                    r = raycast(x, y, th + math.radians(j - 90), segs, circles, MAX_RANGE + 1)
+                    a = th + mt + flip * math.radians(j - 90)
+                    r = raycast(lx, ly, a, segs, circles, MAX_RANGE + 1)
                     if r <= MAX_RANGE:
                         if outliers and rng.random() < outliers:
                             r = rng.uniform(0.1, r)
                         if range_noise:
                             r = max(0.001, r + rng.gauss(0.0, range_noise))
-                    vals.append(proto.range_to_raw(r, "mm", MAX_RANGE))
-                w.write(t_us, 1, proto.encode_b0(vals, "mm"))
+                    if carmen:
+                        ranges.append(r if r <= MAX_RANGE else CARMEN_NO_RETURN)
+                    else:
+                        vals.append(proto.range_to_raw(r, "mm", MAX_RANGE))
+                if carmen:
+                    w.scan(t_us / 1e6, ranges)
+                else:
+                    w.write(t_us, 1, proto.encode_b0(vals, "mm"))
                 tf.write(f"{t_us / 1e6:.6f} {x:.6f} {y:.6f} {th:.6f}\n")
                 scans += 1
             # motion for the next step: turn towards the waypoint, then drive
@@ -176,12 +270,21 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--range-noise", type=float, default=0.0)
     ap.add_argument("--outliers", type=float, default=0.0)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--carmen", action="store_true",
+                    help="write OUT as a CARMEN log (ODOM + ROBOTLASER1) instead of a capture")
+    ap.add_argument("--laser-pose", type=float, nargs=3, metavar=("X", "Y", "THETA"),
+                    default=(0.0, 0.0, 0.0),
+                    help="the laser's pose on the robot (m, m, rad; x forward, y left)")
+    ap.add_argument("--upside-down", action="store_true", help="the laser is mounted upside down")
     a = ap.parse_args(argv)
     if a.seconds <= 0 or a.slip < 0 or a.range_noise < 0 or not 0 <= a.outliers <= 1:
         ap.error("--seconds > 0, --slip >= 0, --range-noise >= 0, 0 <= --outliers <= 1")
-    n = simulate(a.out, a.truth, a.world, a.seconds, a.slip, a.range_noise, a.outliers, a.seed)
-    print(f"rsm-sim: {n} scans, {a.seconds:g} s in world {a.world} -> {a.out}, truth {a.truth}",
-          file=sys.stderr)
+    if not all(math.isfinite(v) for v in a.laser_pose) or math.hypot(*a.laser_pose[:2]) > 5.0:
+        ap.error("--laser-pose: finite numbers, the laser within 5 m of the robot's centre")
+    n = simulate(a.out, a.truth, a.world, a.seconds, a.slip, a.range_noise, a.outliers, a.seed,
+                 carmen=a.carmen, laser_pose=tuple(a.laser_pose), upside_down=a.upside_down)
+    print(f"rsm-sim: {n} scans, {a.seconds:g} s in world {a.world} -> {a.out}"
+          f"{' (CARMEN)' if a.carmen else ''}, truth {a.truth}", file=sys.stderr)
     return 0
 
 
