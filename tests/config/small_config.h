@@ -10,8 +10,8 @@
 #define RSM_ARIA_MAX_SONAR 8
 #define RSM_ARIA_STR_SIZE 12
 /* A pool that fills within seconds, so that eviction is exercised. */
-#define RSM_TMAP_TILES 64
-#define RSM_TMAP_HASH_LOG2 7
+#define RSM_TMAP_TILES 48
+#define RSM_TMAP_HASH_LOG2 6
 /* Odd and tiny: every frame reaches a driver in many pieces. */
 #define RSM_LINK_RX_CHUNK 7
 #endif

@@ -360,6 +360,14 @@ static void check_loop(rsm_method_t method)
         TEST_ASSERT_TRUE_MESSAGE(rsm.final_err_m < QUANT + 0.01f && rsm.final_err_rad < 0.5f * DEG, msg);
         TEST_ASSERT_TRUE_MESSAGE(rsm.max_err_m < QUANT + 0.015f, msg);
         TEST_ASSERT_TRUE_MESSAGE(rsm.accepted > (uint32_t)(path_len * 9u / 10u), msg);
+#if RSM_TMAP_TILES < 256
+        /* The tiny test pool is full well before the end: the least recently
+         * written tiles were reused, and tracking held. */
+        TEST_ASSERT_GREATER_THAN_UINT32(0u, loc.state.persistent.map.counters.evicted);
+        TEST_ASSERT_EQUAL_UINT32((uint32_t)RSM_TMAP_TILES, loc.state.persistent.map.used);
+#else
+        TEST_ASSERT_EQUAL_UINT32(0u, loc.state.persistent.map.counters.evicted);
+#endif
         return;
     }
 #if FULL_CAPACITY
@@ -451,6 +459,128 @@ void test_localizer_scan_should_track_with_43_percent_outliers(void)
 void test_localizer_scan_should_track_with_30_percent_outliers_with_the_papers_method(void)
 {
     check_outliers(RSM_METHOD_PAPER, 0.3f);
+}
+
+/* ---- moving people and the laser's mounting ---------------------------------- */
+
+static rsm_synth_segment_t walk_segments[64];
+
+/* The room with a 0.3 m square "person" centred at (x, y), or without. */
+static void room_with_person(int present, float x, float y)
+{
+    const rsm_synth_world_t room = rsm_synth_world_room();
+    const float h = 0.15f;
+    const rsm_synth_segment_t box[4] = {
+        {x - h, y - h, x + h, y - h}, {x + h, y - h, x + h, y + h}, {x + h, y + h, x - h, y + h}, {x - h, y + h, x - h, y - h}};
+    TEST_ASSERT_TRUE(room.count + 4u <= sizeof walk_segments / sizeof walk_segments[0]);
+    memcpy(walk_segments, room.seg, room.count * sizeof room.seg[0]);
+    memcpy(&walk_segments[room.count], box, sizeof box);
+    world.seg = walk_segments;
+    world.count = room.count + (present ? 4u : 0u);
+}
+
+#define WALK_FROM 10u
+#define WALK_TO 60u
+
+static float walker_x(size_t k)
+{
+    return -0.5f + 0.8f * (float)(k - WALK_FROM) / (float)(WALK_TO - WALK_FROM);
+}
+
+void test_localizer_map_should_forget_a_person_who_walked_by(void)
+{
+    /* Someone crosses the middle of the room while the robot drives the
+     * loop, then leaves. While in view they enter the map; once beams pass
+     * where they stood, those cells fade, and the walls stay. */
+    char msg[160];
+    rsm_localizer_report_t rep;
+    const rsm_tmap_t *m = &loc.state.persistent.map;
+    float seen = 0.0f;
+    float left = 0.0f;
+    size_t k;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &path[0], p0_track));
+    for (k = 0; k < path_len; ++k) {
+        const int present = k >= WALK_FROM && k < WALK_TO;
+        room_with_person(present, present ? walker_x(k) : 0.0f, 0.0f);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, step(&loc, k, &odo_err, NULL, &rep));
+        if (k == WALK_TO - 1u) {
+            /* Occupancy where the person's faces were, at their last place. */
+            seen = rsm_tmap_occupancy(m, 0u, walker_x(k) - 0.15f, 0.0f) +
+                   rsm_tmap_occupancy(m, 0u, walker_x(k) + 0.15f, 0.0f);
+        }
+    }
+    for (k = WALK_FROM; k < WALK_TO; ++k) {
+        const float o = rsm_tmap_occupancy(m, 0u, walker_x(k) - 0.15f, 0.0f);
+        left = o > left ? o : left;
+    }
+    {
+        const rsm_pose_t est = rsm_localizer_pose(&loc);
+        snprintf(msg, sizeof msg,
+                 "occupancy at the person's faces while there %.2f (sum of two), highest left behind %.2f; final error %.3f m",
+                 (double)seen, (double)left, (double)rsm_synth_pos_error(&est, &path[path_len - 1u]));
+        TEST_MESSAGE(msg);
+        TEST_ASSERT_TRUE_MESSAGE(seen >= 0.5f, msg);
+        TEST_ASSERT_TRUE_MESSAGE(left < 0.5f, msg);
+        TEST_ASSERT_TRUE_MESSAGE(rsm_synth_pos_error(&est, &path[path_len - 1u]) < QUANT + 0.02f, msg);
+    }
+    /* The walls are still there: the west wall's inside face and the box. */
+    TEST_ASSERT_TRUE(rsm_tmap_occupancy(m, 0u, -1.95f, 0.0f) >= 0.5f);
+    TEST_ASSERT_TRUE(rsm_tmap_occupancy(m, 0u, 0.55f, 0.4f) + rsm_tmap_occupancy(m, 0u, 0.45f, 0.4f) >= 0.5f);
+}
+
+/* Runs the loop with scans from a laser at mount (robot frame, maybe upside
+ * down: its readings then come mirrored), the localizer configured with
+ * cfg_mount; returns the worst position error on the way. */
+static float run_mounted(const rsm_pose_t *mount, int upside_down, const rsm_pose_t *cfg_mount, int cfg_upside_down)
+{
+    rsm_localizer_report_t rep;
+    float worst = 0.0f;
+    size_t k;
+    cfg.laser_mount = *cfg_mount;
+    cfg.laser_upside_down = (uint8_t)cfg_upside_down;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &path[0], p0_track));
+    for (k = 0; k < path_len; ++k) {
+        const rsm_pose_t laser = rsm_pose_compose(&path[k], mount);
+        rsm_pose_t est;
+        size_t i;
+        if (k > 0) {
+            const rsm_motion_t u = rsm_synth_motion(&path[k - 1], &path[k], &odo_err);
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+        }
+        make_scan(&laser, NULL, (uint64_t)k * STEP_US);
+        if (upside_down) {
+            for (i = 0; i < scan.count; ++i) {
+                scan.angle_rad[i] = -scan.angle_rad[i];
+            }
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+        est = rsm_localizer_pose(&loc);
+        if (rsm_synth_pos_error(&est, &path[k]) > worst) {
+            worst = rsm_synth_pos_error(&est, &path[k]);
+        }
+    }
+    return worst;
+}
+
+void test_localizer_should_place_scans_with_the_lasers_mount(void)
+{
+    char msg[200];
+    const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+    const rsm_pose_t ahead = {0.22f, 0.03f, 0.1f};
+    const float centred = run_mounted(&zero, 0, &zero, 0);
+    const float mounted = run_mounted(&ahead, 0, &ahead, 0);
+    const float ignored = run_mounted(&ahead, 0, &zero, 0);
+    const float flipped = run_mounted(&ahead, 1, &ahead, 1);
+    const float unflipped = run_mounted(&ahead, 1, &ahead, 0);
+    snprintf(msg, sizeof msg,
+             "worst error: centred %.3f m, mounted ahead %.3f, mount ignored %.3f, upside down %.3f, "
+             "upside down ignored %.3f",
+             (double)centred, (double)mounted, (double)ignored, (double)flipped, (double)unflipped);
+    TEST_MESSAGE(msg);
+    TEST_ASSERT_TRUE_MESSAGE(mounted < centred + 0.02f, msg);
+    TEST_ASSERT_TRUE_MESSAGE(flipped < centred + 0.02f, msg);
+    TEST_ASSERT_TRUE_MESSAGE(ignored > mounted + 0.1f, msg);
+    TEST_ASSERT_TRUE_MESSAGE(unflipped > mounted + 0.1f, msg);
 }
 
 /* ---- unusable scans and recovery ------------------------------------------------ */
@@ -930,6 +1060,8 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_track_with_30_percent_outliers);
     RUN_TEST(test_localizer_scan_should_track_with_43_percent_outliers);
     RUN_TEST(test_localizer_scan_should_track_with_30_percent_outliers_with_the_papers_method);
+    RUN_TEST(test_localizer_map_should_forget_a_person_who_walked_by);
+    RUN_TEST(test_localizer_should_place_scans_with_the_lasers_mount);
     RUN_TEST(test_localizer_scan_should_refuse_unusable_scans_and_recover);
     RUN_TEST(test_localizer_scan_should_ignore_a_scan_older_than_the_last);
     RUN_TEST(test_localizer_scan_should_refuse_scans_after_a_one_metre_odometry_jump);

@@ -205,11 +205,28 @@ typedef struct model_tile {
     int held;
 } model_tile_t;
 
-#define MODEL_KEYS 400
+/* More keys than the pool holds, so that slots are reused. */
+#define MODEL_KEYS (RSM_TMAP_TILES + 100)
+
+static model_tile_t model[MODEL_KEYS];
+
+static void model_check(uint32_t step, float tile_m)
+{
+    size_t k;
+    for (k = 0; k < (size_t)MODEL_KEYS; ++k) {
+        const float x = ((float)model[k].tx + 0.5f) * tile_m;
+        const float y = ((float)model[k].ty + 0.5f) * tile_m;
+        if (model[k].held != (rsm_tmap_occupancy(&map, 0u, x, y) > 0.0f)) {
+            char msg[80];
+            snprintf(msg, sizeof msg, "step %u key %u: model says %s", (unsigned)step, (unsigned)k,
+                     model[k].held ? "held" : "not held");
+            TEST_FAIL_MESSAGE(msg);
+        }
+    }
+}
 
 void test_tmap_pool_should_match_a_model_through_eviction(void)
 {
-    static model_tile_t model[MODEL_KEYS];
     rsm_synth_rng_t rng;
     uint32_t held = 0;
     uint32_t step;
@@ -219,24 +236,26 @@ void test_tmap_pool_should_match_a_model_through_eviction(void)
     cfg.miss_dec = 0u; /* only the index is under test */
     init();
     rsm_synth_rng_seed(&rng, 77u);
-    for (k = 0; k < MODEL_KEYS; ++k) {
-        /* Keys over all four quadrants, some sharing hash neighbourhoods. */
-        model[k].tx = (int32_t)(k % 23u) - 11;
-        model[k].ty = (int32_t)(k / 23u) - 9;
+    for (k = 0; k < (size_t)MODEL_KEYS; ++k) {
+        /* Keys over all four quadrants, rows 128 wide. */
+        model[k].tx = (int32_t)(k % 128u) - 64;
+        model[k].ty = (int32_t)(k / 128u) - 40;
         model[k].held = 0;
     }
-    for (step = 1; step <= 3000u; ++step) {
-        const size_t i = (size_t)(rsm_synth_rng_next(&rng) % MODEL_KEYS);
+    /* Fill the pool one key per update, then write random keys: each new
+     * one must take the slot of the least recently written. */
+    for (step = 1; step <= (uint32_t)RSM_TMAP_TILES + 3000u; ++step) {
+        const size_t i = step <= (uint32_t)RSM_TMAP_TILES ? (size_t)(step - 1u)
+                                                           : (size_t)(rsm_synth_rng_next(&rng) % MODEL_KEYS);
         rsm_point_t p;
         p.x = ((float)model[i].tx + 0.5f) * tile_m;
         p.y = ((float)model[i].ty + 0.5f) * tile_m;
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, &p, 1u));
         if (!model[i].held) {
             if (held == (uint32_t)RSM_TMAP_TILES) {
-                /* The model evicts the least recently written tile. */
                 size_t j;
                 size_t oldest = MODEL_KEYS;
-                for (j = 0; j < MODEL_KEYS; ++j) {
+                for (j = 0; j < (size_t)MODEL_KEYS; ++j) {
                     if (model[j].held && (oldest == MODEL_KEYS || model[j].written < model[oldest].written)) {
                         oldest = j;
                     }
@@ -248,21 +267,14 @@ void test_tmap_pool_should_match_a_model_through_eviction(void)
             ++held;
         }
         model[i].written = step;
-        if (step % 97u == 0u || step == 3000u) {
-            for (k = 0; k < MODEL_KEYS; ++k) {
-                const float x = ((float)model[k].tx + 0.5f) * tile_m;
-                const float y = ((float)model[k].ty + 0.5f) * tile_m;
-                char msg[80];
-                snprintf(msg, sizeof msg, "step %u key %u", (unsigned)step, (unsigned)k);
-                TEST_ASSERT_EQUAL_INT_MESSAGE(model[k].held, rsm_tmap_occupancy(&map, 0u, x, y) > 0.0f, msg);
-            }
+        if (step == (uint32_t)RSM_TMAP_TILES || (step > (uint32_t)RSM_TMAP_TILES && step % 500u == 0u)) {
+            model_check(step, tile_m);
         }
     }
     TEST_ASSERT_EQUAL_UINT32(held, map.used);
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)RSM_TMAP_TILES, map.used);
     TEST_ASSERT_EQUAL_UINT32(0u, map.counters.dropped);
-#if RSM_TMAP_TILES < MODEL_KEYS
     TEST_ASSERT_GREATER_THAN_UINT32(0u, map.counters.evicted);
-#endif
     TEST_ASSERT_EQUAL_UINT32(map.counters.allocated, map.used);
 }
 
