@@ -17,10 +17,10 @@ rsm_mapmatch_config_t rsm_mapmatch_config_default(void)
     rsm_mapmatch_config_t c;
     c.iterations = 6u;
     c.sigma = 0.3f;
-    c.min_step_m = 1.0e-4f;
-    c.min_step_rad = 1.0e-4f;
+    c.min_step_m = 0.002f;
+    c.min_step_rad = 0.001f;
     c.search_rad = 0.1f;
-    c.search_step_rad = 0.01f;
+    c.search_step_rad = 0.02f;
     c.gate_d2 = 0.0f;
     return c;
 }
@@ -53,7 +53,9 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
 {
     const float c = cosf(x->theta);
     const float sn = sinf(x->theta);
+    rsm_tmap_cursor_t cur;
     size_t k;
+    rsm_tmap_cursor_init(&cur, level);
     memset(s, 0, sizeof *s);
     for (k = 0; k < n; ++k) {
         const float px = pts[k].x;
@@ -62,7 +64,7 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
         const float wy = x->y + sn * px + c * py;
         float gx;
         float gy;
-        const float m = rsm_tmap_sample(map, level, wx, wy, &gx, &gy);
+        const float m = rsm_tmap_sample_at(map, &cur, wx, wy, &gx, &gy);
         const float r = 1.0f - m;
         float gt;
         s->cost += r * r;
@@ -93,11 +95,13 @@ static float coarse_cost(const rsm_tmap_t *map, uint32_t level, const rsm_point_
     const float c = cosf(x->theta);
     const float sn = sinf(x->theta);
     float cost = 0.0f;
+    rsm_tmap_cursor_t cur;
     size_t k;
+    rsm_tmap_cursor_init(&cur, level);
     for (k = 0; k < n; ++k) {
         const float wx = x->x + c * pts[k].x - sn * pts[k].y;
         const float wy = x->y + sn * pts[k].x + c * pts[k].y;
-        const float r = 1.0f - rsm_tmap_occupancy(map, level, wx, wy);
+        const float r = 1.0f - rsm_tmap_occupancy_at(map, &cur, wx, wy);
         cost += r * r;
     }
     return cost;
@@ -188,10 +192,12 @@ int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg,
                 const float tx = x0->x + (float)i * step;
                 const float ty = x0->y + (float)j * step;
                 float cost = 0.0f;
+                rsm_tmap_cursor_t cur;
                 size_t k;
+                rsm_tmap_cursor_init(&cur, level);
                 for (k = 0; k < n; k += stride) {
-                    const float r = 1.0f - rsm_tmap_occupancy(map, level, tx + c * pts[k].x - sn * pts[k].y,
-                                                              ty + sn * pts[k].x + c * pts[k].y);
+                    const float r = 1.0f - rsm_tmap_occupancy_at(map, &cur, tx + c * pts[k].x - sn * pts[k].y,
+                                                                 ty + sn * pts[k].x + c * pts[k].y);
                     cost += r * r;
                 }
                 if (!any || cost < best_cost) {
@@ -278,8 +284,11 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
                     step[2] *= 0.5f;
                 }
             }
-            if (!accepted || (fabsf(step[0]) < cfg->min_step_m && fabsf(step[1]) < cfg->min_step_m &&
-                              fabsf(step[2]) < cfg->min_step_rad)) {
+            /* Coarser levels only place the next one: their thresholds grow
+             * with their cells. */
+            if (!accepted || (fabsf(step[0]) < cfg->min_step_m * (float)(1u << level) &&
+                              fabsf(step[1]) < cfg->min_step_m * (float)(1u << level) &&
+                              fabsf(step[2]) < cfg->min_step_rad * (float)(1u << level))) {
                 break;
             }
         }

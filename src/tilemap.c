@@ -51,6 +51,9 @@ int rsm_tmap_init(rsm_tmap_t *map, const rsm_tmap_config_t *cfg)
     for (v = 0; v <= RSM_TMAP_MAX_VALUE; ++v) {
         map->occ[v] = v >= cfg->saturation ? 1.0f : (float)v / (float)cfg->saturation;
     }
+    for (v = 0; v < (uint32_t)RSM_TMAP_LEVELS; ++v) {
+        map->inv_cell[v] = 1.0f / (cfg->cell_m * (float)(1u << v));
+    }
     memset(map->hash, 0xFF, sizeof map->hash);
     return RSM_OK;
 }
@@ -147,14 +150,7 @@ static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t t
     return s;
 }
 
-/* Tile lookups in a loop mostly hit the tile of the previous cell. */
-typedef struct cursor {
-    uint32_t level;
-    int32_t tx;
-    int32_t ty;
-    uint32_t slot;  /* RSM_TMAP_NONE: the tile is not held */
-    int valid;
-} cursor_t;
+typedef rsm_tmap_cursor_t cursor_t;
 
 static void cursor_start(cursor_t *c, uint32_t level)
 {
@@ -163,6 +159,11 @@ static void cursor_start(cursor_t *c, uint32_t level)
     c->tx = 0;
     c->ty = 0;
     c->slot = RSM_TMAP_NONE;
+}
+
+void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level)
+{
+    cursor_start(c, level);
 }
 
 static uint32_t cursor_slot(const rsm_tmap_t *map, cursor_t *c, int32_t gx, int32_t gy)
@@ -324,7 +325,7 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
     map->stamp = (map->stamp + 1u) & STAMP_MASK;
     map->counters.updates++;
     for (level = 0; level < map->cfg.levels; ++level) {
-        const float inv_a = 1.0f / rsm_tmap_cell(map, level);
+        const float inv_a = map->inv_cell[level];
         const int32_t ox = cell_of(origin->x, inv_a);
         const int32_t oy = cell_of(origin->y, inv_a);
         cursor_t c;
@@ -398,14 +399,34 @@ static float occ_at(const rsm_tmap_t *map, cursor_t *c, int32_t gx, int32_t gy)
 
 float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y)
 {
-    const float inv_a = 1.0f / rsm_tmap_cell(map, level);
-    return map->occ[rsm_tmap_value(map, level, cell_of(x, inv_a), cell_of(y, inv_a))];
+    cursor_t c;
+    cursor_start(&c, level);
+    return rsm_tmap_occupancy_at(map, &c, x, y);
+}
+
+float rsm_tmap_occupancy_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y)
+{
+    const float inv_a = map->inv_cell[c->level];
+    const int32_t gx = cell_of(x, inv_a);
+    const int32_t gy = cell_of(y, inv_a);
+    uint32_t s;
+    if (!in_range(gx, gy)) {
+        return 0.0f;
+    }
+    s = cursor_slot(map, c, gx, gy);
+    return s == RSM_TMAP_NONE ? 0.0f : map->occ[get_cell(&map->tile[s], cell_index(gx, gy))];
 }
 
 float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy)
 {
-    const float a = rsm_tmap_cell(map, level);
-    const float inv_a = 1.0f / a;
+    cursor_t c;
+    cursor_start(&c, level);
+    return rsm_tmap_sample_at(map, &c, x, y, dx, dy);
+}
+
+float rsm_tmap_sample_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, float *dx, float *dy)
+{
+    const float inv_a = map->inv_cell[c->level];
     /* Cell centres sit at integer coordinates of u, v. */
     const float u = x * inv_a - 0.5f;
     const float v = y * inv_a - 0.5f;
@@ -419,17 +440,33 @@ float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, f
     float m10;
     float m01;
     float m11;
-    cursor_t c;
     if (!in_range(i, j) || !in_range(i + 1, j + 1)) {
         *dx = 0.0f;
         *dy = 0.0f;
         return 0.0f;
     }
-    cursor_start(&c, level);
-    m00 = occ_at(map, &c, i, j);
-    m10 = occ_at(map, &c, i + 1, j);
-    m01 = occ_at(map, &c, i, j + 1);
-    m11 = occ_at(map, &c, i + 1, j + 1);
+    if ((i & TILE_MASK) != TILE_MASK && (j & TILE_MASK) != TILE_MASK) {
+        /* All four cells in one tile: one lookup. */
+        const uint32_t s = cursor_slot(map, c, i, j);
+        if (s == RSM_TMAP_NONE) {
+            *dx = 0.0f;
+            *dy = 0.0f;
+            return 0.0f;
+        }
+        {
+            const rsm_tile_t *t = &map->tile[s];
+            const uint32_t k = cell_index(i, j);
+            m00 = map->occ[get_cell(t, k)];
+            m10 = map->occ[get_cell(t, k + 1u)];
+            m01 = map->occ[get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE)];
+            m11 = map->occ[get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u)];
+        }
+    } else {
+        m00 = occ_at(map, c, i, j);
+        m10 = occ_at(map, c, i + 1, j);
+        m01 = occ_at(map, c, i, j + 1);
+        m11 = occ_at(map, c, i + 1, j + 1);
+    }
     *dx = ((m10 - m00) * (1.0f - dv) + (m11 - m01) * dv) * inv_a;
     *dy = ((m01 - m00) * (1.0f - du) + (m11 - m10) * du) * inv_a;
     return (m00 * (1.0f - du) + m10 * du) * (1.0f - dv) + (m01 * (1.0f - du) + m11 * du) * dv;

@@ -35,13 +35,16 @@ typedef struct rsm_mapmatch_config {
     uint8_t iterations;     /* Gauss-Newton steps per level at most; default 6 */
     float sigma;            /* std of one point's occupancy residual (unitless); smaller
                              * trusts the scan more against odometry; default 0.3 */
-    float min_step_m;       /* converged when a step is below this (and min_step_rad); default 1e-4 */
-    float min_step_rad;     /* default 1e-4 */
+    float min_step_m;       /* a level has converged when a step is below this times its
+                             * cell's multiple of the finest (and min_step_rad likewise);
+                             * default 0.002 */
+    float min_step_rad;     /* default 0.001 */
     float search_rad;       /* before Gauss-Newton, headings within +-search_rad of the
                              * prediction are scored on the coarsest level and the best
                              * starts the descent (odometry's heading can be off by more than
                              * any level's basin after a fast turn); 0 = off; default 0.1 */
-    float search_step_rad;  /* spacing of those headings; default 0.01 */
+    float search_step_rad;  /* spacing of those headings; default 0.02 (a point 5 m away
+                             * moves a quarter of a 40 cm coarse cell) */
     float gate_d2;          /* refuse a result farther than this from the prediction
                              * ((x - x0)^T P0^-1 (x - x0)); 0 = off, the default: the prior
                              * is already part of the cost, and refusing scans lets the map

@@ -74,6 +74,7 @@ typedef struct rsm_tmap_counters {
 typedef struct rsm_tmap {
     rsm_tmap_config_t cfg;             /* copied at init */
     float occ[RSM_TMAP_MAX_VALUE + 1u];  /* occupancy in [0, 1] of each cell value */
+    float inv_cell[RSM_TMAP_LEVELS];   /* 1 / cell side of each level */
     uint32_t stamp;                    /* update counter (30 bits used) */
     uint16_t used;                     /* slots in use */
     uint16_t hash[RSM_TMAP_HASH];      /* slot of a key, linear probing; RSM_TMAP_NONE empty */
@@ -106,6 +107,24 @@ int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t
 
 /* Occupancy in [0, 1] of the cell holding world (x, y) on a level. */
 float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y);
+
+/* A read position on one level of one map: remembers the last tile found,
+ * so that reads of nearby points (a scan's, in beam order) skip the index.
+ * Valid until the map is next written. */
+typedef struct rsm_tmap_cursor {
+    uint32_t level;
+    int32_t tx;
+    int32_t ty;
+    uint32_t slot;  /* RSM_TMAP_NONE: the tile is not held */
+    int valid;
+} rsm_tmap_cursor_t;
+
+void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level);
+
+/* rsm_tmap_occupancy and rsm_tmap_sample through a cursor (its level);
+ * same results. */
+float rsm_tmap_occupancy_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y);
+float rsm_tmap_sample_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, float *dx, float *dy);
 
 /* Occupancy interpolated bilinearly between cell centres at world (x, y) on
  * a level, and its gradient per metre. Reentrant. */

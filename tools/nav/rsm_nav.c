@@ -124,6 +124,8 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     F("recover_ratio", recover_ratio)
     F("recover_m", recover_m)
     F("mm_search_step", mapmatch.search_step_rad)
+    F("mm_min_step", mapmatch.min_step_m)
+    F("mm_min_rad", mapmatch.min_step_rad)
     F("map_update_m", map_update_m)
     F("map_update_rad", map_update_rad)
 #undef F
