@@ -546,7 +546,9 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     if (rc == RSM_OK && cfg->recover_m > 0.0f && res.hit < cfg->recover_ratio * loc->state.persistent.fit) {
         /* Far worse than recent scans: odometry may be off by more than any
          * basin. Search wide, then descend from the best candidate under a
-         * prior widened by the search radius; keep it only if it fits. */
+         * prior widened by the search radius; keep it only if it fits well
+         * again (at least half of what was lost regained: along a corridor a
+         * shifted pose fits a little better for no good reason). */
         rsm_mapmatch_result_t alt;
         rsm_pose_t best;
         float wide[9];
@@ -559,7 +561,8 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
                                 &best) == RSM_OK &&
             rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, wide, &best, &alt) ==
                 RSM_OK &&
-            alt.hit >= cfg->recover_ratio * loc->state.persistent.fit && alt.hit > res.hit) {
+            alt.hit >= cfg->recover_ratio * loc->state.persistent.fit &&
+            alt.hit >= res.hit + 0.5f * (loc->state.persistent.fit - res.hit)) {
             loc->counters.recovered++;
             res = alt;
         }

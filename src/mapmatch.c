@@ -21,6 +21,7 @@ rsm_mapmatch_config_t rsm_mapmatch_config_default(void)
     c.min_step_rad = 0.001f;
     c.search_rad = 0.1f;
     c.search_step_rad = 0.02f;
+    c.fan = 0u;
     c.gate_d2 = 0.0f;
     return c;
 }
@@ -325,7 +326,7 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
     x = start != NULL ? *start : *x0;
     {
         const float f = descend(map, cfg, pts, n, &pr, &x, &s, &res->iterations);
-        if (start == NULL && cfg->search_rad > 0.0f && cfg->search_step_rad > 0.0f) {
+        if (start == NULL && cfg->fan && cfg->search_rad > 0.0f && cfg->search_step_rad > 0.0f) {
             /* The fan's best heading is only a coarse guess: descend from it
              * too and keep whichever ends lower on the finest level. */
             rsm_pose_t alt = *x0;

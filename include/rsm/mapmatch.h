@@ -14,10 +14,10 @@
  * the map as the measurement. Points far from any wall have no gradient and
  * no pull, so outliers and things not yet in the map are ignored.
  *
- * Odometry's heading can be off by several degrees after a fast turn, which
- * moves distant points beyond even the coarsest level's basin; so the descent
- * starts from the best of a fan of headings around the prediction, scored on
- * the coarsest level with the prior's heading term. */
+ * Optionally (fan) the descent also starts from the best of a fan of
+ * headings around the prediction, scored on the coarsest level with the
+ * prior's heading term, for odometry whose heading is far off after a fast
+ * turn. */
 #ifndef RSM_MAPMATCH_H
 #define RSM_MAPMATCH_H
 
@@ -39,12 +39,16 @@ typedef struct rsm_mapmatch_config {
                              * cell's multiple of the finest (and min_step_rad likewise);
                              * default 0.002 */
     float min_step_rad;     /* default 0.001 */
-    float search_rad;       /* before Gauss-Newton, headings within +-search_rad of the
-                             * prediction are scored on the coarsest level and the best
-                             * starts the descent (odometry's heading can be off by more than
-                             * any level's basin after a fast turn); 0 = off; default 0.1 */
+    float search_rad;       /* the heading fan: headings within +-search_rad of a position,
+                             * search_step_rad apart, scored on the coarsest level; used by
+                             * rsm_mapmatch_search and, with fan set, by rsm_mapmatch;
+                             * default 0.1 */
     float search_step_rad;  /* spacing of those headings; default 0.02 (a point 5 m away
                              * moves a quarter of a 40 cm coarse cell) */
+    uint8_t fan;            /* 1: rsm_mapmatch also descends from the fan's best heading
+                             * and keeps the lower end; default 0 (the coarse levels reach
+                             * ten degrees on their own; on the logs the fan cost time and
+                             * gained nothing, docs/map.md) */
     float gate_d2;          /* refuse a result farther than this from the prediction
                              * ((x - x0)^T P0^-1 (x - x0)); 0 = off, the default: the prior
                              * is already part of the cost, and refusing scans lets the map

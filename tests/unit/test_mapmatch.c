@@ -181,10 +181,13 @@ void test_mapmatch_should_recover_large_heading_errors_in_a_hall(void)
     assert_converges(&truth, &pred, 0.02f, 0.3f * DEG);
     pred.theta = truth.theta - 5.0f * DEG;
     assert_converges(&truth, &pred, 0.02f, 0.3f * DEG);
-    /* Ten degrees: the fan reaches 5.7 of them, the descent the rest. */
+    /* Ten degrees: the coarse levels reach that far by themselves; with
+     * the heading fan too (it covers 5.7 of them, the descent the rest). */
     pred.theta = truth.theta + 10.0f * DEG;
     assert_converges(&truth, &pred, 0.02f, 0.3f * DEG);
-    cfg.search_rad = 0.0f;
+    cfg.fan = 1u;
+    assert_converges(&truth, &pred, 0.02f, 0.3f * DEG);
+    pred.theta = truth.theta - 5.0f * DEG;
     assert_converges(&truth, &pred, 0.02f, 0.3f * DEG);
 }
 
