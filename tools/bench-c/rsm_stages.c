@@ -6,7 +6,8 @@
  * Runs the localizer over the log exactly as rsm-nav does (same start pose,
  * odometry increments from the poses of the laser lines, the same clamping
  * of timestamps that go backwards) and prints one JSON object: the build's
- * capacities and sizes, scan outcomes, and
+ * capacities and sizes, scan outcomes, the persistent map's use of its tile
+ * pool (method rsm), and
  *   - with --clock ns (default): per-stage times from the localizer's timing
  *     hook (rsm_localizer_config_t.clock_fn reading CLOCK_MONOTONIC in ns),
  *     the whole call timed from outside, and rsm_localizer_motion; median,
@@ -413,16 +414,20 @@ static void print_json(run_t *r)
            r->beams_out, (unsigned long long)r->clamped);
     printf("  \"config\": {\"RSM_MAX_BEAMS\": %d, \"RSM_MAP_SIZE_LOG2\": %d, \"RSM_MAP_SIZE\": %d, "
            "\"RSM_IMAGE_MAX_CELLS\": %d, \"RSM_MAX_KEYPOINTS\": %d, \"RSM_MAX_CANDIDATES\": %d, "
-           "\"RSM_MAX_MATCHES\": %d, \"RSM_ICP_MAX_POINTS\": %d, \"cell_m\": %.6f},\n",
+           "\"RSM_MAX_MATCHES\": %d, \"RSM_ICP_MAX_POINTS\": %d, \"RSM_TMAP_TILES\": %d, "
+           "\"RSM_TMAP_LEVELS\": %d, \"RSM_TMAP_TILE_LOG2\": %d, \"RSM_TMAP_HASH_LOG2\": %d, \"cell_m\": %.6f, "
+           "\"tmap_cell_m\": %.6f},\n",
            (int)RSM_MAX_BEAMS, (int)RSM_MAP_SIZE_LOG2, (int)RSM_MAP_SIZE, (int)RSM_IMAGE_MAX_CELLS,
            (int)RSM_MAX_KEYPOINTS, (int)RSM_MAX_CANDIDATES, (int)RSM_MAX_MATCHES, (int)RSM_ICP_MAX_POINTS,
-           (double)r->cfg.grid.cell_m);
+           (int)RSM_TMAP_TILES, (int)RSM_TMAP_LEVELS, (int)RSM_TMAP_TILE_LOG2, (int)RSM_TMAP_HASH_LOG2,
+           (double)r->cfg.grid.cell_m, (double)r->cfg.tmap.cell_m);
     printf("  \"sizes\": {\n");
     LOC_PART("rsm_localizer_t", sizeof *loc);
     LOC_PART("ekf", sizeof loc->ekf);
     LOC_PART("odo", sizeof loc->odo);
     LOC_PART("state", sizeof loc->state);
     LOC_PART("state.persistent", sizeof loc->state.persistent);
+    LOC_PART("state.persistent.map", sizeof loc->state.persistent.map);
     LOC_PART("state.persistent.map.tile", sizeof loc->state.persistent.map.tile);
     LOC_PART("state.persistent.map.hash", sizeof loc->state.persistent.map.hash);
     LOC_PART("state.paper", sizeof loc->state.paper);
@@ -436,6 +441,8 @@ static void print_json(run_t *r)
     LOC_PART("state.paper.matches", sizeof loc->state.paper.matches);
     LOC_PART("state.icp", sizeof loc->state.icp);
     LOC_PART("points", sizeof loc->pts + sizeof loc->world);
+    LOC_PART("counters", sizeof loc->counters);
+    LOC_PART("last", sizeof loc->last);
     LOC_PART("rsm_scan_t", sizeof(rsm_scan_t));
     printf("    \"rsm_localizer_config_t\": %lu\n  },\n", (unsigned long)sizeof(rsm_localizer_config_t));
     printf("  \"outcomes\": {");
@@ -444,6 +451,22 @@ static void print_json(run_t *r)
                s + 1u < RSM_SCAN_OUTCOMES ? ", " : "");
     }
     printf("},\n");
+    if (r->cfg.method == RSM_METHOD_MAP && r->initialised) {
+        /* How much of the tile pool the log used: the margin of a capacity. */
+        const rsm_tmap_t *m = &loc->state.persistent.map;
+        uint32_t l;
+        printf("  \"tmap\": {\"tiles\": [");
+        for (l = 0; l < (uint32_t)RSM_TMAP_LEVELS; ++l) {
+            printf("%u%s", (unsigned)rsm_tmap_tiles(m, l), l + 1u < (uint32_t)RSM_TMAP_LEVELS ? ", " : "");
+        }
+        printf("], \"used\": %u, \"updates\": %u, \"allocated\": %u, \"evicted\": %u, \"dropped\": %u, "
+               "\"searches\": %u, \"recovered\": %u},\n",
+               (unsigned)m->used, (unsigned)m->counters.updates, (unsigned)m->counters.allocated,
+               (unsigned)m->counters.evicted, (unsigned)m->counters.dropped, (unsigned)loc->counters.searches,
+               (unsigned)loc->counters.recovered);
+    } else {
+        printf("  \"tmap\": null,\n");
+    }
     if (r->opt.stack) {
         printf("  \"stack\": {\"buffer_bytes\": %zu, \"scans\": %zu, \"peak_bytes\": %zu, \"baseline_bytes\": %zu, "
                "\"scan_bytes\": %zu},\n",

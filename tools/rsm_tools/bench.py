@@ -1,32 +1,34 @@
-"""rsm-bench: measures rsm against its ICP baseline and odometry and writes a report.
+"""rsm-bench: measures rsm against the paper's method, ICP, odometry and the peers, and writes a report.
 
-Every figure in the report is measured by this command; none is typed in.
-The report (``docs/RESULTS.md`` by default) has seven sections:
+Every figure of rsm in the report is measured by this command; none is typed
+in. The peers' figures are read from ``reference/peers.md`` of the shared
+folder and shown beside them. The logs are every folder ``NAME`` of the
+shared folder's ``data/`` that holds ``NAME.clf.gz`` and ``NAME.relations``
+(the shared folder: ``--shared DIR``, else the ``RSM_SHARED_DIR`` environment
+variable the tests use too, else ``../shared`` beside the repository). The
+report (``docs/RESULTS.md`` by default) has these sections:
 
 1. Accuracy: relative-pose error (Kuemmerle et al. 2009, :mod:`rsm_tools.evaluate`)
-   of rsm, icp and odometry on the real log (and on any extra ``--log`` /
-   ``--relations`` pairs), on all relations and on local ones (span <= 2 s).
+   of rsm (the default method, the persistent map), rsm built with
+   ``rsm/config_small.h``, the paper's method, the ICP baseline and odometry on
+   every log, on all relations and on local ones (span <= 2 s), beside the
+   peers' figures and the ratio of rsm's to the best peer's.
 2. Robustness, the paper's experiment: a share of every scan's readings is
-   replaced by random ranges (:mod:`rsm_tools.outliers`), several seeds per
-   level; errors per level with their spread and their ratio to the clean run.
-3. Sharp turns, the paper's Fig. 8: the residuals (cells and degrees) of the
-   three trajectories at the local relations with the fastest true turn, and
-   over all local relations binned by their true rotation.
-4. Speed: wall time per scan from rsm-nav's summary (rsm and icp, the same
-   bench run, one process at a time); per-stage times from ``rsm-stages``
-   (tools/bench-c), which runs the log with the localizer's timing hook;
-   instructions per scan counted by callgrind inside ``rsm_localizer_scan``
-   on the shipped excerpt, in total and by the functions it calls.
-5. Memory: ``sizeof(rsm_localizer_t)`` and its parts from a small C program
-   built against the library; the Cortex-M4F sizes printed by
-   ``tools/cross-check``; per module and per configuration (default and
-   ``tests/config/small_config.h``) from Cortex-M4F builds of this bench;
-   the stack of one localizer step, statically (``-fstack-usage
-   -fcallgraph-info=su`` and the call graph) and by painting a thread's stack
-   (``rsm-stages --stack``).
-6. Scaling: time per scan against readings per scan (the log resampled) and
-   map size, each a build with its own ``RSM_USER_CONFIG``; the state's size.
-7. Where rsm loses: generated from the numbers above.
+   replaced by random ranges (:mod:`rsm_tools.outliers`); the whole curve on
+   the main log, 43 % and 60 % on every log.
+3. Sharp turns, the paper's Fig. 8: residuals at the local relations with the
+   fastest true turn, and over all local relations binned by true rotation.
+4. Speed: wall time per scan (rsm-nav), per stage (``rsm-stages``, the
+   localizer's timing hook) and instructions per scan (callgrind inside
+   ``rsm_localizer_scan``, first scans of every log, default and small
+   configuration), in total and by stage.
+5. Memory: the localizer state per part on this host (``rsm-stages``) and on
+   Cortex-M4F (a cross build per configuration), flash per object, the
+   example firmware, the stack of one localizer step.
+6. Scaling: time, accuracy and state size against readings per scan, the
+   paper's window, the persistent map's tile pool and the shipped presets.
+7. The issue's floors, each a PASS or MISS line (a report, not an assertion).
+8. Where rsm loses: generated from the numbers above.
 
 Trajectories, summaries and a manifest (``bench.json``) are kept in the work
 directory, so that the report can be checked against them; outlier logs are
@@ -38,6 +40,7 @@ matplotlib, if installed, draws the plots.
 import argparse
 import concurrent.futures
 import datetime
+import gzip
 import hashlib
 import json
 import math
@@ -54,24 +57,36 @@ from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 from . import evaluate as ev
 from . import outliers
 
-METHODS = ("rsm", "icp", "odometry")
-ROBUST_METHODS = ("rsm", "icp")
+# rsm-nav --method names: rsm is the default method (scan to persistent map),
+# paper the paper's (key points + RANSAC against a scrolling window).
+METHODS = ("rsm", "paper", "icp", "odometry")
+ROBUST_METHODS = ("rsm", "paper", "icp")  # the methods that read the scans
+SMALL = "rsm-small"  # rsm built with SMALL_HEADER (a run label, not a method)
+SMALL_HEADER = "rsm/config_small.h"
+METHOD_LABEL = {"rsm": "rsm", SMALL: "rsm, config_small", "paper": "paper's method", "icp": "icp",
+                "odometry": "odometry"}
 LEVELS = (0, 10, 20, 30, 43, 50, 60)
-QUICK_LEVELS = (0, 20, 43)
-SEEDS = 3
+QUICK_LEVELS = (0, 43)
+OTHER_LEVELS = (0, 43, 60)  # every log but the main one: the floor's level and the peers' second one
+QUICK_OTHER_LEVELS = (0, 43)
+FIRST_SEED = 7  # the seed of the peers' outlier runs; further seeds count up from it
+SEEDS = 2
 SPEED_REPEATS = 3
+CALLGRIND_SCANS = 1000
 LOCAL_SPAN = 2.0
 SCOPES = ("local", "all")
 QUANTITIES = ("translation", "rotation")
 UNITS = {"translation": "m", "rotation": "deg"}
+MAIN_LOG = "intel"  # the log the curve, turns, speed and the instruction floor use when present
 SECTION_TITLES = (
-    "1. Accuracy on the real log",
+    "1. Accuracy on the real logs",
     "2. Robustness to outliers",
     "3. Sharp turns (the paper's Fig. 8)",
     "4. Speed",
     "5. Memory",
     "6. Scaling",
-    "7. Where rsm loses",
+    "7. The issue's floors",
+    "8. Where rsm loses",
 )
 
 
@@ -171,6 +186,19 @@ def cpu_info() -> Tuple[str, int]:
     return model or platform.processor() or platform.machine() or "unknown CPU", cores or (os.cpu_count() or 0)
 
 
+SOURCE_GLOBS = ("src/*.c", "include/rsm/*.h", "tools/nav/*.[ch]", "tools/bench-c/*.c", "port/baremetal/*.[ch]")
+
+
+def source_digest(root: Path) -> str:
+    """A digest of the sources the measured programs are built from, to notice
+    a change during a run (the figures would then come from different code)."""
+    h = hashlib.sha256()
+    for pattern in SOURCE_GLOBS:
+        for f in sorted(root.glob(pattern)):
+            h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()
+
+
 def git_commit(root: Path) -> str:
     """Short hash of HEAD, with ``+changes`` if tracked or untracked files other
     than the generated report differ from it."""
@@ -230,13 +258,26 @@ def provenance_line(p: dict) -> str:
 _SUMMARY_TIME = re.compile(r"time per scan\s+median\s+([0-9.]+)\s*us,\s*p95\s+([0-9.]+)\s*us")
 _SUMMARY_SCANS = re.compile(r"^\s+scans\s+(\d+)\s*$")
 _SUMMARY_OUTCOME = re.compile(r"^\s{4}([a-z_]+)\s+(\d+)\s*$")
+_SUMMARY_TMAP = re.compile(r"persistent map\s+(\d+) writes, tiles ([\d/]+) per level, (\d+) taken, (\d+) evicted, "
+                           r"(\d+) returns dropped")
+_SUMMARY_RECOVERY = re.compile(r"recovery\s+(\d+) searches, (\d+) taken")
 
 
 def parse_summary(text: str) -> dict:
-    """Scans, outcome counts and per-scan wall times from rsm-nav's summary."""
-    out = {"scans": None, "outcomes": {}, "median_us": None, "p95_us": None}
+    """Scans, outcome counts and per-scan wall times from rsm-nav's summary;
+    for the persistent-map method also its tiles and recovery searches."""
+    out = {"scans": None, "outcomes": {}, "median_us": None, "p95_us": None, "tmap": None, "recovery": None}
     in_outcomes = False
     for line in text.splitlines():
+        m = _SUMMARY_TMAP.search(line)
+        if m:
+            out["tmap"] = {"writes": int(m.group(1)), "tiles": [int(v) for v in m.group(2).split("/")],
+                           "taken": int(m.group(3)), "evicted": int(m.group(4)), "dropped": int(m.group(5))}
+            continue
+        m = _SUMMARY_RECOVERY.search(line)
+        if m:
+            out["recovery"] = {"searches": int(m.group(1)), "taken": int(m.group(2))}
+            continue
         m = _SUMMARY_SCANS.match(line)
         if m:
             out["scans"] = int(m.group(1))
@@ -305,7 +346,7 @@ def _strip_errors(res: dict) -> dict:
 # section 1: accuracy
 
 
-def log_label(log: Path, taken: Iterable[str]) -> str:
+def log_label(log: Path, taken: Iterable[str] = ()) -> str:
     name = log.name
     for ext in (".gz", ".clf", ".log", ".txt"):
         if name.endswith(ext):
@@ -317,12 +358,42 @@ def log_label(log: Path, taken: Iterable[str]) -> str:
     return label
 
 
-def run_accuracy(nav: Path, logs: List[Tuple[str, Path, Path]], work: Path, jobs: int) -> dict:
-    tasks = [(label, log, m) for label, log, _ in logs for m in METHODS]
+def shared_dir(arg: Optional[Path], root: Path) -> Path:
+    """The shared folder: --shared, else $RSM_SHARED_DIR (as for the tests), else ../shared."""
+    if arg is not None:
+        return Path(arg).resolve()
+    env = os.environ.get("RSM_SHARED_DIR")
+    return Path(env).resolve() if env else (root.parent / "shared").resolve()
+
+
+def discover_logs(data: Path) -> List[Tuple[str, Path, Path]]:
+    """(label, log, relations) of every folder NAME of ``data`` holding
+    NAME.clf.gz (or NAME.clf) and NAME.relations; the main log (MAIN_LOG if
+    there is one) first, the others by name."""
+    out = []
+    if data.is_dir():
+        for d in sorted(p for p in data.iterdir() if p.is_dir()):
+            rel = d / f"{d.name}.relations"
+            logs = [d / f"{d.name}.clf.gz", d / f"{d.name}.clf"]
+            log = next((f for f in logs if f.is_file()), None)
+            if log is not None and rel.is_file():
+                out.append((d.name, log.resolve(), rel.resolve()))
+    out.sort(key=lambda t: (t[0] != MAIN_LOG, t[0]))
+    return out
+
+
+def run_accuracy(navs: Dict[str, Optional[Path]], logs: List[Tuple[str, Path, Path]], work: Path,
+                 jobs: int) -> dict:
+    """Every method of the default build and rsm of the small build on every log."""
+    tasks = []
+    for label, log, _ in logs:
+        tasks += [(label, log, m, m, navs["default"]) for m in METHODS]
+        if navs.get("small") is not None:
+            tasks.append((label, log, SMALL, "rsm", navs["small"]))
 
     def one(task):
-        label, log, m = task
-        traj = work / "accuracy" / label / f"{m}.txt"
+        label, log, run_label, m, nav = task
+        traj = work / "accuracy" / label / f"{run_label}.txt"
         return task, traj, run_nav(nav, log, m, traj)
 
     done = parallel(one, tasks, jobs)
@@ -330,11 +401,12 @@ def run_accuracy(nav: Path, logs: List[Tuple[str, Path, Path]], work: Path, jobs
     for label, log, rel in logs:
         relations = ev.load_relations(rel)
         runs = {}
-        for (lab, _, m), traj, r in done:
+        for (lab, _, run_label, m, _), traj, r in done:
             if lab != label:
                 continue
             errs = scoped_errors(traj, relations, details=True)
-            runs[m] = {
+            runs[run_label] = {
+                "method": m,
                 "trajectory": str(traj),
                 "summary_text": r["summary"],
                 "summary": parse_summary(r["summary"]),
@@ -342,6 +414,105 @@ def run_accuracy(nav: Path, logs: List[Tuple[str, Path, Path]], work: Path, jobs
                 "per_relation": errs["all"]["errors"],
             }
         out[label] = {"log": str(log), "relations": str(rel), "relation_count": len(relations), "runs": runs}
+    return out
+
+
+def run_labels(acc_log: dict) -> List[str]:
+    """The runs of one log in report order."""
+    order = ("rsm", SMALL, "paper", "icp", "odometry")
+    return [k for k in order if k in acc_log["runs"]]
+
+
+# ---------------------------------------------------------------------------
+# peers (reference/peers.md of the shared folder)
+
+PEER_COLUMNS = (("all", "translation"), ("all", "rotation"), ("local", "translation"), ("local", "rotation"))
+
+
+def md_tables(text: str) -> List[dict]:
+    """Every Markdown table of a text: the heading it sits under, its header
+    cells and its rows (cells stripped, bold marks removed)."""
+    out = []
+    heading = ""
+    cur = None
+    for line in text.splitlines():
+        s = line.strip()
+        if s.startswith("#"):
+            heading = s.lstrip("#").strip()
+        if s.startswith("|") and s.endswith("|"):
+            cells = [c.strip().replace("**", "").strip() for c in s[1:-1].split("|")]
+            if cur is None:
+                cur = {"heading": heading, "header": cells, "rows": []}
+                out.append(cur)
+            elif all(set(c) <= set("-: ") and c for c in cells):
+                continue
+            else:
+                cur["rows"].append(cells)
+        else:
+            cur = None
+    return out
+
+
+def _number(cell: str) -> Optional[float]:
+    m = re.match(r"^[-+]?\d+(?:\.\d+)?$", cell.replace(" ", ""))
+    return float(m.group(0)) if m else None
+
+
+def peer_kind(method: str) -> str:
+    """odometry (odometry alone), before (an earlier rsm, "rsm (commit ...)") or peer."""
+    low = method.lower()
+    if low.startswith("odometry"):
+        return "odometry"
+    if re.match(r"^rsm\b", low):
+        return "before"
+    return "peer"
+
+
+def parse_peers(text: str) -> dict:
+    """The table "Accuracy" of peers.md: per log, its rows in file order, each
+    with the method, its kind (peer_kind), the four figures by (scope,
+    quantity) (None where the cell holds no number) and the text of any cell
+    that is not a number (e.g. "diverges ..."). Also the date line, if any."""
+    acc = None
+    for t in md_tables(text):
+        if t["heading"].lower().startswith("accuracy"):
+            acc = t
+            break
+    if acc is None:
+        raise BenchError("peers.md has no table under a heading \"Accuracy\"")
+    head = [h.lower() for h in acc["header"]]
+    try:
+        i_log, i_method = head.index("log"), head.index("method")
+        cols = {key: head.index(f"{key[0]} {key[1]}") for key in PEER_COLUMNS}
+    except ValueError:
+        raise BenchError(f"peers.md: unexpected header of the accuracy table: {acc['header']}") from None
+    logs: Dict[str, List[dict]] = {}
+    for row in acc["rows"]:
+        row = row + [""] * (len(head) - len(row))
+        values = {key: _number(row[i]) for key, i in cols.items()}
+        notes = [row[i] for i in cols.values() if row[i] and _number(row[i]) is None]
+        logs.setdefault(row[i_log], []).append({"method": row[i_method], "kind": peer_kind(row[i_method]),
+                                                "values": values, "note": "; ".join(notes)})
+    m = re.search(r"measured (\d{4}-\d\d-\d\d)", text)
+    return {"accuracy": logs, "measured": m.group(1) if m else None}
+
+
+def best_peers(rows: Sequence[dict]) -> Dict[Tuple[str, str], Optional[Tuple[float, str]]]:
+    """Per (scope, quantity): the lowest figure among the peer rows (not
+    odometry alone, not the earlier rsm) and whose it is; None if no peer has one."""
+    out: Dict[Tuple[str, str], Optional[Tuple[float, str]]] = {}
+    for key in PEER_COLUMNS:
+        vals = [(r["values"][key], r["method"]) for r in rows
+                if r["kind"] == "peer" and r["values"].get(key) is not None]
+        out[key] = min(vals, key=lambda v: v[0]) if vals else None
+    return out
+
+
+def load_peers(path: Path) -> dict:
+    if not path.is_file():
+        return {"skipped": f"{path.name} is not on this machine", "path": str(path)}
+    out = parse_peers(path.read_text(encoding="utf-8", errors="replace"))
+    out["path"] = str(path)
     return out
 
 
@@ -364,23 +535,28 @@ def _make_outlier_log(src: str, dst: str, level: int, seed: int) -> str:
     return dst
 
 
-def outlier_logs(log: Path, levels: Sequence[int], seeds: Sequence[int], cache: Path,
-                 jobs: int) -> Tuple[Dict[Tuple[int, int], Path], int]:
-    """The outlier logs (level > 0) for every seed, from the cache or made now.
-    Returns them and how many were made."""
+def outlier_log_path(log: Path, level: int, seed: int, cache: Path, tag: str) -> Path:
+    return cache / f"{log_label(log)}-{tag}-p{level}-s{seed}.clf.gz"
+
+
+def outlier_logs(wanted: Sequence[Tuple[Path, int, int]], cache: Path,
+                 jobs: int) -> Tuple[Dict[Tuple[str, int, int], Path], int]:
+    """The outlier logs for every (log, level > 0, seed), from the cache (keyed
+    by the log's digest) or made now, ``jobs`` at a time. Returns them by
+    (str(log), level, seed) and how many were made."""
     cache.mkdir(parents=True, exist_ok=True)
-    tag = file_digest(log)[:12]
-    stem = log_label(log, ())
+    tags: Dict[str, str] = {}
     want = {}
-    for level in levels:
+    for log, level, seed in wanted:
         if level == 0:
             continue
-        for seed in seeds:
-            want[(level, seed)] = cache / f"{stem}-{tag}-p{level}-s{seed}.clf.gz"
+        if str(log) not in tags:
+            tags[str(log)] = file_digest(log)[:12]
+        want[(str(log), level, seed)] = outlier_log_path(log, level, seed, cache, tags[str(log)])
     missing = [(k, p) for k, p in want.items() if not p.is_file()]
     if missing:
         with concurrent.futures.ProcessPoolExecutor(max_workers=max(1, jobs)) as pool:
-            futs = [pool.submit(_make_outlier_log, str(log), str(p), k[0], k[1]) for k, p in missing]
+            futs = [pool.submit(_make_outlier_log, k[0], str(p), k[1], k[2]) for k, p in missing]
             for f in futs:
                 f.result()
     return want, len(missing)
@@ -393,45 +569,60 @@ def spread(values: Sequence[float]) -> dict:
     return {"mean": math.fsum(vals) / len(vals), "min": min(vals), "max": max(vals), "n": len(vals)}
 
 
-def run_robustness(nav: Path, log: Path, relations_path: Path, clean_runs: dict, levels: Sequence[int],
+def run_robustness(nav: Path, logs: List[Tuple[str, Path, Path]], acc: dict, levels: Dict[str, Sequence[int]],
                    seeds: Sequence[int], work: Path, cache: Path, jobs: int) -> dict:
-    logs, made = outlier_logs(log, levels, seeds, cache, jobs)
-    tasks = [(m, level, seed) for level in levels if level != 0 for seed in seeds for m in ROBUST_METHODS]
+    """Per log: rsm, the paper's method and icp on the outlier logs of its
+    levels and seeds; the table of means, spreads and ratios to the clean run
+    (level 0 is the accuracy run itself)."""
+    wanted = [(log, lv, sd) for label, log, _ in logs for lv in levels[label] for sd in seeds]
+    paths, made = outlier_logs(wanted, cache, jobs)
+    tasks = [(label, m, lv, sd) for label, log, _ in logs for lv in levels[label] if lv != 0
+             for sd in seeds for m in ROBUST_METHODS]
+    by_label = {label: (log, rel) for label, log, rel in logs}
+    # The slowest runs (icp, high levels) first, so that the last ones are short.
+    tasks.sort(key=lambda t: (t[1] != "icp", -t[2]))
 
     def one(task):
-        m, level, seed = task
-        traj = work / "robustness" / f"{m}-p{level}-s{seed}.txt"
-        return task, traj, run_nav(nav, logs[(level, seed)], m, traj)
+        label, m, level, seed = task
+        traj = work / "robustness" / label / f"{m}-p{level}-s{seed}.txt"
+        return task, traj, run_nav(nav, paths[(str(by_label[label][0]), level, seed)], m, traj)
 
     done = parallel(one, tasks, jobs)
-    relations = ev.load_relations(relations_path)
-    runs = []
-    for m in ROBUST_METHODS:  # level 0 is the clean log itself: the accuracy runs
-        c = clean_runs[m]
-        runs.append({"method": m, "level": 0, "seed": None, "trajectory": c["trajectory"],
-                     "summary": c["summary"], "errors": c["errors"]})
-    for (m, level, seed), traj, r in done:
-        runs.append({"method": m, "level": level, "seed": seed, "trajectory": str(traj),
-                     "log": str(logs[(level, seed)]), "summary": parse_summary(r["summary"]),
-                     "errors": _strip_errors(scoped_errors(traj, relations))})
-    table = {}
-    for m in ROBUST_METHODS:
-        for level in levels:
-            sel = [r for r in runs if r["method"] == m and r["level"] == level]
-            row = {"seeds": [r["seed"] for r in sel],
-                   "fused": spread([fused_percent(r["summary"]) for r in sel])}
-            for s in SCOPES:
-                for q in QUANTITIES:
-                    row[f"{s}.{q}"] = spread([r["errors"][s][q]["mean"] for r in sel])
-            table[f"{m}:{level}"] = row
-    for m in ROBUST_METHODS:
-        clean = table[f"{m}:0"]
-        for level in levels:
-            row = table[f"{m}:{level}"]
-            for key in [f"{s}.{q}" for s in SCOPES for q in QUANTITIES]:
-                row[key]["ratio"] = ratio(row[key]["mean"], clean[key]["mean"])
-    return {"log": str(log), "relations": str(relations_path), "levels": list(levels),
-            "seeds": list(seeds), "outlier_logs_made": made, "runs": runs, "table": table}
+    out = {"seeds": list(seeds), "outlier_logs_made": made, "logs": {}}
+    for label, log, rel in logs:
+        relations = ev.load_relations(rel)
+        runs = []
+        for m in ROBUST_METHODS:
+            c = acc[label]["runs"][m]
+            runs.append({"method": m, "level": 0, "seed": None, "trajectory": c["trajectory"],
+                         "summary": c["summary"], "errors": c["errors"]})
+        for (lab, m, level, seed), traj, r in sorted(done, key=lambda d: (d[0][2], d[0][3], d[0][1])):
+            if lab != label:
+                continue
+            runs.append({"method": m, "level": level, "seed": seed, "trajectory": str(traj),
+                         "log": str(paths[(str(log), level, seed)]), "summary": parse_summary(r["summary"]),
+                         "errors": _strip_errors(scoped_errors(traj, relations))})
+        lvls = sorted(set(levels[label]) | {0})
+        table = {}
+        for m in ROBUST_METHODS:
+            for level in lvls:
+                sel = [r for r in runs if r["method"] == m and r["level"] == level]
+                row = {"seeds": [r["seed"] for r in sel],
+                       "fused": spread([fused_percent(r["summary"]) for r in sel])}
+                for sc in SCOPES:
+                    for q in QUANTITIES:
+                        row[f"{sc}.{q}"] = spread([r["errors"][sc][q]["mean"] for r in sel])
+                table[f"{m}:{level}"] = row
+        for m in ROBUST_METHODS:
+            clean = table[f"{m}:0"]
+            for level in lvls:
+                row = table[f"{m}:{level}"]
+                for key in [f"{sc}.{q}" for sc in SCOPES for q in QUANTITIES]:
+                    row[key]["ratio"] = ratio(row[key]["mean"], clean[key]["mean"])
+                    row[key]["ratio_max"] = ratio(row[key]["max"], clean[key]["mean"])
+        out["logs"][label] = {"log": str(log), "relations": str(rel), "levels": lvls, "seeds": list(seeds),
+                              "runs": runs, "table": table}
+    return out
 
 
 # ---------------------------------------------------------------------------
@@ -457,8 +648,11 @@ def run_speed(nav: Path, log: Path, repeats: int, work: Path) -> dict:
             "p95_us": p95[len(p95) // 2], "p95_min": p95[0], "p95_max": p95[-1],
             "scans": sel[0]["scans"],
         }
-    out["ratio_median"] = ratio(out["methods"]["icp"]["median_us"], out["methods"]["rsm"]["median_us"])
-    out["ratio_p95"] = ratio(out["methods"]["icp"]["p95_us"], out["methods"]["rsm"]["p95_us"])
+    # each method against rsm (above 1: slower than rsm)
+    out["ratio_median"] = {m: ratio(out["methods"][m]["median_us"], out["methods"]["rsm"]["median_us"])
+                           for m in ROBUST_METHODS}
+    out["ratio_p95"] = {m: ratio(out["methods"][m]["p95_us"], out["methods"]["rsm"]["p95_us"])
+                        for m in ROBUST_METHODS}
     return out
 
 
@@ -472,127 +666,125 @@ def callgrind_ir(out_file: Path) -> int:
     return int(m.group(1))
 
 
-def run_callgrind(nav: Path, log: Path, work: Path, jobs: int, root: Optional[Path] = None) -> dict:
+_SCAN_LINE = re.compile(rb"^\s*(?:FLASER|ROBOTLASER1)\s")
+
+
+def write_head(log: Path, out: Path, scans: int) -> int:
+    """The log up to its ``scans``-th scan line (gzip, mtime 0, so that reruns
+    give the same bytes); returns the scans written."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    n = 0
+    tmp = out.with_name(out.name + f".tmp{os.getpid()}")
+    opener = gzip.open if log.name.endswith(".gz") else open
+    with opener(log, "rb") as src, open(tmp, "wb") as raw, \
+            gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as dst:
+        for line in src:
+            dst.write(line)
+            if _SCAN_LINE.match(line):
+                n += 1
+                if n >= scans:
+                    break
+    os.replace(tmp, out)
+    return n
+
+
+def run_callgrind(navs: Dict[str, Optional[Path]], logs: List[Tuple[str, Path, Path]], scans: int,
+                  methods: Sequence[str], work: Path, jobs: int, root: Optional[Path] = None) -> dict:
+    """Instructions inside rsm_localizer_scan on the first ``scans`` scans of
+    every log: ``methods`` with the default build, rsm with the small one."""
     valgrind = shutil.which("valgrind")
     if valgrind is None:
         return {"skipped": "valgrind is not installed"}
     helpers = static_functions((root / "src" / "localizer.c").read_text()) if root else []
+    heads = {}
+    for label, log, _ in logs:
+        head = work / "callgrind" / f"{label}-head{scans}.clf.gz"
+        heads[label] = {"log": str(head), "source": str(log), "scans": write_head(log, head, scans)}
+    tasks = [(label, "default", m, navs["default"]) for label, _, _ in logs for m in methods]
+    if navs.get("small") is not None:
+        tasks += [(label, "small", "rsm", navs["small"]) for label, _, _ in logs]
 
-    def one(m):
-        out = work / "callgrind" / f"{m}.callgrind.out"
-        traj = work / "callgrind" / f"{m}.txt"
+    def one(task):
+        label, config, m, nav = task
+        out = work / "callgrind" / f"{label}-{config}-{m}.callgrind.out"
+        traj = work / "callgrind" / f"{label}-{config}-{m}.txt"
         out.parent.mkdir(parents=True, exist_ok=True)
         prefix = [valgrind, "--tool=callgrind", "--toggle-collect=rsm_localizer_scan",
                   f"--callgrind-out-file={out}"]
-        r = run_nav(nav, log, m, traj, prefix)
-        s = parse_summary(r["summary"])
+        r = run_nav(nav, Path(heads[label]["log"]), m, traj, prefix)
+        sm = parse_summary(r["summary"])
         ir = callgrind_ir(out)
         if ir == 0:
             raise BenchError(f"callgrind collected nothing in rsm_localizer_scan for {m} "
                              "(is the symbol in the binary?)")
-        res = {"out": str(out), "scans": s["scans"], "ir": ir, "ir_per_scan": ir / s["scans"]}
-        br = localizer_breakdown(parse_callgrind(out.read_text(errors="replace")), helpers)
+        res = {"log": label, "config": config, "method": m, "out": str(out), "trajectory": str(traj),
+               "scans": sm["scans"], "ir": ir, "ir_per_scan": ir / sm["scans"]}
+        cg = parse_callgrind(out.read_text(errors="replace"))
+        br = localizer_breakdown(cg, helpers)
         if br["total"] == ir:  # the breakdown accounts for every instruction collected
             res["breakdown"] = br
-            res["stages"] = callgrind_stages(br, s["scans"])
+            res["stages"] = callgrind_stages(br, sm["scans"])
         else:
             res["breakdown_note"] = f"the call graph accounts for {br['total']} of {ir} instructions"
-        return m, res
+        if m == "rsm":
+            res["mapmatch"] = callee_costs(cg, "rsm_mapmatch")
+        return f"{label}:{config}:{m}", res
 
-    res = dict(parallel(one, ROBUST_METHODS, jobs))
-    res["ratio"] = ratio(res["icp"]["ir_per_scan"], res["rsm"]["ir_per_scan"])
-    res["log"] = str(log)
-    res["valgrind"] = first_line([valgrind, "--version"]) or "valgrind"
-    return res
+    runs = dict(parallel(one, tasks, jobs))
+    return {"runs": runs, "heads": heads, "scans": scans, "methods": list(methods),
+            "valgrind": first_line([valgrind, "--version"]) or "valgrind"}
+
+
+def cg_run(cg: Optional[dict], label: str, config: str, method: str) -> Optional[dict]:
+    """One callgrind run of run_callgrind's result, or None."""
+    if not cg or "skipped" in cg:
+        return None
+    return cg["runs"].get(f"{label}:{config}:{method}")
 
 
 # ---------------------------------------------------------------------------
 # section 4: memory
 
-# (label, C expression) of the parts of rsm_localizer_t listed in the report.
-MEMORY_PARTS = (
-    ("ekf", "sizeof loc.ekf"),
-    ("odo", "sizeof loc.odo"),
-    ("map", "sizeof loc.map"),
-    ("image", "sizeof loc.image"),
-    ("ransac", "sizeof loc.ransac"),
-    ("work (union of the two below)", "sizeof loc.work"),
-    ("work.rsm (visited + harris + cands)", "sizeof loc.work.rsm"),
-    ("work.icp", "sizeof loc.work.icp"),
-    ("kp_cur + kp_ref", "sizeof loc.kp_cur + sizeof loc.kp_ref"),
-    ("pt_cur + pt_ref", "sizeof loc.pt_cur + sizeof loc.pt_ref"),
-    ("matches", "sizeof loc.matches"),
-    ("pts + world", "sizeof loc.pts + sizeof loc.world"),
-    ("counters + last report", "sizeof loc.counters + sizeof loc.last"),
+# The parts of rsm_localizer_t in the report: (label, key of rsm-stages'
+# "sizes", depth). Depth 0 parts tile the struct (the rest is the config
+# pointer, stamps and padding); the methods' states share one union.
+HOST_PARTS = (
+    ("ekf", "ekf", 0),
+    ("odo", "odo", 0),
+    ("state (union of the three below)", "state", 0),
+    ("state.persistent (rsm)", "state.persistent", 1),
+    ("map.tile[] (tile pool)", "state.persistent.map.tile", 2),
+    ("map.hash[] (tile index)", "state.persistent.map.hash", 2),
+    ("state.paper (the paper's method)", "state.paper", 1),
+    ("map (scrolling window)", "state.paper.map", 2),
+    ("image", "state.paper.image", 2),
+    ("ransac", "state.paper.ransac", 2),
+    ("visited + harris + cands", "state.paper.harris", 2),
+    ("key points and their points", "state.paper.keypoints", 2),
+    ("matches", "state.paper.matches", 2),
+    ("state.icp (icp)", "state.icp", 1),
+    ("pts + world (the scan's points)", "points", 0),
+    ("counters", "counters", 0),
+    ("last report", "last", 0),
 )
-# Parts that tile the struct (the rest is pointers, stamps and padding).
-MEMORY_TILES = ("ekf", "odo", "map", "image", "ransac", "work (union of the two below)",
-                "kp_cur + kp_ref", "pt_cur + pt_ref", "matches", "pts + world",
-                "counters + last report")
+MEMORY_TILES = ("ekf", "odo", "state", "points", "counters", "last")
 MEMORY_OTHER = ("rsm_localizer_config_t", "rsm_scan_t")
-MEMORY_MACROS = ("RSM_MAX_BEAMS", "RSM_MAP_SIZE", "RSM_MAX_KEYPOINTS", "RSM_MAX_CANDIDATES",
-                 "RSM_MAX_MATCHES", "RSM_ICP_MAX_POINTS")
 
 
-def memory_program() -> str:
-    lines = [
-        "/* Generated by rsm_tools.bench: sizes of the localizer state. */",
-        "#include <stdio.h>",
-        '#include "rsm/localizer.h"',
-        '#include "rsm/status.h"',
-        "",
-        "static rsm_localizer_t loc;",
-        "static rsm_localizer_config_t cfg;",
-        "",
-        "int main(void)",
-        "{",
-        "    rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};",
-        "    cfg = rsm_localizer_config_default();",
-        "    if (rsm_localizer_init(&loc, &cfg, &x0, NULL) != RSM_OK) {",
-        '        fprintf(stderr, "default config rejected\\n");',
-        "        return 1;",
-        "    }",
-        '    printf("size|rsm_localizer_t|%lu\\n", (unsigned long)sizeof loc);',
-    ]
-    for label, expr in MEMORY_PARTS:
-        lines.append(f'    printf("part|{label}|%lu\\n", (unsigned long)({expr}));')
-    for t in MEMORY_OTHER:
-        lines.append(f'    printf("size|{t}|%lu\\n", (unsigned long)sizeof({t}));')
-    for mac in MEMORY_MACROS:
-        lines.append(f'    printf("macro|{mac}|%lu\\n", (unsigned long)({mac}));')
-    lines += ["    return 0;", "}", ""]
-    return "\n".join(lines)
-
-
-def run_memory(root: Path, build_dir: Path, work: Path) -> dict:
+def run_memory(exes: Dict[str, Optional[Path]], log: Path, build_dir: Path) -> dict:
+    """sizeof the localizer state and its parts on this host, per
+    configuration, from rsm-stages' JSON (one scan is enough)."""
+    out = {"configs": {}}
     cache = cmake_cache(build_dir)
-    cc = cache.get("CMAKE_C_COMPILER") or shutil.which("cc") or "cc"
-    libs = [p for p in (build_dir / "librsm.a", build_dir / "librsm.so") if p.exists()]
-    if not libs:
-        return {"skipped": f"no librsm in {shown_path(build_dir, root)}"}
-    d = work / "memory"
-    d.mkdir(parents=True, exist_ok=True)
-    src = d / "rsm_sizes.c"
-    exe = d / "rsm_sizes"
-    src.write_text(memory_program())
-    cmd = [cc, "-std=c99", "-O1", f"-I{root / 'include'}"]
-    if cache.get("RSM_USER_CONFIG"):
-        cmd.append(f"-DRSM_USER_CONFIG={cache['RSM_USER_CONFIG']}")
-    if cache.get("RSM_SANITIZE", "OFF").upper() in ("ON", "TRUE", "1", "YES"):
-        cmd.append("-fsanitize=address,undefined")
-    cmd += [str(src), "-o", str(exe), str(libs[0]), "-lm"]
-    res = subprocess.run(cmd, capture_output=True, text=True)
-    if res.returncode != 0:
-        raise BenchError(f"building the size probe failed:\n{' '.join(cmd)}\n{res.stderr}")
-    res = subprocess.run([str(exe)], capture_output=True, text=True)
-    if res.returncode != 0:
-        raise BenchError(f"the size probe failed:\n{res.stderr}")
-    out = {"sizes": {}, "parts": {}, "macros": {}, "compiler": first_line([cc, "--version"]) or cc}
-    for line in res.stdout.splitlines():
-        kind, name, value = line.split("|")
-        out[{"size": "sizes", "part": "parts", "macro": "macros"}[kind]][name] = int(value)
-    total = out["sizes"]["rsm_localizer_t"]
-    out["other"] = total - sum(out["parts"][k] for k in MEMORY_TILES)
+    out["compiler"] = compiler_name(build_dir, cache.get("CMAKE_C_COMPILER") or "cc")
+    for name, exe in exes.items():
+        if exe is None:
+            continue
+        j = run_stages(exe, log, "rsm", ["--limit", "1", "--clock", "none"])
+        sizes = j["sizes"]
+        other = sizes["rsm_localizer_t"] - sum(sizes[k] for k in MEMORY_TILES)
+        out["configs"][name] = {"sizes": sizes, "config": j["config"], "other": other,
+                                "header": SMALL_HEADER if name == "small" else None}
     return out
 
 
@@ -648,9 +840,10 @@ def run_cross_check(root: Path) -> dict:
 # rsm-stages (tools/bench-c): stage times, stack depth, sizes
 
 
-STAGES = ("points", "grid", "harris", "match", "ransac", "refine", "icp", "ekf", "map")
+STAGES = ("points", "mapmatch", "grid", "harris", "match", "ransac", "refine", "icp", "ekf", "map")
 STAGE_WHAT = {
     "points": "readings -> robot-frame points",
+    "mapmatch": "coarse-to-fine alignment to the persistent map (rsm)",
     "grid": "map recentred, points -> scan image",
     "harris": "key points of scan and map",
     "match": "tentative matches",
@@ -658,7 +851,7 @@ STAGE_WHAT = {
     "refine": "sub-cell alignment to the map",
     "icp": "ICP alignment (baseline)",
     "ekf": "measurement noise, gate, update",
-    "map": "scan superimposed on the map",
+    "map": "scan written into the map (rsm: every 0.4 m / 0.5 rad)",
 }
 TIMING_STATS = ("mean_us", "median_us", "p95_us", "max_us", "median_reached_us", "p95_reached_us")
 
@@ -726,10 +919,10 @@ def run_stage_speed(exe: Path, log: Path, repeats: int, stack: bool) -> dict:
                              "beams": sel[0]["beams"], "outcomes": sel[0]["outcomes"]}
     out["config"] = runs[0]["result"]["config"]
     out["sizes"] = runs[0]["result"]["sizes"]
-    r_, i_ = out["methods"]["rsm"]["timing"]["call"], out["methods"]["icp"]["timing"]["call"]
-    out["ratio_median"] = ratio(i_["median_us"], r_["median_us"])
-    out["ratio_p95"] = ratio(i_["p95_us"], r_["p95_us"])
-    out["ratio_mean"] = ratio(i_["mean_us"], r_["mean_us"])
+    r_ = out["methods"]["rsm"]["timing"]["call"]
+    for key in ("median", "p95", "mean"):
+        out[f"ratio_{key}"] = {m: ratio(out["methods"][m]["timing"]["call"][f"{key}_us"], r_[f"{key}_us"])
+                               for m in ROBUST_METHODS}
     if stack:
         out["stack"] = {m: run_stages(exe, log, m, ["--stack"])["stack"] for m in ROBUST_METHODS}
     return out
@@ -824,6 +1017,11 @@ def localizer_breakdown(cg: dict, helpers: Iterable[str], root: str = "rsm_local
 # from two stages are shown as such.
 CALLEE_STAGE = {
     "rsm_scan_to_points": "points",
+    "rsm_mapmatch": "mapmatch",
+    "rsm_mapmatch_search": "mapmatch",
+    "rsm_tmap_update": "map",
+    "rsm_pose_between": "map",
+    "rsm_pose_apply": "map",
     "rsm_image_clear": "grid",
     "rsm_image_mark_points": "grid",
     "rsm_map_recenter": "grid + map",
@@ -843,8 +1041,19 @@ CALLEE_STAGE = {
     "rsm_map_add_points": "map",
     "rsm_icp_set_reference": "map",
 }
-CG_STAGE_ORDER = ("points", "grid", "grid + map", "harris", "match", "ransac", "refine", "icp", "ekf", "map",
-                  "other", "localizer")
+CG_STAGE_ORDER = ("points", "mapmatch", "grid", "grid + map", "harris", "match", "ransac", "refine", "icp", "ekf",
+                  "map", "other", "localizer")
+
+
+def callee_costs(cg: dict, fn: str) -> dict:
+    """Inclusive instructions of every function ``fn`` calls (by base name)
+    and ``fn``'s own, to split one stage's function further."""
+    callees: Dict[str, int] = {}
+    for (caller, callee), (_, ir) in cg["calls"].items():
+        if base_name(caller) == fn and base_name(callee) != fn:
+            callees[base_name(callee)] = callees.get(base_name(callee), 0) + ir
+    own = sum(c for f, c in cg["self"].items() if base_name(f) == fn)
+    return {"own": own, "callees": callees, "total": own + sum(callees.values())}
 
 
 def callgrind_stages(breakdown: dict, scans: int) -> Dict[str, dict]:
@@ -968,9 +1177,9 @@ def run_turns(runs: dict, relations_path: Path, cell_m: float, n: int = TURNS) -
         vals = [row["residual"][m] for row in rows if row["residual"][m] is not None]
         summary[m] = {k: spread([v[k] for v in vals]) for k in ("dx_cells", "dy_cells", "translation_cells",
                                                                  "rotation_deg")}
-    wins = {q: sum(1 for row in rows if row["residual"]["rsm"] and row["residual"]["icp"]
-                   and row["residual"]["rsm"][q] < row["residual"]["icp"][q])
-            for q in ("translation_cells", "rotation_deg")}
+    wins = {o: {q: sum(1 for row in rows if row["residual"]["rsm"] and row["residual"][o]
+                       and row["residual"]["rsm"][q] < row["residual"][o][q])
+                for q in ("translation_cells", "rotation_deg")} for o in METHODS if o != "rsm"}
     bins = []
     for k in range(len(ROTATION_BINS)):
         sel = [r for r in relations if r.span <= LOCAL_SPAN
@@ -1019,12 +1228,12 @@ def plot_turns(turns: dict, path: Path, prov: dict) -> Optional[str]:
         return "no turn was found"
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
     x = list(range(1, len(rows) + 1))
-    w = 0.27
+    w = 0.8 / len(METHODS)
     for j, (key, unit) in enumerate((("translation_cells", "cells"), ("rotation_deg", "deg"))):
         ax = axes[0][j]
         for k, m in enumerate(METHODS):
             vals = [r["residual"][m][key] if r["residual"][m] else float("nan") for r in rows]
-            ax.bar([v + (k - 1) * w for v in x], vals, width=w, label=m)
+            ax.bar([v + (k - (len(METHODS) - 1) / 2) * w for v in x], vals, width=w, label=m)
         ax.set_xticks(x)
         ax.set_xticklabels([f"{i}\n{r['rotation_deg']:.0f}°" for i, r in zip(x, rows)], fontsize=7)
         ax.set_xlabel("turn (fastest first) and its true rotation")
@@ -1035,7 +1244,7 @@ def plot_turns(turns: dict, path: Path, prov: dict) -> Optional[str]:
         ax.legend(fontsize=8)
         ax = axes[1][j]
         labels = [b["bin"] for b in turns["bins"]]
-        for m, style in zip(METHODS, ("o-", "s--", "^:")):
+        for m, style in zip(METHODS, ("o-", "d-.", "s--", "^:")):
             ax.plot(range(len(labels)), [b["methods"][m][key]["mean"] for b in turns["bins"]], style, label=m)
         ax.set_xticks(range(len(labels)))
         ax.set_xticklabels([f"{lab}\n(n={b['relations']})" for lab, b in zip(labels, turns["bins"])], fontsize=7)
@@ -1053,22 +1262,31 @@ def plot_turns(turns: dict, path: Path, prov: dict) -> Optional[str]:
 # Cortex-M4F memory per module and configuration; static stack bound
 
 
-ARM_CONFIGS = (("default", None), ("small", "tests/config/small_config.h"))
+# (name, RSM_USER_CONFIG on the library's include path; None: config.h's defaults)
+ARM_CONFIGS = (("default", None), ("small", SMALL_HEADER))
 ARM_CPU = ("-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard")
 # Caller-owned state per module: (module, label, C expression); the localizer's
-# parts are members of rsm_localizer_t, which also holds the reports.
+# parts are members of rsm_localizer_t, which also holds the reports. Labels
+# indented by two spaces are parts of the localizer, by four parts of a part.
 STATE_SIZES = (
     ("localizer.c", "rsm_localizer_t (all of the below)", "sizeof(rsm_localizer_t)"),
     ("ekf.c", "  ekf", "sizeof(((rsm_localizer_t *)0)->ekf)"),
     ("odometry.c", "  odo", "sizeof(((rsm_localizer_t *)0)->odo)"),
-    ("map.c", "  map", "sizeof(((rsm_localizer_t *)0)->map)"),
-    ("grid.c", "  image", "sizeof(((rsm_localizer_t *)0)->image)"),
-    ("ransac.c", "  ransac", "sizeof(((rsm_localizer_t *)0)->ransac)"),
-    ("harris.c", "  work.rsm (harris + candidates)", "sizeof(((rsm_localizer_t *)0)->work.rsm)"),
-    ("icp.c", "  work.icp (shares work.rsm's memory)", "sizeof(((rsm_localizer_t *)0)->work.icp)"),
-    ("match.c", "  key points and matches",
-     "sizeof(((rsm_localizer_t *)0)->kp_cur) * 2 + sizeof(((rsm_localizer_t *)0)->pt_cur) * 2"
-     " + sizeof(((rsm_localizer_t *)0)->matches)"),
+    ("localizer.c", "  state (union: one method's state)", "sizeof(((rsm_localizer_t *)0)->state)"),
+    ("tilemap.c", "    state.persistent (rsm)", "sizeof(((rsm_localizer_t *)0)->state.persistent)"),
+    ("tilemap.c", "      map.tile[] (tile pool)", "sizeof(((rsm_localizer_t *)0)->state.persistent.map.tile)"),
+    ("tilemap.c", "      map.hash[] (tile index)", "sizeof(((rsm_localizer_t *)0)->state.persistent.map.hash)"),
+    ("map.c", "    state.paper (the paper's method)", "sizeof(((rsm_localizer_t *)0)->state.paper)"),
+    ("map.c", "      map (scrolling window)", "sizeof(((rsm_localizer_t *)0)->state.paper.map)"),
+    ("grid.c", "      image", "sizeof(((rsm_localizer_t *)0)->state.paper.image)"),
+    ("ransac.c", "      ransac", "sizeof(((rsm_localizer_t *)0)->state.paper.ransac)"),
+    ("harris.c", "      visited + harris + cands",
+     "sizeof(((rsm_localizer_t *)0)->state.paper.visited) + sizeof(((rsm_localizer_t *)0)->state.paper.harris)"
+     " + sizeof(((rsm_localizer_t *)0)->state.paper.cands)"),
+    ("match.c", "      key points and matches",
+     "sizeof(((rsm_localizer_t *)0)->state.paper.kp_cur) * 2 + sizeof(((rsm_localizer_t *)0)->state.paper.pt_cur) * 2"
+     " + sizeof(((rsm_localizer_t *)0)->state.paper.matches)"),
+    ("icp.c", "    state.icp (icp)", "sizeof(((rsm_localizer_t *)0)->state.icp)"),
     ("scan.c", "  points (robot and world frame)", "sizeof(((rsm_localizer_t *)0)->pts) * 2"),
     ("localizer.c", "rsm_localizer_config_t", "sizeof(rsm_localizer_config_t)"),
     ("scan.c", "rsm_scan_t (one scan buffer)", "sizeof(rsm_scan_t)"),
@@ -1222,7 +1440,7 @@ def read_callgraph_dir(d: Path) -> dict:
 
 
 def _config_flag(root: Path, header: Optional[str]) -> List[str]:
-    return [f"-DRSM_USER_CONFIG={(root / header).resolve()}"] if header else []
+    return [f"-DRSM_USER_CONFIG={header}"] if header else []  # found on the include path
 
 
 def run_arm_memory(root: Path, work: Path, configs: Sequence[Tuple[str, Optional[str]]] = ARM_CONFIGS) -> dict:
@@ -1239,12 +1457,12 @@ def run_arm_memory(root: Path, work: Path, configs: Sequence[Tuple[str, Optional
         cmd = ["cmake", "-S", str(root), "-B", str(b), "-G", "Ninja",
                f"-DCMAKE_TOOLCHAIN_FILE={root / 'cmake' / 'toolchain-arm-none-eabi.cmake'}",
                "-DCMAKE_BUILD_TYPE=MinSizeRel", "-DCMAKE_C_FLAGS_MINSIZEREL=-Os -DNDEBUG -fstack-usage "
-               "-fcallgraph-info=su", f"-DRSM_USER_CONFIG={(root / header).resolve() if header else ''}"]
+               "-fcallgraph-info=su", f"-DRSM_USER_CONFIG={header or ''}"]
         for c in (cmd, ["cmake", "--build", str(b), "--target", "rsm", "rsm_port_baremetal", "rsm_firmware"]):
             res = subprocess.run(c, capture_output=True, text=True)
             if res.returncode != 0:
                 raise BenchError(f"{' '.join(c)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
-        cfg = {"header": header or "include/rsm/config.h (defaults)"}
+        cfg = {"header": header or "rsm/config.h (defaults)"}
         res = subprocess.run(["arm-none-eabi-size", "-A", "-d", str(b / "librsm.a")], capture_output=True, text=True)
         cfg["objects"] = parse_size_archive(res.stdout)
         probe = b / "rsm_state_probe.c"
@@ -1312,23 +1530,39 @@ def run_host_stack(root: Path, build_dir: Path, work: Path, jobs: int = 2) -> di
 
 
 # ---------------------------------------------------------------------------
-# scaling: readings per scan and map size
+# scaling: readings per scan, the paper's window, the tile pool, presets
 
 
 SCALING_BEAMS = (181, 361, 721)
 SCALING_MAP_LOG2 = (6, 7, 8)
+SCALING_TILES = (600, 1200, 2600)
 DEFAULT_MAX_BEAMS = 361
 DEFAULT_MAP_LOG2 = 7
+DEFAULT_TILES = 2600
 # Shipped configuration presets (include paths) run as they are.
-SCALING_PRESETS = ("rsm/config_host.h",)
+SCALING_PRESETS = (SMALL_HEADER, "rsm/config_host.h")
+# The methods a kind of variant concerns: the window sizes only the paper's
+# method, the tile pool only rsm's.
+KIND_METHODS = {"beams": ROBUST_METHODS, "map": ("paper",), "tiles": ("rsm",), "preset": ("rsm", "paper")}
+
+
+def hash_log2_for(tiles: int) -> int:
+    """The smallest tile index (log2 of its slots) config.h accepts for a pool:
+    at least 4/3 slots per tile."""
+    h = 4
+    while (1 << h) * 3 < 4 * tiles:
+        h += 1
+    return h
 
 
 def scaling_variants(beams: Sequence[int] = SCALING_BEAMS, maps: Sequence[int] = SCALING_MAP_LOG2,
-                     presets: Sequence[str] = SCALING_PRESETS) -> List[dict]:
+                     tiles: Sequence[int] = SCALING_TILES, presets: Sequence[str] = SCALING_PRESETS) -> List[dict]:
     """The builds and runs of the scaling section. Readings: the log's scans
     resampled to N readings, RSM_MAX_BEAMS = N (the default 361 is the default
-    build). Map: the log's own readings, RSM_MAP_SIZE_LOG2 = L. Presets: a
-    shipped config header, the log's own readings."""
+    build). Map: the log's own readings, RSM_MAP_SIZE_LOG2 = L (the paper's
+    window). Tiles: the log's own readings, RSM_TMAP_TILES = T with the
+    smallest index that fits. Presets: a shipped config header, the log's own
+    readings."""
     out = []
     for n in beams:
         macros = {} if n == DEFAULT_MAX_BEAMS else {"RSM_MAX_BEAMS": n}
@@ -1336,9 +1570,14 @@ def scaling_variants(beams: Sequence[int] = SCALING_BEAMS, maps: Sequence[int] =
     for lg in maps:
         macros = {} if lg == DEFAULT_MAP_LOG2 else {"RSM_MAP_SIZE_LOG2": lg}
         out.append({"name": f"map{lg}", "kind": "map", "value": lg, "macros": macros, "resample": None})
+    for t in tiles:
+        macros = {} if t == DEFAULT_TILES else {"RSM_TMAP_TILES": t, "RSM_TMAP_HASH_LOG2": hash_log2_for(t)}
+        out.append({"name": f"tiles{t}", "kind": "tiles", "value": t, "macros": macros, "resample": None})
     for k, h in enumerate(presets):
         out.append({"name": Path(h).stem, "kind": "preset", "value": k, "macros": {}, "header": h,
                     "resample": None})
+    for v in out:
+        v["methods"] = list(KIND_METHODS[v["kind"]])
     return out
 
 
@@ -1350,11 +1589,37 @@ def variant_header(macros: Dict[str, int]) -> str:
     return "\n".join(lines)
 
 
-def build_variant(root: Path, work: Path, main_build: Path, variant: dict) -> Path:
+def configure_build(root: Path, b: Path, main_build: Path, header, targets: Sequence[str]) -> None:
+    """A Release build of ``targets`` in ``b`` with RSM_USER_CONFIG=header, with
+    the main build's compiler and warning settings."""
+    cache = cmake_cache(main_build)
+    cmd = ["cmake", "-S", str(root), "-B", str(b), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
+           "-DRSM_BUILD_TESTS=OFF", f"-DRSM_USER_CONFIG={header}"]
+    if cache.get("CMAKE_C_COMPILER"):
+        cmd.append(f"-DCMAKE_C_COMPILER={cache['CMAKE_C_COMPILER']}")
+    if cache.get("RSM_WERROR"):
+        cmd.append(f"-DRSM_WERROR={cache['RSM_WERROR']}")
+    for c in (cmd, ["cmake", "--build", str(b), "--target", *targets]):
+        res = subprocess.run(c, capture_output=True, text=True)
+        if res.returncode != 0:
+            raise BenchError(f"{' '.join(c)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
+
+
+def build_small(root: Path, main_build: Path, d: Path) -> Dict[str, Path]:
+    """rsm-nav and rsm-stages built with rsm/config_small.h in ``d``."""
+    configure_build(root, d, main_build, SMALL_HEADER, ("rsm-nav", "rsm-stages"))
+    return {"nav": d / "tools" / "nav" / "rsm-nav", "stages": stages_exe(d), "dir": d}
+
+
+def build_variant(root: Path, work: Path, main_build: Path, variant: dict,
+                  prebuilt: Optional[Dict[str, Path]] = None) -> Path:
     """rsm-stages for a variant: the main build's when the variant is the
-    default, else a Release build of its own with a generated RSM_USER_CONFIG."""
+    default, one already built for its header (``prebuilt``), else a Release
+    build of its own with a generated RSM_USER_CONFIG."""
     if not variant["macros"] and not variant.get("header"):
         return stages_exe(main_build)
+    if variant.get("header") and prebuilt and variant["header"] in prebuilt:
+        return prebuilt[variant["header"]]
     d = work / "variants" / variant["name"]
     d.mkdir(parents=True, exist_ok=True)
     if variant.get("header"):
@@ -1364,46 +1629,43 @@ def build_variant(root: Path, work: Path, main_build: Path, variant: dict) -> Pa
         text = variant_header(variant["macros"])
         if not header.is_file() or header.read_text() != text:
             header.write_text(text)
-    b = d / "build"
-    cache = cmake_cache(main_build)
-    cmd = ["cmake", "-S", str(root), "-B", str(b), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
-           "-DRSM_BUILD_TESTS=OFF", f"-DRSM_USER_CONFIG={header}"]
-    if cache.get("CMAKE_C_COMPILER"):
-        cmd.append(f"-DCMAKE_C_COMPILER={cache['CMAKE_C_COMPILER']}")
-    for c in (cmd, ["cmake", "--build", str(b), "--target", "rsm-stages"]):
-        res = subprocess.run(c, capture_output=True, text=True)
-        if res.returncode != 0:
-            raise BenchError(f"{' '.join(c)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
-    return stages_exe(b)
+    configure_build(root, d / "build", main_build, header, ("rsm-stages",))
+    return stages_exe(d / "build")
 
 
 def run_scaling(root: Path, main_build: Path, log: Path, relations_path: Path, work: Path,
-                variants: Optional[List[dict]] = None) -> dict:
+                variants: Optional[List[dict]] = None, prebuilt: Optional[Dict[str, Path]] = None) -> dict:
+    """Each variant's methods through rsm-stages, one process at a time (they
+    are timed): time per scan, accuracy (local and all), fused share, sizes."""
     variants = variants if variants is not None else scaling_variants()
     relations = ev.load_relations(relations_path)
     rows = []
     for v in variants:
-        exe = build_variant(root, work, main_build, v)
-        for m in ROBUST_METHODS:
+        exe = build_variant(root, work, main_build, v, prebuilt)
+        for m in v["methods"]:
             extra = ["--clock", "ns"] + (["--beams", str(v["resample"])] if v["resample"] else [])
             traj = work / "scaling" / f"{v['name']}-{m}.txt"
             j = run_stages(exe, log, m, extra, traj)
-            err = ev.evaluate(ev.load_trajectory(traj), relations, max_span=LOCAL_SPAN, tolerance=0.0)
+            err = scoped_errors(traj, relations)
             rows.append({"variant": v["name"], "kind": v["kind"], "value": v["value"], "macros": v["macros"],
                          "method": m, "beams": j["beams"], "config": j["config"], "sizes": j["sizes"],
                          "call": j["timing"]["call"], "scans": j["scans"], "trajectory": str(traj),
-                         "header": v.get("header"), "outcomes": j["outcomes"],
+                         "header": v.get("header"), "outcomes": j["outcomes"], "tmap": j.get("tmap"),
                          "fused": 100.0 * j["outcomes"]["accepted"] / j["scans"] if j["scans"] else float("nan"),
-                         "local": {q: err[q]["mean"] for q in QUANTITIES}, "matched": err["matched"]})
+                         "local": {q: err["local"][q]["mean"] for q in QUANTITIES},
+                         "all": {q: err["all"][q]["mean"] for q in QUANTITIES},
+                         "matched": err["local"]["matched"]})
     return {"log": str(log), "variants": variants, "rows": rows, "growth": memory_growth(rows)}
 
 
 def memory_growth(rows: Sequence[dict]) -> dict:
-    """Bytes of rsm_localizer_t per reading of RSM_MAX_BEAMS and per map cell,
-    from the smallest and largest variant of each kind."""
+    """Bytes of rsm_localizer_t per reading of RSM_MAX_BEAMS, per cell of the
+    paper's window and per tile of the pool, from the smallest and largest
+    variant of each kind."""
     out = {}
     for kind, x in (("beams", lambda r: r["config"]["RSM_MAX_BEAMS"]),
-                    ("map", lambda r: r["config"]["RSM_MAP_SIZE"] ** 2)):
+                    ("map", lambda r: r["config"]["RSM_MAP_SIZE"] ** 2),
+                    ("tiles", lambda r: r["config"]["RSM_TMAP_TILES"])):
         sel = sorted({(x(r), r["sizes"]["rsm_localizer_t"]) for r in rows if r["kind"] == kind})
         if len(sel) >= 2 and sel[-1][0] != sel[0][0]:
             out[kind] = {"from": sel[0], "to": sel[-1],
@@ -1415,32 +1677,49 @@ def plot_scaling(sc: dict, path: Path, prov: dict) -> Optional[str]:
     plt = _pyplot()
     if plt is None:
         return NO_MATPLOTLIB
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.2))
-    for ax, kind, xlabel in ((axes[0], "beams", "readings per scan"),
-                             (axes[1], "map", "map side [cells]")):
-        for m, style in zip(ROBUST_METHODS, ("o-", "s--")):
+    fig, axes = plt.subplots(2, 2, figsize=(12, 8))
+    styles = dict(zip(ROBUST_METHODS, ("o-", "d-.", "s--")))
+    for ax, kind, xlabel in ((axes[0][0], "beams", "readings per scan"),
+                             (axes[0][1], "map", "side of the paper's window [cells]")):
+        for m in KIND_METHODS[kind]:
             sel = sorted((r for r in sc["rows"] if r["kind"] == kind and r["method"] == m),
                          key=lambda r: r["value"])
+            if not sel:
+                continue
             xs = [r["beams"] if kind == "beams" else r["config"]["RSM_MAP_SIZE"] for r in sel]
-            ax.plot(xs, [r["call"]["median_us"] for r in sel], style, label=f"{m} median")
-            ax.plot(xs, [r["call"]["p95_us"] for r in sel], style, alpha=0.4, label=f"{m} p95")
+            ax.plot(xs, [r["call"]["median_us"] for r in sel], styles[m], label=f"{m} median")
+            ax.plot(xs, [r["call"]["p95_us"] for r in sel], styles[m], alpha=0.4, label=f"{m} p95")
         ax.set_xlabel(xlabel)
         ax.set_ylabel("time per scan [us]")
         ax.set_yscale("log")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
-    ax = axes[2]
-    for kind, style, xlabel in (("beams", "o-", "RSM_MAX_BEAMS"), ("map", "s--", "map cells / 100")):
-        sel = sorted({(r["config"]["RSM_MAX_BEAMS"] if kind == "beams" else r["config"]["RSM_MAP_SIZE"] ** 2 / 100,
-                       r["sizes"]["rsm_localizer_t"]) for r in sc["rows"] if r["kind"] == kind})
-        ax.plot([s[0] for s in sel], [s[1] / 1024 for s in sel], style, label=xlabel)
+    ax = axes[1][0]
+    sel = sorted((r for r in sc["rows"] if r["kind"] == "tiles"), key=lambda r: r["value"])
+    if sel:
+        xs = [r["value"] for r in sel]
+        ax.plot(xs, [r["local"]["translation"] for r in sel], "o-", label="local translation [m]")
+        ax.plot(xs, [r["all"]["translation"] for r in sel], "s--", label="all translation [m]")
+        ax.set_yscale("log")
+    ax.set_xlabel("RSM_TMAP_TILES (tiles in the pool)")
+    ax.set_ylabel("rsm's mean error [m]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax = axes[1][1]
+    for kind, style, xlabel, x in (
+            ("beams", "o-", "RSM_MAX_BEAMS", lambda r: r["config"]["RSM_MAX_BEAMS"]),
+            ("map", "s--", "window cells / 100", lambda r: r["config"]["RSM_MAP_SIZE"] ** 2 / 100),
+            ("tiles", "^:", "tiles / 10", lambda r: r["config"]["RSM_TMAP_TILES"] / 10)):
+        pts = sorted({(x(r), r["sizes"]["rsm_localizer_t"]) for r in sc["rows"] if r["kind"] == kind})
+        if pts:
+            ax.plot([p_[0] for p_ in pts], [p_[1] / 1024 for p_ in pts], style, label=xlabel)
     ax.set_xlabel("capacity")
     ax.set_ylabel("sizeof(rsm_localizer_t) [KiB]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    fig.suptitle("Scaling: time per scan against readings and map size; state size against capacities",
-                 fontsize=11)
-    _save(plt, fig, path, prov, (0, 0.04, 1, 0.94))
+    fig.suptitle("Scaling: time per scan against readings and window size; rsm's error and the state "
+                 "against capacities", fontsize=11)
+    _save(plt, fig, path, prov, (0, 0.03, 1, 0.95))
     return None
 
 
@@ -1450,14 +1729,15 @@ def plot_stages(st: dict, path: Path, prov: dict) -> Optional[str]:
         return NO_MATPLOTLIB
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.2))
     ax = axes[0]
+    labelled = set()
     for k, m in enumerate(ROBUST_METHODS):
         left = 0.0
         for s in STAGES:
             v = st["methods"][m]["timing"][s]["mean_us"]
             if v <= 0:
                 continue
-            ax.barh(k, v, left=left, label=s if k == 0 or s == "icp" else None,
-                    color=f"C{STAGES.index(s)}")
+            ax.barh(k, v, left=left, label=s if s not in labelled else None, color=f"C{STAGES.index(s)}")
+            labelled.add(s)
             left += v
     ax.set_yticks(range(len(ROBUST_METHODS)))
     ax.set_yticklabels(ROBUST_METHODS)
@@ -1466,10 +1746,10 @@ def plot_stages(st: dict, path: Path, prov: dict) -> Optional[str]:
     ax.grid(True, axis="x", alpha=0.3)
     ax = axes[1]
     shown = [s for s in STAGES if any(st["methods"][m]["timing"][s]["reached"] for m in ROBUST_METHODS)]
-    w = 0.2
-    for k, (m, q) in enumerate((("rsm", "median_reached_us"), ("rsm", "p95_reached_us"),
-                                 ("icp", "median_reached_us"), ("icp", "p95_reached_us"))):
-        ax.bar([i + (k - 1.5) * w for i in range(len(shown))],
+    bars = [(m, q) for m in ROBUST_METHODS for q in ("median_reached_us", "p95_reached_us")]
+    w = 0.8 / len(bars)
+    for k, (m, q) in enumerate(bars):
+        ax.bar([i + (k - (len(bars) - 1) / 2) * w for i in range(len(shown))],
                [st["methods"][m]["timing"][s][q] for s in shown], width=w,
                label=f"{m} {'median' if q.startswith('median') else 'p95'}")
     ax.set_xticks(range(len(shown)))
@@ -1487,7 +1767,8 @@ def plot_stages(st: dict, path: Path, prov: dict) -> Optional[str]:
 # plot
 
 
-def plot_robustness(rob: dict, path: Path, prov: dict, odometry: Optional[dict] = None) -> Optional[str]:
+def plot_robustness(rob: dict, path: Path, prov: dict, odometry: Optional[dict] = None,
+                    label: str = "") -> Optional[str]:
     """Draws the robustness curves; returns None or why there is no plot."""
     plt = _pyplot()
     if plt is None:
@@ -1497,7 +1778,7 @@ def plot_robustness(rob: dict, path: Path, prov: dict, odometry: Optional[dict] 
     for i, s in enumerate(SCOPES):
         for j, q in enumerate(QUANTITIES):
             ax = axes[i][j]
-            for m, style in zip(ROBUST_METHODS, ("o-", "s--")):
+            for m, style in zip(ROBUST_METHODS, ("o-", "d-.", "s--")):
                 rows = [rob["table"][f"{m}:{lv}"][f"{s}.{q}"] for lv in levels]
                 means = [r["mean"] for r in rows]
                 err = [[r["mean"] - r["min"] for r in rows], [r["max"] - r["mean"] for r in rows]]
@@ -1508,242 +1789,395 @@ def plot_robustness(rob: dict, path: Path, prov: dict, odometry: Optional[dict] 
             scope = f"local relations (span <= {LOCAL_SPAN:g} s)" if s == "local" else "all relations"
             ax.set_title(f"{q}, {scope}", fontsize=10)
             ax.set_ylabel(f"mean error [{UNITS[q]}]")
-            ax.grid(True, alpha=0.3)
+            ax.set_yscale("log")  # the methods differ by orders of magnitude on all relations
+            ax.grid(True, which="both", alpha=0.3)
             if i == 1:
                 ax.set_xlabel("outliers in every scan [%]")
             ax.legend(fontsize=8)
     n = len(rob["seeds"])
-    fig.suptitle(f"Robustness: relative-pose error vs outliers (mean over {n} seed"
+    fig.suptitle(f"Robustness on {label}: relative-pose error vs outliers (mean over {n} seed"
                  f"{'s' if n != 1 else ''}, bars min..max)", fontsize=11)
     _save(plt, fig, path, prov, (0, 0.03, 1, 0.96))
     return None
 
 
 # ---------------------------------------------------------------------------
-# section 5: where rsm loses
+# section 7: the issue's floors (a report, not an assertion)
+
+FLOOR_LEVEL = 43
+FLOOR_ROBUST = {"local": 1.10, "all": 1.25}  # outlier error over the clean one, translation
+FLOOR_ARM_BYTES = {"default": 128 * 1024, "small": 64 * 1024}
+FLOOR_IR_PER_SCAN = 1.2e6
+PEER_FLOORS = (("all", "translation"), ("local", "translation"), ("local", "rotation"))
+# The figures the issue names (from the shorter peer table it quotes); peers.md
+# lists more peer variants, some lower, and both are checked.
+ISSUE_FLOORS = {
+    "intel": {("all", "translation"): 0.102, ("local", "translation"): 0.0133, ("local", "rotation"): 0.26},
+    "aces": {("all", "translation"): 0.076, ("local", "translation"): 0.040, ("local", "rotation"): 0.43},
+}
+
+
+def _scope_name(scope: str) -> str:
+    return "all-relations" if scope == "all" else "local"
+
+
+def _floor(status: str, kind: str, log: Optional[str], value, limit, text: str) -> dict:
+    return {"status": status, "kind": kind, "log": log, "value": value, "limit": limit,
+            "line": f"{status} {text}"}
+
+
+def check_floors(rsm: Dict[str, dict], peers: Optional[Dict[str, List[dict]]], robust: Dict[str, dict],
+                 arm_bytes: Dict[str, Optional[int]], ir: dict) -> List[dict]:
+    """The floors of the issue, each PASS, MISS or SKIP (not measured) with its line.
+
+    rsm: per log, rsm's errors (errors[scope][quantity]["mean"]);
+    peers: parse_peers()["accuracy"], or None when peers.md is absent;
+    robust: per log, rsm's translation errors {"clean": {scope: m}, "noisy":
+    {seed: {scope: m}}} at FLOOR_LEVEL % outliers; arm_bytes: sizeof
+    (rsm_localizer_t) on Cortex-M4F per configuration (None: not measured);
+    ir: {"log", "scans", "ir_per_scan"} of rsm at the default configuration,
+    or {"skipped": why}."""
+    out = []
+    for log, e in rsm.items():
+        rows = None if peers is None else peers.get(log)
+        best = best_peers(rows) if rows else {}
+        for scope, q in PEER_FLOORS:
+            mine = e[scope][q]["mean"]
+            u = UNITS[q]
+            what = f"{log}: {_scope_name(scope)} {q} {fmt_q(q, mine)} {u}"
+            b = best.get((scope, q))
+            if peers is None:
+                out.append(_floor("SKIP", "peers", log, mine, None, f"{what}: no peer figures (peers.md is not "
+                                                                      "on this machine)"))
+            elif b is None:
+                out.append(_floor("SKIP", "peers", log, mine, None, f"{what}: peers.md has no peer figure "
+                                                                      "for this log"))
+            else:
+                ok = mine <= b[0]
+                out.append(_floor("PASS" if ok else "MISS", "peers", log, mine, b[0],
+                                  f"{what} {'<=' if ok else '>'} {fmt_q(q, b[0])} {u}, the best peer's ({b[1]})"))
+            lim = ISSUE_FLOORS.get(log, {}).get((scope, q))
+            if lim is not None:
+                ok = mine <= lim
+                out.append(_floor("PASS" if ok else "MISS", "issue", log, mine, lim,
+                                  f"{what} {'<=' if ok else '>'} {fmt_q(q, lim)} {u}, the issue's floor"))
+    for log, r in robust.items():
+        seeds = sorted(r["noisy"])
+        for scope in SCOPES:
+            lim = FLOOR_ROBUST[scope]
+            clean = r["clean"][scope]
+            what = f"{log}: {FLOOR_LEVEL} % outliers, {_scope_name(scope)} translation"
+            if not seeds:
+                out.append(_floor("SKIP", "robustness", log, None, lim, f"{what}: not measured"))
+                continue
+            ratios = [ratio(r["noisy"][sd][scope], clean) for sd in seeds]
+            ok = all(math.isfinite(x) and x <= lim for x in ratios)
+            shown = ", ".join(f"{fmt_q('translation', r['noisy'][sd][scope])} m = x{x:.3f} (seed {sd})"
+                              for sd, x in zip(seeds, ratios))
+            out.append(_floor("PASS" if ok else "MISS", "robustness", log, max(ratios), lim,
+                              f"{what} {shown} of the clean {fmt_q('translation', clean)} m; "
+                              f"{'every' if ok else 'not every'} seed <= x{lim:.2f}"))
+    for name, lim in FLOOR_ARM_BYTES.items():
+        b = arm_bytes.get(name)
+        cfg = "the default config.h" if name == "default" else SMALL_HEADER
+        what = f"Cortex-M4F: sizeof(rsm_localizer_t) with {cfg}"
+        if b is None:
+            out.append(_floor("SKIP", "memory", None, None, lim, f"{what}: not measured"))
+        else:
+            ok = b <= lim
+            out.append(_floor("PASS" if ok else "MISS", "memory", None, b, lim,
+                              f"{what} {fmt_int(b)} bytes ({b / 1024:.1f} KiB) {'<=' if ok else '>'} "
+                              f"{lim // 1024} KiB"))
+    if "skipped" in ir:
+        out.append(_floor("SKIP", "instructions", ir.get("log"), None, FLOOR_IR_PER_SCAN,
+                          f"instructions per scan: not measured ({ir['skipped']})"))
+    else:
+        v = ir["ir_per_scan"]
+        ok = v <= FLOOR_IR_PER_SCAN
+        out.append(_floor("PASS" if ok else "MISS", "instructions", ir["log"], v, FLOOR_IR_PER_SCAN,
+                          f"{ir['log']}: {fmt_int(round(v))} instructions per scan (callgrind, first "
+                          f"{ir['scans']} scans, default config.h) {'<=' if ok else '>'} "
+                          f"{fmt_int(round(FLOOR_IR_PER_SCAN))}"))
+    return out
+
+
+def floor_inputs(ctx: dict) -> dict:
+    """The arguments of check_floors from a bench run's results."""
+    acc, rob, am, cg = ctx["accuracy"], ctx.get("robustness"), ctx.get("arm_memory"), ctx.get("callgrind")
+    rsm = {label: a["runs"]["rsm"]["errors"] for label, a in acc.items()}
+    pe = ctx.get("peers") or {}
+    peers = None if "skipped" in pe or "accuracy" not in pe else pe["accuracy"]
+    robust = {}
+    for label, r in ((rob or {}).get("logs") or {}).items():
+        if FLOOR_LEVEL not in r["levels"]:
+            continue
+        noisy = {x["seed"]: {sc: x["errors"][sc]["translation"]["mean"] for sc in SCOPES}
+                 for x in r["runs"] if x["method"] == "rsm" and x["level"] == FLOOR_LEVEL}
+        clean = {sc: acc[label]["runs"]["rsm"]["errors"][sc]["translation"]["mean"] for sc in SCOPES}
+        robust[label] = {"clean": clean, "noisy": noisy}
+    arm = {}
+    for name in FLOOR_ARM_BYTES:
+        c = ((am or {}).get("configs") or {}).get(name)
+        arm[name] = c["state"][0]["bytes"] if c and c.get("state") else None
+    main = ctx["main_label"]
+    run = cg_run(cg, main, "default", "rsm")
+    if run is not None:
+        ir = {"log": main, "scans": run["scans"], "ir_per_scan": run["ir_per_scan"]}
+    else:
+        ir = {"log": main, "skipped": (cg or {}).get("skipped", "no callgrind run of rsm on " + main)}
+    return {"rsm": rsm, "peers": peers, "robust": robust, "arm_bytes": arm, "ir": ir}
+
+
+# ---------------------------------------------------------------------------
+# section 8: where rsm loses
 
 
 def _better(a: float, b: float) -> bool:
-    return math.isfinite(a) and math.isfinite(b) and a < b
+    return a is not None and b is not None and math.isfinite(a) and math.isfinite(b) and a < b
 
 
-def losses(acc: dict, main_label: str, rob: Optional[dict], speed: Optional[dict],
-           cg: Optional[dict], mem: Optional[dict]) -> List[str]:
-    items = []
-    # accuracy, every log
+_PEER_IR = re.compile(r"([0-9.]+)\s*M\b")
+
+
+def peer_speed(text: str) -> List[dict]:
+    """Rows of peers.md's speed table: method and instructions per scan (None
+    where the cell is not "N M")."""
+    out = []
+    for t in md_tables(text):
+        if not t["heading"].lower().startswith("speed"):
+            continue
+        head = [h.lower() for h in t["header"]]
+        i_ir = next((i for i, h in enumerate(head) if h.startswith("instructions")), None)
+        for row in t["rows"]:
+            m = _PEER_IR.search(row[i_ir]) if i_ir is not None and i_ir < len(row) else None
+            out.append({"method": row[0], "kind": peer_kind(row[0]),
+                        "ir_per_scan": float(m.group(1)) * 1e6 if m else None})
+    return out
+
+
+def losses(ctx: dict) -> List[str]:
+    """Every measure of this run on which something else does better than
+    rsm, as sentences; also the floors missed and the narrow wins."""
+    acc = ctx["accuracy"]
+    main = ctx["main_label"]
+    items: List[str] = []
+    floors = ctx.get("floors") or []
+    missed = [f["line"][5:] for f in floors if f["status"] == "MISS"]
+    if missed:
+        items.append(f"Floors missed ({len(missed)} of {len(floors)}): " + "; ".join(missed) + ".")
+    pe = ctx.get("peers") or {}
+    peers = None if "skipped" in pe or "accuracy" not in pe else pe["accuracy"]
     for label, a in acc.items():
-        runs = a["runs"]
-        for other in ("icp", "odometry"):
+        e = a["runs"]["rsm"]["errors"]
+        rows = (peers or {}).get(label) or []
+        if peers is not None and rows:
             lost = []
-            for s in SCOPES:
+            for scope, q in PEER_COLUMNS:
+                mine = e[scope][q]["mean"]
+                better = [r for r in rows if r["kind"] == "peer" and _better(r["values"][(scope, q)], mine)]
+                if better:
+                    lost.append(f"{_scope_name(scope)} {q} (rsm {fmt_q(q, mine)} {UNITS[q]}; "
+                                + ", ".join(f"{r['method']} {fmt_q(q, r['values'][(scope, q)])}" for r in better)
+                                + ")")
+            if lost:
+                items.append(f"On `{label}`, peers of peers.md are below rsm on: " + "; ".join(lost) + ".")
+            else:
+                items.append(f"On `{label}`, no peer of peers.md is below rsm in any of the four columns.")
+            before = [r for r in rows if r["kind"] == "before"]
+            for r in before:
+                worse = [f"{_scope_name(sc)} {q} ({fmt_q(q, e[sc][q]['mean'])} vs {fmt_q(q, r['values'][(sc, q)])} "
+                         f"{UNITS[q]})" for sc, q in PEER_COLUMNS if _better(r["values"][(sc, q)], e[sc][q]["mean"])]
+                if worse:
+                    items.append(f"On `{label}`, rsm is worse than the earlier rsm of peers.md ({r['method']}) on: "
+                                 + "; ".join(worse) + ".")
+        small = a["runs"].get(SMALL)
+        if small:
+            worse = [f"{_scope_name(sc)} {q} {fmt_q(q, small['errors'][sc][q]['mean'])} vs "
+                     f"{fmt_q(q, e[sc][q]['mean'])} {UNITS[q]}" for sc, q in PEER_COLUMNS
+                     if small["errors"][sc][q]["mean"] > 1.05 * e[sc][q]["mean"]]
+            if worse:
+                items.append(f"On `{label}`, rsm with `{SMALL_HEADER}` is more than 5 % worse than with the default "
+                             "configuration: " + "; ".join(worse) + ".")
+        for other in ("paper", "icp", "odometry"):
+            if other not in a["runs"]:
+                continue
+            lost = []
+            for sc in SCOPES:
                 for q in QUANTITIES:
                     for stat in ("mean", "std", "max"):
-                        mine = runs["rsm"]["errors"][s][q][stat]
-                        theirs = runs[other]["errors"][s][q][stat]
+                        mine = e[sc][q][stat]
+                        theirs = a["runs"][other]["errors"][sc][q][stat]
                         if _better(theirs, mine):
-                            lost.append(f"{s} {q} {stat} ({fmt_q(q, theirs)} vs rsm's "
-                                        f"{fmt_q(q, mine)} {UNITS[q]})")
+                            lost.append(f"{sc} {q} {stat} ({fmt_q(q, theirs)} vs rsm's {fmt_q(q, mine)} {UNITS[q]})")
             if lost:
                 items.append(f"On `{label}`, {other} beats rsm on: " + "; ".join(lost) + ".")
             else:
                 items.append(f"On `{label}`, {other} beats rsm on no error measure (mean, std, max "
-                             f"of translation and rotation, local and all relations).")
-    # robustness
-    if rob:
-        t = rob["table"]
-        noisy = [lv for lv in rob["levels"] if lv != 0]
-        lost, seed_lost, narrow, worse_ratio = [], [], [], []
-        for s in SCOPES:
-            for q in QUANTITIES:
-                k = f"{s}.{q}"
-                clean_r, clean_i = t["rsm:0"][k]["mean"], t["icp:0"][k]["mean"]
-                for lv in noisy:
-                    r, i = t[f"rsm:{lv}"][k], t[f"icp:{lv}"][k]
-                    pairs = list(zip(_per_seed(rob, "icp", lv, s, q), _per_seed(rob, "rsm", lv, s, q)))
-                    seeds_lost = sum(1 for a_, b_ in pairs if a_ < b_)
-                    if _better(i["mean"], r["mean"]):
-                        lost.append(f"{lv} % {s} {q} ({fmt_q(q, i['mean'])} vs rsm's "
-                                    f"{fmt_q(q, r['mean'])} {UNITS[q]}; icp lower with {seeds_lost} "
-                                    f"of {len(pairs)} seeds)")
-                    elif seeds_lost:
-                        seed_lost.append(f"{lv} % {s} {q} ({seeds_lost} of {len(pairs)} seeds; the "
-                                         f"means are still rsm {fmt_q(q, r['mean'])} vs icp "
-                                         f"{fmt_q(q, i['mean'])} {UNITS[q]})")
-                    if _better(r["mean"], i["mean"]) and r["mean"] > 0.9 * i["mean"]:
-                        narrow.append(f"{lv} % {s} {q} ({fmt_q(q, r['mean'])} vs icp's "
-                                      f"{fmt_q(q, i['mean'])} {UNITS[q]}, {100 * (1 - r['mean'] / i['mean']):.1f} % "
-                                      f"below; clean: {100 * (1 - clean_r / clean_i):.1f} % below)")
-                worse = [lv for lv in noisy if math.isfinite(t[f"icp:{lv}"][k]["ratio"])
-                         and t[f"rsm:{lv}"][k]["ratio"] > t[f"icp:{lv}"][k]["ratio"]]
-                if worse:
-                    rr = [t[f"rsm:{lv}"][k]["ratio"] for lv in worse]
-                    ir = [t[f"icp:{lv}"][k]["ratio"] for lv in worse]
-                    worse_ratio.append(
-                        f"{s} {q} at {', '.join(map(str, worse))} % (rsm {_range(rr)}x, icp {_range(ir)}x)")
-        if lost:
-            items.append("With outliers, icp's mean error over the seeds is below rsm's at: "
-                         + "; ".join(lost) + ".")
-        else:
-            items.append("With outliers, icp's mean error over the seeds is below rsm's at no level, in "
-                         "no scope and in neither translation nor rotation.")
-        if seed_lost:
-            items.append("With outliers, icp beats rsm on the same outlier log (same seed) at: "
-                         + "; ".join(seed_lost) + ".")
-        odo = acc[main_label]["runs"]["odometry"]["errors"]
+                             "of translation and rotation, local and all relations).")
+    rob = ctx.get("robustness")
+    for label, r in ((rob or {}).get("logs") or {}).items():
+        t = r["table"]
+        noisy = [lv for lv in r["levels"] if lv != 0]
+        for other in ("paper", "icp"):
+            lost = []
+            for sc in SCOPES:
+                for q in QUANTITIES:
+                    k = f"{sc}.{q}"
+                    for lv in noisy:
+                        mine, theirs = t[f"rsm:{lv}"][k]["mean"], t[f"{other}:{lv}"][k]["mean"]
+                        if _better(theirs, mine):
+                            lost.append(f"{lv} % {sc} {q} ({fmt_q(q, theirs)} vs rsm's {fmt_q(q, mine)} {UNITS[q]})")
+            items.append(f"With outliers on `{label}`, {other}'s mean error over the seeds is below rsm's at: "
+                         + "; ".join(lost) + "." if lost else
+                         f"With outliers on `{label}`, {other}'s mean error over the seeds is below rsm's at no "
+                         "level, in no scope and in neither translation nor rotation.")
+        odo = acc[label]["runs"]["odometry"]["errors"]
         above = []
-        for s in SCOPES:
+        for sc in SCOPES:
             for q in QUANTITIES:
-                lv_above = [lv for lv in noisy if _better(odo[s][q]["mean"], t[f"rsm:{lv}"][f"{s}.{q}"]["mean"])]
+                lv_above = [lv for lv in noisy if _better(odo[sc][q]["mean"], t[f"rsm:{lv}"][f"{sc}.{q}"]["mean"])]
                 if lv_above:
-                    vals = [t[f"rsm:{lv}"][f"{s}.{q}"]["mean"] for lv in lv_above]
-                    shown = (fmt_q(q, vals[0]) if len(vals) == 1
-                             else f"{fmt_q(q, min(vals))}..{fmt_q(q, max(vals))}")
-                    above.append(f"{s} {q} at {', '.join(map(str, lv_above))} % (rsm {shown} vs "
-                                 f"odometry {fmt_q(q, odo[s][q]['mean'])} {UNITS[q]})")
+                    above.append(f"{sc} {q} at {', '.join(map(str, lv_above))} % (odometry "
+                                 f"{fmt_q(q, odo[sc][q]['mean'])} {UNITS[q]})")
         if above:
-            items.append("With outliers, rsm's mean error over the seeds is above that of odometry alone "
-                         "(which reads no scans): " + "; ".join(above) + ".")
-        else:
-            items.append("With outliers, rsm's mean error over the seeds stays below that of odometry "
-                         "alone at every level, in both scopes, in translation and rotation.")
-        if narrow:
-            items.append("With outliers, rsm stays ahead of icp by less than 10 % at: " + "; ".join(narrow) + ".")
-        if worse_ratio:
-            items.append("Relative to its own clean figure, rsm's mean error grows more than icp's: "
-                         + "; ".join(worse_ratio) + ". (A ratio compares each method with its own clean "
-                         "run; icp starts from a worse one.)")
+            items.append(f"With outliers on `{label}`, rsm's mean error over the seeds is above that of odometry "
+                         "alone (which reads no scans): " + "; ".join(above) + ".")
+    speed = ctx.get("speed")
     if speed:
-        if _better(speed["methods"]["icp"]["median_us"], speed["methods"]["rsm"]["median_us"]):
-            items.append(f"icp's median time per scan is lower than rsm's "
-                         f"({speed['methods']['icp']['median_us']:.1f} vs "
-                         f"{speed['methods']['rsm']['median_us']:.1f} us).")
-        if _better(speed["methods"]["icp"]["p95_us"], speed["methods"]["rsm"]["p95_us"]):
-            items.append(f"icp's 95th-percentile time per scan is lower than rsm's "
-                         f"({speed['methods']['icp']['p95_us']:.1f} vs "
-                         f"{speed['methods']['rsm']['p95_us']:.1f} us).")
-    if cg and "skipped" not in cg and _better(cg["icp"]["ir_per_scan"], cg["rsm"]["ir_per_scan"]):
-        items.append(f"icp executes fewer instructions per scan than rsm "
-                     f"({cg['icp']['ir_per_scan']:.0f} vs {cg['rsm']['ir_per_scan']:.0f}).")
-    if mem and "skipped" not in mem:
-        p = mem["parts"]
-        r_, i_ = p["work.rsm (visited + harris + cands)"], p["work.icp"]
-        if r_ > i_:
-            items.append(f"Memory: rsm's scratch ({fmt_int(r_)} bytes) is larger than the ICP "
-                         f"baseline's ({fmt_int(i_)} bytes), so it sets the size of the shared union.")
+        sm = speed["methods"]
+        for other in ("paper", "icp"):
+            for key, what in (("median_us", "median"), ("p95_us", "95th-percentile")):
+                if _better(sm[other][key], sm["rsm"][key]):
+                    items.append(f"Speed on `{main}`: {other}'s {what} time per scan is lower than rsm's "
+                                 f"({sm[other][key]:.1f} vs {sm['rsm'][key]:.1f} us).")
+    cg = ctx.get("callgrind")
+    for label in acc:
+        mine = cg_run(cg, label, "default", "rsm")
+        if mine is None:
+            continue
+        for other in ("paper", "icp"):
+            theirs = cg_run(cg, label, "default", other)
+            if theirs and _better(theirs["ir_per_scan"], mine["ir_per_scan"]):
+                items.append(f"Instructions on `{label}`: {other} executes fewer per scan than rsm "
+                             f"({fmt_int(round(theirs['ir_per_scan']))} vs {fmt_int(round(mine['ir_per_scan']))}, "
+                             f"{fmt_ratio(mine['ir_per_scan'] / theirs['ir_per_scan'])} times fewer).")
+        if label == main and ctx.get("peer_speed"):
+            cheaper = [p for p in ctx["peer_speed"] if p["kind"] == "peer"
+                       and _better(p["ir_per_scan"], mine["ir_per_scan"])]
+            if cheaper:
+                items.append(f"Instructions on `{main}`: peers of peers.md with fewer instructions per scan than "
+                             f"rsm's {fmt_int(round(mine['ir_per_scan']))}: " + ", ".join(
+                                 f"{p['method']} ({fmt_int(round(p['ir_per_scan']))})" for p in cheaper) + ".")
+    am = ctx.get("arm_memory")
+    if am and "skipped" not in am and "default" in am["configs"] and am["configs"]["default"].get("state"):
+        st = {s["label"].strip(): s["bytes"] for s in am["configs"]["default"]["state"]}
+        pers, paper = st.get("state.persistent (rsm)"), st.get("state.paper (the paper's method)")
+        total = st.get("rsm_localizer_t (all of the below)")
+        if pers and paper and pers > paper:
+            items.append(f"Memory: the persistent map's tile pool makes rsm's state {fmt_int(pers)} bytes on "
+                         f"Cortex-M4F, {fmt_ratio(pers / paper)} times the paper's method's ({fmt_int(paper)}); "
+                         f"it sets the size of the union and of the whole localizer ({fmt_int(total)} bytes).")
+    items += _turn_losses(ctx.get("turns"))
+    items += _stage_losses(ctx.get("stages"))
+    items += _scaling_losses(ctx.get("scaling"))
     # a narrow win is worth saying too
-    a = acc[main_label]
-    for other in ("icp", "odometry"):
-        for q in QUANTITIES:
-            mine = a["runs"]["rsm"]["errors"]["local"][q]["mean"]
-            theirs = a["runs"][other]["errors"]["local"][q]["mean"]
-            if _better(mine, theirs) and mine > 0.9 * theirs:
-                items.append(f"On `{main_label}`, rsm's local {q} mean ({fmt_q(q, mine)} {UNITS[q]}) is "
-                             f"only {100 * (1 - mine / theirs):.1f} % below {other}'s "
-                             f"({fmt_q(q, theirs)} {UNITS[q]}): a narrow margin.")
+    for label, a in acc.items():
+        for other in ("paper", "icp", "odometry"):
+            for q in QUANTITIES:
+                mine = a["runs"]["rsm"]["errors"]["local"][q]["mean"]
+                theirs = a["runs"][other]["errors"]["local"][q]["mean"]
+                if _better(mine, theirs) and mine > 0.9 * theirs:
+                    items.append(f"On `{label}`, rsm's local {q} mean ({fmt_q(q, mine)} {UNITS[q]}) is only "
+                                 f"{100 * (1 - mine / theirs):.1f} % below {other}'s ({fmt_q(q, theirs)} "
+                                 f"{UNITS[q]}): a narrow margin.")
     # the all-relations caveat, with this run's numbers
-    per = a["runs"]["rsm"]["per_relation"]
+    per = acc[main]["runs"]["rsm"]["per_relation"]
     longs = [e for e in per if abs(e[1] - e[0]) > LOCAL_SPAN]
     total = math.fsum(e[2] for e in per)
-    caveat = ("Relations spanning minutes are loop closures: rsm, like the ICP baseline and "
-              "odometry, has no loop closure, so its drift over minutes is never corrected, and no "
-              "scan matcher without loop closure gets them right. On a log with many of them the "
-              "all-relations figures are dominated by them: they measure drift, not matching "
-              "quality, and change a lot with small changes.")
+    caveat = ("Relations spanning minutes measure drift: rsm has no loop closure, so what its persistent map "
+              "does not hold together over a loop is never corrected.")
     if per and longs and total > 0:
         share = math.fsum(e[2] for e in longs) / total
         longest = max(abs(e[1] - e[0]) for e in longs)
         over60 = sum(1 for e in longs if abs(e[1] - e[0]) > 60.0)
-        items.append(
-            f"On `{main_label}`, {len(longs)} of {len(per)} matched relations span more than "
-            f"{LOCAL_SPAN:g} s ({over60} more than a minute, the longest {longest:.0f} s) and carry "
-            f"{100 * share:.1f} % of rsm's summed translational error"
-            + (": they dominate the all-relations figures. " if share > 0.5 else ". ") + caveat)
-    else:
-        items.append(f"On `{main_label}` no matched relation spans more than {LOCAL_SPAN:g} s. " + caveat)
+        items.append(f"On `{main}`, {len(longs)} of {len(per)} matched relations span more than {LOCAL_SPAN:g} s "
+                     f"({over60} more than a minute, the longest {longest:.0f} s) and carry {100 * share:.1f} % of "
+                     "rsm's summed translational error. " + caveat)
     return items
 
 
-def more_losses(turns: Optional[dict], st: Optional[dict], sc: Optional[dict], am: Optional[dict],
-                hs: Optional[dict]) -> List[str]:
-    """Items of "where rsm loses" from the sections added for issue 6."""
+def _turn_losses(turns: Optional[dict]) -> List[str]:
     items = []
-    if turns and turns["turns"]:
-        n = len(turns["turns"])
-        sm = turns["summary"]
-        for other in ("icp", "odometry"):
-            lost = []
-            for q, label in (("translation_cells", "translation"), ("rotation_deg", "rotation")):
-                idx = [str(k) for k, r in enumerate(turns["turns"], 1)
-                       if r["residual"]["rsm"] and r["residual"][other]
-                       and r["residual"][other][q] < r["residual"]["rsm"][q]]
-                if idx:
-                    lost.append(f"{label} at {len(idx)} of {n} (turn{'s' if len(idx) > 1 else ''} "
-                                f"{', '.join(idx)})")
-            means = [q for q in ("translation_cells", "rotation_deg")
-                     if _better(sm[other][q]["mean"], sm["rsm"][q]["mean"])]
-            if lost:
-                items.append(f"At the {n} sharpest turns, {other}'s residual is below rsm's in "
-                             + "; ".join(lost) + (f"; its mean is lower in {', '.join(m_.split('_')[0] for m_ in means)}"
-                                                  if means else "; rsm's means are still lower") + ".")
-        for other in ("icp", "odometry"):
-            worse = [b for b in turns["bins"] if b["relations"]
-                     and _better(b["methods"][other]["translation_cells"]["mean"],
-                                 b["methods"]["rsm"]["translation_cells"]["mean"])]
-            if worse:
-                items.append(f"By true rotation, {other}'s mean translation residual is below rsm's for the "
-                             "local relations turning " + "; ".join(
-                                 f"{b['bin']} deg ({_cells(b['methods'][other]['translation_cells']['mean'])} vs "
-                                 f"{_cells(b['methods']['rsm']['translation_cells']['mean'])} cells, "
-                                 f"{b['relations']} relations)" for b in worse) + ".")
-    if st:
-        t = st["methods"]["rsm"]["timing"]
-        top = max(STAGES, key=lambda s_: t[s_]["mean_us"] if s_ in t else 0.0)
-        share = 100.0 * t[top]["mean_us"] / t["step"]["mean_us"] if t["step"]["mean_us"] else float("nan")
-        items.append(f"Speed: one stage dominates rsm's time per scan: {top} ({fmt_pct(share)} % of the mean "
-                     f"step); rsm's 95th percentile is {fmt_ratio(ratio(t['call']['p95_us'], t['call']['median_us']))} "
-                     "times its median.")
-        if st.get("stack") and hs and "skipped" not in hs:
-            bound = hs["stack"]["rsm_localizer_scan"]["bytes"]
-            painted = max(st["stack"][m]["scan_bytes"] for m in ROBUST_METHODS)
-            if painted > bound:
-                items.append(f"Stack: the painted depth ({fmt_int(painted)} bytes) exceeds the host's static "
-                             f"bound ({fmt_int(bound)} bytes, libc/libm calls not counted): those calls add "
-                             "the difference.")
-    if sc:
-        rows = [r for r in sc["rows"] if r["method"] == "rsm"]
-        for kind, default in (("map", DEFAULT_MAP_LOG2), ("beams", DEFAULT_MAX_BEAMS)):
-            base = [r for r in rows if r["kind"] == kind and r["value"] == default]
-            if not base:
-                continue
-            b0 = base[0]
-            for r in sorted((r for r in rows if r["kind"] == kind and r["value"] != default), key=lambda r: r["value"]):
-                worse = [q for q in QUANTITIES if r["local"][q] > 1.05 * b0["local"][q]]
-                what = (f"a {r['config']['RSM_MAP_SIZE']}-cell map" if kind == "map"
-                        else f"{r['beams']} resampled readings")
-                dflt = (f"{b0['config']['RSM_MAP_SIZE']} cells" if kind == "map" else f"{b0['beams']} readings")
-                if worse:
-                    items.append(f"Scaling: with {what} rsm's local error is more than 5 % above that with "
-                                 f"{dflt}: " + "; ".join(f"{q} {fmt_q(q, r['local'][q])} vs "
-                                                         f"{fmt_q(q, b0['local'][q])} {UNITS[q]}" for q in worse) + ".")
-        base = [r for r in rows if r["kind"] == "map" and r["value"] == DEFAULT_MAP_LOG2]
-        for r in (r for r in rows if r["kind"] == "preset"):
-            if base:
-                worse = [q for q in QUANTITIES if r["local"][q] > 1.05 * base[0]["local"][q]]
-                if worse:
-                    items.append(f"Scaling: the preset `{r['header']}` has a local error more than 5 % above the "
-                                 "default configuration's: " + "; ".join(
-                                     f"{q} {fmt_q(q, r['local'][q])} vs {fmt_q(q, base[0]['local'][q])} {UNITS[q]}"
-                                     for q in worse) + ".")
-        beams = sorted((r for r in rows if r["kind"] == "beams"), key=lambda r: r["beams"])
+    if not turns or not turns["turns"]:
+        return items
+    n = len(turns["turns"])
+    sm = turns["summary"]
+    for other in ("paper", "icp", "odometry"):
+        lost = []
+        for q, label in (("translation_cells", "translation"), ("rotation_deg", "rotation")):
+            idx = [str(k) for k, r in enumerate(turns["turns"], 1)
+                   if r["residual"]["rsm"] and r["residual"][other]
+                   and r["residual"][other][q] < r["residual"]["rsm"][q]]
+            if idx:
+                lost.append(f"{label} at {len(idx)} of {n} (turn{'s' if len(idx) > 1 else ''} {', '.join(idx)})")
+        means = [q.split("_")[0] for q in ("translation_cells", "rotation_deg")
+                 if _better(sm[other][q]["mean"], sm["rsm"][q]["mean"])]
+        if lost:
+            items.append(f"At the {n} sharpest turns, {other}'s residual is below rsm's in " + "; ".join(lost)
+                         + (f"; its mean is lower in {', '.join(means)}" if means else "; rsm's means are still lower")
+                         + ".")
+    for other in ("paper", "icp", "odometry"):
+        worse = [b for b in turns["bins"] if b["relations"]
+                 and _better(b["methods"][other]["translation_cells"]["mean"],
+                             b["methods"]["rsm"]["translation_cells"]["mean"])]
+        if worse:
+            items.append(f"By true rotation, {other}'s mean translation residual is below rsm's for the local "
+                         "relations turning " + "; ".join(
+                             f"{b['bin']} deg ({_cells(b['methods'][other]['translation_cells']['mean'])} vs "
+                             f"{_cells(b['methods']['rsm']['translation_cells']['mean'])} cells, "
+                             f"{b['relations']} relations)" for b in worse) + ".")
+    return items
+
+
+def _stage_losses(st: Optional[dict]) -> List[str]:
+    if not st:
+        return []
+    t = st["methods"]["rsm"]["timing"]
+    top = max(STAGES, key=lambda s_: t[s_]["mean_us"] if s_ in t else 0.0)
+    share = 100.0 * t[top]["mean_us"] / t["step"]["mean_us"] if t["step"]["mean_us"] else float("nan")
+    return [f"Speed: one stage dominates rsm's time per scan: {top} ({fmt_pct(share)} % of the mean step); rsm's "
+            f"95th percentile is {fmt_ratio(ratio(t['call']['p95_us'], t['call']['median_us']))} times its median."]
+
+
+def _scaling_losses(sc: Optional[dict]) -> List[str]:
+    items = []
+    if not sc:
+        return items
+    rows = sc["rows"]
+    base = {m: [r for r in rows if r["method"] == m and not r["macros"] and not r.get("header")
+                and r["kind"] in ("tiles", "map")] for m in ("rsm", "paper")}
+    for r in rows:
+        b = base.get(r["method"])
+        if not b or (not r["macros"] and not r.get("header")) or r["kind"] == "beams":
+            continue
+        b0 = b[0]
+        worse = [f"{sc_} {q} {fmt_q(q, r[sc_][q])} vs {fmt_q(q, b0[sc_][q])} {UNITS[q]}"
+                 for sc_ in SCOPES for q in QUANTITIES if r[sc_][q] > 1.05 * b0[sc_][q]]
+        if worse:
+            what = (f"`{r['header']}`" if r.get("header")
+                    else ", ".join(f"{k} {v}" for k, v in sorted(r["macros"].items())))
+            items.append(f"Scaling: {r['method']} with {what} is more than 5 % worse than with the default "
+                         "configuration: " + "; ".join(worse) + ".")
+    for m in ROBUST_METHODS:
+        beams = sorted((r for r in rows if r["kind"] == "beams" and r["method"] == m), key=lambda r: r["beams"])
         if len(beams) >= 2:
             lo, hi = beams[0], beams[-1]
             tr = ratio(hi["call"]["median_us"], lo["call"]["median_us"])
-            rr = hi["beams"] / lo["beams"]
             better = all(hi["local"][q] < lo["local"][q] for q in QUANTITIES)
-            items.append(f"Scaling: {hi['beams']} readings per scan cost {fmt_ratio(tr)} times the median time "
-                         f"of {lo['beams']} ({rr:.2f} times the readings)"
-                         + ("" if better else " and do not lower both local errors (the resampled readings "
-                                              "carry no new information)") + ".")
+            items.append(f"Scaling: for {m}, {hi['beams']} readings per scan cost {fmt_ratio(tr)} times the median "
+                         f"time of {lo['beams']} ({hi['beams'] / lo['beams']:.2f} times the readings)"
+                         + ("" if better else " and do not lower both local errors (the resampled readings carry "
+                                              "no new information)") + ".")
     return items
 
 
@@ -1752,14 +2186,8 @@ def _range(vals: Sequence[float]) -> str:
     return fmt_ratio(lo) if fmt_ratio(lo) == fmt_ratio(hi) else f"{fmt_ratio(lo)}..{fmt_ratio(hi)}"
 
 
-def _per_seed(rob: dict, m: str, level: int, s: str, q: str) -> List[float]:
-    rows = sorted((r for r in rob["runs"] if r["method"] == m and r["level"] == level),
-                  key=lambda r: (r["seed"] is None, r["seed"]))
-    return [r["errors"][s][q]["mean"] for r in rows]
-
-
 # ---------------------------------------------------------------------------
-# report parts of the sections added for issue 6
+# report parts
 
 
 def _us(v: Optional[float]) -> str:
@@ -1793,9 +2221,10 @@ def report_turns(tn: Optional[dict], main: str, root: Path) -> List[str]:
          "scans because the log's timestamps jitter), at most one per "
          f"{tn['separation']} scans; for each, the residual inverse(true) ∘ estimated of the trajectories of "
          f"section 1, as absolute values: Δx and Δy (in the frame of the true end pose) in cells of "
-         f"{cell_cm:g} cm (the default `grid.cell_m`, as `rsm-stages` reports it) and Δθ in degrees; "
-         "translation is the length of (Δx, Δy). Each method runs its whole filter along the relation's scans, so these are residuals "
-         "of the tracked motion over the turn, not of one isolated scan match as in the paper.", ""]
+         f"{cell_cm:g} cm (the paper's grid, `grid.cell_m`, as `rsm-stages` reports it; rsm's own finest "
+         "map cell is twice that) and Δθ in degrees; translation is the length of (Δx, Δy). Each method runs "
+         "its whole filter along the relation's scans, so these are residuals of the tracked motion over the "
+         "turn, not of one isolated scan match as in the paper.", ""]
     rows = []
     for k, r in enumerate(tn["turns"], 1):
         cells = [str(k), f"{r['t1_rel']:.1f}", f"{r['span']:.2f}", str(r["gap"]), f"{r['rotation_deg']:.1f}",
@@ -1805,9 +2234,8 @@ def report_turns(tn: Optional[dict], main: str, root: Path) -> List[str]:
             cells += (["n/a", "n/a"] if e is None else
                       [f"{_cells(e['dx_cells'])}, {_cells(e['dy_cells'])}", _deg(e["rotation_deg"])])
         rows.append(cells)
-    L += md_table(["turn", "t1 [s]", "span [s]", "scans", "true rotation [deg]", "true translation [m]",
-                   "rsm Δx, Δy [cells]", "rsm Δθ [deg]", "icp Δx, Δy [cells]", "icp Δθ [deg]",
-                   "odometry Δx, Δy [cells]", "odometry Δθ [deg]"], rows, "turns")
+    L += md_table(["turn", "t1 [s]", "span [s]", "scans", "true rotation [deg]", "true translation [m]"]
+                  + [h for m in METHODS for h in (f"{m} Δx, Δy [cells]", f"{m} Δθ [deg]")], rows, "turns")
     rows = []
     for m in METHODS:
         s = tn["summary"][m]
@@ -1818,8 +2246,8 @@ def report_turns(tn: Optional[dict], main: str, root: Path) -> List[str]:
     L += md_table(["method", "turns", "mean Δx [cells]", "mean Δy [cells]", "mean translation [cells]",
                    "max translation [cells]", "mean Δθ [deg]", "max Δθ [deg]"], rows, "turns summary")
     n = len(tn["turns"])
-    L += [f"rsm's residual is below icp's at {tn['rsm_better']['translation_cells']} of {n} turns in "
-          f"translation and at {tn['rsm_better']['rotation_deg']} of {n} in rotation.", ""]
+    L += ["; ".join(f"rsm's residual is below {o}'s at {w['translation_cells']} of {n} turns in translation and "
+                    f"at {w['rotation_deg']} of {n} in rotation" for o, w in tn["rsm_better"].items()) + ".", ""]
     L += [f"Every local relation of `{main}`, by its true rotation: mean translation residual in cells and "
           "mean rotation residual in degrees.", ""]
     rows = []
@@ -1828,8 +2256,8 @@ def report_turns(tn: Optional[dict], main: str, root: Path) -> List[str]:
         for m in METHODS:
             cells += [_cells(b["methods"][m]["translation_cells"]["mean"]), _deg(b["methods"][m]["rotation_deg"]["mean"])]
         rows.append(cells)
-    L += md_table(["true rotation [deg]", "relations", "rsm [cells]", "rsm [deg]", "icp [cells]", "icp [deg]",
-                   "odometry [cells]", "odometry [deg]"], rows, "turns by rotation")
+    L += md_table(["true rotation [deg]", "relations"] + [h for m in METHODS for h in (f"{m} [cells]", f"{m} [deg]")],
+                  rows, "turns by rotation")
     return L
 
 
@@ -1840,11 +2268,13 @@ def report_stage_speed(st: Optional[dict], speed: Optional[dict], main: str) -> 
          f"`rsm-stages` (tools/bench-c) runs `{main}` as rsm-nav does (same trajectory, bit for bit) with "
          "the localizer's timing hook set: `rsm_localizer_config_t.clock_fn` reads CLOCK_MONOTONIC in "
          "nanoseconds and `rsm_localizer_scan` charges each stage the time from its start to the next "
-         f"stage's. rsm and icp ran alternately, one process at a time, {st['repeats']} time(s) each, in "
-         "this bench run; every figure is the median over the repeats. A stage's median and 95th "
+         f"stage's. rsm, the paper's method and icp ran in turn, one process at a time, {st['repeats']} time(s) "
+         "each, in this bench run; every figure is the median over the repeats. A stage's median and 95th "
          "percentile are over the scans that reached it (*scans*); its mean is over all scans, so the "
          "stage means add up to the whole step's mean (*share*). *whole step* is the hook's own total "
-         "(first to last clock reading), *whole call* the call timed from outside.", ""]
+         "(first to last clock reading), *whole call* the call timed from outside. rsm's *map* stage writes "
+         "the scan into the persistent map only after 0.4 m or 0.5 rad of travel, so most of its calls are "
+         "a test and its 95th percentile is far above its median.", ""]
     rows = []
     mt = {m: st["methods"][m]["timing"] for m in ROBUST_METHODS}
     for s in STAGES + ("step", "call"):
@@ -1861,54 +2291,96 @@ def report_stage_speed(st: Optional[dict], speed: Optional[dict], main: str) -> 
                       _us2(t["p95_us"] if whole else t["p95_reached_us"]), _us2(t["mean_us"]),
                       "" if s == "call" else fmt_pct(share)]
         rows.append(cells)
-    rows.append(["icp / rsm", "whole call", "", fmt_ratio(st["ratio_median"]), fmt_ratio(st["ratio_p95"]),
-                 fmt_ratio(st["ratio_mean"]), "", "", "", "", "", ""])
-    L += md_table(["stage", "what", "rsm scans", "rsm median [us]", "rsm p95 [us]", "rsm mean [us]", "rsm share %",
-                   "icp scans", "icp median [us]", "icp p95 [us]", "icp mean [us]", "icp share %"], rows,
-                  "speed stages")
+    for m in ROBUST_METHODS:
+        if m == "rsm":
+            continue
+        rows.append([f"{m} / rsm", "whole call", ""]
+                    + [""] * (5 * ROBUST_METHODS.index(m) - 1)
+                    + ["", fmt_ratio(st["ratio_median"][m]), fmt_ratio(st["ratio_p95"][m]),
+                       fmt_ratio(st["ratio_mean"][m]), ""]
+                    + [""] * (5 * (len(ROBUST_METHODS) - ROBUST_METHODS.index(m) - 1)))
+    L += md_table(["stage", "what"] + [h for m in ROBUST_METHODS for h in
+                                      (f"{m} scans", f"{m} median [us]", f"{m} p95 [us]", f"{m} mean [us]",
+                                       f"{m} share %")], rows, "speed stages")
     mo = mt["rsm"].get("motion")
     if mo:
         L += [f"Odometry prediction (`rsm_localizer_motion`, the EKF predict, once per scan): median "
               f"{_us2(mo['median_us'])} us, p95 {_us2(mo['p95_us'])} us (rsm run).", ""]
     if speed:
-        a, b = speed["methods"]["rsm"]["median_us"], mt["rsm"]["call"]["median_us"]
-        c, d = speed["methods"]["icp"]["median_us"], mt["icp"]["call"]["median_us"]
-        L += [f"With the hook the whole call's median is {_us(b)} us for rsm and {_us(d)} us for icp; "
-              f"rsm-nav, which leaves the hook NULL, measured {_us(a)} and {_us(c)} us above "
-              f"({fmt_ratio(ratio(b, a))} and {fmt_ratio(ratio(d, c))} times): the clock readings cost little "
-              "next to the stages, but two processes measured minutes apart differ by a few per cent anyway.", ""]
+        parts = [f"{_us(mt[m]['call']['median_us'])} us for {m} (rsm-nav: {_us(speed['methods'][m]['median_us'])})"
+                 for m in ROBUST_METHODS]
+        L += ["With the hook the whole call's median is " + ", ".join(parts) + "; rsm-nav leaves the hook NULL. "
+              "The clock readings cost little next to the stages, but two processes measured minutes apart "
+              "differ by a few per cent anyway.", ""]
     if st.get("plot"):
-        L += [f"![Time per stage, rsm and icp]({st['plot']})", ""]
+        L += [f"![Time per stage, rsm, the paper's method and icp]({st['plot']})", ""]
     elif st.get("plot_note"):
         L += [f"No plot: {st['plot_note']}.", ""]
     return L
 
 
-def report_callgrind_stages(cg: Optional[dict]) -> List[str]:
-    if not cg or "skipped" in cg or "stages" not in cg.get("rsm", {}):
-        return []
-    L = ["Instructions per scan by stage, from the same callgrind runs: the inclusive count of every "
-         "function `rsm_localizer_scan` calls, grouped by the stage that calls it (`rsm_map_recenter` and "
-         "the sine/cosine of `to_world` run in both the grid and the map stage). *localizer* is "
-         "`rsm_localizer_scan`'s own code with the static helpers the compiler inlined into it: the listing "
-         "of the map cells near the scan that are Harris candidates, the candidate copies, `to_world`, the "
-         "noise models and the stage bookkeeping. Callgrind counts functions, not stages, so that part "
-         "cannot be split further; the wall-time table above has the exact split.", ""]
+def _cg_columns(cg: dict, label: str) -> List[Tuple[str, dict]]:
+    """The callgrind runs of one log in report order, with their column names."""
+    out = []
+    for config, m in (("default", "rsm"), ("small", "rsm"), ("default", "paper"), ("default", "icp")):
+        r = cg_run(cg, label, config, m)
+        if r is not None:
+            out.append((SMALL if config == "small" else m, r))
+    return out
+
+
+def report_callgrind(cg: Optional[dict], root: Path, main: str) -> List[str]:
+    if not cg or "skipped" in cg:
+        return [f"Instruction counts not measured: {(cg or {}).get('skipped', 'disabled')}.", ""]
+    L = [f"Instructions executed inside `rsm_localizer_scan` (callgrind, `--toggle-collect=rsm_localizer_scan`, "
+         f"{cg['valgrind']}) on the first {cg['scans']} scans of every log (all of it if shorter; `rsm-nav` on a "
+         "copy of the log cut after that scan line), divided by the scans; *rsm-small* is rsm built with "
+         f"`{SMALL_HEADER}`. These counts repeat exactly from run to run on the same binary.", ""]
     rows = []
-    for stg in CG_STAGE_ORDER:
-        if not any(stg in cg[m]["stages"] for m in ROBUST_METHODS):
-            continue
-        fns = sorted({f for m in ROBUST_METHODS for f in cg[m]["stages"].get(stg, {}).get("functions", [])})
-        cells = [stg, ", ".join(f"`{f}`" for f in fns)]
-        for m in ROBUST_METHODS:
-            row = cg[m]["stages"].get(stg)
-            if row is None:
-                cells += ["0", "0.0"]
-            else:
-                cells += [fmt_int(round(row["ir_per_scan"])), fmt_pct(100.0 * row["ir"] / cg[m]["ir"])]
-        rows.append(cells)
-    L += md_table(["stage", "functions", "rsm Ir per scan", "rsm %", "icp Ir per scan", "icp %"], rows,
-                  "speed callgrind stages")
+    for label, h in cg["heads"].items():
+        base = cg_run(cg, label, "default", "rsm")
+        for name, r in _cg_columns(cg, label):
+            rows.append([label, name, fmt_int(r["scans"]), fmt_int(r["ir"]), fmt_int(round(r["ir_per_scan"])),
+                         fmt_ratio(ratio(r["ir_per_scan"], base["ir_per_scan"])) if base else "n/a"])
+    L += md_table(["log", "run", "scans", "Ir collected", "Ir per scan", "x rsm"], rows, "speed callgrind")
+    cols = _cg_columns(cg, main)
+    if cols and all("stages" in r for _, r in cols):
+        L += [f"By stage on `{main}`: the inclusive count of every function `rsm_localizer_scan` calls, grouped by "
+              "the stage that calls it (`rsm_pose_between`, `rsm_pose_apply` and the sine/cosine of `to_world` "
+              "run when rsm writes its map; `rsm_map_recenter` in both the paper's grid and map stages). "
+              "*localizer* is `rsm_localizer_scan`'s own code with the static helpers the compiler inlined into "
+              "it. Callgrind counts functions, not stages, so that part cannot be split further; the wall-time "
+              "table below has the exact split.", ""]
+        rows = []
+        for stg in CG_STAGE_ORDER:
+            if not any(stg in r["stages"] for _, r in cols):
+                continue
+            fns = sorted({f for _, r in cols for f in r["stages"].get(stg, {}).get("functions", [])})
+            cells = [stg, ", ".join(f"`{f}`" for f in fns)]
+            for _, r in cols:
+                row = r["stages"].get(stg)
+                cells += (["0", "0.0"] if row is None else
+                          [fmt_int(round(row["ir_per_scan"])), fmt_pct(100.0 * row["ir"] / r["ir"])])
+            rows.append(cells)
+        L += md_table(["stage", "functions"] + [h for n, _ in cols for h in (f"{n} Ir per scan", f"{n} %")], rows,
+                      "speed callgrind stages")
+    details = [(label, "rsm", r) for label in cg["heads"] for r in [cg_run(cg, label, "default", "rsm")]
+               if r and r.get("mapmatch") and r["mapmatch"]["total"]]
+    if details:
+        L += ["Inside `rsm_mapmatch` (rsm's matching, the default configuration): its own code and the inclusive "
+              "count of each function it calls, per scan (include/rsm/mapmatch.h describes the steps: the "
+              "heading fan, then Gauss-Newton from the coarsest level to the finest).", ""]
+        fns = sorted({f for _, _, r in details for f in r["mapmatch"]["callees"]},
+                     key=lambda f: -max(r["mapmatch"]["callees"].get(f, 0) for _, _, r in details))
+        rows = []
+        for f in ["(own code)"] + fns:
+            cells = [f if f == "(own code)" else f"`{f}`"]
+            for _, _, r in details:
+                v = r["mapmatch"]["own"] if f == "(own code)" else r["mapmatch"]["callees"].get(f, 0)
+                cells += [fmt_int(round(v / r["scans"])), fmt_pct(100.0 * v / r["mapmatch"]["total"])]
+            rows.append(cells)
+        L += md_table(["function"] + [h for label, _, _ in details for h in (f"{label} Ir per scan", f"{label} %")],
+                      rows, "speed callgrind mapmatch")
     return L
 
 
@@ -1967,8 +2439,9 @@ def report_arm_memory(am: Optional[dict], root: Path) -> List[str]:
                 cells += [fmt_int(v) if v is not None else "n/a"]
             rows.append(cells)
         L += ["Caller-owned state on the target (`sizeof`, from a probe object built with the same compiler "
-              "and configuration). The indented rows are the parts of `rsm_localizer_t`; `work.rsm` and "
-              "`work.icp` share one union.", ""]
+              "and configuration). The indented rows are the parts of `rsm_localizer_t` and of its parts; "
+              "`state.persistent`, `state.paper` and `state.icp` share one union (one method runs per "
+              "localizer), so the largest of them, rsm's tile pool, sets its size.", ""]
         L += md_table(["module", "state"] + [f"{n} [bytes]" for n in names], rows, "memory arm configs state")
     else:
         L += ["State sizes on the target not measured: "
@@ -1994,7 +2467,7 @@ def report_stack(am: Optional[dict], hs: Optional[dict], st: Optional[dict], sta
          "from each entry point through that call graph, summing the frames. Calls into libc/libm "
          "(listed) count 0, and so do calls through a pointer to the user's code (the optional timing "
          "hook in the localizer's stage bookkeeping, the aligner's result callback); the Harris patch "
-         "callback is resolved to the two functions the localizer passes (`patch_map`, "
+         "callback (the paper's method) is resolved to the two functions the localizer passes (`patch_map`, "
          "`rsm_harris_patch_image`). `rsm_sync_*` (the odometry/scan aligner) call `rsm_localizer_scan` "
          "and `rsm_localizer_motion` themselves. *Painted* (host only): `rsm-stages --stack` runs every "
          "scan of the log in a fresh thread whose stack buffer was filled with a pattern, finds the "
@@ -2042,60 +2515,61 @@ def report_stack(am: Optional[dict], hs: Optional[dict], st: Optional[dict], sta
 def report_scaling(sc: Optional[dict], main: str) -> List[str]:
     if not sc:
         return ["Not measured in this run.", ""]
-    L = [f"Time per scan (whole call, rsm-stages, one run each) on `{main}` against readings per scan and "
-         "map size, each variant a Release build of its own with a generated `RSM_USER_CONFIG` (the "
-         "default values come from the main build). Readings: the log's 180-beam scans are resampled to N "
-         "readings over the same 179° field (linear in range between neighbouring readings closer than "
-         "0.1 m, otherwise the nearer reading) with `RSM_MAX_BEAMS` = N; they add readings, not "
-         "information. Map: the log's own 180 readings with `RSM_MAP_SIZE_LOG2` = L. *preset*: a shipped "
-         "configuration header as it is, with the log's own readings. The local error (relations spanning "
-         "at most 2 s), the share of scans fused and the scans refused by the gate (*jump*) show what each "
-         "variant does to accuracy.", ""]
+    L = [f"Time per scan (whole call, rsm-stages, one run each, one process at a time) and mean error on `{main}` "
+         "for builds with other capacities, each variant a Release build of its own with a generated "
+         "`RSM_USER_CONFIG` (the default values come from the main build). *beams*: the log's 180-beam scans "
+         "resampled to N readings over the same 179° field (linear in range between neighbouring readings "
+         "closer than 0.1 m, otherwise the nearer reading) with `RSM_MAX_BEAMS` = N; they add readings, not "
+         "information. *map*: the paper's scrolling window, `RSM_MAP_SIZE_LOG2` = L (the paper's method only; "
+         "rsm does not use it). *tiles*: rsm's tile pool, `RSM_TMAP_TILES` = T with the smallest tile index "
+         "config.h accepts (rsm only; when the pool is full the least recently written tiles are reused). "
+         "*preset*: a shipped configuration header as it is. *map* to *preset* use the log's own readings. "
+         "*tiles used* is the persistent map's use of its pool at the end of the log (taken / evicted).", ""]
     rows = []
-    for r in sorted(sc["rows"], key=lambda r: (r["kind"], r["value"], r["method"])):
+    kinds = ("beams", "map", "tiles", "preset")
+    for r in sorted(sc["rows"], key=lambda r: (kinds.index(r["kind"]), r["value"], ROBUST_METHODS.index(r["method"]))):
         c = r["config"]
         cfg = (f"`{r['header']}`" if r.get("header") else
                ", ".join(f"{k} {v}" for k, v in sorted(r["macros"].items())) or "defaults")
-        rows.append([r["kind"], cfg, str(r["beams"]), f"{c['RSM_MAP_SIZE']} x {c['RSM_MAP_SIZE']}", r["method"],
-                     _us(r["call"]["median_us"]), _us(r["call"]["p95_us"]), fmt_q("translation", r["local"]["translation"]),
-                     fmt_q("rotation", r["local"]["rotation"]), fmt_pct(r["fused"]), str(r["outcomes"].get("jump", 0)),
+        tm = r.get("tmap")
+        rows.append([r["kind"], cfg, str(r["beams"]), r["method"], _us(r["call"]["median_us"]),
+                     _us(r["call"]["p95_us"]),
+                     fmt_q("translation", r["local"]["translation"]), fmt_q("rotation", r["local"]["rotation"]),
+                     fmt_q("translation", r["all"]["translation"]), fmt_pct(r["fused"]),
+                     f"{fmt_int(tm['used'])} / {fmt_int(c['RSM_TMAP_TILES'])} ({fmt_int(tm['allocated'])} / "
+                     f"{fmt_int(tm['evicted'])})" if tm else "",
                      fmt_int(r["sizes"]["rsm_localizer_t"])])
-    L += md_table(["varies", "config", "readings", "map [cells]", "method", "median [us]", "p95 [us]",
-                   "local translation [m]", "local rotation [deg]", "fused %", "gated (jump)",
+    L += md_table(["varies", "config", "readings", "method", "median [us]", "p95 [us]", "local translation [m]",
+                   "local rotation [deg]", "all translation [m]", "fused %", "tiles used (taken / evicted)",
                    "sizeof(rsm_localizer_t)"], rows, "scaling time")
     seen = {}
     for r in sc["rows"]:
         seen.setdefault(r["variant"], r)
     rows = []
-    for v in sorted(seen.values(), key=lambda r: (r["kind"], r["value"])):
+    for v in sorted(seen.values(), key=lambda r: (kinds.index(r["kind"]), r["value"])):
         c, s = v["config"], v["sizes"]
-        rows.append([v["variant"], str(c["RSM_MAX_BEAMS"]), str(c["RSM_MAP_SIZE"]), fmt_int(s["rsm_localizer_t"]),
-                     fmt_int(s["map"]), fmt_int(s["image"]), fmt_int(s["work"]), fmt_int(s["ransac"]),
-                     fmt_int(s["points"]), fmt_int(s["rsm_scan_t"])])
+        rows.append([v["variant"], str(c["RSM_MAX_BEAMS"]), str(c["RSM_MAP_SIZE"]), fmt_int(c["RSM_TMAP_TILES"]),
+                     fmt_int(s["rsm_localizer_t"]), fmt_int(s["state.persistent"]), fmt_int(s["state.paper"]),
+                     fmt_int(s["state.icp"]), fmt_int(s["points"]), fmt_int(s["rsm_scan_t"])])
     L += ["How the state grows with the capacities (bytes on this host):", ""]
-    L += md_table(["variant", "RSM_MAX_BEAMS", "map side", "rsm_localizer_t", "map", "image", "work", "ransac",
-                   "points", "rsm_scan_t"], rows, "scaling memory")
-    gated = sorted((r for r in sc["rows"] if r["kind"] == "beams" and r["method"] == "rsm"), key=lambda r: r["beams"])
-    if len(gated) >= 2 and gated[-1]["outcomes"].get("jump", 0) > gated[0]["outcomes"].get("jump", 0):
-        L += ["With more readings rsm refuses more scans at the gate ("
-              + ", ".join(f"{fmt_int(r['outcomes'].get('jump', 0))} at {r['beams']}" for r in gated)
-              + " readings): the refined measurement's covariance is the map fit's cost times the inverse of "
-              "JᵀJ, a sum over the points, so it shrinks as points are added, while interpolated readings "
-              "are not independent of their neighbours. The measurement noise was tuned with 180 readings.", ""]
+    L += md_table(["variant", "RSM_MAX_BEAMS", "window side", "RSM_TMAP_TILES", "rsm_localizer_t",
+                   "state.persistent", "state.paper", "state.icp", "points", "rsm_scan_t"], rows, "scaling memory")
     g = sc.get("growth", {})
     parts = []
     if "beams" in g:
         parts.append(f"{g['beams']['bytes_per_unit']:.1f} bytes of `rsm_localizer_t` per unit of RSM_MAX_BEAMS "
-                     "(the members it sizes: `pts` and `world`, the image's cell list through "
-                     "RSM_IMAGE_MAX_CELLS = 2 x RSM_MAX_BEAMS, and the ICP points inside the work union), and "
-                     "every `rsm_scan_t` grows with it too")
+                     "(`pts` and `world`, and the paper's image and ICP points inside the union when they are the "
+                     "larger member), and every `rsm_scan_t` grows with it too")
     if "map" in g:
-        parts.append(f"{g['map']['bytes_per_unit']:.3f} bytes per map cell (the members it sizes: the map's hit "
-                     "counts, the scan image's bitmap and the bitmap of listed reference candidates)")
+        parts.append(f"{g['map']['bytes_per_unit']:.3f} bytes per cell of the paper's window (only while "
+                     "`state.paper` is the union's largest member)")
+    if "tiles" in g:
+        parts.append(f"{g['tiles']['bytes_per_unit']:.1f} bytes per tile of rsm's pool (the tile and its share of "
+                     "the index)")
     if parts:
         L += ["Growth between the smallest and largest variant: " + "; ".join(parts) + ".", ""]
     if sc.get("plot"):
-        L += [f"![Scaling of time per scan and state size]({sc['plot']})", ""]
+        L += [f"![Scaling of time per scan, error and state size]({sc['plot']})", ""]
     elif sc.get("plot_note"):
         L += [f"No plot: {sc['plot_note']}.", ""]
     return L
@@ -2114,226 +2588,189 @@ def md_table(header: Sequence[str], rows: Iterable[Sequence[str]], anchor: str) 
     return out
 
 
-def headline_extras(ctx: dict) -> List[str]:
-    """Headline sentences from the sections added for issue 6."""
-    out = []
-    tn = ctx.get("turns")
-    if tn and tn["turns"]:
-        sm = tn["summary"]
-        out.append(f"at the {len(tn['turns'])} sharpest turns rsm's mean residual is "
-                   f"{_cells(sm['rsm']['translation_cells']['mean'])} cells and {_deg(sm['rsm']['rotation_deg']['mean'])} deg "
-                   f"(icp {_cells(sm['icp']['translation_cells']['mean'])} cells, {_deg(sm['icp']['rotation_deg']['mean'])} deg; "
-                   f"odometry {_cells(sm['odometry']['translation_cells']['mean'])} cells, "
-                   f"{_deg(sm['odometry']['rotation_deg']['mean'])} deg)")
-    st = ctx.get("stages")
-    if st:
-        t = st["methods"]["rsm"]["timing"]
-        top = max(STAGES, key=lambda s_: t[s_]["mean_us"] if s_ in t else 0.0)
-        out.append(f"rsm's slowest stage is {top} ({fmt_pct(100.0 * t[top]['mean_us'] / t['step']['mean_us'])} % "
-                   f"of the mean step, median {_us2(t[top]['median_reached_us'])} us)")
-    am = ctx.get("arm_memory")
-    if am and "skipped" not in am:
-        c = am["configs"]
-        if "default" in c:
-            stk = c["default"]["stack"]
-            via = (f", {fmt_int(stk['rsm_sync_scan']['bytes'])} through the aligner's `rsm_sync_scan`"
-                   if "rsm_sync_scan" in stk else "")
-            out.append(f"one localizer step needs at most {fmt_int(stk['rsm_localizer_scan']['bytes'])} "
-                       f"bytes of stack on Cortex-M4F{via} (static bound, libm calls not counted)")
-        if "small" in c and c["small"].get("firmware") and c["small"].get("state"):
-            out.append(f"with `{c['small']['header']}` the state is "
-                       f"{fmt_int(c['small']['state'][0]['bytes'])} bytes and the example firmware "
-                       f"{fmt_int(c['small']['firmware']['bss'] + c['small']['firmware']['data'])} bytes of RAM and "
-                       f"{fmt_int(c['small']['firmware']['text'])} bytes of flash")
-    return out
+def _peer_rows(ctx: dict, label: str) -> Optional[List[dict]]:
+    pe = ctx.get("peers") or {}
+    if "skipped" in pe or "accuracy" not in pe:
+        return None
+    return pe["accuracy"].get(label)
 
 
-def write_report(ctx: dict) -> str:
-    root: Path = ctx["root"]
-    prov = ctx["provenance"]
-    pl = provenance_line(prov)
-    acc, rob, speed, cg, mem, xc = (ctx.get(k) for k in ("accuracy", "robustness", "speed",
-                                                        "callgrind", "memory", "cross_check"))
-    main = ctx["main_label"]
-    L: List[str] = []
-    L += [
-        "# rsm benchmark results",
-        "",
-        "Generated by `./tools/bench` (`python -m rsm_tools.bench`); do not edit by hand. Every "
-        "number below was measured by that command in the run described here.",
-        "",
-        pl,
-        "",
-        f"Bench settings: outlier levels {', '.join(str(v) for v in ctx['levels'])} %, "
-        f"{len(ctx['seeds'])} seed(s) per level ({', '.join(str(s) for s in ctx['seeds'])}), "
-        f"{ctx['speed_repeats']} speed repeat(s), {ctx['jobs']} rsm-nav process(es) at a time"
-        + (", quick mode" if ctx["quick"] else "") + ". "
-        f"Whole bench: {ctx['elapsed']:.0f} s ("
-        + ", ".join(f"{k} {v:.0f} s" for k, v in ctx["stage_seconds"].items()) + ").",
-        "",
-    ]
-    # headline
-    ma = acc[main]["runs"]
-    hl = []
-    for m in METHODS:
-        e = ma[m]["errors"]
-        hl.append([m] + [fmt_q(q, e[s][q]["mean"]) for s in SCOPES for q in QUANTITIES])
-    L += ["## Headline", "",
-          f"Mean relative-pose error on `{main}` (local = relations spanning at most "
-          f"{LOCAL_SPAN:g} s):", ""]
-    L += md_table(["method", "local translation [m]", "local rotation [deg]",
-                   "all translation [m]", "all rotation [deg]"], hl, "headline")
-    extra = []
-    if rob:
-        top = max(lv for lv in rob["levels"])
-        for lv in rob["levels"]:
-            if lv == 0:
-                continue
-            if lv == 43 or (43 not in rob["levels"] and lv == top):
-                r = rob["table"][f"rsm:{lv}"]["local.translation"]
-                extra.append(f"with {lv} % outliers rsm's local translation error is "
-                             f"{fmt_q('translation', r['mean'])} m, {fmt_ratio(r['ratio'])} times its "
-                             "clean figure")
-    if speed:
-        extra.append(f"icp takes {fmt_ratio(speed['ratio_median'])} times rsm's median wall time per scan")
-    if cg and "skipped" not in cg:
-        extra.append(f"icp executes {fmt_ratio(cg['ratio'])} times rsm's instructions per scan (callgrind)")
-    if mem and "skipped" not in mem:
-        extra.append(f"the localizer state is {fmt_int(mem['sizes']['rsm_localizer_t'])} bytes on "
-                     "this host" + (f" and {fmt_int(xc['statics']['fw_localizer'])} bytes on Cortex-M4F"
-                                    if xc and "skipped" not in xc and "fw_localizer" in xc["statics"] else ""))
-    extra += headline_extras(ctx)
-    if extra:
-        L += ["In this run: " + "; ".join(extra) + ".", ""]
+def before_label(method: str) -> str:
+    """"rsm (commit 953a3c1)" -> "rsm before (commit 953a3c1)"."""
+    m = re.match(r"^rsm\s*\((.*)\)\s*$", method)
+    return f"rsm before ({m.group(1)})" if m else f"rsm before ({method})"
 
-    # 1. accuracy
-    L += [f"## {SECTION_TITLES[0]}", "", pl, ""]
-    L += [f"Relative-pose error of Kümmerle et al. 2009 (`rsm_tools.evaluate`, exact timestamps) "
-          f"of the trajectories `rsm-nav --method rsm|icp|odometry` writes. *local*: relations "
-          f"spanning at most {LOCAL_SPAN:g} s; *all*: every relation. Translation in m, rotation in "
-          "degrees; std is the population standard deviation; *fused* is the share of scans whose "
-          "measurement the filter accepted.", ""]
+
+def summary_rows(ctx: dict, label: str) -> List[List[str]]:
+    """The rows of one log in the headline table: this run's methods, the
+    earlier rsm, the best peer per column and rsm's ratio to it."""
+    a = ctx["accuracy"][label]
+    rows = []
+    for run in run_labels(a):
+        e = a["runs"][run]["errors"]
+        rows.append([label, run] + [fmt_q(q, e[sc][q]["mean"]) for sc, q in PEER_COLUMNS])
+    peers = _peer_rows(ctx, label)
+    if peers:
+        for r in peers:
+            if r["kind"] == "before":
+                rows.append([label, before_label(r["method"])]
+                            + [fmt_q(q, r["values"][(sc, q)]) for sc, q in PEER_COLUMNS])
+        best = best_peers(peers)
+        rows.append([label, "best peer"] + [
+            "n/a" if best[k] is None else f"{fmt_q(k[1], best[k][0])} ({best[k][1]})" for k in PEER_COLUMNS])
+        for run in ("rsm", SMALL):
+            if run in a["runs"]:
+                e = a["runs"][run]["errors"]
+                rows.append([label, f"{run} / best peer"] + [
+                    "n/a" if best[k] is None else fmt_ratio(ratio(e[k[0]][k[1]]["mean"], best[k][0]))
+                    for k in PEER_COLUMNS])
+    return rows
+
+
+def report_accuracy(ctx: dict, root: Path) -> List[str]:
+    acc = ctx["accuracy"]
+    pe = ctx.get("peers") or {}
+    L = [f"Relative-pose error of Kümmerle et al. 2009 (`rsm_tools.evaluate`, exact timestamps) of the "
+         f"trajectories `rsm-nav --method rsm|paper|icp|odometry` writes; *rsm-small* is `rsm-nav --method rsm` "
+         f"built with `{SMALL_HEADER}` (the microcontroller preset). *local*: relations spanning at most "
+         f"{LOCAL_SPAN:g} s; *all*: every relation. Translation in m, rotation in degrees; std is the "
+         "population standard deviation; *fused* is the share of scans whose measurement the filter accepted.", ""]
+    if "skipped" in pe:
+        L += [f"No peer figures: {pe['skipped']} (`{shown_path(Path(pe['path']), root)}`), so the peers' columns "
+              "and the floors that need them are skipped.", ""]
+    else:
+        L += [f"The peers' figures are those of `{shown_path(Path(pe['path']), root)}` (measured "
+              f"{pe.get('measured') or 'on a date it does not state'}; table \"Accuracy\"), typed in there, not "
+              "measured by this run. *best peer* is the lowest figure of the column among the peers of that log; "
+              "odometry alone and the earlier rsm of that table are not peers. The peers' own settings "
+              "(parameters, range cuts) are described there.", ""]
     for label, a in acc.items():
         L += [f"### `{label}`", "",
-              f"Log `{shown_path(Path(a['log']), root)}`, relations "
-              f"`{shown_path(Path(a['relations']), root)}` ({a['relation_count']} relations), "
-              f"{a['runs']['rsm']['summary']['scans']} scans.", ""]
+              f"Log `{shown_path(Path(a['log']), root)}`, relations `{shown_path(Path(a['relations']), root)}` "
+              f"({a['relation_count']} relations), {a['runs']['rsm']['summary']['scans']} scans.", ""]
         rows = []
-        for m in METHODS:
-            r = a["runs"][m]
-            for s in SCOPES:
-                e = r["errors"][s]
-                rows.append([m, s, str(e["matched"]), str(e["unmatched"])]
+        for run in run_labels(a):
+            r = a["runs"][run]
+            for sc in SCOPES:
+                e = r["errors"][sc]
+                rows.append([run, sc, str(e["matched"]), str(e["unmatched"])]
                             + [fmt_q(q, e[q][st]) for q in QUANTITIES for st in ("mean", "std", "max")]
                             + [fmt_pct(fused_percent(r["summary"]))])
         L += md_table(["method", "scope", "matched", "unmatched", "translation mean", "std", "max",
                        "rotation mean", "std", "max", "fused %"], rows, f"accuracy {label}")
-        oc = []
-        for m in METHODS:
-            o = a["runs"][m]["summary"]["outcomes"]
-            oc.append(f"{m}: " + ", ".join(f"{k} {v}" for k, v in o.items()))
-        L += ["Scan outcomes (rsm-nav summary): " + "; ".join(oc) + ".", ""]
-
-    # 2. robustness
-    L += [f"## {SECTION_TITLES[1]}", "", pl, ""]
-    if not rob:
-        L += ["Not measured in this run.", ""]
-    else:
-        L += [f"The paper's experiment on `{main}`: in every scan, the given share of the readings "
-              "is replaced by uniform random ranges (`rsm_tools.outliers`, the same readings and "
-              "values for rsm and icp at each seed). For each level: the mean over seeds of the "
-              "mean error, its spread (min..max over the seeds) and its ratio to the same method's "
-              f"clean figure. Seeds {', '.join(str(s) for s in rob['seeds'])}; 0 % is the clean log "
-              f"itself (one run). {rob['outlier_logs_made']} outlier log(s) were generated in this "
-              "run, the others came from the cache.", ""]
-        for s in SCOPES:
-            title = (f"Local relations (span <= {LOCAL_SPAN:g} s)" if s == "local" else "All relations")
-            L += [f"### {title}", ""]
+        peers = _peer_rows(ctx, label)
+        if peers:
             rows = []
-            for lv in rob["levels"]:
+            for run in run_labels(a):
+                e = a["runs"][run]["errors"]
+                rows.append([run, "this run"] + [fmt_q(q, e[sc][q]["mean"]) for sc, q in PEER_COLUMNS])
+            for r in peers:
+                kind = {"before": "peers.md, the earlier rsm", "odometry": "peers.md, not a peer"}.get(
+                    r["kind"], "peers.md, peer")
+                rows.append([r["method"], kind] + [
+                    (fmt_q(q, r["values"][(sc, q)]) if r["values"][(sc, q)] is not None else (r["note"] or "n/a")
+                     if (sc, q) == PEER_COLUMNS[0] else "") for sc, q in PEER_COLUMNS])
+            rows += [[row[1], "peers.md" if row[1].startswith("best") else "ratio"] + row[2:]
+                     for row in summary_rows(ctx, label)
+                     if row[1].startswith(("best peer", "rsm / best", f"{SMALL} / best"))]
+            L += ["Beside the peers (mean errors; columns as in peers.md):", ""]
+            L += md_table(["method", "source", "all translation [m]", "all rotation [deg]", "local translation [m]",
+                           "local rotation [deg]"], rows, f"peers {label}")
+        elif "skipped" not in pe:
+            L += [f"peers.md has no figures for `{label}`.", ""]
+        oc = []
+        for run in run_labels(a):
+            o = a["runs"][run]["summary"]["outcomes"]
+            oc.append(f"{run}: " + ", ".join(f"{k} {v}" for k, v in o.items()))
+        L += ["Scan outcomes (rsm-nav summary): " + "; ".join(oc) + ".", ""]
+        tm = []
+        for run in ("rsm", SMALL):
+            s = a["runs"].get(run, {}).get("summary")
+            if s and s.get("tmap"):
+                t, rc = s["tmap"], s.get("recovery") or {}
+                tm.append(f"{run}: {fmt_int(t['writes'])} writes, tiles {'/'.join(map(str, t['tiles']))} per level, "
+                          f"{fmt_int(t['taken'])} taken, {fmt_int(t['evicted'])} evicted, {fmt_int(t['dropped'])} "
+                          f"returns dropped; {rc.get('searches', 0)} recovery searches, {rc.get('taken', 0)} taken")
+        if tm:
+            L += ["Persistent map at the end of the log (rsm-nav summary): " + "; ".join(tm) + ".", ""]
+    return L
+
+
+def report_robustness(ctx: dict, root: Path) -> List[str]:
+    rob = ctx.get("robustness")
+    if not rob:
+        return ["Not measured in this run.", ""]
+    main = ctx["main_label"]
+    L = ["The paper's experiment: in every scan, the given share of the readings is replaced by uniform random "
+         f"ranges (`rsm_tools.outliers`: up to {outliers.DEFAULT_MAX_RANGE:g} m, the same readings and values for "
+         "every method at each seed). For each level: the mean over seeds of the mean error, its spread (min..max "
+         "over the seeds) and its ratio to the same method's clean figure. Seeds "
+         f"{', '.join(str(s) for s in rob['seeds'])} (7 is the peers' seed); 0 % is the clean log itself (the "
+         f"accuracy run). The whole curve on `{main}`, the floor's {FLOOR_LEVEL} % and the peers' second level on "
+         f"the other logs. {rob['outlier_logs_made']} outlier log(s) were generated in this run, the others came "
+         "from the cache. peers.md's robustness table (below) drew its outliers up to each log's largest reading, "
+         "so its ratios are beside, not equal to, these.", ""]
+    for label, r in rob["logs"].items():
+        for sc in SCOPES:
+            title = (f"local relations (span <= {LOCAL_SPAN:g} s)" if sc == "local" else "all relations")
+            L += [f"### `{label}`, {title}", ""]
+            rows = []
+            for lv in r["levels"]:
                 for m in ROBUST_METHODS:
-                    row = rob["table"][f"{m}:{lv}"]
-                    cells = [str(lv), m, str(row[f'{s}.translation']["n"])]
+                    row = r["table"][f"{m}:{lv}"]
+                    cells = [str(lv), m, str(row[f"{sc}.translation"]["n"])]
                     for q in QUANTITIES:
-                        c = row[f"{s}.{q}"]
+                        c = row[f"{sc}.{q}"]
                         cells += [fmt_q(q, c["mean"]), f"{fmt_q(q, c['min'])}..{fmt_q(q, c['max'])}",
                                   fmt_ratio(c["ratio"])]
                     cells.append(fmt_pct(row["fused"]["mean"]))
                     rows.append(cells)
-            L += md_table(["outliers %", "method", "runs", "translation mean [m]", "min..max",
-                           "x clean", "rotation mean [deg]", "min..max", "x clean", "fused %"],
-                          rows, f"robustness {s}")
-        if ctx.get("plot"):
-            L += [f"![Robustness curves: mean error against the share of outliers, rsm and icp, "
-                  f"odometry as a reference line]({ctx['plot']})", ""]
-        elif ctx.get("plot_note"):
-            L += [f"No plot: {ctx['plot_note']}.", ""]
+            L += md_table(["outliers %", "method", "runs", "translation mean [m]", "min..max", "x clean",
+                           "rotation mean [deg]", "min..max", "x clean", "fused %"], rows, f"robustness {label} {sc}")
+    if ctx.get("plot"):
+        L += [f"![Robustness curves on {main}: mean error against the share of outliers, rsm, the paper's method "
+              f"and icp, odometry as a reference line]({ctx['plot']})", ""]
+    elif ctx.get("plot_note"):
+        L += [f"No plot: {ctx['plot_note']}.", ""]
+    pt = ctx.get("peer_robustness")
+    if pt:
+        L += ["peers.md's robustness table, as it is there (local translation error at 43 % / 60 % outliers, "
+              "times the clean figure; their injection):", ""]
+        L += md_table(pt["header"], pt["rows"], "peers robustness")
+    return L
 
-    # 3. sharp turns
-    L += [f"## {SECTION_TITLES[2]}", "", pl, ""]
-    L += report_turns(ctx.get("turns"), main, root)
-    if ctx.get("turns") and ctx.get("turns_plot"):
-        L += [f"![Residuals of rsm, icp and odometry at the sharpest turns and by true rotation]"
-              f"({ctx['turns_plot']})", ""]
-    elif ctx.get("turns_plot_note"):
-        L += [f"No plot: {ctx['turns_plot_note']}.", ""]
 
-    # 4. speed
-    L += [f"## {SECTION_TITLES[3]}", "", pl, ""]
-    if speed:
-        L += [f"Wall time of `rsm_localizer_scan` per scan, from rsm-nav's summary, on `{main}` "
-              f"({speed['methods']['rsm']['scans']} scans). rsm and icp ran alternately, one process at "
-              f"a time, {speed['repeats']} time(s) each, in this bench run; the table gives the "
-              "median over the repeats of each run's median and 95th percentile, and the range "
-              "over the repeats. Wall times depend on the machine and its load.", ""]
-        rows = []
-        for m in ROBUST_METHODS:
-            s_ = speed["methods"][m]
-            rows.append([m, f"{s_['median_us']:.1f}", f"{s_['median_min']:.1f}..{s_['median_max']:.1f}",
-                         f"{s_['p95_us']:.1f}", f"{s_['p95_min']:.1f}..{s_['p95_max']:.1f}"])
-        rows.append(["icp / rsm", fmt_ratio(speed["ratio_median"]), "", fmt_ratio(speed["ratio_p95"]), ""])
-        L += md_table(["method", "median [us]", "range", "p95 [us]", "range"], rows, "speed wall")
-        ident = all(Path(r["trajectory"]).read_bytes() == Path(acc[main]["runs"][r["method"]]["trajectory"]).read_bytes()
-                    for r in speed["runs"])
-        L += [("Every repeat wrote a trajectory bit-identical to the accuracy run's."
-               if ident else "WARNING: a repeat wrote a trajectory that differs from the accuracy run's."), ""]
+def report_memory(ctx: dict, root: Path) -> List[str]:
+    mem, xc, am = ctx.get("memory"), ctx.get("cross_check"), ctx.get("arm_memory")
+    L = []
+    if mem and mem.get("configs"):
+        names = list(mem["configs"])
+        c0 = mem["configs"][names[0]]["config"]
+        L += [f"`sizeof` on this host ({mem['compiler']}) from `rsm-stages` (its JSON prints them), per configuration: "
+              + "; ".join(f"*{n}* = `{mem['configs'][n]['header'] or 'rsm/config.h (defaults)'}`" for n in names)
+              + f". Default capacities: {c0['RSM_MAX_BEAMS']} readings, a tile pool of "
+              f"{fmt_int(c0['RSM_TMAP_TILES'])} tiles of {1 << c0['RSM_TMAP_TILE_LOG2']} x "
+              f"{1 << c0['RSM_TMAP_TILE_LOG2']} cells over {c0['RSM_TMAP_LEVELS']} levels (finest cell "
+              f"{c0['tmap_cell_m'] * 100:g} cm), the paper's window {c0['RSM_MAP_SIZE']} x {c0['RSM_MAP_SIZE']} "
+              f"cells of {c0['cell_m'] * 100:g} cm. The three methods' states share one union.", ""]
+        total = "rsm_localizer_t (total)"
+        rows = [[total] + [x for n in names for x in (fmt_int(mem["configs"][n]["sizes"]["rsm_localizer_t"]),
+                                                      _kib(mem["configs"][n]["sizes"]["rsm_localizer_t"]))]]
+        for label, key, depth in HOST_PARTS:
+            rows.append(["&nbsp;&nbsp;" * (depth + 1) + label]
+                        + [x for n in names for x in (fmt_int(mem["configs"][n]["sizes"][key]),
+                                                      _kib(mem["configs"][n]["sizes"][key]))])
+        rows.append(["&nbsp;&nbsp;other (config pointer, stamps, padding)"]
+                    + [x for n in names for x in (fmt_int(mem["configs"][n]["other"]),
+                                                  _kib(mem["configs"][n]["other"]))])
+        rows += [[k] + [x for n in names for x in (fmt_int(mem["configs"][n]["sizes"][k]),
+                                                   _kib(mem["configs"][n]["sizes"][k]))] for k in MEMORY_OTHER]
+        L += md_table(["part"] + [h for n in names for h in (f"{n} [bytes]", f"{n} [KiB]")], rows, "memory host")
     else:
-        L += ["Wall time not measured in this run.", ""]
-    if cg and "skipped" not in cg:
-        L += [f"Instructions executed inside `rsm_localizer_scan` (callgrind, "
-              f"`--toggle-collect=rsm_localizer_scan`, {cg['valgrind']}) on "
-              f"`{shown_path(Path(cg['log']), root)}`, divided by the scans. These counts repeat "
-              "exactly from run to run on the same binary.", ""]
-        rows = [[m, fmt_int(cg[m]["scans"]), fmt_int(cg[m]["ir"]), fmt_int(round(cg[m]["ir_per_scan"]))]
-                for m in ROBUST_METHODS]
-        rows.append(["icp / rsm", "", "", fmt_ratio(cg["ratio"])])
-        L += md_table(["method", "scans", "Ir collected", "Ir per scan"], rows, "speed callgrind")
-        L += report_callgrind_stages(cg)
-    else:
-        L += [f"Instruction counts not measured: {(cg or {}).get('skipped', 'disabled')}.", ""]
-    L += report_stage_speed(ctx.get("stages"), speed, main)
-
-    # 5. memory
-    L += [f"## {SECTION_TITLES[4]}", "", pl, ""]
-    if mem and "skipped" not in mem:
-        mac = mem["macros"]
-        L += [f"`sizeof` on this host ({mem['compiler']}), default `config.h` (beams "
-              f"{mac['RSM_MAX_BEAMS']}, map {mac['RSM_MAP_SIZE']} x {mac['RSM_MAP_SIZE']} cells, "
-              f"{mac['RSM_MAX_KEYPOINTS']} key points, {mac['RSM_MAX_CANDIDATES']} candidates, "
-              f"{mac['RSM_MAX_MATCHES']} matches), from a probe program built against the library "
-              "and run with the default runtime config.", ""]
-        rows = [["rsm_localizer_t (total)", fmt_int(mem["sizes"]["rsm_localizer_t"]),
-                 f"{mem['sizes']['rsm_localizer_t'] / 1024:.1f}"]]
-        rows += [[k, fmt_int(v), f"{v / 1024:.1f}"] for k, v in mem["parts"].items()]
-        rows.append(["other (pointer, stamps, padding)", fmt_int(mem["other"]), f"{mem['other'] / 1024:.1f}"])
-        rows += [[k, fmt_int(mem["sizes"][k]), f"{mem['sizes'][k] / 1024:.1f}"] for k in MEMORY_OTHER]
-        L += md_table(["part", "bytes", "KiB"], rows, "memory host")
-    else:
-        L += [f"Host sizes not measured: {(mem or {}).get('skipped', 'disabled')}.", ""]
-    am = ctx.get("arm_memory")
+        L += ["Host sizes not measured in this run.", ""]
     if xc and "skipped" not in xc:
-        L += [f"Cortex-M4F (`tools/cross-check`, {xc['compiler']}, -Os): flash (text + rodata) per "
-              "object of the library and the bare-metal port.", ""]
+        L += [f"Cortex-M4F (`tools/cross-check`, {xc['compiler']}, -Os, default configuration): flash (text + "
+              "rodata) per object of the library and the bare-metal port.", ""]
         rows = [[o["library"], o["object"], fmt_int(o["text"]), fmt_int(o["rodata"]), fmt_int(o["flash"]),
                  fmt_int(o["ram"])] for o in xc["objects"]]
         rows += [[lib, "TOTAL", fmt_int(t["text"]), fmt_int(t["rodata"]), fmt_int(t["flash"]), fmt_int(t["ram"])]
@@ -2350,19 +2787,168 @@ def write_report(ctx: dict) -> str:
                   f"of the firmware's main file total {fmt_int(xc['statics'].get('total', 0))} bytes. "
                   "Checks: " + "; ".join(xc["checks"]) + ".", ""]
     else:
-        L += [f"Cortex-M4F sizes not measured: {(xc or {}).get('skipped', 'disabled')}.", ""]
+        L += [f"Cortex-M4F sizes (tools/cross-check) not measured: {(xc or {}).get('skipped', 'disabled')}.", ""]
     L += report_arm_memory(am, root)
     L += report_stack(am, ctx.get("host_stack"), ctx.get("stages"), ctx.get("stack_note"))
+    return L
 
-    # 6. scaling
-    L += [f"## {SECTION_TITLES[5]}", "", pl, ""]
-    L += report_scaling(ctx.get("scaling"), main)
 
-    # 7. losses
-    L += [f"## {SECTION_TITLES[6]}", "", pl, ""]
-    L += [f"- {item}" for item in ctx["losses"]]
-    L.append("")
+def report_floors(ctx: dict) -> List[str]:
+    floors = ctx.get("floors") or []
+    n = {k: sum(1 for f in floors if f["status"] == k) for k in ("PASS", "MISS", "SKIP")}
+    L = ["The floors of issue 10, each checked on this run's figures and printed as PASS or MISS (SKIP: not "
+         "measured in this run). They are a report, not an assertion: the bench does not fail on a MISS. Peers: "
+         "the lowest figure among the peers of peers.md for that log. Robustness: rsm with "
+         f"{FLOOR_LEVEL} % outliers against its own clean run, translation, local <= x{FLOOR_ROBUST['local']:.2f} "
+         f"and all relations <= x{FLOOR_ROBUST['all']:.2f}, at every seed. Memory: `sizeof(rsm_localizer_t)` "
+         f"from the Cortex-M4F probe of section 5. Instructions: callgrind, section 4.", "",
+         f"{n['PASS']} PASS, {n['MISS']} MISS" + (f", {n['SKIP']} SKIP" if n["SKIP"] else "") + ":", "", "```"]
+    L += [f["line"] for f in floors]
+    L += ["```", ""]
+    return L
+
+
+def headline_extras(ctx: dict) -> List[str]:
+    out = []
+    rob = ctx.get("robustness")
+    for label, r in ((rob or {}).get("logs") or {}).items():
+        if FLOOR_LEVEL in r["levels"]:
+            x = r["table"][f"rsm:{FLOOR_LEVEL}"]
+            out.append(f"with {FLOOR_LEVEL} % outliers rsm's translation error on `{label}` is "
+                       f"{fmt_ratio(x['local.translation']['ratio'])} times its clean figure on local relations and "
+                       f"{fmt_ratio(x['all.translation']['ratio'])} times on all")
+    speed = ctx.get("speed")
+    if speed:
+        out.append(f"rsm's median time per scan on `{ctx['main_label']}` is "
+                   f"{_us(speed['methods']['rsm']['median_us'])} us "
+                   f"(paper's method {_us(speed['methods']['paper']['median_us'])}, icp "
+                   f"{_us(speed['methods']['icp']['median_us'])})")
+    cg = ctx.get("callgrind")
+    r = cg_run(cg, ctx["main_label"], "default", "rsm")
+    if r:
+        p = cg_run(cg, ctx["main_label"], "default", "paper")
+        out.append(f"rsm executes {fmt_int(round(r['ir_per_scan']))} instructions per scan (callgrind, first "
+                   f"{r['scans']} scans of `{ctx['main_label']}`)"
+                   + (f", {fmt_ratio(r['ir_per_scan'] / p['ir_per_scan'])} times the paper's method's" if p else ""))
+    am = ctx.get("arm_memory")
+    if am and "skipped" not in am:
+        parts = [f"{fmt_int(c['state'][0]['bytes'])} bytes with `{c['header']}`" for c in am["configs"].values()
+                 if c.get("state")]
+        if parts:
+            out.append("the localizer state on Cortex-M4F is " + " and ".join(parts))
+        c = am["configs"].get("default")
+        if c:
+            stk = c["stack"]
+            out.append(f"one localizer step needs at most {fmt_int(stk['rsm_localizer_scan']['bytes'])} bytes of "
+                       "stack on Cortex-M4F (static bound, libm calls not counted)")
+    tn = ctx.get("turns")
+    if tn and tn["turns"]:
+        sm = tn["summary"]
+        out.append(f"at the {len(tn['turns'])} sharpest turns rsm's mean residual is "
+                   f"{_cells(sm['rsm']['translation_cells']['mean'])} cells and "
+                   f"{_deg(sm['rsm']['rotation_deg']['mean'])} "
+                   f"deg (paper's method {_cells(sm['paper']['translation_cells']['mean'])} cells, "
+                   f"{_deg(sm['paper']['rotation_deg']['mean'])} deg; odometry "
+                   f"{_cells(sm['odometry']['translation_cells']['mean'])} cells, "
+                   f"{_deg(sm['odometry']['rotation_deg']['mean'])} deg)")
+    return out
+
+
+def write_report(ctx: dict) -> str:
+    root: Path = ctx["root"]
+    prov = ctx["provenance"]
+    pl = provenance_line(prov)
+    acc = ctx["accuracy"]
+    main = ctx["main_label"]
+    L: List[str] = []
+    L += [
+        "# rsm benchmark results",
+        "",
+        "Generated by `./tools/bench` (`python -m rsm_tools.bench`); do not edit by hand. Every figure of this "
+        "repository's methods below was measured by that command in the run described here; the peers' figures "
+        "are read from peers.md of the shared folder.",
+        "",
+        pl,
+        "",
+    ]
+    if ctx.get("sources_changed"):
+        L += [f"**WARNING: {ctx['sources_changed']}.**", ""]
+    L += [
+        f"Bench settings: logs {', '.join(f'`{k}`' for k in acc)} (every folder of "
+        f"`{shown_path(Path(ctx['data_dir']), root)}` with a log and its relations); outlier levels "
+        f"{', '.join(str(v) for v in ctx['levels'])} % on `{main}`, "
+        f"{', '.join(str(v) for v in ctx['other_levels'])} % on the others; {len(ctx['seeds'])} seed(s) per level "
+        f"({', '.join(str(s) for s in ctx['seeds'])}); {ctx['speed_repeats']} speed repeat(s); "
+        f"{ctx['jobs']} rsm-nav process(es) at a time" + (", quick mode" if ctx["quick"] else "") + ". "
+        f"Whole bench: {ctx['elapsed']:.0f} s ("
+        + ", ".join(f"{k} {v:.0f} s" for k, v in ctx["stage_seconds"].items()) + ").",
+        "",
+    ]
+    L += ["## Headline", "", pl, "",
+          f"Mean relative-pose error on every log (local = relations spanning at most {LOCAL_SPAN:g} s), "
+          f"beside the peers of peers.md; *rsm-small* is rsm built with `{SMALL_HEADER}`; *rsm before* the "
+          "earlier rsm as peers.md measured it.", ""]
+    rows = [row for label in acc for row in summary_rows(ctx, label)]
+    L += md_table(["log", "method", "all translation [m]", "all rotation [deg]", "local translation [m]",
+                   "local rotation [deg]"], rows, "headline")
+    pe = ctx.get("peers") or {}
+    if "skipped" in pe:
+        L += [f"No peer figures in this run: {pe['skipped']}.", ""]
+    floors = ctx.get("floors") or []
+    if floors:
+        L += ["The issue's floors (section 7):", "", "```"] + [f["line"] for f in floors] + ["```", ""]
+    extra = headline_extras(ctx)
+    if extra:
+        L += ["In this run: " + "; ".join(extra) + ".", ""]
+
+    sections = (
+        report_accuracy(ctx, root),
+        report_robustness(ctx, root),
+        report_turns(ctx.get("turns"), main, root) + (
+            [f"![Residuals at the sharpest turns and by true rotation]({ctx['turns_plot']})", ""]
+            if ctx.get("turns") and ctx.get("turns_plot") else
+            [f"No plot: {ctx['turns_plot_note']}.", ""] if ctx.get("turns_plot_note") else []),
+        report_speed(ctx, root),
+        report_memory(ctx, root),
+        report_scaling(ctx.get("scaling"), main),
+        report_floors(ctx),
+        [f"- {item}" for item in ctx["losses"]] + [""],
+    )
+    for title, body in zip(SECTION_TITLES, sections):
+        L += [f"## {title}", "", pl, ""] + body
     return "\n".join(L)
+
+
+def report_speed(ctx: dict, root: Path) -> List[str]:
+    speed, main = ctx.get("speed"), ctx["main_label"]
+    L = []
+    if speed:
+        L += [f"Wall time of `rsm_localizer_scan` per scan, from rsm-nav's summary, on `{main}` "
+              f"({speed['methods']['rsm']['scans']} scans). The methods ran in turn, one process at a time, "
+              f"{speed['repeats']} time(s) each, in this bench run; the table gives the median over the repeats "
+              "of each run's median and 95th percentile, and the range over the repeats. Wall times depend on the "
+              "machine and its load.", ""]
+        rows = []
+        for m in ROBUST_METHODS:
+            s_ = speed["methods"][m]
+            rows.append([m, f"{s_['median_us']:.1f}", f"{s_['median_min']:.1f}..{s_['median_max']:.1f}",
+                         f"{s_['p95_us']:.1f}", f"{s_['p95_min']:.1f}..{s_['p95_max']:.1f}"])
+        for m in ROBUST_METHODS[1:]:
+            rows.append([f"{m} / rsm", fmt_ratio(speed["ratio_median"][m]), "", fmt_ratio(speed["ratio_p95"][m]), ""])
+        L += md_table(["method", "median [us]", "range", "p95 [us]", "range"], rows, "speed wall")
+        ident = all(Path(r["trajectory"]).read_bytes() == Path(ctx["accuracy"][main]["runs"][r["method"]]["trajectory"])
+                    .read_bytes() for r in speed["runs"])
+        L += [("Every repeat wrote a trajectory bit-identical to the accuracy run's."
+               if ident else "WARNING: a repeat wrote a trajectory that differs from the accuracy run's."), ""]
+    else:
+        L += ["Wall time not measured in this run.", ""]
+    L += report_callgrind(ctx.get("callgrind"), root, main)
+    ps = ctx.get("peer_speed_table")
+    if ps:
+        L += ["peers.md's speed table, as it is there (its own runs, `-O2`; \"rsm\" there is the earlier rsm):", ""]
+        L += md_table(ps["header"], ps["rows"], "peers speed")
+    L += report_stage_speed(ctx.get("stages"), speed, main)
+    return L
 
 
 # ---------------------------------------------------------------------------
@@ -2379,6 +2965,16 @@ def _levels(text: str) -> List[int]:
     return vals
 
 
+def _counts(text: str) -> List[int]:
+    try:
+        vals = sorted({int(v) for v in text.split(",") if v.strip()})
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a comma-separated list of integers: {text!r}") from None
+    if not vals or any(v < 1 for v in vals):
+        raise argparse.ArgumentTypeError(f"values must be positive: {text!r}")
+    return vals
+
+
 def _names(text: str) -> List[str]:
     known = [n for n, _ in ARM_CONFIGS]
     vals = [v.strip() for v in text.split(",") if v.strip()]
@@ -2390,25 +2986,29 @@ def _names(text: str) -> List[str]:
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="rsm-bench",
-        description="Measure rsm, its ICP baseline and odometry (accuracy, robustness to outliers, "
-                    "speed, memory) and write docs/RESULTS.md. ./tools/bench builds and runs this.")
+        description="Measure rsm, the paper's method, its ICP baseline and odometry on every log of the shared "
+                    "folder (accuracy beside the peers, robustness to outliers, speed, memory, the issue's floors) "
+                    "and write docs/RESULTS.md. ./tools/bench builds and runs this.")
     p.add_argument("--root", type=Path, help="repository root (default: found from the current folder)")
-    p.add_argument("--build-dir", type=Path, help="build with tools/nav/rsm-nav and librsm.a "
+    p.add_argument("--build-dir", type=Path, help="build with tools/nav/rsm-nav and tools/bench-c/rsm-stages "
                    "(default: ROOT/build-release)")
-    p.add_argument("--real-log", type=Path, help="the main log (default: ROOT/../shared/data/intel/intel.clf.gz)")
-    p.add_argument("--real-relations", type=Path, help="its relations (default: intel.relations beside it)")
-    p.add_argument("--log", type=Path, action="append", default=[], help="extra CARMEN log for the "
-                   "accuracy section (repeatable, each with a --relations)")
-    p.add_argument("--relations", type=Path, action="append", default=[], help="relations of the "
-                   "matching --log")
-    p.add_argument("--callgrind-log", type=Path, help="log for instruction counts "
-                   "(default: ROOT/tests/data/intel_head.clf.gz)")
-    p.add_argument("--levels", type=_levels, help="outlier percentages (default: "
-                   + ",".join(map(str, LEVELS)) + "; quick: " + ",".join(map(str, QUICK_LEVELS)) + ")")
-    p.add_argument("--seeds", type=int, help=f"seeds per outlier level (default {SEEDS}; quick 1)")
+    p.add_argument("--shared", type=Path, help="the shared folder: its data/NAME/ folders holding NAME.clf.gz and "
+                   "NAME.relations are the logs, reference/peers.md the peers' figures (default: the environment "
+                   "variable RSM_SHARED_DIR, else ROOT/../shared)")
+    p.add_argument("--small-build", type=Path, help=f"a Release build with RSM_USER_CONFIG={SMALL_HEADER} holding "
+                   "rsm-nav and rsm-stages (default: the bench builds one in BUILD/bench-small)")
+    p.add_argument("--levels", type=_levels, help="outlier percentages on the main log (default: "
+                   + ",".join(map(str, LEVELS)) + "; quick: " + ",".join(map(str, QUICK_LEVELS)) + "); the other "
+                   "logs run " + ",".join(map(str, OTHER_LEVELS)) + " (quick " + ",".join(map(str, QUICK_OTHER_LEVELS))
+                   + ")")
+    p.add_argument("--seeds", type=int, help=f"seeds per outlier level, counting from {FIRST_SEED} "
+                   f"(default {SEEDS}; quick 1)")
     p.add_argument("--speed-repeats", type=int, help=f"timed runs per method (default {SPEED_REPEATS}; quick 1)")
-    p.add_argument("--jobs", type=int, default=2, help="rsm-nav processes at a time (default 2)")
-    p.add_argument("--quick", action="store_true", help="one seed, fewer levels, one speed repeat")
+    p.add_argument("--callgrind-scans", type=int, default=CALLGRIND_SCANS,
+                   help=f"scans from the start of every log counted by callgrind (default {CALLGRIND_SCANS})")
+    p.add_argument("--jobs", type=int, default=2, help="rsm-nav processes at a time for untimed runs (default 2)")
+    p.add_argument("--quick", action="store_true", help="one seed, fewer levels, one speed repeat, callgrind of rsm "
+                   "only, no scaling builds")
     p.add_argument("--no-callgrind", action="store_true", help="skip the instruction counts")
     p.add_argument("--no-cross-check", action="store_true", help="skip tools/cross-check")
     p.add_argument("--no-plots", action="store_true", help="draw no plot")
@@ -2420,8 +3020,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-scaling", action="store_true", help="skip the scaling section")
     p.add_argument("--scaling-beams", type=_levels, help="readings per scan of the scaling runs (default "
                    + ",".join(map(str, SCALING_BEAMS)) + f"; quick {DEFAULT_MAX_BEAMS})")
-    p.add_argument("--scaling-maps", type=_levels, help="RSM_MAP_SIZE_LOG2 values of the scaling runs (default "
-                   + ",".join(map(str, SCALING_MAP_LOG2)) + f"; quick {DEFAULT_MAP_LOG2}); the presets "
+    p.add_argument("--scaling-maps", type=_levels, help="RSM_MAP_SIZE_LOG2 values of the paper's window (default "
+                   + ",".join(map(str, SCALING_MAP_LOG2)) + f"; quick {DEFAULT_MAP_LOG2})")
+    p.add_argument("--scaling-tiles", type=_counts, help="RSM_TMAP_TILES values of rsm's tile pool (default "
+                   + ",".join(map(str, SCALING_TILES)) + f"; quick {DEFAULT_TILES}); the presets "
                    + ", ".join(SCALING_PRESETS) + " run too, except in quick mode")
     p.add_argument("--output", type=Path, help="report (default: ROOT/docs/RESULTS.md)")
     p.add_argument("--plots-dir", type=Path, help="plots (default: ROOT/docs/results)")
@@ -2436,6 +3038,22 @@ def _json_default(o):
     raise TypeError(type(o))
 
 
+def _jsonable(o):
+    """o with tuple keys (the peers' (scope, quantity)) joined by a space, for the manifest."""
+    if isinstance(o, dict):
+        return {(" ".join(map(str, k)) if isinstance(k, tuple) else k): _jsonable(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_jsonable(v) for v in o]
+    return o
+
+
+def _peer_table(text: str, heading: str) -> Optional[dict]:
+    for t in md_tables(text):
+        if t["heading"].lower().startswith(heading):
+            return {"header": t["header"], "rows": [r + [""] * (len(t["header"]) - len(r)) for r in t["rows"]]}
+    return None
+
+
 def run(args: argparse.Namespace) -> Path:
     t_start = time.monotonic()
     root = (args.root or find_root()).resolve()
@@ -2446,32 +3064,27 @@ def run(args: argparse.Namespace) -> Path:
     stages_bin = stages_exe(build)
     if not stages_bin.is_file():
         raise BenchError(f"rsm-stages is not built: {stages_bin} (run ./tools/bench, which builds it)")
-    real_log = (args.real_log or root.parent / "shared" / "data" / "intel" / "intel.clf.gz").resolve()
-    real_rel = (args.real_relations or real_log.parent / "intel.relations").resolve()
-    for f, what in ((real_log, "the real log"), (real_rel, "its relations")):
-        if not f.is_file():
-            raise BenchError(f"{what} is missing: {f} (the Intel dataset belongs in ../shared/data/intel/)")
-    if len(args.log) != len(args.relations):
-        raise BenchError("give one --relations for every --log")
+    shared = shared_dir(args.shared, root)
+    data = shared / "data"
+    logs = discover_logs(data)
+    if not logs:
+        raise BenchError(f"no log in {data}: each log is a folder NAME holding NAME.clf.gz and NAME.relations "
+                         "(set the shared folder with --shared or RSM_SHARED_DIR)")
     levels = args.levels or (list(QUICK_LEVELS) if args.quick else list(LEVELS))
     if 0 not in levels:
         levels = [0] + levels  # the ratios need the clean figure
+    other_levels = list(QUICK_OTHER_LEVELS if args.quick else OTHER_LEVELS)
     nseeds = args.seeds if args.seeds is not None else (1 if args.quick else SEEDS)
     repeats = args.speed_repeats if args.speed_repeats is not None else (1 if args.quick else SPEED_REPEATS)
-    if nseeds < 1 or repeats < 1 or args.jobs < 1:
-        raise BenchError("--seeds, --speed-repeats and --jobs must be at least 1")
-    seeds = list(range(1, nseeds + 1))
+    if nseeds < 1 or repeats < 1 or args.jobs < 1 or args.callgrind_scans < 1:
+        raise BenchError("--seeds, --speed-repeats, --callgrind-scans and --jobs must be at least 1")
+    seeds = list(range(FIRST_SEED, FIRST_SEED + nseeds))
     work = (args.work_dir or build / "bench-work").resolve()
     cache = (args.cache_dir or build / "bench-cache").resolve()
     output = (args.output or root / "docs" / "RESULTS.md").resolve()
     plots = (args.plots_dir or root / "docs" / "results").resolve()
-    cg_log = (args.callgrind_log or root / "tests" / "data" / "intel_head.clf.gz").resolve()
     work.mkdir(parents=True, exist_ok=True)
-
-    logs: List[Tuple[str, Path, Path]] = []
-    for log, rel in [(real_log, real_rel)] + list(zip(args.log, args.relations)):
-        logs.append((log_label(log, [l[0] for l in logs]), log.resolve(), rel.resolve()))
-    main_label = logs[0][0]
+    main_label, main_log, main_rel = logs[0]
     stage_seconds: Dict[str, float] = {}
 
     def stage(name, fn, *a):
@@ -2482,24 +3095,50 @@ def run(args: argparse.Namespace) -> Path:
         print(f"rsm-bench: {name} done in {stage_seconds[name]:.1f} s", flush=True)
         return res
 
+    print("rsm-bench: logs " + ", ".join(f"{l} ({shown_path(g, root)})" for l, g, _ in logs), flush=True)
     prov = provenance(root, build)
-    ctx = {"root": root, "provenance": prov, "main_label": main_label, "levels": levels, "seeds": seeds,
-           "speed_repeats": repeats, "jobs": args.jobs, "quick": args.quick}
-    ctx["accuracy"] = stage("accuracy", run_accuracy, nav, logs, work, args.jobs)
-    ctx["speed"] = stage("speed", run_speed, nav, real_log, repeats, work)
-    ctx["robustness"] = stage("robustness", run_robustness, nav, real_log, real_rel,
-                              ctx["accuracy"][main_label]["runs"], levels, seeds, work, cache, args.jobs)
+    digest = source_digest(root)
+    ctx = {"root": root, "provenance": prov, "main_label": main_label, "levels": levels,
+           "other_levels": other_levels, "seeds": seeds, "speed_repeats": repeats, "jobs": args.jobs,
+           "quick": args.quick, "data_dir": str(data)}
+    peers_md = shared / "reference" / "peers.md"
+    ctx["peers"] = load_peers(peers_md)
+    if "skipped" in ctx["peers"]:
+        print(f"rsm-bench: no peer figures: {ctx['peers']['skipped']} ({peers_md}); the peers are skipped",
+              flush=True)
+    else:
+        text = peers_md.read_text(encoding="utf-8", errors="replace")
+        ctx["peer_speed"] = peer_speed(text)
+        ctx["peer_speed_table"] = _peer_table(text, "speed")
+        ctx["peer_robustness"] = _peer_table(text, "robustness")
+    if args.small_build:
+        sb = args.small_build.resolve()
+        small = {"nav": sb / "tools" / "nav" / "rsm-nav", "stages": stages_exe(sb), "dir": sb}
+        for f in (small["nav"], small["stages"]):
+            if not f.is_file():
+                raise BenchError(f"{f} is missing in the --small-build tree")
+    else:
+        small = stage("small build", build_small, root, build, build / "bench-small")
+    ctx["small_build"] = str(small["dir"])
+    navs = {"default": nav, "small": small["nav"]}
+    ctx["accuracy"] = stage("accuracy", run_accuracy, navs, logs, work, args.jobs)
+    ctx["speed"] = stage("speed", run_speed, nav, main_log, repeats, work)
+    lv_by_log = {label: (levels if label == main_label else other_levels) for label, _, _ in logs}
+    ctx["robustness"] = stage("robustness", run_robustness, nav, logs, ctx["accuracy"], lv_by_log, seeds, work,
+                              cache, args.jobs)
     sanitized = cmake_cache(build).get("RSM_SANITIZE", "OFF").upper() in ("ON", "TRUE", "1", "YES")
     painted = not (args.no_stack or sanitized)
     if not painted:
         ctx["stack_note"] = ("--no-stack" if args.no_stack else
                              "the build is instrumented by AddressSanitizer, which moves frames off the stack")
-    ctx["stages"] = stage("stages", run_stage_speed, stages_bin, real_log, repeats, painted)
-    ctx["turns"] = stage("turns", run_turns, ctx["accuracy"][main_label]["runs"], real_rel,
+    ctx["stages"] = stage("stages", run_stage_speed, stages_bin, main_log, repeats, painted)
+    ctx["turns"] = stage("turns", run_turns, ctx["accuracy"][main_label]["runs"], main_rel,
                          ctx["stages"]["config"]["cell_m"], args.turns)
+    cg_methods = ("rsm",) if args.quick else ROBUST_METHODS
     ctx["callgrind"] = ({"skipped": "--no-callgrind"} if args.no_callgrind
-                        else stage("callgrind", run_callgrind, nav, cg_log, work, args.jobs, root))
-    ctx["memory"] = stage("memory", run_memory, root, build, work)
+                        else stage("callgrind", run_callgrind, navs, logs, args.callgrind_scans, cg_methods, work,
+                                   args.jobs, root))
+    ctx["memory"] = stage("memory", run_memory, {"default": stages_bin, "small": small["stages"]}, main_log, build)
     ctx["cross_check"] = ({"skipped": "--no-cross-check"} if args.no_cross_check
                           else stage("cross-check", run_cross_check, root))
     if args.no_arm_memory:
@@ -2512,43 +3151,40 @@ def run(args: argparse.Namespace) -> Path:
     if not args.no_scaling:
         beams = args.scaling_beams or ([DEFAULT_MAX_BEAMS] if args.quick else list(SCALING_BEAMS))
         maps = args.scaling_maps or ([DEFAULT_MAP_LOG2] if args.quick else list(SCALING_MAP_LOG2))
-        ctx["scaling"] = stage("scaling", run_scaling, root, build, real_log, real_rel, work,
-                               scaling_variants(beams, maps, () if args.quick else SCALING_PRESETS))
+        tiles = args.scaling_tiles or ([DEFAULT_TILES] if args.quick else list(SCALING_TILES))
+        ctx["scaling"] = stage("scaling", run_scaling, root, build, main_log, main_rel, work,
+                               scaling_variants(beams, maps, tiles, () if args.quick else SCALING_PRESETS),
+                               {SMALL_HEADER: small["stages"]})
     if args.no_plots:
         ctx["plot_note"] = ctx["turns_plot_note"] = ctx["stages"]["plot_note"] = "--no-plots"
         if ctx.get("scaling"):
             ctx["scaling"]["plot_note"] = "--no-plots"
     else:
         png = plots / "robustness.png"
-        note = plot_robustness(ctx["robustness"], png, prov,
-                               ctx["accuracy"][main_label]["runs"]["odometry"]["errors"])
+        note = plot_robustness(ctx["robustness"]["logs"][main_label], png, prov,
+                               ctx["accuracy"][main_label]["runs"]["odometry"]["errors"], main_label)
         if note:
             ctx["plot_note"] = note
         else:
             ctx["plot"] = os.path.relpath(png, output.parent).replace(os.sep, "/")
-        png = plots / "turns.png"
-        note = plot_turns(ctx["turns"], png, prov)
-        if note:
-            ctx["turns_plot_note"] = note
-        else:
-            ctx["turns_plot"] = os.path.relpath(png, output.parent).replace(os.sep, "/")
-        png = plots / "stages.png"
-        note = plot_stages(ctx["stages"], png, prov)
-        if note:
-            ctx["stages"]["plot_note"] = note
-        else:
-            ctx["stages"]["plot"] = os.path.relpath(png, output.parent).replace(os.sep, "/")
-        if ctx.get("scaling"):
-            png = plots / "scaling.png"
-            note = plot_scaling(ctx["scaling"], png, prov)
+        for key, fn, name, target in (("turns", plot_turns, "turns.png", ctx),
+                                      ("stages", plot_stages, "stages.png", ctx["stages"]),
+                                      ("scaling", plot_scaling, "scaling.png", ctx.get("scaling"))):
+            if not ctx.get(key):
+                continue
+            png = plots / name
+            note = fn(ctx[key], png, prov)
+            prefix = "turns_" if key == "turns" else ""
             if note:
-                ctx["scaling"]["plot_note"] = note
+                target[f"{prefix}plot_note"] = note
             else:
-                ctx["scaling"]["plot"] = os.path.relpath(png, output.parent).replace(os.sep, "/")
-    ctx["losses"] = losses(ctx["accuracy"], main_label, ctx["robustness"], ctx["speed"],
-                           ctx["callgrind"], ctx["memory"])
-    ctx["losses"] += more_losses(ctx["turns"], ctx["stages"], ctx.get("scaling"), ctx.get("arm_memory"),
-                                 ctx.get("host_stack"))
+                target[f"{prefix}plot"] = os.path.relpath(png, output.parent).replace(os.sep, "/")
+    if source_digest(root) != digest:
+        ctx["sources_changed"] = ("the library's or the tools' sources changed while this run was measuring, so "
+                                  "its figures may come from different code: run it again")
+        print(f"rsm-bench: WARNING: {ctx['sources_changed']}", flush=True)
+    ctx["floors"] = check_floors(**floor_inputs(ctx))
+    ctx["losses"] = losses(ctx)
     ctx["elapsed"] = time.monotonic() - t_start
     ctx["stage_seconds"] = stage_seconds
     text = write_report(ctx)
@@ -2557,8 +3193,11 @@ def run(args: argparse.Namespace) -> Path:
     manifest = {k: v for k, v in ctx.items() if k != "root"}
     manifest["report"] = str(output)
     manifest["logs"] = [{"label": l, "log": str(g), "relations": str(r)} for l, g, r in logs]
-    (work / "bench.json").write_text(json.dumps(manifest, indent=1, default=_json_default,
+    (work / "bench.json").write_text(json.dumps(_jsonable(manifest), indent=1, default=_json_default,
                                                 allow_nan=True))
+    print("rsm-bench: the issue's floors:")
+    for f in ctx["floors"]:
+        print(f"  {f['line']}")
     print(f"rsm-bench: wrote {output} in {ctx['elapsed']:.0f} s (work files in {work})")
     return output
 
