@@ -16,7 +16,7 @@
 rsm_tmap_config_t rsm_tmap_config_default(void)
 {
     rsm_tmap_config_t c;
-    c.cell_m = 0.1f;
+    c.cell_m = RSM_TMAP_CELL_M;
     c.levels = (uint8_t)RSM_TMAP_LEVELS;
     c.hit_inc = 4u;
     c.miss_dec = 1u;
@@ -112,6 +112,25 @@ static void hash_remove(rsm_tmap_t *map, uint32_t s)
 
 /* Slot for a tile that is not held: a free one, else the least recently
  * written one not written by this update. RSM_TMAP_NONE if none. */
+/* The least recently written slot not written by the update in progress;
+ * RSM_TMAP_NONE if there is none. */
+static uint32_t oldest_slot(const rsm_tmap_t *map)
+{
+    uint32_t best_age = 0;
+    uint32_t s = RSM_TMAP_NONE;
+    uint32_t k;
+    for (k = 0; k < map->used; ++k) {
+        const uint32_t age = (map->stamp - (map->tile[k].stamp & STAMP_MASK)) & STAMP_MASK;
+        if (age > best_age) {
+            best_age = age;
+            s = k;
+        }
+    }
+    return s;
+}
+
+/* Slot for a tile that is not held: a free one, else the least recently
+ * written one not written by this update. RSM_TMAP_NONE if none. */
 static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
 {
     uint32_t s;
@@ -121,22 +140,15 @@ static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t t
         s = map->used++;
         map->counters.allocated++;
     } else {
-        uint32_t best_age = 0;
-        uint32_t k;
-        s = RSM_TMAP_NONE;
-        for (k = 0; k < (uint32_t)RSM_TMAP_TILES; ++k) {
-            const uint32_t age = (map->stamp - (map->tile[k].stamp & STAMP_MASK)) & STAMP_MASK;
-            if (age > best_age) {
-                best_age = age;
-                s = k;
-            }
-        }
+        s = oldest_slot(map);
         if (s == RSM_TMAP_NONE) {
             return RSM_TMAP_NONE;
         }
         hash_remove(map, s);
+        map->level_used[tile_level(&map->tile[s])]--;
         map->counters.evicted++;
     }
+    map->level_used[level]++;
     t = &map->tile[s];
     t->tx = (int16_t)tx;
     t->ty = (int16_t)ty;
@@ -212,12 +224,7 @@ uint8_t rsm_tmap_value(const rsm_tmap_t *map, uint32_t level, int32_t gx, int32_
 
 uint32_t rsm_tmap_tiles(const rsm_tmap_t *map, uint32_t level)
 {
-    uint32_t k;
-    uint32_t n = 0;
-    for (k = 0; k < map->used; ++k) {
-        n += tile_level(&map->tile[k]) == level ? 1u : 0u;
-    }
-    return n;
+    return level < (uint32_t)RSM_TMAP_LEVELS ? map->level_used[level] : 0u;
 }
 
 int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t *gy0, int32_t *gx1, int32_t *gy1)

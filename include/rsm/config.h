@@ -41,20 +41,29 @@
 
 /* ---- persistent map (tilemap.h) ---------------------------------------- */
 
-/* log2 of a map tile's side in cells: 3 -> 8 x 8 cells (0.8 m at the
- * default 10 cm). 4 bits per cell: 32 bytes a tile plus 8 of header. Small
+/* log2 of a map tile's side in cells: 3 -> 8 x 8 cells (0.4 m at the
+ * default 5 cm). 4 bits per cell: 32 bytes a tile plus 8 of header. Small
  * tiles waste less on space without walls (docs/map.md). */
 #ifndef RSM_TMAP_TILE_LOG2
 #define RSM_TMAP_TILE_LOG2 3
 #endif
 
+/* Default side of the finest cells, metres (the runtime default of
+ * rsm_tmap_config_t.cell_m): a smaller pool holds a building better with
+ * coarser cells (rsm/config_small.h). */
+#ifndef RSM_TMAP_CELL_M
+#define RSM_TMAP_CELL_M 0.05f
+#endif
+
 /* Resolutions the map keeps (cells of 1, 2, 4, ... times the finest). */
 #ifndef RSM_TMAP_LEVELS
-#define RSM_TMAP_LEVELS 3
+#define RSM_TMAP_LEVELS 4
 #endif
 
 /* Tiles in the pool, all levels together: 40 bytes each at 8 x 8 cells.
- * 2600 hold the whole Intel lab (1234 used) and the ACES building (2431). */
+ * When it is full the least recently written tile is reused: with 2600
+ * the 5 cm level follows the robot while the coarser ones keep most of a
+ * building (docs/map.md). */
 #ifndef RSM_TMAP_TILES
 #define RSM_TMAP_TILES 2600
 #endif

@@ -1,13 +1,16 @@
 /* A configuration for microcontrollers with 64 KiB of RAM to spare: select
  * it with -DRSM_USER_CONFIG=rsm/config_small.h (CMake option
- * RSM_USER_CONFIG). The persistent map holds 1200 tiles (about 1000 m^2 of
- * walls at 10 cm: the whole Intel lab, most of the ACES building; the least
- * recently written tiles are reused beyond that). About 58 KiB of localizer
- * state; tools/bench prints its accuracy beside the default's. */
+ * RSM_USER_CONFIG). The persistent map holds 1200 tiles at 10, 20 and 40 cm
+ * (about the whole Intel lab, most of the ACES building; the least recently
+ * written tiles are reused beyond that): with so few tiles, 5 cm cells would
+ * forget the building too soon. About 57 KiB of localizer state;
+ * tools/bench prints its accuracy beside the default's. */
 #ifndef RSM_CONFIG_SMALL_H
 #define RSM_CONFIG_SMALL_H
 #define RSM_TMAP_TILES 1200
 #define RSM_TMAP_HASH_LOG2 11
+#define RSM_TMAP_LEVELS 3
+#define RSM_TMAP_CELL_M 0.1f
 #define RSM_MAP_SIZE_LOG2 6
 #define RSM_MAX_KEYPOINTS 32
 #define RSM_MAX_CANDIDATES 384

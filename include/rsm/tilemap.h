@@ -48,7 +48,7 @@ typedef struct rsm_tile {
 } rsm_tile_t;
 
 typedef struct rsm_tmap_config {
-    float cell_m;          /* finest cell side, metres; default 0.1 */
+    float cell_m;          /* finest cell side, metres; default RSM_TMAP_CELL_M (0.05) */
     uint8_t levels;        /* resolutions in use, 1..RSM_TMAP_LEVELS; default RSM_TMAP_LEVELS */
     uint8_t hit_inc;       /* added by a return; default 4 */
     uint8_t miss_dec;      /* taken by a beam passing through; default 1 */
@@ -77,6 +77,7 @@ typedef struct rsm_tmap {
     float inv_cell[RSM_TMAP_LEVELS];   /* 1 / cell side of each level */
     uint32_t stamp;                    /* update counter (30 bits used) */
     uint16_t used;                     /* slots in use */
+    uint16_t level_used[RSM_TMAP_LEVELS];  /* of those, per level */
     uint16_t hash[RSM_TMAP_HASH];      /* slot of a key, linear probing; RSM_TMAP_NONE empty */
     rsm_tile_t tile[RSM_TMAP_TILES];
     rsm_tmap_counters_t counters;

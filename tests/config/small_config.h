@@ -12,6 +12,8 @@
 /* A pool that fills within seconds, so that eviction is exercised. */
 #define RSM_TMAP_TILES 48
 #define RSM_TMAP_HASH_LOG2 6
+#define RSM_TMAP_LEVELS 3
+#define RSM_TMAP_CELL_M 0.1f
 /* Odd and tiny: every frame reaches a driver in many pieces. */
 #define RSM_LINK_RX_CHUNK 7
 #endif

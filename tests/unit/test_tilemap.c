@@ -21,6 +21,7 @@ void setUp(void)
     memset(&map, 0xA5, sizeof map); /* init must not rely on zeroed storage */
     cfg = rsm_tmap_config_default();
     cfg.levels = 1u;
+    cfg.cell_m = 0.1f; /* the coordinates below are written for 10 cm cells */
 }
 
 void tearDown(void)
