@@ -627,10 +627,13 @@ static void print_summary(nav_t *nav)
     print_mount(nav);
     if (nav->cfg.method == RSM_METHOD_MAP) {
         const rsm_tmap_t *m = &nav->loc.state.persistent.map;
-        printf("  persistent map  %u writes, tiles %u/%u/%u per level, %u taken, %u evicted, %u returns dropped\n",
-               (unsigned)m->counters.updates, (unsigned)rsm_tmap_tiles(m, 0), (unsigned)rsm_tmap_tiles(m, 1),
-               (unsigned)rsm_tmap_tiles(m, 2), (unsigned)m->counters.allocated, (unsigned)m->counters.evicted,
-               (unsigned)m->counters.dropped);
+        uint32_t level;
+        printf("  persistent map  %u writes, tiles ", (unsigned)m->counters.updates);
+        for (level = 0; level < m->cfg.levels; ++level) {
+            printf("%s%u", level > 0u ? "/" : "", (unsigned)rsm_tmap_tiles(m, level));
+        }
+        printf(" per level, %u taken, %u evicted, %u returns dropped\n", (unsigned)m->counters.allocated,
+               (unsigned)m->counters.evicted, (unsigned)m->counters.dropped);
         printf("  recovery        %u searches, %u taken\n", (unsigned)c->searches, (unsigned)c->recovered);
     }
     printf("  timestamps      %llu clamped (went backwards)\n", (unsigned long long)nav->clamped);
