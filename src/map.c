@@ -126,15 +126,11 @@ static float occupancy(const rsm_map_t *map, int32_t gx, int32_t gy, float inv_s
 static float sample(const rsm_map_t *map, float x, float y, float inv_sat, uint8_t sat, float *gx_out, float *gy_out)
 {
     const float inv_a = 1.0f / map->cell_m;
-    /* Cell centres sit at integer coordinates of u, v. */
-    const float u = x * inv_a - 0.5f;
-    const float v = y * inv_a - 0.5f;
-    const float fu = floorf(u);
-    const float fv = floorf(v);
-    const int32_t i = (int32_t)fu;
-    const int32_t j = (int32_t)fv;
-    const float du = u - fu;
-    const float dv = v - fv;
+    const rsm_bilinear_t b = rsm_bilinear_at(x, y, inv_a);
+    const int32_t i = b.i;
+    const int32_t j = b.j;
+    const float du = b.du;
+    const float dv = b.dv;
     const float m00 = occupancy(map, i, j, inv_sat, sat);
     const float m10 = occupancy(map, i + 1, j, inv_sat, sat);
     const float m01 = occupancy(map, i, j + 1, inv_sat, sat);

@@ -5,6 +5,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "rsm/grid.h"
 #include "rsm/status.h"
 
 #define STAMP_MASK 0x3FFFFFFFu
@@ -364,14 +365,11 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                 /* Share the increment among the four cells around the point
                  * by bilinear weights, so that the interpolated occupancy
                  * peaks where the returns are, not at cell centres. */
-                const float u = points[k].x * inv_a - 0.5f;
-                const float v = points[k].y * inv_a - 0.5f;
-                const float fu = floorf(u);
-                const float fv = floorf(v);
-                const int32_t gx = (int32_t)fu;
-                const int32_t gy = (int32_t)fv;
-                const float du = u - fu;
-                const float dv = v - fv;
+                const rsm_bilinear_t b = rsm_bilinear_at(points[k].x, points[k].y, inv_a);
+                const int32_t gx = b.i;
+                const int32_t gy = b.j;
+                const float du = b.du;
+                const float dv = b.dv;
                 const float inc = (float)map->cfg.hit_inc;
                 if (!in_range(gx, gy) || !in_range(gx + 1, gy + 1)) {
                     map->counters.outside++;
@@ -434,15 +432,11 @@ float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, f
 float rsm_tmap_sample_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, float *dx, float *dy)
 {
     const float inv_a = map->inv_cell[c->level];
-    /* Cell centres sit at integer coordinates of u, v. */
-    const float u = x * inv_a - 0.5f;
-    const float v = y * inv_a - 0.5f;
-    const float fu = floorf(u);
-    const float fv = floorf(v);
-    const int32_t i = (int32_t)fu;
-    const int32_t j = (int32_t)fv;
-    const float du = u - fu;
-    const float dv = v - fv;
+    const rsm_bilinear_t b = rsm_bilinear_at(x, y, inv_a);
+    const int32_t i = b.i;
+    const int32_t j = b.j;
+    const float du = b.du;
+    const float dv = b.dv;
     float m00;
     float m10;
     float m01;

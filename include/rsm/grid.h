@@ -62,6 +62,19 @@ typedef struct rsm_image {
 /* Global cell of a coordinate: floor(v / a). */
 int32_t rsm_grid_cell_of(float v_m, float cell_m);
 
+/* Where world (x, y) sits among the cell centres of a grid with 1/a =
+ * inv_a: cell (i, j) holds the nearest centre at or below-left of it, and
+ * (du, dv) in [0, 1) are the fractions of the way to the next centres. What
+ * a bilinear read or a bilinear write of the four cells needs. */
+typedef struct rsm_bilinear {
+    int32_t i;
+    int32_t j;
+    float du;
+    float dv;
+} rsm_bilinear_t;
+
+rsm_bilinear_t rsm_bilinear_at(float x, float y, float inv_a);
+
 /* True if the global cell lies inside the window. */
 static inline int rsm_window_contains(const rsm_window_t *w, int32_t gx, int32_t gy)
 {
