@@ -26,6 +26,14 @@ rsm_bilinear_t rsm_bilinear_at(float x, float y, float inv_a)
     const float fu = floorf(u);
     const float fv = floorf(v);
     rsm_bilinear_t b;
+    if (!(fu > -1.0e9f && fu < 1.0e9f && fv > -1.0e9f && fv < 1.0e9f)) {
+        /* Beyond any grid (or NaN): a far cell, and no overflowing cast. */
+        b.i = 1 << 30;
+        b.j = 1 << 30;
+        b.du = 0.0f;
+        b.dv = 0.0f;
+        return b;
+    }
     b.i = (int32_t)fu;
     b.j = (int32_t)fv;
     b.du = u - fu;

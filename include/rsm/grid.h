@@ -65,7 +65,8 @@ int32_t rsm_grid_cell_of(float v_m, float cell_m);
 /* Where world (x, y) sits among the cell centres of a grid with 1/a =
  * inv_a: cell (i, j) holds the nearest centre at or below-left of it, and
  * (du, dv) in [0, 1) are the fractions of the way to the next centres. What
- * a bilinear read or a bilinear write of the four cells needs. */
+ * a bilinear read or a bilinear write of the four cells needs. Beyond
+ * 1e9 cells (or NaN): cell (2^30, 2^30), fractions 0. */
 typedef struct rsm_bilinear {
     int32_t i;
     int32_t j;

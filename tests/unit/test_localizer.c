@@ -739,6 +739,31 @@ void test_localizer_scan_should_stay_finite_after_a_one_metre_jump_with_map_on_r
     TEST_MESSAGE(msg);
 }
 
+void test_localizer_map_should_survive_poses_far_beyond_its_range(void)
+{
+    /* A start (or an odometry stream) far beyond what the map's cells can
+     * index: scans are matched against nothing and written nowhere, the
+     * estimate stays finite, and nothing overflows (the sanitizer build
+     * runs this too). */
+    const rsm_pose_t far_away = {3.0e9f, -2.0e9f, 0.3f};
+    rsm_localizer_report_t rep;
+    size_t k;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &far_away, p0_track));
+    for (k = 0; k < 5u; ++k) {
+        const rsm_motion_t u = {0.1f, 0.0f, 0.01f};
+        rsm_pose_t est;
+        if (k > 0u) {
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+        }
+        make_scan(&path[K0], NULL, (uint64_t)k * STEP_US);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+        est = rsm_localizer_pose(&loc);
+        TEST_ASSERT_TRUE(rsm_synth_pose_finite(&est));
+        TEST_ASSERT_TRUE(k == 0u ? rep.outcome == RSM_SCAN_FIRST : rep.outcome == RSM_SCAN_LOW_SUPPORT);
+    }
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.state.persistent.map.used);
+}
+
 void test_localizer_motion_should_refuse_non_finite_increments(void)
 {
     rsm_motion_t u;
@@ -1068,6 +1093,7 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_ignore_a_scan_older_than_the_last);
     RUN_TEST(test_localizer_scan_should_refuse_scans_after_a_one_metre_odometry_jump);
     RUN_TEST(test_localizer_scan_should_stay_finite_after_a_one_metre_jump_with_map_on_reject);
+    RUN_TEST(test_localizer_map_should_survive_poses_far_beyond_its_range);
     RUN_TEST(test_localizer_motion_should_refuse_non_finite_increments);
     RUN_TEST(test_localizer_scan_should_reject_invalid_arguments);
     RUN_TEST(test_localizer_scan_should_be_bit_identical_side_by_side);
