@@ -44,7 +44,7 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.mapmatch = rsm_mapmatch_config_default();
     c.map_update_m = 0.4f;
     c.map_update_rad = 0.5f;
-    c.recover_ratio = 0.6f;
+    c.recover_ratio = 0.4f;
     c.recover_m = 1.0f;
     c.clock_fn = NULL;
     c.clock_ctx = NULL;

@@ -93,7 +93,7 @@ typedef struct rsm_localizer_config {
     float map_update_rad;           /* ... or this much turning; default 0.5 */
     float recover_ratio;            /* a match whose mean occupancy under its points falls below
                                      * this share of the recent mean (odometry far off: a slip, a
-                                     * bump, a kidnap) triggers a search of +-recover_m; default 0.6 */
+                                     * bump, a kidnap) triggers a search of +-recover_m; default 0.4 */
     float recover_m;                /* 0 = never search; default 1.0 */
     uint8_t map_min_hits;           /* map cells with this many hits are occupied; default 1 */
     uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
