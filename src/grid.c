@@ -18,29 +18,6 @@ int32_t rsm_grid_cell_of(float v_m, float cell_m)
     return (int32_t)floorf(v_m / cell_m);
 }
 
-rsm_bilinear_t rsm_bilinear_at(float x, float y, float inv_a)
-{
-    /* Cell centres sit at integer coordinates of u, v. */
-    const float u = x * inv_a - 0.5f;
-    const float v = y * inv_a - 0.5f;
-    const float fu = floorf(u);
-    const float fv = floorf(v);
-    rsm_bilinear_t b;
-    if (!(fu > -1.0e9f && fu < 1.0e9f && fv > -1.0e9f && fv < 1.0e9f)) {
-        /* Beyond any grid (or NaN): a far cell, and no overflowing cast. */
-        b.i = 1 << 30;
-        b.j = 1 << 30;
-        b.du = 0.0f;
-        b.dv = 0.0f;
-        return b;
-    }
-    b.i = (int32_t)fu;
-    b.j = (int32_t)fv;
-    b.du = u - fu;
-    b.dv = v - fv;
-    return b;
-}
-
 void rsm_image_clear(rsm_image_t *img)
 {
     size_t k;

@@ -9,6 +9,7 @@
 #ifndef RSM_GRID_H
 #define RSM_GRID_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -74,7 +75,29 @@ typedef struct rsm_bilinear {
     float dv;
 } rsm_bilinear_t;
 
-rsm_bilinear_t rsm_bilinear_at(float x, float y, float inv_a);
+static inline rsm_bilinear_t rsm_bilinear_at(float x, float y, float inv_a)
+{
+    /* Cell centres sit at integer coordinates of u, v. Inline: the map's
+     * reads call it for every point of every descent step. */
+    const float u = x * inv_a - 0.5f;
+    const float v = y * inv_a - 0.5f;
+    const float fu = floorf(u);
+    const float fv = floorf(v);
+    rsm_bilinear_t b;
+    if (!(fu > -1.0e9f && fu < 1.0e9f && fv > -1.0e9f && fv < 1.0e9f)) {
+        /* Beyond any grid (or NaN): a far cell, and no overflowing cast. */
+        b.i = 1 << 30;
+        b.j = 1 << 30;
+        b.du = 0.0f;
+        b.dv = 0.0f;
+        return b;
+    }
+    b.i = (int32_t)fu;
+    b.j = (int32_t)fv;
+    b.du = u - fu;
+    b.dv = v - fv;
+    return b;
+}
 
 /* True if the global cell lies inside the window. */
 static inline int rsm_window_contains(const rsm_window_t *w, int32_t gx, int32_t gy)
