@@ -15,12 +15,8 @@
 #include "rsm/lms.h"
 #include "rsm/status.h"
 
-#define CHECK(cond)            \
-    do {                       \
-        if (!(cond)) {         \
-            __builtin_trap();  \
-        }                      \
-    } while (0)
+#include "fuzz_check.h"
+
 
 typedef struct run_state {
     rsm_lms_parser_t parser;

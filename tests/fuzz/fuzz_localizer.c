@@ -21,12 +21,8 @@
 #include "rsm/localizer.h"
 #include "rsm/status.h"
 
-#define CHECK(cond)            \
-    do {                       \
-        if (!(cond)) {         \
-            __builtin_trap();  \
-        }                      \
-    } while (0)
+#include "fuzz_check.h"
+
 
 typedef struct reader {
     const uint8_t *p;
