@@ -46,6 +46,10 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.map_update_rad = 0.5f;
     c.recover_ratio = 0.4f;
     c.recover_m = 1.0f;
+    c.isolation.tol_m = 0.0f;
+    c.isolation.slope = 3.0f;
+    c.isolation.window = 2u;
+    c.isolation.agree = 1u;
     c.clock_fn = NULL;
     c.clock_ctx = NULL;
     return c;
@@ -598,6 +602,7 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t d = rsm_pose_between(&loc->state.persistent.written, est);
+    uint8_t isolated[(RSM_MAX_BEAMS + 7) / 8];
     rsm_point_t origin;
     if (!first && sqrtf(d.x * d.x + d.y * d.y) < cfg->map_update_m && fabsf(d.theta) < cfg->map_update_rad) {
         return;
@@ -606,6 +611,22 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
     origin.x = cfg->laser_mount.x;
     origin.y = cfg->laser_mount.y;
     origin = rsm_pose_apply(est, &origin);
+    /* Returns no neighbour confirms stay out of the map (they still count
+     * in matching, where a map that holds only confirmed walls outvotes
+     * them): a map keeps what it is given for minutes, and phantom returns
+     * would take its memory and blur its walls. */
+    if (rsm_points_isolated(loc->world, npts, &origin, &cfg->isolation, isolated) > 0u) {
+        size_t k;
+        size_t kept = 0;
+        for (k = 0; k < npts; ++k) {
+            if ((isolated[k >> 3] >> (k & 7u)) & 1u) {
+                loc->counters.unconfirmed++;
+            } else {
+                loc->world[kept++] = loc->world[k];
+            }
+        }
+        npts = kept;
+    }
     if (rsm_tmap_update(&loc->state.persistent.map, &origin, loc->world, npts) == RSM_OK) {
         loc->state.persistent.written = *est;
     }

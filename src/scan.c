@@ -1,6 +1,7 @@
 #include "rsm/scan.h"
 
 #include <math.h>
+#include <string.h>
 
 #include "rsm/status.h"
 
@@ -75,4 +76,48 @@ int rsm_scan_to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm
         }
     }
     return (int)n;
+}
+
+/* Whether q continues p's surface (see rsm_points_isolated). */
+static int same_surface(const rsm_point_t *o, const rsm_point_t *p, const rsm_point_t *q, float rp,
+                        const rsm_isolation_t *iso)
+{
+    const float dx = q->x - p->x;
+    const float dy = q->y - p->y;
+    const float gap = fabsf((p->x - o->x) * (q->y - o->y) - (p->y - o->y) * (q->x - o->x)) / rp;
+    const float lim = iso->tol_m + iso->slope * gap;
+    return dx * dx + dy * dy <= lim * lim;
+}
+
+size_t rsm_points_isolated(const rsm_point_t *pts, size_t n, const rsm_point_t *origin, const rsm_isolation_t *iso,
+                           uint8_t *mask)
+{
+    static const rsm_point_t zero = {0.0f, 0.0f};
+    const rsm_point_t *o = origin != NULL ? origin : &zero;
+    size_t marked = 0;
+    size_t i;
+    size_t w;
+    if (pts == NULL || iso == NULL || mask == NULL) {
+        return 0u;
+    }
+    memset(mask, 0, (n + 7u) / 8u);
+    if (!(iso->tol_m > 0.0f) || iso->window == 0u) {
+        return 0u;
+    }
+    w = iso->window < RSM_ISOLATION_MAX_WINDOW ? iso->window : RSM_ISOLATION_MAX_WINDOW;
+    for (i = 0; i < n; ++i) {
+        const rsm_point_t *p = &pts[i];
+        const float rp = sqrtf((p->x - o->x) * (p->x - o->x) + (p->y - o->y) * (p->y - o->y));
+        uint32_t agree = 0;
+        size_t k;
+        for (k = 1; k <= w && agree < iso->agree && rp > 0.0f; ++k) {
+            agree += (k <= i && same_surface(o, p, &pts[i - k], rp, iso)) ? 1u : 0u;
+            agree += (i + k < n && same_surface(o, p, &pts[i + k], rp, iso)) ? 1u : 0u;
+        }
+        if (agree < iso->agree) {
+            mask[i >> 3] = (uint8_t)(mask[i >> 3] | (1u << (i & 7u)));
+            ++marked;
+        }
+    }
+    return marked;
 }

@@ -24,6 +24,9 @@ rsm_tmap_config_t rsm_tmap_config_default(void)
     c.saturation = 8u;
     c.clear_margin = 1u;
     c.splat_from = 1u;
+    c.age_shift = 2u;
+    c.wall_level = 1u;
+    c.wall_value = 0u;
     return c;
 }
 
@@ -111,10 +114,11 @@ static void hash_remove(rsm_tmap_t *map, uint32_t s)
     map->hash[i] = (uint16_t)RSM_TMAP_NONE;
 }
 
-/* Slot for a tile that is not held: a free one, else the least recently
- * written one not written by this update. RSM_TMAP_NONE if none. */
-/* The least recently written slot not written by the update in progress;
- * RSM_TMAP_NONE if there is none. */
+/* The slot to reuse: the one written longest ago, where a tile's age counts
+ * 4^-level (a coarse tile holds 4^level times the area of a fine one for the
+ * same bytes, so the building's outline outlives the fine detail around
+ * it). Never a slot written by the update in progress; RSM_TMAP_NONE if every
+ * slot was. */
 static uint32_t oldest_slot(const rsm_tmap_t *map)
 {
     uint32_t best_age = 0;
@@ -122,8 +126,9 @@ static uint32_t oldest_slot(const rsm_tmap_t *map)
     uint32_t k;
     for (k = 0; k < map->used; ++k) {
         const uint32_t age = (map->stamp - (map->tile[k].stamp & STAMP_MASK)) & STAMP_MASK;
-        if (age > best_age) {
-            best_age = age;
+        const uint32_t scaled = age >> (map->cfg.age_shift * tile_level(&map->tile[k]));
+        if (age > 0u && (s == RSM_TMAP_NONE || scaled > best_age)) {
+            best_age = scaled;
             s = k;
         }
     }
@@ -161,6 +166,38 @@ static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t t
     }
     map->hash[h] = (uint16_t)s;
     return s;
+}
+
+/* Gives back the slot of a tile that holds nothing any more (every cell 0,
+ * which reads the same as no tile): the last slot in use moves into it, so
+ * slots stay dense. */
+static void free_slot(rsm_tmap_t *map, uint32_t s)
+{
+    const uint32_t last = (uint32_t)map->used - 1u;
+    hash_remove(map, s);
+    map->level_used[tile_level(&map->tile[s])]--;
+    if (s != last) {
+        const rsm_tile_t *t = &map->tile[last];
+        uint32_t h = hash_key(tile_level(t), t->tx, t->ty);
+        while (map->hash[h] != last) {
+            h = (h + 1u) & (RSM_TMAP_HASH - 1u);
+        }
+        map->hash[h] = (uint16_t)s;
+        map->tile[s] = *t;
+    }
+    map->used--;
+    map->counters.freed++;
+}
+
+static int tile_empty(const rsm_tile_t *t)
+{
+    uint32_t k;
+    for (k = 0; k < (uint32_t)RSM_TMAP_TILE_BYTES; ++k) {
+        if (t->cell[k] != 0u) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 typedef rsm_tmap_cursor_t cursor_t;
@@ -266,8 +303,9 @@ static int32_t cell_of(float v, float inv_a)
 }
 
 /* Lowers the cells from (x0, y0) towards (x1, y1), stopping margin + 1
- * cells short of the end (Bresenham). */
-static void clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t dec,
+ * cells short of the end (Bresenham). Returns the highest value the beam
+ * met (before lowering it). */
+static uint32_t clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t dec,
                        uint32_t margin)
 {
     const int32_t dx = x1 > x0 ? x1 - x0 : x0 - x1;
@@ -277,6 +315,7 @@ static void clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0, int
     const int32_t steps = dx > dy ? dx : dy;
     int32_t err = dx - dy;
     int32_t k;
+    uint32_t top = 0;
     for (k = 0; k < steps - (int32_t)margin; ++k) {
         const uint32_t s = cursor_slot(map, c, x0, y0);
         int32_t e2;
@@ -284,8 +323,15 @@ static void clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0, int
             rsm_tile_t *t = &map->tile[s];
             const uint32_t i = cell_index(x0, y0);
             const uint32_t v = get_cell(t, i);
-            if (v != 0u) {
-                set_cell(t, i, v > dec ? v - dec : 0u);
+            top = v > top ? v : top;
+            if (v > dec) {
+                set_cell(t, i, v - dec);
+            } else if (v != 0u) {
+                set_cell(t, i, 0u);
+                if (tile_empty(t)) {
+                    free_slot(map, s);
+                    c->valid = 0;
+                }
             }
         }
         /* One step along the major axis, and along the minor when due. */
@@ -299,6 +345,14 @@ static void clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0, int
             y0 += sy;
         }
     }
+    return top;
+}
+
+/* Value of a cell through a cursor; 0 where no tile is held. */
+static uint32_t cell_value(const rsm_tmap_t *map, cursor_t *c, int32_t gx, int32_t gy)
+{
+    const uint32_t s = cursor_slot(map, c, gx, gy);
+    return s == RSM_TMAP_NONE ? 0u : get_cell(&map->tile[s], cell_index(gx, gy));
 }
 
 /* Adds inc to a cell, taking a tile for it if needed. */
@@ -329,13 +383,22 @@ static void add_hit(rsm_tmap_t *map, cursor_t *c, uint32_t level, int32_t gx, in
 
 int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n)
 {
-    uint32_t level;
+    /* Returns whose beam crossed a cell the finest level holds as a wall
+     * (saturated): behind a wall the laser cannot see, so the return is a
+     * phantom (noise, a reflection) or the wall has gone; either way it is
+     * not written until the beams have worn the wall down. */
+    uint8_t behind[(RSM_MAX_BEAMS + 7) / 8];
+    uint32_t idx;
+    memset(behind, 0, sizeof behind);
     if (map == NULL || origin == NULL || (n > 0u && points == NULL) || !isfinite(origin->x) || !isfinite(origin->y)) {
         return RSM_ERR_INVAL;
     }
     map->stamp = (map->stamp + 1u) & STAMP_MASK;
     map->counters.updates++;
-    for (level = 0; level < map->cfg.levels; ++level) {
+    for (idx = 0; idx < map->cfg.levels; ++idx) {
+        /* The level that judges walls first, so that every level knows. */
+        const uint32_t judge = map->cfg.wall_level < map->cfg.levels ? map->cfg.wall_level : 0u;
+        const uint32_t level = idx == 0u ? judge : (idx <= judge ? idx - 1u : idx);
         const float inv_a = map->inv_cell[level];
         const int32_t ox = cell_of(origin->x, inv_a);
         const int32_t oy = cell_of(origin->y, inv_a);
@@ -355,15 +418,27 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                 gx = cell_of(points[k].x, inv_a);
                 gy = cell_of(points[k].y, inv_a);
                 if (in_range(gx, gy)) {
-                    clear_beam(map, &c, ox, oy, gx, gy, map->cfg.miss_dec, map->cfg.clear_margin);
+                    const uint32_t top = clear_beam(map, &c, ox, oy, gx, gy, map->cfg.miss_dec, map->cfg.clear_margin);
+                    if (map->cfg.wall_value > 0u && idx == 0u && top >= map->cfg.wall_value &&
+                        k < (size_t)RSM_MAX_BEAMS && cell_value(map, &c, gx, gy) < map->cfg.wall_value) {
+                        behind[k >> 3] = (uint8_t)(behind[k >> 3] | (1u << (k & 7u)));
+                    }
                 }
             }
         }
         cursor_start(&c, level);
         for (k = 0; k < n; ++k) {
+            uint32_t inc;
             if (!(fabsf(points[k].x) < 1.0e6f && fabsf(points[k].y) < 1.0e6f)) {
                 continue;
             }
+            if (k < (size_t)RSM_MAX_BEAMS && (behind[k >> 3] >> (k & 7u)) & 1u) {
+                if (idx == 0u) {
+                    map->counters.behind++;
+                }
+                continue;
+            }
+            inc = map->cfg.hit_inc;
             if (level >= map->cfg.splat_from) {
                 /* Share the increment among the four cells around the point
                  * by bilinear weights, so that the interpolated occupancy
@@ -373,15 +448,15 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                 const int32_t gy = b.j;
                 const float du = b.du;
                 const float dv = b.dv;
-                const float inc = (float)map->cfg.hit_inc;
+                const float f = (float)inc;
                 if (!in_range(gx, gy) || !in_range(gx + 1, gy + 1)) {
                     map->counters.outside++;
                     continue;
                 }
-                add_hit(map, &c, level, gx, gy, (uint32_t)(inc * (1.0f - du) * (1.0f - dv) + 0.5f));
-                add_hit(map, &c, level, gx + 1, gy, (uint32_t)(inc * du * (1.0f - dv) + 0.5f));
-                add_hit(map, &c, level, gx, gy + 1, (uint32_t)(inc * (1.0f - du) * dv + 0.5f));
-                add_hit(map, &c, level, gx + 1, gy + 1, (uint32_t)(inc * du * dv + 0.5f));
+                add_hit(map, &c, level, gx, gy, (uint32_t)(f * (1.0f - du) * (1.0f - dv) + 0.5f));
+                add_hit(map, &c, level, gx + 1, gy, (uint32_t)(f * du * (1.0f - dv) + 0.5f));
+                add_hit(map, &c, level, gx, gy + 1, (uint32_t)(f * (1.0f - du) * dv + 0.5f));
+                add_hit(map, &c, level, gx + 1, gy + 1, (uint32_t)(f * du * dv + 0.5f));
             } else {
                 const int32_t gx = cell_of(points[k].x, inv_a);
                 const int32_t gy = cell_of(points[k].y, inv_a);
@@ -389,7 +464,7 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                     map->counters.outside++;
                     continue;
                 }
-                add_hit(map, &c, level, gx, gy, map->cfg.hit_inc);
+                add_hit(map, &c, level, gx, gy, inc);
             }
         }
     }

@@ -79,6 +79,10 @@ typedef enum rsm_noise_model {
 typedef struct rsm_localizer_config {
     rsm_method_t method;
     rsm_scan_limits_t limits;       /* usable range interval */
+    rsm_isolation_t isolation;      /* returns no neighbour confirms are not written into the
+                                     * persistent map (RSM_METHOD_MAP); tol_m 0 = off. Default
+                                     * off (slope 3, window 2, agree 1; 0.1 m turns it on): see
+                                     * docs/map.md for what it costs on clean logs */
     rsm_grid_config_t grid;         /* cell size and marking rule */
     rsm_harris_config_t harris;
     rsm_ransac_config_t ransac;
@@ -154,6 +158,8 @@ typedef struct rsm_localizer_counters {
     uint32_t bad_motions;                    /* non-finite increments refused */
     uint32_t searches;                       /* recovery searches run (RSM_METHOD_MAP) */
     uint32_t recovered;                      /* ... whose pose was taken */
+    uint32_t unconfirmed;                    /* returns kept out of the persistent map: no
+                                              * neighbour confirmed them (isolation) */
 } rsm_localizer_counters_t;
 
 typedef struct rsm_localizer {

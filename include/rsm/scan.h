@@ -53,6 +53,28 @@ int rsm_scan_reading_ok(const rsm_scan_t *scan, size_t i, const rsm_scan_limits_
 int rsm_scan_to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_point_t *out,
                        size_t cap, rsm_scan_drops_t *drops);
 
+/* Parameters of rsm_points_isolated. */
+#define RSM_ISOLATION_MAX_WINDOW 4u
+
+typedef struct rsm_isolation {
+    float tol_m;      /* 0 = keep every point */
+    float slope;      /* 1 / cos of the steepest incidence kept (3 ~ 70 deg) */
+    uint8_t window;   /* neighbours looked at on each side, 1..RSM_ISOLATION_MAX_WINDOW */
+    uint8_t agree;    /* neighbours that must continue the surface, 1..2 * window */
+} rsm_isolation_t;
+
+/* Marks the points (in beam order, as rsm_scan_to_points gives them, seen
+ * from origin: the laser's position, NULL for (0, 0)) that lie on no
+ * surface with enough of their `window` neighbours on either side: a
+ * neighbour q continues p's surface if |p - q| <= tol_m + slope * (the gap
+ * between their beams at q's range). A return that its neighbours do not
+ * confirm - a speck of dust, a mixed pixel at an edge, a reflection, random
+ * noise - is more often wrong than a confirmed one; far away, where beams
+ * are sparse and walls grazed, it is also often right. Sets bit k of mask
+ * (n bits, all written) for each marked point and returns how many. */
+size_t rsm_points_isolated(const rsm_point_t *pts, size_t n, const rsm_point_t *origin, const rsm_isolation_t *iso,
+                           uint8_t *mask);
+
 #ifdef __cplusplus
 }
 #endif

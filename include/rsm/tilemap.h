@@ -59,6 +59,14 @@ typedef struct rsm_tmap_config {
                             * wall reads where it is, not at a cell centre up to half a
                             * (coarse) cell away; finer levels give it all to the return's
                             * cell, which keeps walls one cell thick. Default 1 */
+    uint8_t age_shift;     /* when the pool is full, a tile's age counts 2^-(age_shift * level):
+                            * 2 keeps a coarse tile as long as the fine ones covering the same
+                            * area. Default 2 */
+    uint8_t wall_level;    /* level that judges whether a beam crossed a wall; default 1 */
+    uint8_t wall_value;    /* a cell at or above this on wall_level is a wall: a return whose
+                            * beam crossed one, and that does not itself land on a wall, is
+                            * not written; 0 = off. Default 0 (off; 8 is the value measured
+                            * in docs/map.md) */
 } rsm_tmap_config_t;
 
 rsm_tmap_config_t rsm_tmap_config_default(void);
@@ -67,6 +75,8 @@ typedef struct rsm_tmap_counters {
     uint32_t updates;       /* scans written */
     uint32_t allocated;     /* tiles taken from free slots */
     uint32_t evicted;       /* tiles whose slot was reused for another */
+    uint32_t freed;         /* tiles given back when beams had cleared every cell */
+    uint32_t behind;        /* returns not written: their beam crossed a wall */
     uint32_t dropped;       /* returns lost because every slot was in use by the update */
     uint32_t outside;       /* returns beyond the tile coordinate range */
 } rsm_tmap_counters_t;

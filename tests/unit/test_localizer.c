@@ -456,6 +456,17 @@ void test_localizer_scan_should_track_with_43_percent_outliers(void)
     check_outliers(RSM_METHOD_MAP, 0.43f);
 }
 
+void test_localizer_scan_should_keep_unconfirmed_and_hidden_returns_out_of_the_map(void)
+{
+    /* With the isolation test and the wall rule on, the same run keeps
+     * outliers out of the map (counted) and tracks as well. */
+    cfg.isolation.tol_m = 0.1f;
+    cfg.tmap.wall_value = 8u;
+    check_outliers(RSM_METHOD_MAP, 0.43f);
+    TEST_ASSERT_GREATER_THAN_UINT32(0u, loc.counters.unconfirmed);
+    TEST_ASSERT_GREATER_THAN_UINT32(0u, loc.state.persistent.map.counters.behind);
+}
+
 void test_localizer_scan_should_track_with_30_percent_outliers_with_the_papers_method(void)
 {
     check_outliers(RSM_METHOD_PAPER, 0.3f);
@@ -1086,6 +1097,7 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_run_the_icp_baseline);
     RUN_TEST(test_localizer_scan_should_track_with_30_percent_outliers);
     RUN_TEST(test_localizer_scan_should_track_with_43_percent_outliers);
+    RUN_TEST(test_localizer_scan_should_keep_unconfirmed_and_hidden_returns_out_of_the_map);
     RUN_TEST(test_localizer_scan_should_track_with_30_percent_outliers_with_the_papers_method);
     RUN_TEST(test_localizer_map_should_forget_a_person_who_walked_by);
     RUN_TEST(test_localizer_should_place_scans_with_the_lasers_mount);

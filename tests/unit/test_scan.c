@@ -195,6 +195,124 @@ void test_scan_to_points_should_reject_bad_arguments(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_scan_to_points(&scan, &lim, pts, 2, NULL));
 }
 
+/* A wall 2 m ahead of (ox, oy) seen by 1-degree beams, in beam order. */
+static void wall_points(rsm_point_t *p, size_t n, float ox, float oy)
+{
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        const float a = ((float)k - (float)(n / 2u)) * 0.0174533f;
+        p[k].x = ox + 2.0f;
+        p[k].y = oy + 2.0f * tanf(a);
+    }
+}
+
+static rsm_isolation_t isolation(void)
+{
+    rsm_isolation_t iso;
+    iso.tol_m = 0.1f;
+    iso.slope = 3.0f;
+    iso.window = 2u;
+    iso.agree = 1u;
+    return iso;
+}
+
+static int marked(const uint8_t *mask, size_t k)
+{
+    return (mask[k >> 3] >> (k & 7u)) & 1;
+}
+
+void test_points_isolated_should_mark_a_phantom_and_not_the_wall(void)
+{
+    rsm_point_t p[21];
+    uint8_t mask[3];
+    const rsm_isolation_t iso = isolation();
+    const rsm_point_t o = {0.0f, 0.0f};
+    size_t k;
+    wall_points(p, 21u, 0.0f, 0.0f);
+    /* Beam 10 sees something 1.2 m short of the wall. */
+    p[10].x = 0.8f;
+    memset(mask, 0xFF, sizeof mask); /* every bit of the n is written */
+    TEST_ASSERT_EQUAL_size_t(1u, rsm_points_isolated(p, 21u, &o, &iso, mask));
+    for (k = 0; k < 21u; ++k) {
+        TEST_ASSERT_EQUAL_INT(k == 10u, marked(mask, k));
+    }
+}
+
+void test_points_isolated_should_judge_from_the_given_origin(void)
+{
+    /* The same scene seen from (5, -3): the same single phantom. */
+    rsm_point_t p[21];
+    uint8_t mask[3];
+    const rsm_isolation_t iso = isolation();
+    const rsm_point_t o = {5.0f, -3.0f};
+    wall_points(p, 21u, o.x, o.y);
+    p[3].x = o.x + 1.1f;
+    TEST_ASSERT_EQUAL_size_t(1u, rsm_points_isolated(p, 21u, &o, &iso, mask));
+    TEST_ASSERT_TRUE(marked(mask, 3u));
+}
+
+void test_points_isolated_should_let_a_pair_confirm_itself_and_honour_agree(void)
+{
+    /* Two neighbouring returns on a small object confirm each other; with
+     * agree = 2 each has only one neighbour on its surface and both are
+     * marked, while every wall return, the ends included, has two. */
+    rsm_point_t p[21];
+    uint8_t mask[3];
+    rsm_isolation_t iso = isolation();
+    wall_points(p, 21u, 0.0f, 0.0f);
+    p[10].x = 1.0f;
+    p[11].x = 1.0f;
+    p[11].y = p[10].y + 0.0175f;
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_isolated(p, 21u, NULL, &iso, mask));
+    iso.agree = 2u;
+    TEST_ASSERT_EQUAL_size_t(2u, rsm_points_isolated(p, 21u, NULL, &iso, mask));
+    TEST_ASSERT_TRUE(marked(mask, 10u) && marked(mask, 11u));
+}
+
+void test_points_isolated_should_accept_steep_walls_up_to_the_slope(void)
+{
+    /* A wall at 25 degrees to the beams (65 degrees incidence): consecutive
+     * returns lie 1.9 to 2.6 beam gaps apart, inside slope 3, outside 1.5. */
+    rsm_point_t p[9];
+    uint8_t mask[2];
+    rsm_isolation_t iso = isolation();
+    size_t k;
+    iso.tol_m = 0.01f;
+    iso.window = 1u;
+    for (k = 0; k < 9u; ++k) {
+        /* Wall through (3, 0) along direction 25 degrees. */
+        const float a = ((float)k - 4.0f) * 0.0174533f;
+        const float t = 3.0f * sinf(a) / sinf(0.436332f - a);
+        p[k].x = 3.0f + t * cosf(0.436332f);
+        p[k].y = t * sinf(0.436332f);
+    }
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_isolated(p, 9u, NULL, &iso, mask));
+    iso.slope = 1.5f;
+    TEST_ASSERT_EQUAL_size_t(9u, rsm_points_isolated(p, 9u, NULL, &iso, mask));
+}
+
+void test_points_isolated_should_mark_nothing_when_off(void)
+{
+    rsm_point_t p[5];
+    uint8_t mask[1];
+    rsm_isolation_t iso = isolation();
+    wall_points(p, 5u, 0.0f, 0.0f);
+    p[2].x = 0.5f;
+    iso.tol_m = 0.0f;
+    mask[0] = 0xFF;
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_isolated(p, 5u, NULL, &iso, mask));
+    TEST_ASSERT_EQUAL_HEX8(0u, mask[0]);
+    iso.tol_m = 0.1f;
+    iso.window = 0u;
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_isolated(p, 5u, NULL, &iso, mask));
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_isolated(NULL, 5u, NULL, &iso, mask));
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_isolated(p, 5u, NULL, NULL, mask));
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_isolated(p, 5u, NULL, &iso, NULL));
+    /* A single point has no neighbour at all. */
+    iso.window = 2u;
+    TEST_ASSERT_EQUAL_size_t(1u, rsm_points_isolated(p, 1u, NULL, &iso, mask));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -207,5 +325,10 @@ int main(void)
     RUN_TEST(test_scan_to_points_should_stop_at_cap);
     RUN_TEST(test_scan_to_points_should_handle_a_full_scan);
     RUN_TEST(test_scan_to_points_should_reject_bad_arguments);
+    RUN_TEST(test_points_isolated_should_mark_a_phantom_and_not_the_wall);
+    RUN_TEST(test_points_isolated_should_judge_from_the_given_origin);
+    RUN_TEST(test_points_isolated_should_let_a_pair_confirm_itself_and_honour_agree);
+    RUN_TEST(test_points_isolated_should_accept_steep_walls_up_to_the_slope);
+    RUN_TEST(test_points_isolated_should_mark_nothing_when_off);
     return UNITY_END();
 }

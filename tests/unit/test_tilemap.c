@@ -94,9 +94,10 @@ void test_tmap_update_should_clear_along_the_beam_but_not_near_the_return(void)
 {
     int32_t gx;
     int i;
-    init();
     /* A wall of returns along x = 2.05 from the origin: then move it to x = 3.05
-     * so that beams pass through the old one. */
+     * so that beams pass through the old one (the wall rule is off by
+     * default: see test_tmap_update_should_not_write_returns_behind_a_wall). */
+    init();
     for (i = 0; i < 2; ++i) {
         update_one(0.05f, 0.05f, 2.05f, 0.05f);
     }
@@ -287,6 +288,7 @@ void test_tmap_update_should_drop_returns_when_every_tile_is_written_by_it(void)
     const float tile_m = cfg.cell_m * (float)RSM_TMAP_TILE_SIDE;
     const rsm_point_t o = {0.0f, 0.0f};
     size_t k;
+    cfg.miss_dec = 0u; /* the beams near the origin would clear and free tiles */
     init();
     for (k = 0; k < (size_t)RSM_TMAP_TILES + 5u; ++k) {
         p[k].x = ((float)(k % 64u) + 0.5f) * tile_m;
@@ -301,6 +303,136 @@ void test_tmap_update_should_drop_returns_when_every_tile_is_written_by_it(void)
     TEST_ASSERT_EQUAL_UINT32(5u, map.counters.evicted);
     TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(p[RSM_TMAP_TILES + 4].x),
                                                         cell(p[RSM_TMAP_TILES + 4].y)));
+}
+
+void test_tmap_update_should_free_a_tile_that_beams_have_cleared(void)
+{
+    const uint32_t b_cell_y = (uint32_t)cell(2.05f);
+    int i;
+    init();
+    /* Three tiles: A holds one return, B and C one each elsewhere. */
+    update_one(0.05f, 0.05f, 0.55f, 0.05f);
+    update_one(0.05f, 0.05f, 0.05f, 2.05f);
+    update_one(0.05f, 0.05f, 0.05f, -2.05f);
+    TEST_ASSERT_EQUAL_UINT32(3u, map.used);
+    /* Beams through A's return to D beyond it wear it down to 0: A then
+     * holds nothing and its slot goes back (D, the last slot, moves in). */
+    for (i = 0; i < (int)cfg.hit_inc; ++i) {
+        update_one(0.05f, 0.05f, 1.25f, 0.05f);
+    }
+    TEST_ASSERT_EQUAL_UINT32(1u, map.counters.freed);
+    TEST_ASSERT_EQUAL_UINT32(3u, map.used);
+    TEST_ASSERT_EQUAL_UINT32(3u, rsm_tmap_tiles(&map, 0u));
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell(0.55f), 0));
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, 0, (int32_t)b_cell_y));
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, 0, cell(-2.05f)));
+    TEST_ASSERT_EQUAL_UINT8(RSM_TMAP_MAX_VALUE, rsm_tmap_value(&map, 0u, cell(1.25f), 0));
+    /* The freed tile can be taken again. */
+    update_one(0.05f, 0.05f, 0.05f, 0.55f);
+    TEST_ASSERT_EQUAL_UINT32(4u, map.used);
+    TEST_ASSERT_EQUAL_UINT32(5u, map.counters.allocated);
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, 0, cell(0.55f)));
+}
+
+/* Two returns on a wall 1 m ahead, then one 2 m ahead behind it. */
+static void wall_and_beyond(void)
+{
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 2.05f, 0.05f);
+}
+
+void test_tmap_update_should_not_write_returns_behind_a_wall(void)
+{
+    TEST_ASSERT_EQUAL_UINT8(0u, cfg.wall_value); /* off by default */
+    cfg.wall_value = 8u;
+    init();
+    /* Two returns make a wall (the cell reaches wall_value)... */
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT8(cfg.wall_value, rsm_tmap_value(&map, 0u, cell(1.05f), 0));
+    /* ...that a return beyond it cannot have come through: not written, but
+     * its beam still wears the wall. */
+    update_one(0.05f, 0.05f, 2.05f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT32(1u, map.counters.behind);
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell(2.05f), 0));
+    TEST_ASSERT_EQUAL_UINT8(cfg.wall_value - cfg.miss_dec, rsm_tmap_value(&map, 0u, cell(1.05f), 0));
+    /* Worn below wall_value (a door opened), the wall lets returns in. */
+    update_one(0.05f, 0.05f, 2.05f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT32(1u, map.counters.behind);
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(2.05f), 0));
+    /* A return on the wall itself (a beam grazing it first) is written. */
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 0.85f, 0.05f);
+    update_one(0.05f, 0.05f, 0.85f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT8(2u * cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(0.85f), 0));
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT32(1u, map.counters.behind);
+    /* Off: written at once. */
+    cfg.wall_value = 0u;
+    init();
+    wall_and_beyond();
+    TEST_ASSERT_EQUAL_UINT32(0u, map.counters.behind);
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(2.05f), 0));
+}
+
+void test_tmap_update_should_judge_walls_on_wall_level_for_every_level(void)
+{
+    /* Two levels, walls judged on the coarse one (no sharing of returns,
+     * so that values are exact): its verdict keeps the return out of the
+     * fine level too. */
+    cfg.levels = 2u;
+    cfg.splat_from = 2u;
+    cfg.wall_level = 1u;
+    cfg.wall_value = 8u;
+    init();
+    wall_and_beyond();
+    TEST_ASSERT_EQUAL_UINT32(1u, map.counters.behind);
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell(2.05f), 0));
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 1u, cell(2.05f) / 2, 0));
+}
+
+/* One return at (x, y) on every level. */
+static void hit_at(float x, float y)
+{
+    update_one(x, y + 0.5f, x, y);
+}
+
+void test_tmap_pool_should_keep_coarse_tiles_longer_with_age_shift(void)
+{
+    /* Region A is seen twice early (fine tiles a, a' and coarse tile A),
+     * then never again; every later update sees a new region (one fine and
+     * one coarse tile each) until the pool is full, and three more. With
+     * age_shift 0 the oldest go whatever their level, A among them; with 2
+     * a coarse tile's age counts a quarter, and younger fine tiles go
+     * before A. */
+    uint8_t shift;
+    for (shift = 0u; shift <= 2u; shift = (uint8_t)(shift + 2u)) {
+        const float ax = -1.55f;
+        const int32_t a_coarse = (int32_t)floorf(ax / (2.0f * cfg.cell_m));
+        uint32_t k = 0;
+        uint32_t extra = 0;
+        cfg.levels = 2u;
+        cfg.splat_from = 2u;
+        cfg.miss_dec = 0u;
+        cfg.age_shift = shift;
+        init();
+        hit_at(ax, 0.05f);
+        hit_at(-0.75f, 0.05f);
+        TEST_ASSERT_EQUAL_UINT32(3u, map.used);
+        while (extra < 3u) {
+            if (map.used == (uint32_t)RSM_TMAP_TILES) {
+                ++extra;
+            }
+            hit_at(0.05f + 1.6f * (float)k++, 0.05f);
+        }
+        TEST_ASSERT_GREATER_THAN_UINT32(4u, map.counters.evicted);
+        TEST_ASSERT_EQUAL_UINT8(shift == 0u ? 0u : cfg.hit_inc, rsm_tmap_value(&map, 1u, a_coarse, 0));
+        /* The fine tiles of A go first either way. */
+        TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell(ax), 0));
+    }
 }
 
 void test_tmap_sample_should_interpolate_and_give_the_gradient(void)
@@ -385,6 +517,10 @@ int main(void)
     RUN_TEST(test_tmap_update_should_skip_non_finite_points_and_refuse_bad_arguments);
     RUN_TEST(test_tmap_pool_should_match_a_model_through_eviction);
     RUN_TEST(test_tmap_update_should_drop_returns_when_every_tile_is_written_by_it);
+    RUN_TEST(test_tmap_update_should_free_a_tile_that_beams_have_cleared);
+    RUN_TEST(test_tmap_update_should_not_write_returns_behind_a_wall);
+    RUN_TEST(test_tmap_update_should_judge_walls_on_wall_level_for_every_level);
+    RUN_TEST(test_tmap_pool_should_keep_coarse_tiles_longer_with_age_shift);
     RUN_TEST(test_tmap_sample_should_interpolate_and_give_the_gradient);
     RUN_TEST(test_tmap_bounds_should_cover_the_held_tiles);
     return UNITY_END();

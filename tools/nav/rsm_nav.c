@@ -117,6 +117,9 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     U("map_sat", tmap.saturation, uint8_t)
     U("map_margin", tmap.clear_margin, uint8_t)
     U("map_splat_from", tmap.splat_from, uint8_t)
+    U("map_age_shift", tmap.age_shift, uint8_t)
+    U("map_wall_level", tmap.wall_level, uint8_t)
+    U("map_wall_value", tmap.wall_value, uint8_t)
     U("mm_iterations", mapmatch.iterations, uint8_t)
     F("mm_sigma", mapmatch.sigma)
     F("mm_search", mapmatch.search_rad)
@@ -129,6 +132,10 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     F("mm_min_rad", mapmatch.min_step_rad)
     F("map_update_m", map_update_m)
     F("map_update_rad", map_update_rad)
+    F("iso_tol", isolation.tol_m)
+    F("iso_slope", isolation.slope)
+    U("iso_window", isolation.window, uint8_t)
+    U("iso_agree", isolation.agree, uint8_t)
 #undef F
 #undef U
     return -1;
@@ -634,6 +641,8 @@ static void print_summary(nav_t *nav)
         }
         printf(" per level, %u taken, %u evicted, %u returns dropped\n", (unsigned)m->counters.allocated,
                (unsigned)m->counters.evicted, (unsigned)m->counters.dropped);
+        printf("  map writes      %u tiles cleared and freed, %u returns behind walls, %u unconfirmed\n",
+               (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed);
         printf("  recovery        %u searches, %u taken\n", (unsigned)c->searches, (unsigned)c->recovered);
     }
     printf("  timestamps      %llu clamped (went backwards)\n", (unsigned long long)nav->clamped);

@@ -261,6 +261,7 @@ _SUMMARY_OUTCOME = re.compile(r"^\s{4}([a-z_]+)\s+(\d+)\s*$")
 _SUMMARY_TMAP = re.compile(r"persistent map\s+(\d+) writes, tiles ([\d/]+) per level, (\d+) taken, (\d+) evicted, "
                            r"(\d+) returns dropped")
 _SUMMARY_RECOVERY = re.compile(r"recovery\s+(\d+) searches, (\d+) taken")
+_SUMMARY_FREED = re.compile(r"map writes\s+(\d+) tiles cleared and freed")
 
 
 def parse_summary(text: str) -> dict:
@@ -277,6 +278,10 @@ def parse_summary(text: str) -> dict:
         m = _SUMMARY_RECOVERY.search(line)
         if m:
             out["recovery"] = {"searches": int(m.group(1)), "taken": int(m.group(2))}
+            continue
+        m = _SUMMARY_FREED.search(line)
+        if m and out["tmap"] is not None:
+            out["tmap"]["freed"] = int(m.group(1))
             continue
         m = _SUMMARY_SCANS.match(line)
         if m:
