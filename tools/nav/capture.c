@@ -1,6 +1,7 @@
 /* Streaming reader for rsm capture files; see capture.h and docs/capture.md. */
 #include "capture.h"
 
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -236,11 +237,17 @@ static int fill(cap_reader *r, size_t need)
             r->end -= r->start;
             r->start = 0;
         }
+        errno = 0;
         got = fread(r->win + r->end, 1, CAP_WIN - r->end, r->fp);
-        if (got == 0u) {
-            if (ferror(r->fp)) {
-                r->io_error = 1;
+        if (got < CAP_WIN - r->end && ferror(r->fp)) {
+            /* A read error is not the end of the file: remember it (sticky),
+             * so the caller is told instead of seeing a truncated tail. */
+            if (!r->io_error) {
+                r->io_errno = errno;
             }
+            r->io_error = 1;
+        }
+        if (got == 0u) {
             r->eof = 1;
         }
         r->end += got;
@@ -294,6 +301,16 @@ static int resync(cap_reader *r)
     }
 }
 
+/* The sticky read error: the bytes not yet delivered stay unread. */
+static int io_failure(cap_reader *r)
+{
+    char msg[sizeof r->error];
+    snprintf(msg, sizeof msg, "read error at byte %llu after %llu good records: %s",
+             (unsigned long long)(r->base + avail(r)), (unsigned long long)r->count.records,
+             r->io_errno != 0 ? strerror(r->io_errno) : "unknown cause");
+    return fail(r, CAP_ERR_IO, msg);
+}
+
 static int problem(cap_reader *r, int status, const char *msg)
 {
     fail(r, status, msg);
@@ -310,7 +327,7 @@ int cap_next(cap_reader *r, cap_record *rec, uint8_t *buf, size_t cap)
         const uint8_t *b;
 
         if (!fill(r, 1)) {
-            return r->io_error ? fail(r, CAP_ERR_IO, "read error") : CAP_END;
+            return r->io_error ? io_failure(r) : CAP_END;
         }
         have_head = fill(r, CAP_REC_HEAD);
         size = complete_at(r, 0);
@@ -329,6 +346,9 @@ int cap_next(cap_reader *r, cap_record *rec, uint8_t *buf, size_t cap)
                 st = problem(r, CAP_ERR_CORRUPT, "corrupt capture record (bad sync or CRC)");
                 if (st != CAP_OK) return st;
                 continue;
+            }
+            if (r->io_error) {
+                return io_failure(r); /* not a truncated or corrupt tail: the read failed */
             }
             r->count.skipped_bytes += r->base + avail(r) - off;
             drop(r, avail(r));

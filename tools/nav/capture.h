@@ -77,7 +77,8 @@ typedef struct {
     uint64_t base;               /* file offset of win[start] */
     size_t start, end;           /* valid bytes are win[start..end) */
     int eof;
-    int io_error;
+    int io_error;                /* a read failed: every later cap_next returns CAP_ERR_IO */
+    int io_errno;                /* errno of the first failed read (0 if unknown) */
     char error[160];
     uint8_t win[1u << 18];
 } cap_reader;
@@ -88,7 +89,10 @@ typedef struct {
 int cap_open(cap_reader *r, FILE *fp, int lenient);
 
 /* The next record: its bytes go to buf (capacity cap bytes; 65535 always
- * suffices).  Returns CAP_OK, CAP_END or an error status. */
+ * suffices).  Returns CAP_OK, CAP_END or an error status.  A read error is
+ * CAP_ERR_IO in strict and lenient readers alike, never a truncated record
+ * or the end; it is sticky (every later call returns it again), so a caller
+ * must stop on it rather than skip it. */
 int cap_next(cap_reader *r, cap_record *rec, uint8_t *buf, size_t cap);
 
 /* Metadata value for key (NUL-terminated), or NULL. */

@@ -505,6 +505,7 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
     int laser_id = -1;
     size_t i;
     int rc;
+    int status;
     const char *v;
     if (fp == NULL) {
         fprintf(stderr, "rsm-nav: cannot open %s: %s\n", path, strerror(errno));
@@ -550,14 +551,23 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
         }
         if (nav_start(nav, &x0) != 0) {
             cap_close(&reader);
+            fclose(fp);
             return 2;
         }
     }
     nav_stream_init(&stream);
+    status = 0;
     for (;;) {
         cap_record rec;
         rc = cap_next(&reader, &rec, buf, sizeof buf);
         if (rc == CAP_END) {
+            break;
+        }
+        if (rc == CAP_ERR_IO) {
+            /* Sticky: stop here; what was decoded so far is still flushed
+             * and written by the caller. */
+            fprintf(stderr, "rsm-nav: cannot read %s: %s\n", path, cap_error_text(&reader));
+            status = 1;
             break;
         }
         if (rc != CAP_OK) {
@@ -585,7 +595,11 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
            (unsigned long long)stream.lms_scans, (unsigned long long)stream.bad_scans,
            (unsigned)stream.lms.stats.crc_errors, (unsigned)stream.lms.stats.bytes_skipped);
     cap_close(&reader);
-    return 0;
+    if (fclose(fp) != 0 && status == 0) {
+        fprintf(stderr, "rsm-nav: error closing %s: %s\n", path, strerror(errno));
+        status = 1;
+    }
+    return status;
 }
 
 static const char *method_name(rsm_method_t m)
