@@ -9,12 +9,15 @@ given number of bytes.
 
 import gzip
 import os
+import re
+import signal
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
 
-from conftest import build_dir, rsm_nav_binary
+from conftest import FakeDevices, build_dir, rsm_nav_binary
 from rsm_tools import capture as cap
 from rsm_tools import convert
 
@@ -38,6 +41,12 @@ def run_nav(*args, fault_path=None, fault_after=None, timeout=NAV_TIMEOUT):
         env["ASAN_OPTIONS"] = (env.get("ASAN_OPTIONS", "") + ":verify_asan_link_order=0").lstrip(":")
     return subprocess.run([str(rsm_nav_binary()), *map(str, args)], capture_output=True, text=True,
                           timeout=timeout, env=env)
+
+
+def number(pattern: str, text: str) -> int:
+    m = re.search(pattern, text)
+    assert m, f"no {pattern!r} in:\n{text}"
+    return int(m.group(1))
 
 
 def rows(path: Path):
@@ -83,3 +92,54 @@ def test_capture_read_error_inside_a_record_is_an_error_not_a_truncated_tail(tmp
     assert "read error" in res.stderr, res.stderr
     assert "truncated 1" not in res.stdout, res.stdout
     assert len(rows(traj)) > 50
+
+
+def point_link(link: Path, target: str):
+    tmp = link.with_name(link.name + ".new")
+    if tmp.is_symlink():
+        tmp.unlink()
+    tmp.symlink_to(target)
+    os.replace(tmp, link)
+
+
+def test_active_mode_reopens_a_robot_that_vanished_and_came_back(tmp_path, head_capture):
+    """The fake robot is killed (an adapter pulled out) and started again
+    behind the same name (plugged back in, as a udev symlink does): rsm-nav
+    neither spins nor floods the dead line, reopens it with back-off, and
+    takes the restarted counters as a new connection."""
+    seconds = 14
+    robot = tmp_path / "robot"
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    first = FakeDevices(tmp_path / "a", "--robot", "--capture", str(head_capture))
+    point_link(robot, first.paths["robot"])
+    traj, events = tmp_path / "t.txt", tmp_path / "e.txt"
+    nav = subprocess.Popen([str(rsm_nav_binary()), "--robot", str(robot), "--seconds", str(seconds),
+                            "--trajectory", str(traj), "--events", str(events)],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    second = None
+    try:
+        time.sleep(4)
+        first.proc.send_signal(signal.SIGKILL)  # gone without a word
+        first.proc.wait()
+        robot.unlink()
+        time.sleep(3)
+        second = FakeDevices(tmp_path / "b", "--robot", "--capture", str(head_capture))
+        point_link(robot, second.paths["robot"])
+        out, err = nav.communicate(timeout=NAV_TIMEOUT)
+    finally:
+        if nav.poll() is None:
+            nav.kill()
+            nav.wait()
+        if second is not None:
+            second.stop()
+    assert nav.returncode == 0, err
+    assert "robot link " + str(robot) + " failed" in err, err
+    assert "reopened" in err, err
+    assert number(r"(\d+) connects \(", err) >= 2, err
+    # One PULSE per 0.5 s at most while connected (the busy loop sent millions).
+    assert number(r"(\d+) keep-alives", err) <= 2 * seconds + 4, err
+    restarts = number(r"(\d+) counter restarts", out)
+    assert restarts >= 2, out
+    enc = [l for l in events.read_text().splitlines() if l.startswith("E ")]
+    assert len(enc) > 20
