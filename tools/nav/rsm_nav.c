@@ -284,11 +284,14 @@ static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_lo
 }
 
 /* Stream sink callbacks (capture and live modes). */
-static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us)
+static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us, int restart)
 {
     nav_t *nav = (nav_t *)ctx;
     if (nav_start(nav, NULL) != 0) {
         return;
+    }
+    if (restart) {
+        (void)rsm_sync_encoder_restart(&nav->sync); /* no step across a new connection */
     }
     nav->encoders++;
     if (nav->events != NULL) {
@@ -664,6 +667,11 @@ static void print_summary(nav_t *nav)
                (unsigned)a->interpolated, (unsigned)a->exact, (unsigned)a->late, (unsigned)a->timed_out,
                (unsigned)a->superseded, (unsigned)a->encoder_backwards, (unsigned)a->encoder_overflow);
     }
+    if (nav->loc.odo.implausible != 0u || nav->loc.odo.relatched != 0u || nav->loc.ekf.lost != 0u) {
+        printf("  odometry        %u implausible increments refused, %u counter restarts taken up,"
+               " %u predictions lost (covariance reset)\n",
+               (unsigned)nav->loc.odo.implausible, (unsigned)nav->loc.odo.relatched, (unsigned)nav->loc.ekf.lost);
+    }
     printf("  readings dropped: nan %u, too short %u, too long %u\n", (unsigned)c->drops.nan,
            (unsigned)c->drops.too_short, (unsigned)c->drops.too_long);
     printf("  time per scan   median %.1f us, p95 %.1f us (this machine, wall clock)\n", median * 1e6, p95 * 1e6);
@@ -863,7 +871,8 @@ int main(int argc, char **argv)
             printf("rsm-nav summary\n");
             printf("  source          live: robot %s, laser %s%s\n", live.robot ? live.robot : "-",
                    live.lms ? live.lms : "-", live.listen_only ? " (listen-only)" : "");
-            printf("  robot link      %llu encoder packets\n", (unsigned long long)nav.encoders);
+            printf("  robot link      %llu encoder packets, %u counter restarts (new connections)\n",
+                   (unsigned long long)nav.encoders, (unsigned)nav.sync.counters.restarts);
         }
     }
     /* Whatever happened, keep what was written. */
