@@ -143,3 +143,67 @@ def test_active_mode_reopens_a_robot_that_vanished_and_came_back(tmp_path, head_
     assert restarts >= 2, out
     enc = [l for l in events.read_text().splitlines() if l.startswith("E ")]
     assert len(enc) > 20
+
+
+# ---- CARMEN logs ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("damage", ["truncated", "corrupt", "directory", "read_error"])
+def test_carmen_log_that_cannot_be_read_to_the_end_is_an_error(tmp_path, head_log, damage):
+    data = head_log.read_bytes()
+    log = tmp_path / "log.clf.gz"
+    fault = {}
+    if damage == "truncated":
+        log.write_bytes(data[:len(data) // 2])
+        why = "unexpected end of file"
+    elif damage == "corrupt":
+        mid = bytearray(data)
+        for i in range(len(mid) // 2, len(mid) // 2 + 40):
+            mid[i] ^= 0x55
+        log.write_bytes(bytes(mid))
+        why = "log.clf.gz: "
+    elif damage == "directory":
+        log.mkdir()
+        why = "Is a directory"
+    else:
+        log.write_bytes(data)
+        fault = {"fault_path": log, "fault_after": len(data) // 2}
+        why = "Input/output error"
+    traj = tmp_path / "t.txt"
+    res = run_nav("--carmen", log, "--trajectory", traj, "--quiet", **fault)
+    assert res.returncode == 1, res.stderr
+    assert "cannot read" in res.stderr and why in res.stderr, res.stderr
+    if damage != "directory":
+        assert len(rows(traj)) > 50  # what was read is kept
+
+
+def flaser_lines(head_log, n):
+    text = gzip.decompress(head_log.read_bytes()).decode()
+    return [l for l in text.splitlines() if l.startswith("FLASER")][:n]
+
+
+def test_carmen_reading_counts_that_are_not_whole_numbers_are_malformed(tmp_path, head_log):
+    lines = flaser_lines(head_log, 30)
+    for k, count in ((5, "nan"), (9, "1.5"), (13, "inf"), (17, "1e300")):
+        f = lines[k].split()
+        f[1] = count
+        lines[k] = " ".join(f)
+    log = tmp_path / "bad.clf"
+    log.write_text("\n".join(lines) + "\n")
+    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert "malformed 4" in res.stdout, res.stdout
+    assert len(rows(tmp_path / "t.txt")) == 26
+
+
+def test_carmen_line_longer_than_the_buffer_with_a_nul_is_one_line(tmp_path, head_log):
+    lines = flaser_lines(head_log, 10)
+    # Over 64 KiB, with a NUL early on and what looks like a record after it.
+    long_line = "COMMENT \0 " + lines[0] + " " + "x" * 70000
+    log = tmp_path / "nul.clf"
+    log.write_text("\n".join(lines[:5] + [long_line] + lines[5:]) + "\n")
+    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert "too long 1" in res.stdout, res.stdout
+    assert "lines           11 " in res.stdout, res.stdout
+    assert len(rows(tmp_path / "t.txt")) == 10

@@ -58,13 +58,27 @@ static int slot_of(int fd)
     return -1;
 }
 
+/* Each open of the file starts its count afresh (close is not wrapped, so
+ * a reused descriptor number is found here again). */
 static void track(int fd)
 {
+    const int slot = slot_of(fd);
+    if (slot >= 0) {
+        delivered[slot] = 0ull;
+        return;
+    }
     if (fd >= 0 && nfaulty < SHIM_MAX_FDS) {
         faulty_fd[nfaulty] = fd;
         delivered[nfaulty] = 0ull;
         nfaulty++;
     }
+}
+
+static void untrack(int slot)
+{
+    faulty_fd[slot] = faulty_fd[nfaulty - 1];
+    delivered[slot] = delivered[nfaulty - 1];
+    nfaulty--;
 }
 
 static ssize_t real_read(int fd, void *buf, size_t n)
@@ -109,6 +123,8 @@ static int open_common(const char *sym, const char *path, int flags, mode_t mode
     fd = f(path, flags, mode);
     if (is_fault_path(path)) {
         track(fd);
+    } else if (fd >= 0 && slot_of(fd) >= 0) {
+        untrack(slot_of(fd)); /* the number of a closed faulty descriptor, reused */
     }
     return fd;
 }
@@ -141,9 +157,7 @@ static int cookie_close(void *cookie)
     const int fd = (int)(intptr_t)cookie;
     const int slot = slot_of(fd);
     if (slot >= 0) {
-        faulty_fd[slot] = faulty_fd[nfaulty - 1];
-        delivered[slot] = delivered[nfaulty - 1];
-        nfaulty--;
+        untrack(slot);
     }
     return close(fd);
 }

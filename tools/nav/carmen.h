@@ -16,7 +16,9 @@ typedef enum carmen_kind {
     CARMEN_SCAN = 1,
     CARMEN_ODOM = 2,
     CARMEN_SKIPPED = 3,  /* internal: a well-formed record the reader cannot hold (counted) */
-    CARMEN_BAD_POSE = 4  /* internal: a pose or timestamp is NaN or infinite (counted as malformed) */
+    CARMEN_BAD_POSE = 4, /* internal: a pose or timestamp is NaN or infinite (counted as malformed) */
+    CARMEN_ERROR = 5     /* the file cannot be read on (read error, corrupt or truncated gzip):
+                          * carmen_error() says why; every later call returns it again */
 } carmen_kind_t;
 
 typedef struct carmen_counts {
@@ -54,6 +56,7 @@ typedef struct carmen_record {
 
 typedef struct carmen_reader {
     void *gz;                  /* gzFile */
+    char error[200];           /* why reading stopped early (empty: it did not) */
     char line[1 << 16];
     int fov179;                /* 1: spread FLASER beams over exactly 180 deg (pi/(n-1) steps) */
     carmen_counts_t counts;
@@ -62,7 +65,8 @@ typedef struct carmen_reader {
 int carmen_open(carmen_reader_t *r, const char *path);
 void carmen_close(carmen_reader_t *r);
 
-/* Next scan or odometry record; CARMEN_EOF at the end. */
+/* Next scan or odometry record; CARMEN_EOF at the end, CARMEN_ERROR if the
+ * rest of the file cannot be read. */
 carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec);
 
 /* Next well-formed scan record that carries a mount (has_mount), skipping
@@ -70,5 +74,8 @@ carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec);
  * For a look ahead before the real pass: only counts.lines is meaningful
  * (it is then the record's line number). */
 carmen_kind_t carmen_next_mount(carmen_reader_t *r, carmen_record_t *rec);
+
+/* Why the last CARMEN_ERROR happened. */
+const char *carmen_error(const carmen_reader_t *r);
 
 #endif

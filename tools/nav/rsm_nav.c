@@ -400,6 +400,7 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
     rsm_pose_t log_mount = {0.0f, 0.0f, 0.0f};
     int have_log_mount;
     int have_odom = 0;
+    int status = 0;
     carmen_mount(nav, path, fov179, &log_mount, &have_log_mount);
     reader.fov179 = fov179;
     if (carmen_open(&reader, path) != 0) {
@@ -410,6 +411,12 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
         const carmen_kind_t k = carmen_next(&reader, &rec);
         size_t b;
         if (k == CARMEN_EOF) {
+            break;
+        }
+        if (k == CARMEN_ERROR) {
+            /* What was read so far is kept (the caller flushes it). */
+            fprintf(stderr, "rsm-nav: cannot read %s: %s\n", path, carmen_error(&reader));
+            status = 1;
             break;
         }
         if (k != CARMEN_SCAN) {
@@ -453,7 +460,7 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
         printf("                  FLASER lines whose laser pose differs from their odometry pose: %llu\n",
                (unsigned long long)reader.counts.flaser_offset);
     }
-    return 0;
+    return status;
 }
 
 static const char *meta(const cap_reader *r, const char *key)
