@@ -207,3 +207,123 @@ def test_carmen_line_longer_than_the_buffer_with_a_nul_is_one_line(tmp_path, hea
     assert "too long 1" in res.stdout, res.stdout
     assert "lines           11 " in res.stdout, res.stdout
     assert len(rows(tmp_path / "t.txt")) == 10
+
+
+# ---- the --map picture ------------------------------------------------------------
+
+
+def read_pgm(path: Path):
+    data = path.read_bytes()
+    head = data.split(b"\n", 4)
+    w, h = map(int, head[2].split())
+    pixels = head[4]
+    assert len(pixels) == w * h
+    return w, h, pixels
+
+
+def yaml_origin(path: Path):
+    for line in path.read_text().splitlines():
+        if line.startswith("origin:"):
+            x, y, _ = line.split("[", 1)[1].rstrip("]").split(",")
+            return float(x), float(y)
+    raise AssertionError("no origin in " + str(path))
+
+
+def with_fields(line: str, **changes) -> str:
+    """A FLASER line with some readings or pose fields replaced (the pose
+    fields count from the end: odom x is -6, the stamp -3)."""
+    f = line.split()
+    for key, value in changes.items():
+        f[int(key[1:]) if key[0] == "r" else len(f) - int(key[1:])] = value
+    return " ".join(f)
+
+
+def stamped(line: str, t: float) -> str:
+    f = line.split()
+    f[-3] = f"{t:.6f}"
+    f[-1] = f"{t:.6f}"
+    return " ".join(f)
+
+
+def test_map_picture_has_each_scans_own_points_even_when_it_had_too_few(tmp_path, head_log):
+    lines = flaser_lines(head_log, 40)
+    for k in range(20, 40):
+        f = lines[k].split()
+        f[2:182] = ["0.00"] * 180            # too short: dropped
+        f[2 + 85:2 + 95] = ["15.00"] * 10     # ten readings 15 m ahead: a FEW_POINTS scan
+        lines[k] = " ".join(f)
+    log = tmp_path / "few.clf"
+    log.write_text("\n".join(lines) + "\n")
+    pgm = tmp_path / "m.pgm"
+    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--map", pgm, "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert "few_points     20" in res.stdout, res.stdout
+    w, h, px = read_pgm(pgm)
+    x0, y0 = yaml_origin(tmp_path / "m.yaml")
+    last = rows(tmp_path / "t.txt")[-1].split()
+    rx, ry, rt = float(last[1]), float(last[2]), float(last[3])
+    import math
+    wx, wy = rx + 15.0 * math.cos(rt), ry + 15.0 * math.sin(rt)
+    cx, cy = int((wx - x0) / 0.05), int((wy - y0) / 0.05)
+    assert 0 <= cx < w and 0 <= cy < h, "the picture does not reach the few points"
+    near = [px[(h - 1 - y) * w + x] for y in range(cy - 10, cy + 11) for x in range(cx - 10, cx + 11)
+            if 0 <= x < w and 0 <= y < h]
+    assert 0 in near
+
+
+def write_repeated_log(path: Path, head_log, n: int):
+    """n copies of one scan (a robot standing still), gzipped line by line
+    so that this process stays small: a child's peak RSS as the kernel
+    reports it is at least its parent's at the fork."""
+    line = flaser_lines(head_log, 1)[0]
+    with gzip.open(path, "wt") as f:
+        for k in range(n):
+            f.write(stamped(line, 1000.0 + 0.1 * k) + "\n")
+
+
+def peak_kib(args) -> int:
+    res = run_nav(*args)
+    assert res.returncode == 0, res.stderr
+    return number(r"memory +peak (\d+) KiB", res.stdout)
+
+
+def test_map_picture_memory_does_not_grow_with_the_number_of_scans(tmp_path, head_log):
+    """20 000 scans of a robot standing still: the picture costs the same
+    memory as none (the old one kept every point, 1.4 KB per scan: over
+    12 MiB here), and is the one a tenth of the scans gives."""
+    log = tmp_path / "still.clf.gz"
+    write_repeated_log(log, head_log, 20000)
+    short = tmp_path / "short.clf.gz"
+    write_repeated_log(short, head_log, 2000)
+    base = ["--trajectory", tmp_path / "t.txt", "--quiet"]
+    without = peak_kib(["--carmen", log, *base])
+    with_map = peak_kib(["--carmen", log, "--map", tmp_path / "m.pgm", *base])
+    assert with_map - without < 3 * 1024, (without, with_map)  # KiB
+    peak_kib(["--carmen", short, "--map", tmp_path / "s.pgm", *base])
+    assert (tmp_path / "m.pgm").read_bytes() == (tmp_path / "s.pgm").read_bytes()
+
+
+def test_map_picture_with_no_points_at_first_and_a_teleport_far_away(tmp_path, head_log):
+    lines = flaser_lines(head_log, 30)
+    f = lines[0].split()
+    f[2:182] = ["0.00"] * 180                       # the first scan has no usable point
+    lines[0] = " ".join(f)
+    lines[10] = with_fields(lines[10], o6="1e18")    # one pose 1e18 m away
+    log = tmp_path / "far.clf"
+    log.write_text("\n".join(lines) + "\n")
+    pgm = tmp_path / "m.pgm"
+    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--map", pgm, "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert "left out of the picture" in res.stderr, res.stderr
+    assert pgm.read_bytes()[:2] == b"P5"
+
+
+def test_map_picture_too_large_says_so(tmp_path, head_log):
+    lines = flaser_lines(head_log, 30)
+    for k in range(15, 30):
+        lines[k] = with_fields(lines[k], o6=str(1500.0 + float(lines[k].split()[-6])))
+    log = tmp_path / "wide.clf"
+    log.write_text("\n".join(lines) + "\n")
+    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--map", tmp_path / "m.pgm", "--quiet")
+    assert res.returncode == 1, res.stderr
+    assert "would span" in res.stderr and "1000 m" in res.stderr, res.stderr

@@ -156,7 +156,7 @@ typedef struct nav {
     int quiet;
     FILE *traj;
     const char *map_path;
-    hitlist_t hits;
+    hitmap_t hits;         /* --map: hit counts per picture cell */
     double *times;
     size_t ntimes;
     size_t cap_times;
@@ -224,6 +224,23 @@ static void nav_clamp(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us)
     scan->stamp_us = stamp_us;
 }
 
+/* This scan's usable readings (the localizer's robot-frame points, filled
+ * for every scan) placed at its estimate, into the --map picture. Not
+ * loc.world: the core fills that only for scans it writes into its map. */
+static void nav_map_points(nav_t *nav, const rsm_localizer_report_t *rep)
+{
+    static rsm_point_t world[RSM_MAX_BEAMS];
+    size_t k;
+    const size_t n = rep->points <= RSM_MAX_BEAMS ? rep->points : RSM_MAX_BEAMS;
+    for (k = 0; k < n; ++k) {
+        world[k] = rsm_pose_apply(&rep->pose, &nav->loc.pts[k]);
+    }
+    if (hitmap_add(&nav->hits, world, n) != 0) {
+        fprintf(stderr, "rsm-nav: out of memory for the map picture\n");
+        exit(1);
+    }
+}
+
 /* Records one fused scan: time taken, trajectory line, map points. */
 static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, double elapsed_s,
                        double file_stamp_s)
@@ -246,7 +263,7 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
     fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, (double)rep->pose.x, (double)rep->pose.y,
             (double)rep->pose.theta);
     if (nav->map_path != NULL) {
-        (void)hitlist_add(&nav->hits, nav->loc.world, rep->points);
+        nav_map_points(nav, rep);
     }
     if (!nav->quiet && nav->ntimes % 1000 == 0) {
         fprintf(stderr, "rsm-nav: %zu scans, %.1f s\n", nav->ntimes, now_s() - nav->t_start);
@@ -636,6 +653,25 @@ static void print_mount(const nav_t *nav)
     }
 }
 
+/* Peak resident memory of this program, where the system tells it
+ * (Linux: VmHWM; getrusage would count the parent's memory at the fork). */
+static void print_peak_memory(void)
+{
+    char line[128];
+    FILE *f = fopen("/proc/self/status", "r");
+    if (f == NULL) {
+        return;
+    }
+    while (fgets(line, sizeof line, f) != NULL) {
+        unsigned long kib;
+        if (sscanf(line, "VmHWM: %lu kB", &kib) == 1) {
+            printf("  memory          peak %lu KiB resident\n", kib);
+            break;
+        }
+    }
+    fclose(f);
+}
+
 static void print_summary(nav_t *nav)
 {
     const rsm_localizer_counters_t *c = &nav->loc.counters;
@@ -682,6 +718,7 @@ static void print_summary(nav_t *nav)
     printf("  readings dropped: nan %u, too short %u, too long %u\n", (unsigned)c->drops.nan,
            (unsigned)c->drops.too_short, (unsigned)c->drops.too_long);
     printf("  time per scan   median %.1f us, p95 %.1f us (this machine, wall clock)\n", median * 1e6, p95 * 1e6);
+    print_peak_memory();
 }
 
 int main(int argc, char **argv)
@@ -849,6 +886,10 @@ int main(int argc, char **argv)
             }
         }
     }
+    if (hitmap_init(&nav.hits, nav.cfg.grid.cell_m) != 0 && nav.map_path != NULL) {
+        fprintf(stderr, "rsm-nav: bad cell size for the map picture\n");
+        return 2;
+    }
     nav.traj = fopen(trajectory, "w");
     if (nav.traj == NULL) {
         fprintf(stderr, "rsm-nav: cannot write %s: %s\n", trajectory, strerror(errno));
@@ -891,15 +932,30 @@ int main(int argc, char **argv)
         fprintf(stderr, "rsm-nav: error writing %s\n", trajectory);
         rc = rc ? rc : 1;
     }
-    if (rc == 0 && nav.map_path != NULL && nav.hits.count > 0 &&
-        pgm_write_map(nav.map_path, &nav.hits, nav.cfg.grid.cell_m) != 0) {
-        fprintf(stderr, "rsm-nav: cannot write map %s\n", nav.map_path);
-        rc = 1;
+    if (rc == 0 && nav.map_path != NULL) {
+        double w_m = 0.0;
+        double h_m = 0.0;
+        const int m = pgm_write_map(nav.map_path, &nav.hits, &w_m, &h_m);
+        if (m == PGM_TOO_LARGE) {
+            fprintf(stderr,
+                    "rsm-nav: map %s not written: it would span %.0f m x %.0f m, over the %.0f m the"
+                    " picture allows at %.3f m per pixel\n",
+                    nav.map_path, w_m, h_m, (double)PGM_MAX_SIDE * (double)nav.hits.res_m,
+                    (double)nav.hits.res_m);
+            rc = 1;
+        } else if (m != 0) {
+            fprintf(stderr, "rsm-nav: cannot write map %s: %s\n", nav.map_path, strerror(errno));
+            rc = 1;
+        }
+        if (nav.hits.far != 0u) {
+            fprintf(stderr, "rsm-nav: %llu map points %.0e m or more from the origin left out of the picture\n",
+                    (unsigned long long)nav.hits.far, (double)PGM_MAX_COORD_M);
+        }
     }
     if (rc == 0) {
         print_summary(&nav);
     }
-    hitlist_free(&nav.hits);
+    hitmap_free(&nav.hits);
     free(nav.times);
     free(nav.restore_idx);
     free(nav.restore_us);
