@@ -327,3 +327,48 @@ def test_map_picture_too_large_says_so(tmp_path, head_log):
     res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--map", tmp_path / "m.pgm", "--quiet")
     assert res.returncode == 1, res.stderr
     assert "would span" in res.stderr and "1000 m" in res.stderr, res.stderr
+
+
+# ---- live mode ------------------------------------------------------------------------
+
+
+def test_listen_mode_on_a_source_that_never_runs_dry_keeps_its_time_limit(tmp_path):
+    res = run_nav("--robot", "/dev/zero", "--listen", "--seconds", "1", "--trajectory", tmp_path / "t.txt",
+                  "--quiet", timeout=30)
+    assert res.returncode == 0, res.stderr
+
+
+def test_listen_mode_on_a_source_that_never_runs_dry_stops_at_a_signal(tmp_path):
+    nav = subprocess.Popen([str(rsm_nav_binary()), "--robot", "/dev/zero", "--listen", "--trajectory",
+                            str(tmp_path / "t.txt")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.0)
+    nav.send_signal(signal.SIGTERM)
+    try:
+        _, err = nav.communicate(timeout=30)
+    finally:
+        if nav.poll() is None:
+            nav.kill()
+            nav.wait()
+    assert nav.returncode == 0, err
+    assert "stopped by signal" in err, err
+
+
+def test_listen_mode_with_nothing_ever_arriving_fails(tmp_path):
+    res = run_nav("--robot", "/dev/null", "--listen", "--seconds", "1", "--trajectory", tmp_path / "t.txt",
+                  "--quiet", timeout=30)
+    assert res.returncode == 1, res.stderr
+    assert "nothing arrived" in res.stderr, res.stderr
+
+
+def test_active_mode_with_no_device_ever_connecting_fails(tmp_path):
+    """A pseudo-terminal nobody answers on: the drivers try for the whole run."""
+    import pty
+    master, slave = pty.openpty()
+    try:
+        res = run_nav("--robot", os.ttyname(slave), "--seconds", "2", "--trajectory", tmp_path / "t.txt",
+                      "--quiet", timeout=60)
+    finally:
+        os.close(master)
+        os.close(slave)
+    assert res.returncode == 1, res.stderr
+    assert "no robot ever connected" in res.stderr, res.stderr
