@@ -372,3 +372,29 @@ def test_active_mode_with_no_device_ever_connecting_fails(tmp_path):
         os.close(slave)
     assert res.returncode == 1, res.stderr
     assert "no robot ever connected" in res.stderr, res.stderr
+
+
+# ---- hostile captures -------------------------------------------------------------------
+
+
+def test_capture_resync_over_false_record_starts_costs_one_crc_pass(tmp_path, head_capture):
+    """1 MiB of "RC\\xff\\xff": a false record start every 4 bytes, each
+    claiming 64 KiB. The reader used to CRC each claim anew (39 s)."""
+    data = head_capture.read_bytes()
+    offsets = record_offsets(head_capture)
+    cut = offsets[len(offsets) // 2]
+    hostile = tmp_path / "hostile.cap"
+    hostile.write_bytes(data[:cut] + b"RC\xff\xff" * (1 << 18) + data[cut:])
+    res = run_nav("--capture", hostile, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert "corrupt 1," in res.stdout and f"{1 << 20} bytes skipped" in res.stdout, res.stdout
+    checked = number(r"(\d+) checked by CRC", res.stdout)
+    assert checked <= 2 * len(hostile.read_bytes()), res.stdout
+    assert len(rows(tmp_path / "t.txt")) == len(rows_of_clean_run(tmp_path, head_capture))
+
+
+def rows_of_clean_run(tmp_path, capture):
+    traj = tmp_path / "clean.txt"
+    res = run_nav("--capture", capture, "--trajectory", traj, "--quiet")
+    assert res.returncode == 0, res.stderr
+    return rows(traj)

@@ -33,6 +33,43 @@ uint32_t cap_crc32(uint32_t crc, const uint8_t *p, size_t n)
     return ~crc;
 }
 
+/* ---- CRC of a span from two prefix CRCs --------------------------------------
+ * For the CRC-32 used here, crc(A B) = crc(A) * x^(8 |B|) + crc(B) modulo
+ * the polynomial (the initial and final inversions cancel), so
+ * crc(B) = crc(A B) ^ (crc(A) * x^(8 |B|)). Polynomials are held reflected,
+ * as the table-driven CRC holds them: bit 31 is x^0. */
+#define CAP_POLY 0xEDB88320u
+
+static uint32_t gf2_mul(uint32_t a, uint32_t b)
+{
+    uint32_t m = 1u << 31;
+    uint32_t p = 0u;
+    while (m != 0u && a != 0u) {
+        if (a & m) {
+            p ^= b;
+            a &= ~m;
+        }
+        m >>= 1;
+        b = (b & 1u) ? (b >> 1) ^ CAP_POLY : b >> 1;
+    }
+    return p;
+}
+
+/* x^(8 n) modulo the polynomial, by squaring: x^(2^k) for k = 3, 4, ... */
+static uint32_t gf2_x8n(size_t n)
+{
+    uint32_t sq = 1u << 23; /* x^8 */
+    uint32_t p = 1u << 31;  /* x^0 */
+    while (n != 0u) {
+        if (n & 1u) {
+            p = gf2_mul(sq, p);
+        }
+        sq = gf2_mul(sq, sq);
+        n >>= 1;
+    }
+    return p;
+}
+
 static uint16_t rd16(const uint8_t *p) { return (uint16_t)(p[0] | (p[1] << 8)); }
 
 static uint32_t rd32(const uint8_t *p)
@@ -84,6 +121,7 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
     char *out;
 
     memset(r, 0, offsetof(cap_reader, win));
+    r->crc_end = 0;
     r->fp = fp;
     r->lenient = lenient;
     got = read_full(fp, fixed, sizeof fixed);
@@ -236,6 +274,7 @@ static int fill(cap_reader *r, size_t need)
             memmove(r->win, r->win + r->start, avail(r));
             r->end -= r->start;
             r->start = 0;
+            r->crc_end = 0; /* the prefix CRCs start again from the new win[0] */
         }
         errno = 0;
         got = fread(r->win + r->end, 1, CAP_WIN - r->end, r->fp);
@@ -261,7 +300,22 @@ static void drop(cap_reader *r, size_t n)
     r->base += n;
     if (r->start == r->end) {
         r->start = r->end = 0;
+        r->crc_end = 0;
     }
+}
+
+/* CRC-32 of win[a..b), a <= b <= end. */
+static uint32_t span_crc(cap_reader *r, size_t a, size_t b)
+{
+    if (r->crc_end == 0u) {
+        r->crc[0] = 0u;
+    }
+    while (r->crc_end < b) {
+        r->crc[r->crc_end + 1u] = cap_crc32(r->crc[r->crc_end], r->win + r->crc_end, 1u);
+        r->crc_end++;
+        r->count.crc_bytes++;
+    }
+    return r->crc[b] ^ gf2_mul(gf2_x8n(b - a), r->crc[a]);
 }
 
 /* Size of a valid record at win[start+i], 0 if none (i < 65536). */
@@ -276,7 +330,7 @@ static size_t complete_at(cap_reader *r, size_t i)
     size = CAP_REC_OVERHEAD + n;
     if (!fill(r, i + size)) return 0;
     b = r->win + r->start + i; /* fill may have moved the window */
-    return cap_crc32(0, b, CAP_REC_HEAD + n) == rd32(b + CAP_REC_HEAD + n) ? size : 0u;
+    return span_crc(r, r->start + i, r->start + i + CAP_REC_HEAD + n) == rd32(b + CAP_REC_HEAD + n) ? size : 0u;
 }
 
 /* Skip to the next valid record after win[start]; 0 if none before EOF. */

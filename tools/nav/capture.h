@@ -58,6 +58,8 @@ typedef struct {
     uint64_t truncated;
     uint64_t out_of_order;
     uint64_t unknown_channel;
+    uint64_t crc_bytes;          /* bytes run through the CRC: about the file size, however
+                                  * many false record starts a resync meets */
 } cap_counters;
 
 typedef struct {
@@ -81,10 +83,15 @@ typedef struct {
     int io_errno;                /* errno of the first failed read (0 if unknown) */
     char error[160];
     uint8_t win[1u << 18];
+    /* crc[j]: CRC-32 of win[0..j), valid for j <= crc_end: the CRC of any
+     * span of the window is then two table reads and a shift, so that a
+     * resync over candidates claiming 64 KiB each does not CRC each anew. */
+    size_t crc_end;
+    uint32_t crc[(1u << 18) + 1u];
 } cap_reader;
 
 /* Reads and checks the header.  Returns CAP_OK or an error status (see
- * cap_error_text).  The reader is large (~260 KiB): do not put it on a small
+ * cap_error_text).  The reader is large (~1.3 MiB): do not put it on a small
  * stack.  fp stays owned by the caller. */
 int cap_open(cap_reader *r, FILE *fp, int lenient);
 

@@ -611,10 +611,12 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
     }
     printf("rsm-nav summary\n");
     printf("  source          capture %s\n", path);
-    printf("  records         %llu (corrupt %llu, truncated %llu, out of order %llu, unknown channel %llu)\n",
+    printf("  records         %llu (corrupt %llu, truncated %llu, out of order %llu, unknown channel %llu;"
+           " %llu bytes skipped, %llu checked by CRC)\n",
            (unsigned long long)reader.count.records, (unsigned long long)reader.count.corrupt,
            (unsigned long long)reader.count.truncated, (unsigned long long)reader.count.out_of_order,
-           (unsigned long long)reader.count.unknown_channel);
+           (unsigned long long)reader.count.unknown_channel, (unsigned long long)reader.count.skipped_bytes,
+           (unsigned long long)reader.count.crc_bytes);
     printf("  robot link      %llu encoder packets, %llu other; checksum errors %u, bytes skipped %u\n",
            (unsigned long long)stream.encoder_packets, (unsigned long long)stream.other_packets,
            (unsigned)stream.aria.stats.checksum_errors, (unsigned)stream.aria.stats.bytes_skipped);
