@@ -398,3 +398,21 @@ def rows_of_clean_run(tmp_path, capture):
     res = run_nav("--capture", capture, "--trajectory", traj, "--quiet")
     assert res.returncode == 0, res.stderr
     return rows(traj)
+
+
+# ---- command line -------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("kv, top", [("iterations=1e12", "4294967295"), ("min_hits=256", "255"),
+                                     ("min_hits=257", "255"), ("seed=1.5", "4294967295"),
+                                     ("k_den=2147483648", "2147483647"), ("rule=3", "2"), ("noise=-1", "1")])
+def test_set_refuses_integers_that_do_not_fit_their_field(tmp_path, head_log, kv, top):
+    res = run_nav("--carmen", head_log, "--trajectory", tmp_path / "t.txt", "--quiet", "--set", kv)
+    assert res.returncode == 2, res.stderr
+    assert f"a whole number from 0 to {top}" in res.stderr, res.stderr
+
+
+def test_set_takes_integers_at_the_top_of_their_field(tmp_path, head_log):
+    res = run_nav("--carmen", head_log, "--trajectory", tmp_path / "t.txt", "--quiet", "--method", "odometry",
+                  "--set", "min_hits=255", "--set", "rule=2", "--set", "seed=4294967295")
+    assert res.returncode == 0, res.stderr

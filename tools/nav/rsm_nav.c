@@ -56,7 +56,16 @@ static void usage(FILE *f)
             "mount_x, mount_y, mount_theta, upside_down (as --laser-pose and --upside-down).\n");
 }
 
-static int set_option(rsm_localizer_config_t *c, const char *kv)
+/* The largest value an integer field of this size holds (enums: int). */
+static double set_option_max(size_t size, int is_unsigned)
+{
+    const double bits = (double)size * 8.0 - (is_unsigned ? 0.0 : 1.0);
+    return pow(2.0, bits) - 1.0;
+}
+
+/* Sets one KEY=VALUE. Returns 0, -1 (unknown key or not a number) or -2
+ * (an integer field and VALUE is not a whole number from 0 to *top_out). */
+static int set_option(rsm_localizer_config_t *c, const char *kv, double *top_out)
 {
     const char *eq = strchr(kv, '=');
     char key[64];
@@ -73,18 +82,30 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     if (*end != '\0' || end == eq + 1 || errno != 0 || !isfinite(v)) {
         return -1;
     }
+/* Integers must fit their field: a silent conversion would turn 257 into 1
+ * and 1e12 into undefined behaviour. */
 #define F(name, field) if (strcmp(key, name) == 0) { c->field = (float)v; return 0; }
-#define U(name, field, type) if (strcmp(key, name) == 0) { if (v < 0) return -1; c->field = (type)v; return 0; }
+#define U(name, field, type) E(name, field, type, set_option_max(sizeof(c->field), (type)-1 > 0))
+#define E(name, field, type, maxv) \
+    if (strcmp(key, name) == 0) { \
+        const double top = (maxv); \
+        if (!(v >= 0.0 && v <= top) || v != floor(v)) { \
+            *top_out = top; \
+            return -2; \
+        } \
+        c->field = (type)v; \
+        return 0; \
+    }
     F("cell", grid.cell_m)
     F("sigma", grid.sigma_m)
-    U("rule", grid.rule, rsm_grid_rule_t)
+    E("rule", grid.rule, rsm_grid_rule_t, 2.0)
     U("min_hits", map_min_hits, uint8_t)
     F("window", match_window_m)
     F("search_sigmas", search_sigmas)
     F("search_min", search_min_m)
     F("search_max", search_max_m)
     F("gate", gate_d2)
-    U("noise", noise, rsm_noise_model_t)
+    E("noise", noise, rsm_noise_model_t, 1.0)
     F("r_min_xy", r_min_xy_m)
     F("r_min_theta", r_min_theta_rad)
     F("inlier_tol", ransac.inlier_tol_m)
@@ -131,6 +152,7 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     F("map_update_rad", map_update_rad)
 #undef F
 #undef U
+#undef E
     return -1;
 }
 
@@ -846,7 +868,13 @@ int main(int argc, char **argv)
                 return 2;
             }
         } else if (strcmp(a, "--set") == 0 && next) {
-            if (set_option(&nav.cfg, argv[++i]) != 0) {
+            double top = 0.0;
+            const int set = set_option(&nav.cfg, argv[++i], &top);
+            if (set == -2) {
+                fprintf(stderr, "rsm-nav: bad --set '%s': a whole number from 0 to %.0f\n", argv[i], top);
+                return 2;
+            }
+            if (set != 0) {
                 fprintf(stderr, "rsm-nav: bad --set '%s'\n", argv[i]);
                 return 2;
             }
