@@ -191,7 +191,11 @@ typedef struct rsm_localizer {
 } rsm_localizer_t;
 
 /* Validates cfg (and each module's part) and starts at pose x0 with
- * covariance p0 (NULL: zero). Returns RSM_OK or RSM_ERR_INVAL. */
+ * covariance p0 (NULL: zero). Returns RSM_OK or RSM_ERR_INVAL. Coordinates
+ * must stay within 1e6 m of the origin (the paper's method refuses a start
+ * beyond it; the maps drop points beyond it), and floats resolve only
+ * centimetres from about 1e5 m on: far from the origin, work in a frame
+ * centred near the robot (docs/robustness.md, "Coordinates"). */
 int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, const rsm_pose_t *x0,
                        const float p0[9]);
 

@@ -416,3 +416,67 @@ def test_set_takes_integers_at_the_top_of_their_field(tmp_path, head_log):
     res = run_nav("--carmen", head_log, "--trajectory", tmp_path / "t.txt", "--quiet", "--method", "odometry",
                   "--set", "min_hits=255", "--set", "rule=2", "--set", "seed=4294967295")
     assert res.returncode == 0, res.stderr
+
+
+# ---- coordinates far from the origin, and what the start pose messages say ---------------
+
+
+def shifted_log(head_log, path: Path, dx: float):
+    text = gzip.decompress(head_log.read_bytes()).decode()
+    out = []
+    for line in text.splitlines():
+        f = line.split()
+        if f and f[0] == "FLASER":
+            for k in (-9, -8, -6, -5):  # laser x y, odometry x y
+                f[k] = repr(float(f[k]) + dx)
+            line = " ".join(f)
+        out.append(line)
+    path.write_text("\n".join(out) + "\n")
+
+
+@pytest.mark.parametrize("method", ["rsm", "paper"])
+def test_a_log_far_from_the_origin_tracks_as_it_does_near_it(tmp_path, head_log, method):
+    """5e5 m out a float resolves 3 cm: rsm-nav runs the localizer in a
+    frame centred on the start and adds the offset back to its outputs."""
+    near = tmp_path / "near.txt"
+    res = run_nav("--carmen", head_log, "--trajectory", near, "--quiet", "--method", method)
+    assert res.returncode == 0, res.stderr
+    for dx in (5e5, 2e6):
+        log = tmp_path / f"far{dx:.0f}.clf"
+        shifted_log(head_log, log, dx)
+        far = tmp_path / f"far{dx:.0f}.txt"
+        res_far = run_nav("--carmen", log, "--trajectory", far, "--quiet", "--method", method,
+                          "--map", tmp_path / "m.pgm")
+        assert res_far.returncode == 0, res_far.stderr
+        outcomes = [l for l in res.stdout.splitlines() if l.startswith("    ")]
+        assert outcomes == [l for l in res_far.stdout.splitlines() if l.startswith("    ")], res_far.stdout
+        for a, b in zip(rows(near), rows(far)):
+            a, b = a.split(), b.split()
+            assert abs(float(a[1]) + dx - float(b[1])) < 1e-3 and abs(float(a[2]) + dx - float(b[2])) < 1e-3
+        x0, _ = yaml_origin(tmp_path / "m.yaml")
+        assert abs(x0 - dx) < 100.0
+
+
+def with_metadata(src: Path, dst: Path, **meta):
+    data = src.read_bytes()
+    with open(src, "rb") as fh:
+        header, size = cap.read_header(fh)
+    for key, value in meta.items():
+        header.metadata[key.replace("__", ".")] = value
+    dst.write_bytes(cap.encode_header(header) + data[size:])
+    return dst
+
+
+def test_a_start_pose_that_is_not_finite_is_named(tmp_path, head_capture):
+    bad = with_metadata(head_capture, tmp_path / "nan.cap", robot__initial_pose="nan 0 0")
+    res = run_nav("--capture", bad, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 2, res.stderr
+    assert "start pose from the capture's robot.initial_pose is not finite" in res.stderr, res.stderr
+    assert "invalid configuration" not in res.stderr
+
+
+def test_a_capture_with_nonsense_geometry_is_named(tmp_path, head_capture):
+    bad = with_metadata(head_capture, tmp_path / "geom.cap", robot__ticks_per_m="nan")
+    res = run_nav("--capture", bad, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 1, res.stderr
+    assert "robot.ticks_per_m is 'nan', not a positive number" in res.stderr, res.stderr

@@ -107,6 +107,16 @@ static rsm_pose_t mount_from(const double robot[3], const double laser[3])
 
 #define MAX_FIELDS 4096
 
+static void set_odom(carmen_record_t *rec, const double pose[3])
+{
+    rec->odom_d[0] = pose[0];
+    rec->odom_d[1] = pose[1];
+    rec->odom_d[2] = pose[2];
+    rec->odom.x = (float)pose[0];
+    rec->odom.y = (float)pose[1];
+    rec->odom.theta = (float)pose[2];
+}
+
 /* A count of readings: a whole number in 0..MAX_FIELDS (NaN and fractions
  * are malformed; converting them to size_t would be undefined). */
 static int count_field(const char *s, size_t *out)
@@ -153,9 +163,7 @@ static carmen_kind_t parse_flaser(carmen_reader_t *r, char **f, size_t nf, carme
         if (lp < 0 || op < 0 || !isfinite(ts)) {
             return CARMEN_BAD_POSE;
         }
-        rec->odom.x = (float)odom[0];
-        rec->odom.y = (float)odom[1];
-        rec->odom.theta = (float)odom[2];
+        set_odom(rec, odom);
         rec->stamp_s = ts;
         /* Identical triples (Intel, ACES) say nothing about the mount. */
         rec->has_mount = laser[0] != odom[0] || laser[1] != odom[1] || laser[2] != odom[2];
@@ -220,9 +228,7 @@ static carmen_kind_t parse_robotlaser(carmen_reader_t *r, char **f, size_t nf, c
         if (lp < 0 || rp < 0 || !isfinite(ts)) {
             return CARMEN_BAD_POSE;
         }
-        rec->odom.x = (float)robot[0];
-        rec->odom.y = (float)robot[1];
-        rec->odom.theta = (float)robot[2];
+        set_odom(rec, robot);
         rec->stamp_s = ts;
         rec->has_mount = 1;
         rec->mount = mount_from(robot, laser);
@@ -247,9 +253,10 @@ static carmen_kind_t parse_odom(char **f, size_t nf, carmen_record_t *rec)
     if (!isfinite(x) || !isfinite(y) || !isfinite(t) || !isfinite(ts)) {
         return CARMEN_BAD_POSE;
     }
-    rec->odom.x = (float)x;
-    rec->odom.y = (float)y;
-    rec->odom.theta = (float)t;
+    {
+        const double pose[3] = {x, y, t};
+        set_odom(rec, pose);
+    }
     rec->stamp_s = ts;
     rec->count = 0;
     rec->has_mount = 0;

@@ -39,6 +39,7 @@ typedef struct carmen_record {
     const char *type;          /* the record's keyword: "FLASER", "ROBOTLASER1" or "ODOM" */
     double stamp_s;            /* ipc timestamp */
     rsm_pose_t odom;           /* odometry pose (FLASER odom triple, or ODOM x y theta) */
+    double odom_d[3];          /* the same as read, in double: log poses can be far from the origin */
     size_t count;              /* readings (scans) */
     float range_m[RSM_MAX_BEAMS];
     float start_rad;           /* angle of reading 0 */

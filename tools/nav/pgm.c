@@ -137,7 +137,7 @@ static int write_yaml(const char *pgm_path, float res, double x0, double y0)
     return fclose(f) == 0 ? 0 : -1;
 }
 
-int pgm_write_map(const char *pgm_path, const hitmap_t *h, double *w_m, double *h_m)
+int pgm_write_map(const char *pgm_path, const hitmap_t *h, double off_x, double off_y, double *w_m, double *h_m)
 {
     const int64_t margin = (int64_t)ceilf(PGM_MARGIN_M / h->res_m);
     int64_t x0;
@@ -187,5 +187,5 @@ int pgm_write_map(const char *pgm_path, const hitmap_t *h, double *w_m, double *
     if (fclose(f) != 0) {
         return -1;
     }
-    return write_yaml(pgm_path, h->res_m, (double)x0 * (double)h->res_m, (double)y0 * (double)h->res_m);
+    return write_yaml(pgm_path, h->res_m, off_x + (double)x0 * (double)h->res_m, off_y + (double)y0 * (double)h->res_m);
 }

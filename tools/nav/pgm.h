@@ -37,8 +37,9 @@ void hitmap_free(hitmap_t *h);
 /* Writes PGM (ROS map_server conventions: 0 occupied, 205 unknown) and a
  * YAML beside it (same name, .yaml). Returns 0, PGM_TOO_LARGE (the picture
  * would span more than PGM_MAX_SIDE cells; *w_m and *h_m say how far) or
- * -1 (cannot write; errno says why). */
+ * -1 (cannot write; errno says why). The points are in a frame shifted by
+ * (off_x, off_y) metres from the world's: the YAML origin adds it back. */
 #define PGM_TOO_LARGE (-2)
-int pgm_write_map(const char *pgm_path, const hitmap_t *h, double *w_m, double *h_m);
+int pgm_write_map(const char *pgm_path, const hitmap_t *h, double off_x, double off_y, double *w_m, double *h_m);
 
 #endif

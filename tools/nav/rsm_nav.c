@@ -195,6 +195,10 @@ typedef struct nav {
     FILE *events;          /* --events: decoded inputs, one line each, in processing order */
     int have_x0;           /* --initial-pose given: overrides any other start */
     rsm_pose_t x0;
+    /* Far from the origin the localizer runs in a frame shifted by this
+     * (metres, added back to every output): floats resolve 3 cm at 5e5 m. */
+    double off_x;
+    double off_y;
     /* Capture and live modes: odometry and scans aligned in time (sync.h). */
     rsm_sync_config_t sync_cfg;
     rsm_sync_t sync;
@@ -211,22 +215,49 @@ typedef struct nav {
 
 static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep);
 
-/* Starts the localizer once, at x0 (NULL: zero) unless --initial-pose
- * gave the start. */
-static int nav_start(nav_t *nav, const rsm_pose_t *x0)
+/* Beyond this distance of the start from the origin, the localizer works in
+ * a frame centred on the start (see off_x). */
+#define NAV_LOCAL_FRAME_M 1000.0
+
+/* Starts the localizer once, at x0 (x, y, theta; NULL: zero) unless
+ * --initial-pose gave the start; where is the start's source, for messages. */
+static int nav_start(nav_t *nav, const double *x0, const char *where)
 {
-    static const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+    double x = 0.0;
+    double y = 0.0;
+    double th = 0.0;
+    rsm_pose_t start;
     if (nav->initialised) {
         return 0;
     }
     if (nav->have_x0) {
-        x0 = &nav->x0;
-    } else if (x0 == NULL) {
-        x0 = &zero;
+        x = nav->x0.x;
+        y = nav->x0.y;
+        th = nav->x0.theta;
+        where = "--initial-pose";
+    } else if (x0 != NULL) {
+        x = x0[0];
+        y = x0[1];
+        th = x0[2];
     }
-    if (rsm_localizer_init(&nav->loc, &nav->cfg, x0, NULL) != RSM_OK ||
-        rsm_sync_init(&nav->sync, &nav->loc, &nav->sync_cfg, on_fused, nav) != RSM_OK) {
-        fprintf(stderr, "rsm-nav: invalid configuration\n");
+    if (!isfinite(x) || !isfinite(y) || !isfinite(th)) {
+        fprintf(stderr, "rsm-nav: the start pose from %s is not finite (%g %g %g)\n", where, x, y, th);
+        return -1;
+    }
+    if (fabs(x) > NAV_LOCAL_FRAME_M || fabs(y) > NAV_LOCAL_FRAME_M) {
+        nav->off_x = x;
+        nav->off_y = y;
+    }
+    start.x = (float)(x - nav->off_x);
+    start.y = (float)(y - nav->off_y);
+    start.theta = rsm_wrap_angle((float)th);
+    if (rsm_localizer_init(&nav->loc, &nav->cfg, &start, NULL) != RSM_OK) {
+        fprintf(stderr, "rsm-nav: invalid configuration (a --set value, the laser pose or the odometry"
+                        " geometry is out of range)\n");
+        return -1;
+    }
+    if (rsm_sync_init(&nav->sync, &nav->loc, &nav->sync_cfg, on_fused, nav) != RSM_OK) {
+        fprintf(stderr, "rsm-nav: invalid alignment settings\n");
         return -1;
     }
     nav->initialised = 1;
@@ -282,8 +313,8 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
         fprintf(stderr, "rsm-nav: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
         return;
     }
-    fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, (double)rep->pose.x, (double)rep->pose.y,
-            (double)rep->pose.theta);
+    fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, nav->off_x + (double)rep->pose.x,
+            nav->off_y + (double)rep->pose.y, (double)rep->pose.theta);
     if (nav->map_path != NULL) {
         nav_map_points(nav, rep);
     }
@@ -298,7 +329,7 @@ static void nav_scan(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us, double fil
     rsm_localizer_report_t rep;
     double t0;
     int rc;
-    if (nav_start(nav, NULL) != 0) {
+    if (nav_start(nav, NULL, "the default") != 0) {
         return;
     }
     nav_clamp(nav, scan, stamp_us);
@@ -326,7 +357,7 @@ static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_lo
 static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us, int restart)
 {
     nav_t *nav = (nav_t *)ctx;
-    if (nav_start(nav, NULL) != 0) {
+    if (nav_start(nav, NULL, "the default") != 0) {
         return;
     }
     if (restart) {
@@ -371,7 +402,7 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
         }
         fprintf(nav->events, "S %zu %08lx\n", scan->count, (unsigned long)h);
     }
-    if (nav_start(nav, NULL) != 0) {
+    if (nav_start(nav, NULL, "the default") != 0) {
         return;
     }
     copy = *scan;
@@ -430,12 +461,28 @@ static void carmen_mount(nav_t *nav, const char *path, int fov179, rsm_pose_t *l
     carmen_close(&ahead);
 }
 
+/* The increment between two log poses, in double: far from the origin a
+ * float difference loses centimetres. */
+static rsm_motion_t motion_between(const double a[3], const double b[3])
+{
+    const double dx = b[0] - a[0];
+    const double dy = b[1] - a[1];
+    const double c = cos(a[2]);
+    const double s = sin(a[2]);
+    const double dt = b[2] - a[2];
+    rsm_motion_t u;
+    u.dx = (float)(c * dx + s * dy);
+    u.dy = (float)(-s * dx + c * dy);
+    u.dtheta = (float)atan2(sin(dt), cos(dt));
+    return u;
+}
+
 static int run_carmen(nav_t *nav, const char *path, int fov179)
 {
     static carmen_reader_t reader;
     static carmen_record_t rec;
     static rsm_scan_t scan;
-    rsm_pose_t last_odom = {0.0f, 0.0f, 0.0f};
+    double last_odom[3] = {0.0, 0.0, 0.0};
     rsm_pose_t log_mount = {0.0f, 0.0f, 0.0f};
     int have_log_mount;
     int have_odom = 0;
@@ -467,15 +514,15 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
             nav->mount_disagree++;
         }
         /* Start in the odometry frame so the trajectories are comparable. */
-        if (nav_start(nav, &rec.odom) != 0) {
+        if (nav_start(nav, rec.odom_d, "the log's first pose") != 0) {
             carmen_close(&reader);
             return 2;
         }
         if (have_odom) {
-            const rsm_motion_t u = rsm_odometry_from_poses(&last_odom, &rec.odom);
+            const rsm_motion_t u = motion_between(last_odom, rec.odom_d);
             (void)rsm_localizer_motion(&nav->loc, &u);
         }
-        last_odom = rec.odom;
+        memcpy(last_odom, rec.odom_d, sizeof last_odom);
         have_odom = 1;
         for (b = 0; b < rec.count; ++b) {
             scan.range_m[b] = rec.range_m[b];
@@ -544,6 +591,20 @@ static void load_restore_table(nav_t *nav, const char *text)
     }
 }
 
+/* A capture metadata value that must be a positive number; 0 or -1 (said why). */
+static int positive_meta(const char *path, const char *key, const char *text, float *out)
+{
+    char *end;
+    const float v = strtof(text, &end);
+    if (end == text || !isfinite(v) || !(v > 0.0f)) {
+        fprintf(stderr, "rsm-nav: %s: %s is '%s', not a positive number (give --ticks-per-m / --wheel-base)\n",
+                path, key, text);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
 static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *sink)
 {
     static cap_reader reader;
@@ -574,21 +635,27 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
     }
     /* Geometry recorded with the capture, unless given on the command line. */
     if ((v = meta(&reader, "robot.ticks_per_m")) != NULL && nav->cfg.odometry.ticks_per_m_left == 0.0f) {
-        nav->cfg.odometry.ticks_per_m_left = nav->cfg.odometry.ticks_per_m_right = strtof(v, NULL);
+        if (positive_meta(path, "robot.ticks_per_m", v, &nav->cfg.odometry.ticks_per_m_left) != 0) {
+            cap_close(&reader);
+            fclose(fp);
+            return 1;
+        }
+        nav->cfg.odometry.ticks_per_m_right = nav->cfg.odometry.ticks_per_m_left;
     }
-    if ((v = meta(&reader, "robot.wheel_base_m")) != NULL && nav->cfg.odometry.wheel_base_m == 0.0f) {
-        nav->cfg.odometry.wheel_base_m = strtof(v, NULL);
+    if ((v = meta(&reader, "robot.wheel_base_m")) != NULL && nav->cfg.odometry.wheel_base_m == 0.0f &&
+        positive_meta(path, "robot.wheel_base_m", v, &nav->cfg.odometry.wheel_base_m) != 0) {
+        cap_close(&reader);
+        fclose(fp);
+        return 1;
     }
     if ((v = meta(&reader, "convert.clamped")) != NULL) {
         load_restore_table(nav, v);
     }
     {
-        rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};
-        float a, b, c;
-        if ((v = meta(&reader, "robot.initial_pose")) != NULL && sscanf(v, "%f %f %f", &a, &b, &c) == 3) {
-            x0.x = a;
-            x0.y = b;
-            x0.theta = c;
+        double x0[3] = {0.0, 0.0, 0.0};
+        if ((v = meta(&reader, "robot.initial_pose")) != NULL &&
+            sscanf(v, "%lf %lf %lf", &x0[0], &x0[1], &x0[2]) != 3) {
+            x0[0] = x0[1] = x0[2] = 0.0;
         }
         if (nav->cfg.odometry.ticks_per_m_left == 0.0f) {
             const rsm_odometry_config_t d = rsm_odometry_config_default();
@@ -598,7 +665,7 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
         if (nav->cfg.odometry.wheel_base_m == 0.0f) {
             nav->cfg.odometry.wheel_base_m = rsm_odometry_config_default().wheel_base_m;
         }
-        if (nav_start(nav, &x0) != 0) {
+        if (nav_start(nav, x0, "the capture's robot.initial_pose") != 0) {
             cap_close(&reader);
             fclose(fp);
             return 2;
@@ -965,7 +1032,7 @@ int main(int argc, char **argv)
     if (rc == 0 && nav.map_path != NULL) {
         double w_m = 0.0;
         double h_m = 0.0;
-        const int m = pgm_write_map(nav.map_path, &nav.hits, &w_m, &h_m);
+        const int m = pgm_write_map(nav.map_path, &nav.hits, nav.off_x, nav.off_y, &w_m, &h_m);
         if (m == PGM_TOO_LARGE) {
             fprintf(stderr,
                     "rsm-nav: map %s not written: it would span %.0f m x %.0f m, over the %.0f m the"
