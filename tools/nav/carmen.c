@@ -88,16 +88,17 @@ static int pose3(char **f, double v[3])
     return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]) ? 1 : -1;
 }
 
-/* The laser's pose in the robot frame, both given in the same (odometry)
- * frame. Doubles: log poses can be hundreds of metres from the origin, where
- * a float keeps only about 0.1 mm. */
-static rsm_pose_t mount_from(const double robot[3], const double laser[3])
+/* The pose "to" seen from the pose "from", both in the same (odometry)
+ * frame: the laser's mount from the robot and laser poses, or an odometry
+ * increment. Doubles: log poses can be hundreds of metres from the origin,
+ * where a float keeps only about 0.1 mm. */
+rsm_pose_t carmen_between(const double from[3], const double to[3])
 {
-    const double dx = laser[0] - robot[0];
-    const double dy = laser[1] - robot[1];
-    const double c = cos(robot[2]);
-    const double s = sin(robot[2]);
-    const double dt = laser[2] - robot[2];
+    const double dx = to[0] - from[0];
+    const double dy = to[1] - from[1];
+    const double c = cos(from[2]);
+    const double s = sin(from[2]);
+    const double dt = to[2] - from[2];
     rsm_pose_t m;
     m.x = (float)(c * dx + s * dy);
     m.y = (float)(-s * dx + c * dy);
@@ -169,7 +170,7 @@ static carmen_kind_t parse_flaser(carmen_reader_t *r, char **f, size_t nf, carme
         rec->has_mount = laser[0] != odom[0] || laser[1] != odom[1] || laser[2] != odom[2];
         if (rec->has_mount) {
             r->counts.flaser_offset++;
-            rec->mount = mount_from(odom, laser);
+            rec->mount = carmen_between(odom, laser);
         }
     }
     rec->count = n;
@@ -231,7 +232,7 @@ static carmen_kind_t parse_robotlaser(carmen_reader_t *r, char **f, size_t nf, c
         set_odom(rec, robot);
         rec->stamp_s = ts;
         rec->has_mount = 1;
-        rec->mount = mount_from(robot, laser);
+        rec->mount = carmen_between(robot, laser);
     }
     rec->count = n;
     rec->start_rad = (float)start;

@@ -76,6 +76,10 @@ carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec);
  * (it is then the record's line number). */
 carmen_kind_t carmen_next_mount(carmen_reader_t *r, carmen_record_t *rec);
 
+/* The pose "to" seen from "from" (x, y, theta each, same frame), computed in
+ * double. */
+rsm_pose_t carmen_between(const double from[3], const double to[3]);
+
 /* Why the last CARMEN_ERROR happened. */
 const char *carmen_error(const carmen_reader_t *r);
 

@@ -461,22 +461,6 @@ static void carmen_mount(nav_t *nav, const char *path, int fov179, rsm_pose_t *l
     carmen_close(&ahead);
 }
 
-/* The increment between two log poses, in double: far from the origin a
- * float difference loses centimetres. */
-static rsm_motion_t motion_between(const double a[3], const double b[3])
-{
-    const double dx = b[0] - a[0];
-    const double dy = b[1] - a[1];
-    const double c = cos(a[2]);
-    const double s = sin(a[2]);
-    const double dt = b[2] - a[2];
-    rsm_motion_t u;
-    u.dx = (float)(c * dx + s * dy);
-    u.dy = (float)(-s * dx + c * dy);
-    u.dtheta = (float)atan2(sin(dt), cos(dt));
-    return u;
-}
-
 static int run_carmen(nav_t *nav, const char *path, int fov179)
 {
     static carmen_reader_t reader;
@@ -519,7 +503,9 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
             return 2;
         }
         if (have_odom) {
-            const rsm_motion_t u = motion_between(last_odom, rec.odom_d);
+            /* In double: far from the origin a float difference loses centimetres. */
+            const rsm_pose_t d = carmen_between(last_odom, rec.odom_d);
+            const rsm_motion_t u = {d.x, d.y, d.theta};
             (void)rsm_localizer_motion(&nav->loc, &u);
         }
         memcpy(last_odom, rec.odom_d, sizeof last_odom);
