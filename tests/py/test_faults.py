@@ -480,3 +480,82 @@ def test_a_capture_with_nonsense_geometry_is_named(tmp_path, head_capture):
     res = run_nav("--capture", bad, "--trajectory", tmp_path / "t.txt", "--quiet")
     assert res.returncode == 1, res.stderr
     assert "robot.ticks_per_m is 'nan', not a positive number" in res.stderr, res.stderr
+
+
+# ---- one bad timestamp must not poison the rest ---------------------------------------------
+
+
+def clamped_count(stdout: str) -> int:
+    return number(r"timestamps +(\d+) clamped", stdout)
+
+
+def test_one_odd_carmen_stamp_does_not_clamp_every_later_scan(tmp_path, head_log):
+    lines = flaser_lines(head_log, 200)
+    clean = tmp_path / "clean.clf"
+    clean.write_text("\n".join(lines) + "\n")
+    ref = run_nav("--carmen", clean, "--trajectory", tmp_path / "r.txt", "--quiet")
+    assert ref.returncode == 0, ref.stderr
+    odd = list(lines)
+    odd[50] = with_fields(odd[50], o3="-5.0")                         # negative
+    odd[120] = with_fields(odd[120], o3=f"{4e9:.6f}")                 # far future
+    log = tmp_path / "odd.clf"
+    log.write_text("\n".join(odd) + "\n")
+    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert clamped_count(res.stdout) == clamped_count(ref.stdout), res.stdout
+    assert "2 odd" in res.stdout, res.stdout
+    assert len(rows(tmp_path / "t.txt")) == 200
+
+
+def test_a_real_jump_of_the_clock_is_taken_once(tmp_path, head_log):
+    lines = flaser_lines(head_log, 200)
+    jumped = lines[:100] + [stamped(l, float(l.split()[-3]) + 7200.0) for l in lines[100:]]
+    log = tmp_path / "jump.clf"
+    log.write_text("\n".join(jumped) + "\n")
+    clean = tmp_path / "clean.clf"
+    clean.write_text("\n".join(lines) + "\n")
+    ref = run_nav("--carmen", clean, "--trajectory", tmp_path / "r.txt", "--quiet")
+    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert "1 odd" in res.stdout and "1 jumps of the clock" in res.stdout, res.stdout
+    assert clamped_count(res.stdout) == clamped_count(ref.stdout), res.stdout
+
+
+def restamped_capture(src: Path, dst: Path, changes: dict):
+    """The capture with some records' stamps replaced (index -> stamp or a
+    function of the old stamp), CRCs recomputed."""
+    data = src.read_bytes()
+    with open(src, "rb") as fh:
+        _, size = cap.read_header(fh)
+    with cap.CaptureReader(src) as r:
+        recs = list(r)
+    out = bytearray(data[:size])
+    for k, rec in enumerate(recs):
+        ts = rec.timestamp
+        if k in changes:
+            ts = changes[k](ts) if callable(changes[k]) else changes[k]
+        out += cap.encode_record(ts, rec.channel, rec.direction, rec.data)
+    dst.write_bytes(bytes(out))
+    return len(recs)
+
+
+def test_one_far_future_capture_record_does_not_drop_the_rest(tmp_path, head_capture):
+    n = restamped_capture(head_capture, tmp_path / "far.cap", {300: 2 ** 62})
+    res = run_nav("--capture", tmp_path / "far.cap", "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert f"records         {n - 1} (corrupt 0, truncated 0, out of order 1," in res.stdout, res.stdout
+    _, recs, stats = cap.read_capture(tmp_path / "far.cap", lenient=True)
+    assert (len(recs), stats.out_of_order) == (n - 1, 1)
+    ref = rows_of_clean_run(tmp_path, head_capture)
+    assert len(rows(tmp_path / "t.txt")) >= len(ref) - 1
+
+
+def test_a_capture_whose_clock_jumps_is_read_on(tmp_path, head_capture):
+    hour2 = 7_200_000_000
+    n = restamped_capture(head_capture, tmp_path / "jump.cap",
+                          {k: (lambda t: t + hour2) for k in range(300, 100000)})
+    res = run_nav("--capture", tmp_path / "jump.cap", "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert f"records         {n - 1} (corrupt 0, truncated 0, out of order 1," in res.stdout, res.stdout
+    _, recs, stats = cap.read_capture(tmp_path / "jump.cap", lenient=True)
+    assert (len(recs), stats.out_of_order) == (n - 1, 1)

@@ -182,8 +182,15 @@ typedef struct nav {
     double *times;
     size_t ntimes;
     size_t cap_times;
-    uint64_t last_us;
+    uint64_t last_us;      /* the localizer's time of the last scan */
     uint64_t clamped;
+    int have_stamp;
+    uint64_t src_last_us;  /* the source's stamp of the last scan taken */
+    uint64_t base_us;      /* localizer time = source stamp + base (modulo 2^64) */
+    int have_odd;
+    uint64_t odd_us;       /* a stamp far from the previous one, not yet confirmed */
+    uint64_t odd_stamps;
+    uint64_t time_jumps;
     double t_start;
     /* Capture mode: original stamps of scans whose stamp the converter clamped. */
     uint64_t *restore_idx;
@@ -266,15 +273,43 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
 
 /* Log and capture timestamps can jitter backwards while the order of the
  * records is the true order (the Intel log does so 631 times): the
- * localizer gets a clamped stamp, counted; the trajectory keeps the original. */
+ * localizer gets a clamped stamp, counted; the trajectory keeps the original.
+ * One stamp far from its neighbours (a negative or far-future stamp in a
+ * log) is not trusted alone, or it would clamp every later scan: it gets
+ * the previous stamp (counted as odd) unless the next one agrees with it;
+ * then the clock really jumped and the localizer's time carries on from
+ * where it was (no time passes across the jump). */
+#define NAV_MAX_STEP_US 3600000000ull
+
+static uint64_t stamp_gap(uint64_t a, uint64_t b)
+{
+    return a > b ? a - b : b - a;
+}
+
 static void nav_clamp(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us)
 {
-    if (stamp_us < nav->last_us) {
-        stamp_us = nav->last_us;
+    uint64_t t;
+    if (nav->have_stamp && stamp_gap(stamp_us, nav->src_last_us) > NAV_MAX_STEP_US) {
+        if (!nav->have_odd || stamp_gap(stamp_us, nav->odd_us) > NAV_MAX_STEP_US) {
+            nav->odd_us = stamp_us;
+            nav->have_odd = 1;
+            nav->odd_stamps++;
+            scan->stamp_us = nav->last_us;
+            return;
+        }
+        nav->time_jumps++;
+        nav->base_us = nav->last_us - stamp_us; /* modulo 2^64, so either direction works */
+    }
+    nav->have_odd = 0;
+    nav->have_stamp = 1;
+    nav->src_last_us = stamp_us;
+    t = stamp_us + nav->base_us;
+    if (t < nav->last_us) {
+        t = nav->last_us;
         nav->clamped++;
     }
-    nav->last_us = stamp_us;
-    scan->stamp_us = stamp_us;
+    nav->last_us = t;
+    scan->stamp_us = t;
 }
 
 /* This scan's usable readings (the localizer's robot-frame points, filled
@@ -514,7 +549,10 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
             scan.range_m[b] = rec.range_m[b];
         }
         (void)rsm_scan_set_uniform(&scan, rec.count, rec.start_rad, rec.step_rad);
-        nav_scan(nav, &scan, (uint64_t)llround(rec.stamp_s * 1e6), rec.stamp_s);
+        /* A negative or absurd stamp becomes the farthest one: odd to nav_clamp. */
+        nav_scan(nav, &scan,
+                 rec.stamp_s >= 0.0 && rec.stamp_s < 1.8e13 ? (uint64_t)llround(rec.stamp_s * 1e6) : UINT64_MAX,
+                 rec.stamp_s);
     }
     carmen_close(&reader);
     printf("rsm-nav summary\n");
@@ -773,7 +811,10 @@ static void print_summary(nav_t *nav)
                (unsigned)m->counters.evicted, (unsigned)m->counters.dropped);
         printf("  recovery        %u searches, %u taken\n", (unsigned)c->searches, (unsigned)c->recovered);
     }
-    printf("  timestamps      %llu clamped (went backwards)\n", (unsigned long long)nav->clamped);
+    printf("  timestamps      %llu clamped (went backwards), %llu odd (far from both neighbours: replaced),"
+           " %llu jumps of the clock\n",
+           (unsigned long long)nav->clamped, (unsigned long long)nav->odd_stamps,
+           (unsigned long long)nav->time_jumps);
     printf("  scans           %u\n", (unsigned)c->scans);
     for (o = 0; o < RSM_SCAN_OUTCOMES; ++o) {
         if (c->outcome[o] != 0) {
