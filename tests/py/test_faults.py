@@ -559,3 +559,50 @@ def test_a_capture_whose_clock_jumps_is_read_on(tmp_path, head_capture):
     assert f"records         {n - 1} (corrupt 0, truncated 0, out of order 1," in res.stdout, res.stdout
     _, recs, stats = cap.read_capture(tmp_path / "jump.cap", lenient=True)
     assert (len(recs), stats.out_of_order) == (n - 1, 1)
+
+
+# ---- the C and Python capture readers refuse the same headers ---------------------------------
+
+
+def raw_header(body: bytes) -> bytes:
+    import struct
+    import zlib
+    fixed = cap.MAGIC + struct.pack("<HHI", 1, 0, len(body))
+    return fixed + body + struct.pack("<I", zlib.crc32(fixed + body))
+
+
+def header_body(name: bytes = b"robot", key: bytes = b"k", value: bytes = b"v", channels: int = 1) -> bytes:
+    import struct
+    body = bytes([channels])
+    for i in range(channels):
+        body += struct.pack("<BBIB", i, 1, 9600, len(name)) + name
+    return body + struct.pack("<H", 1) + struct.pack("<H", len(key)) + key + struct.pack("<I", len(value)) + value
+
+
+@pytest.mark.parametrize("body", [
+    header_body(channels=0),
+    header_body(name=b"\xff\xfe"),
+    header_body(key=b"\xc3"),                  # cut short
+    header_body(value=b"\xc0\xaf"),            # overlong
+    header_body(value=b"\xed\xa0\x80"),        # a surrogate
+    header_body(value=b"\xf4\x90\x80\x80"),    # past U+10FFFF
+], ids=["no_channels", "name", "key_cut", "overlong", "surrogate", "too_high"])
+def test_both_capture_readers_refuse_the_same_headers(tmp_path, body):
+    import io
+    path = tmp_path / "h.cap"
+    path.write_bytes(raw_header(body))
+    with pytest.raises(cap.HeaderError):
+        cap.read_header(io.BytesIO(path.read_bytes()))
+    res = run_nav("--capture", path, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 1, res.stderr
+    assert "capture header body malformed" in res.stderr, res.stderr
+
+
+def test_both_capture_readers_take_utf8_beyond_ascii(tmp_path):
+    import io
+    path = tmp_path / "h.cap"
+    path.write_bytes(raw_header(header_body(name="läser".encode(), value="\U0010FFFF €".encode())))
+    header, _ = cap.read_header(io.BytesIO(path.read_bytes()))
+    assert header.channels[0].name == "läser"
+    res = run_nav("--capture", path, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr

@@ -112,6 +112,48 @@ const char *cap_error_text(const cap_reader *r) { return r->error; }
 
 static size_t read_full(FILE *fp, uint8_t *p, size_t n) { return fread(p, 1, n, fp); }
 
+/* Whether p[0..n) is well-formed UTF-8 as Python decodes it (no overlong
+ * forms, no surrogates, nothing past U+10FFFF): both readers must refuse
+ * the same headers. */
+static int valid_utf8(const uint8_t *p, size_t n)
+{
+    size_t i = 0;
+    while (i < n) {
+        const uint8_t c = p[i];
+        size_t len;
+        uint8_t lo = 0x80u;
+        uint8_t hi = 0xBFu;
+        size_t k;
+        if (c < 0x80u) {
+            ++i;
+            continue;
+        }
+        if (c >= 0xC2u && c <= 0xDFu) {
+            len = 2;
+        } else if (c >= 0xE0u && c <= 0xEFu) {
+            len = 3;
+            lo = c == 0xE0u ? 0xA0u : 0x80u; /* no overlong */
+            hi = c == 0xEDu ? 0x9Fu : 0xBFu; /* no surrogates */
+        } else if (c >= 0xF0u && c <= 0xF4u) {
+            len = 4;
+            lo = c == 0xF0u ? 0x90u : 0x80u;
+            hi = c == 0xF4u ? 0x8Fu : 0xBFu; /* up to U+10FFFF */
+        } else {
+            return 0;
+        }
+        if (n - i < len || p[i + 1] < lo || p[i + 1] > hi) {
+            return 0;
+        }
+        for (k = 2; k < len; ++k) {
+            if (p[i + k] < 0x80u || p[i + k] > 0xBFu) {
+                return 0;
+            }
+        }
+        i += len;
+    }
+    return 1;
+}
+
 int cap_open(cap_reader *r, FILE *fp, int lenient)
 {
     uint8_t fixed[16], crcb[4];
@@ -155,7 +197,7 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
     /* channels */
     if (hlen < 1u) goto malformed;
     nch = body[0];
-    if (nch > CAP_MAX_CHANNELS) goto malformed;
+    if (nch < 1u || nch > CAP_MAX_CHANNELS) goto malformed;
     off = 1;
     for (i = 0; i < nch; ++i) {
         size_t nl;
@@ -166,7 +208,7 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
         c->baud = rd32(body + off + 2);
         nl = body[off + 6];
         off += 7;
-        if (nl == 0u || off + nl > hlen || c->id == 255u) goto malformed;
+        if (nl == 0u || off + nl > hlen || c->id == 255u || !valid_utf8(body + off, nl)) goto malformed;
         memcpy(c->name, body + off, nl);
         c->name[nl] = '\0';
         off += nl;
@@ -184,11 +226,11 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
             if (o + 2u > hlen) goto malformed;
             kl = rd16(body + o);
             o += 2;
-            if (o + kl + 4u > hlen) goto malformed;
+            if (o + kl + 4u > hlen || !valid_utf8(body + o, kl)) goto malformed;
             o += kl;
             vl = rd32(body + o);
             o += 4;
-            if (vl > hlen - o) goto malformed;
+            if (vl > hlen - o || !valid_utf8(body + o, vl)) goto malformed;
             o += vl;
             text += kl + vl + 2u;
         }

@@ -208,8 +208,8 @@ def read_header(fh: IO[bytes]) -> Tuple[Header, int]:
     try:
         channels = []
         off = 1
-        if body[0] > MAX_CHANNELS:
-            raise ValueError(f"{body[0]} channels (at most {MAX_CHANNELS})")
+        if not 1 <= body[0] <= MAX_CHANNELS:
+            raise ValueError(f"{body[0]} channels (1 to {MAX_CHANNELS})")
         for _ in range(body[0]):
             cid, proto, baud, nl = struct.unpack_from("<BBIB", body, off)
             off += 7
