@@ -11,6 +11,7 @@ import gzip
 import os
 import re
 import signal
+import sys
 import subprocess
 import time
 from pathlib import Path
@@ -606,3 +607,57 @@ def test_both_capture_readers_take_utf8_beyond_ascii(tmp_path):
     assert header.channels[0].name == "läser"
     res = run_nav("--capture", path, "--trajectory", tmp_path / "t.txt", "--quiet")
     assert res.returncode == 0, res.stderr
+
+
+# ---- rsm-replay ---------------------------------------------------------------------------
+
+
+def replay(*args, timeout=60):
+    from conftest import subprocess_env
+    return subprocess.Popen([sys.executable, "-m", "rsm_tools.replay", *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=subprocess_env())
+
+
+def tiny_capture(path: Path, stamps):
+    import struct
+    import zlib
+    body = bytes([1]) + struct.pack("<BBIB", 0, 1, 9600, 5) + b"robot" + struct.pack("<H", 0)
+    fixed = cap.MAGIC + struct.pack("<HHI", 1, 0, len(body))
+    data = fixed + body + struct.pack("<I", zlib.crc32(fixed + body))
+    for k, ts in enumerate(stamps):
+        data += cap.encode_record(ts, 0, cap.RX, bytes([k]) * 10)
+    path.write_bytes(data)
+
+
+def test_replay_shortens_long_pauses_and_survives_the_last_stamp(tmp_path):
+    """A pause of 1 s and one to 2^64-1 us (the latter was an OverflowError
+    traceback, the former slept through)."""
+    path = tmp_path / "gaps.cap"
+    tiny_capture(path, [0, 1_000_000, 2 ** 64 - 1])
+    proc = replay(path, "--pty", "--max-gap", "0.05", "--linger", "0")
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
+    assert "3 records" in err and "2 pauses over 0.05 s shortened" in err, err
+
+
+def test_replay_stops_when_the_pty_reader_goes_away(tmp_path, head_capture):
+    proc = replay(head_capture, "--pty", "--fast", "--wait-open", "--linger", "0", "--stall", "5")
+    try:
+        paths = {}
+        while len(paths) < 2:
+            line = proc.stdout.readline()
+            assert line, proc.stderr.read()
+            name, dev = line.split()
+            paths[name] = dev
+        fds = [os.open(dev, os.O_RDONLY | os.O_NOCTTY) for dev in paths.values()]
+        os.read(fds[0], 100)
+        for fd in fds:
+            os.close(fd)  # the reader dies with most of the capture unread
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 1, err
+    assert "closed it" in err or "nothing read" in err, err
