@@ -661,3 +661,56 @@ def test_replay_stops_when_the_pty_reader_goes_away(tmp_path, head_capture):
             proc.wait()
     assert proc.returncode == 1, err
     assert "closed it" in err or "nothing read" in err, err
+
+
+# ---- rsm-convert ---------------------------------------------------------------------------
+
+
+def run_convert(log, out):
+    from conftest import subprocess_env
+    return subprocess.run([sys.executable, "-m", "rsm_tools.convert", str(log), str(out)], capture_output=True,
+                          text=True, timeout=120, env=subprocess_env())
+
+
+def test_convert_takes_scans_without_readings_and_negative_stamps(tmp_path, head_log):
+    lines = flaser_lines(head_log, 60)
+    f = lines[10].split()
+    lines[10] = " ".join(["FLASER", "0"] + f[182:])          # no readings
+    for k in (0, 1, 30):
+        lines[k] = stamped(lines[k], -5.0 - k)              # negative, at the start and inside
+    log = tmp_path / "odd.clf"
+    log.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "odd.cap"
+    res = run_convert(log, out)
+    assert res.returncode == 0, res.stderr
+    assert "Traceback" not in res.stderr
+    assert "1 FLASER lines without readings sent as odometry only" in res.stderr, res.stderr
+    _, recs, _ = cap.read_capture(out)
+    assert sum(1 for r in recs if r.channel == 1) == 59
+    nav = run_nav("--capture", out, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert nav.returncode == 0, nav.stderr
+    assert len(rows(tmp_path / "t.txt")) == 59
+
+
+def test_convert_says_what_it_skipped(tmp_path, head_log):
+    lines = flaser_lines(head_log, 30)
+    f = lines[5].split()
+    robotlaser = ("ROBOTLASER1 0 -1.5708 3.1416 0.0175 81.9 0.01 0 180 " + " ".join(f[2:182]) + " 0 "
+                  + " ".join(f[182:188]) + " 0 0 0 0 0 " + " ".join(f[188:]))
+    lines.insert(6, robotlaser)
+    lines.insert(8, "FLASER 180 1.0 2.0")
+    log = tmp_path / "mixed.clf"
+    log.write_text("\n".join(lines) + "\n")
+    res = run_convert(log, tmp_path / "mixed.cap")
+    assert res.returncode == 0, res.stderr
+    assert "not converted (only ODOM and FLASER are): 1 ROBOTLASER1" in res.stderr, res.stderr
+    assert "malformed lines skipped: field_count=1" in res.stderr, res.stderr
+
+
+def test_convert_reports_a_truncated_gzip_log(tmp_path, head_log):
+    data = head_log.read_bytes()
+    log = tmp_path / "cut.clf.gz"
+    log.write_bytes(data[:len(data) // 2])
+    res = run_convert(log, tmp_path / "cut.cap")
+    assert res.returncode == 2, res.stderr
+    assert "Traceback" not in res.stderr and "cannot read" in res.stderr, res.stderr

@@ -194,7 +194,7 @@ typedef struct nav {
     double t_start;
     /* Capture mode: original stamps of scans whose stamp the converter clamped. */
     uint64_t *restore_idx;
-    uint64_t *restore_us;
+    int64_t *restore_us;   /* signed: a log's stamp may be negative */
     size_t nrestore;
     size_t restore_next;   /* the table is in scan order: a cursor, not a search */
     uint64_t scan_index;
@@ -419,13 +419,13 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
 {
     static rsm_scan_t copy;
     nav_t *nav = (nav_t *)ctx;
-    uint64_t file_us = stamp_us;
+    double file_s = (double)stamp_us * 1e-6;
     size_t k;
     while (nav->restore_next < nav->nrestore && nav->restore_idx[nav->restore_next] < nav->scan_index) {
         nav->restore_next++;
     }
     if (nav->restore_next < nav->nrestore && nav->restore_idx[nav->restore_next] == nav->scan_index) {
-        file_us = nav->restore_us[nav->restore_next];
+        file_s = (double)nav->restore_us[nav->restore_next] * 1e-6;
     }
     nav->scan_index++;
     if (nav->events != NULL) {
@@ -443,7 +443,7 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
     copy = *scan;
     nav_clamp(nav, &copy, stamp_us);
     /* At most two scans are ever inside the aligner (one waiting, one new). */
-    nav->file_s[(nav->file_head + nav->file_count) % 4u] = (double)file_us * 1e-6;
+    nav->file_s[(nav->file_head + nav->file_count) % 4u] = file_s;
     nav->file_count++;
     nav->call_t0 = now_s();
     if (rsm_sync_scan(&nav->sync, &copy) != RSM_OK) {
@@ -592,13 +592,13 @@ static void load_restore_table(nav_t *nav, const char *text)
     while (p != NULL && *p != '\0') {
         char kind[32];
         unsigned long long idx;
-        unsigned long long orig;
-        unsigned long long written;
-        if (sscanf(p, "%31s %llu %llu %llu", kind, &idx, &orig, &written) == 4 && strcmp(kind, "FLASER") == 0) {
+        long long orig;
+        long long written;
+        if (sscanf(p, "%31s %llu %lld %lld", kind, &idx, &orig, &written) == 4 && strcmp(kind, "FLASER") == 0) {
             if (nav->nrestore == cap) {
                 cap = cap ? cap * 2 : 256;
                 nav->restore_idx = (uint64_t *)realloc(nav->restore_idx, cap * sizeof *nav->restore_idx);
-                nav->restore_us = (uint64_t *)realloc(nav->restore_us, cap * sizeof *nav->restore_us);
+                nav->restore_us = (int64_t *)realloc(nav->restore_us, cap * sizeof *nav->restore_us);
                 if (nav->restore_idx == NULL || nav->restore_us == NULL) {
                     fprintf(stderr, "rsm-nav: out of memory\n");
                     exit(1);
