@@ -714,3 +714,35 @@ def test_convert_reports_a_truncated_gzip_log(tmp_path, head_log):
     res = run_convert(log, tmp_path / "cut.cap")
     assert res.returncode == 2, res.stderr
     assert "Traceback" not in res.stderr and "cannot read" in res.stderr, res.stderr
+
+
+# ---- a checksum-valid but corrupt ENCODER packet ------------------------------------------------
+
+
+def test_a_corrupt_encoder_packet_that_passes_its_checksum_does_not_move_the_robot(tmp_path, head_capture):
+    """ARIA's additive checksum misses two opposite bit flips in one column:
+    such a packet once sent the pose 8 km away for good."""
+    from rsm_tools import protocols as proto
+    data = head_capture.read_bytes()
+    with open(head_capture, "rb") as fh:
+        _, size = cap.read_header(fh)
+    with cap.CaptureReader(head_capture) as r:
+        recs = list(r)
+    robot = [k for k, rec in enumerate(recs) if rec.channel == 0]
+    hit = robot[len(robot) // 2]
+    left, right = proto.decode_encoder(recs[hit].data)
+    out = bytearray(data[:size])
+    for k, rec in enumerate(recs):
+        payload = proto.encode_encoder(left + 2 ** 30, right) if k == hit else rec.data
+        out += cap.encode_record(rec.timestamp, rec.channel, rec.direction, payload)
+    bad = tmp_path / "corrupt.cap"
+    bad.write_bytes(bytes(out))
+    ref = rows_of_clean_run(tmp_path, head_capture)
+    res = run_nav("--capture", bad, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert number(r"(\d+) implausible increments refused", res.stdout) >= 1, res.stdout
+    got = rows(tmp_path / "t.txt")
+    assert len(got) == len(ref)
+    worst = max(abs(float(a.split()[1]) - float(b.split()[1])) + abs(float(a.split()[2]) - float(b.split()[2]))
+                for a, b in zip(ref, got))
+    assert worst < 0.2, worst

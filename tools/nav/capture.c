@@ -400,11 +400,10 @@ static int resync(cap_reader *r)
 /* The sticky read error: the bytes not yet delivered stay unread. */
 static int io_failure(cap_reader *r)
 {
-    char msg[sizeof r->error];
-    snprintf(msg, sizeof msg, "read error at byte %llu after %llu good records: %s",
+    snprintf(r->error, sizeof r->error, "read error at byte %llu after %llu good records: %s",
              (unsigned long long)(r->base + avail(r)), (unsigned long long)r->count.records,
              r->io_errno != 0 ? strerror(r->io_errno) : "unknown cause");
-    return fail(r, CAP_ERR_IO, msg);
+    return CAP_ERR_IO;
 }
 
 static int problem(cap_reader *r, int status, const char *msg)
