@@ -32,12 +32,14 @@ def shim_library() -> Path:
     return lib
 
 
-def run_nav(*args, fault_path=None, fault_after=None, timeout=NAV_TIMEOUT):
+def run_nav(*args, fault_path=None, fault_after=None, timeout=NAV_TIMEOUT, report_open=False):
     env = dict(os.environ)
     if fault_path is not None:
         env["LD_PRELOAD"] = str(shim_library())
         env["RSM_FAULT_PATH"] = str(fault_path)
         env["RSM_FAULT_AFTER"] = str(fault_after)
+        if report_open:
+            env["RSM_FAULT_REPORT_OPEN"] = "1"
         # Under ASan the runtime is not first in the library list: allowed here.
         env["ASAN_OPTIONS"] = (env.get("ASAN_OPTIONS", "") + ":verify_asan_link_order=0").lstrip(":")
     return subprocess.run([str(rsm_nav_binary()), *map(str, args)], capture_output=True, text=True,
@@ -81,6 +83,13 @@ def test_capture_read_error_at_a_record_boundary_stops_flushes_and_fails(tmp_pat
     assert "read error" in res.stderr and "Input/output error" in res.stderr, res.stderr
     assert len(rows(traj)) > 100
     assert rows(traj) == rows(tmp_path / "ref.txt")
+
+
+def test_capture_run_closes_its_file(tmp_path, head_capture):
+    res = run_nav("--capture", head_capture, "--trajectory", tmp_path / "t.txt", "--quiet",
+                  fault_path=head_capture, fault_after=1 << 40, report_open=True)
+    assert res.returncode == 0, res.stderr
+    assert "never closed" not in res.stderr, res.stderr
 
 
 def test_capture_read_error_inside_a_record_is_an_error_not_a_truncated_tail(tmp_path, head_capture):

@@ -6,6 +6,8 @@
  * Files opened with fopen get a stdio stream over the failing reads
  * (glibc's stdio calls its internal read, which a preload cannot replace);
  * files opened with open (zlib's gzopen does) have their read replaced.
+ * With RSM_FAULT_REPORT_OPEN set, a stream of that file still open when the
+ * program exits is reported on stderr ("fault_shim: ... never closed").
  * Nothing else is touched. Test support only: never linked into a tool. */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -26,6 +28,7 @@ typedef ssize_t (*read_fn)(int, void *, size_t);
 typedef FILE *(*fopen_fn)(const char *, const char *);
 
 static int faulty_fd[SHIM_MAX_FDS];
+static int streams_open; /* fopen'ed streams of the file not yet closed */
 static unsigned long long delivered[SHIM_MAX_FDS];
 static int nfaulty;
 
@@ -156,6 +159,7 @@ static int cookie_close(void *cookie)
 {
     const int fd = (int)(intptr_t)cookie;
     const int slot = slot_of(fd);
+    streams_open--;
     if (slot >= 0) {
         untrack(slot);
     }
@@ -174,6 +178,7 @@ static FILE *fopen_common(const char *sym, const char *path, const char *mode)
         if (fd < 0) {
             return NULL;
         }
+        streams_open++;
         return fopencookie((void *)(intptr_t)fd, mode, io);
     }
     {
@@ -192,4 +197,11 @@ FILE *fopen(const char *path, const char *mode)
 FILE *fopen64(const char *path, const char *mode)
 {
     return fopen_common("fopen64", path, mode);
+}
+
+__attribute__((destructor)) static void report_open_streams(void)
+{
+    if (streams_open > 0 && getenv("RSM_FAULT_REPORT_OPEN") != NULL) {
+        fprintf(stderr, "fault_shim: %d stream(s) of %s never closed\n", streams_open, getenv("RSM_FAULT_PATH"));
+    }
 }
