@@ -156,6 +156,20 @@ int rsm_ekf_init(rsm_ekf_t *ekf, const rsm_pose_t *x0, const float p0[9])
     return RSM_OK;
 }
 
+/* Keeps a lost covariance usable (see RSM_EKF_LOST_VAR_XY_M2 in ekf.h):
+ * returns 1 if it was reset to its capped diagonal. */
+static int bound_lost(float p[9])
+{
+    if (p[0] <= RSM_EKF_LOST_VAR_XY_M2 && p[4] <= RSM_EKF_LOST_VAR_XY_M2 && p[8] <= RSM_EKF_LOST_VAR_THETA) {
+        return 0;
+    }
+    p[0] = p[0] < RSM_EKF_LOST_VAR_XY_M2 ? p[0] : RSM_EKF_LOST_VAR_XY_M2;
+    p[4] = p[4] < RSM_EKF_LOST_VAR_XY_M2 ? p[4] : RSM_EKF_LOST_VAR_XY_M2;
+    p[8] = p[8] < RSM_EKF_LOST_VAR_THETA ? p[8] : RSM_EKF_LOST_VAR_THETA;
+    p[1] = p[2] = p[3] = p[5] = p[6] = p[7] = 0.0f;
+    return 1;
+}
+
 int rsm_ekf_predict(rsm_ekf_t *ekf, const rsm_motion_t *u, const float q[9])
 {
     float jv[9];
@@ -183,6 +197,9 @@ int rsm_ekf_predict(rsm_ekf_t *ekf, const rsm_motion_t *u, const float q[9])
     mat3_symmetrise(a);
     if (!pose_finite(&x) || !all_finite(a, 9)) {
         return RSM_ERR_DEGENERATE;
+    }
+    if (bound_lost(a)) {
+        ekf->lost++;
     }
     ekf->x = x;
     for (i = 0; i < 9; ++i) {

@@ -681,6 +681,12 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         stage_end(&clk);
         return RSM_ERR_ORDER;
     }
+    if (loc->have_scan && loc->counters.motions == loc->motions_at_scan) {
+        /* No odometry since the last scan: the robot may still have moved. */
+        static const rsm_motion_t still = {0.0f, 0.0f, 0.0f};
+        (void)rsm_localizer_motion(loc, &still);
+    }
+    loc->motions_at_scan = loc->counters.motions;
     n = rsm_scan_to_points(scan, &loc->cfg->limits, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
     npts = n > 0 ? (size_t)n : 0u;
     apply_mount(loc, npts);

@@ -4,6 +4,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "rsm/status.h"
 
@@ -29,6 +30,10 @@ rsm_odometry_config_t rsm_odometry_config_default(void)
      * 2 mm and 2 mrad per step. */
     c.sigma_trans_min_m = 0.002f;
     c.sigma_rot_min_rad = 0.002f;
+    /* Generous bounds: they only have to catch counts no robot produces. */
+    c.max_wheel_speed_mps = 3.0f;
+    c.max_turn_rate_rps = 4.0f * RSM_PI;
+    c.slack_s = 1.0f;
     return c;
 }
 
@@ -56,15 +61,21 @@ int rsm_odometry_init(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg)
     }
     if (!non_negative_finite(cfg->sigma_trans_per_m) || !non_negative_finite(cfg->sigma_rot_per_rad) ||
         !non_negative_finite(cfg->sigma_rot_per_m) || !non_negative_finite(cfg->sigma_trans_min_m) ||
-        !non_negative_finite(cfg->sigma_rot_min_rad)) {
+        !non_negative_finite(cfg->sigma_rot_min_rad) || !non_negative_finite(cfg->max_wheel_speed_mps) ||
+        !non_negative_finite(cfg->max_turn_rate_rps) || !non_negative_finite(cfg->slack_s)) {
         return RSM_ERR_INVAL;
     }
+    memset(odo, 0, sizeof *odo);
     odo->cfg = cfg;
-    odo->last_left = 0u;
-    odo->last_right = 0u;
-    odo->have_last = 0u;
-    odo->steps = 0u;
     return RSM_OK;
+}
+
+void rsm_odometry_restart(rsm_odometry_t *odo)
+{
+    if (odo != NULL) {
+        odo->have_last = 0u;
+        odo->have_cand = 0u;
+    }
 }
 
 static uint32_t counter_mask(uint8_t bits)
@@ -94,36 +105,104 @@ static int32_t counter_delta(uint32_t cur, uint32_t last, uint8_t bits)
     return -(int32_t)mag;
 }
 
-int rsm_odometry_update_ticks(rsm_odometry_t *odo, uint32_t left, uint32_t right, rsm_motion_t *out)
+/* Seconds from an earlier stamp to a later one; 0 when either is unknown
+ * or time went backwards. */
+static float elapsed_s(uint8_t have_from, uint64_t from_us, uint64_t to_us)
 {
-    uint32_t mask;
+    if (!have_from || to_us == RSM_ODOMETRY_NO_TIME || to_us < from_us) {
+        return 0.0f;
+    }
+    return (float)((double)(to_us - from_us) * 1e-6);
+}
+
+/* Whether wheel steps of dl and dr ticks fit the configured rates over dt. */
+static int plausible(const rsm_odometry_config_t *cfg, int32_t dl, int32_t dr, float dt)
+{
+    const float t = dt + cfg->slack_s;
+    const float ml = (float)dl / cfg->ticks_per_m_left;
+    const float mr = (float)dr / cfg->ticks_per_m_right;
+    if (cfg->max_wheel_speed_mps > 0.0f &&
+        (fabsf(ml) > cfg->max_wheel_speed_mps * t || fabsf(mr) > cfg->max_wheel_speed_mps * t)) {
+        return 0;
+    }
+    /* The turn before wrapping: a step of several turns is not small. */
+    if (cfg->max_turn_rate_rps > 0.0f && fabsf(mr - ml) / cfg->wheel_base_m > cfg->max_turn_rate_rps * t) {
+        return 0;
+    }
+    return 1;
+}
+
+static void latch(rsm_odometry_t *odo, uint32_t left, uint32_t right, uint64_t stamp_us)
+{
+    odo->last_left = left;
+    odo->last_right = right;
+    odo->have_last = 1u;
+    odo->have_time = stamp_us != RSM_ODOMETRY_NO_TIME;
+    odo->last_us = stamp_us;
+    odo->have_cand = 0u;
+}
+
+static void zero_motion(rsm_motion_t *out)
+{
+    out->dx = 0.0f;
+    out->dy = 0.0f;
+    out->dtheta = 0.0f;
+}
+
+int rsm_odometry_update_ticks_at(rsm_odometry_t *odo, uint32_t left, uint32_t right, uint64_t stamp_us,
+                                 rsm_motion_t *out)
+{
+    const rsm_odometry_config_t *cfg;
+    uint8_t bits;
     int32_t dl;
     int32_t dr;
     if (odo == NULL || odo->cfg == NULL || out == NULL) {
         return RSM_ERR_INVAL;
     }
-    if (odo->cfg->counter_bits < 16u || odo->cfg->counter_bits > 32u) {
+    cfg = odo->cfg;
+    bits = cfg->counter_bits;
+    if (bits < 16u || bits > 32u) {
         return RSM_ERR_INVAL;
     }
-    mask = counter_mask(odo->cfg->counter_bits);
-    left &= mask;
-    right &= mask;
+    left &= counter_mask(bits);
+    right &= counter_mask(bits);
+    zero_motion(out);
     if (!odo->have_last) {
-        odo->last_left = left;
-        odo->last_right = right;
-        odo->have_last = 1u;
-        out->dx = 0.0f;
-        out->dy = 0.0f;
-        out->dtheta = 0.0f;
+        latch(odo, left, right, stamp_us);
         return RSM_ERR_AGAIN;
     }
-    dl = counter_delta(left, odo->last_left, odo->cfg->counter_bits);
-    dr = counter_delta(right, odo->last_right, odo->cfg->counter_bits);
-    odo->last_left = left;
-    odo->last_right = right;
-    *out = rsm_odometry_from_ticks(odo->cfg, dl, dr);
+    dl = counter_delta(left, odo->last_left, bits);
+    dr = counter_delta(right, odo->last_right, bits);
+    if (!plausible(cfg, dl, dr, elapsed_s(odo->have_time, odo->last_us, stamp_us))) {
+        if (odo->have_cand) {
+            const int32_t cl = counter_delta(left, odo->cand_left, bits);
+            const int32_t cr = counter_delta(right, odo->cand_right, bits);
+            if (plausible(cfg, cl, cr, elapsed_s(odo->cand_has_time, odo->cand_us, stamp_us))) {
+                /* The counters started over at the refused sample. */
+                latch(odo, left, right, stamp_us);
+                odo->relatched++;
+                *out = rsm_odometry_from_ticks(cfg, cl, cr);
+                odo->steps++;
+                return RSM_OK;
+            }
+        }
+        odo->implausible++;
+        odo->have_cand = 1u;
+        odo->cand_left = left;
+        odo->cand_right = right;
+        odo->cand_has_time = stamp_us != RSM_ODOMETRY_NO_TIME;
+        odo->cand_us = stamp_us;
+        return RSM_ERR_RANGE;
+    }
+    latch(odo, left, right, stamp_us);
+    *out = rsm_odometry_from_ticks(cfg, dl, dr);
     odo->steps++;
     return RSM_OK;
+}
+
+int rsm_odometry_update_ticks(rsm_odometry_t *odo, uint32_t left, uint32_t right, rsm_motion_t *out)
+{
+    return rsm_odometry_update_ticks_at(odo, left, right, RSM_ODOMETRY_NO_TIME, out);
 }
 
 rsm_motion_t rsm_odometry_from_ticks(const rsm_odometry_config_t *cfg, int32_t d_left, int32_t d_right)

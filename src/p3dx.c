@@ -49,11 +49,13 @@ static int send_frame(rsm_p3dx_t *d, const uint8_t *buf, int n, uint64_t now)
         return n;
     }
     st = rsm_link_write_all(d->link, buf, (size_t)n, NULL);
+    /* A failed write is an attempt too: the keep-alive clock moves on, or a
+     * dead link would get a PULSE on every poll. */
+    d->last_tx_us = now;
     if (st != RSM_OK) {
         d->stats.write_errors++;
         return st;
     }
-    d->last_tx_us = now;
     return RSM_OK;
 }
 

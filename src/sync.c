@@ -49,8 +49,13 @@ static uint32_t counter_lerp(uint32_t mask, uint32_t from, uint32_t to, uint64_t
 
 static void apply(rsm_sync_t *s, const rsm_sync_sample_t *smp)
 {
-    /* The first sample only latches the counters (RSM_ERR_AGAIN). */
-    (void)rsm_localizer_ticks(s->loc, smp->left, smp->right);
+    rsm_motion_t u;
+    /* The first sample only latches the counters (RSM_ERR_AGAIN); an
+     * implausible step is refused and counted by the odometry, which gets
+     * the sample's time so that the allowance grows with the gap. */
+    if (rsm_odometry_update_ticks_at(&s->loc->odo, smp->left, smp->right, smp->stamp_us, &u) == RSM_OK) {
+        (void)rsm_localizer_motion(s->loc, &u);
+    }
     s->base = *smp;
     s->have_base = 1u;
 }
@@ -76,13 +81,16 @@ static void apply_front(rsm_sync_t *s)
     apply(s, &smp);
 }
 
+/* The scan's stamp plus the offset, saturated at both ends (unsigned
+ * arithmetic: a stamp near 2^63 or 2^64 must not overflow). */
 static uint64_t scan_time(const rsm_sync_t *s, const rsm_scan_t *scan)
 {
-    const int64_t off = (int64_t)s->cfg->scan_offset_us;
-    if (off < 0 && scan->stamp_us < (uint64_t)(-off)) {
-        return 0u;
+    const int32_t off = s->cfg->scan_offset_us;
+    if (off < 0) {
+        const uint64_t back = (uint64_t)(-(int64_t)off);
+        return scan->stamp_us < back ? 0u : scan->stamp_us - back;
     }
-    return (uint64_t)((int64_t)scan->stamp_us + off);
+    return scan->stamp_us > UINT64_MAX - (uint64_t)off ? UINT64_MAX : scan->stamp_us + (uint64_t)off;
 }
 
 /* Brings the odometry up to time t and runs the scan. */
@@ -189,6 +197,20 @@ int rsm_sync_encoder(rsm_sync_t *s, uint32_t left, uint32_t right, uint64_t stam
     while (s->count > 0u && s->ring[s->head].stamp_us + s->cfg->hold_us < stamp_us) {
         apply_front(s);
     }
+    return RSM_OK;
+}
+
+int rsm_sync_encoder_restart(rsm_sync_t *s)
+{
+    if (s == NULL || s->loc == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    while (s->count > 0u) {
+        apply_front(s);
+    }
+    s->have_base = 0u;
+    rsm_odometry_restart(&s->loc->odo);
+    s->counters.restarts++;
     return RSM_OK;
 }
 

@@ -22,14 +22,25 @@ typedef struct rsm_ekf {
     uint32_t updates;
     uint32_t rejected; /* updates refused: non-finite input, singular S, gate
                         * exceeded or non-finite result */
+    uint32_t lost;     /* predictions whose covariance passed RSM_EKF_LOST_VAR_XY_M2
+                        * or RSM_EKF_LOST_VAR_THETA (reset to a diagonal, see below) */
 } rsm_ekf_t;
+
+/* Beyond these variances the estimate is lost in that respect (a position
+ * std over 1 km, a heading std over pi): the linearised correlations mean
+ * nothing, and in float they make S singular, so no update could ever be
+ * taken again. The prediction then keeps only the diagonal, capped here,
+ * and the next measurement within the gate restores the estimate. */
+#define RSM_EKF_LOST_VAR_XY_M2 1.0e6f
+#define RSM_EKF_LOST_VAR_THETA (3.14159265f * 3.14159265f)
 
 /* Sets the state and covariance (p0 row-major; NULL -> zero). Returns
  * RSM_ERR_INVAL if p0 is not symmetric with a non-negative diagonal. */
 int rsm_ekf_init(rsm_ekf_t *ekf, const rsm_pose_t *x0, const float p0[9]);
 
 /* x = x (+) u; P = Jv P Jv^T + Ju Q Ju^T (q is 3x3 in increment space;
- * NULL -> no process noise), Jacobians taken at the prior state. Returns
+ * NULL -> no process noise), Jacobians taken at the prior state; a lost
+ * covariance is reset to its capped diagonal (counted in lost). Returns
  * RSM_OK, RSM_ERR_INVAL for NULL ekf/u or non-finite u/q, RSM_ERR_DEGENERATE
  * if the result would not be finite; the state is unchanged on error. */
 int rsm_ekf_predict(rsm_ekf_t *ekf, const rsm_motion_t *u, const float q[9]);

@@ -191,13 +191,18 @@ typedef struct rsm_localizer {
     rsm_point_t pts[RSM_MAX_BEAMS];      /* usable readings, robot frame */
     rsm_point_t world[RSM_MAX_BEAMS];    /* the same in the world frame */
     uint64_t last_stamp_us;
+    uint32_t motions_at_scan;            /* counters.motions when the last scan came */
     uint8_t have_scan;
     rsm_localizer_counters_t counters;
     rsm_localizer_report_t last;
 } rsm_localizer_t;
 
 /* Validates cfg (and each module's part) and starts at pose x0 with
- * covariance p0 (NULL: zero). Returns RSM_OK or RSM_ERR_INVAL. */
+ * covariance p0 (NULL: zero). Returns RSM_OK or RSM_ERR_INVAL. Coordinates
+ * must stay within 1e6 m of the origin (the paper's method refuses a start
+ * beyond it; the maps drop points beyond it), and floats resolve only
+ * centimetres from about 1e5 m on: far from the origin, work in a frame
+ * centred near the robot (docs/robustness.md, "Coordinates"). */
 int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, const rsm_pose_t *x0,
                        const float p0[9]);
 
@@ -209,7 +214,12 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u);
  * the first call only latches and returns RSM_ERR_AGAIN. */
 int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right);
 
-/* Processes one scan taken at the current predicted pose. Always fills
+/* Processes one scan taken at the current predicted pose. A scan with no
+ * motion applied since the previous one first predicts a zero increment
+ * (the odometry noise floors sigma_trans_min_m and sigma_rot_min_rad):
+ * without it a robot with no odometry would keep P at zero and the estimate
+ * could never move; such a robot should raise those floors to what it may
+ * travel between scans. Always fills
  * *rep (may be NULL) and returns RSM_OK when the estimate is usable,
  * whatever the outcome; rejected scans leave the prediction in place and say
  * why in rep->outcome and the counters. Returns RSM_ERR_ORDER (scan ignored)

@@ -29,10 +29,22 @@ typedef struct rsm_odometry_config {
     float sigma_rot_per_m;    /* rad of heading error per m travelled (drift) */
     float sigma_trans_min_m;  /* floor on translation std per step */
     float sigma_rot_min_rad;  /* floor on heading std per step */
+    /* Plausibility of a tick increment (0 = that check off). A step whose
+     * wheel travel or turn exceeds what these rates allow in the elapsed time
+     * plus slack_s is refused and counted: a corrupt packet that passed its
+     * checksum, or counters that started over. */
+    float max_wheel_speed_mps; /* fastest plausible wheel, m/s */
+    float max_turn_rate_rps;   /* fastest plausible turn, rad/s */
+    float slack_s;             /* added to every step's elapsed time (stamp jitter, and the
+                                * whole allowance when the caller gives no time), s */
 } rsm_odometry_config_t;
 
 /* P3-DX defaults: TicksMM 128 (calibrate), B = 0.357 m, 32-bit counters.
- * Noise: 0.05 m/m, 0.05 rad/rad, 0.02 rad/m, floors 2 mm and 2 mrad. */
+ * Noise: 0.05 m/m, 0.05 rad/rad, 0.02 rad/m, floors 2 mm and 2 mrad.
+ * Plausibility: 3 m/s per wheel, 4 pi rad/s (two turns a second), 1 s of
+ * slack: far beyond what a robot of this class does, so only corrupt or
+ * restarted counts are refused (one step without a time may move up to
+ * 3 m and turn up to 2 turns). */
 rsm_odometry_config_t rsm_odometry_config_default(void);
 
 typedef struct rsm_odometry {
@@ -40,8 +52,24 @@ typedef struct rsm_odometry {
     uint32_t last_left;
     uint32_t last_right;
     uint8_t have_last;
+    uint8_t have_time;        /* last_us is known */
+    uint64_t last_us;
+    /* A refused sample, kept: if the next one follows on from it, the
+     * counters started over there (a robot restarted) and it becomes the
+     * baseline; if the next follows on from the last accepted one, it was a
+     * one-off corrupt packet and nothing is lost. */
+    uint8_t have_cand;
+    uint8_t cand_has_time;
+    uint32_t cand_left;
+    uint32_t cand_right;
+    uint64_t cand_us;
     uint32_t steps;           /* increments produced */
+    uint32_t implausible;     /* samples refused as beyond the plausible speed or turn rate */
+    uint32_t relatched;       /* times the counters were taken up again from a refused sample */
 } rsm_odometry_t;
+
+/* rsm_odometry_update_ticks_at without a time. */
+#define RSM_ODOMETRY_NO_TIME UINT64_MAX
 
 typedef struct rsm_motion {
     float dx;       /* m, robot frame at step start */
@@ -56,8 +84,22 @@ int rsm_odometry_init(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg);
 /* Feeds raw counter values (only the low counter_bits are used). The first
  * call only latches the counts and returns RSM_ERR_AGAIN with *out zeroed;
  * later calls return RSM_OK and the increment since the previous call, with
- * differences taken modulo 2^counter_bits (wrap-around safe). */
+ * differences taken modulo 2^counter_bits (wrap-around safe). An
+ * implausible increment (see the config) gives RSM_ERR_RANGE with *out
+ * zeroed, counted in implausible; the baseline stays, unless the next
+ * sample follows on from the refused one (counters that started over:
+ * counted in relatched). Without a time the step is allowed slack_s. */
 int rsm_odometry_update_ticks(rsm_odometry_t *odo, uint32_t left, uint32_t right, rsm_motion_t *out);
+
+/* The same with the time the counters were read (any microsecond clock;
+ * RSM_ODOMETRY_NO_TIME if unknown): the plausible step grows with the time
+ * since the baseline. */
+int rsm_odometry_update_ticks_at(rsm_odometry_t *odo, uint32_t left, uint32_t right, uint64_t stamp_us,
+                                 rsm_motion_t *out);
+
+/* The counters start over (a new connection): the next sample only
+ * latches. */
+void rsm_odometry_restart(rsm_odometry_t *odo);
 
 /* Increment from signed tick differences already computed by the caller
  * (zero increment if cfg is NULL or has non-positive geometry). */

@@ -57,6 +57,7 @@ typedef struct rsm_sync_counters {
     uint32_t encoders;          /* encoder samples offered */
     uint32_t encoder_backwards; /* sample stamped before the previous one: taken in arrival order */
     uint32_t encoder_overflow;  /* held samples applied early because the buffer was full */
+    uint32_t restarts;          /* rsm_sync_encoder_restart calls (new connections) */
 } rsm_sync_counters_t;
 
 /* Called once per fused scan with the localizer's status and report. */
@@ -93,6 +94,12 @@ int rsm_sync_init(rsm_sync_t *s, rsm_localizer_t *loc, const rsm_sync_config_t *
 /* An encoder sample: raw counters (as rsm_localizer_ticks takes them) read at
  * stamp_us. May fuse a waiting scan. Returns RSM_OK or RSM_ERR_INVAL. */
 int rsm_sync_encoder(rsm_sync_t *s, uint32_t left, uint32_t right, uint64_t stamp_us);
+
+/* The encoder counters start over (the first sample of a new connection
+ * follows: a robot that restarted counts from 0). Held samples are applied
+ * first; the next sample only latches the counters, so no step is taken
+ * across the restart. Returns RSM_OK or RSM_ERR_INVAL. */
+int rsm_sync_encoder_restart(rsm_sync_t *s);
 
 /* A scan, stamped in scan->stamp_us (copied; the caller's buffer is free on
  * return). Fuses it now when odometry past its time is already held, or

@@ -457,6 +457,38 @@ void test_covariance_should_stay_symmetric_positive_definite_over_random_cycles(
     TEST_ASSERT_EQUAL_UINT32(0u, ekf.rejected);
 }
 
+void test_predict_should_keep_a_lost_covariance_usable_and_the_filter_recovers(void)
+{
+    const rsm_odometry_config_t oc = rsm_odometry_config_default();
+    const rsm_motion_t corrupt = {8000.0f, 3.0f, 0.5f};
+    const rsm_motion_t step = {0.05f, 0.0f, 0.01f};
+    const float r[9] = {1e-4f, 0.0f, 0.0f, 0.0f, 1e-4f, 0.0f, 0.0f, 0.0f, 1e-5f};
+    const rsm_pose_t origin = {0.0f, 0.0f, 0.0f};
+    float q[9];
+    rsm_pose_t z;
+    int k;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ekf_init(&ekf, &origin, NULL));
+    /* An 8 km increment (with its noise: 1600 rad of heading std), then
+     * more driving: in float the linearised P became singular and every
+     * update was refused for ever. */
+    rsm_odometry_noise(&oc, &corrupt, q);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ekf_predict(&ekf, &corrupt, q));
+    for (k = 0; k < 300; ++k) {
+        rsm_odometry_noise(&oc, &step, q);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ekf_predict(&ekf, &step, q));
+    }
+    TEST_ASSERT_GREATER_THAN_UINT32(0u, ekf.lost);
+    TEST_ASSERT_TRUE(ekf.p[0] <= RSM_EKF_LOST_VAR_XY_M2 && ekf.p[4] <= RSM_EKF_LOST_VAR_XY_M2);
+    TEST_ASSERT_TRUE(ekf.p[8] <= RSM_EKF_LOST_VAR_THETA);
+    /* A measurement near the prediction is taken and P is small again. */
+    z = ekf.x;
+    z.x += 0.05f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ekf_update(&ekf, &z, r, 16.27f));
+    TEST_ASSERT_LESS_THAN_FLOAT(1e-3f, ekf.p[0]);
+    TEST_ASSERT_LESS_THAN_FLOAT(1e-3f, ekf.p[8]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-2f, z.x, ekf.x.x);
+}
+
 void test_mat3_inverse_should_invert_and_detect_singularity(void)
 {
     uint32_t seed = 99u;
@@ -541,6 +573,7 @@ int main(void)
     RUN_TEST(test_update_gate_should_reject_far_measurements);
     RUN_TEST(test_update_should_reject_non_finite_measurements);
     RUN_TEST(test_covariance_should_stay_symmetric_positive_definite_over_random_cycles);
+    RUN_TEST(test_predict_should_keep_a_lost_covariance_usable_and_the_filter_recovers);
     RUN_TEST(test_mat3_inverse_should_invert_and_detect_singularity);
     return UNITY_END();
 }

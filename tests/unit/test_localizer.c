@@ -1084,6 +1084,31 @@ void test_localizer_stage_names_should_be_distinct(void)
     TEST_ASSERT_EQUAL_STRING("unknown", rsm_stage_name(RSM_STAGE_COUNT));
 }
 
+void test_localizer_scan_without_motion_calls_should_still_follow_the_scans(void)
+{
+    const rsm_pose_t start = {-1.0f, -0.5f, 0.1f};
+    rsm_localizer_report_t rep;
+    rsm_synth_rng_t rng;
+    rsm_pose_t truth = start;
+    uint32_t k;
+    float err;
+    /* No odometry at all: the per-scan floors carry what the robot may
+     * travel between scans (1 cm and 10 mrad here). */
+    cfg.odometry.sigma_trans_min_m = 0.01f;
+    cfg.odometry.sigma_rot_min_rad = 0.01f;
+    rsm_synth_rng_seed(&rng, 7u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &start, NULL));
+    for (k = 0; k < 25u; ++k) {
+        truth.x = start.x + 0.005f * (float)k; /* 5 mm per scan, no motion call */
+        make_scan(&truth, &rng, (uint64_t)k * STEP_US);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    }
+    TEST_ASSERT_GREATER_THAN_FLOAT(1e-6f, loc.ekf.p[0]); /* was 1e-8: pinned where it started */
+    TEST_ASSERT_EQUAL_UINT32(24u, loc.counters.motions);
+    err = rsm_localizer_pose(&loc).x - truth.x;
+    TEST_ASSERT_FLOAT_WITHIN(QUANT, 0.0f, err);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -1115,5 +1140,6 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_time_stages_across_a_clock_wrap);
     RUN_TEST(test_localizer_scan_should_time_an_out_of_order_scan_as_a_whole);
     RUN_TEST(test_localizer_stage_names_should_be_distinct);
+    RUN_TEST(test_localizer_scan_without_motion_calls_should_still_follow_the_scans);
     return UNITY_END();
 }

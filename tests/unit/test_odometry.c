@@ -207,6 +207,9 @@ void test_from_ticks_should_return_zero_for_unusable_config(void)
 void test_update_ticks_should_unwrap_32_bit_counters_both_ways(void)
 {
     rsm_motion_t u;
+    /* The arithmetic alone: half the range in one step is no robot's motion. */
+    cfg.max_wheel_speed_mps = 0.0f;
+    cfg.max_turn_rate_rps = 0.0f;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
     /* Forwards across 2^32: 0xFFFFFF00 -> 0x00000100 is +512 ticks. */
     TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks(&odo, 0xFFFFFF00u, 0xFFFFFF00u, &u));
@@ -228,6 +231,75 @@ void test_update_ticks_should_unwrap_32_bit_counters_both_ways(void)
     TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.0f, u.dx);
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, (64.0f / 128000.0f) / 0.357f, u.dtheta);
     TEST_ASSERT_EQUAL_UINT32(6u, odo.steps);
+}
+
+void test_update_ticks_should_refuse_a_corrupt_step_and_lose_nothing(void)
+{
+    rsm_motion_t u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks_at(&odo, 0u, 0u, 0u, &u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks_at(&odo, 12800u, 12800u, 100000u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.1f, u.dx);
+    /* Two opposite bit flips the additive checksum misses: 8 km in 0.1 s. */
+    u.dx = 9.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE,
+                          rsm_odometry_update_ticks_at(&odo, 12800u + 0x40000000u, 12800u, 200000u, &u));
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dx);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, u.dtheta);
+    TEST_ASSERT_EQUAL_UINT32(1u, odo.implausible);
+    /* The next good sample carries the whole motion since the last good one. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks_at(&odo, 38400u, 38400u, 300000u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.2f, u.dx);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.0f, u.dtheta);
+    TEST_ASSERT_EQUAL_UINT32(0u, odo.relatched);
+    TEST_ASSERT_EQUAL_UINT32(2u, odo.steps);
+    /* A turn too fast for the robot is refused as well (wheels within speed). */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_odometry_update_ticks_at(&odo, 38400u - 340000u,
+                                                                      38400u + 340000u, 400000u, &u));
+    TEST_ASSERT_EQUAL_UINT32(2u, odo.implausible);
+}
+
+void test_update_ticks_should_take_up_counters_that_started_over(void)
+{
+    rsm_motion_t u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks_at(&odo, 5000000u, 4000000u, 0u, &u));
+    /* The robot restarted: its counters read from 0 again. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_odometry_update_ticks_at(&odo, 0u, 0u, 100000u, &u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks_at(&odo, 1280u, 1280u, 200000u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.01f, u.dx);
+    TEST_ASSERT_EQUAL_UINT32(1u, odo.relatched);
+    TEST_ASSERT_EQUAL_UINT32(1u, odo.implausible);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks_at(&odo, 2560u, 2560u, 300000u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.01f, u.dx);
+    /* Told of the restart, the next sample only latches. */
+    rsm_odometry_restart(&odo);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks_at(&odo, 9u, 9u, 400000u, &u));
+    TEST_ASSERT_EQUAL_UINT32(1u, odo.implausible);
+}
+
+void test_update_ticks_should_allow_more_travel_after_a_longer_gap(void)
+{
+    rsm_motion_t u;
+    const uint32_t five_m = 5u * 128000u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks_at(&odo, 0u, 0u, 0u, &u));
+    /* 5 m in 0.1 s (plus 1 s of slack at 3 m/s): refused. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_odometry_update_ticks_at(&odo, five_m, five_m, 100000u, &u));
+    /* The same counts 2 s after the last good sample: fine. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks_at(&odo, five_m, five_m, 2000000u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 5.0f, u.dx);
+    /* Without a time, the slack alone: 5 m more is refused, 2 m is not. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_odometry_update_ticks(&odo, 2u * five_m, 2u * five_m, &u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, five_m + 256000u, five_m + 256000u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 2.0f, u.dx);
+    /* Zero turns a check off. */
+    cfg.max_wheel_speed_mps = 0.0f;
+    cfg.max_turn_rate_rps = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 20u * five_m, 20u * five_m, &u));
+    /* Negative or non-finite bounds are refused at init. */
+    cfg.slack_s = -1.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_init(&odo, &cfg));
 }
 
 void test_update_ticks_should_unwrap_16_bit_counters_both_ways(void)
@@ -440,6 +512,9 @@ int main(void)
     RUN_TEST(test_from_ticks_should_follow_an_arc_at_mid_heading);
     RUN_TEST(test_from_ticks_should_return_zero_for_unusable_config);
     RUN_TEST(test_update_ticks_should_unwrap_32_bit_counters_both_ways);
+    RUN_TEST(test_update_ticks_should_refuse_a_corrupt_step_and_lose_nothing);
+    RUN_TEST(test_update_ticks_should_take_up_counters_that_started_over);
+    RUN_TEST(test_update_ticks_should_allow_more_travel_after_a_longer_gap);
     RUN_TEST(test_update_ticks_should_unwrap_16_bit_counters_both_ways);
     RUN_TEST(test_from_poses_should_round_trip_through_apply);
     RUN_TEST(test_from_poses_should_express_motion_in_the_start_frame);

@@ -499,6 +499,38 @@ void test_p3dx_poll_should_send_a_pulse_after_500_ms_without_commands(void)
     TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.keepalives);
 }
 
+static int failing_write(void *ctx, const uint8_t *buf, size_t len)
+{
+    (void)ctx;
+    (void)buf;
+    (void)len;
+    return RSM_ERR_IO;
+}
+
+void test_p3dx_poll_should_keep_the_keepalive_pace_when_writes_fail(void)
+{
+    rsm_p3dx_event_t ev;
+    uint64_t start;
+    uint32_t ka;
+    uint32_t errors;
+    int i;
+    connect_ok();
+    link.write = failing_write; /* the adapter is gone for writing; SIPs still come */
+    start = fl.now_us;
+    ka = drv.stats.keepalives;
+    errors = drv.stats.write_errors;
+    for (i = 0; i < 2000; ++i) {
+        robot_tick();
+        (void)rsm_p3dx_poll(&drv, &ev);
+    }
+    /* Every poll waits for something: 2000 polls take well over a second. */
+    TEST_ASSERT_GREATER_THAN_UINT64(1000000u, fl.now_us - start);
+    TEST_ASSERT_GREATER_THAN_UINT32(ka, drv.stats.keepalives);
+    TEST_ASSERT_LESS_OR_EQUAL_UINT32(ka + 1u + (uint32_t)((fl.now_us - start) / cfg.keepalive_us),
+                                     drv.stats.keepalives);
+    TEST_ASSERT_EQUAL_UINT32(drv.stats.keepalives - ka, drv.stats.write_errors - errors);
+}
+
 void test_p3dx_set_vel_should_send_the_same_bytes_as_the_aria_encoder(void)
 {
     uint8_t expect[64];
@@ -891,6 +923,7 @@ int main(void)
     RUN_TEST(test_p3dx_connect_should_restart_at_sync0_on_a_wrong_reply);
     RUN_TEST(test_p3dx_poll_should_report_link_loss_and_reconnect_when_the_robot_returns);
     RUN_TEST(test_p3dx_poll_should_send_a_pulse_after_500_ms_without_commands);
+    RUN_TEST(test_p3dx_poll_should_keep_the_keepalive_pace_when_writes_fail);
     RUN_TEST(test_p3dx_set_vel_should_send_the_same_bytes_as_the_aria_encoder);
     RUN_TEST(test_p3dx_poll_should_count_garbage_and_bit_flips_and_keep_decoding);
     RUN_TEST(test_p3dx_connect_should_probe_the_baud_rate);

@@ -271,6 +271,52 @@ void test_scan_offset_should_move_the_alignment_time(void)
     TEST_ASSERT_EQUAL_UINT64(250u, res.stamp[0]); /* the scan keeps its own stamp */
 }
 
+void test_scan_offset_should_saturate_instead_of_wrapping(void)
+{
+    scfg.scan_offset_us = 1000;
+    enc(0u, 100u);
+    enc(12800u, 5000u);
+    /* Near the end of time: the offset saturates, the scan waits for later
+     * odometry; it does not wrap round to a time before the samples. */
+    scan_at(UINT64_MAX - 10u);
+    TEST_ASSERT_EQUAL_size_t(0, res.n);
+    TEST_ASSERT_EQUAL_UINT32(0u, sync.counters.late);
+    scan_at((uint64_t)INT64_MAX - 10u); /* past the signed range too (UBSan checks) */
+    TEST_ASSERT_EQUAL_UINT32(0u, sync.counters.late);
+    TEST_ASSERT_EQUAL_INT(1, rsm_sync_flush(&sync));
+    TEST_ASSERT_EQUAL_size_t(2, res.n);
+}
+
+void test_corrupt_encoder_sample_should_be_refused_and_lose_no_motion(void)
+{
+    enc(0u, 100000u);
+    enc(12800u, 200000u);
+    /* Checksum-valid but corrupt: one counter 2^30 ticks (8.4 km) on. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_encoder(&sync, 12800u + 0x40000000u, 12800u, 300000u));
+    enc(38400u, 400000u);
+    scan_at(400000u);
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.3f, res.x[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.0f, rsm_localizer_pose(&loc).theta);
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT32(1u, loc.odo.implausible);
+    TEST_ASSERT_LESS_THAN_FLOAT(1.0f, loc.ekf.p[0]);
+}
+
+void test_encoder_restart_should_take_no_step_across_a_new_connection(void)
+{
+    enc(5000000u, 100000u);
+    enc(5012800u, 200000u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_encoder_restart(&sync));
+    enc(0u, 300000u); /* the robot restarted: its counters read 0 */
+    enc(12800u, 400000u);
+    scan_at(400000u);
+    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.2f, res.x[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.restarts);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.odo.implausible);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_encoder_restart(NULL));
+}
+
 void test_default_config_should_snap_within_a_millisecond(void)
 {
     TEST_ASSERT_EQUAL_UINT32(1000u, rsm_sync_config_default().snap_us);
@@ -378,6 +424,9 @@ int main(void)
     RUN_TEST(test_scan_just_before_its_packet_should_snap_to_it);
     RUN_TEST(test_scan_between_packets_beyond_the_snap_should_interpolate);
     RUN_TEST(test_oversized_scan_should_be_refused_and_not_fused);
+    RUN_TEST(test_scan_offset_should_saturate_instead_of_wrapping);
+    RUN_TEST(test_corrupt_encoder_sample_should_be_refused_and_lose_no_motion);
+    RUN_TEST(test_encoder_restart_should_take_no_step_across_a_new_connection);
     RUN_TEST(test_every_scan_should_be_fused_once_in_order_whatever_the_arrival_order);
     return UNITY_END();
 }

@@ -317,7 +317,7 @@ static void run_scan(run_t *r, uint64_t stamp_us, double file_stamp_s)
 
 static int run_log(run_t *r)
 {
-    rsm_pose_t last_odom = {0.0f, 0.0f, 0.0f};
+    double last_odom[3] = {0.0, 0.0, 0.0};
     int have_odom = 0;
     r->reader.fov179 = r->opt.fov179;
     if (carmen_open(&r->reader, r->opt.carmen) != 0) {
@@ -329,6 +329,11 @@ static int run_log(run_t *r)
         size_t b;
         if (k == CARMEN_EOF || (r->opt.limit > 0u && r->scans >= r->opt.limit)) {
             break;
+        }
+        if (k == CARMEN_ERROR) {
+            fprintf(stderr, "rsm-stages: cannot read %s: %s\n", r->opt.carmen, carmen_error(&r->reader));
+            carmen_close(&r->reader);
+            return 1;
         }
         if (k != CARMEN_SCAN || (r->opt.beams > 0u && r->rec.count < 2u)) {
             continue;
@@ -343,14 +348,16 @@ static int run_log(run_t *r)
             r->beams_in = r->rec.count;
         }
         if (have_odom) {
-            const rsm_motion_t u = rsm_odometry_from_poses(&last_odom, &r->rec.odom);
+            /* As rsm-nav takes it: between the log's poses in double. */
+            const rsm_pose_t d = carmen_between(last_odom, r->rec.odom_d);
+            const rsm_motion_t u = {d.x, d.y, d.theta};
             const uint64_t t0 = now_ns();
             (void)rsm_localizer_motion(&r->loc, &u);
             if (!r->opt.stack) {
                 push(&r->motion, (double)(now_ns() - t0) * 1e-3);
             }
         }
-        last_odom = r->rec.odom;
+        memcpy(last_odom, r->rec.odom_d, sizeof last_odom);
         have_odom = 1;
         if (r->opt.beams > 0u) {
             resample(&r->rec, r->opt.beams, &r->cfg.limits, &r->scan);

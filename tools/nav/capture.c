@@ -1,6 +1,7 @@
 /* Streaming reader for rsm capture files; see capture.h and docs/capture.md. */
 #include "capture.h"
 
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -30,6 +31,43 @@ uint32_t cap_crc32(uint32_t crc, const uint8_t *p, size_t n)
         crc = table[(crc ^ p[i]) & 0xFFu] ^ (crc >> 8);
     }
     return ~crc;
+}
+
+/* ---- CRC of a span from two prefix CRCs --------------------------------------
+ * For the CRC-32 used here, crc(A B) = crc(A) * x^(8 |B|) + crc(B) modulo
+ * the polynomial (the initial and final inversions cancel), so
+ * crc(B) = crc(A B) ^ (crc(A) * x^(8 |B|)). Polynomials are held reflected,
+ * as the table-driven CRC holds them: bit 31 is x^0. */
+#define CAP_POLY 0xEDB88320u
+
+static uint32_t gf2_mul(uint32_t a, uint32_t b)
+{
+    uint32_t m = 1u << 31;
+    uint32_t p = 0u;
+    while (m != 0u && a != 0u) {
+        if (a & m) {
+            p ^= b;
+            a &= ~m;
+        }
+        m >>= 1;
+        b = (b & 1u) ? (b >> 1) ^ CAP_POLY : b >> 1;
+    }
+    return p;
+}
+
+/* x^(8 n) modulo the polynomial, by squaring: x^(2^k) for k = 3, 4, ... */
+static uint32_t gf2_x8n(size_t n)
+{
+    uint32_t sq = 1u << 23; /* x^8 */
+    uint32_t p = 1u << 31;  /* x^0 */
+    while (n != 0u) {
+        if (n & 1u) {
+            p = gf2_mul(sq, p);
+        }
+        sq = gf2_mul(sq, sq);
+        n >>= 1;
+    }
+    return p;
 }
 
 static uint16_t rd16(const uint8_t *p) { return (uint16_t)(p[0] | (p[1] << 8)); }
@@ -74,6 +112,48 @@ const char *cap_error_text(const cap_reader *r) { return r->error; }
 
 static size_t read_full(FILE *fp, uint8_t *p, size_t n) { return fread(p, 1, n, fp); }
 
+/* Whether p[0..n) is well-formed UTF-8 as Python decodes it (no overlong
+ * forms, no surrogates, nothing past U+10FFFF): both readers must refuse
+ * the same headers. */
+static int valid_utf8(const uint8_t *p, size_t n)
+{
+    size_t i = 0;
+    while (i < n) {
+        const uint8_t c = p[i];
+        size_t len;
+        uint8_t lo = 0x80u;
+        uint8_t hi = 0xBFu;
+        size_t k;
+        if (c < 0x80u) {
+            ++i;
+            continue;
+        }
+        if (c >= 0xC2u && c <= 0xDFu) {
+            len = 2;
+        } else if (c >= 0xE0u && c <= 0xEFu) {
+            len = 3;
+            lo = c == 0xE0u ? 0xA0u : 0x80u; /* no overlong */
+            hi = c == 0xEDu ? 0x9Fu : 0xBFu; /* no surrogates */
+        } else if (c >= 0xF0u && c <= 0xF4u) {
+            len = 4;
+            lo = c == 0xF0u ? 0x90u : 0x80u;
+            hi = c == 0xF4u ? 0x8Fu : 0xBFu; /* up to U+10FFFF */
+        } else {
+            return 0;
+        }
+        if (n - i < len || p[i + 1] < lo || p[i + 1] > hi) {
+            return 0;
+        }
+        for (k = 2; k < len; ++k) {
+            if (p[i + k] < 0x80u || p[i + k] > 0xBFu) {
+                return 0;
+            }
+        }
+        i += len;
+    }
+    return 1;
+}
+
 int cap_open(cap_reader *r, FILE *fp, int lenient)
 {
     uint8_t fixed[16], crcb[4];
@@ -83,6 +163,7 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
     char *out;
 
     memset(r, 0, offsetof(cap_reader, win));
+    r->crc_end = 0;
     r->fp = fp;
     r->lenient = lenient;
     got = read_full(fp, fixed, sizeof fixed);
@@ -116,7 +197,7 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
     /* channels */
     if (hlen < 1u) goto malformed;
     nch = body[0];
-    if (nch > CAP_MAX_CHANNELS) goto malformed;
+    if (nch < 1u || nch > CAP_MAX_CHANNELS) goto malformed;
     off = 1;
     for (i = 0; i < nch; ++i) {
         size_t nl;
@@ -127,7 +208,7 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
         c->baud = rd32(body + off + 2);
         nl = body[off + 6];
         off += 7;
-        if (nl == 0u || off + nl > hlen || c->id == 255u) goto malformed;
+        if (nl == 0u || off + nl > hlen || c->id == 255u || !valid_utf8(body + off, nl)) goto malformed;
         memcpy(c->name, body + off, nl);
         c->name[nl] = '\0';
         off += nl;
@@ -145,11 +226,11 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
             if (o + 2u > hlen) goto malformed;
             kl = rd16(body + o);
             o += 2;
-            if (o + kl + 4u > hlen) goto malformed;
+            if (o + kl + 4u > hlen || !valid_utf8(body + o, kl)) goto malformed;
             o += kl;
             vl = rd32(body + o);
             o += 4;
-            if (vl > hlen - o) goto malformed;
+            if (vl > hlen - o || !valid_utf8(body + o, vl)) goto malformed;
             o += vl;
             text += kl + vl + 2u;
         }
@@ -235,12 +316,19 @@ static int fill(cap_reader *r, size_t need)
             memmove(r->win, r->win + r->start, avail(r));
             r->end -= r->start;
             r->start = 0;
+            r->crc_end = 0; /* the prefix CRCs start again from the new win[0] */
         }
+        errno = 0;
         got = fread(r->win + r->end, 1, CAP_WIN - r->end, r->fp);
-        if (got == 0u) {
-            if (ferror(r->fp)) {
-                r->io_error = 1;
+        if (got < CAP_WIN - r->end && ferror(r->fp)) {
+            /* A read error is not the end of the file: remember it (sticky),
+             * so the caller is told instead of seeing a truncated tail. */
+            if (!r->io_error) {
+                r->io_errno = errno;
             }
+            r->io_error = 1;
+        }
+        if (got == 0u) {
             r->eof = 1;
         }
         r->end += got;
@@ -254,7 +342,22 @@ static void drop(cap_reader *r, size_t n)
     r->base += n;
     if (r->start == r->end) {
         r->start = r->end = 0;
+        r->crc_end = 0;
     }
+}
+
+/* CRC-32 of win[a..b), a <= b <= end. */
+static uint32_t span_crc(cap_reader *r, size_t a, size_t b)
+{
+    if (r->crc_end == 0u) {
+        r->crc[0] = 0u;
+    }
+    while (r->crc_end < b) {
+        r->crc[r->crc_end + 1u] = cap_crc32(r->crc[r->crc_end], r->win + r->crc_end, 1u);
+        r->crc_end++;
+        r->count.crc_bytes++;
+    }
+    return r->crc[b] ^ gf2_mul(gf2_x8n(b - a), r->crc[a]);
 }
 
 /* Size of a valid record at win[start+i], 0 if none (i < 65536). */
@@ -269,7 +372,7 @@ static size_t complete_at(cap_reader *r, size_t i)
     size = CAP_REC_OVERHEAD + n;
     if (!fill(r, i + size)) return 0;
     b = r->win + r->start + i; /* fill may have moved the window */
-    return cap_crc32(0, b, CAP_REC_HEAD + n) == rd32(b + CAP_REC_HEAD + n) ? size : 0u;
+    return span_crc(r, r->start + i, r->start + i + CAP_REC_HEAD + n) == rd32(b + CAP_REC_HEAD + n) ? size : 0u;
 }
 
 /* Skip to the next valid record after win[start]; 0 if none before EOF. */
@@ -294,6 +397,15 @@ static int resync(cap_reader *r)
     }
 }
 
+/* The sticky read error: the bytes not yet delivered stay unread. */
+static int io_failure(cap_reader *r)
+{
+    snprintf(r->error, sizeof r->error, "read error at byte %llu after %llu good records: %s",
+             (unsigned long long)(r->base + avail(r)), (unsigned long long)r->count.records,
+             r->io_errno != 0 ? strerror(r->io_errno) : "unknown cause");
+    return CAP_ERR_IO;
+}
+
 static int problem(cap_reader *r, int status, const char *msg)
 {
     fail(r, status, msg);
@@ -310,7 +422,7 @@ int cap_next(cap_reader *r, cap_record *rec, uint8_t *buf, size_t cap)
         const uint8_t *b;
 
         if (!fill(r, 1)) {
-            return r->io_error ? fail(r, CAP_ERR_IO, "read error") : CAP_END;
+            return r->io_error ? io_failure(r) : CAP_END;
         }
         have_head = fill(r, CAP_REC_HEAD);
         size = complete_at(r, 0);
@@ -329,6 +441,9 @@ int cap_next(cap_reader *r, cap_record *rec, uint8_t *buf, size_t cap)
                 st = problem(r, CAP_ERR_CORRUPT, "corrupt capture record (bad sync or CRC)");
                 if (st != CAP_OK) return st;
                 continue;
+            }
+            if (r->io_error) {
+                return io_failure(r); /* not a truncated or corrupt tail: the read failed */
             }
             r->count.skipped_bytes += r->base + avail(r) - off;
             drop(r, avail(r));
@@ -360,6 +475,17 @@ int cap_next(cap_reader *r, cap_record *rec, uint8_t *buf, size_t cap)
             if (st != CAP_OK) return st;
             continue;
         }
+        if (r->lenient && r->have_last && ts > r->last_ts && ts - r->last_ts > CAP_MAX_STEP_US &&
+            !(r->have_far && (ts > r->far_ts ? ts - r->far_ts : r->far_ts - ts) <= CAP_MAX_STEP_US)) {
+            /* One record far ahead would make every later one out of order:
+             * it counts as out of order itself unless the next one agrees. */
+            drop(r, size);
+            r->have_far = 1;
+            r->far_ts = ts;
+            r->count.out_of_order++;
+            (void)problem(r, CAP_ERR_ORDER, "record stamped over an hour after the previous one (not trusted alone)");
+            continue;
+        }
         if (r->have_last && ts < r->last_ts) {
             drop(r, size);
             r->count.out_of_order++;
@@ -373,6 +499,7 @@ int cap_next(cap_reader *r, cap_record *rec, uint8_t *buf, size_t cap)
         }
         memcpy(buf, b + CAP_REC_HEAD, n);
         drop(r, size);
+        r->have_far = 0;
         r->have_last = 1;
         r->last_ts = ts;
         r->count.records++;

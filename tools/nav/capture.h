@@ -18,6 +18,9 @@
 #define CAP_MAX_CHUNK 65535u
 #define CAP_REC_HEAD 14u
 #define CAP_REC_OVERHEAD 18u
+/* Lenient readers do not trust alone a record stamped this much after the
+ * previous one (one hour, in microseconds). */
+#define CAP_MAX_STEP_US 3600000000ull
 
 enum cap_status {
     CAP_OK = 0,              /* a record was delivered */
@@ -58,6 +61,8 @@ typedef struct {
     uint64_t truncated;
     uint64_t out_of_order;
     uint64_t unknown_channel;
+    uint64_t crc_bytes;          /* bytes run through the CRC: about the file size, however
+                                  * many false record starts a resync meets */
 } cap_counters;
 
 typedef struct {
@@ -74,21 +79,32 @@ typedef struct {
     cap_counters count;
     int have_last;
     uint64_t last_ts;
+    int have_far;                /* lenient: a record far ahead of last_ts was skipped ... */
+    uint64_t far_ts;             /* ... stamped this (docs/capture.md, "Far ahead") */
     uint64_t base;               /* file offset of win[start] */
     size_t start, end;           /* valid bytes are win[start..end) */
     int eof;
-    int io_error;
+    int io_error;                /* a read failed: every later cap_next returns CAP_ERR_IO */
+    int io_errno;                /* errno of the first failed read (0 if unknown) */
     char error[160];
     uint8_t win[1u << 18];
+    /* crc[j]: CRC-32 of win[0..j), valid for j <= crc_end: the CRC of any
+     * span of the window is then two table reads and a shift, so that a
+     * resync over candidates claiming 64 KiB each does not CRC each anew. */
+    size_t crc_end;
+    uint32_t crc[(1u << 18) + 1u];
 } cap_reader;
 
 /* Reads and checks the header.  Returns CAP_OK or an error status (see
- * cap_error_text).  The reader is large (~260 KiB): do not put it on a small
+ * cap_error_text).  The reader is large (~1.3 MiB): do not put it on a small
  * stack.  fp stays owned by the caller. */
 int cap_open(cap_reader *r, FILE *fp, int lenient);
 
 /* The next record: its bytes go to buf (capacity cap bytes; 65535 always
- * suffices).  Returns CAP_OK, CAP_END or an error status. */
+ * suffices).  Returns CAP_OK, CAP_END or an error status.  A read error is
+ * CAP_ERR_IO in strict and lenient readers alike, never a truncated record
+ * or the end; it is sticky (every later call returns it again), so a caller
+ * must stop on it rather than skip it. */
 int cap_next(cap_reader *r, cap_record *rec, uint8_t *buf, size_t cap);
 
 /* Metadata value for key (NUL-terminated), or NULL. */

@@ -2,6 +2,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <zlib.h>
@@ -9,8 +10,31 @@
 int carmen_open(carmen_reader_t *r, const char *path)
 {
     memset(&r->counts, 0, sizeof r->counts);
+    r->error[0] = '\0';
     r->gz = gzopen(path, "rb");
     return r->gz != NULL ? 0 : -1;
+}
+
+const char *carmen_error(const carmen_reader_t *r)
+{
+    return r->error;
+}
+
+/* After gzgets or gzgetc found nothing more: 1 if that was a read error or
+ * a damaged gzip stream (zlib's word for it kept), 0 at a clean end. */
+static int stream_failed(carmen_reader_t *r)
+{
+    int code = Z_OK;
+    const char *msg = gzerror((gzFile)r->gz, &code);
+    if (code == Z_OK) {
+        return 0;
+    }
+    if (r->error[0] == '\0') {
+        snprintf(r->error, sizeof r->error, "%s after line %llu",
+                 code == Z_ERRNO ? strerror(errno) : (msg != NULL ? msg : "read error"),
+                 (unsigned long long)r->counts.lines);
+    }
+    return 1;
 }
 
 void carmen_close(carmen_reader_t *r)
@@ -64,16 +88,17 @@ static int pose3(char **f, double v[3])
     return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]) ? 1 : -1;
 }
 
-/* The laser's pose in the robot frame, both given in the same (odometry)
- * frame. Doubles: log poses can be hundreds of metres from the origin, where
- * a float keeps only about 0.1 mm. */
-static rsm_pose_t mount_from(const double robot[3], const double laser[3])
+/* The pose "to" seen from the pose "from", both in the same (odometry)
+ * frame: the laser's mount from the robot and laser poses, or an odometry
+ * increment. Doubles: log poses can be hundreds of metres from the origin,
+ * where a float keeps only about 0.1 mm. */
+rsm_pose_t carmen_between(const double from[3], const double to[3])
 {
-    const double dx = laser[0] - robot[0];
-    const double dy = laser[1] - robot[1];
-    const double c = cos(robot[2]);
-    const double s = sin(robot[2]);
-    const double dt = laser[2] - robot[2];
+    const double dx = to[0] - from[0];
+    const double dy = to[1] - from[1];
+    const double c = cos(from[2]);
+    const double s = sin(from[2]);
+    const double dt = to[2] - from[2];
     rsm_pose_t m;
     m.x = (float)(c * dx + s * dy);
     m.y = (float)(-s * dx + c * dy);
@@ -83,15 +108,36 @@ static rsm_pose_t mount_from(const double robot[3], const double laser[3])
 
 #define MAX_FIELDS 4096
 
+static void set_odom(carmen_record_t *rec, const double pose[3])
+{
+    rec->odom_d[0] = pose[0];
+    rec->odom_d[1] = pose[1];
+    rec->odom_d[2] = pose[2];
+    rec->odom.x = (float)pose[0];
+    rec->odom.y = (float)pose[1];
+    rec->odom.theta = (float)pose[2];
+}
+
+/* A count of readings: a whole number in 0..MAX_FIELDS (NaN and fractions
+ * are malformed; converting them to size_t would be undefined). */
+static int count_field(const char *s, size_t *out)
+{
+    double v;
+    if (!num(s, &v) || !(v >= 0.0 && v <= (double)MAX_FIELDS) || v != floor(v)) {
+        return 0;
+    }
+    *out = (size_t)v;
+    return 1;
+}
+
 static carmen_kind_t parse_flaser(carmen_reader_t *r, char **f, size_t nf, carmen_record_t *rec)
 {
     double v;
     size_t n;
     size_t i;
-    if (nf < 2 || !num(f[1], &v) || v < 0.0 || v > 100000.0) {
+    if (nf < 2 || !count_field(f[1], &n)) {
         return CARMEN_EOF;
     }
-    n = (size_t)v;
     if (nf < 2 + n + 9) {
         return CARMEN_EOF;
     }
@@ -118,15 +164,13 @@ static carmen_kind_t parse_flaser(carmen_reader_t *r, char **f, size_t nf, carme
         if (lp < 0 || op < 0 || !isfinite(ts)) {
             return CARMEN_BAD_POSE;
         }
-        rec->odom.x = (float)odom[0];
-        rec->odom.y = (float)odom[1];
-        rec->odom.theta = (float)odom[2];
+        set_odom(rec, odom);
         rec->stamp_s = ts;
         /* Identical triples (Intel, ACES) say nothing about the mount. */
         rec->has_mount = laser[0] != odom[0] || laser[1] != odom[1] || laser[2] != odom[2];
         if (rec->has_mount) {
             r->counts.flaser_offset++;
-            rec->mount = mount_from(odom, laser);
+            rec->mount = carmen_between(odom, laser);
         }
     }
     rec->count = n;
@@ -153,18 +197,12 @@ static carmen_kind_t parse_robotlaser(carmen_reader_t *r, char **f, size_t nf, c
     size_t i;
     size_t base;
     if (nf < 9 || !num(f[2], &start) || !num(f[3], &fov) || !num(f[4], &res) || !num(f[5], &maxr) ||
-        !isfinite(start) || !isfinite(fov) || !isfinite(res) || !isfinite(maxr) ||
-        !num(f[8], &v) || v < 0.0 || v > 100000.0) {
+        !isfinite(start) || !isfinite(fov) || !isfinite(res) || !isfinite(maxr) || !count_field(f[8], &n)) {
         return CARMEN_EOF;
     }
-    n = (size_t)v;
-    if (nf < 9 + n + 1) {
+    if (nf < 9 + n + 1 || !count_field(f[9 + n], &m)) {
         return CARMEN_EOF;
     }
-    if (!num(f[9 + n], &v) || v < 0.0 || v > 100000.0) {
-        return CARMEN_EOF;
-    }
-    m = (size_t)v;
     base = 10 + n + m;
     if (nf < base + 14) {
         return CARMEN_EOF;
@@ -191,12 +229,10 @@ static carmen_kind_t parse_robotlaser(carmen_reader_t *r, char **f, size_t nf, c
         if (lp < 0 || rp < 0 || !isfinite(ts)) {
             return CARMEN_BAD_POSE;
         }
-        rec->odom.x = (float)robot[0];
-        rec->odom.y = (float)robot[1];
-        rec->odom.theta = (float)robot[2];
+        set_odom(rec, robot);
         rec->stamp_s = ts;
         rec->has_mount = 1;
-        rec->mount = mount_from(robot, laser);
+        rec->mount = carmen_between(robot, laser);
     }
     rec->count = n;
     rec->start_rad = (float)start;
@@ -218,9 +254,10 @@ static carmen_kind_t parse_odom(char **f, size_t nf, carmen_record_t *rec)
     if (!isfinite(x) || !isfinite(y) || !isfinite(t) || !isfinite(ts)) {
         return CARMEN_BAD_POSE;
     }
-    rec->odom.x = (float)x;
-    rec->odom.y = (float)y;
-    rec->odom.theta = (float)t;
+    {
+        const double pose[3] = {x, y, t};
+        set_odom(rec, pose);
+    }
     rec->stamp_s = ts;
     rec->count = 0;
     rec->has_mount = 0;
@@ -232,18 +269,27 @@ static carmen_kind_t parse_odom(char **f, size_t nf, carmen_record_t *rec)
  * counted and skipped. */
 static int read_line(carmen_reader_t *r)
 {
+    const size_t last = sizeof r->line - 1;
+    if (r->error[0] != '\0') {
+        return -1;
+    }
     for (;;) {
-        size_t len;
+        /* gzgets ends what it stored with a NUL: at the very end only when
+         * the buffer filled up. strlen cannot tell, a NUL inside the line
+         * would make the rest of it read as a line of its own. */
+        r->line[last] = 'x';
         if (gzgets((gzFile)r->gz, r->line, (int)sizeof r->line) == NULL) {
-            return 0;
+            return stream_failed(r) ? -1 : 0;
         }
         r->counts.lines++;
-        len = strlen(r->line);
-        if (len == sizeof r->line - 1 && r->line[len - 1] != '\n') {
+        if (r->line[last] == '\0' && r->line[last - 1] != '\n') {
             /* Skip the rest of an over-long line. */
             int c;
             r->counts.too_long++;
             while ((c = gzgetc((gzFile)r->gz)) != -1 && c != '\n') {
+            }
+            if (c == -1 && stream_failed(r)) {
+                return -1;
             }
             continue;
         }
@@ -321,8 +367,9 @@ carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec)
     for (;;) {
         size_t nf;
         carmen_kind_t k;
-        if (!read_line(r)) {
-            return CARMEN_EOF;
+        const int got = read_line(r);
+        if (got <= 0) {
+            return got < 0 ? CARMEN_ERROR : CARMEN_EOF;
         }
         k = parse_line(r, rec, &nf);
         if (k == CARMEN_SKIPPED) {
@@ -349,8 +396,8 @@ carmen_kind_t carmen_next_mount(carmen_reader_t *r, carmen_record_t *rec)
     for (;;) {
         size_t nf;
         const char *p;
-        if (!read_line(r)) {
-            return CARMEN_EOF;
+        if (read_line(r) <= 0) {
+            return CARMEN_EOF; /* the real pass reports errors */
         }
         p = r->line;
         while (is_space(*p)) {

@@ -16,7 +16,9 @@ typedef enum carmen_kind {
     CARMEN_SCAN = 1,
     CARMEN_ODOM = 2,
     CARMEN_SKIPPED = 3,  /* internal: a well-formed record the reader cannot hold (counted) */
-    CARMEN_BAD_POSE = 4  /* internal: a pose or timestamp is NaN or infinite (counted as malformed) */
+    CARMEN_BAD_POSE = 4, /* internal: a pose or timestamp is NaN or infinite (counted as malformed) */
+    CARMEN_ERROR = 5     /* the file cannot be read on (read error, corrupt or truncated gzip):
+                          * carmen_error() says why; every later call returns it again */
 } carmen_kind_t;
 
 typedef struct carmen_counts {
@@ -37,6 +39,7 @@ typedef struct carmen_record {
     const char *type;          /* the record's keyword: "FLASER", "ROBOTLASER1" or "ODOM" */
     double stamp_s;            /* ipc timestamp */
     rsm_pose_t odom;           /* odometry pose (FLASER odom triple, or ODOM x y theta) */
+    double odom_d[3];          /* the same as read, in double: log poses can be far from the origin */
     size_t count;              /* readings (scans) */
     float range_m[RSM_MAX_BEAMS];
     float start_rad;           /* angle of reading 0 */
@@ -54,6 +57,7 @@ typedef struct carmen_record {
 
 typedef struct carmen_reader {
     void *gz;                  /* gzFile */
+    char error[200];           /* why reading stopped early (empty: it did not) */
     char line[1 << 16];
     int fov179;                /* 1: spread FLASER beams over exactly 180 deg (pi/(n-1) steps) */
     carmen_counts_t counts;
@@ -62,7 +66,8 @@ typedef struct carmen_reader {
 int carmen_open(carmen_reader_t *r, const char *path);
 void carmen_close(carmen_reader_t *r);
 
-/* Next scan or odometry record; CARMEN_EOF at the end. */
+/* Next scan or odometry record; CARMEN_EOF at the end, CARMEN_ERROR if the
+ * rest of the file cannot be read. */
 carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec);
 
 /* Next well-formed scan record that carries a mount (has_mount), skipping
@@ -70,5 +75,12 @@ carmen_kind_t carmen_next(carmen_reader_t *r, carmen_record_t *rec);
  * For a look ahead before the real pass: only counts.lines is meaningful
  * (it is then the record's line number). */
 carmen_kind_t carmen_next_mount(carmen_reader_t *r, carmen_record_t *rec);
+
+/* The pose "to" seen from "from" (x, y, theta each, same frame), computed in
+ * double. */
+rsm_pose_t carmen_between(const double from[3], const double to[3]);
+
+/* Why the last CARMEN_ERROR happened. */
+const char *carmen_error(const carmen_reader_t *r);
 
 #endif

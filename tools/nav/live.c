@@ -29,33 +29,110 @@ static double mono_s(void)
     return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
+/* Active mode: a device that went away is reopened after this long, doubling
+ * up to the cap while it stays away (an adapter unplugged and plugged back). */
+#define REOPEN_FIRST_S 0.1
+#define REOPEN_MAX_S 2.0
+/* Listen mode: bytes taken from one link per wake-up, so that a source that
+ * never runs dry still lets the loop see the time limit and signals. */
+#define DRAIN_MAX_BYTES 65536
+
 typedef struct endpoint {
     const char *path;
+    const char *what;          /* "robot" or "laser" */
+    uint32_t baud;             /* rate it was opened at */
     rsm_posix_auto_link_t state;
     rsm_link_t link;
     int open;
     int ended;
+    int down;                  /* active mode: the link failed; reopened at retry_at */
+    double retry_at;
+    double backoff_s;
+    unsigned reopens;
 } endpoint_t;
 
-static int open_endpoint(endpoint_t *e, const char *path, uint32_t baud)
+static void report_open_error(const endpoint_t *e, int rc)
+{
+    const int err = rsm_posix_auto_errno(&e->state);
+    fprintf(stderr, "rsm-nav: cannot open %s: %s%s%s\n", e->path, rsm_strerror(rc), err ? ": " : "",
+            err ? strerror(err) : "");
+}
+
+static int open_endpoint(endpoint_t *e, const char *what, const char *path, uint32_t baud)
 {
     int rc;
+    memset(e, 0, sizeof *e);
     e->path = path;
-    e->open = 0;
-    e->ended = 0;
+    e->what = what;
+    e->baud = baud;
     if (path == NULL) {
         e->ended = 1;
         return 0;
     }
     rc = rsm_posix_link_open_auto(&e->state, path, baud, 0u, &e->link);
     if (rc != RSM_OK) {
-        const int err = rsm_posix_auto_errno(&e->state);
-        fprintf(stderr, "rsm-nav: cannot open %s: %s%s%s\n", path, rsm_strerror(rc), err ? ": " : "",
-                err ? strerror(err) : "");
+        report_open_error(e, rc);
         return -1;
     }
     e->open = 1;
     return 0;
+}
+
+/* Active mode: the driver's poll failed (the device vanished, the peer
+ * died). The link is closed and reopened later, never polled in a loop. */
+static void endpoint_failed(endpoint_t *e, int status)
+{
+    fprintf(stderr, "rsm-nav: %s link %s failed (%s): reopening\n", e->what, e->path, rsm_strerror(status));
+    (void)rsm_posix_link_close(&e->state);
+    e->down = 1;
+    e->backoff_s = REOPEN_FIRST_S;
+    e->retry_at = mono_s() + e->backoff_s;
+}
+
+/* Returns 1 when the link is open again (the driver must start over). */
+static int endpoint_retry(endpoint_t *e, int quiet)
+{
+    int rc;
+    if (mono_s() < e->retry_at) {
+        return 0;
+    }
+    rc = rsm_posix_link_open_auto(&e->state, e->path, e->baud, 0u, &e->link);
+    if (rc != RSM_OK) {
+        e->backoff_s = e->backoff_s * 2.0 < REOPEN_MAX_S ? e->backoff_s * 2.0 : REOPEN_MAX_S;
+        e->retry_at = mono_s() + e->backoff_s;
+        return 0;
+    }
+    e->down = 0;
+    e->reopens++;
+    if (!quiet) {
+        fprintf(stderr, "rsm-nav: %s link %s reopened\n", e->what, e->path);
+    }
+    return 1;
+}
+
+/* Sleeps until the earlier retry of the links that are down (at most 50 ms),
+ * when no open link would make the loop wait. */
+static void nap_while_down(const endpoint_t *a, const endpoint_t *b)
+{
+    double until = mono_s() + 0.05;
+    struct timespec ts;
+    double left;
+    if ((a->open && !a->down) || (b->open && !b->down)) {
+        return; /* the other driver's poll waits on its link */
+    }
+    if (a->open && a->down && a->retry_at < until) {
+        until = a->retry_at;
+    }
+    if (b->open && b->down && b->retry_at < until) {
+        until = b->retry_at;
+    }
+    left = until - mono_s();
+    if (left <= 0.0) {
+        return;
+    }
+    ts.tv_sec = 0;
+    ts.tv_nsec = (long)(left * 1e9);
+    nanosleep(&ts, NULL);
 }
 
 static int endpoint_fd(const endpoint_t *e)
@@ -68,7 +145,7 @@ static int drain(endpoint_t *e, nav_stream_t *s, int robot, const nav_stream_sin
 {
     uint8_t buf[4096];
     int total = 0;
-    for (;;) {
+    while (total < DRAIN_MAX_BYTES) {
         const int n = rsm_link_read(&e->link, buf, sizeof buf, 0u);
         if (n < 0) {
             /* The far end closed (a replay finished) or the device went away:
@@ -88,6 +165,7 @@ static int drain(endpoint_t *e, nav_stream_t *s, int robot, const nav_stream_sin
         }
         total += n;
     }
+    return total;
 }
 
 static int run_listen(const nav_live_options_t *opt, endpoint_t *robot, endpoint_t *laser,
@@ -154,6 +232,10 @@ static int run_listen(const nav_live_options_t *opt, endpoint_t *robot, endpoint
                 (unsigned long long)bytes, (unsigned long long)stream.encoder_packets,
                 (unsigned long long)stream.lms_scans, (unsigned long long)stream.bad_scans);
     }
+    if (bytes == 0u && !stop_requested) {
+        fprintf(stderr, "rsm-nav: nothing arrived on any link\n");
+        return 1;
+    }
     return 0;
 }
 
@@ -184,16 +266,19 @@ static void report_laser(const rsm_sicklms_t *d)
 }
 
 /* One poll of the robot driver; encoder packets go to the sink. Returns 1
- * if the poll gave an event. */
+ * if the poll gave an event, 0 if not, a negative status if the link failed. */
 static int poll_robot(rsm_p3dx_t *d, const nav_stream_sink_t *sink, int quiet)
 {
     rsm_p3dx_event_t ev;
-    if (rsm_p3dx_poll(d, &ev) != RSM_OK) {
-        return 0;
+    const int st = rsm_p3dx_poll(d, &ev);
+    if (st != RSM_OK) {
+        return st < 0 ? st : 0;
     }
     switch (ev.type) {
     case RSM_P3DX_EVENT_ENCODER:
-        sink->encoder(sink->ctx, ev.encoder.left, ev.encoder.right, ev.stamp_us);
+        /* The first packet of a connection starts the counts over (a robot
+         * that restarted counts from 0): the driver says so. */
+        sink->encoder(sink->ctx, ev.encoder.left, ev.encoder.right, ev.stamp_us, !ev.encoder.has_delta);
         if (sink->tick != NULL) {
             sink->tick(sink->ctx, ev.stamp_us); /* a scan waiting for this sample goes on */
         }
@@ -222,12 +307,13 @@ static int poll_robot(rsm_p3dx_t *d, const nav_stream_sink_t *sink, int quiet)
 }
 
 /* One poll of the laser driver; scans go to the sink. Returns 1 if the poll
- * gave an event. */
+ * gave an event, 0 if not, a negative status if the link failed. */
 static int poll_laser(rsm_sicklms_t *d, const nav_stream_sink_t *sink, int quiet)
 {
     rsm_sicklms_event_t ev;
-    if (rsm_sicklms_poll(d, &ev) != RSM_OK) {
-        return 0;
+    const int st = rsm_sicklms_poll(d, &ev);
+    if (st != RSM_OK) {
+        return st < 0 ? st : 0;
     }
     switch (ev.type) {
     case RSM_SICKLMS_EVENT_SCAN:
@@ -271,6 +357,8 @@ static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint
     rsm_clock_t clock;
     const double t0 = mono_s();
     double t_end;
+    int robot_live;
+    int laser_live;
     (void)rsm_p3dx_config_default(&pcfg);
     (void)rsm_sicklms_config_default(&lcfg);
     (void)rsm_posix_clock_init(&clock);
@@ -293,12 +381,31 @@ static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint
     }
     while (!stop_requested) {
         int events = 0;
-        if (robot->open) {
-            events += poll_robot(&p3dx, sink, opt->quiet);
+        if (robot->open && robot->down) {
+            if (endpoint_retry(robot, opt->quiet)) {
+                (void)rsm_p3dx_connect(&p3dx);
+            }
+        } else if (robot->open) {
+            const int r = poll_robot(&p3dx, sink, opt->quiet);
+            if (r < 0) {
+                endpoint_failed(robot, r);
+            } else {
+                events += r;
+            }
         }
-        if (laser->open) {
-            events += poll_laser(&lms, sink, opt->quiet);
+        if (laser->open && laser->down) {
+            if (endpoint_retry(laser, opt->quiet)) {
+                (void)rsm_sicklms_connect(&lms);
+            }
+        } else if (laser->open) {
+            const int r = poll_laser(&lms, sink, opt->quiet);
+            if (r < 0) {
+                endpoint_failed(laser, r);
+            } else {
+                events += r;
+            }
         }
+        nap_while_down(robot, laser);
         if (events == 0 && sink->tick != NULL) {
             /* Idle: a scan waiting for odometry may time out. The drivers
              * stamp with this clock, so the aligner's times agree. */
@@ -312,29 +419,40 @@ static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint
      * gets STOP and ENABLE 0, then CLOSE; the laser stops its stream and
      * goes back to its power-up rate. Bounded in time whatever the
      * devices do. */
-    if (robot->open) {
+    if (robot->open && !robot->down) {
         (void)rsm_p3dx_disconnect(&p3dx);
     }
-    if (laser->open) {
+    if (laser->open && !laser->down) {
         (void)rsm_sicklms_disconnect(&lms);
     }
     t_end = mono_s() + 5.0;
-    while (mono_s() < t_end && ((robot->open && p3dx.state != RSM_P3DX_IDLE) ||
-                                (laser->open && lms.state != RSM_SICKLMS_IDLE))) {
-        if (robot->open && p3dx.state != RSM_P3DX_IDLE) {
-            (void)poll_robot(&p3dx, sink, opt->quiet);
+    robot_live = robot->open && !robot->down;
+    laser_live = laser->open && !laser->down;
+    while (mono_s() < t_end && ((robot_live && p3dx.state != RSM_P3DX_IDLE) ||
+                                (laser_live && lms.state != RSM_SICKLMS_IDLE))) {
+        if (robot_live && p3dx.state != RSM_P3DX_IDLE && poll_robot(&p3dx, sink, opt->quiet) < 0) {
+            robot_live = 0; /* gone: nothing more to say to it */
         }
-        if (laser->open && lms.state != RSM_SICKLMS_IDLE) {
-            (void)poll_laser(&lms, sink, opt->quiet);
+        if (laser_live && lms.state != RSM_SICKLMS_IDLE && poll_laser(&lms, sink, opt->quiet) < 0) {
+            laser_live = 0;
         }
     }
     if (!opt->quiet) {
         if (robot->open) {
             report_robot(&p3dx);
+            fprintf(stderr, "rsm-nav: robot link reopened %u times\n", robot->reopens);
         }
         if (laser->open) {
             report_laser(&lms);
+            fprintf(stderr, "rsm-nav: laser link reopened %u times\n", laser->reopens);
         }
+    }
+    if ((robot->open && p3dx.stats.connects == 0u) || (laser->open && lms.stats.connects == 0u)) {
+        fprintf(stderr, "rsm-nav: no %s ever connected\n",
+                robot->open && p3dx.stats.connects == 0u
+                    ? (laser->open && lms.stats.connects == 0u ? "device" : "robot")
+                    : "laser");
+        return 1;
     }
     return 0;
 }
@@ -349,8 +467,10 @@ int nav_live_run(const nav_live_options_t *opt, const nav_stream_sink_t *sink)
     sa.sa_handler = on_signal;
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
-    if (open_endpoint(&robot, opt->robot, opt->robot_baud ? opt->robot_baud : (opt->listen_only ? 38400u : 9600u)) != 0 ||
-        open_endpoint(&laser, opt->lms, opt->lms_baud ? opt->lms_baud : (opt->listen_only ? 38400u : 9600u)) != 0) {
+    if (open_endpoint(&robot, "robot", opt->robot,
+                      opt->robot_baud ? opt->robot_baud : (opt->listen_only ? 38400u : 9600u)) != 0 ||
+        open_endpoint(&laser, "laser", opt->lms,
+                      opt->lms_baud ? opt->lms_baud : (opt->listen_only ? 38400u : 9600u)) != 0) {
         if (robot.open) {
             (void)rsm_posix_link_close(&robot.state);
         }
@@ -360,10 +480,10 @@ int nav_live_run(const nav_live_options_t *opt, const nav_stream_sink_t *sink)
     if (stop_requested && !opt->quiet) {
         fprintf(stderr, "rsm-nav: stopped by signal\n");
     }
-    if (robot.open) {
+    if (robot.open && !robot.down) {
         (void)rsm_posix_link_close(&robot.state);
     }
-    if (laser.open) {
+    if (laser.open && !laser.down) {
         (void)rsm_posix_link_close(&laser.state);
     }
     return rc;

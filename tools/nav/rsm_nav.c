@@ -56,7 +56,16 @@ static void usage(FILE *f)
             "mount_x, mount_y, mount_theta, upside_down (as --laser-pose and --upside-down).\n");
 }
 
-static int set_option(rsm_localizer_config_t *c, const char *kv)
+/* The largest value an integer field of this size holds (enums: int). */
+static double set_option_max(size_t size, int is_unsigned)
+{
+    const double bits = (double)size * 8.0 - (is_unsigned ? 0.0 : 1.0);
+    return pow(2.0, bits) - 1.0;
+}
+
+/* Sets one KEY=VALUE. Returns 0, -1 (unknown key or not a number) or -2
+ * (an integer field and VALUE is not a whole number from 0 to *top_out). */
+static int set_option(rsm_localizer_config_t *c, const char *kv, double *top_out)
 {
     const char *eq = strchr(kv, '=');
     char key[64];
@@ -73,18 +82,30 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     if (*end != '\0' || end == eq + 1 || errno != 0 || !isfinite(v)) {
         return -1;
     }
+/* Integers must fit their field: a silent conversion would turn 257 into 1
+ * and 1e12 into undefined behaviour. */
 #define F(name, field) if (strcmp(key, name) == 0) { c->field = (float)v; return 0; }
-#define U(name, field, type) if (strcmp(key, name) == 0) { if (v < 0) return -1; c->field = (type)v; return 0; }
+#define U(name, field, type) E(name, field, type, set_option_max(sizeof(c->field), (type)-1 > 0))
+#define E(name, field, type, maxv) \
+    if (strcmp(key, name) == 0) { \
+        const double top = (maxv); \
+        if (!(v >= 0.0 && v <= top) || v != floor(v)) { \
+            *top_out = top; \
+            return -2; \
+        } \
+        c->field = (type)v; \
+        return 0; \
+    }
     F("cell", grid.cell_m)
     F("sigma", grid.sigma_m)
-    U("rule", grid.rule, rsm_grid_rule_t)
+    E("rule", grid.rule, rsm_grid_rule_t, 2.0)
     U("min_hits", map_min_hits, uint8_t)
     F("window", match_window_m)
     F("search_sigmas", search_sigmas)
     F("search_min", search_min_m)
     F("search_max", search_max_m)
     F("gate", gate_d2)
-    U("noise", noise, rsm_noise_model_t)
+    E("noise", noise, rsm_noise_model_t, 1.0)
     F("r_min_xy", r_min_xy_m)
     F("r_min_theta", r_min_theta_rad)
     F("inlier_tol", ransac.inlier_tol_m)
@@ -138,6 +159,7 @@ static int set_option(rsm_localizer_config_t *c, const char *kv)
     U("iso_agree", isolation.agree, uint8_t)
 #undef F
 #undef U
+#undef E
     return -1;
 }
 
@@ -163,16 +185,23 @@ typedef struct nav {
     int quiet;
     FILE *traj;
     const char *map_path;
-    hitlist_t hits;
+    hitmap_t hits;         /* --map: hit counts per picture cell */
     double *times;
     size_t ntimes;
     size_t cap_times;
-    uint64_t last_us;
+    uint64_t last_us;      /* the localizer's time of the last scan */
     uint64_t clamped;
+    int have_stamp;
+    uint64_t src_last_us;  /* the source's stamp of the last scan taken */
+    uint64_t base_us;      /* localizer time = source stamp + base (modulo 2^64) */
+    int have_odd;
+    uint64_t odd_us;       /* a stamp far from the previous one, not yet confirmed */
+    uint64_t odd_stamps;
+    uint64_t time_jumps;
     double t_start;
     /* Capture mode: original stamps of scans whose stamp the converter clamped. */
     uint64_t *restore_idx;
-    uint64_t *restore_us;
+    int64_t *restore_us;   /* signed: a log's stamp may be negative */
     size_t nrestore;
     size_t restore_next;   /* the table is in scan order: a cursor, not a search */
     uint64_t scan_index;
@@ -180,6 +209,10 @@ typedef struct nav {
     FILE *events;          /* --events: decoded inputs, one line each, in processing order */
     int have_x0;           /* --initial-pose given: overrides any other start */
     rsm_pose_t x0;
+    /* Far from the origin the localizer runs in a frame shifted by this
+     * (metres, added back to every output): floats resolve 3 cm at 5e5 m. */
+    double off_x;
+    double off_y;
     /* Capture and live modes: odometry and scans aligned in time (sync.h). */
     rsm_sync_config_t sync_cfg;
     rsm_sync_t sync;
@@ -196,22 +229,49 @@ typedef struct nav {
 
 static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep);
 
-/* Starts the localizer once, at x0 (NULL: zero) unless --initial-pose
- * gave the start. */
-static int nav_start(nav_t *nav, const rsm_pose_t *x0)
+/* Beyond this distance of the start from the origin, the localizer works in
+ * a frame centred on the start (see off_x). */
+#define NAV_LOCAL_FRAME_M 1000.0
+
+/* Starts the localizer once, at x0 (x, y, theta; NULL: zero) unless
+ * --initial-pose gave the start; where is the start's source, for messages. */
+static int nav_start(nav_t *nav, const double *x0, const char *where)
 {
-    static const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+    double x = 0.0;
+    double y = 0.0;
+    double th = 0.0;
+    rsm_pose_t start;
     if (nav->initialised) {
         return 0;
     }
     if (nav->have_x0) {
-        x0 = &nav->x0;
-    } else if (x0 == NULL) {
-        x0 = &zero;
+        x = nav->x0.x;
+        y = nav->x0.y;
+        th = nav->x0.theta;
+        where = "--initial-pose";
+    } else if (x0 != NULL) {
+        x = x0[0];
+        y = x0[1];
+        th = x0[2];
     }
-    if (rsm_localizer_init(&nav->loc, &nav->cfg, x0, NULL) != RSM_OK ||
-        rsm_sync_init(&nav->sync, &nav->loc, &nav->sync_cfg, on_fused, nav) != RSM_OK) {
-        fprintf(stderr, "rsm-nav: invalid configuration\n");
+    if (!isfinite(x) || !isfinite(y) || !isfinite(th)) {
+        fprintf(stderr, "rsm-nav: the start pose from %s is not finite (%g %g %g)\n", where, x, y, th);
+        return -1;
+    }
+    if (fabs(x) > NAV_LOCAL_FRAME_M || fabs(y) > NAV_LOCAL_FRAME_M) {
+        nav->off_x = x;
+        nav->off_y = y;
+    }
+    start.x = (float)(x - nav->off_x);
+    start.y = (float)(y - nav->off_y);
+    start.theta = rsm_wrap_angle((float)th);
+    if (rsm_localizer_init(&nav->loc, &nav->cfg, &start, NULL) != RSM_OK) {
+        fprintf(stderr, "rsm-nav: invalid configuration (a --set value, the laser pose or the odometry"
+                        " geometry is out of range)\n");
+        return -1;
+    }
+    if (rsm_sync_init(&nav->sync, &nav->loc, &nav->sync_cfg, on_fused, nav) != RSM_OK) {
+        fprintf(stderr, "rsm-nav: invalid alignment settings\n");
         return -1;
     }
     nav->initialised = 1;
@@ -220,15 +280,60 @@ static int nav_start(nav_t *nav, const rsm_pose_t *x0)
 
 /* Log and capture timestamps can jitter backwards while the order of the
  * records is the true order (the Intel log does so 631 times): the
- * localizer gets a clamped stamp, counted; the trajectory keeps the original. */
+ * localizer gets a clamped stamp, counted; the trajectory keeps the original.
+ * One stamp far from its neighbours (a negative or far-future stamp in a
+ * log) is not trusted alone, or it would clamp every later scan: it gets
+ * the previous stamp (counted as odd) unless the next one agrees with it;
+ * then the clock really jumped and the localizer's time carries on from
+ * where it was (no time passes across the jump). */
+#define NAV_MAX_STEP_US 3600000000ull
+
+static uint64_t stamp_gap(uint64_t a, uint64_t b)
+{
+    return a > b ? a - b : b - a;
+}
+
 static void nav_clamp(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us)
 {
-    if (stamp_us < nav->last_us) {
-        stamp_us = nav->last_us;
+    uint64_t t;
+    if (nav->have_stamp && stamp_gap(stamp_us, nav->src_last_us) > NAV_MAX_STEP_US) {
+        if (!nav->have_odd || stamp_gap(stamp_us, nav->odd_us) > NAV_MAX_STEP_US) {
+            nav->odd_us = stamp_us;
+            nav->have_odd = 1;
+            nav->odd_stamps++;
+            scan->stamp_us = nav->last_us;
+            return;
+        }
+        nav->time_jumps++;
+        nav->base_us = nav->last_us - stamp_us; /* modulo 2^64, so either direction works */
+    }
+    nav->have_odd = 0;
+    nav->have_stamp = 1;
+    nav->src_last_us = stamp_us;
+    t = stamp_us + nav->base_us;
+    if (t < nav->last_us) {
+        t = nav->last_us;
         nav->clamped++;
     }
-    nav->last_us = stamp_us;
-    scan->stamp_us = stamp_us;
+    nav->last_us = t;
+    scan->stamp_us = t;
+}
+
+/* This scan's usable readings (the localizer's robot-frame points, filled
+ * for every scan) placed at its estimate, into the --map picture. Not
+ * loc.world: the core fills that only for scans it writes into its map. */
+static void nav_map_points(nav_t *nav, const rsm_localizer_report_t *rep)
+{
+    static rsm_point_t world[RSM_MAX_BEAMS];
+    size_t k;
+    const size_t n = rep->points <= RSM_MAX_BEAMS ? rep->points : RSM_MAX_BEAMS;
+    for (k = 0; k < n; ++k) {
+        world[k] = rsm_pose_apply(&rep->pose, &nav->loc.pts[k]);
+    }
+    if (hitmap_add(&nav->hits, world, n) != 0) {
+        fprintf(stderr, "rsm-nav: out of memory for the map picture\n");
+        exit(1);
+    }
 }
 
 /* Records one fused scan: time taken, trajectory line, map points. */
@@ -250,10 +355,10 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
         fprintf(stderr, "rsm-nav: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
         return;
     }
-    fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, (double)rep->pose.x, (double)rep->pose.y,
-            (double)rep->pose.theta);
+    fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, nav->off_x + (double)rep->pose.x,
+            nav->off_y + (double)rep->pose.y, (double)rep->pose.theta);
     if (nav->map_path != NULL) {
-        (void)hitlist_add(&nav->hits, nav->loc.world, rep->points);
+        nav_map_points(nav, rep);
     }
     if (!nav->quiet && nav->ntimes % 1000 == 0) {
         fprintf(stderr, "rsm-nav: %zu scans, %.1f s\n", nav->ntimes, now_s() - nav->t_start);
@@ -266,7 +371,7 @@ static void nav_scan(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us, double fil
     rsm_localizer_report_t rep;
     double t0;
     int rc;
-    if (nav_start(nav, NULL) != 0) {
+    if (nav_start(nav, NULL, "the default") != 0) {
         return;
     }
     nav_clamp(nav, scan, stamp_us);
@@ -291,11 +396,14 @@ static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_lo
 }
 
 /* Stream sink callbacks (capture and live modes). */
-static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us)
+static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us, int restart)
 {
     nav_t *nav = (nav_t *)ctx;
-    if (nav_start(nav, NULL) != 0) {
+    if (nav_start(nav, NULL, "the default") != 0) {
         return;
+    }
+    if (restart) {
+        (void)rsm_sync_encoder_restart(&nav->sync); /* no step across a new connection */
     }
     nav->encoders++;
     if (nav->events != NULL) {
@@ -318,13 +426,13 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
 {
     static rsm_scan_t copy;
     nav_t *nav = (nav_t *)ctx;
-    uint64_t file_us = stamp_us;
+    double file_s = (double)stamp_us * 1e-6;
     size_t k;
     while (nav->restore_next < nav->nrestore && nav->restore_idx[nav->restore_next] < nav->scan_index) {
         nav->restore_next++;
     }
     if (nav->restore_next < nav->nrestore && nav->restore_idx[nav->restore_next] == nav->scan_index) {
-        file_us = nav->restore_us[nav->restore_next];
+        file_s = (double)nav->restore_us[nav->restore_next] * 1e-6;
     }
     nav->scan_index++;
     if (nav->events != NULL) {
@@ -336,13 +444,13 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
         }
         fprintf(nav->events, "S %zu %08lx\n", scan->count, (unsigned long)h);
     }
-    if (nav_start(nav, NULL) != 0) {
+    if (nav_start(nav, NULL, "the default") != 0) {
         return;
     }
     copy = *scan;
     nav_clamp(nav, &copy, stamp_us);
     /* At most two scans are ever inside the aligner (one waiting, one new). */
-    nav->file_s[(nav->file_head + nav->file_count) % 4u] = (double)file_us * 1e-6;
+    nav->file_s[(nav->file_head + nav->file_count) % 4u] = file_s;
     nav->file_count++;
     nav->call_t0 = now_s();
     if (rsm_sync_scan(&nav->sync, &copy) != RSM_OK) {
@@ -400,10 +508,11 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
     static carmen_reader_t reader;
     static carmen_record_t rec;
     static rsm_scan_t scan;
-    rsm_pose_t last_odom = {0.0f, 0.0f, 0.0f};
+    double last_odom[3] = {0.0, 0.0, 0.0};
     rsm_pose_t log_mount = {0.0f, 0.0f, 0.0f};
     int have_log_mount;
     int have_odom = 0;
+    int status = 0;
     carmen_mount(nav, path, fov179, &log_mount, &have_log_mount);
     reader.fov179 = fov179;
     if (carmen_open(&reader, path) != 0) {
@@ -416,6 +525,12 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
         if (k == CARMEN_EOF) {
             break;
         }
+        if (k == CARMEN_ERROR) {
+            /* What was read so far is kept (the caller flushes it). */
+            fprintf(stderr, "rsm-nav: cannot read %s: %s\n", path, carmen_error(&reader));
+            status = 1;
+            break;
+        }
         if (k != CARMEN_SCAN) {
             continue; /* odometry comes from the pose carried by each laser line */
         }
@@ -425,21 +540,26 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
             nav->mount_disagree++;
         }
         /* Start in the odometry frame so the trajectories are comparable. */
-        if (nav_start(nav, &rec.odom) != 0) {
+        if (nav_start(nav, rec.odom_d, "the log's first pose") != 0) {
             carmen_close(&reader);
             return 2;
         }
         if (have_odom) {
-            const rsm_motion_t u = rsm_odometry_from_poses(&last_odom, &rec.odom);
+            /* In double: far from the origin a float difference loses centimetres. */
+            const rsm_pose_t d = carmen_between(last_odom, rec.odom_d);
+            const rsm_motion_t u = {d.x, d.y, d.theta};
             (void)rsm_localizer_motion(&nav->loc, &u);
         }
-        last_odom = rec.odom;
+        memcpy(last_odom, rec.odom_d, sizeof last_odom);
         have_odom = 1;
         for (b = 0; b < rec.count; ++b) {
             scan.range_m[b] = rec.range_m[b];
         }
         (void)rsm_scan_set_uniform(&scan, rec.count, rec.start_rad, rec.step_rad);
-        nav_scan(nav, &scan, (uint64_t)llround(rec.stamp_s * 1e6), rec.stamp_s);
+        /* A negative or absurd stamp becomes the farthest one: odd to nav_clamp. */
+        nav_scan(nav, &scan,
+                 rec.stamp_s >= 0.0 && rec.stamp_s < 1.8e13 ? (uint64_t)llround(rec.stamp_s * 1e6) : UINT64_MAX,
+                 rec.stamp_s);
     }
     carmen_close(&reader);
     printf("rsm-nav summary\n");
@@ -457,7 +577,7 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
         printf("                  FLASER lines whose laser pose differs from their odometry pose: %llu\n",
                (unsigned long long)reader.counts.flaser_offset);
     }
-    return 0;
+    return status;
 }
 
 static const char *meta(const cap_reader *r, const char *key)
@@ -479,13 +599,13 @@ static void load_restore_table(nav_t *nav, const char *text)
     while (p != NULL && *p != '\0') {
         char kind[32];
         unsigned long long idx;
-        unsigned long long orig;
-        unsigned long long written;
-        if (sscanf(p, "%31s %llu %llu %llu", kind, &idx, &orig, &written) == 4 && strcmp(kind, "FLASER") == 0) {
+        long long orig;
+        long long written;
+        if (sscanf(p, "%31s %llu %lld %lld", kind, &idx, &orig, &written) == 4 && strcmp(kind, "FLASER") == 0) {
             if (nav->nrestore == cap) {
                 cap = cap ? cap * 2 : 256;
                 nav->restore_idx = (uint64_t *)realloc(nav->restore_idx, cap * sizeof *nav->restore_idx);
-                nav->restore_us = (uint64_t *)realloc(nav->restore_us, cap * sizeof *nav->restore_us);
+                nav->restore_us = (int64_t *)realloc(nav->restore_us, cap * sizeof *nav->restore_us);
                 if (nav->restore_idx == NULL || nav->restore_us == NULL) {
                     fprintf(stderr, "rsm-nav: out of memory\n");
                     exit(1);
@@ -502,6 +622,20 @@ static void load_restore_table(nav_t *nav, const char *text)
     }
 }
 
+/* A capture metadata value that must be a positive number; 0 or -1 (said why). */
+static int positive_meta(const char *path, const char *key, const char *text, float *out)
+{
+    char *end;
+    const float v = strtof(text, &end);
+    if (end == text || !isfinite(v) || !(v > 0.0f)) {
+        fprintf(stderr, "rsm-nav: %s: %s is '%s', not a positive number (give --ticks-per-m / --wheel-base)\n",
+                path, key, text);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
 static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *sink)
 {
     static cap_reader reader;
@@ -512,6 +646,7 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
     int laser_id = -1;
     size_t i;
     int rc;
+    int status;
     const char *v;
     if (fp == NULL) {
         fprintf(stderr, "rsm-nav: cannot open %s: %s\n", path, strerror(errno));
@@ -531,21 +666,27 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
     }
     /* Geometry recorded with the capture, unless given on the command line. */
     if ((v = meta(&reader, "robot.ticks_per_m")) != NULL && nav->cfg.odometry.ticks_per_m_left == 0.0f) {
-        nav->cfg.odometry.ticks_per_m_left = nav->cfg.odometry.ticks_per_m_right = strtof(v, NULL);
+        if (positive_meta(path, "robot.ticks_per_m", v, &nav->cfg.odometry.ticks_per_m_left) != 0) {
+            cap_close(&reader);
+            fclose(fp);
+            return 1;
+        }
+        nav->cfg.odometry.ticks_per_m_right = nav->cfg.odometry.ticks_per_m_left;
     }
-    if ((v = meta(&reader, "robot.wheel_base_m")) != NULL && nav->cfg.odometry.wheel_base_m == 0.0f) {
-        nav->cfg.odometry.wheel_base_m = strtof(v, NULL);
+    if ((v = meta(&reader, "robot.wheel_base_m")) != NULL && nav->cfg.odometry.wheel_base_m == 0.0f &&
+        positive_meta(path, "robot.wheel_base_m", v, &nav->cfg.odometry.wheel_base_m) != 0) {
+        cap_close(&reader);
+        fclose(fp);
+        return 1;
     }
     if ((v = meta(&reader, "convert.clamped")) != NULL) {
         load_restore_table(nav, v);
     }
     {
-        rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};
-        float a, b, c;
-        if ((v = meta(&reader, "robot.initial_pose")) != NULL && sscanf(v, "%f %f %f", &a, &b, &c) == 3) {
-            x0.x = a;
-            x0.y = b;
-            x0.theta = c;
+        double x0[3] = {0.0, 0.0, 0.0};
+        if ((v = meta(&reader, "robot.initial_pose")) != NULL &&
+            sscanf(v, "%lf %lf %lf", &x0[0], &x0[1], &x0[2]) != 3) {
+            x0[0] = x0[1] = x0[2] = 0.0;
         }
         if (nav->cfg.odometry.ticks_per_m_left == 0.0f) {
             const rsm_odometry_config_t d = rsm_odometry_config_default();
@@ -555,16 +696,25 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
         if (nav->cfg.odometry.wheel_base_m == 0.0f) {
             nav->cfg.odometry.wheel_base_m = rsm_odometry_config_default().wheel_base_m;
         }
-        if (nav_start(nav, &x0) != 0) {
+        if (nav_start(nav, x0, "the capture's robot.initial_pose") != 0) {
             cap_close(&reader);
+            fclose(fp);
             return 2;
         }
     }
     nav_stream_init(&stream);
+    status = 0;
     for (;;) {
         cap_record rec;
         rc = cap_next(&reader, &rec, buf, sizeof buf);
         if (rc == CAP_END) {
+            break;
+        }
+        if (rc == CAP_ERR_IO) {
+            /* Sticky: stop here; what was decoded so far is still flushed
+             * and written by the caller. */
+            fprintf(stderr, "rsm-nav: cannot read %s: %s\n", path, cap_error_text(&reader));
+            status = 1;
             break;
         }
         if (rc != CAP_OK) {
@@ -581,10 +731,12 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
     }
     printf("rsm-nav summary\n");
     printf("  source          capture %s\n", path);
-    printf("  records         %llu (corrupt %llu, truncated %llu, out of order %llu, unknown channel %llu)\n",
+    printf("  records         %llu (corrupt %llu, truncated %llu, out of order %llu, unknown channel %llu;"
+           " %llu bytes skipped, %llu checked by CRC)\n",
            (unsigned long long)reader.count.records, (unsigned long long)reader.count.corrupt,
            (unsigned long long)reader.count.truncated, (unsigned long long)reader.count.out_of_order,
-           (unsigned long long)reader.count.unknown_channel);
+           (unsigned long long)reader.count.unknown_channel, (unsigned long long)reader.count.skipped_bytes,
+           (unsigned long long)reader.count.crc_bytes);
     printf("  robot link      %llu encoder packets, %llu other; checksum errors %u, bytes skipped %u\n",
            (unsigned long long)stream.encoder_packets, (unsigned long long)stream.other_packets,
            (unsigned)stream.aria.stats.checksum_errors, (unsigned)stream.aria.stats.bytes_skipped);
@@ -592,7 +744,11 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
            (unsigned long long)stream.lms_scans, (unsigned long long)stream.bad_scans,
            (unsigned)stream.lms.stats.crc_errors, (unsigned)stream.lms.stats.bytes_skipped);
     cap_close(&reader);
-    return 0;
+    if (fclose(fp) != 0 && status == 0) {
+        fprintf(stderr, "rsm-nav: error closing %s: %s\n", path, strerror(errno));
+        status = 1;
+    }
+    return status;
 }
 
 static const char *method_name(rsm_method_t m)
@@ -617,6 +773,25 @@ static void print_mount(const nav_t *nav)
                " %.0f mm / %.3f rad (the first kept)\n",
                (unsigned long long)nav->mount_disagree, (double)NAV_MOUNT_TOL_M * 1000.0, (double)NAV_MOUNT_TOL_RAD);
     }
+}
+
+/* Peak resident memory of this program, where the system tells it
+ * (Linux: VmHWM; getrusage would count the parent's memory at the fork). */
+static void print_peak_memory(void)
+{
+    char line[128];
+    FILE *f = fopen("/proc/self/status", "r");
+    if (f == NULL) {
+        return;
+    }
+    while (fgets(line, sizeof line, f) != NULL) {
+        unsigned long kib;
+        if (sscanf(line, "VmHWM: %lu kB", &kib) == 1) {
+            printf("  memory          peak %lu KiB resident\n", kib);
+            break;
+        }
+    }
+    fclose(f);
 }
 
 static void print_summary(nav_t *nav)
@@ -645,7 +820,10 @@ static void print_summary(nav_t *nav)
                (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed);
         printf("  recovery        %u searches, %u taken\n", (unsigned)c->searches, (unsigned)c->recovered);
     }
-    printf("  timestamps      %llu clamped (went backwards)\n", (unsigned long long)nav->clamped);
+    printf("  timestamps      %llu clamped (went backwards), %llu odd (far from both neighbours: replaced),"
+           " %llu jumps of the clock\n",
+           (unsigned long long)nav->clamped, (unsigned long long)nav->odd_stamps,
+           (unsigned long long)nav->time_jumps);
     printf("  scans           %u\n", (unsigned)c->scans);
     for (o = 0; o < RSM_SCAN_OUTCOMES; ++o) {
         if (c->outcome[o] != 0) {
@@ -659,9 +837,15 @@ static void print_summary(nav_t *nav)
                (unsigned)a->interpolated, (unsigned)a->exact, (unsigned)a->late, (unsigned)a->timed_out,
                (unsigned)a->superseded, (unsigned)a->encoder_backwards, (unsigned)a->encoder_overflow);
     }
+    if (nav->loc.odo.implausible != 0u || nav->loc.odo.relatched != 0u || nav->loc.ekf.lost != 0u) {
+        printf("  odometry        %u implausible increments refused, %u counter restarts taken up,"
+               " %u predictions lost (covariance reset)\n",
+               (unsigned)nav->loc.odo.implausible, (unsigned)nav->loc.odo.relatched, (unsigned)nav->loc.ekf.lost);
+    }
     printf("  readings dropped: nan %u, too short %u, too long %u\n", (unsigned)c->drops.nan,
            (unsigned)c->drops.too_short, (unsigned)c->drops.too_long);
     printf("  time per scan   median %.1f us, p95 %.1f us (this machine, wall clock)\n", median * 1e6, p95 * 1e6);
+    print_peak_memory();
 }
 
 int main(int argc, char **argv)
@@ -787,7 +971,13 @@ int main(int argc, char **argv)
                 return 2;
             }
         } else if (strcmp(a, "--set") == 0 && next) {
-            if (set_option(&nav.cfg, argv[++i]) != 0) {
+            double top = 0.0;
+            const int set = set_option(&nav.cfg, argv[++i], &top);
+            if (set == -2) {
+                fprintf(stderr, "rsm-nav: bad --set '%s': a whole number from 0 to %.0f\n", argv[i], top);
+                return 2;
+            }
+            if (set != 0) {
                 fprintf(stderr, "rsm-nav: bad --set '%s'\n", argv[i]);
                 return 2;
             }
@@ -829,6 +1019,10 @@ int main(int argc, char **argv)
             }
         }
     }
+    if (hitmap_init(&nav.hits, nav.cfg.grid.cell_m) != 0 && nav.map_path != NULL) {
+        fprintf(stderr, "rsm-nav: bad cell size for the map picture\n");
+        return 2;
+    }
     nav.traj = fopen(trajectory, "w");
     if (nav.traj == NULL) {
         fprintf(stderr, "rsm-nav: cannot write %s: %s\n", trajectory, strerror(errno));
@@ -858,7 +1052,8 @@ int main(int argc, char **argv)
             printf("rsm-nav summary\n");
             printf("  source          live: robot %s, laser %s%s\n", live.robot ? live.robot : "-",
                    live.lms ? live.lms : "-", live.listen_only ? " (listen-only)" : "");
-            printf("  robot link      %llu encoder packets\n", (unsigned long long)nav.encoders);
+            printf("  robot link      %llu encoder packets, %u counter restarts (new connections)\n",
+                   (unsigned long long)nav.encoders, (unsigned)nav.sync.counters.restarts);
         }
     }
     /* Whatever happened, keep what was written. */
@@ -870,15 +1065,30 @@ int main(int argc, char **argv)
         fprintf(stderr, "rsm-nav: error writing %s\n", trajectory);
         rc = rc ? rc : 1;
     }
-    if (rc == 0 && nav.map_path != NULL && nav.hits.count > 0 &&
-        pgm_write_map(nav.map_path, &nav.hits, nav.cfg.grid.cell_m) != 0) {
-        fprintf(stderr, "rsm-nav: cannot write map %s\n", nav.map_path);
-        rc = 1;
+    if (rc == 0 && nav.map_path != NULL) {
+        double w_m = 0.0;
+        double h_m = 0.0;
+        const int m = pgm_write_map(nav.map_path, &nav.hits, nav.off_x, nav.off_y, &w_m, &h_m);
+        if (m == PGM_TOO_LARGE) {
+            fprintf(stderr,
+                    "rsm-nav: map %s not written: it would span %.0f m x %.0f m, over the %.0f m the"
+                    " picture allows at %.3f m per pixel\n",
+                    nav.map_path, w_m, h_m, (double)PGM_MAX_SIDE * (double)nav.hits.res_m,
+                    (double)nav.hits.res_m);
+            rc = 1;
+        } else if (m != 0) {
+            fprintf(stderr, "rsm-nav: cannot write map %s: %s\n", nav.map_path, strerror(errno));
+            rc = 1;
+        }
+        if (nav.hits.far != 0u) {
+            fprintf(stderr, "rsm-nav: %llu map points %.0e m or more from the origin left out of the picture\n",
+                    (unsigned long long)nav.hits.far, (double)PGM_MAX_COORD_M);
+        }
     }
     if (rc == 0) {
         print_summary(&nav);
     }
-    hitlist_free(&nav.hits);
+    hitmap_free(&nav.hits);
     free(nav.times);
     free(nav.restore_idx);
     free(nav.restore_us);

@@ -28,7 +28,7 @@ void nav_stream_robot(nav_stream_t *s, const uint8_t *data, size_t n, uint64_t s
             rsm_aria_encoder_t enc;
             if (rsm_aria_decode_encoder(&pkt, &enc) == RSM_OK) {
                 s->encoder_packets++;
-                sink->encoder(sink->ctx, enc.left, enc.right, stamp_us);
+                sink->encoder(sink->ctx, enc.left, enc.right, stamp_us, 0);
             } else {
                 s->other_packets++;
             }

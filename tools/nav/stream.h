@@ -15,8 +15,9 @@
 
 typedef struct nav_stream_sink {
     void *ctx;
-    /* An ENCODER packet: raw 32-bit counters. */
-    void (*encoder)(void *ctx, int32_t left, int32_t right, uint64_t stamp_us);
+    /* An ENCODER packet: raw 32-bit counters. restart: the first packet of
+     * a new connection, whose counts need not follow the previous ones. */
+    void (*encoder)(void *ctx, int32_t left, int32_t right, uint64_t stamp_us, int restart);
     /* A complete 0xB0 scan converted to the robot frame, stamped with the
      * arrival of its telegram's first byte. */
     void (*scan)(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us);

@@ -33,6 +33,9 @@ SYNC = b"RC"
 REC_HEAD = struct.Struct("<2sHQBB")   # sync, n, timestamp, channel, direction
 REC_HEAD_SIZE = REC_HEAD.size          # 14
 REC_OVERHEAD = REC_HEAD_SIZE + 4       # + CRC
+# Lenient readers do not trust alone a record stamped this much after the
+# previous one (one hour; docs/capture.md, "Far ahead").
+MAX_STEP_US = 3_600_000_000
 MAX_CHUNK = 0xFFFF
 MAX_CHANNELS = 32
 RX, TX = 0, 1
@@ -205,8 +208,8 @@ def read_header(fh: IO[bytes]) -> Tuple[Header, int]:
     try:
         channels = []
         off = 1
-        if body[0] > MAX_CHANNELS:
-            raise ValueError(f"{body[0]} channels (at most {MAX_CHANNELS})")
+        if not 1 <= body[0] <= MAX_CHANNELS:
+            raise ValueError(f"{body[0]} channels (1 to {MAX_CHANNELS})")
         for _ in range(body[0]):
             cid, proto, baud, nl = struct.unpack_from("<BBIB", body, off)
             off += 7
@@ -267,6 +270,7 @@ class CaptureWriter:
         self.records = 0
         self.bytes = 0
         self.last_ts: Optional[int] = None
+        self._far_ts: Optional[int] = None   # lenient: a far-ahead record skipped, stamped this
         self._write(head)
 
     def _write(self, b: bytes) -> None:
@@ -463,12 +467,23 @@ class CaptureReader:
                 self._problem(UnknownChannelError(
                     f"record for channel id {ch}, which the header does not list", off, st.records))
                 continue
+            if (self.lenient and self.last_ts is not None and ts - self.last_ts > MAX_STEP_US
+                    and not (self._far_ts is not None and abs(ts - self._far_ts) <= MAX_STEP_US)):
+                # One record far ahead would make every later one out of order:
+                # it counts as out of order itself unless the next one agrees.
+                self._far_ts = ts
+                st.out_of_order += 1
+                self._problem(OutOfOrderError(
+                    f"record timestamp {ts} us is over an hour after the previous {self.last_ts} us "
+                    "(not trusted alone)", off, st.records))
+                continue
             if self.last_ts is not None and ts < self.last_ts:
                 st.out_of_order += 1
                 self._problem(OutOfOrderError(
                     f"record timestamp {ts} us is earlier than the previous {self.last_ts} us",
                     off, st.records))
                 continue
+            self._far_ts = None
             self.last_ts = ts
             st.records += 1
             st.bytes += n

@@ -31,12 +31,13 @@ import bisect
 import math
 import os
 import sys
+import zlib
 from dataclasses import dataclass
 from typing import Iterable, List, Optional, Sequence, Tuple
 
 from . import capture as cap
 from . import protocols as proto
-from .carmen import FLaser, Odom, read_log, time_key
+from .carmen import FLaser, LogStats, Odom, read_log, time_key
 
 Pose = Tuple[float, float, float]
 
@@ -161,15 +162,20 @@ def monotonic_stamps(stamps: Sequence[int]) -> List[int]:
     The longest non-decreasing subsequence keeps its stamps; each other
     stamp is interpolated linearly (by position, rounded down) between the
     kept stamps before and after it, or takes the nearest kept stamp at
-    either end.  O(n log n).
+    either end.  A negative stamp is never kept (a capture cannot hold it);
+    with no usable stamp at all every stamp becomes 0.  O(n log n).
     """
     n = len(stamps)
     if n == 0:
         return []
+    if all(t < 0 for t in stamps):
+        return [0] * n
     tails: List[int] = []      # tails[k]: index ending the best run of length k + 1
     tail_vals: List[int] = []
     prev = [-1] * n
     for i, t in enumerate(stamps):
+        if t < 0:
+            continue
         k = bisect.bisect_right(tail_vals, t)
         prev[i] = tails[k - 1] if k > 0 else -1
         if k == len(tails):
@@ -229,12 +235,26 @@ class ConvertStats:
     max_clamp_us: int = 0
     split: int = 0
     packets: int = 0
+    empty_scans: int = 0       # FLASER lines with no readings: odometry only, no telegram
+    log: Optional[LogStats] = None
 
     def summary(self) -> str:
-        return (f"{self.odom} ODOM + {self.scans} FLASER -> {self.packets} ENCODER "
-                f"packets and {self.scans} 0xB0 telegrams; {self.clamped} timestamps re-placed "
-                f"({self.clamped_scans} of scans, moved by at most {self.max_clamp_us / 1e6:.6f} s); "
+        text = (f"{self.odom} ODOM + {self.scans} FLASER -> {self.packets} ENCODER "
+                f"packets and {self.scans - self.empty_scans} 0xB0 telegrams; {self.clamped} timestamps "
+                f"re-placed ({self.clamped_scans} of scans, moved by at most {self.max_clamp_us / 1e6:.6f} s); "
                 f"{self.split} odometry steps sent as 3 packets (sideways motion)")
+        if self.empty_scans:
+            text += f"; {self.empty_scans} FLASER lines without readings sent as odometry only"
+        if self.log is not None:
+            skipped = {k: v for k, v in self.log.records.items() if k not in ("ODOM", "FLASER")}
+            if skipped:
+                text += "; not converted (only ODOM and FLASER are): " + ", ".join(
+                    f"{v} {k}" for k, v in sorted(skipped.items()))
+            if self.log.malformed:
+                text += "; malformed lines skipped: " + ", ".join(
+                    f"{k}={v}" for k, v in sorted(self.log.malformed.items()))
+                text += "".join(f"\n  line {n} ({kind}): {why}" for n, kind, why in self.log.examples[:5])
+        return text
 
 
 def convert(log, out, units: str = "mm", readings: int = 181,
@@ -246,8 +266,8 @@ def convert(log, out, units: str = "mm", readings: int = 181,
         raise ValueError("readings must be 180, 181 or 361")
     if units not in ("mm", "cm"):
         raise ValueError("units must be mm or cm")
-    recs = [r for r in read_log(log, types=("ODOM", "FLASER"))]
-    st = ConvertStats()
+    st = ConvertStats(log=LogStats())
+    recs = [r for r in read_log(log, types=("ODOM", "FLASER"), stats=st.log)]
     # pass 1: monotonic timestamps (the table of re-placed ones goes into the header)
     clamped_lines = []
     original = [time_key(r.timestamp) for r in recs]
@@ -305,6 +325,9 @@ def convert(log, out, units: str = "mm", readings: int = 181,
                 st.odom += 1
             else:
                 st.scans += 1
+                if not r.ranges:
+                    st.empty_scans += 1  # no telegram can say "no readings"
+                    continue
                 rng = resample(r.ranges, readings)
                 w.write(t, LASER, proto.encode_b0_ranges(rng, units, max_range))
     return st
@@ -348,8 +371,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         st = convert(a.log, a.out, a.units, a.readings, a.ticks_per_m, a.wheel_base,
                      a.max_range, a.start_ticks, a.ground_truth, int(round(a.min_gap_ms * 1000.0)))
-    except OSError as exc:
-        print(f"rsm-convert: {exc}", file=sys.stderr)
+    except (OSError, EOFError, zlib.error) as exc:
+        # A truncated or corrupt gzip log ends in EOFError or zlib.error.
+        print(f"rsm-convert: cannot read {a.log} to the end: {exc or type(exc).__name__}", file=sys.stderr)
         return 2
     print(f"rsm-convert: {st.summary()}", file=sys.stderr)
     return 0

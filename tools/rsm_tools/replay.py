@@ -11,11 +11,16 @@ channel is printed on stdout (flushed) before playing starts, so another
 program can open the paths.  Channels with neither are skipped.
 
 Timing: recorded (``--speed 1``, default), scaled (``--speed 4`` = four times
-faster), or ``--fast``: as fast as the reader takes the bytes (writes block
-while the pty buffer is full).  ``--wait-open`` waits for a reader to open
-every pty first.  Progress goes to stderr.  Ctrl-C (SIGINT) or SIGTERM stops
-the replay cleanly (exit status 0 after a "stopped" message).  Exit status 2:
-bad arguments, an unreadable capture or a port that cannot be opened.
+faster), or ``--fast``: as fast as the reader takes the bytes (writes wait
+while the pty buffer is full).  A recorded pause longer than ``--max-gap``
+seconds (default 5, after scaling) is shortened to it and counted: a capture
+paused for an hour, or a corrupt stamp, does not stall the replay.
+``--wait-open`` waits for a reader to open every pty first.  Progress goes to
+stderr.  Ctrl-C (SIGINT) or SIGTERM stops the replay cleanly (exit status 0
+after a "stopped" message).  Exit status 1: a problem in the capture, or a
+reader that went away (closed its pty, or read nothing for ``--stall``
+seconds, default 10, while bytes waited).  Exit status 2: bad arguments, an
+unreadable capture or a port that cannot be opened.
 """
 
 import argparse
@@ -34,16 +39,23 @@ class Stop(Exception):
     pass
 
 
+class ReaderGone(Exception):
+    """Nobody reads a pty any more: writing would wait for ever."""
+
+
 def _raise_stop(signum, frame):  # noqa: ARG001
     raise Stop(signal.Signals(signum).name)
 
 
 class PtyOut:
-    def __init__(self, name: str) -> None:
+    def __init__(self, name: str, stall_s: float = 10.0) -> None:
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)
         self.path = os.ttyname(self.slave)
         self.name = name
+        self.stall_s = stall_s
+        self.seen_open = False
+        os.set_blocking(self.master, False)
 
     def release_slave(self) -> None:
         if self.slave is not None:
@@ -54,13 +66,33 @@ class PtyOut:
         """True once someone has the slave open (the master no longer reports a hang-up)."""
         p = select.poll()
         p.register(self.master, select.POLLHUP)
-        return not any(ev & select.POLLHUP for _, ev in p.poll(0))
+        is_open = not any(ev & select.POLLHUP for _, ev in p.poll(0))
+        self.seen_open = self.seen_open or is_open
+        return is_open
 
     def write(self, data: bytes) -> None:
+        """All of data, waiting while the buffer is full; ReaderGone when the
+        reader that had the pty open closed it, or read nothing for stall_s."""
         view = memoryview(data)
+        stalled = None
         while view:
-            n = os.write(self.master, view)
-            view = view[n:]
+            try:
+                n = os.write(self.master, view)
+            except BlockingIOError:
+                n = 0
+            if n > 0:
+                view = view[n:]
+                stalled = None
+                continue
+            if self.slave is None and self.seen_open and not self.opened():
+                raise ReaderGone(f"the reader of {self.name} ({self.path}) closed it")
+            now = time.monotonic()
+            stalled = stalled if stalled is not None else now
+            if now - stalled >= self.stall_s:
+                raise ReaderGone(f"nothing read from {self.name} ({self.path}) for {self.stall_s:g} s")
+            p = select.poll()
+            p.register(self.master, select.POLLOUT)
+            p.poll(100)
 
     def close(self) -> None:
         self.release_slave()
@@ -106,10 +138,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--wait-open", action="store_true", help="wait until every pty is opened")
     ap.add_argument("--linger", type=float, default=1.0,
                     help="seconds to keep ptys open after the last byte (default 1)")
+    ap.add_argument("--max-gap", type=float, default=5.0,
+                    help="longest pause, seconds after scaling; longer ones are shortened (default 5)")
+    ap.add_argument("--stall", type=float, default=10.0,
+                    help="give up when a pty reader takes nothing for this long (default 10 s)")
     ap.add_argument("--quiet", action="store_true")
     a = ap.parse_args(argv)
-    if a.speed <= 0:
-        ap.error("--speed must be positive")
+    if not a.speed > 0 or not a.max_gap >= 0 or not a.stall > 0:
+        ap.error("--speed and --stall must be positive, --max-gap not negative")
     try:
         ports = parse_ports(a.port)
     except ValueError as exc:
@@ -143,7 +179,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                           file=sys.stderr)
                     return 2
             elif a.pty:
-                outs[ch.id] = PtyOut(ch.name)
+                outs[ch.id] = PtyOut(ch.name, a.stall)
         if not outs:
             print("rsm-replay: nothing to play into: give --port CHANNEL=DEVICE or --pty",
                   file=sys.stderr)
@@ -161,6 +197,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 time.sleep(0.02)
         start = time.monotonic()
         last_progress = 0.0
+        shortened = 0
         for rec in reader:
             if rec.direction != cap.RX or rec.channel not in outs:
                 continue
@@ -169,6 +206,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             if not a.fast:
                 due = start + (rec.timestamp - t_first) / 1e6 / a.speed
                 delay = due - time.monotonic()
+                if delay > a.max_gap:
+                    # The schedule moves on by what is cut, so later pauses keep their length.
+                    start -= delay - a.max_gap
+                    delay = a.max_gap
+                    shortened += 1
                 if delay > 0:
                     time.sleep(delay)
             outs[rec.channel].write(rec.data)  # type: ignore[attr-defined]
@@ -182,7 +224,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                       f"{records} records, {nbytes} bytes", end="", file=sys.stderr, flush=True)
         if not a.quiet:
             print(f"\rrsm-replay: done: {records} records, {nbytes} bytes"
-                  + (f", {(t_last - t_first) / 1e6:.1f} s of capture" if t_first is not None else ""),
+                  + (f", {(t_last - t_first) / 1e6:.1f} s of capture" if t_first is not None else "")
+                  + (f"; {shortened} pauses over {a.max_gap:g} s shortened" if shortened else ""),
                   file=sys.stderr, flush=True)
         if ptys and a.linger > 0:
             time.sleep(a.linger)
@@ -193,6 +236,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 0
     except cap.CaptureError as exc:
         print(f"\nrsm-replay: capture problem after {records} records: {exc}", file=sys.stderr)
+        return 1
+    except ReaderGone as exc:
+        print(f"\nrsm-replay: stopped after {records} records, {nbytes} bytes: {exc}", file=sys.stderr)
         return 1
     finally:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
