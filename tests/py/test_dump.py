@@ -370,11 +370,12 @@ def test_dump_survives_the_pty_master_closing(tmp_path):
     proc = subprocess.Popen([str(built_tool("tools/dump/rsm-dump")), "--protocol", "aria", os.ttyname(slave)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     os.close(slave)
-    time.sleep(0.2)
     os.write(master, vbytes(vector("aria_encoder_packet")))
-    time.sleep(0.3)
+    # The master closes only once rsm-dump has printed the packet, however slowly it runs.
+    first = proc.stdout.readline()
     os.close(master)
     out, err = proc.communicate(timeout=30)
+    out = first + out
     assert proc.returncode == 0, err.decode()
     objs = parse_lines(out.decode())
     assert objs[-1]["summary"] is True

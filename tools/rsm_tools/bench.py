@@ -3133,7 +3133,7 @@ def run(args: argparse.Namespace) -> Path:
     ctx["full_checks"] = ([check(None, "data", None, "full-log checks: not run (--no-full-checks)")]
                           if args.no_full_checks
                           else stage("full-log checks", fullchecks.run_all, shared, nav, logs, work / "full-checks",
-                                     root, ctx["accuracy"]))
+                                     root, ctx["accuracy"], not args.quick))
     ctx["speed"] = stage("speed", run_speed, nav, main_log, repeats, work)
     lv_by_log = {label: (levels if label == main_label else other_levels) for label, _, _ in logs}
     ctx["robustness"] = stage("robustness", run_robustness, nav, logs, ctx["accuracy"], lv_by_log, seeds, work,

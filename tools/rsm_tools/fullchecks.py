@@ -14,7 +14,11 @@ folder (``RSM_SHARED_DIR``, see docs/reference/README.md) is here, and
   on every measure, and a second run is bit-identical;
 * the capture path (rsm-convert, then ``rsm-nav --capture``) tracks within 2 %
   of the direct run on the log (``rsm-nav --carmen``), on all relations and on
-  local ones.
+  local ones;
+* a figure that depends on the machine's speed and load, so it is no test: the
+  shipped excerpt replayed over pseudo-terminals in real time (8x) into
+  ``rsm-nav --listen``, its local error against the 0.03 m floor and how many
+  poses equal the capture-mode run's.
 
 Each check is a dict ``{"status": PASS|MISS|SKIP, "kind", "log", "value",
 "limit", "line"}``, as the bench's floors are.  Run alone::
@@ -23,12 +27,14 @@ Each check is a dict ``{"status": PASS|MISS|SKIP, "kind", "log", "value",
 """
 
 import argparse
+import os
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
+from . import capture as cap
 from . import convert
 from . import evaluate as ev
 from .carmen import LogStats, read_log, time_key
@@ -36,6 +42,8 @@ from .excerpt import excerpt_log, excerpt_poses, excerpt_relations
 from .fileio import open_binary
 
 LOCAL_SPAN = 2.0
+LIVE_SPEED = "8"
+LIVE_FLOOR = 0.03          # local translation of the real-time live run on the excerpt, m
 CAPTURE_TOLERANCE = 1.02   # capture-path error over the direct run's, at most
 INTEL_LOCAL_FLOOR = 0.03   # rsm's local translation error on Intel, m
 # The Intel log as docs/reference/intel-SOURCE.md describes it.
@@ -203,14 +211,54 @@ def check_capture_path(label: str, nav: Path, log: Path, relations: List[ev.Rela
     return out
 
 
+def check_live_replay(nav: Path, root: Path, work: Path) -> List[dict]:
+    """The shipped excerpt through rsm-replay --speed 8 into rsm-nav --listen (timing-dependent: a figure)."""
+    data = root / "tests" / "data"
+    capf = work / "excerpt.cap"
+    convert.convert(data / "intel_head.clf.gz", capf)
+    ref = work / "excerpt-capture.txt"
+    run_nav(nav, ["--capture", str(capf)], ref)
+    live = work / "excerpt-live.txt"
+    x0 = cap.read_capture(capf)[0].metadata.get("robot.initial_pose", "0 0 0").split()
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(capf), "--pty", "--speed", LIVE_SPEED,
+                          "--linger", "0.5", "--quiet", "--run", str(nav), "--robot", "{robot}", "--lms", "{laser}",
+                          "--listen", "--initial-pose", *x0, "--trajectory", str(live), "--quiet"],
+                         capture_output=True, text=True, timeout=600, env=_tools_env())
+    if res.returncode != 0:
+        return [check(False, "live", "excerpt", f"excerpt: live replay failed: {res.stderr.strip()[-200:]}")]
+    rels = ev.load_relations(data / "intel_head.relations")
+    got = errors(capture_poses(capf, live), rels)["local"]["translation"]["mean"]
+    want = errors(capture_poses(capf, ref), rels)["local"]["translation"]["mean"]
+    same = sum(a == b for a, b in zip(_poses(live), _poses(ref)))
+    ok = got <= LIVE_FLOOR
+    return [check(ok, "live", "excerpt", f"excerpt replayed in real time ({LIVE_SPEED}x) into rsm-nav --listen: "
+                  f"local translation {got:.4f} m ({'<=' if ok else '>'} {LIVE_FLOOR} m; capture mode {want:.4f} m), "
+                  f"{same} of {len(_poses(ref))} poses equal to capture mode's (this machine, this load)",
+                  got, LIVE_FLOOR)]
+
+
+def _poses(traj: Path) -> List[List[str]]:
+    return [l.split()[1:] for l in traj.read_text().splitlines() if l and not l.startswith("#")]
+
+
+def _tools_env() -> dict:
+    """The environment for ``python -m rsm_tools.*`` from this checkout."""
+    env = dict(os.environ)
+    tools = str(Path(__file__).resolve().parents[1])
+    env["PYTHONPATH"] = tools + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    return env
+
+
 # ---------------------------------------------------------------------------
 
 
 def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, root: Path,
-            accuracy: Optional[dict] = None, say: Callable[[str], None] = lambda s: None) -> List[dict]:
+            accuracy: Optional[dict] = None, live: bool = True,
+            say: Callable[[str], None] = lambda s: None) -> List[dict]:
     """Every check on ``logs`` ((label, log, relations)); ``accuracy`` is the
     bench's accuracy section when it ran (its rsm, icp and odometry
-    trajectories are reused), else they are run here."""
+    trajectories are reused), else they are run here; ``live`` False skips
+    the real-time replay."""
     work.mkdir(parents=True, exist_ok=True)
     out: List[dict] = []
     intel = shared / "data" / "intel"
@@ -225,6 +273,11 @@ def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], wor
     else:
         out.append(check(None, "data", "intel", "intel: the shared folder has no data/intel/intel.clf.gz, so the "
                          "log's description and the shipped excerpt are not checked"))
+    if live:
+        say("the excerpt replayed in real time")
+        out += check_live_replay(nav, root, work)
+    else:
+        out.append(check(None, "live", "excerpt", "excerpt replayed in real time: not run (quick)"))
     for label, log, rel in logs:
         say(f"{label}: baselines, rerun, capture path")
         relations = ev.load_relations(rel)
