@@ -3076,8 +3076,9 @@ def run(args: argparse.Namespace) -> Path:
     data = shared / "data"
     logs = discover_logs(data)
     if not logs:
-        raise BenchError(f"no log in {data}: each log is a folder NAME holding NAME.clf.gz and NAME.relations "
-                         "(set the shared folder with --shared or RSM_SHARED_DIR)")
+        raise BenchError(f"no log in {data}: the bench needs the full logs, each a folder NAME holding NAME.clf.gz "
+                         "and NAME.relations (set the shared folder with --shared or RSM_SHARED_DIR; see "
+                         "docs/reference/README.md)")
     levels = args.levels or (list(QUICK_LEVELS) if args.quick else list(LEVELS))
     if 0 not in levels:
         levels = [0] + levels  # the ratios need the clean figure
