@@ -5,7 +5,7 @@ in. The peers' figures are read from ``docs/reference/peers.md`` (``--peers``)
 and shown beside them. The logs are every folder ``NAME`` of the
 shared folder's ``data/`` that holds ``NAME.clf.gz`` and ``NAME.relations``
 (the shared folder: ``--shared DIR``, else the ``RSM_SHARED_DIR`` environment
-variable the tests use too, else ``../shared`` beside the repository). The
+variable, the one setting for the full logs, else ``../shared`` beside the repository). The
 report (``docs/RESULTS.md`` by default) has these sections:
 
 1. Accuracy: relative-pose error (Kuemmerle et al. 2009, :mod:`rsm_tools.evaluate`)
@@ -361,7 +361,7 @@ def log_label(log: Path, taken: Iterable[str] = ()) -> str:
 
 
 def shared_dir(arg: Optional[Path], root: Path) -> Path:
-    """The shared folder: --shared, else $RSM_SHARED_DIR (as for the tests), else ../shared."""
+    """The shared folder: --shared, else $RSM_SHARED_DIR (docs/reference/README.md), else ../shared."""
     if arg is not None:
         return Path(arg).resolve()
     env = os.environ.get("RSM_SHARED_DIR")

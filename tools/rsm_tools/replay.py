@@ -257,6 +257,20 @@ def run_with(a, reader, outs, ptys) -> int:
     step = None
     records = nbytes = groups = 0
     status: Optional[int] = None
+    for o in ptys:
+        os.set_blocking(o.master, False)
+
+    def write_to(out, data: bytes) -> None:
+        """Writes all of data, waiting while the pty is full, unless the reader has ended."""
+        view = memoryview(data)
+        while view:
+            try:
+                view = view[os.write(out.master, view):]
+            except BlockingIOError:
+                if child.poll() is not None:
+                    raise ls.ReaderGone(0) from None
+                select.select([], [out.master], [], 0.1)
+
     try:
         if a.lockstep:
             step = ls.Lockstep(child.pid, [o.slave for o in ptys])
@@ -280,7 +294,7 @@ def run_with(a, reader, outs, ptys) -> int:
             written = {o.name: 0 for o in ptys}
             for rec in group:
                 out = outs[rec.channel]
-                out.write(rec.data)  # type: ignore[attr-defined]
+                write_to(out, rec.data)
                 written[out.name] += len(rec.data)  # type: ignore[attr-defined]
                 records += 1
                 nbytes += len(rec.data)
@@ -304,7 +318,7 @@ def run_with(a, reader, outs, ptys) -> int:
         if a.linger > 0:
             time.sleep(a.linger)
     except ls.ReaderGone as exc:
-        status = exc.status
+        status = exc.status if step is not None and step.status is not None else None
         print(f"rsm-replay: {cmd[0]} ended after {records} records", file=sys.stderr)
     except ls.LockstepError as exc:
         print(f"rsm-replay: lockstep: {exc}", file=sys.stderr)
