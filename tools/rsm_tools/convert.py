@@ -291,7 +291,10 @@ def convert(log, out, units: str = "auto", readings: int = 181,
     st.units = pick_units(st.longest_m) if units == "auto" else units
     units = st.units
     st.limit_m = UNIT_LIMIT_M[units] if max_range is None else min(max_range, UNIT_LIMIT_M[units])
-    st.too_far = sum(1 for x in valid if proto.range_to_raw(x, units, max_range) == proto.LMS_TOO_FAR)
+    # what range_to_raw sends as "too far", counted without encoding every reading
+    scale = proto._UNIT_SCALE[units]
+    cut = math.inf if max_range is None else max_range
+    st.too_far = sum(1 for x in valid if x > cut or round(x / scale) > proto.LMS_MAX_VALUE)
     # pass 1: monotonic timestamps (the table of re-placed ones goes into the header)
     clamped_lines = []
     original = [time_key(r.timestamp) for r in recs]
