@@ -20,7 +20,7 @@
 extern "C" {
 #endif
 
-/* How a reading near a cell border is treated (DESIGN.md, step 2). */
+/* How a reading near a cell border is treated (docs/reference/method.md, step 2). */
 typedef enum rsm_grid_rule {
     RSM_GRID_SIGMA_INSIDE = 0, /* paper: mark only if the point is >= sigma inside its cell */
     RSM_GRID_SIGMA_TOUCH = 1,  /* mark every cell the sigma circle touches (1 to 4) */

@@ -16,8 +16,8 @@
  * each encoded frame must parse back to itself.
  * Any violation executes __builtin_trap().
  *
- * Seeds: corpus/fuzz_aria/ holds the robot -> host vectors of the shared
- * reference vectors.json as raw files, plus a few streams mixing them with
+ * Seeds: corpus/fuzz_aria/ holds the robot -> host vectors of
+ * tests/data/vectors.json as raw files, plus a few streams mixing them with
  * garbage, bit flips, cuts and false headers. */
 #include <stddef.h>
 #include <stdint.h>

@@ -3,8 +3,9 @@
 The tests run from a plain checkout (``python -m pytest tests/py``) without
 installing the package: the ``tools`` folder is put on ``sys.path``.
 
-The real dataset is expected in ``../shared/data/intel/`` relative to the
-repository root.  Tests that need it FAIL (they do not skip) when it is absent.
+Every test uses only the repository: the shipped excerpt of the Intel log
+and the protocol vectors in ``tests/data/``.  The full logs are read by
+``./tools/bench`` alone (see docs/reference/README.md).
 """
 
 import gzip
@@ -22,9 +23,7 @@ import pytest
 REPO_ROOT = Path(__file__).resolve().parents[2]
 TOOLS_DIR = REPO_ROOT / "tools"
 TEST_DATA = REPO_ROOT / "tests" / "data"
-INTEL_DIR = REPO_ROOT.parent / "shared" / "data" / "intel"
-
-INTEL_FILES = ("intel.clf.gz", "intel.relations", "intel-corrected-poses.txt")
+VECTORS = TEST_DATA / "vectors.json"
 
 if str(TOOLS_DIR) not in sys.path:
     sys.path.insert(0, str(TOOLS_DIR))
@@ -32,24 +31,13 @@ if str(TOOLS_DIR) not in sys.path:
 
 def _require(path: Path, what: str) -> Path:
     if not path.is_file():
-        pytest.fail(
-            f"{what} not found: {path}\n"
-            "The real Intel Research Lab dataset must sit in ../shared/data/intel/ relative "
-            "to the repository root (files: " + ", ".join(INTEL_FILES) + ").",
-            pytrace=False,
-        )
+        pytest.fail(f"{what} not found: {path} (it is part of the repository)", pytrace=False)
     return path
 
 
-def require_intel_dir() -> Path:
-    """The real dataset folder.
-
-    Called inside a test body (not as a fixture), so that a missing dataset
-    shows as a FAILED test, not as a set-up error or a skip.
-    """
-    for name in INTEL_FILES:
-        _require(INTEL_DIR / name, f"real dataset file {name}")
-    return INTEL_DIR
+def load_vectors() -> list:
+    """The protocol vectors of docs/reference/protocols.md section 3."""
+    return json.loads(_require(VECTORS, "protocol vectors").read_text())
 
 
 @pytest.fixture(scope="session")

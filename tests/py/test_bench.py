@@ -3,7 +3,7 @@
 The bench runs once (module fixture) in quick settings on a shared folder
 made here: data/head/ is tests/data/intel_head.clf.gz with its relations,
 data/head10/ the same excerpt with 10 % outliers, plus two folders the bench
-must ignore; reference/peers.md is a made-up table with figures for `head`
+must ignore; peers.md (--peers) is a made-up table with figures for `head`
 only. It runs with rsm-nav and rsm-stages from RSM_BUILD_DIR (ctest sets it),
 the small configuration built by the bench, one Cortex-M4F configuration (the
 small one) and the scaling section with the default build only. It never
@@ -96,10 +96,9 @@ def run(tmp_path_factory, head_log, head_relations):
     (shared / "data" / "notes" / "README.md").write_text("not a log\n")
     (shared / "data" / "partial").mkdir()  # a log without relations: ignored
     shutil.copy(head_log, shared / "data" / "partial" / "partial.clf.gz")
-    (shared / "reference").mkdir()
-    (shared / "reference" / "peers.md").write_text(PEERS_MD)
+    (d / "peers.md").write_text(PEERS_MD)
     cmd = [sys.executable, "-m", "rsm_tools.bench", "--root", str(REPO_ROOT), "--build-dir", str(build),
-           "--shared", str(shared), "--quick", "--levels", ",".join(map(str, LEVELS)), "--seeds", str(SEEDS),
+           "--shared", str(shared), "--peers", str(d / "peers.md"), "--quick", "--levels", ",".join(map(str, LEVELS)), "--seeds", str(SEEDS),
            "--callgrind-scans", str(CG_SCANS), "--no-cross-check", "--arm-configs", "small",
            "--output", str(d / "RESULTS.md"), "--plots-dir", str(d / "results"),
            "--work-dir", str(d / "work"), "--cache-dir", str(d / "cache")]
@@ -371,9 +370,7 @@ def test_floors_are_checked_on_this_runs_figures(run):
     real = [(m, v) for m, v in made_up_peers() if m != "odometry alone" and not m.startswith("rsm (")]
     for label in ("head", "head10"):
         res = scoped(man["accuracy"][label]["runs"]["rsm"]["trajectory"], rels)
-        mine = [l for l in lines if l.startswith(("PASS " + label + ":", "MISS " + label + ":",
-                                                  "SKIP " + label + ":")) and "outliers" not in l
-                and "instructions" not in l]
+        mine = [f["line"] for f in man["floors"] if f["log"] == label and f["kind"] == "peers"]
         assert len(mine) == 3, mine
         for line, (sc, q) in zip(mine, bench.PEER_FLOORS):
             if label == "head10":
@@ -994,3 +991,24 @@ def test_scaling_variants_headers_and_growth(tmp_path):
     assert math.isclose(g["map"]["bytes_per_unit"], 80000 / (256 ** 2 - 64 ** 2))
     assert math.isclose(g["tiles"]["bytes_per_unit"], 80000 / 2000)
     assert bench.memory_growth(rows[:1]) == {}
+
+
+def test_full_log_checks_are_reported_with_the_floors(run):
+    """rsm_tools.fullchecks on the made-up shared folder: no Intel log (SKIP),
+    and on every log rsm against its baselines, a rerun and the capture path."""
+    man, rels = run["manifest"], run["relations"]
+    full = [f for f in man["floors"] if f["kind"] in ("data", "baselines", "rerun", "capture", "live")]
+    lines = floor_lines(run["report"])
+    assert all(f["line"] in lines for f in full)
+    assert [f["status"] for f in full if f["kind"] in ("data", "live")] == ["SKIP", "SKIP"]  # no Intel log; quick
+    for label in ("head", "head10"):
+        mine = {f["kind"]: f for f in full if f["log"] == label}
+        assert mine["rerun"]["status"] == "PASS"
+        errs = {m: scoped(man["accuracy"][label]["runs"][m]["trajectory"], rels) for m in ("rsm", "icp", "odometry")}
+        beaten = all(errs["rsm"][sc][q]["mean"] < errs[o][sc][q]["mean"] for o in ("icp", "odometry")
+                     for sc in bench.SCOPES for q in ("translation", "rotation"))
+        assert mine["baselines"]["status"] == ("PASS" if beaten else "MISS")
+        capture = [f for f in full if f["log"] == label and f["kind"] == "capture"]
+        assert len(capture) == 2
+        for f in capture:
+            assert f["status"] == ("PASS" if f["value"] <= 1.02 else "MISS") and "readings past" in f["line"]

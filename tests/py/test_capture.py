@@ -190,25 +190,21 @@ def c_reader(tmp_path_factory):
     return out
 
 
+def _golden_module():
+    """tests/data/capture/make_golden.py, which also defines the dump format."""
+    import importlib.util
+    path = REPO_ROOT / "tests" / "data" / "capture" / "make_golden.py"
+    spec = importlib.util.spec_from_file_location("make_golden", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+GOLDEN = _golden_module()
+
+
 def python_dump(path, lenient):
-    lines = []
-    r = None
-    try:
-        r = cap.CaptureReader(path, lenient=lenient)
-        h = r.header
-        for c in h.channels:
-            lines.append(f"channel {c.id} {c.name} {c.protocol} {c.baud}")
-        for k in sorted(h.metadata):
-            lines.append(f"meta {k}={h.metadata[k]}")
-        for rec in r:
-            lines.append(f"record {rec.offset} {rec.timestamp} {rec.channel} {rec.direction} "
-                         f"{len(rec.data)} {rec.data.hex()}")
-        s = r.stats
-        lines.append(f"end records={s.records} corrupt={s.corrupt} truncated={s.truncated} "
-                     f"order={s.out_of_order} channel={s.unknown_channel} skipped={s.skipped_bytes}")
-    except cap.CaptureError as exc:
-        lines.append(f"error {exc.kind}")
-    return lines
+    return GOLDEN.dump(path, lenient).splitlines()
 
 
 def c_dump(exe, path, lenient):
@@ -241,3 +237,28 @@ def test_c_reader_matches_python_on_damaged_files(tmp_path, c_reader):
         for lenient in (False, True):
             py = python_dump(f, lenient)
             assert c_dump(c_reader, f, lenient) == py, (f.name, lenient)
+
+
+# ---------------------------------------------------------------------------
+# golden files (tests/data/capture): the writer's bytes, the reader's view
+
+
+def test_golden_files_are_what_the_writer_writes_and_the_reader_reads(tmp_path, c_reader):
+    """make_golden.py remakes every committed file byte for byte, so the
+    golden captures are the Python writer's and the .txt files the Python
+    reader's view of them, which tests/unit/test_capture.c holds the C reader
+    to; the C reader driver agrees here too."""
+    committed = REPO_ROOT / "tests" / "data" / "capture"
+    GOLDEN.make(tmp_path)
+    names = sorted(p.name for p in committed.iterdir() if p.suffix in (".cap", ".txt"))
+    assert names == ["damaged.cap", "damaged.lenient.txt", "damaged.strict.txt", "good.cap", "good.lenient.txt",
+                     "good.strict.txt"]
+    for name in names:
+        assert (tmp_path / name).read_bytes() == (committed / name).read_bytes(), name
+    for name in ("good", "damaged"):
+        for mode in ("strict", "lenient"):
+            want = (committed / f"{name}.{mode}.txt").read_text().splitlines()
+            assert python_dump(committed / f"{name}.cap", mode == "lenient") == want
+            assert c_dump(c_reader, committed / f"{name}.cap", mode == "lenient") == want
+    # every kind of fault is in the damaged file, each counted once
+    assert want[-1] == "end records=11 corrupt=3 truncated=1 order=1 channel=1 skipped=77"

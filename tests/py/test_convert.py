@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from conftest import subprocess_env
+from conftest import read_maybe_gz, subprocess_env
 from rsm_tools import capture as cap
 from rsm_tools import convert as cv
 from rsm_tools import protocols as p
@@ -87,30 +87,81 @@ def test_timestamps_monotonic_spread_and_recoverable(tmp_path, head_log):
         assert orig == time_key(s.timestamp) and written == rec.timestamp
 
 
-@pytest.mark.parametrize("units,readings", [("mm", 180), ("mm", 181), ("cm", 361), ("cm", 181)])
-def test_b0_ranges_equal_log_ranges(tmp_path, head_log, units, readings):
+def beam_of(j: int, readings: int):
+    """The CARMEN beam (1 degree apart) at reading j of an LMS scan, or None."""
+    if readings == 180:
+        return j
+    i, rem = divmod(j * 180, readings - 1)
+    return i if rem == 0 and i < 180 else None
+
+
+@pytest.mark.parametrize("units,readings,max_range", [("mm", 180, 8.0), ("mm", 181, 8.0), ("cm", 361, 50.0),
+                                                      ("cm", 181, 50.0), ("auto", 181, None)])
+def test_b0_ranges_equal_log_ranges(tmp_path, head_log, units, readings, max_range):
     out = tmp_path / "h.cap"
-    max_range = 8.0 if units == "mm" else 50.0
-    cv.convert(head_log, out, units=units, readings=readings, max_range=max_range)
+    st = cv.convert(head_log, out, units=units, readings=readings, max_range=max_range)
+    want_units = "cm" if units == "auto" else units
+    assert st.units == want_units
+    limit = min(max_range or math.inf, 81.82 if want_units == "cm" else 8.182)
     scans = [r for r in log_records(head_log) if r.kind == "FLASER"]
     _, got, _ = cap.read_capture(out)
     laser = [r for r in got if r.channel == 1]
-    res = 0.001 if units == "mm" else 0.01
-    n_valid = n_far = 0
+    res = 0.001 if want_units == "mm" else 0.01
+    n_valid = n_far = n_none = 0
     for s, rec in zip(scans, laser):
         b0 = p.decode_b0(rec.data)
-        assert b0.count == readings and b0.units == units and b0.status == 0x10
+        assert b0.count == readings and b0.units == want_units and b0.status == 0x10
         got_r = b0.ranges()
         for j, g in enumerate(got_r):
-            i = j if readings == 180 else int(math.floor(j * 179 / (readings - 1) + 0.5))
+            i = beam_of(j, readings)
+            if i is None:  # no beam at this bearing
+                assert g is None and b0.raw[j] == p.LMS_NO_VALUE
+                n_none += 1
+                continue
             r = s.ranges[i]
-            if r > max_range:
+            if r > limit:
                 assert g is None and b0.raw[j] == p.LMS_TOO_FAR
                 n_far += 1
             else:
                 assert abs(g - r) <= res / 2 + 1e-9, (j, g, r)
                 n_valid += 1
     assert n_valid > 10000 and n_far > 100
+    assert n_none == {180: 0, 181: 1, 361: 181}[readings] * len(scans)
+    assert st.too_far == n_far
+
+
+def test_units_cover_the_longest_reading_or_the_clamp_is_loud(tmp_path, head_log):
+    """The excerpt reaches 81.83 m (the Intel log's no-return value): cm is
+    chosen, and the readings past 81.82 m are counted and printed. A log
+    whose readings all fit in 8.182 m gets mm, with nothing clamped."""
+    scans = [r for r in log_records(head_log) if r.kind == "FLASER"]
+    longest = max(x for s in scans for x in s.ranges)
+    beyond = sum(1 for s in scans for x in s.ranges if x > 81.82)
+    assert longest > 81.82 and beyond > 0
+    out = tmp_path / "h.cap"
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.convert", str(head_log), str(out)],
+                         capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 0, res.stderr
+    assert f"in cm (longest reading {longest:.3f} m)" in res.stderr
+    assert f"WARNING: {beyond} readings longer than 81.820 m" in res.stderr
+    h, _, _ = cap.read_capture(out)
+    assert h.metadata["laser.units"] == "cm" and h.metadata["convert.too_far"] == str(beyond)
+
+    # The same log with every reading cut to 8 m: mm, and no warning.
+    short = tmp_path / "short.clf"
+    lines = []
+    for line in read_maybe_gz(head_log).decode().splitlines():
+        f = line.split()
+        if f and f[0] == "FLASER":
+            n = int(f[1])
+            f[2:2 + n] = [f"{min(float(x), 8.0):.2f}" for x in f[2:2 + n]]
+        lines.append(" ".join(f))
+    short.write_text("\n".join(lines) + "\n")
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.convert", str(short), str(out)],
+                         capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 0, res.stderr
+    assert "in mm (longest reading 8.000 m)" in res.stderr and "WARNING" not in res.stderr
+    assert cap.read_capture(out)[0].metadata["convert.too_far"] == "0"
 
 
 def test_command_line(tmp_path, head_log):

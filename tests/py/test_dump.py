@@ -1,8 +1,7 @@
-"""End-to-end tests of rsm-dump (tools/dump) on the shared protocol vectors.
+"""End-to-end tests of rsm-dump (tools/dump) on the protocol vectors.
 
 rsm-dump comes from the CMake build named by RSM_BUILD_DIR (ctest sets it).
-The vectors are ../shared/reference/vectors.json relative to the repository
-root; the tests FAIL (they do not skip) when the file is absent.
+The vectors are tests/data/vectors.json (docs/reference/protocols.md section 3).
 """
 
 import json
@@ -15,19 +14,10 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO_ROOT, built_tool
-
-VECTORS = REPO_ROOT.parent / "shared" / "reference" / "vectors.json"
+from conftest import built_tool, load_vectors
 
 
 # ---- helpers -----------------------------------------------------------------
-
-
-def load_vectors() -> list:
-    if not VECTORS.is_file():
-        pytest.fail(f"protocol vectors not found: {VECTORS} (expected in ../shared/reference/ "
-                    "relative to the repository root)", pytrace=False)
-    return json.loads(VECTORS.read_text())
 
 
 def vector(name: str) -> dict:
@@ -380,11 +370,12 @@ def test_dump_survives_the_pty_master_closing(tmp_path):
     proc = subprocess.Popen([str(built_tool("tools/dump/rsm-dump")), "--protocol", "aria", os.ttyname(slave)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     os.close(slave)
-    time.sleep(0.2)
     os.write(master, vbytes(vector("aria_encoder_packet")))
-    time.sleep(0.3)
+    # The master closes only once rsm-dump has printed the packet, however slowly it runs.
+    first = proc.stdout.readline()
     os.close(master)
     out, err = proc.communicate(timeout=30)
+    out = first + out
     assert proc.returncode == 0, err.decode()
     objs = parse_lines(out.decode())
     assert objs[-1]["summary"] is True

@@ -5,7 +5,6 @@ talks to their pseudo-terminals directly, as the real devices would
 Waits are generous and never the thing being measured: every check is on
 what came back, not on how fast."""
 
-import json
 import os
 import select
 import struct
@@ -13,7 +12,7 @@ import termios
 import time
 import tty
 
-from conftest import REPO_ROOT, FakeDevices
+from conftest import FakeDevices, load_vectors
 from rsm_tools import protocols as p
 
 TIMEOUT = 30.0
@@ -225,8 +224,7 @@ def test_laser_acks_naks_switches_rate_streams_and_answers_status(tmp_path):
 
 
 def test_the_encoders_the_fakes_use_match_the_reference():
-    vectors = {v["name"]: bytes.fromhex(v["hex"]) for v in
-               json.loads((REPO_ROOT.parent / "shared" / "reference" / "vectors.json").read_text())}
+    vectors = {v["name"]: bytes.fromhex(v["hex"]) for v in load_vectors()}
     assert p.encode_sync2_reply("Robot1", "Pioneer", "p3dx-sh") == vectors["aria_sync2_reply_example"]
     _, payload = p.aria_unframe(vectors["aria_hostbaud_38400"])
     assert p.aria_int_value(payload) == 2

@@ -1,25 +1,19 @@
 """The Python protocol encoders reproduce the reference vectors byte for byte.
 
-The vectors live in ``../shared/reference/vectors.json`` (beside the
-repository, like the dataset); the test FAILS if the file is absent.
+The vectors are ``tests/data/vectors.json`` (docs/reference/protocols.md
+section 3).
 """
 
-import json
 import random
 
 import pytest
 
-from conftest import REPO_ROOT
+from conftest import TEST_DATA, load_vectors as vector_list
 from rsm_tools import protocols as p
-
-VECTORS = REPO_ROOT.parent / "shared" / "reference" / "vectors.json"
 
 
 def load_vectors():
-    if not VECTORS.is_file():
-        pytest.fail(f"protocol vectors not found: {VECTORS} (expected in ../shared/reference/)",
-                    pytrace=False)
-    return {v["name"]: v for v in json.loads(VECTORS.read_text())}
+    return {v["name"]: v for v in vector_list()}
 
 
 def hx(v) -> bytes:
@@ -190,3 +184,13 @@ def test_frame_counter_finds_frames_in_noise_and_split_chunks():
     for i in range(0, len(s), 100):
         lc.feed(s[i:i + 100])
     assert lc.types.get(0xB0) == 5
+
+
+def test_the_captured_scan_file_is_the_vector_of_that_name():
+    """tests/data/lms_b0_captured_361_mm.txt (embedded in test_lms.c) and the
+    vector in vectors.json are the same 732 bytes, and a valid 361-reading mm scan."""
+    text = (TEST_DATA / "lms_b0_captured_361_mm.txt").read_text()
+    data = bytes.fromhex(text.replace("*", " "))
+    assert data == hx(load_vectors()["lms_b0_captured_361_mm"]) and len(data) == 732
+    scan = p.decode_b0(data)
+    assert scan.count == 361 and scan.units == p.UNITS_MM

@@ -121,6 +121,46 @@ def test_replay_errors(tmp_path, head_cap):
     assert res.returncode == 2 and "bad magic" in res.stderr
 
 
+def test_replay_runs_its_reader_and_reports_how_it_ended(tmp_path, head_cap):
+    """--run: the reader gets the pty paths, rsm-replay ends with it and
+    returns its failure; --lockstep feeds it every record; wrong uses are refused."""
+    def replay(*args):
+        return subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(head_cap), *map(str, args)],
+                              capture_output=True, text=True, env=subprocess_env(), timeout=300)
+
+    res = replay("--pty", "--lockstep")
+    assert res.returncode == 2 and "--lockstep needs --pty and --run" in res.stderr
+    res = replay("--pty", "--run", "true", "{sonar}")
+    assert res.returncode == 2 and "no channel" in res.stderr
+    res = replay("--pty", "--fast", "--linger", "0", "--run", sys.executable, "-c", "import sys; sys.exit(3)")
+    assert res.returncode == 3 and "exited with status 3" in res.stderr
+    # a reader that counts what it gets, fed in lockstep, the first 300 records only
+    reader = tmp_path / "count.py"
+    reader.write_text(
+        "import os, select, sys, tty\n"
+        "fds = [os.open(p, os.O_RDONLY | os.O_NOCTTY) for p in sys.argv[1:3]]\n"
+        "for fd in fds: tty.setraw(fd)\n"
+        "got = 0\n"
+        "while fds:\n"
+        "    ready, _, _ = select.select(fds, [], [], 60)\n"
+        "    for fd in ready:\n"
+        "        try:\n"
+        "            data = os.read(fd, 65536)\n"
+        "        except OSError:\n"
+        "            data = b''\n"
+        "        if not data:\n"
+        "            fds.remove(fd)\n"
+        "        got += len(data)\n"
+        "print(got)\n")
+    _, records, _ = cap.read_capture(head_cap)
+    want = sum(len(r.data) for r in records[:300] if r.direction == cap.RX)
+    res = replay("--pty", "--lockstep", "--records", "300", "--linger", "0.2", "--run", sys.executable, reader,
+                 "{robot}", "{laser}")
+    assert res.returncode == 0, res.stderr
+    assert int(res.stdout.split()[-1]) == want
+    assert "300 records" in res.stderr and "lockstep with" in res.stderr
+
+
 # ---------------------------------------------------------------------------
 # rsm-capture
 

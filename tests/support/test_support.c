@@ -2,23 +2,13 @@
 
 #include <stdio.h>
 
-static const char *join(char *out, size_t cap, const char *root, const char *rel)
+const char *rsm_test_source_path(char *out, size_t cap, const char *rel)
 {
-    int n = snprintf(out, cap, "%s/%s", root, rel);
+    int n = snprintf(out, cap, "%s/%s", RSM_SOURCE_DIR, rel);
     if (n < 0 || (size_t)n >= cap) {
         return NULL;
     }
     return out;
-}
-
-const char *rsm_test_source_path(char *out, size_t cap, const char *rel)
-{
-    return join(out, cap, RSM_SOURCE_DIR, rel);
-}
-
-const char *rsm_test_shared_path(char *out, size_t cap, const char *rel)
-{
-    return join(out, cap, RSM_SHARED_DIR, rel);
 }
 
 uint32_t rsm_test_rng_next(uint32_t *state)

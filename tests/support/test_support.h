@@ -1,15 +1,13 @@
-/* Helpers shared by the unit tests: where the project and the shared data are. */
+/* Helpers shared by the unit tests: where the project's files are, a generator. */
 #ifndef RSM_TEST_SUPPORT_H
 #define RSM_TEST_SUPPORT_H
 
 #include <stddef.h>
 #include <stdint.h>
 
-/* Writes "<root>/<rel>" into out (cap bytes); returns out, or NULL if too long.
- * root is the source tree for rsm_test_source_path and the shared/ folder
- * beside it for rsm_test_shared_path. */
+/* Writes "<source tree>/<rel>" into out (cap bytes); returns out, or NULL if
+ * too long. Tests read only the repository (tests/data). */
 const char *rsm_test_source_path(char *out, size_t cap, const char *rel);
-const char *rsm_test_shared_path(char *out, size_t cap, const char *rel);
 
 /* Small deterministic generator for randomised tests (xorshift32; the
  * caller keeps the non-zero state, so every test is repeatable). */

@@ -1,6 +1,6 @@
 /* Unit tests of the ARIA codec (rsm/aria.h).
  *
- * Every aria_* vector of the shared reference vectors.json is a test named
+ * Every aria_* vector of tests/data/vectors.json is a test named
  * after it, with its bytes embedded below: encoders must reproduce the
  * host -> robot vectors byte for byte, decoders must recover every listed
  * field of the robot -> host vectors. The rest injects faults (garbage,

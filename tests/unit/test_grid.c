@@ -1,5 +1,5 @@
 /* Grid: floor() cell indexing, the toroidal window, the binary image and the
- * three marking rules (DESIGN.md step 2). Holds for any RSM_MAP_SIZE_LOG2 and
+ * three marking rules (docs/reference/method.md step 2). Holds for any RSM_MAP_SIZE_LOG2 and
  * RSM_IMAGE_MAX_CELLS. */
 #include <math.h>
 #include <stdint.h>

@@ -59,7 +59,8 @@ static const uint8_t v_b0_short_mm[] = {0x02, 0x80, 0x0A, 0x00, 0xB0, 0x03, 0x40
                                         0x1F, 0x01, 0x00, 0xA0, 0x0F, 0x10, 0x79, 0x03};
 static const uint8_t v_bb_variant_ok[] = {0x02, 0x80, 0x07, 0x00, 0xBB, 0x01, 0xB4,
                                           0x00, 0x32, 0x00, 0x10, 0x03, 0x9D};
-/* lms_b0_captured_361_mm: a real 732-byte scan (180 deg / 0.5 deg, mm). */
+/* lms_b0_captured_361_mm: a real 732-byte scan (180 deg / 0.5 deg, mm);
+ * tests/data/lms_b0_captured_361_mm.txt. */
 static const uint8_t v_b0_captured_361_mm[732] = {
     0x02, 0x80, 0xD6, 0x02, 0xB0, 0x69, 0x41, 0xCB, 0x08, 0xCB, 0x08, 0xC2,
     0x08, 0xC2, 0x08, 0xC3, 0x08, 0xBA, 0x08, 0xB9, 0x08, 0xB0, 0x08, 0x9E,
@@ -397,9 +398,9 @@ static void assert_conserved(const run_log_t *log, size_t fed)
 static int build_b0(uint8_t *out, size_t cap, uint16_t cw, const uint16_t *words, size_t n,
                     uint8_t status)
 {
-    uint8_t data[2u + 2u * 405u + 1u];
+    uint8_t data[2u + 2u * 406u + 1u];
     size_t i;
-    TEST_ASSERT_TRUE(n <= 405u);
+    TEST_ASSERT_TRUE(n <= 406u);
     data[0] = (uint8_t)(cw & 0xFFu);
     data[1] = (uint8_t)(cw >> 8);
     for (i = 0; i < n; ++i) {
@@ -1291,28 +1292,59 @@ void test_rsm_lms_decode_b0_should_use_the_configured_distance_bits(void)
     TEST_ASSERT_FLOAT_WITHIN(1e-5f, 8.826f, scan.reading[0].range_m);
 }
 
+/* Readings in the largest 0xB0 telegram the receiver accepts:
+ * LEN = CMD + count word + 2 per reading + status <= RSM_LMS_MAX_LEN. */
+#define LMS_MAX_READINGS ((size_t)((RSM_LMS_MAX_LEN - 4u) / 2u))
+
+/* The decoder refuses more readings than RSM_MAX_BEAMS (RSM_ERR_NOMEM,
+ * output untouched). Under the default and small configurations a legal
+ * telegram can carry that many; under a larger RSM_MAX_BEAMS (the host
+ * preset's 721) no telegram the receiver accepts can, so there the largest
+ * legal telegram must decode whole, and the limit is checked on a telegram
+ * described by hand, as a caller with its own framing could pass. */
 void test_rsm_lms_decode_b0_should_reject_more_readings_than_rsm_max_beams(void)
 {
     static uint16_t words[RSM_MAX_BEAMS + 1];
     static uint8_t frame[RSM_LMS_MAX_TELEGRAM];
+    static uint8_t data[2u + 2u * (RSM_MAX_BEAMS + 1u) + 1u];
     rsm_lms_scan_t scan;
     rsm_lms_scan_t before;
     rsm_lms_telegram_t t;
-    const size_t fit = (size_t)RSM_MAX_BEAMS;
+    const size_t fit = (size_t)RSM_MAX_BEAMS < LMS_MAX_READINGS ? (size_t)RSM_MAX_BEAMS : LMS_MAX_READINGS;
+    const size_t over = (size_t)RSM_MAX_BEAMS + 1u;
     size_t i;
     int n;
-    for (i = 0; i <= fit; ++i) {
+    for (i = 0; i < over; ++i) {
         words[i] = (uint16_t)(1000u + i);
     }
-    /* exactly RSM_MAX_BEAMS readings fit */
+    /* as many readings as both the decoder and the receiver take: all decoded */
     n = build_b0(frame, sizeof frame, (uint16_t)(0x4000u | fit), words, fit, 0x10);
     t = view_of(frame, (size_t)n);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_lms_decode_b0(&t, NULL, &scan));
     TEST_ASSERT_EQUAL_size_t(fit, scan.count);
     TEST_ASSERT_EQUAL_UINT16(1000u + fit - 1u, scan.reading[fit - 1u].raw);
-    /* one more is rejected, output untouched */
-    n = build_b0(frame, sizeof frame, (uint16_t)(0x4000u | (fit + 1u)), words, fit + 1u, 0x10);
-    t = view_of(frame, (size_t)n);
+    /* one reading over RSM_MAX_BEAMS is refused, output untouched */
+    if (over <= LMS_MAX_READINGS) {
+        n = build_b0(frame, sizeof frame, (uint16_t)(0x4000u | over), words, over, 0x10);
+        t = view_of(frame, (size_t)n);
+    } else {
+        /* no legal telegram carries more than LMS_MAX_READINGS */
+        TEST_ASSERT_TRUE(build_b0(frame, sizeof frame, (uint16_t)(0x4000u | (LMS_MAX_READINGS + 1u)), words,
+                                  LMS_MAX_READINGS + 1u, 0x10) < 0);
+        data[0] = (uint8_t)((0x4000u | over) & 0xFFu);
+        data[1] = (uint8_t)((0x4000u | over) >> 8);
+        for (i = 0; i < over; ++i) {
+            data[2u + 2u * i] = (uint8_t)(words[i] & 0xFFu);
+            data[3u + 2u * i] = (uint8_t)(words[i] >> 8);
+        }
+        data[2u + 2u * over] = 0x10;
+        memset(&t, 0, sizeof t);
+        t.adr = 0x80u;
+        t.cmd = 0xB0u;
+        t.data = data;
+        t.data_len = 3u + 2u * over;
+        t.len = (uint16_t)(1u + t.data_len);
+    }
     memset(&scan, 0x5A, sizeof scan);
     memcpy(&before, &scan, sizeof scan);
     TEST_ASSERT_EQUAL_INT(RSM_ERR_NOMEM, rsm_lms_decode_b0(&t, NULL, &scan));

@@ -1,7 +1,7 @@
 """rsm-convert: a CARMEN log to a capture of the serial bytes a P3-DX and an LMS would send.
 
-    rsm-convert LOG OUT.cap [--units mm|cm] [--readings 180|181|361]
-                [--ticks-per-m 128000] [--wheel-base 0.357] [--max-range 8.0]
+    rsm-convert LOG OUT.cap [--units auto|mm|cm] [--readings 180|181|361]
+                [--ticks-per-m 128000] [--wheel-base 0.357] [--max-range M]
                 [--start-ticks N] [--min-gap-ms 10] [--ground-truth NAME]
 
 * Every odometry pose of the log (each ODOM line and the odometry triple of
@@ -10,7 +10,12 @@
   inverse differential-drive kinematics (see :func:`integrate`), accumulated
   as integers from the reconstructed pose, so quantisation never drifts.
 * Every FLASER scan becomes one LMS 0xB0 telegram on channel ``laser``
-  right after its ENCODER packet, at the same timestamp.
+  right after its ENCODER packet, at the same timestamp.  The range unit is
+  chosen to keep what the log has (``--units auto``, the default): mm when
+  the longest valid reading fits in 8.182 m, else cm (81.82 m).  Readings no
+  unit can carry, or beyond ``--max-range``, go out as the LMS code "value
+  larger than the maximum"; their number is printed and kept in the header
+  (``convert.too_far``), never dropped silently.
 * File order is kept.  The log's stamps go backwards at times because single
   records carry a stamp far off their neighbours'; the longest
   non-decreasing run of stamps is kept as it is and every stamp off it is
@@ -43,7 +48,7 @@ Pose = Tuple[float, float, float]
 
 DEFAULT_TICKS_PER_M = 128000.0
 DEFAULT_WHEEL_BASE = 0.357
-DEFAULT_MAX_RANGE = 8.0
+UNIT_LIMIT_M = {u: proto.LMS_MAX_VALUE * proto._UNIT_SCALE[u] for u in ("mm", "cm")}  # 8.182, 81.82
 DEFAULT_MIN_GAP_US = 10000
 ROBOT, LASER = 0, 1
 
@@ -143,17 +148,33 @@ class TickEncoder:
 
 
 def resample(ranges: Sequence[float], n: int) -> List[float]:
-    """180 beams to ``n`` readings.
+    """``m`` beams to ``n`` readings at the beams' own angles.
 
-    n == len(ranges): unchanged.  Otherwise the beams are taken to span exactly
-    180 deg (beam i at i*180/(m-1) deg) and reading j (at j*180/(n-1) deg) is the
-    nearest beam: index round(j*(m-1)/(n-1)).  No interpolation, so every
-    reading is a real measurement.
+    n == m: unchanged.  Otherwise the beams are taken as CARMEN lays them out
+    and rsm-nav reads them (beam i at i*180/m deg from the right; 180 beams at
+    1 deg) and reading j of the LMS scan (at j*180/(n-1) deg) is the beam at
+    exactly that angle, or NaN ("no valid measurement") when no beam is there:
+    the 181st reading of a 1-degree scan, the odd readings of a half-degree
+    one.  Every reading is a real measurement at its true bearing.
     """
     m = len(ranges)
     if n == m:
         return list(ranges)
-    return [ranges[int(math.floor(j * (m - 1) / (n - 1) + 0.5))] for j in range(n)]
+    out = []
+    for j in range(n):
+        num = j * m  # beam index j*m/(n-1), when it is a whole beam
+        i, rem = divmod(num, n - 1)
+        out.append(ranges[i] if rem == 0 and i < m else float("nan"))
+    return out
+
+
+def valid_reading(r: float) -> bool:
+    return math.isfinite(r) and r > 0.0
+
+
+def pick_units(longest: float) -> str:
+    """The finer unit that carries ``longest`` metres: mm up to 8.182 m, else cm."""
+    return "mm" if proto.range_to_raw(longest, "mm") != proto.LMS_TOO_FAR else "cm"
 
 
 def monotonic_stamps(stamps: Sequence[int]) -> List[int]:
@@ -237,11 +258,16 @@ class ConvertStats:
     packets: int = 0
     empty_scans: int = 0       # FLASER lines with no readings: odometry only, no telegram
     log: Optional[LogStats] = None
+    units: str = "mm"
+    longest_m: float = 0.0    # the longest valid reading of the log
+    limit_m: float = 0.0      # the longest range sent: the unit's limit or --max-range
+    too_far: int = 0          # valid readings beyond limit_m, sent as "too far"
 
     def summary(self) -> str:
         text = (f"{self.odom} ODOM + {self.scans} FLASER -> {self.packets} ENCODER "
-                f"packets and {self.scans - self.empty_scans} 0xB0 telegrams; {self.clamped} timestamps "
-                f"re-placed ({self.clamped_scans} of scans, moved by at most {self.max_clamp_us / 1e6:.6f} s); "
+                f"packets and {self.scans - self.empty_scans} 0xB0 telegrams in {self.units} (longest "
+                f"reading {self.longest_m:.3f} m); {self.clamped} timestamps re-placed "
+                f"({self.clamped_scans} of scans, moved by at most {self.max_clamp_us / 1e6:.6f} s); "
                 f"{self.split} odometry steps sent as 3 packets (sideways motion)")
         if self.empty_scans:
             text += f"; {self.empty_scans} FLASER lines without readings sent as odometry only"
@@ -256,18 +282,39 @@ class ConvertStats:
                 text += "".join(f"\n  line {n} ({kind}): {why}" for n, kind, why in self.log.examples[:5])
         return text
 
+    def warning(self) -> Optional[str]:
+        """The loud line about readings that could not be kept, or None."""
+        if self.too_far == 0:
+            return None
+        return (f"WARNING: {self.too_far} readings longer than {self.limit_m:.3f} m (the most that "
+                f"{self.units} units{' and --max-range' if self.limit_m < UNIT_LIMIT_M[self.units] else ''} "
+                f"carry) sent as 'value larger than the maximum' (0x1FF7); the longest was "
+                f"{self.longest_m:.3f} m")
 
-def convert(log, out, units: str = "mm", readings: int = 181,
+
+def convert(log, out, units: str = "auto", readings: int = 181,
             ticks_per_m: float = DEFAULT_TICKS_PER_M, wheel_base: float = DEFAULT_WHEEL_BASE,
-            max_range: float = DEFAULT_MAX_RANGE, start_ticks: int = 0,
+            max_range: Optional[float] = None, start_ticks: int = 0,
             ground_truth: Optional[str] = None, min_gap_us: int = DEFAULT_MIN_GAP_US) -> ConvertStats:
-    """Convert the CARMEN log ``log`` to the capture ``out``; returns the counts."""
+    """Convert the CARMEN log ``log`` to the capture ``out``; returns the counts.
+
+    units "auto" picks mm or cm by the longest valid reading (:func:`pick_units`);
+    max_range None sends every reading the unit carries."""
     if readings not in (180, 181, 361):
         raise ValueError("readings must be 180, 181 or 361")
-    if units not in ("mm", "cm"):
-        raise ValueError("units must be mm or cm")
+    if units not in ("auto", "mm", "cm"):
+        raise ValueError("units must be auto, mm or cm")
     st = ConvertStats(log=LogStats())
     recs = [r for r in read_log(log, types=("ODOM", "FLASER"), stats=st.log)]
+    valid = [x for r in recs if isinstance(r, FLaser) for x in r.ranges if valid_reading(x)]
+    st.longest_m = max(valid, default=0.0)
+    st.units = pick_units(st.longest_m) if units == "auto" else units
+    units = st.units
+    st.limit_m = UNIT_LIMIT_M[units] if max_range is None else min(max_range, UNIT_LIMIT_M[units])
+    # what range_to_raw sends as "too far", counted without encoding every reading
+    scale = proto._UNIT_SCALE[units]
+    cut = math.inf if max_range is None else max_range
+    st.too_far = sum(1 for x in valid if x > cut or round(x / scale) > proto.LMS_MAX_VALUE)
     # pass 1: monotonic timestamps (the table of re-placed ones goes into the header)
     clamped_lines = []
     original = [time_key(r.timestamp) for r in recs]
@@ -297,8 +344,11 @@ def convert(log, out, units: str = "mm", readings: int = 181,
         "laser.readings": str(readings),
         "laser.fov_deg": "180",
         "laser.measuring_mode": "0x00",
-        "laser.max_range_m": repr(float(max_range)),
-        "laser.resampling": "none" if readings == 180 else "nearest beam, 180 beams over 180 deg",
+        "laser.max_range_m": repr(float(st.limit_m)),
+        "laser.resampling": "none" if readings == 180 else "the beam at each reading's angle (beam i at i deg), "
+                                                           "else no value",
+        "convert.longest_m": repr(float(st.longest_m)),
+        "convert.too_far": str(st.too_far),
         "convert.clamped_total": str(st.clamped),
         "convert.clamped": "\n".join(clamped_lines),
     }
@@ -351,12 +401,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-convert", description=__doc__.split("\n\n")[0])
     ap.add_argument("log", help="CARMEN log (plain or gzip)")
     ap.add_argument("out", help="capture file to write")
-    ap.add_argument("--units", choices=("mm", "cm"), default="mm")
+    ap.add_argument("--units", choices=("auto", "mm", "cm"), default="auto",
+                    help="range unit of the 0xB0 telegrams; auto (default): mm when the log's longest valid "
+                         "reading fits in 8.182 m, else cm (81.82 m)")
     ap.add_argument("--readings", type=int, choices=(180, 181, 361), default=181)
     ap.add_argument("--ticks-per-m", type=float, default=DEFAULT_TICKS_PER_M)
     ap.add_argument("--wheel-base", type=float, default=DEFAULT_WHEEL_BASE)
-    ap.add_argument("--max-range", type=float, default=DEFAULT_MAX_RANGE,
-                    help="longer ranges are sent as the LMS 'too far' code 0x1FF7 (default 8.0 m)")
+    ap.add_argument("--max-range", type=float, default=None,
+                    help="longer ranges are sent as the LMS 'too far' code 0x1FF7 (default: only those the "
+                         "unit cannot carry); every such reading is counted and reported")
     ap.add_argument("--min-gap-ms", type=float, default=DEFAULT_MIN_GAP_US / 1000.0,
                     help="least time between two records, so a replay keeps their order "
                          f"(default {DEFAULT_MIN_GAP_US / 1000.0:g}; 0 keeps the log's stamps)")
@@ -366,7 +419,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     a = ap.parse_args(argv)
     if a.min_gap_ms < 0:
         ap.error("--min-gap-ms must not be negative")
-    if a.ticks_per_m <= 0 or a.wheel_base <= 0 or a.max_range <= 0:
+    if a.ticks_per_m <= 0 or a.wheel_base <= 0 or (a.max_range is not None and a.max_range <= 0):
         ap.error("--ticks-per-m, --wheel-base and --max-range must be positive")
     try:
         st = convert(a.log, a.out, a.units, a.readings, a.ticks_per_m, a.wheel_base,
@@ -376,6 +429,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f"rsm-convert: cannot read {a.log} to the end: {exc or type(exc).__name__}", file=sys.stderr)
         return 2
     print(f"rsm-convert: {st.summary()}", file=sys.stderr)
+    warning = st.warning()
+    if warning:
+        print(f"rsm-convert: {warning}", file=sys.stderr)
     return 0
 
 

@@ -2,6 +2,7 @@
 
     rsm-replay CAP [--port CHANNEL=DEVICE ...] [--pty] [--speed X | --fast]
                [--wait-open] [--linger S] [--quiet]
+    rsm-replay CAP --pty --lockstep [--linger S] [--quiet] --run PROGRAM ARGS...
 
 Only rx records (device -> host) are played; tx records are what the host
 sent and are skipped.  Each channel goes to the serial device named with
@@ -21,6 +22,15 @@ after a "stopped" message).  Exit status 1: a problem in the capture, or a
 reader that went away (closed its pty, or read nothing for ``--stall``
 seconds, default 10, while bytes waited).  Exit status 2: bad arguments, an
 unreadable capture or a port that cannot be opened.
+
+``--run PROGRAM ARGS...`` starts the reader itself (``{CHANNEL}`` in its
+arguments becomes that channel's pty path) and ends with it: the exit status
+is the reader's when it fails, else 0.  ``--lockstep`` (with ``--run``) makes
+the reader's result independent of the machine's speed and load (see
+:mod:`rsm_tools.lockstep`): before each group of records with one timestamp
+rsm-replay waits until the reader has read everything and is blocked waiting
+for more, then writes the whole group while it is held there; timing options
+are ignored.
 """
 
 import argparse
@@ -33,6 +43,7 @@ import tty
 from typing import Dict, List, Optional, Sequence
 
 from . import capture as cap
+from . import lockstep as ls
 
 
 class Stop(Exception):
@@ -117,6 +128,18 @@ class SerialOut:
             self.port.close()
 
 
+def played(reader, outs, limit: Optional[int]):
+    """The records to play: received bytes of the channels with a port, at most ``limit``."""
+    n = 0
+    for rec in reader:
+        if rec.direction != cap.RX or rec.channel not in outs:
+            continue
+        if limit is not None and n >= limit:
+            return
+        n += 1
+        yield rec
+
+
 def parse_ports(specs: Sequence[str]) -> Dict[str, str]:
     out = {}
     for s in specs:
@@ -143,9 +166,19 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--stall", type=float, default=10.0,
                     help="give up when a pty reader takes nothing for this long (default 10 s)")
     ap.add_argument("--quiet", action="store_true")
+    ap.add_argument("--records", type=int, metavar="N",
+                    help="play only the first N records (then the ports close, as if unplugged)")
+    ap.add_argument("--lockstep", action="store_true",
+                    help="feed the --run program one timestamp at a time, each when it waits for input")
+    ap.add_argument("--run", nargs=argparse.REMAINDER, metavar="PROGRAM",
+                    help="start PROGRAM ARGS... ({CHANNEL} = that pty's path) and end with it")
     a = ap.parse_args(argv)
     if not a.speed > 0 or not a.max_gap >= 0 or not a.stall > 0:
         ap.error("--speed and --stall must be positive, --max-gap not negative")
+    if a.records is not None and a.records < 0:
+        ap.error("--records must not be negative")
+    if a.lockstep and not (a.pty and a.run):
+        ap.error("--lockstep needs --pty and --run PROGRAM")
     try:
         ports = parse_ports(a.port)
     except ValueError as exc:
@@ -187,6 +220,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         for o in outs.values():
             print(f"{o.name} {o.path}", flush=True)
         ptys = [o for o in outs.values() if isinstance(o, PtyOut)]
+        if a.run:
+            return run_with(a, reader, outs, ptys)
         if a.wait_open and ptys:
             for o in ptys:
                 o.release_slave()
@@ -198,9 +233,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         start = time.monotonic()
         last_progress = 0.0
         shortened = 0
-        for rec in reader:
-            if rec.direction != cap.RX or rec.channel not in outs:
-                continue
+        for rec in played(reader, outs, a.records):
             if t_first is None:
                 t_first = rec.timestamp
             if not a.fast:
@@ -249,6 +282,105 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 pass
         if reader is not None:
             reader.close()
+
+
+def run_with(a, reader, outs, ptys) -> int:
+    """Starts the --run program on the ptys and plays into them, in lockstep
+    with it when asked; returns the program's failure status, else 0."""
+    import subprocess
+
+    paths = {o.name: o.path for o in ptys}
+    try:
+        cmd = [arg.format(**paths) for arg in a.run]
+    except (KeyError, IndexError, ValueError) as exc:
+        print(f"rsm-replay: --run: no channel for {exc} in {' '.join(a.run)}", file=sys.stderr)
+        return 2
+    try:
+        child = subprocess.Popen(cmd)
+    except OSError as exc:
+        print(f"rsm-replay: cannot start {cmd[0]}: {exc}", file=sys.stderr)
+        return 2
+    step = None
+    records = nbytes = groups = 0
+    status: Optional[int] = None
+    for o in ptys:
+        os.set_blocking(o.master, False)
+
+    def write_to(out, data: bytes) -> None:
+        """Writes all of data, waiting while the pty is full, unless the reader has ended."""
+        view = memoryview(data)
+        while view:
+            try:
+                view = view[os.write(out.master, view):]
+            except BlockingIOError:
+                if child.poll() is not None:
+                    raise ls.ReaderGone(0) from None
+                select.select([], [out.master], [], 0.1)
+
+    try:
+        if a.lockstep:
+            step = ls.Lockstep(child.pid, [o.slave for o in ptys])
+        group: List[cap.Record] = []
+
+        start = time.monotonic()
+        t_first: Optional[int] = None
+
+        def flush() -> None:
+            nonlocal records, nbytes, groups, t_first
+            if not group:
+                return
+            if step is not None:
+                step.hold()
+            elif not a.fast:  # recorded timing, scaled
+                if t_first is None:
+                    t_first = group[0].timestamp
+                delay = start + (group[0].timestamp - t_first) / 1e6 / a.speed - time.monotonic()
+                if delay > 0:
+                    time.sleep(delay)
+            written = {o.name: 0 for o in ptys}
+            for rec in group:
+                out = outs[rec.channel]
+                write_to(out, rec.data)
+                written[out.name] += len(rec.data)  # type: ignore[attr-defined]
+                records += 1
+                nbytes += len(rec.data)
+            if step is not None:
+                step.release([written[o.name] for o in ptys])
+            groups += 1
+            group.clear()
+
+        for rec in played(reader, outs, a.records):
+            if group and rec.timestamp != group[0].timestamp:
+                flush()
+            group.append(rec)
+        flush()
+        if step is not None:
+            step.detach()
+            status = step.status
+        if not a.quiet:
+            print(f"rsm-replay: done: {records} records, {nbytes} bytes in {groups} groups"
+                  + (f", lockstep with {step.retries} retries" if step is not None else ""),
+                  file=sys.stderr, flush=True)
+        if a.linger > 0:
+            time.sleep(a.linger)
+    except ls.ReaderGone as exc:
+        status = exc.status if step is not None and step.status is not None else None
+        print(f"rsm-replay: {cmd[0]} ended after {records} records", file=sys.stderr)
+    except ls.LockstepError as exc:
+        print(f"rsm-replay: lockstep: {exc}", file=sys.stderr)
+        child.kill()
+        status = None
+    finally:
+        for o in outs.values():
+            o.close()  # type: ignore[attr-defined]
+        outs.clear()
+    if status is None:
+        rc = child.wait()
+    else:  # reaped by the lockstep's waitpid
+        rc = child.returncode = os.waitstatus_to_exitcode(status)
+    if rc != 0:
+        print(f"rsm-replay: {cmd[0]} exited with status {rc}", file=sys.stderr)
+    return rc if rc > 0 else (1 if rc < 0 else 0)
 
 
 if __name__ == "__main__":

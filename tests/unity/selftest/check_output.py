@@ -1,17 +1,22 @@
 #!/usr/bin/env python3
-"""Run a Unity-style test executable and check its output line by line.
+"""Run a Unity-style test executable and check how it behaved.
 
-The expected output is derived from marker comments in the test's C source
-(see the header of selftest_cases.c for the marker syntax):
+The expected behaviour is derived from marker comments in the test's C
+source (see the header of selftest_cases.c for the marker syntax):
 
-* one result line per RUN_TEST, in RUN_TEST order, each preceded by any
-  INFO lines of that test, formatted "<file>:<line>:<test>:<text>";
-* then an empty line, a line of 23 dashes, "N Tests F Failures I Ignored "
-  (with Unity's trailing space) and "OK" or "FAIL";
-* and an exit status equal to the number of failures.
+* one result per RUN_TEST, in RUN_TEST order, each preceded by any INFO
+  lines of that test: its verdict (PASS, FAIL, IGNORE, INFO), the test's
+  name and the source line it points at (the failing assertion, the
+  ignore, the message; for a PASS the RUN_TEST line);
+* a message the test itself passed (the last string literal of a
+  ..._MESSAGE(...) call on the marked line) must appear in that result;
+* the counts "N Tests F Failures I Ignored", the final OK or FAIL, and an
+  exit status equal to the number of failures.
 
-Only the directory part of the file name is ignored (compilers differ in
-what __FILE__ holds); everything else must match exactly.
+The wording Unity adds (e.g. "Expected 3 Was 4", its punctuation, extra
+details such as "Character N", how NaN is spelled) is not checked: it
+differs between Unity releases (2.6 and 2.7 do), while the behaviour above
+does not. Lines of other forms are ignored.
 
 With --self-check the script also proves that the comparison is not
 vacuous: it perturbs the expectation in several ways and requires every
@@ -31,27 +36,56 @@ SUMMARY = re.compile(r"/\*\s*expect-summary:\s*(?P<text>.*?)\s*\*/")
 FUNCTION = re.compile(r"^\s*(?:static\s+)?void\s+(?P<name>\w+)\s*\(\s*void\s*\)")
 MAIN = re.compile(r"^\s*int\s+main\s*\(")
 RUN_TEST = re.compile(r"\bRUN_TEST\s*\(\s*(?P<name>\w+)\s*(?:,\s*(?P<line>\d+)\s*)?\)")
-DASHES = "-" * 23
 
 
 class AuthoringError(Exception):
     """The markers in the test source are inconsistent."""
 
 
-class Expected:
-    """One expected output line: exact text, or a regular expression."""
+RESULT = re.compile(r"^(?P<line>\d+):(?P<test>\w+):(?P<verdict>PASS|FAIL|IGNORE|INFO)(?P<rest>.*)$")
+COUNTS = re.compile(r"(?P<tests>\d+)\s+Tests\s+(?P<failures>\d+)\s+Failures\s+(?P<ignored>\d+)\s+Ignored")
+MESSAGE_CALL = re.compile(r"\w*MESSAGE\s*\(")
+STRING = re.compile(r'"((?:[^"\\]|\\.)*)"')
 
-    def __init__(self, text, is_regex=False):
-        self.text = text
-        self.is_regex = is_regex
 
-    def matches(self, line):
-        if self.is_regex:
-            return re.fullmatch(self.text, line) is not None
-        return line == self.text
+class Result:
+    """One result of a run: verdict, test, source line and the text after the verdict."""
+
+    def __init__(self, verdict, test, line, message=None):
+        self.verdict = verdict
+        self.test = test
+        self.line = line
+        self.message = message
+
+    def key(self):
+        return (self.verdict, self.test, self.line)
 
     def __repr__(self):
-        return ("re:" if self.is_regex else "") + repr(self.text)
+        return "%s:%d:%s" % (self.test, self.line, self.verdict) + (
+            " with %r" % self.message if self.message else "")
+
+
+class Expected(Result):
+    """An expected result; its message, when the test passed one, must appear in the actual one."""
+
+    def matches(self, result):
+        if result is None or self.key() != result.key():
+            return False
+        return self.message is None or squash(self.message) in squash(result.message or "")
+
+
+def squash(text):
+    """Text without whitespace: Unity releases differ in the spaces around messages."""
+    return re.sub(r"\s+", "", text)
+
+
+def user_message(source_line):
+    """The message a ..._MESSAGE(...) call on this line passes (its last string literal), if any."""
+    if not MESSAGE_CALL.search(source_line):
+        return None
+    literals = STRING.findall(source_line.split("/*")[0])
+    message = literals[-1].strip() if literals else ""
+    return message or None
 
 
 def verdict_of(text):
@@ -111,6 +145,8 @@ def parse_source(path):
 
     lines = []
     failures = ignores = 0
+    with open(path, encoding="utf-8") as handle:
+        source = handle.read().split("\n")
     for name, reported, run_marker in runs:
         entries = [(n, r, t) for (n, r, t) in own_markers.get(name, [])]
         entries += named_markers.get(name, [])
@@ -127,20 +163,42 @@ def parse_source(path):
             raise AuthoringError("%s: unknown verdict %r for %s" % (base, verdicts[0], name))
         failures += verdicts[0] == "FAIL"
         ignores += verdicts[0] == "IGNORE"
-        for number, is_regex, text in entries:
-            prefix = "%s:%d:%s:" % (base, number, name)
-            if is_regex:
-                lines.append(Expected(re.escape(prefix) + text, True))
-            else:
-                lines.append(Expected(prefix + text))
+        for number, _, text in entries:
+            message = user_message(source[number - 1]) if number != reported else None
+            lines.append(Expected(verdict_of(text), name, number, message))
 
     computed = "%d Tests %d Failures %d Ignored" % (len(runs), failures, ignores)
     if summary != computed:
         raise AuthoringError("%s: expect-summary says %r but the markers add up to %r"
                              % (base, summary, computed))
-    lines += [Expected(""), Expected(DASHES), Expected(computed + " "),
-              Expected("OK" if failures == 0 else "FAIL")]
-    return lines, failures
+    return Behaviour(lines, (len(runs), failures, ignores), "OK" if failures == 0 else "FAIL"), failures
+
+
+class Behaviour:
+    """Results in order, the counts (tests, failures, ignored) and the final verdict."""
+
+    def __init__(self, results, counts, final):
+        self.results = results
+        self.counts = counts
+        self.final = final
+
+
+def behaviour_of(lines):
+    """What a run's output says: its results, its counts, its final verdict."""
+    results, counts, final = [], None, None
+    for line in lines:
+        m = RESULT.match(line)
+        if m:
+            results.append(Result(m.group("verdict"), m.group("test"), int(m.group("line")), m.group("rest")))
+            continue
+        c = COUNTS.search(line)
+        if c:
+            counts = (int(c.group("tests")), int(c.group("failures")), int(c.group("ignored")))
+            continue
+        word = line.strip()
+        if counts is not None and word in ("OK", "FAIL", "FAILED"):
+            final = "FAIL" if word.startswith("FAIL") else "OK"
+    return Behaviour(results, counts, final)
 
 
 def run_binary(command, base, timeout):
@@ -154,24 +212,29 @@ def run_binary(command, base, timeout):
     lines = text.split("\n")
     if lines and lines[-1] == "":
         lines.pop()
-    strip_dir = re.compile(r"^.*[/\\](?=" + re.escape(base) + r":)")
-    lines = [strip_dir.sub("", line.rstrip("\r")) for line in lines]
+    # Results of this source only, without its file name (compilers differ in what __FILE__ holds).
+    own = re.compile(r"^(?:.*[/\\])?" + re.escape(base) + r":")
+    lines = [own.sub("", line.rstrip("\r")) if own.match(line) else line.rstrip("\r") for line in lines]
     return lines, proc.returncode, proc.stderr.decode("utf-8", "replace"), text
 
 
-def compare(expected, actual, want_status, status):
+def compare(expected, actual_lines, want_status, status):
     """Return a list of human-readable problems (empty when all matches)."""
     problems = []
-    for index in range(max(len(expected), len(actual))):
-        want = expected[index] if index < len(expected) else None
-        got = actual[index] if index < len(actual) else None
+    actual = behaviour_of(actual_lines)
+    for index in range(max(len(expected.results), len(actual.results))):
+        want = expected.results[index] if index < len(expected.results) else None
+        got = actual.results[index] if index < len(actual.results) else None
         if want is None:
-            problems.append("output line %d is extra: %r" % (index + 1, got))
+            problems.append("result %d is extra: %r" % (index + 1, got))
         elif got is None:
-            problems.append("output line %d is missing, expected %r" % (index + 1, want))
+            problems.append("result %d is missing, expected %r" % (index + 1, want))
         elif not want.matches(got):
-            problems.append("output line %d differs:\n    expected %r\n    actual   %r"
-                            % (index + 1, want, got))
+            problems.append("result %d differs:\n    expected %r\n    actual   %r" % (index + 1, want, got))
+    if actual.counts != expected.counts:
+        problems.append("counts (tests, failures, ignored) %r, expected %r" % (actual.counts, expected.counts))
+    if actual.final != expected.final:
+        problems.append("final verdict %r, expected %r" % (actual.final, expected.final))
     if status is None or status < 0:
         problems.append("the test program died (status %r)" % status)
     elif status != want_status % 256:
@@ -180,19 +243,46 @@ def compare(expected, actual, want_status, status):
 
 
 def perturbations(expected, want_status):
-    """Yield (description, expected lines, expected status) that must all fail."""
-    first = expected[0]
-    changed = Expected(first.text + "x", first.is_regex)
-    yield "one character appended to the first line", [changed] + expected[1:], want_status
-    yield "first line dropped", expected[1:], want_status
-    yield "last result line dropped", expected[:-5] + expected[-4:], want_status
-    if len(expected) > 5:
-        swapped = list(expected)
-        swapped[0], swapped[1] = swapped[1], swapped[0]
-        yield "first two lines swapped", swapped, want_status
+    """Yield (description, expected behaviour, expected status) that must all fail."""
+    res = expected.results
+
+    def variant(results=None, counts=None, final=None):
+        return Behaviour(res if results is None else results, counts or expected.counts, final or expected.final)
+
+    first = res[0]
+    other = "FAIL" if first.verdict != "FAIL" else "PASS"
+    yield "first verdict changed", variant([Expected(other, first.test, first.line, first.message)] + res[1:]), \
+        want_status
+    yield "first line number off by one", variant([Expected(first.verdict, first.test, first.line + 1,
+                                                            first.message)] + res[1:]), want_status
+    yield "first test renamed", variant([Expected(first.verdict, first.test + "x", first.line,
+                                                  first.message)] + res[1:]), want_status
+    with_message = [i for i, e in enumerate(res) if e.message]
+    if with_message:
+        i = with_message[0]
+        e = res[i]
+        changed = list(res)
+        changed[i] = Expected(e.verdict, e.test, e.line, e.message + "x")
+        yield "a message changed", variant(changed), want_status
+    yield "first result dropped", variant(res[1:]), want_status
+    yield "last result dropped", variant(res[:-1]), want_status
+    if len(res) > 1:
+        yield "first two results swapped", variant([res[1], res[0]] + res[2:]), want_status
+    tests, failures, ignored = expected.counts
+    yield "ignored count off by one", variant(counts=(tests, failures, ignored + 1)), want_status
     yield "exit status off by one", expected, want_status + 1
-    final = Expected("FAIL" if expected[-1].text == "OK" else "OK")
-    yield "final verdict flipped", expected[:-1] + [final], want_status
+    yield "final verdict flipped", variant(final="FAIL" if expected.final == "OK" else "OK"), want_status
+
+
+def rewordings(lines):
+    """Yield (description, output) that say the same in other words, as other
+    Unity releases do; the comparison must accept them all."""
+    yield "no space after the verdict's colon", [re.sub(r":(PASS|FAIL|IGNORE|INFO): ", r":\1:", l) for l in lines]
+    yield "details appended to every failure", [l + " Character 3." if RESULT.match(l) and ":FAIL" in l else l
+                                                 for l in lines]
+    yield "other spellings of special values", [re.sub(r"\b(nan|inf)\b", lambda m: m.group(1).upper(), l)
+                                                for l in lines]
+    yield "assertion texts reworded", [re.sub(r"Expected ", "Wanted ", l) for l in lines]
 
 
 def main():
@@ -237,10 +327,16 @@ def main():
         if missed:
             print("check_output: the comparison failed to notice: %s" % ", ".join(missed))
             return 1
-        print("check_output: comparison rejects every perturbed expectation")
+        refused = [d for d, lines in rewordings(actual) if compare(expected, lines, want_status, status)]
+        if refused:
+            print("check_output: the comparison depends on wording: %s" % ", ".join(refused))
+            return 1
+        messages = sum(1 for e in expected.results if e.message)
+        print("check_output: comparison rejects every perturbed expectation and accepts every rewording "
+              "(%d results carry a message of the test's own)" % messages)
 
-    print("check_output: %d output lines and exit status %d match %s"
-          % (len(expected), status, base))
+    print("check_output: %d results, the counts and exit status %d match %s"
+          % (len(expected.results), status, base))
     return 0
 
 

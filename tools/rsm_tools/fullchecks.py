@@ -1,0 +1,321 @@
+"""The checks that need the full logs, printed as PASS or MISS lines.
+
+The unit and end-to-end tests use only the repository (the excerpt in
+``tests/data``).  What can only be checked on the full logs of the shared data
+folder (``RSM_SHARED_DIR``, see docs/reference/README.md) is here, and
+``./tools/bench`` runs it and prints its lines with the other floors:
+
+* the Intel log is the one its description documents (docs/reference/
+  intel-SOURCE.md: record counts, the 631 stamps that go backwards, raw
+  odometry against the relations, the corrected poses against them);
+* the shipped excerpt is the log's beginning, byte for byte, and its relations
+  and poses are those of the full files (tests/data/README.md);
+* on every log, rsm is more accurate than the ICP baseline and odometry alone
+  on every measure, and a second run is bit-identical;
+* the capture path (rsm-convert, then ``rsm-nav --capture``) tracks within 2 %
+  of the direct run on the log (``rsm-nav --carmen``), on all relations and on
+  local ones;
+* a figure that depends on the machine's speed and load, so it is no test: the
+  shipped excerpt replayed over pseudo-terminals in real time (8x) into
+  ``rsm-nav --listen``, its local error against the 0.03 m floor and how many
+  poses equal the capture-mode run's.
+
+Each check is a dict ``{"status": PASS|MISS|SKIP, "kind", "log", "value",
+"limit", "line"}``, as the bench's floors are.  Run alone::
+
+    python -m rsm_tools.fullchecks --nav build/tools/nav/rsm-nav [--shared DIR]
+"""
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+from . import capture as cap
+from . import convert
+from . import evaluate as ev
+from .carmen import LogStats, read_log, time_key
+from .excerpt import excerpt_log, excerpt_poses, excerpt_relations
+from .fileio import open_binary
+
+LOCAL_SPAN = 2.0
+LIVE_SPEED = "8"
+LIVE_FLOOR = 0.03          # local translation of the real-time live run on the excerpt, m
+CAPTURE_TOLERANCE = 1.02   # capture-path error over the direct run's, at most
+INTEL_LOCAL_FLOOR = 0.03   # rsm's local translation error on Intel, m
+# The Intel log as docs/reference/intel-SOURCE.md describes it.
+INTEL_FACTS = {"FLASER": 13631, "ODOM": 26915, "comments": 4, "readings": 180, "backwards": 631}
+
+
+def unpacked(path: Path) -> bytes:
+    with open_binary(path) as f:
+        return f.read()
+
+
+def check(ok: Optional[bool], kind: str, log: Optional[str], text: str, value=None, limit=None) -> dict:
+    status = "SKIP" if ok is None else ("PASS" if ok else "MISS")
+    return {"status": status, "kind": kind, "log": log, "value": value, "limit": limit, "line": f"{status} {text}"}
+
+
+# ---------------------------------------------------------------------------
+# the Intel log and its description
+
+
+def check_intel_log(log: Path) -> List[dict]:
+    st = LogStats()
+    backwards = bad_count = 0
+    prev = None
+    for rec in read_log(log, stats=st):
+        if rec.kind != "FLASER":
+            continue
+        bad_count += rec.num_readings != INTEL_FACTS["readings"]
+        if prev is not None and rec.timestamp < prev:
+            backwards += 1
+        prev = rec.timestamp
+    got = {"FLASER": st.records.get("FLASER", 0), "ODOM": st.records.get("ODOM", 0), "comments": st.comments,
+           "backwards": backwards}
+    ok = (all(got[k] == INTEL_FACTS[k] for k in got) and bad_count == 0
+          and st.malformed_total == 0 and st.unknown_total == 0)
+    text = ", ".join(f"{k} {got[k]}" for k in got)
+    want = ", ".join(f"{k} {INTEL_FACTS[k]}" for k in got)
+    return [check(ok, "data", "intel", f"intel: the log as intel-SOURCE.md describes it: {text}; scans not of "
+                  f"{INTEL_FACTS['readings']} readings {bad_count}, malformed {st.malformed_total}, unknown "
+                  f"{st.unknown_total} (documented: {want}, 0, 0, 0)")]
+
+
+def _near(v: float, want: float, tol: float) -> bool:
+    return abs(v - want) <= tol
+
+
+def check_intel_odometry(log: Path, relations: Path) -> List[dict]:
+    """Raw odometry against the relations: the figures intel-SOURCE.md gives."""
+    traj = ev.Trajectory(ev.odometry_trajectory(log))
+    rels = ev.load_relations(relations)
+    res = ev.evaluate(traj, rels)
+    short = ev.evaluate(traj, [r for r in rels if r.span < 5.0])
+    long_ = ev.evaluate(traj, [r for r in rels if r.span >= 5.0])
+    ok = (res["matched"] == len(rels) and res["unmatched"] == 0 and res["inexact"] == 0
+          and short["matched"] == 1732 and _near(short["translation"]["mean"], 0.022, 0.001)
+          and long_["matched"] == 1252 and _near(long_["translation"]["mean"], 17.5, 0.1)
+          and _near(long_["translation"]["max"], 70.0, 0.5))
+    return [check(ok, "data", "intel", f"intel: raw odometry, {res['matched']} of {len(rels)} relations matched "
+                  f"exactly; under 5 s: {short['matched']}, {short['translation']['mean']:.4f} m mean; 5 s and "
+                  f"over: {long_['matched']}, {long_['translation']['mean']:.2f} m mean, "
+                  f"{long_['translation']['max']:.1f} m max (documented: 1732, 0.022 m; 1252, 17.5 m, 70 m)")]
+
+
+def check_intel_poses(poses: Path, relations: Path) -> List[dict]:
+    gt, fmt = ev.load_poses(poses)
+    res = ev.evaluate(gt, ev.load_relations(relations), tolerance=0.0)
+    t, r = res["translation"], res["rotation"]
+    ok = (fmt == "corrected-poses" and len(gt) == 910 and res["matched"] == 90 and _near(t["mean"], 0.036, 0.001)
+          and _near(t["max"], 0.179, 0.001) and _near(r["mean"], 0.42, 0.01))
+    return [check(ok, "data", "intel", f"intel: corrected poses ({len(gt)}) against the relations: {res['matched']} "
+                  f"covered, {t['mean']:.4f} m / {r['mean']:.3f} deg mean, {t['max']:.3f} m max (documented: "
+                  "910 poses, 90, 0.036 m / 0.42 deg, 0.179 m)")]
+
+
+def check_excerpt(d: Path, test_data: Path, work: Path) -> List[dict]:
+    """tests/data is the real log's beginning, remade by rsm-excerpt."""
+    head_log = test_data / "intel_head.clf.gz"
+    out = work / "intel_head.clf.gz"
+    res = excerpt_log(d / "intel.clf.gz", out, first_scans=600)
+    excerpt_relations(d / "intel.relations", work / "h.relations", res)
+    excerpt_poses(d / "intel-corrected-poses.txt", work / "h.poses", res)
+    same = {
+        "log": unpacked(out) == unpacked(head_log),
+        "relations": (work / "h.relations").read_bytes() == (test_data / "intel_head.relations").read_bytes(),
+        "poses": (work / "h.poses").read_bytes() == (test_data / "intel_head-corrected-poses.txt").read_bytes(),
+        "prefix": unpacked(d / "intel.clf.gz").startswith(unpacked(head_log)),
+    }
+    # every relation with both ends among the kept scans is kept
+    rels = ev.load_relations(d / "intel.relations")
+    inside = [r for r in rels if time_key(r.t1) in res.scan_index and time_key(r.t2) in res.scan_index]
+    same["all relations inside"] = ev.load_relations(test_data / "intel_head.relations") == inside
+    bad = [k for k, v in same.items() if not v]
+    return [check(not bad, "data", "intel", "intel: tests/data is the log's first 600 scans with their relations "
+                  "and poses, remade by rsm-excerpt" + (f" (differs: {', '.join(bad)})" if bad else ""))]
+
+
+# ---------------------------------------------------------------------------
+# rsm on every log
+
+
+def run_nav(nav: Path, args: Sequence[str], traj: Path) -> str:
+    res = subprocess.run([str(nav), *args, "--trajectory", str(traj), "--quiet"], capture_output=True, text=True,
+                         timeout=3600)
+    if res.returncode != 0:
+        raise RuntimeError(f"rsm-nav {' '.join(args)} failed ({res.returncode}): {res.stderr.strip()}")
+    return res.stdout
+
+
+def errors(poses, relations: List[ev.Relation]) -> Dict[str, dict]:
+    return {scope: ev.evaluate(poses, relations, max_span=span, tolerance=0.0)
+            for scope, span in (("all", None), ("local", LOCAL_SPAN))}
+
+
+def check_baselines(label: str, errs: Dict[str, Dict[str, dict]]) -> List[dict]:
+    """errs: method -> scope -> evaluate() result, for rsm, icp and odometry."""
+    lost = []
+    for other in ("icp", "odometry"):
+        for scope in ("all", "local"):
+            for q in ("translation", "rotation"):
+                mine, theirs = errs["rsm"][scope][q]["mean"], errs[other][scope][q]["mean"]
+                if not mine < theirs:
+                    lost.append(f"{other} {scope} {q} ({theirs:.4f} <= rsm {mine:.4f})")
+    out = [check(not lost, "baselines", label, f"{label}: rsm below ICP and odometry alone in translation and "
+                 "rotation, all and local relations" + (f"; not on: {'; '.join(lost)}" if lost else ""))]
+    if label == "intel":
+        v = errs["rsm"]["local"]["translation"]["mean"]
+        out.append(check(v <= INTEL_LOCAL_FLOOR, "baselines", label, f"intel: rsm local translation {v:.4f} m "
+                         f"{'<=' if v <= INTEL_LOCAL_FLOOR else '>'} {INTEL_LOCAL_FLOOR} m", v, INTEL_LOCAL_FLOOR))
+    return out
+
+
+def check_rerun(label: str, nav: Path, log: Path, traj: Path, work: Path) -> List[dict]:
+    again = work / f"{label}-again.txt"
+    run_nav(nav, ["--carmen", str(log)], again)
+    same = again.read_bytes() == traj.read_bytes()
+    return [check(same, "rerun", label, f"{label}: a second rsm run is bit-identical to the first")]
+
+
+def capture_poses(capf: Path, traj: Path) -> List[Tuple[float, float, float, float]]:
+    """A capture run's poses, each at its scan's stamp in the log."""
+    stamps = [t / 1e6 for t in convert.original_scan_stamps(capf)]
+    rows = [l.split() for l in traj.read_text().splitlines() if l and not l.startswith("#")]
+    if len(rows) != len(stamps):
+        raise RuntimeError(f"{traj}: {len(rows)} poses for {len(stamps)} scans")
+    return [(stamps[i], float(r[1]), float(r[2]), float(r[3])) for i, r in enumerate(rows)]
+
+
+def check_capture_path(label: str, nav: Path, log: Path, relations: List[ev.Relation],
+                       direct: Dict[str, dict], work: Path) -> List[dict]:
+    """The log as serial bytes (rsm-convert) through rsm-nav --capture, beside the direct run."""
+    capf = work / f"{label}.cap"
+    st = convert.convert(log, capf)
+    traj = work / f"{label}-capture.txt"
+    run_nav(nav, ["--capture", str(capf)], traj)
+    got = errors(capture_poses(capf, traj), relations)
+    out = []
+    for scope in ("all", "local"):
+        mine, ref = got[scope]["translation"]["mean"], direct[scope]["translation"]["mean"]
+        r = mine / ref if ref > 0 else float("inf")
+        ok = r <= CAPTURE_TOLERANCE
+        out.append(check(ok, "capture", label, f"{label}: capture path ({st.units}, {st.too_far} readings past "
+                         f"{st.limit_m:.2f} m) {'all-relations' if scope == 'all' else 'local'} translation "
+                         f"{mine:.4f} m = x{r:.3f} of the direct run's {ref:.4f} m "
+                         f"({'<=' if ok else '>'} x{CAPTURE_TOLERANCE:.2f})", r, CAPTURE_TOLERANCE))
+    return out
+
+
+def check_live_replay(nav: Path, root: Path, work: Path) -> List[dict]:
+    """The shipped excerpt through rsm-replay --speed 8 into rsm-nav --listen (timing-dependent: a figure)."""
+    data = root / "tests" / "data"
+    capf = work / "excerpt.cap"
+    convert.convert(data / "intel_head.clf.gz", capf)
+    ref = work / "excerpt-capture.txt"
+    run_nav(nav, ["--capture", str(capf)], ref)
+    live = work / "excerpt-live.txt"
+    x0 = cap.read_capture(capf)[0].metadata.get("robot.initial_pose", "0 0 0").split()
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(capf), "--pty", "--speed", LIVE_SPEED,
+                          "--linger", "0.5", "--quiet", "--run", str(nav), "--robot", "{robot}", "--lms", "{laser}",
+                          "--listen", "--initial-pose", *x0, "--trajectory", str(live), "--quiet"],
+                         capture_output=True, text=True, timeout=600, env=_tools_env())
+    if res.returncode != 0:
+        return [check(False, "live", "excerpt", f"excerpt: live replay failed: {res.stderr.strip()[-200:]}")]
+    rels = ev.load_relations(data / "intel_head.relations")
+    got = errors(capture_poses(capf, live), rels)["local"]["translation"]["mean"]
+    want = errors(capture_poses(capf, ref), rels)["local"]["translation"]["mean"]
+    same = sum(a == b for a, b in zip(_poses(live), _poses(ref)))
+    ok = got <= LIVE_FLOOR
+    return [check(ok, "live", "excerpt", f"excerpt replayed in real time ({LIVE_SPEED}x) into rsm-nav --listen: "
+                  f"local translation {got:.4f} m ({'<=' if ok else '>'} {LIVE_FLOOR} m; capture mode {want:.4f} m), "
+                  f"{same} of {len(_poses(ref))} poses equal to capture mode's (this machine, this load)",
+                  got, LIVE_FLOOR)]
+
+
+def _poses(traj: Path) -> List[List[str]]:
+    return [l.split()[1:] for l in traj.read_text().splitlines() if l and not l.startswith("#")]
+
+
+def _tools_env() -> dict:
+    """The environment for ``python -m rsm_tools.*`` from this checkout."""
+    env = dict(os.environ)
+    tools = str(Path(__file__).resolve().parents[1])
+    env["PYTHONPATH"] = tools + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    return env
+
+
+# ---------------------------------------------------------------------------
+
+
+def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, root: Path,
+            accuracy: Optional[dict] = None, live: bool = True,
+            say: Callable[[str], None] = lambda s: None) -> List[dict]:
+    """Every check on ``logs`` ((label, log, relations)); ``accuracy`` is the
+    bench's accuracy section when it ran (its rsm, icp and odometry
+    trajectories are reused), else they are run here; ``live`` False skips
+    the real-time replay."""
+    work.mkdir(parents=True, exist_ok=True)
+    out: List[dict] = []
+    intel = shared / "data" / "intel"
+    if (intel / "intel.clf.gz").is_file():
+        say("the Intel log against its description")
+        out += check_intel_log(intel / "intel.clf.gz")
+        if (intel / "intel.relations").is_file():
+            out += check_intel_odometry(intel / "intel.clf.gz", intel / "intel.relations")
+        if (intel / "intel-corrected-poses.txt").is_file():
+            out += check_intel_poses(intel / "intel-corrected-poses.txt", intel / "intel.relations")
+            out += check_excerpt(intel, root / "tests" / "data", work)
+    else:
+        out.append(check(None, "data", "intel", "intel: the shared folder has no data/intel/intel.clf.gz, so the "
+                         "log's description and the shipped excerpt are not checked"))
+    if live:
+        say("the excerpt replayed in real time")
+        out += check_live_replay(nav, root, work)
+    else:
+        out.append(check(None, "live", "excerpt", "excerpt replayed in real time: not run (quick)"))
+    for label, log, rel in logs:
+        say(f"{label}: baselines, rerun, capture path")
+        relations = ev.load_relations(rel)
+        errs, trajs = {}, {}
+        for m in ("rsm", "icp", "odometry"):
+            run = ((accuracy or {}).get(label) or {}).get("runs", {}).get(m)
+            traj = Path(run["trajectory"]) if run else work / f"{label}-{m}.txt"
+            if not run:
+                run_nav(nav, ["--carmen", str(log), "--method", m], traj)
+            trajs[m] = traj
+            errs[m] = errors(ev.load_trajectory(traj), relations)
+        out += check_baselines(label, errs)
+        out += check_rerun(label, nav, log, trajs["rsm"], work)
+        out += check_capture_path(label, nav, log, relations, errs["rsm"], work)
+    return out
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    from .bench import discover_logs, find_root, shared_dir  # one definition, the bench's
+
+    ap = argparse.ArgumentParser(prog="rsm-fullchecks", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--nav", type=Path, required=True, help="the rsm-nav to check (a Release build)")
+    ap.add_argument("--shared", type=Path, help="the shared folder (default: $RSM_SHARED_DIR, else ../shared)")
+    ap.add_argument("--root", type=Path, help="repository root (default: found from the current folder)")
+    a = ap.parse_args(argv)
+    root = (a.root or find_root()).resolve()
+    shared = shared_dir(a.shared, root)
+    logs = discover_logs(shared / "data")
+    if not logs:
+        print(f"rsm-fullchecks: no log in {shared / 'data'} (set RSM_SHARED_DIR or --shared)", file=sys.stderr)
+        return 2
+    with tempfile.TemporaryDirectory() as tmp:
+        res = run_all(shared, a.nav, logs, Path(tmp), root, say=lambda s: print(f"rsm-fullchecks: {s}",
+                                                                                  file=sys.stderr, flush=True))
+    for c in res:
+        print(c["line"])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
