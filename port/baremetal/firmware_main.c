@@ -199,6 +199,10 @@ int main(void)
             rsm_board_put_dec(fw_stats.scan_events);
             rsm_board_put_str(", receive overflows ");
             rsm_board_put_dec(fw_stats.robot_overflows + fw_stats.laser_overflows);
+            rsm_board_put_str("\nM stack ");
+            rsm_board_put_dec((uint32_t)rsm_stack_used());
+            rsm_board_put_str(" of ");
+            rsm_board_put_dec((uint32_t)rsm_stack_size());
             rsm_board_put_str("\n");
             rsm_board_exit(0);
         }
