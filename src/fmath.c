@@ -33,25 +33,37 @@
 #define LN2_LO 0x1.7f7d1cp-20f
 #define SQRT2 0x1.6a09e6p+0f
 
-/* sin r and cos r for |r| <= pi/4 + a little. Taylor to r^9 and r^10: the
- * next terms are below 2e-9 and 1.2e-10 there, under 1/30 ulp of 1. */
-static float sin_poly(float r)
+/* sin and cos of r + rlo for |r| <= pi/4 + a little, rlo the reduction's
+ * low part (|rlo| < ulp(r)): sin(r + rlo) = sin r + rlo cos r, cos(r + rlo)
+ * = cos r - rlo sin r to far below an ulp. Taylor to r^9 and r^10: the next
+ * terms are below 2e-9 and 1.2e-10 there, under 1/30 ulp of 1. */
+static float sin_poly(float r, float rlo)
 {
     const float z = r * r;
-    return r + r * z * (-1.0f / 6.0f + z * (1.0f / 120.0f + z * (-1.0f / 5040.0f + z * (1.0f / 362880.0f))));
+    return r + (rlo + r * z * (-1.0f / 6.0f + z * (1.0f / 120.0f + z * (-1.0f / 5040.0f + z * (1.0f / 362880.0f)))));
 }
 
-static float cos_poly(float r)
+static float cos_poly(float r, float rlo)
 {
     const float z = r * r;
-    return 1.0f - 0.5f * z +
-           z * z * (1.0f / 24.0f + z * (-1.0f / 720.0f + z * (1.0f / 40320.0f + z * (-1.0f / 3628800.0f))));
+    const float hz = 0.5f * z;
+    const float w = 1.0f - hz;
+    /* 1 - w is exact (w is in [0.69, 1]), so (1 - w) - hz is the rounding
+     * error of w, added back with the small terms. */
+    return w + (((1.0f - w) - hz) +
+                (z * z * (1.0f / 24.0f + z * (-1.0f / 720.0f + z * (1.0f / 40320.0f + z * (-1.0f / 3628800.0f)))) -
+                 r * rlo));
 }
 
-/* x = k pi/2 + *r with |*r| <= pi/4 (about); returns k mod 4. */
-static uint32_t reduce(float x, float *r)
+/* x = k pi/2 + *r + *rlo with |*r| <= pi/4 (about) and *rlo the part of the
+ * reduced argument below *r's last bit; returns k mod 4. */
+static uint32_t reduce(float x, float *r, float *rlo)
 {
     float kf;
+    float a;
+    float c;
+    float s;
+    float lo;
     int32_t k;
     if (!(fabsf(x) < REDUCE_LIMIT)) {
         /* Exact (fmodf is), so still deterministic; the core never gets here. */
@@ -60,13 +72,25 @@ static uint32_t reduce(float x, float *r)
     kf = x * TWO_OVER_PI;
     k = (int32_t)(kf >= 0.0f ? kf + 0.5f : kf - 0.5f);
     kf = (float)k;
-    *r = ((x - kf * PIO2_1) - kf * PIO2_2) - kf * PIO2_3;
+    a = x - kf * PIO2_1; /* exact */
+    c = -(kf * PIO2_2);  /* exact */
+    /* s + error = a + c exactly (Knuth's two-sum). */
+    s = a + c;
+    {
+        const float a2 = s - c;
+        const float c2 = s - a2;
+        lo = (a - a2) + (c - c2);
+    }
+    lo -= kf * PIO2_3;
+    *r = s + lo;
+    *rlo = lo - (*r - s);
     return (uint32_t)k & 3u;
 }
 
 float rsm_sinf(float x)
 {
     float r;
+    float rlo;
     uint32_t q;
     if (!isfinite(x)) {
         return x - x; /* NaN for inf and NaN */
@@ -74,36 +98,37 @@ float rsm_sinf(float x)
     if (fabsf(x) < 0x1p-12f) {
         return x; /* x^3 / 6 is below half an ulp of x; keeps the sign of -0 */
     }
-    q = reduce(x, &r);
+    q = reduce(x, &r, &rlo);
     switch (q) {
     case 0u:
-        return sin_poly(r);
+        return sin_poly(r, rlo);
     case 1u:
-        return cos_poly(r);
+        return cos_poly(r, rlo);
     case 2u:
-        return -sin_poly(r);
+        return -sin_poly(r, rlo);
     default:
-        return -cos_poly(r);
+        return -cos_poly(r, rlo);
     }
 }
 
 float rsm_cosf(float x)
 {
     float r;
+    float rlo;
     uint32_t q;
     if (!isfinite(x)) {
         return x - x;
     }
-    q = reduce(x, &r);
+    q = reduce(x, &r, &rlo);
     switch (q) {
     case 0u:
-        return cos_poly(r);
+        return cos_poly(r, rlo);
     case 1u:
-        return -sin_poly(r);
+        return -sin_poly(r, rlo);
     case 2u:
-        return -cos_poly(r);
+        return -cos_poly(r, rlo);
     default:
-        return sin_poly(r);
+        return sin_poly(r, rlo);
     }
 }
 
