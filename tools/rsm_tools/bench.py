@@ -190,7 +190,8 @@ def cpu_info() -> Tuple[str, int]:
     return model or platform.processor() or platform.machine() or "unknown CPU", cores or (os.cpu_count() or 0)
 
 
-SOURCE_GLOBS = ("src/*.c", "include/rsm/*.h", "tools/nav/*.[ch]", "tools/bench-c/*.c", "port/baremetal/*.[ch]")
+SOURCE_GLOBS = ("src/*.[ch]", "include/rsm/*.h", "tools/nav/*.[ch]", "tools/bench-c/*.c", "port/baremetal/*.[ch]",
+                "port/baremetal/*/*.[ch]", "port/baremetal/boards/*/*.[ch]")
 
 
 def source_digest(root: Path) -> str:
