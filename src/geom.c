@@ -1,6 +1,7 @@
 #include "rsm/geom.h"
 
 #include <math.h>
+#include "fmath.h"
 
 float rsm_wrap_angle(float a)
 {
@@ -20,8 +21,8 @@ float rsm_wrap_angle(float a)
 
 rsm_pose_t rsm_pose_compose(const rsm_pose_t *a, const rsm_pose_t *b)
 {
-    const float c = cosf(a->theta);
-    const float s = sinf(a->theta);
+    const float c = rsm_cosf(a->theta);
+    const float s = rsm_sinf(a->theta);
     rsm_pose_t r;
     r.x = a->x + c * b->x - s * b->y;
     r.y = a->y + s * b->x + c * b->y;
@@ -31,8 +32,8 @@ rsm_pose_t rsm_pose_compose(const rsm_pose_t *a, const rsm_pose_t *b)
 
 rsm_pose_t rsm_pose_inverse(const rsm_pose_t *a)
 {
-    const float c = cosf(a->theta);
-    const float s = sinf(a->theta);
+    const float c = rsm_cosf(a->theta);
+    const float s = rsm_sinf(a->theta);
     rsm_pose_t r;
     r.x = -c * a->x - s * a->y;
     r.y = s * a->x - c * a->y;
@@ -48,8 +49,8 @@ rsm_pose_t rsm_pose_between(const rsm_pose_t *a, const rsm_pose_t *b)
 
 rsm_point_t rsm_pose_apply(const rsm_pose_t *a, const rsm_point_t *p)
 {
-    const float c = cosf(a->theta);
-    const float s = sinf(a->theta);
+    const float c = rsm_cosf(a->theta);
+    const float s = rsm_sinf(a->theta);
     rsm_point_t r;
     r.x = a->x + c * p->x - s * p->y;
     r.y = a->y + s * p->x + c * p->y;

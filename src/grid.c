@@ -2,6 +2,7 @@
 
 #include <math.h>
 #include <string.h>
+#include "fmath.h"
 
 rsm_grid_config_t rsm_grid_config_default(void)
 {
@@ -15,7 +16,7 @@ rsm_grid_config_t rsm_grid_config_default(void)
 int32_t rsm_grid_cell_of(float v_m, float cell_m)
 {
     /* floorf, not a cast: (int)(-0.3) is 0, which would give cell 0 twice the width. */
-    return (int32_t)floorf(v_m / cell_m);
+    return (int32_t)rsm_floorf(v_m / cell_m);
 }
 
 void rsm_image_clear(rsm_image_t *img)

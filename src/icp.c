@@ -5,6 +5,7 @@
 #include <math.h>
 
 #include "rsm/status.h"
+#include "fmath.h"
 
 /* Pair counts are reported in uint16_t. */
 RSM_STATIC_ASSERT(icp_points_fit_u16, RSM_ICP_MAX_POINTS >= 2 && RSM_ICP_MAX_POINTS <= 65535);
@@ -119,9 +120,9 @@ static int fit_core(const rsm_point_t *src, const rsm_pose_t *src_pose, const rs
 
     /* The angle that maximises sum w (R a) . b, i.e. minimises the squared
      * residuals; atan2 keeps the quadrant (any angle, not only +-90 deg). */
-    th = atan2f(cross, dot);
-    c = cosf(th);
-    s = sinf(th);
+    th = rsm_atan2f(cross, dot);
+    c = rsm_cosf(th);
+    s = rsm_sinf(th);
     t->x = dcx - (c * scx - s * scy);
     t->y = dcy - (s * scx + c * scy);
     t->theta = rsm_wrap_angle(th);

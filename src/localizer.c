@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "fmath.h"
 
 rsm_localizer_config_t rsm_localizer_config_default(void)
 {
@@ -229,8 +230,8 @@ rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc)
 
 static void to_world(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t n)
 {
-    const float c = cosf(pose->theta);
-    const float s = sinf(pose->theta);
+    const float c = rsm_cosf(pose->theta);
+    const float s = rsm_sinf(pose->theta);
     size_t k;
     for (k = 0; k < n; ++k) {
         loc->world[k].x = pose->x + c * loc->pts[k].x - s * loc->pts[k].y;
@@ -456,7 +457,7 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         return RSM_SCAN_FEW_KEYPOINTS;
     }
     radius_m = search_radius(loc);
-    radius_cells = (int32_t)ceilf(radius_m / a) + 1;
+    radius_cells = (int32_t)rsm_ceilf(radius_m / a) + 1;
     nkr = reference_keypoints(loc, radius_cells);
     rep->keypoints_ref = (uint32_t)nkr;
     if (nkr < cfg->min_keypoints) {
@@ -525,8 +526,8 @@ static void apply_mount(rsm_localizer_t *loc, size_t n)
         return;
     }
     {
-        const float c = cosf(m->theta);
-        const float s = sinf(m->theta);
+        const float c = rsm_cosf(m->theta);
+        const float s = rsm_sinf(m->theta);
         for (k = 0; k < n; ++k) {
             const float lx = loc->pts[k].x;
             const float ly = cfg->laser_upside_down ? -loc->pts[k].y : loc->pts[k].y;

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "fmath.h"
 
 static int finite_pos(float x, float y)
 {
@@ -148,8 +149,8 @@ static float sample(const rsm_map_t *map, float x, float y, float inv_sat, uint8
 static uint32_t normal_equations(const rsm_map_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *pose,
                                  float inv_sat, uint8_t sat, float h[6], float b[3], float *cost_used, float *total)
 {
-    const float c = cosf(pose->theta);
-    const float s = sinf(pose->theta);
+    const float c = rsm_cosf(pose->theta);
+    const float s = rsm_sinf(pose->theta);
     uint32_t used = 0;
     size_t k;
     memset(h, 0, 6 * sizeof h[0]);

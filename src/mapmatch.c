@@ -7,6 +7,7 @@
 
 #include "rsm/ekf.h"
 #include "rsm/status.h"
+#include "fmath.h"
 
 /* Smallest prior variance used, so that a filter that starts with a zero
  * covariance still has an invertible prior (m^2 and rad^2). */
@@ -52,8 +53,8 @@ typedef struct sums {
 static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, const rsm_pose_t *x,
                        sums_t *s)
 {
-    const float c = cosf(x->theta);
-    const float sn = sinf(x->theta);
+    const float c = rsm_cosf(x->theta);
+    const float sn = rsm_sinf(x->theta);
     rsm_tmap_cursor_t cur;
     size_t k;
     rsm_tmap_cursor_init(&cur, level);
@@ -93,8 +94,8 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
  * at its nearest cell centre (no interpolation: a coarse score). */
 static float coarse_cost(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, const rsm_pose_t *x)
 {
-    const float c = cosf(x->theta);
-    const float sn = sinf(x->theta);
+    const float c = rsm_cosf(x->theta);
+    const float sn = rsm_sinf(x->theta);
     float cost = 0.0f;
     rsm_tmap_cursor_t cur;
     size_t k;
@@ -186,8 +187,8 @@ int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg,
     *best = *x0;
     for (a = -fan; a <= fan; ++a) {
         const float th = rsm_wrap_angle(x0->theta + (float)a * cfg->search_step_rad);
-        const float c = cosf(th);
-        const float sn = sinf(th);
+        const float c = rsm_cosf(th);
+        const float sn = rsm_sinf(th);
         for (j = -half; j <= half; ++j) {
             for (i = -half; i <= half; ++i) {
                 const float tx = x0->x + (float)i * step;

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "fmath.h"
 
 rsm_odometry_config_t rsm_odometry_config_default(void)
 {
@@ -227,8 +228,8 @@ rsm_motion_t rsm_odometry_from_ticks(const rsm_odometry_config_t *cfg, int32_t d
     dth = (dr - dl) / cfg->wheel_base_m;
     /* Chord at the mid heading: exact direction of the chord of a circular
      * arc, and a length error of only dS*dth^2/24. */
-    u.dx = ds * cosf(0.5f * dth);
-    u.dy = ds * sinf(0.5f * dth);
+    u.dx = ds * rsm_cosf(0.5f * dth);
+    u.dy = ds * rsm_sinf(0.5f * dth);
     u.dtheta = rsm_wrap_angle(dth);
     return u;
 }
@@ -275,8 +276,8 @@ void rsm_odometry_jacobians(const rsm_pose_t *pose, const rsm_motion_t *u, float
     if (pose == NULL || u == NULL) {
         return;
     }
-    c = cosf(pose->theta);
-    s = sinf(pose->theta);
+    c = rsm_cosf(pose->theta);
+    s = rsm_sinf(pose->theta);
     /* x' = x + c dx - s dy, y' = y + s dx + c dy, theta' = theta + dtheta. */
     if (jv != NULL) {
         jv[0] = 1.0f;

@@ -4,6 +4,7 @@
 
 #include "rsm/icp.h"
 #include "rsm/status.h"
+#include "fmath.h"
 
 rsm_ransac_config_t rsm_ransac_config_default(void)
 {
@@ -63,9 +64,9 @@ static int hypothesis(const rsm_ransac_config_t *cfg, const rsm_point_t *ref, co
         ++*length_rejects;
         return 0;
     }
-    t->theta = atan2f(a * d - b * c, a * c + b * d);
-    cs = cosf(t->theta);
-    sn = sinf(t->theta);
+    t->theta = rsm_atan2f(a * d - b * c, a * c + b * d);
+    cs = rsm_cosf(t->theta);
+    sn = rsm_sinf(t->theta);
     t->x = ri->x - (cs * ci->x - sn * ci->y);
     t->y = ri->y - (sn * ci->x + cs * ci->y);
     return 1;
@@ -77,8 +78,8 @@ static int hypothesis(const rsm_ransac_config_t *cfg, const rsm_point_t *ref, co
 static uint32_t support_of(const rsm_ransac_config_t *cfg, const rsm_point_t *ref, const rsm_point_t *cur,
                            const rsm_match_t *m, size_t nm, const rsm_pose_t *t, uint8_t *flags)
 {
-    const float cs = cosf(t->theta);
-    const float sn = sinf(t->theta);
+    const float cs = rsm_cosf(t->theta);
+    const float sn = rsm_sinf(t->theta);
     const float tol2 = cfg->inlier_tol_m * cfg->inlier_tol_m;
     uint32_t count = 0;
     uint32_t last_ref = 0xFFFFFFFFu;
@@ -112,19 +113,19 @@ static uint32_t needed_iterations(float confidence, float w, uint32_t budget)
     if (p2 <= 1.0e-6f) {
         return budget;
     }
-    n = logf(1.0f - confidence) / logf(1.0f - p2);
+    n = rsm_logf(1.0f - confidence) / rsm_logf(1.0f - p2);
     if (!(n < (float)budget)) {
         return budget;
     }
-    return n < 1.0f ? 1u : (uint32_t)ceilf(n);
+    return n < 1.0f ? 1u : (uint32_t)rsm_ceilf(n);
 }
 
 /* Least-squares refit over inliers, keeping the best match per reference. */
 static int refine(rsm_ransac_t *rs, const rsm_point_t *ref, const rsm_point_t *cur, const rsm_match_t *m,
                   size_t nm, rsm_pose_t *t, float *rms)
 {
-    const float cs = cosf(t->theta);
-    const float sn = sinf(t->theta);
+    const float cs = rsm_cosf(t->theta);
+    const float sn = rsm_sinf(t->theta);
     size_t k = 0;
     size_t n = 0;
     float sum = 0.0f;

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "fmath.h"
 
 rsm_scan_limits_t rsm_scan_limits_default(void)
 {
@@ -70,8 +71,8 @@ int rsm_scan_to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm
     }
     for (i = 0; i < scan->count && n < cap; ++i) {
         if (rsm_scan_reading_ok(scan, i, lim, drops)) {
-            out[n].x = scan->range_m[i] * cosf(scan->angle_rad[i]);
-            out[n].y = scan->range_m[i] * sinf(scan->angle_rad[i]);
+            out[n].x = scan->range_m[i] * rsm_cosf(scan->angle_rad[i]);
+            out[n].y = scan->range_m[i] * rsm_sinf(scan->angle_rad[i]);
             ++n;
         }
     }

@@ -7,6 +7,7 @@
 
 #include "rsm/grid.h"
 #include "rsm/status.h"
+#include "fmath.h"
 
 #define STAMP_MASK 0x3FFFFFFFu
 #define TILE_MASK ((int32_t)RSM_TMAP_TILE_SIDE - 1)
@@ -296,7 +297,7 @@ int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t
 /* Cell of a world coordinate at a level: floor, not truncation. */
 static int32_t cell_of(float v, float inv_a)
 {
-    const float u = floorf(v * inv_a);
+    const float u = rsm_floorf(v * inv_a);
     /* Far beyond the map's range (or NaN): a cell in_range refuses, and no
      * float-to-int conversion that overflows. */
     return u > -(float)CELL_LIMIT && u < (float)CELL_LIMIT ? (int32_t)u : CELL_LIMIT;

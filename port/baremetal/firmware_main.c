@@ -5,20 +5,21 @@
  * state, statically, at file scope (the library itself keeps none), and it is
  * the only place where interrupt handlers may reach that state directly.
  *
- * What it does today: sets up a millisecond tick clock, two UART receive
- * rings filled from their interrupts, and two rsm_link_t on top of them (the
- * Pioneer P3-DX on one UART, the SICK LMS 2xx on the other), then drains both
- * links in the main loop, counting bytes. The ARIA and LMS drivers and the
- * localizer slot into the places marked ">>> RSM_FIRMWARE" below.
- *
- * The register layout is a PLACEHOLDER in the style of an STM32F4 USART
- * (SR/DR/BRR/CR1, RXNE and TXE flags) at made-up board addresses; SysTick is
- * the architectural Cortex-M one. Replace everything under "board
- * placeholders" with your vendor's headers and startup code, whose vector
- * table must point at the handlers defined here. */
+ * It sets up a millisecond tick clock, two UART receive rings filled from
+ * their interrupts, two rsm_link_t on top of them (the Pioneer P3-DX on one
+ * serial port, the SICK LMS 2xx on the other), the two drivers and the
+ * localizer they feed, then runs the main loop. Everything that differs
+ * between boards (clocks, register addresses, pins, interrupt numbers, the
+ * vector table, the memory map) is in boards/<board>/ behind boards/board.h:
+ *   mps2_an386  boots under QEMU (./tools/test runs it: the devices' ports are
+ *               files there, so the drivers' handshakes go out and time out);
+ *   stm32f407   an STM32F407 at 168 MHz (docs/bringup-stm32f4.md).
+ * RSM_FIRMWARE_RUN_MS, when defined and not 0, ends the run after that many
+ * milliseconds with a summary on the console (the emulated board's test). */
 #include <stddef.h>
 #include <stdint.h>
 
+#include "board.h"
 #include "rsm/hal.h"
 #include "rsm/localizer.h"
 #include "rsm/p3dx.h"
@@ -28,62 +29,43 @@
 #include "tick_clock.h"
 #include "uart_ring.h"
 
-/* ---- board placeholders --------------------------------------------------- */
-
-typedef struct fw_usart_regs {
-    volatile uint32_t sr;  /* status: RXNE = byte received, TXE = data register empty */
-    volatile uint32_t dr;  /* data */
-    volatile uint32_t brr; /* baud rate divisor = peripheral clock / baud */
-    volatile uint32_t cr1; /* control: UE, TE, RE, RXNEIE */
-} fw_usart_regs_t;
-
-#define FW_USART_ROBOT ((fw_usart_regs_t *)0x40011000u) /* placeholder: P3-DX port */
-#define FW_USART_LASER ((fw_usart_regs_t *)0x40004400u) /* placeholder: LMS port */
-#define FW_SR_RXNE (1u << 5)
-#define FW_SR_TC (1u << 6)
-#define FW_SR_TXE (1u << 7)
-#define FW_CR1_RE (1u << 2)
-#define FW_CR1_TE (1u << 3)
-#define FW_CR1_RXNEIE (1u << 5)
-#define FW_CR1_UE (1u << 13)
-#define FW_PCLK_HZ 84000000u  /* placeholder: the UARTs' peripheral clock */
-#define FW_CORE_HZ 168000000u /* placeholder: the core clock that drives SysTick */
-#define FW_TX_SPIN_LIMIT 100000u
-
-/* SysTick (architectural on every ARMv7-M core). */
-#define FW_SYST_CSR (*(volatile uint32_t *)0xE000E010u)
-#define FW_SYST_RVR (*(volatile uint32_t *)0xE000E014u)
-#define FW_SYST_CVR (*(volatile uint32_t *)0xE000E018u)
+#ifndef RSM_FIRMWARE_RUN_MS
+#define RSM_FIRMWARE_RUN_MS 0
+#endif
 
 /* ---- the application's state (caller-owned rsm state, static here) -------- */
 
-/* Milliseconds since reset; written only by SysTick_Handler. */
+/* Milliseconds since the tick started; written only by rsm_app_tick_isr. */
 static volatile uint32_t fw_ms_ticks;
 
 static rsm_tick_clock_t fw_tick;          /* 64-bit microseconds from fw_ms_ticks */
 static rsm_clock_t fw_clock;              /* fw_tick as an rsm_clock_t */
-static rsm_uart_ring_t fw_robot_rx;       /* filled by USART1_IRQHandler */
-static rsm_uart_ring_t fw_laser_rx;       /* filled by USART2_IRQHandler */
+static rsm_uart_ring_t fw_rx[RSM_BOARD_PORTS]; /* filled by rsm_app_uart_isr */
+static rsm_uart_link_config_t fw_uart_cfg[RSM_BOARD_PORTS]; /* filled from the board at start */
 static rsm_uart_link_t fw_robot_uart;
 static rsm_uart_link_t fw_laser_uart;
-static rsm_link_t fw_robot_link;          /* hand this to the ARIA driver */
-static rsm_link_t fw_laser_link;          /* hand this to the LMS driver */
+static rsm_link_t fw_robot_link;          /* the ARIA driver's */
+static rsm_link_t fw_laser_link;          /* the LMS driver's */
 
 /* Counters for a debugger or a telemetry frame (count, don't print). */
 static struct fw_stats {
     uint32_t robot_overflows;
     uint32_t laser_overflows;
+    uint32_t encoder_events;
+    uint32_t scan_events;
 } fw_stats;
 
-/* The two device drivers and the localizer they feed. */
+/* The two device drivers and the localizer they feed. The localizer is the
+ * largest object (about 116 KiB with the default config.h); the drivers and
+ * the fusion go to core-coupled RAM where the board has it. */
 static rsm_localizer_config_t fw_loc_cfg;
 static rsm_localizer_t fw_localizer;
-static rsm_sync_config_t fw_sync_cfg;
-static rsm_sync_t fw_sync;                /* fuses each scan with odometry at its own time */
-static rsm_p3dx_config_t fw_robot_cfg;
-static rsm_p3dx_t fw_robot;
-static rsm_sicklms_config_t fw_laser_cfg;
-static rsm_sicklms_t fw_laser;
+static RSM_BOARD_CCM rsm_sync_config_t fw_sync_cfg;
+static RSM_BOARD_CCM rsm_sync_t fw_sync;  /* fuses each scan with odometry at its own time */
+static RSM_BOARD_CCM rsm_p3dx_config_t fw_robot_cfg;
+static RSM_BOARD_CCM rsm_p3dx_t fw_robot;
+static RSM_BOARD_CCM rsm_sicklms_config_t fw_laser_cfg;
+static RSM_BOARD_CCM rsm_sicklms_t fw_laser;
 
 /* ---- board functions behind the HAL ---------------------------------------- */
 
@@ -93,117 +75,73 @@ static uint32_t fw_read_ms(void *hw)
     return fw_ms_ticks;
 }
 
-static int fw_uart_tx_byte(void *hw, uint8_t byte)
-{
-    fw_usart_regs_t *usart = (fw_usart_regs_t *)hw;
-    uint32_t spins = FW_TX_SPIN_LIMIT;
-    while ((usart->sr & FW_SR_TXE) == 0u) {
-        if (--spins == 0u) {
-            return RSM_ERR_TIMEOUT;
-        }
-    }
-    usart->dr = byte;
-    return RSM_OK;
-}
-
-static int fw_uart_set_baud(void *hw, uint32_t baud)
-{
-    fw_usart_regs_t *usart = (fw_usart_regs_t *)hw;
-    const uint32_t div = (FW_PCLK_HZ + baud / 2u) / baud;
-    uint32_t spins = FW_TX_SPIN_LIMIT;
-    if (div < 16u || div > 0xFFFFu) {
-        return RSM_ERR_RANGE;
-    }
-    /* The last byte written (e.g. the P3-DX's HOSTBAUD) leaves at the old
-     * rate first (hal.h): wait for transmission complete. */
-    while ((usart->sr & FW_SR_TC) == 0u && --spins != 0u) {
-    }
-    usart->brr = div;
-    return RSM_OK;
-}
-
-static void fw_idle(void *hw)
-{
-    (void)hw;
-    /* Sleep until the next interrupt: a received byte or the 1 ms tick. */
-    __asm__ volatile("wfi");
-}
-
 static const rsm_tick_clock_config_t fw_tick_cfg = {
     fw_read_ms, NULL, 1000u, 32u
 };
-static const rsm_uart_link_config_t fw_robot_uart_cfg = {
-    fw_uart_tx_byte, fw_uart_set_baud, fw_idle, (void *)FW_USART_ROBOT
-};
-static const rsm_uart_link_config_t fw_laser_uart_cfg = {
-    fw_uart_tx_byte, fw_uart_set_baud, fw_idle, (void *)FW_USART_LASER
-};
 
-/* ---- interrupt handlers (the vector table points here) ---------------------- */
+/* ---- interrupt handlers (the board's vector table points here) -------------- */
 
-void SysTick_Handler(void);
-void USART1_IRQHandler(void);
-void USART2_IRQHandler(void);
-
-void SysTick_Handler(void)
+void rsm_app_tick_isr(void)
 {
     fw_ms_ticks = fw_ms_ticks + 1u;
 }
 
-/* Moves every byte the UART holds into the ring; the ring is the only state
+/* Moves every byte the port holds into its ring; the ring is the only state
  * shared with the main loop, and the ISR is its only producer. */
-static void fw_uart_rx_isr(fw_usart_regs_t *usart, rsm_uart_ring_t *ring)
+void rsm_app_uart_isr(rsm_board_port_t port)
 {
-    while ((usart->sr & FW_SR_RXNE) != 0u) {
-        (void)rsm_uart_ring_push(ring, (uint8_t)(usart->dr & 0xFFu));
+    void *hw = rsm_board_port_hw(port);
+    uint8_t byte;
+    while (rsm_board_uart_rx_byte(hw, &byte)) {
+        (void)rsm_uart_ring_push(&fw_rx[port], byte);
     }
 }
 
-void USART1_IRQHandler(void)
-{
-    fw_uart_rx_isr(FW_USART_ROBOT, &fw_robot_rx);
-}
+/* ---- console ------------------------------------------------------------------ */
 
-void USART2_IRQHandler(void)
+static void fw_stop(const char *what, int status)
 {
-    fw_uart_rx_isr(FW_USART_LASER, &fw_laser_rx);
+    rsm_board_put_str("rsm example firmware: ");
+    rsm_board_put_str(what);
+    rsm_board_put_str(": ");
+    rsm_board_put_str(rsm_strerror(status));
+    rsm_board_put_str("\n");
+    rsm_board_exit(1);
 }
 
 /* ---- start-up and main loop ------------------------------------------------- */
 
-static void fw_board_init(void)
-{
-    FW_SYST_RVR = FW_CORE_HZ / 1000u - 1u; /* 1 kHz tick */
-    FW_SYST_CVR = 0u;
-    FW_SYST_CSR = 7u; /* core clock, interrupt, enable */
-    FW_USART_ROBOT->cr1 = FW_CR1_UE | FW_CR1_TE | FW_CR1_RE | FW_CR1_RXNEIE;
-    FW_USART_LASER->cr1 = FW_CR1_UE | FW_CR1_TE | FW_CR1_RE | FW_CR1_RXNEIE;
-    /* Placeholder: enable the two USART interrupts in the NVIC here. */
-}
-
 int main(void)
 {
     uint64_t now_us = 0u;
+    int rc;
+    int p;
 
-    /* Rings first: the interrupts that fill them are enabled by fw_board_init. */
-    rsm_uart_ring_init(&fw_robot_rx);
-    rsm_uart_ring_init(&fw_laser_rx);
-    if (rsm_tick_clock_init(&fw_tick, &fw_tick_cfg, &fw_clock) != RSM_OK ||
-        rsm_uart_link_init(&fw_robot_uart, &fw_robot_uart_cfg, &fw_robot_rx, &fw_clock,
-                           &fw_robot_link) != RSM_OK ||
-        rsm_uart_link_init(&fw_laser_uart, &fw_laser_uart_cfg, &fw_laser_rx, &fw_clock,
-                           &fw_laser_link) != RSM_OK) {
-        for (;;) {
-            /* A configuration error: stop here, where a debugger will look. */
-        }
+    rsm_board_init();
+    rsm_board_put_str("rsm example firmware on ");
+    rsm_board_put_str(rsm_board_name);
+    rsm_board_put_str("\n");
+
+    /* Rings first: the interrupts that fill them start below. */
+    for (p = 0; p < (int)RSM_BOARD_PORTS; ++p) {
+        fw_uart_cfg[p].tx_byte = rsm_board_uart_tx_byte;
+        fw_uart_cfg[p].set_baud = rsm_board_uart_set_baud;
+        fw_uart_cfg[p].idle = rsm_board_idle;
+        fw_uart_cfg[p].hw = rsm_board_port_hw((rsm_board_port_t)p);
+        rsm_uart_ring_init(&fw_rx[p]);
     }
-    fw_board_init();
+    if ((rc = rsm_tick_clock_init(&fw_tick, &fw_tick_cfg, &fw_clock)) != RSM_OK ||
+        (rc = rsm_uart_link_init(&fw_robot_uart, &fw_uart_cfg[RSM_BOARD_PORT_ROBOT], &fw_rx[RSM_BOARD_PORT_ROBOT],
+                                 &fw_clock, &fw_robot_link)) != RSM_OK ||
+        (rc = rsm_uart_link_init(&fw_laser_uart, &fw_uart_cfg[RSM_BOARD_PORT_LASER], &fw_rx[RSM_BOARD_PORT_LASER],
+                                 &fw_clock, &fw_laser_link)) != RSM_OK) {
+        fw_stop("port set-up", rc);
+    }
     /* P3-DX and LMS 2xx both power up at 9600 baud. */
     (void)rsm_link_set_baud(&fw_robot_link, 9600u);
     (void)rsm_link_set_baud(&fw_laser_link, 9600u);
+    rsm_board_start_interrupts();
 
-    /* >>> RSM_FIRMWARE_INIT: initialise the drivers on fw_robot_link and
-     *     fw_laser_link with fw_clock here. */
     {
         const rsm_pose_t start = {0.0f, 0.0f, 0.0f};
         fw_loc_cfg = rsm_localizer_config_default();
@@ -211,14 +149,16 @@ int main(void)
         (void)rsm_sicklms_config_default(&fw_laser_cfg);
         fw_laser_cfg.baud = 38400u; /* switch the laser up from its power-up 9600 */
         fw_sync_cfg = rsm_sync_config_default();
-        if (rsm_localizer_init(&fw_localizer, &fw_loc_cfg, &start, NULL) != RSM_OK ||
-            rsm_sync_init(&fw_sync, &fw_localizer, &fw_sync_cfg, NULL, NULL) != RSM_OK ||
-            rsm_p3dx_init(&fw_robot, &fw_robot_link, &fw_clock, &fw_robot_cfg) != RSM_OK ||
-            rsm_sicklms_init(&fw_laser, &fw_laser_link, &fw_clock, &fw_laser_cfg) != RSM_OK ||
-            rsm_p3dx_connect(&fw_robot) != RSM_OK || rsm_sicklms_connect(&fw_laser) != RSM_OK) {
-            for (;;) {
-            }
+        if ((rc = rsm_localizer_init(&fw_localizer, &fw_loc_cfg, &start, NULL)) != RSM_OK ||
+            (rc = rsm_sync_init(&fw_sync, &fw_localizer, &fw_sync_cfg, NULL, NULL)) != RSM_OK ||
+            (rc = rsm_p3dx_init(&fw_robot, &fw_robot_link, &fw_clock, &fw_robot_cfg)) != RSM_OK ||
+            (rc = rsm_sicklms_init(&fw_laser, &fw_laser_link, &fw_clock, &fw_laser_cfg)) != RSM_OK) {
+            fw_stop("driver set-up", rc);
         }
+        /* Connecting only starts the handshakes; poll drives them. A link
+         * error here is retried by the driver's own timeout. */
+        (void)rsm_p3dx_connect(&fw_robot);
+        (void)rsm_sicklms_connect(&fw_laser);
     }
 
     for (;;) {
@@ -235,20 +175,40 @@ int main(void)
             if (rsm_p3dx_poll(&fw_robot, &rev) == RSM_OK && rev.type == RSM_P3DX_EVENT_ENCODER) {
                 (void)rsm_sync_encoder(&fw_sync, (uint32_t)rev.encoder.left, (uint32_t)rev.encoder.right,
                                        rev.stamp_us);
+                fw_stats.encoder_events++;
                 moved = 1;
             }
             if (rsm_sicklms_poll(&fw_laser, &lev) == RSM_OK && lev.type == RSM_SICKLMS_EVENT_SCAN &&
                 lev.scan != NULL) {
                 (void)rsm_sync_scan(&fw_sync, lev.scan);
+                fw_stats.scan_events++;
                 moved = 1;
             }
         }
 
         (void)rsm_sync_poll(&fw_sync, now_us); /* a scan waits at most max_wait_us for odometry */
-        fw_stats.robot_overflows = rsm_uart_ring_overflows(&fw_robot_rx);
-        fw_stats.laser_overflows = rsm_uart_ring_overflows(&fw_laser_rx);
+        fw_stats.robot_overflows = rsm_uart_ring_overflows(&fw_rx[RSM_BOARD_PORT_ROBOT]);
+        fw_stats.laser_overflows = rsm_uart_ring_overflows(&fw_rx[RSM_BOARD_PORT_LASER]);
+#if RSM_FIRMWARE_RUN_MS != 0
+        if (now_us >= (uint64_t)RSM_FIRMWARE_RUN_MS * 1000u) {
+            rsm_board_put_str("rsm example firmware: ran ");
+            rsm_board_put_dec((uint32_t)(now_us / 1000u));
+            rsm_board_put_str(" ms: encoder events ");
+            rsm_board_put_dec(fw_stats.encoder_events);
+            rsm_board_put_str(", scans ");
+            rsm_board_put_dec(fw_stats.scan_events);
+            rsm_board_put_str(", receive overflows ");
+            rsm_board_put_dec(fw_stats.robot_overflows + fw_stats.laser_overflows);
+            rsm_board_put_str("\nM stack ");
+            rsm_board_put_dec((uint32_t)rsm_stack_used());
+            rsm_board_put_str(" of ");
+            rsm_board_put_dec((uint32_t)rsm_stack_size());
+            rsm_board_put_str("\n");
+            rsm_board_exit(0);
+        }
+#endif
         if (moved == 0) {
-            fw_idle(NULL);
+            rsm_board_idle(NULL);
         }
     }
 }

@@ -409,6 +409,27 @@ void test_localizer_scan_should_run_the_icp_baseline(void)
     TEST_ASSERT_TRUE_MESSAGE(icp.final_err_m < odo.final_err_m, msg);
 }
 
+/* The paper's method with outliers ends anywhere from 1 to 20 cm off on
+ * this loop depending on the outlier draw, and on the last bit of sine and
+ * cosine (a one-ulp change moves a RANSAC decision): it is judged on the
+ * median of this many outlier seeds. The persistent map is steady enough to
+ * be judged on one. */
+#define PAPER_OUTLIER_SEEDS 5u
+
+static float median_of_seeds(float v[PAPER_OUTLIER_SEEDS])
+{
+    uint32_t i;
+    uint32_t j;
+    for (i = 1; i < PAPER_OUTLIER_SEEDS; ++i) {
+        const float x = v[i];
+        for (j = i; j > 0u && v[j - 1u] > x; --j) {
+            v[j] = v[j - 1u];
+        }
+        v[j] = x;
+    }
+    return v[PAPER_OUTLIER_SEEDS / 2u];
+}
+
 /* The loop with a share of every scan's readings replaced by outliers. */
 static void check_outliers(rsm_method_t method, float fraction)
 {
@@ -419,11 +440,33 @@ static void check_outliers(rsm_method_t method, float fraction)
     odo = run(&loc, RSM_METHOD_ODOMETRY, NULL);
     scan_cfg.outlier_fraction = fraction;
     scan_cfg.sigma_m = 0.005f;
-    rsm_synth_rng_seed(&rng, 3030u);
-    rsm = run(&loc, method, &rng);
+    if (method == RSM_METHOD_MAP) {
+        rsm_synth_rng_seed(&rng, 3030u);
+        rsm = run(&loc, method, &rng);
+    } else {
+        float fin[PAPER_OUTLIER_SEEDS];
+        float rad[PAPER_OUTLIER_SEEDS];
+        float top[PAPER_OUTLIER_SEEDS];
+        float acc[PAPER_OUTLIER_SEEDS];
+        uint32_t k;
+        for (k = 0; k < PAPER_OUTLIER_SEEDS; ++k) {
+            run_result_t one;
+            rsm_synth_rng_seed(&rng, 3030u + k);
+            one = run(&loc, method, &rng);
+            fin[k] = one.final_err_m;
+            rad[k] = one.final_err_rad;
+            top[k] = one.max_err_m;
+            acc[k] = (float)one.accepted;
+        }
+        rsm.final_err_m = median_of_seeds(fin);
+        rsm.final_err_rad = median_of_seeds(rad);
+        rsm.max_err_m = median_of_seeds(top);
+        rsm.accepted = (uint32_t)median_of_seeds(acc);
+    }
     snprintf(msg, sizeof msg,
              "%s, %.0f%% outliers, 5 mm noise: final %.3f m (%.2f deg, max %.3f m, %u accepted of %u), odometry %.3f m",
-             method == RSM_METHOD_MAP ? "map" : "paper", (double)(fraction * 100.0f), (double)rsm.final_err_m,
+             method == RSM_METHOD_MAP ? "map" : "paper, medians of 5 seeds", (double)(fraction * 100.0f),
+             (double)rsm.final_err_m,
              (double)(rsm.final_err_rad / DEG), (double)rsm.max_err_m, (unsigned)rsm.accepted, (unsigned)path_len,
              (double)odo.final_err_m);
     TEST_MESSAGE(msg);

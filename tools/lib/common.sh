@@ -11,10 +11,11 @@ RSM_VENV_PY="$RSM_VENV/bin/python"
 
 # Debian packages the build and the tests need (tools/test installs them).
 # libclang-rt-dev carries libFuzzer (clang only recommends it); zlib1g-dev is
-# for rsm-nav reading gzipped CARMEN logs.
+# for rsm-nav reading gzipped CARMEN logs; qemu-system-arm runs the firmware
+# images on an emulated Cortex-M4F (the m4.* tests).
 RSM_DEBS=(cmake ninja-build gcc g++ pkg-config libserialport-dev
           gcc-arm-none-eabi libnewlib-arm-none-eabi clang libclang-rt-dev
-          python3-venv valgrind zlib1g-dev)
+          python3-venv valgrind zlib1g-dev qemu-system-arm)
 
 # ---- messages and stages ------------------------------------------------------
 

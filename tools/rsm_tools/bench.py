@@ -21,7 +21,10 @@ report (``docs/RESULTS.md`` by default) has these sections:
 4. Speed: wall time per scan (rsm-nav), per stage (``rsm-stages``, the
    localizer's timing hook) and instructions per scan (callgrind inside
    ``rsm_localizer_scan``, first scans of every log, default and small
-   configuration), in total and by stage.
+   configuration), in total and by stage; and on the target: instructions per
+   scan and per stage of the replay firmware on an emulated Cortex-M4F (QEMU
+   mps2-an386, ``-O2``, :mod:`rsm_tools.m4`) beside callgrind's count of the
+   same excerpt on the host, with the images' flash, RAM and painted stack.
 5. Memory: the localizer state per part on this host (``rsm-stages``) and on
    Cortex-M4F (a cross build per configuration), flash per object, the
    example firmware, the stack of one localizer step.
@@ -56,7 +59,7 @@ from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 from . import evaluate as ev
-from . import fullchecks, outliers
+from . import fullchecks, m4, outliers
 from .fullchecks import check
 
 # rsm-nav --method names: rsm is the default method (scan to persistent map),
@@ -188,7 +191,8 @@ def cpu_info() -> Tuple[str, int]:
     return model or platform.processor() or platform.machine() or "unknown CPU", cores or (os.cpu_count() or 0)
 
 
-SOURCE_GLOBS = ("src/*.c", "include/rsm/*.h", "tools/nav/*.[ch]", "tools/bench-c/*.c", "port/baremetal/*.[ch]")
+SOURCE_GLOBS = ("src/*.[ch]", "include/rsm/*.h", "tools/nav/*.[ch]", "tools/bench-c/*.c", "port/baremetal/*.[ch]",
+                "port/baremetal/*/*.[ch]", "port/baremetal/boards/*/*.[ch]")
 
 
 def source_digest(root: Path) -> str:
@@ -1448,6 +1452,137 @@ def read_callgraph_dir(d: Path) -> dict:
 
 def _config_flag(root: Path, header: Optional[str]) -> List[str]:
     return [f"-DRSM_USER_CONFIG={header}"] if header else []  # found on the include path
+
+
+M4_TARGETS = ("rsm_firmware", "rsm_replay_m4")
+
+
+def _arm_size(elf: Path) -> dict:
+    """Berkeley sizes of an image: flash = text + data, RAM = data + bss (stack included)."""
+    res = subprocess.run(["arm-none-eabi-size", str(elf)], capture_output=True, text=True)
+    vals = res.stdout.splitlines()[-1].split() if res.returncode == 0 and res.stdout.strip() else []
+    if len(vals) < 3:
+        raise BenchError(f"arm-none-eabi-size {elf} gave no sizes: {res.stderr}")
+    text, data, bss = (int(v) for v in vals[:3])
+    return {"text": text, "data": data, "bss": bss, "flash": text + data, "ram": data + bss}
+
+
+def _symbol_bytes(elf: Path, names: Sequence[str]) -> int:
+    res = subprocess.run(["arm-none-eabi-nm", "-S", str(elf)], capture_output=True, text=True)
+    return sum(int(f[1], 16) for f in (l.split() for l in res.stdout.splitlines())
+               if len(f) == 4 and f[3] in names)
+
+
+def run_m4(root: Path, work: Path, replay_host: Optional[Path]) -> dict:
+    """The firmware images cross-built at -O2 and run under QEMU (mps2-an386):
+    instructions per scan and per stage of the replay firmware on the shipped
+    excerpt, the known-loop calibration, each image's flash, RAM and painted
+    stack; and callgrind's count of the same excerpt through the same source
+    on the host (rsm-replay-host), when valgrind is there."""
+    for tool in ("arm-none-eabi-gcc", "arm-none-eabi-size", "arm-none-eabi-nm", "qemu-system-arm", "cmake",
+                 "ninja"):
+        if shutil.which(tool) is None:
+            return {"skipped": f"{tool} is not installed"}
+    b = work / "m4-O2"
+    cmd = ["cmake", "-S", str(root), "-B", str(b), "-G", "Ninja",
+           f"-DCMAKE_TOOLCHAIN_FILE={root / 'cmake' / 'toolchain-arm-none-eabi.cmake'}",
+           "-DCMAKE_BUILD_TYPE=Release", "-DCMAKE_C_FLAGS_RELEASE=-O2 -DNDEBUG"]
+    for c in (cmd, ["cmake", "--build", str(b), "--parallel", "2", "--target", *M4_TARGETS]):
+        res = subprocess.run(c, capture_output=True, text=True)
+        if res.returncode != 0:
+            raise BenchError(f"{' '.join(c)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
+    fw_dir = b / "port" / "baremetal"
+    replay_elf, example_elf = fw_dir / "rsm_replay_m4.elf", fw_dir / "rsm_firmware.elf"
+    try:
+        out = m4.run(replay_elf)
+        cost = m4.costs(out)
+        ex_dir = work / "m4-example"
+        ex_dir.mkdir(parents=True, exist_ok=True)
+        ex_out = m4.run(example_elf, [ex_dir / "robot.bin", ex_dir / "laser.bin"])
+    except m4.M4Error as e:
+        raise BenchError(str(e))
+    (work / "m4-replay.out").write_text(out)
+    ex_m = m4.lines_of(ex_out, "M")
+    images = {"replay": {**_arm_size(replay_elf), "stack_used": cost["stack_used"],
+                         "stack_size": cost["stack_size"],
+                         "excerpt": _symbol_bytes(replay_elf, ("rsm_replay_scans", "rsm_replay_steps"))},
+              "example": {**_arm_size(example_elf), "stack_used": int(ex_m[0][1]) if ex_m else None,
+                          "stack_size": int(ex_m[0][3]) if ex_m else None, "excerpt": 0}}
+    res_out = {"compiler": first_line(["arm-none-eabi-gcc", "--version"]) or "arm-none-eabi-gcc",
+               "qemu": first_line(["qemu-system-arm", "--version"]) or "qemu-system-arm",
+               "icount_shift": m4.ICOUNT_SHIFT, "cost": cost, "images": images}
+    valgrind = shutil.which("valgrind")
+    if replay_host is None or not replay_host.is_file():
+        res_out["host"] = {"skipped": "rsm-replay-host was not built"}
+    elif valgrind is None:
+        res_out["host"] = {"skipped": "valgrind is not installed"}
+    else:
+        cg_out = work / "m4-host.callgrind.out"
+        r = subprocess.run([valgrind, "--tool=callgrind", "--toggle-collect=rsm_localizer_scan",
+                            f"--callgrind-out-file={cg_out}", str(replay_host)], capture_output=True, text=True)
+        if r.returncode != 0:
+            raise BenchError(f"callgrind of {replay_host} failed: {r.stderr[-2000:]}")
+        host_p = [l for l in r.stdout.splitlines() if l.startswith("P ")]
+        target_p = [l for l in out.splitlines() if l.startswith("P ")]
+        ir = callgrind_ir(cg_out)
+        res_out["host"] = {"ir": ir, "scans": len(host_p), "ir_per_scan": ir / max(1, len(host_p)),
+                           "identical": host_p == target_p}
+    return res_out
+
+
+def m4_lines(m: Optional[dict]) -> List[str]:
+    """What tools/bench prints about the target (and the report repeats)."""
+    if not m or "skipped" in m:
+        return [f"Cortex-M4F: not measured ({(m or {}).get('skipped', 'disabled')})"]
+    c = m["cost"]
+    L = [f"Cortex-M4F -O2 (QEMU mps2-an386, -icount shift={m['icount_shift']}), {c['scans']} scans of the "
+         f"excerpt: instructions per scan mean {fmt_int(round(c['mean']))}, p95 {fmt_int(round(c['p95']))}, "
+         f"p99 {fmt_int(round(c['p99']))}, max {fmt_int(round(c['max']))}"]
+    h = m.get("host", {})
+    if "skipped" not in h:
+        L.append(f"host x86-64 (callgrind, same excerpt and source): {fmt_int(round(h['ir_per_scan']))} "
+                 f"instructions per scan; trajectories {'bit-identical' if h['identical'] else 'DIFFERENT'}")
+    for name, im in m["images"].items():
+        stack = ("n/a" if im["stack_used"] is None else f"{fmt_int(im['stack_used'])} of {fmt_int(im['stack_size'])}")
+        extra = f" (of which the excerpt {fmt_int(im['excerpt'])})" if im["excerpt"] else ""
+        L.append(f"{name} image: flash {fmt_int(im['flash'])} bytes{extra}, RAM {fmt_int(im['ram'])} bytes "
+                 f"(stack included), stack used {stack} bytes")
+    return L
+
+
+def report_m4(m: Optional[dict]) -> List[str]:
+    L = ["### On the target: Cortex-M4F", ""]
+    if not m or "skipped" in m:
+        return L + [m4_lines(m)[0] + ".", ""]
+    c = m["cost"]
+    cal = c["calibration"]
+    L += [f"The replay firmware (`port/baremetal/replay/`) runs the shipped excerpt (`tests/data/intel_head.clf.gz`, "
+          f"encoder counts and scans compiled in) through the localizer, default configuration, built with "
+          f"{m['compiler']} at `-O2`, on QEMU's mps2-an386 ({m['qemu']}) with `-icount shift={m['icount_shift']}`: "
+          f"the virtual clock advances {1 << m['icount_shift']} ns per instruction, so the board's 25 MHz timer, "
+          f"read by the localizer's `clock_fn`, counts one tick per {cal['per_tick']:g} instructions. Calibration: "
+          f"a known loop of {fmt_int(cal['insns'])} instructions measured {fmt_int(round(cal['measured']))}. "
+          "QEMU counts instructions, not cycles: on a real M4 at 168 MHz the cycles are at least as many "
+          "(flash wait states, divides, loads).", ""]
+    rows = [["mean", fmt_int(round(c["mean"]))], ["p95", fmt_int(round(c["p95"]))],
+            ["p99", fmt_int(round(c["p99"]))], ["max", fmt_int(round(c["max"]))]]
+    h = m.get("host", {})
+    if "skipped" not in h:
+        rows.append(["host x86-64, callgrind, mean", fmt_int(round(h["ir_per_scan"]))])
+    L += md_table(["instructions per scan", "value"], rows, "speed m4")
+    L += md_table(["stage", "M4 instructions per scan (mean)"],
+                  [[k, fmt_int(round(v))] for k, v in c["stages"].items() if v > 0], "speed m4 stages")
+    rows = []
+    for name, im in m["images"].items():
+        rows.append([name, fmt_int(im["flash"]), fmt_int(im["excerpt"]), fmt_int(im["ram"]),
+                     "n/a" if im["stack_used"] is None else fmt_int(im["stack_used"]),
+                     "n/a" if im["stack_size"] is None else fmt_int(im["stack_size"])])
+    L += md_table(["image", "flash [bytes]", "of which excerpt", "RAM [bytes]", "stack used (painted)",
+                   "stack reserved"], rows, "memory m4 images")
+    if "skipped" not in h:
+        L += [("The host's trajectory of the same excerpt is bit-identical to the target's."
+               if h["identical"] else "WARNING: the host's trajectory differs from the target's."), ""]
+    return L
 
 
 def run_arm_memory(root: Path, work: Path, configs: Sequence[Tuple[str, Optional[str]]] = ARM_CONFIGS) -> dict:
@@ -2953,6 +3088,7 @@ def report_speed(ctx: dict, root: Path) -> List[str]:
     else:
         L += ["Wall time not measured in this run.", ""]
     L += report_callgrind(ctx.get("callgrind"), root, main)
+    L += report_m4(ctx.get("m4"))
     ps = ctx.get("peer_speed_table")
     if ps:
         L += ["peers.md's speed table, as it is there (its own runs, `-O2`; \"rsm\" there is the earlier rsm):", ""]
@@ -3021,6 +3157,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="one seed, fewer levels, one speed repeat, callgrind of rsm "
                    "only, no scaling builds")
     p.add_argument("--no-callgrind", action="store_true", help="skip the instruction counts")
+    p.add_argument("--no-m4", action="store_true",
+                   help="skip the Cortex-M4F images under QEMU (instructions per scan on the target)")
     p.add_argument("--no-cross-check", action="store_true", help="skip tools/cross-check")
     p.add_argument("--no-full-checks", action="store_true", help="skip the checks of rsm_tools.fullchecks (the "
                    "logs against their description, rsm against its baselines, reruns, the capture path)")
@@ -3156,6 +3294,8 @@ def run(args: argparse.Namespace) -> Path:
     ctx["callgrind"] = ({"skipped": "--no-callgrind"} if args.no_callgrind
                         else stage("callgrind", run_callgrind, navs, logs, args.callgrind_scans, cg_methods, work,
                                    args.jobs, root))
+    ctx["m4"] = ({"skipped": "--no-m4"} if args.no_m4
+                 else stage("m4", run_m4, root, work, build / "port" / "baremetal" / "rsm-replay-host"))
     ctx["memory"] = stage("memory", run_memory, {"default": stages_bin, "small": small["stages"]}, main_log, build)
     ctx["cross_check"] = ({"skipped": "--no-cross-check"} if args.no_cross_check
                           else stage("cross-check", run_cross_check, root))
@@ -3213,6 +3353,9 @@ def run(args: argparse.Namespace) -> Path:
     manifest["logs"] = [{"label": l, "log": str(g), "relations": str(r)} for l, g, r in logs]
     (work / "bench.json").write_text(json.dumps(_jsonable(manifest), indent=1, default=_json_default,
                                                 allow_nan=True))
+    print("rsm-bench: on the target:")
+    for line in m4_lines(ctx.get("m4")):
+        print(f"  {line}")
     print("rsm-bench: the issue's floors:")
     for f in ctx["floors"]:
         print(f"  {f['line']}")

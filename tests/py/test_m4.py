@@ -1,0 +1,70 @@
+"""rsm_tools.m4 (the QEMU runner of the firmware images) on made-up console
+output: the cost figures, the calibration check and the generator of the
+replay's input.  The images themselves run in the m4.* ctest entries."""
+
+import re
+
+import pytest
+
+from conftest import TEST_DATA
+from rsm_tools import m4
+
+
+def _output(steps, c=(1000, 400, 101000, 40400)):
+    lines = ["rsm replay on mps2-an386", "C " + " ".join(str(v) for v in c)]
+    for i, s in enumerate(steps):
+        lines.append(f"P {i} 0 00000000 00000000 00000000")
+        stages = [0] * len(m4.STAGES)
+        stages[0], stages[-1] = 10, s - 10
+        lines.append(f"T {i} {s} " + " ".join(str(v) for v in stages))
+    lines += ["E scans 3 accepted 3 motions 3", "M stack 1900 of 16384 cycles_hz 25000000", "rsm replay: done"]
+    return "\n".join(lines) + "\n"
+
+
+def test_costs_are_ticks_times_instructions_per_tick():
+    steps = list(range(100, 300))  # ticks per scan
+    res = m4.costs(_output(steps))
+    k = m4.INSNS_PER_TICK
+    assert res["scans"] == 200
+    assert res["mean"] == pytest.approx(k * sum(steps) / len(steps))
+    assert res["p95"] == k * 289 and res["p99"] == k * 297 and res["max"] == k * 299  # nearest rank
+    assert res["stages"]["points"] == 10 * k
+    assert res["stages"]["mapmatch"] == pytest.approx(k * (sum(steps) / len(steps) - 10))
+    assert res["stack_used"] == 1900 and res["stack_size"] == 16384
+
+
+def test_calibration_fails_when_the_timer_does_not_count_instructions():
+    ok = m4.calibration(_output([100]))
+    assert ok["insns"] == 200000 and ok["measured"] == 200000
+    # one tick off is the resolution; two ticks off is a wrong model
+    m4.calibration(_output([100], c=(1000, 400, 101000, 40401)))
+    with pytest.raises(m4.M4Error, match="calibration"):
+        m4.calibration(_output([100], c=(1000, 400, 101000, 40402)))
+    with pytest.raises(m4.M4Error):
+        m4.calibration("no such line\n")
+
+
+def test_qemu_command_counts_instructions_and_ends_by_semihosting(tmp_path):
+    if m4.shutil.which("qemu-system-arm") is None:
+        pytest.fail("qemu-system-arm is not installed (./tools/test installs it)")
+    cmd = m4.qemu_command(tmp_path / "x.elf", [tmp_path / "a.bin"])
+    assert "mps2-an386" in cmd and f"shift={m4.ICOUNT_SHIFT},sleep=off" in cmd
+    assert "enable=on,target=native" in cmd and f"file:{tmp_path / 'a.bin'}" in cmd
+
+
+def test_generated_excerpt_has_every_scan_after_its_pose(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+    gen = Path(__file__).resolve().parents[2] / "port" / "baremetal" / "replay" / "gen_replay_data.py"
+    out = tmp_path / "d.c"
+    subprocess.run([sys.executable, str(gen), str(TEST_DATA / "intel_head.clf.gz"), str(out), "--scans", "5"],
+                   check=True)
+    text = out.read_text()
+    assert "rsm_replay_scan_count = 5u;" in text
+    steps = re.findall(r"^    \{(\d+)u, (\d+)u, (\d+)u\},$", text, re.M)
+    scans = [int(s[2]) for s in steps if s[2] != "0"]
+    assert scans == [1, 2, 3, 4, 5]
+    rows = re.findall(r"^    \{(\d+)u, \{([0-9, ]+)\}\},$", text, re.M)
+    assert len(rows) == 5 and all(len(r[1].split(",")) == 180 for r in rows)
+    assert int(rows[0][0]) == 0 and int(rows[1][0]) > 0  # stamps from the first scan

@@ -1,0 +1,178 @@
+"""rsm-m4: runs the Cortex-M4F firmware images under QEMU (mps2-an386) and checks them.
+
+    python3 tools/rsm_tools/m4.py example ELF WORKDIR
+    python3 tools/rsm_tools/m4.py replay ELF HOST_EXE WORKDIR
+
+``example`` boots the example firmware with its two device ports on files and
+checks the banner, the end-of-run summary and that the P3-DX handshake went
+out on the robot port (SYNC0, repeated after each step timeout, which needs
+SysTick interrupts) and something on the laser port.  ``replay`` boots the
+replay firmware, checks its start-up, the instruction-count calibration (the
+known loop) and that its trajectory equals the host's (``HOST_EXE``, the same
+source built for the host) bit for bit.  Both fail on a fault report, a
+non-zero exit status or a time-out: a locked-up image never hangs the test.
+
+QEMU runs with ``-icount shift=ICOUNT_SHIFT,sleep=off``: the virtual clock
+advances exactly 2^shift ns per executed instruction, so the board's 25 MHz
+timer counts one tick per 40 / 2^shift instructions, the same on every
+machine, and idle time (WFI) is skipped.  Python standard library only, so
+that ctest can run it with any python3; ``rsm_tools.bench`` imports it.
+"""
+
+import argparse
+import shutil
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+ICOUNT_SHIFT = 3
+TIMER_HZ = 25_000_000  # mps2-an386 SYSCLK, which clocks its APB timers
+NS_PER_TICK = 1e9 / TIMER_HZ
+INSNS_PER_TICK = NS_PER_TICK / (1 << ICOUNT_SHIFT)  # 5 at shift 3
+TIMEOUT_S = 300
+SYNC0 = bytes([0xFA, 0xFB, 0x03, 0x00, 0x00, 0x00])  # ARIA SYNC0 packet (docs protocols.md 1.6)
+STAGES = ("points", "grid", "harris", "match", "ransac", "refine", "icp", "ekf", "map", "mapmatch")
+
+
+class M4Error(RuntimeError):
+    """A run or a check failed."""
+
+
+def qemu_command(elf: Path, serial_files: Sequence[Path] = ()) -> List[str]:
+    qemu = shutil.which("qemu-system-arm")
+    if qemu is None:
+        raise M4Error("qemu-system-arm not found (Debian: qemu-system-arm; ./tools/test installs it)")
+    cmd = [qemu, "-M", "mps2-an386", "-kernel", str(elf), "-display", "none", "-monitor", "none",
+           "-serial", "stdio"]
+    for f in serial_files:
+        cmd += ["-serial", f"file:{f}"]
+    cmd += ["-semihosting-config", "enable=on,target=native",
+            "-icount", f"shift={ICOUNT_SHIFT},sleep=off", "-no-reboot"]
+    return cmd
+
+
+def run(elf: Path, serial_files: Sequence[Path] = (), timeout: float = TIMEOUT_S) -> str:
+    """Console output of one run; M4Error unless it ended by itself with status 0."""
+    cmd = qemu_command(elf, serial_files)
+    try:
+        res = subprocess.run(cmd, stdin=subprocess.DEVNULL, capture_output=True, timeout=timeout)
+    except subprocess.TimeoutExpired as e:
+        out = (e.stdout or b"").decode(errors="replace")
+        raise M4Error(f"{elf.name}: no exit within {timeout:.0f} s (locked up?); output so far:\n{out[-2000:]}")
+    out = res.stdout.decode(errors="replace")
+    if "FAULT" in out or res.returncode != 0:
+        raise M4Error(f"{elf.name}: exit status {res.returncode}\n{out[-2000:]}\n"
+                      f"{res.stderr.decode(errors='replace')[-2000:]}")
+    return out
+
+
+def lines_of(text: str, tag: str) -> List[List[str]]:
+    return [l.split()[1:] for l in text.splitlines() if l.startswith(tag + " ")]
+
+
+def check_example(elf: Path, work: Path) -> str:
+    work.mkdir(parents=True, exist_ok=True)
+    robot, laser = work / "robot.bin", work / "laser.bin"
+    for f in (robot, laser):
+        f.unlink(missing_ok=True)
+    out = run(elf, [robot, laser])
+    if "rsm example firmware on mps2-an386" not in out:
+        raise M4Error(f"no banner in:\n{out}")
+    if "rsm example firmware: ran " not in out:
+        raise M4Error(f"no end-of-run summary in:\n{out}")
+    sent = robot.read_bytes()
+    n_sync = sent.count(SYNC0)
+    # step_timeout_us is 1 s: SYNC0 at 0, 1, 2 and 3 s of the 3.5 s run.
+    if n_sync < 3 or sent != SYNC0 * n_sync:
+        raise M4Error(f"robot port: expected SYNC0 repeated at least 3 times, got {sent.hex()}")
+    if not laser.read_bytes().startswith(b"\x02"):
+        raise M4Error(f"laser port: expected an LMS telegram (STX), got {laser.read_bytes()[:16].hex()}")
+    return f"example: booted, {n_sync} SYNC0 on the robot port, {len(laser.read_bytes())} bytes on the laser port"
+
+
+def calibration(out: str) -> Dict[str, float]:
+    """The known loop: 2 n instructions; its tick counts must match the model."""
+    c = lines_of(out, "C")
+    if len(c) != 1 or len(c[0]) != 4:
+        raise M4Error(f"no calibration line in the output")
+    n1, t1, n2, t2 = (int(v) for v in c[0])
+    insns = 2 * (n2 - n1)
+    measured = (t2 - t1) * INSNS_PER_TICK
+    if abs(measured - insns) > INSNS_PER_TICK:
+        raise M4Error(f"calibration: the known loop ran {insns} instructions, the timer says {measured:.0f} "
+                      f"(icount shift {ICOUNT_SHIFT}, {INSNS_PER_TICK:g} per tick)")
+    return {"insns": insns, "measured": measured, "per_tick": INSNS_PER_TICK}
+
+
+def check_replay(elf: Path, host_exe: Path, work: Path) -> str:
+    work.mkdir(parents=True, exist_ok=True)
+    out = run(elf)
+    (work / "replay-m4.out").write_text(out)
+    host = subprocess.run([str(host_exe)], capture_output=True, text=True, timeout=TIMEOUT_S)
+    if host.returncode != 0:
+        raise M4Error(f"{host_exe.name}: exit status {host.returncode}: {host.stderr}")
+    (work / "replay-host.out").write_text(host.stdout)
+    if "rsm replay: done" not in out:
+        raise M4Error("the replay firmware did not finish")
+    cal = calibration(out)
+    target_p = [l for l in out.splitlines() if l.startswith(("P ", "E "))]
+    host_p = [l for l in host.stdout.splitlines() if l.startswith(("P ", "E "))]
+    if not host_p or sum(1 for l in host_p if l.startswith("P ")) == 0:
+        raise M4Error("the host replay wrote no pose")
+    for i, (a, b) in enumerate(zip(host_p, target_p)):
+        if a != b:
+            raise M4Error(f"host and target differ first at line {i + 1}:\n  host   {a}\n  target {b}")
+    if len(host_p) != len(target_p):
+        raise M4Error(f"host wrote {len(host_p)} pose and summary lines, target {len(target_p)}")
+    return (f"replay: {len(host_p) - 1} poses equal bit for bit on host and M4; calibration "
+            f"{cal['insns']} instructions measured as {cal['measured']:.0f}")
+
+
+def percentile(values: Sequence[float], q: float) -> float:
+    """Nearest-rank percentile (q in 0..100)."""
+    s = sorted(values)
+    k = max(0, min(len(s) - 1, int(-(-q * len(s) // 100)) - 1))
+    return s[k]
+
+
+def costs(out: str) -> dict:
+    """Instructions per scan and per stage from a replay run's T lines."""
+    t = lines_of(out, "T")
+    if not t:
+        raise M4Error("no T lines in the replay output")
+    steps = [int(r[1]) * INSNS_PER_TICK for r in t]
+    stages = {name: statistics.fmean(int(r[2 + i]) * INSNS_PER_TICK for r in t) for i, name in enumerate(STAGES)}
+    m = lines_of(out, "M")
+    stack = int(m[0][1]) if m else None
+    stack_size = int(m[0][3]) if m else None
+    return {"scans": len(steps), "mean": statistics.fmean(steps), "p95": percentile(steps, 95),
+            "p99": percentile(steps, 99), "max": max(steps), "stages": stages,
+            "stack_used": stack, "stack_size": stack_size, "calibration": calibration(out)}
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    e = sub.add_parser("example", help="boot the example firmware and check it")
+    e.add_argument("elf", type=Path)
+    e.add_argument("work", type=Path)
+    r = sub.add_parser("replay", help="run the replay firmware and compare with the host")
+    r.add_argument("elf", type=Path)
+    r.add_argument("host_exe", type=Path)
+    r.add_argument("work", type=Path)
+    a = ap.parse_args(argv)
+    try:
+        if a.cmd == "example":
+            print(check_example(a.elf, a.work))
+        else:
+            print(check_replay(a.elf, a.host_exe, a.work))
+    except M4Error as err:
+        print(f"rsm-m4: FAIL: {err}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
