@@ -1,0 +1,20 @@
+# The extra sources of the fuzz targets that run whole paths of the host
+# tools or the test support's fake link: used by the libFuzzer build
+# (tests/fuzz) and by the corpus replays every build runs (tests/).
+function(rsm_fuzz_extras target name)
+  set(nav ${PROJECT_SOURCE_DIR}/tools/nav)
+  if(name STREQUAL "fuzz_capture")
+    target_sources(${target} PRIVATE ${nav}/capture.c ${nav}/stream.c)
+    target_include_directories(${target} PRIVATE ${nav})
+    target_compile_definitions(${target} PRIVATE _POSIX_C_SOURCE=200809L)
+  elseif(name STREQUAL "fuzz_carmen")
+    find_package(ZLIB REQUIRED)
+    target_sources(${target} PRIVATE ${nav}/carmen.c)
+    target_include_directories(${target} PRIVATE ${nav})
+    target_compile_definitions(${target} PRIVATE _POSIX_C_SOURCE=200809L)
+    target_link_libraries(${target} PRIVATE ZLIB::ZLIB)
+  elseif(name STREQUAL "fuzz_drivers")
+    target_sources(${target} PRIVATE ${PROJECT_SOURCE_DIR}/tests/support/fakelink.c)
+    target_include_directories(${target} PRIVATE ${PROJECT_SOURCE_DIR}/tests/support)
+  endif()
+endfunction()
