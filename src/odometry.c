@@ -113,7 +113,15 @@ static float elapsed_s(uint8_t have_from, uint64_t from_us, uint64_t to_us)
     if (!have_from || to_us == RSM_ODOMETRY_NO_TIME || to_us < from_us) {
         return 0.0f;
     }
-    return (float)((double)(to_us - from_us) * 1e-6);
+    {
+        /* Whole seconds and microseconds apart: no double arithmetic, which
+         * a Cortex-M4F does in software (and cross-check refuses). Beyond
+         * 11 days the bounds catch nothing anyway. */
+        const uint64_t d = to_us - from_us;
+        const uint64_t whole = d / 1000000u;
+        const float secs = whole > 1000000u ? 1.0e6f : (float)(uint32_t)whole;
+        return secs + (float)(uint32_t)(d % 1000000u) * 1.0e-6f;
+    }
 }
 
 /* Whether wheel steps of dl and dr ticks fit the configured rates over dt. */
