@@ -620,7 +620,7 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
         size_t k;
         size_t kept = 0;
         for (k = 0; k < npts; ++k) {
-            if ((isolated[k >> 3] >> (k & 7u)) & 1u) {
+            if (((uint32_t)isolated[k >> 3] >> (k & 7u)) & 1u) {
                 loc->counters.unconfirmed++;
             } else {
                 loc->world[kept++] = loc->world[k];

@@ -422,7 +422,7 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                     const uint32_t top = clear_beam(map, &c, ox, oy, gx, gy, map->cfg.miss_dec, map->cfg.clear_margin);
                     if (map->cfg.wall_value > 0u && idx == 0u && top >= map->cfg.wall_value &&
                         k < (size_t)RSM_MAX_BEAMS && cell_value(map, &c, gx, gy) < map->cfg.wall_value) {
-                        behind[k >> 3] = (uint8_t)(behind[k >> 3] | (1u << (k & 7u)));
+                        behind[k >> 3] = (uint8_t)((uint32_t)behind[k >> 3] | (1u << (k & 7u)));
                     }
                 }
             }
@@ -433,7 +433,7 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
             if (!(fabsf(points[k].x) < 1.0e6f && fabsf(points[k].y) < 1.0e6f)) {
                 continue;
             }
-            if (k < (size_t)RSM_MAX_BEAMS && (behind[k >> 3] >> (k & 7u)) & 1u) {
+            if (k < (size_t)RSM_MAX_BEAMS && ((uint32_t)behind[k >> 3] >> (k & 7u)) & 1u) {
                 if (idx == 0u) {
                     map->counters.behind++;
                 }

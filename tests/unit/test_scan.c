@@ -218,7 +218,7 @@ static rsm_isolation_t isolation(void)
 
 static int marked(const uint8_t *mask, size_t k)
 {
-    return (mask[k >> 3] >> (k & 7u)) & 1;
+    return (int)(((uint32_t)mask[k >> 3] >> (k & 7u)) & 1u);
 }
 
 void test_points_isolated_should_mark_a_phantom_and_not_the_wall(void)
