@@ -2664,7 +2664,7 @@ def report_scaling(sc: Optional[dict], main: str) -> List[str]:
          "closer than 0.1 m, otherwise the nearer reading) with `RSM_MAX_BEAMS` = N; they add readings, not "
          "information. *map*: the paper's scrolling window, `RSM_MAP_SIZE_LOG2` = L (the paper's method only; "
          "rsm does not use it). *tiles*: rsm's tile pool, `RSM_TMAP_TILES` = T with the smallest tile index "
-         "config.h accepts (rsm only; when the pool is full the least recently written tiles are reused). "
+         "config.h accepts (rsm only; when the pool is full the tiles written longest ago are reused, a coarse tile's age counting less, see docs/map.md). "
          "*preset*: a shipped configuration header as it is. *map* to *preset* use the log's own readings. "
          "*tiles used* is the persistent map's use of its pool at the end of the log (taken / evicted).", ""]
     rows = []
