@@ -46,6 +46,16 @@ def head_log() -> Path:
 
 
 @pytest.fixture(scope="session")
+def excerpt_capture(tmp_path_factory, head_log) -> Path:
+    """The shipped excerpt as a capture (rsm-convert's default rendering)."""
+    from rsm_tools import convert
+
+    out = tmp_path_factory.mktemp("cap") / "head.cap"
+    convert.convert(str(head_log), str(out))
+    return out
+
+
+@pytest.fixture(scope="session")
 def head_relations() -> Path:
     return _require(TEST_DATA / "intel_head.relations", "shipped excerpt relations")
 

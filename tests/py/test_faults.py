@@ -20,7 +20,6 @@ import pytest
 
 from conftest import REPO_ROOT, FakeDevices, build_dir, rsm_nav_binary
 from rsm_tools import capture as cap
-from rsm_tools import convert
 from rsm_tools import evaluate as ev
 
 NAV_TIMEOUT = 120
@@ -57,48 +56,42 @@ def rows(path: Path):
     return [l for l in path.read_text().splitlines() if l and not l.startswith("#")]
 
 
-@pytest.fixture(scope="module")
-def head_capture(tmp_path_factory, head_log):
-    out = tmp_path_factory.mktemp("cap") / "head.cap"
-    convert.convert(str(head_log), str(out))
-    return out
-
 
 def record_offsets(path: Path):
     with cap.CaptureReader(path) as r:
         return [rec.offset for rec in r]
 
 
-def test_capture_read_error_at_a_record_boundary_stops_flushes_and_fails(tmp_path, head_capture):
-    offsets = record_offsets(head_capture)
+def test_capture_read_error_at_a_record_boundary_stops_flushes_and_fails(tmp_path, excerpt_capture):
+    offsets = record_offsets(excerpt_capture)
     cut = offsets[len(offsets) // 2]
     # What the records before the failure give, read from an intact file.
     part = tmp_path / "part.cap"
-    part.write_bytes(head_capture.read_bytes()[:cut])
+    part.write_bytes(excerpt_capture.read_bytes()[:cut])
     ref = run_nav("--capture", part, "--trajectory", tmp_path / "ref.txt", "--quiet")
     assert ref.returncode == 0, ref.stderr
     traj = tmp_path / "t.txt"
-    res = run_nav("--capture", head_capture, "--trajectory", traj, "--quiet",
-                  fault_path=head_capture, fault_after=cut)
+    res = run_nav("--capture", excerpt_capture, "--trajectory", traj, "--quiet",
+                  fault_path=excerpt_capture, fault_after=cut)
     assert res.returncode == 1, res.stderr
     assert "read error" in res.stderr and "Input/output error" in res.stderr, res.stderr
     assert len(rows(traj)) > 100
     assert rows(traj) == rows(tmp_path / "ref.txt")
 
 
-def test_capture_run_closes_its_file(tmp_path, head_capture):
-    res = run_nav("--capture", head_capture, "--trajectory", tmp_path / "t.txt", "--quiet",
-                  fault_path=head_capture, fault_after=1 << 40, report_open=True)
+def test_capture_run_closes_its_file(tmp_path, excerpt_capture):
+    res = run_nav("--capture", excerpt_capture, "--trajectory", tmp_path / "t.txt", "--quiet",
+                  fault_path=excerpt_capture, fault_after=1 << 40, report_open=True)
     assert res.returncode == 0, res.stderr
     assert "never closed" not in res.stderr, res.stderr
 
 
-def test_capture_read_error_inside_a_record_is_an_error_not_a_truncated_tail(tmp_path, head_capture):
-    offsets = record_offsets(head_capture)
+def test_capture_read_error_inside_a_record_is_an_error_not_a_truncated_tail(tmp_path, excerpt_capture):
+    offsets = record_offsets(excerpt_capture)
     cut = offsets[len(offsets) // 3] + 7
     traj = tmp_path / "t.txt"
-    res = run_nav("--capture", head_capture, "--trajectory", traj, "--quiet",
-                  fault_path=head_capture, fault_after=cut)
+    res = run_nav("--capture", excerpt_capture, "--trajectory", traj, "--quiet",
+                  fault_path=excerpt_capture, fault_after=cut)
     assert res.returncode == 1, res.stderr
     assert "read error" in res.stderr, res.stderr
     assert "truncated 1" not in res.stdout, res.stdout
@@ -113,7 +106,7 @@ def point_link(link: Path, target: str):
     os.replace(tmp, link)
 
 
-def test_active_mode_reopens_a_robot_that_vanished_and_came_back(tmp_path, head_capture):
+def test_active_mode_reopens_a_robot_that_vanished_and_came_back(tmp_path, excerpt_capture):
     """The fake robot is killed (an adapter pulled out) and started again
     behind the same name (plugged back in, as a udev symlink does): rsm-nav
     neither spins nor floods the dead line, reopens it with back-off, and
@@ -122,7 +115,7 @@ def test_active_mode_reopens_a_robot_that_vanished_and_came_back(tmp_path, head_
     robot = tmp_path / "robot"
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
-    first = FakeDevices(tmp_path / "a", "--robot", "--capture", str(head_capture))
+    first = FakeDevices(tmp_path / "a", "--robot", "--capture", str(excerpt_capture))
     point_link(robot, first.paths["robot"])
     traj, events = tmp_path / "t.txt", tmp_path / "e.txt"
     nav = subprocess.Popen([str(rsm_nav_binary()), "--robot", str(robot), "--seconds", str(seconds),
@@ -135,7 +128,7 @@ def test_active_mode_reopens_a_robot_that_vanished_and_came_back(tmp_path, head_
         first.proc.wait()
         robot.unlink()
         time.sleep(3)
-        second = FakeDevices(tmp_path / "b", "--robot", "--capture", str(head_capture))
+        second = FakeDevices(tmp_path / "b", "--robot", "--capture", str(excerpt_capture))
         point_link(robot, second.paths["robot"])
         out, err = nav.communicate(timeout=NAV_TIMEOUT)
     finally:
@@ -388,11 +381,11 @@ def test_active_mode_with_no_device_ever_connecting_fails(tmp_path):
 # ---- hostile captures -------------------------------------------------------------------
 
 
-def test_capture_resync_over_false_record_starts_costs_one_crc_pass(tmp_path, head_capture):
+def test_capture_resync_over_false_record_starts_costs_one_crc_pass(tmp_path, excerpt_capture):
     """1 MiB of "RC\\xff\\xff": a false record start every 4 bytes, each
     claiming 64 KiB. The reader used to CRC each claim anew (39 s)."""
-    data = head_capture.read_bytes()
-    offsets = record_offsets(head_capture)
+    data = excerpt_capture.read_bytes()
+    offsets = record_offsets(excerpt_capture)
     cut = offsets[len(offsets) // 2]
     hostile = tmp_path / "hostile.cap"
     hostile.write_bytes(data[:cut] + b"RC\xff\xff" * (1 << 18) + data[cut:])
@@ -401,7 +394,7 @@ def test_capture_resync_over_false_record_starts_costs_one_crc_pass(tmp_path, he
     assert "corrupt 1," in res.stdout and f"{1 << 20} bytes skipped" in res.stdout, res.stdout
     checked = number(r"(\d+) checked by CRC", res.stdout)
     assert checked <= 2 * len(hostile.read_bytes()), res.stdout
-    assert len(rows(tmp_path / "t.txt")) == len(rows_of_clean_run(tmp_path, head_capture))
+    assert len(rows(tmp_path / "t.txt")) == len(rows_of_clean_run(tmp_path, excerpt_capture))
 
 
 def rows_of_clean_run(tmp_path, capture):
@@ -489,16 +482,16 @@ def with_metadata(src: Path, dst: Path, **meta):
     return dst
 
 
-def test_a_start_pose_that_is_not_finite_is_named(tmp_path, head_capture):
-    bad = with_metadata(head_capture, tmp_path / "nan.cap", robot__initial_pose="nan 0 0")
+def test_a_start_pose_that_is_not_finite_is_named(tmp_path, excerpt_capture):
+    bad = with_metadata(excerpt_capture, tmp_path / "nan.cap", robot__initial_pose="nan 0 0")
     res = run_nav("--capture", bad, "--trajectory", tmp_path / "t.txt", "--quiet")
     assert res.returncode == 2, res.stderr
     assert "start pose from the capture's robot.initial_pose is not finite" in res.stderr, res.stderr
     assert "invalid configuration" not in res.stderr
 
 
-def test_a_capture_with_nonsense_geometry_is_named(tmp_path, head_capture):
-    bad = with_metadata(head_capture, tmp_path / "geom.cap", robot__ticks_per_m="nan")
+def test_a_capture_with_nonsense_geometry_is_named(tmp_path, excerpt_capture):
+    bad = with_metadata(excerpt_capture, tmp_path / "geom.cap", robot__ticks_per_m="nan")
     res = run_nav("--capture", bad, "--trajectory", tmp_path / "t.txt", "--quiet")
     assert res.returncode == 1, res.stderr
     assert "robot.ticks_per_m is 'nan', not a positive number" in res.stderr, res.stderr
@@ -561,20 +554,20 @@ def restamped_capture(src: Path, dst: Path, changes: dict):
     return len(recs)
 
 
-def test_one_far_future_capture_record_does_not_drop_the_rest(tmp_path, head_capture):
-    n = restamped_capture(head_capture, tmp_path / "far.cap", {300: 2 ** 62})
+def test_one_far_future_capture_record_does_not_drop_the_rest(tmp_path, excerpt_capture):
+    n = restamped_capture(excerpt_capture, tmp_path / "far.cap", {300: 2 ** 62})
     res = run_nav("--capture", tmp_path / "far.cap", "--trajectory", tmp_path / "t.txt", "--quiet")
     assert res.returncode == 0, res.stderr
     assert f"records         {n - 1} (corrupt 0, truncated 0, out of order 1," in res.stdout, res.stdout
     _, recs, stats = cap.read_capture(tmp_path / "far.cap", lenient=True)
     assert (len(recs), stats.out_of_order) == (n - 1, 1)
-    ref = rows_of_clean_run(tmp_path, head_capture)
+    ref = rows_of_clean_run(tmp_path, excerpt_capture)
     assert len(rows(tmp_path / "t.txt")) >= len(ref) - 1
 
 
-def test_a_capture_whose_clock_jumps_is_read_on(tmp_path, head_capture):
+def test_a_capture_whose_clock_jumps_is_read_on(tmp_path, excerpt_capture):
     hour2 = 7_200_000_000
-    n = restamped_capture(head_capture, tmp_path / "jump.cap",
+    n = restamped_capture(excerpt_capture, tmp_path / "jump.cap",
                           {k: (lambda t: t + hour2) for k in range(300, 100000)})
     res = run_nav("--capture", tmp_path / "jump.cap", "--trajectory", tmp_path / "t.txt", "--quiet")
     assert res.returncode == 0, res.stderr
@@ -662,8 +655,8 @@ def test_replay_shortens_long_pauses_and_survives_the_last_stamp(tmp_path):
     assert "3 records" in err and "2 pauses over 0.05 s shortened" in err, err
 
 
-def test_replay_stops_when_the_pty_reader_goes_away(tmp_path, head_capture):
-    proc = replay(head_capture, "--pty", "--fast", "--wait-open", "--linger", "0", "--stall", "5")
+def test_replay_stops_when_the_pty_reader_goes_away(tmp_path, excerpt_capture):
+    proc = replay(excerpt_capture, "--pty", "--fast", "--wait-open", "--linger", "0", "--stall", "5")
     try:
         paths = {}
         while len(paths) < 2:
@@ -740,14 +733,14 @@ def test_convert_reports_a_truncated_gzip_log(tmp_path, head_log):
 # ---- a checksum-valid but corrupt ENCODER packet ------------------------------------------------
 
 
-def test_a_corrupt_encoder_packet_that_passes_its_checksum_does_not_move_the_robot(tmp_path, head_capture):
+def test_a_corrupt_encoder_packet_that_passes_its_checksum_does_not_move_the_robot(tmp_path, excerpt_capture):
     """ARIA's additive checksum misses two opposite bit flips in one column:
     such a packet once sent the pose 8 km away for good."""
     from rsm_tools import protocols as proto
-    data = head_capture.read_bytes()
-    with open(head_capture, "rb") as fh:
+    data = excerpt_capture.read_bytes()
+    with open(excerpt_capture, "rb") as fh:
         _, size = cap.read_header(fh)
-    with cap.CaptureReader(head_capture) as r:
+    with cap.CaptureReader(excerpt_capture) as r:
         recs = list(r)
     robot = [k for k, rec in enumerate(recs) if rec.channel == 0]
     hit = robot[len(robot) // 2]
@@ -758,7 +751,7 @@ def test_a_corrupt_encoder_packet_that_passes_its_checksum_does_not_move_the_rob
         out += cap.encode_record(rec.timestamp, rec.channel, rec.direction, payload)
     bad = tmp_path / "corrupt.cap"
     bad.write_bytes(bytes(out))
-    ref = rows_of_clean_run(tmp_path, head_capture)
+    ref = rows_of_clean_run(tmp_path, excerpt_capture)
     res = run_nav("--capture", bad, "--trajectory", tmp_path / "t.txt", "--quiet")
     assert res.returncode == 0, res.stderr
     assert number(r"(\d+) implausible increments refused", res.stdout) >= 1, res.stdout

@@ -19,16 +19,9 @@ import subprocess
 import pytest
 
 from conftest import FakeDevices, rsm_nav_binary
-from rsm_tools import convert
 
 NAV_TIMEOUT = 180
 
-
-@pytest.fixture(scope="module")
-def excerpt_capture(tmp_path_factory, head_log):
-    out = tmp_path_factory.mktemp("cap") / "head.cap"
-    convert.convert(str(head_log), str(out))
-    return out
 
 
 @pytest.fixture(scope="module")

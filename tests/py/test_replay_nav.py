@@ -28,12 +28,6 @@ from rsm_tools import convert
 from rsm_tools import evaluate as ev
 
 
-@pytest.fixture(scope="module")
-def excerpt_capture(tmp_path_factory, head_log):
-    out = tmp_path_factory.mktemp("cap") / "head.cap"
-    convert.convert(str(head_log), str(out))
-    return out
-
 
 def per_channel(events: Path):
     enc, scans = [], []
