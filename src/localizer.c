@@ -138,10 +138,13 @@ static void stage_end(stage_clock_t *c)
     }
 }
 
-int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, const rsm_pose_t *x0,
-                       const float p0[9])
+int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned long fingerprint,
+                               const rsm_localizer_config_t *cfg, const rsm_pose_t *x0, const float p0[9])
 {
     int rc;
+    if (loc_size != sizeof(rsm_localizer_t) || fingerprint != (unsigned long)RSM_CONFIG_FINGERPRINT) {
+        return RSM_ERR_CONFIG;
+    }
     if (loc == NULL || cfg == NULL || x0 == NULL || cfg->method > RSM_METHOD_MAP ||
         !(cfg->limits.max_range_m > cfg->limits.min_range_m) || !(cfg->grid.cell_m > 0.0f) ||
         !(cfg->grid.sigma_m >= 0.0f) || cfg->grid.sigma_m * 2.0f >= cfg->grid.cell_m || cfg->map_min_hits < 1u ||

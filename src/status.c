@@ -15,6 +15,7 @@ const char *rsm_strerror(int status)
     case RSM_ERR_NOSYS: return "not supported";
     case RSM_ERR_PROTO: return "protocol error";
     case RSM_ERR_ORDER: return "timestamp out of order";
+    case RSM_ERR_CONFIG: return "built with other capacities than the library";
     default: return "unknown status";
     }
 }

@@ -172,4 +172,18 @@ RSM_STATIC_ASSERT(lms_telegram_size, RSM_LMS_MAX_TELEGRAM >= 812);
 RSM_STATIC_ASSERT(link_rx_chunk_range, RSM_LINK_RX_CHUNK >= 1 && RSM_LINK_RX_CHUNK <= 65536);
 RSM_STATIC_ASSERT(sync_depth_range, RSM_SYNC_DEPTH >= 2 && RSM_SYNC_DEPTH <= 1024);
 
+/* A digest of every capacity above (FNV-1a over their values), as the code
+ * including this header sees them. The library compares the caller's with
+ * its own (rsm_localizer_init), so that an application compiled with other
+ * capacities than the library gets RSM_ERR_CONFIG instead of a state object
+ * of the wrong size. */
+#define RSM_CONFIG_MIX_(h, v) ((((unsigned long)(h) ^ (unsigned long)(v)) * 16777619ul) & 0xFFFFFFFFul)
+#define RSM_CONFIG_FINGERPRINT                                                                                      \
+    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
+    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
+    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(2166136261ul, RSM_MAX_BEAMS), RSM_MAP_SIZE_LOG2),                  \
+    RSM_IMAGE_MAX_CELLS), RSM_TMAP_TILE_LOG2), RSM_TMAP_LEVELS), RSM_TMAP_TILES), RSM_TMAP_HASH_LOG2),                \
+    RSM_MAX_KEYPOINTS), RSM_MAX_CANDIDATES), RSM_MAX_MATCHES), RSM_ICP_MAX_POINTS), RSM_ARIA_MAX_PACKET),             \
+    RSM_ARIA_MAX_SONAR), RSM_ARIA_STR_SIZE), RSM_LMS_MAX_TELEGRAM), RSM_LINK_RX_CHUNK), RSM_SYNC_DEPTH)
+
 #endif /* RSM_CONFIG_H */

@@ -202,9 +202,17 @@ typedef struct rsm_localizer {
  * must stay within 1e6 m of the origin (the paper's method refuses a start
  * beyond it; the maps drop points beyond it), and floats resolve only
  * centimetres from about 1e5 m on: far from the origin, work in a frame
- * centred near the robot (docs/robustness.md, "Coordinates"). */
-int rsm_localizer_init(rsm_localizer_t *loc, const rsm_localizer_config_t *cfg, const rsm_pose_t *x0,
-                       const float p0[9]);
+ * centred near the robot (docs/robustness.md, "Coordinates").
+ * cfg is kept by pointer, not copied: it must outlive loc.
+ * A macro: it passes the caller's sizeof(rsm_localizer_t) and capacity
+ * digest (RSM_CONFIG_FINGERPRINT), so that an application compiled with
+ * other capacities than the library gets RSM_ERR_CONFIG, with nothing
+ * written, instead of a state object of the wrong size. */
+#define rsm_localizer_init(loc, cfg, x0, p0) \
+    rsm_localizer_init_checked((loc), sizeof(rsm_localizer_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (cfg), (x0), (p0))
+
+int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned long fingerprint,
+                               const rsm_localizer_config_t *cfg, const rsm_pose_t *x0, const float p0[9]);
 
 /* Predicts with an odometry increment (robot frame at the step's start).
  * Non-finite increments are refused with RSM_ERR_RANGE and counted. */

@@ -1,5 +1,7 @@
 # Install the built rsm into a scratch prefix, then build and run a consumer
-# twice: with find_package(rsm) and with pkg-config (plain compiler call).
+# twice: with find_package(rsm) and with pkg-config (plain compiler call);
+# each also once with RSM_MAX_BEAMS other than the library's, where
+# rsm_localizer_init must refuse (RSM_ERR_CONFIG) rather than overflow.
 file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)
 
@@ -16,6 +18,7 @@ run(${CMAKE_COMMAND} -S ${RSM_SOURCE_DIR}/tests/consumer -B ${WORK_DIR}/build
     -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_C_COMPILER=${C_COMPILER})
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(${WORK_DIR}/build/consumer)
+run(${WORK_DIR}/build/consumer_mismatch)
 
 find_program(PKG_CONFIG pkg-config REQUIRED)
 file(GLOB_RECURSE pcs ${prefix}/*/rsm.pc)
@@ -30,3 +33,6 @@ endif()
 separate_arguments(flags UNIX_COMMAND "${flags}")
 run(${C_COMPILER} -std=c99 ${RSM_SOURCE_DIR}/tests/consumer/main.c ${flags} -o ${WORK_DIR}/consumer_pc)
 run(${WORK_DIR}/consumer_pc)
+run(${C_COMPILER} -std=c99 -DRSM_MAX_BEAMS=181 -DEXPECT_MISMATCH=1 ${RSM_SOURCE_DIR}/tests/consumer/main.c ${flags}
+    -o ${WORK_DIR}/consumer_pc_mismatch)
+run(${WORK_DIR}/consumer_pc_mismatch)

@@ -1,15 +1,35 @@
-/* Links against an installed rsm and checks a few calls give real answers. */
+/* Links against an installed rsm and checks a few calls give real answers.
+ * Built twice: as is, and with EXPECT_MISMATCH and a capacity the library
+ * was not built with, where starting a localizer must fail cleanly
+ * (RSM_ERR_CONFIG) instead of writing past the application's object. */
 #include <stdio.h>
 #include <string.h>
 
 #include "rsm/rsm.h"
 
+#ifndef EXPECT_MISMATCH
+#define EXPECT_MISMATCH 0
+#endif
+
+static rsm_localizer_t loc;
+static rsm_localizer_config_t cfg;
+
 int main(void)
 {
+    const rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};
+    const int want = EXPECT_MISMATCH ? RSM_ERR_CONFIG : RSM_OK;
+    int rc;
     if (strcmp(rsm_strerror(RSM_ERR_CHECKSUM), "checksum mismatch") != 0) {
         fprintf(stderr, "unexpected strerror text\n");
         return 1;
     }
-    printf("rsm consumer ok (map %d cells a side)\n", RSM_MAP_SIZE);
+    cfg = rsm_localizer_config_default();
+    rc = rsm_localizer_init(&loc, &cfg, &x0, NULL);
+    if (rc != want) {
+        fprintf(stderr, "rsm_localizer_init: %d (%s), expected %d\n", rc, rsm_strerror(rc), want);
+        return 1;
+    }
+    printf("rsm consumer ok (%d beams, localizer %lu bytes: %s)\n", RSM_MAX_BEAMS, (unsigned long)sizeof loc,
+           rsm_strerror(rc));
     return 0;
 }

@@ -245,6 +245,26 @@ static void assert_rejected(const rsm_localizer_config_t *c, const char *what)
     TEST_ASSERT_EQUAL_INT_MESSAGE(RSM_ERR_INVAL, rsm_localizer_init(&loc, c, &x0, NULL), what);
 }
 
+void test_localizer_init_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* What rsm_localizer_init passes for an application compiled with
+     * another RSM_MAX_BEAMS (a smaller object) or with capacities that
+     * happen to give the same size: refused, and not one byte written. */
+    const rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};
+    memset(&loc, 0x5A, sizeof loc);
+    memcpy(&snapshot, &loc, sizeof loc);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_localizer_init_checked(&loc, sizeof loc - 8u,
+                                                                     (unsigned long)RSM_CONFIG_FINGERPRINT, &cfg,
+                                                                     &x0, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_localizer_init_checked(&loc, sizeof loc,
+                                                                     (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul,
+                                                                     &cfg, &x0, NULL));
+    TEST_ASSERT_EQUAL_MEMORY(&snapshot, &loc, sizeof loc);
+    TEST_ASSERT_EQUAL_STRING("built with other capacities than the library", rsm_strerror(RSM_ERR_CONFIG));
+    /* The macro passes this build's own: accepted. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &x0, NULL));
+}
+
 void test_localizer_init_should_reject_bad_configs(void)
 {
     const rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};
@@ -1168,6 +1188,7 @@ int main(void)
     RUN_TEST(test_synth_scan_should_replace_exactly_the_outlier_share_deterministically);
     RUN_TEST(test_synth_path_should_follow_the_legs);
     RUN_TEST(test_localizer_config_default_should_be_valid);
+    RUN_TEST(test_localizer_init_should_refuse_a_caller_built_with_other_capacities);
     RUN_TEST(test_localizer_init_should_reject_bad_configs);
     RUN_TEST(test_localizer_scan_should_beat_odometry_on_a_synthetic_loop);
     RUN_TEST(test_localizer_scan_should_beat_odometry_on_a_synthetic_loop_with_the_papers_method);
