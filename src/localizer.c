@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "bits.h"
 #include "fmath.h"
 
 rsm_localizer_config_t rsm_localizer_config_default(void)
@@ -623,7 +624,7 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
         size_t k;
         size_t kept = 0;
         for (k = 0; k < npts; ++k) {
-            if (((uint32_t)isolated[k >> 3] >> (k & 7u)) & 1u) {
+            if (rsm_bit_get(isolated, k)) {
                 loc->counters.unconfirmed++;
             } else {
                 loc->world[kept++] = loc->world[k];

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "bits.h"
 #include "fmath.h"
 
 rsm_scan_limits_t rsm_scan_limits_default(void)
@@ -116,7 +117,7 @@ size_t rsm_points_isolated(const rsm_point_t *pts, size_t n, const rsm_point_t *
             agree += (i + k < n && same_surface(o, p, &pts[i + k], rp, iso)) ? 1u : 0u;
         }
         if (agree < iso->agree) {
-            mask[i >> 3] = (uint8_t)((uint32_t)mask[i >> 3] | (1u << (i & 7u)));
+            rsm_bit_set(mask, i);
             ++marked;
         }
     }

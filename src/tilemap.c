@@ -7,6 +7,7 @@
 
 #include "rsm/grid.h"
 #include "rsm/status.h"
+#include "bits.h"
 #include "fmath.h"
 
 #define STAMP_MASK 0x3FFFFFFFu
@@ -136,8 +137,8 @@ static uint32_t oldest_slot(const rsm_tmap_t *map)
     return s;
 }
 
-/* Slot for a tile that is not held: a free one, else the least recently
- * written one not written by this update. RSM_TMAP_NONE if none. */
+/* Slot for a tile that is not held: a free one, else oldest_slot's.
+ * RSM_TMAP_NONE if none. */
 static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
 {
     uint32_t s;
@@ -384,11 +385,13 @@ static void add_hit(rsm_tmap_t *map, cursor_t *c, uint32_t level, int32_t gx, in
 
 int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n)
 {
-    /* Returns whose beam crossed a cell the finest level holds as a wall
-     * (saturated): behind a wall the laser cannot see, so the return is a
-     * phantom (noise, a reflection) or the wall has gone; either way it is
-     * not written until the beams have worn the wall down. */
+    /* Returns whose beam crossed a wall (a cell at wall_value or above on
+     * wall_level) without landing on one: behind a wall the laser cannot
+     * see, so the return is a phantom (noise, a reflection) or the wall has
+     * gone; either way it is not written until the beams have worn the wall
+     * down. wall_level is written first, so that every level knows. */
     uint8_t behind[(RSM_MAX_BEAMS + 7) / 8];
+    uint32_t judge;
     uint32_t idx;
     memset(behind, 0, sizeof behind);
     if (map == NULL || origin == NULL || (n > 0u && points == NULL) || !isfinite(origin->x) || !isfinite(origin->y)) {
@@ -396,9 +399,8 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
     }
     map->stamp = (map->stamp + 1u) & STAMP_MASK;
     map->counters.updates++;
+    judge = map->cfg.wall_level < map->cfg.levels ? map->cfg.wall_level : 0u;
     for (idx = 0; idx < map->cfg.levels; ++idx) {
-        /* The level that judges walls first, so that every level knows. */
-        const uint32_t judge = map->cfg.wall_level < map->cfg.levels ? map->cfg.wall_level : 0u;
         const uint32_t level = idx == 0u ? judge : (idx <= judge ? idx - 1u : idx);
         const float inv_a = map->inv_cell[level];
         const int32_t ox = cell_of(origin->x, inv_a);
@@ -422,24 +424,22 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                     const uint32_t top = clear_beam(map, &c, ox, oy, gx, gy, map->cfg.miss_dec, map->cfg.clear_margin);
                     if (map->cfg.wall_value > 0u && idx == 0u && top >= map->cfg.wall_value &&
                         k < (size_t)RSM_MAX_BEAMS && cell_value(map, &c, gx, gy) < map->cfg.wall_value) {
-                        behind[k >> 3] = (uint8_t)((uint32_t)behind[k >> 3] | (1u << (k & 7u)));
+                        rsm_bit_set(behind, k);
                     }
                 }
             }
         }
         cursor_start(&c, level);
         for (k = 0; k < n; ++k) {
-            uint32_t inc;
             if (!(fabsf(points[k].x) < 1.0e6f && fabsf(points[k].y) < 1.0e6f)) {
                 continue;
             }
-            if (k < (size_t)RSM_MAX_BEAMS && ((uint32_t)behind[k >> 3] >> (k & 7u)) & 1u) {
+            if (k < (size_t)RSM_MAX_BEAMS && rsm_bit_get(behind, k)) {
                 if (idx == 0u) {
                     map->counters.behind++;
                 }
                 continue;
             }
-            inc = map->cfg.hit_inc;
             if (level >= map->cfg.splat_from) {
                 /* Share the increment among the four cells around the point
                  * by bilinear weights, so that the interpolated occupancy
@@ -449,7 +449,7 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                 const int32_t gy = b.j;
                 const float du = b.du;
                 const float dv = b.dv;
-                const float f = (float)inc;
+                const float f = (float)map->cfg.hit_inc;
                 if (!in_range(gx, gy) || !in_range(gx + 1, gy + 1)) {
                     map->counters.outside++;
                     continue;
@@ -465,7 +465,7 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                     map->counters.outside++;
                     continue;
                 }
-                add_hit(map, &c, level, gx, gy, inc);
+                add_hit(map, &c, level, gx, gy, map->cfg.hit_inc);
             }
         }
     }
@@ -474,11 +474,7 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
 
 static float occ_at(const rsm_tmap_t *map, cursor_t *c, int32_t gx, int32_t gy)
 {
-    const uint32_t s = cursor_slot(map, c, gx, gy);
-    if (s == RSM_TMAP_NONE) {
-        return 0.0f;
-    }
-    return map->occ[get_cell(&map->tile[s], cell_index(gx, gy))];
+    return map->occ[cell_value(map, c, gx, gy)];
 }
 
 float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y)

@@ -2,7 +2,7 @@
 
 Runs ``rsm-nav`` with the given ``--set`` values on every log of the shared
 folder, clean and with 43 % of every scan's readings replaced by outliers
-(one copy per seed, made once with :mod:`rsm_tools.outliers` and cached),
+(one copy per seed, made once and kept in the bench's cache),
 each at several ``map_update_m`` values: the all-relations error of one run
 moves a lot with small changes (a few returns to earlier places either snap
 back or keep a second copy), so one run says little. Prints one line per log
@@ -24,26 +24,17 @@ from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from . import evaluate as ev
-from . import outliers
+from .bench import outlier_logs
 
 DEFAULT_UPDATES = "0.34 0.37 0.40 0.43 0.46"
-
-
-def outlier_copy(src: Path, cache: Path, name: str, seed: int) -> Path:
-    """The log with 43 % outliers for seed, made once."""
-    out = cache / f"{name}-o43-s{seed}.clf.gz"
-    if not out.exists():
-        tmp = out.with_suffix(".tmp.gz")
-        outliers.inject_file(str(src), str(tmp), "43", seed)
-        tmp.rename(out)
-    return out
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-sweep", description=__doc__.split("\n\n")[0])
     ap.add_argument("--nav", required=True, help="the rsm-nav to run")
     ap.add_argument("--shared", type=Path, help="the shared folder (default: $RSM_SHARED_DIR, else ../shared)")
-    ap.add_argument("--work", type=Path, required=True, help="folder for trajectories and the outlier copies")
+    ap.add_argument("--work", type=Path, required=True, help="folder for the trajectories")
+    ap.add_argument("--cache", type=Path, required=True, help="folder of the outlier copies (the bench's cache)")
     ap.add_argument("--label", default="run", help="name of the row")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="passed to rsm-nav")
     ap.add_argument("--updates", default=os.environ.get("RSM_SWEEP_UPDATES", DEFAULT_UPDATES),
@@ -61,13 +52,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 2
     a.work.mkdir(parents=True, exist_ok=True)
     only = set(a.only.split())
+    seeds = [int(s) for s in a.seeds.split()]
+    srcs = {name: shared / "data" / name / f"{name}.clf.gz" for name in logs}
+    copies, _ = outlier_logs([(srcs[name], 43, seed) for name in logs for seed in seeds
+                              if not only or f"{name}-s{seed}" in only], a.cache, a.jobs)
     jobs: List[Tuple[str, str, Path, List[str]]] = []
     for name in logs:
-        src = shared / "data" / name / f"{name}.clf.gz"
-        variants = [("clean", src)]
-        for seed in (int(s) for s in a.seeds.split()):
-            if not only or f"{name}-s{seed}" in only:
-                variants.append((f"s{seed}", outlier_copy(src, a.work, name, seed)))
+        variants = [("clean", srcs[name])] + [(f"s{seed}", copies[(str(srcs[name]), 43, seed)])
+                                               for seed in seeds if (str(srcs[name]), 43, seed) in copies]
         for variant, path in variants:
             if only and f"{name}-{variant}" not in only:
                 continue
