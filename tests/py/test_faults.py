@@ -52,6 +52,15 @@ def number(pattern: str, text: str) -> int:
     return int(m.group(1))
 
 
+def nav_with_map(tmp_path: Path, lines, name: str):
+    """Writes lines as the log NAME.clf and runs rsm-nav on it with --map
+    m.pgm; returns the run and the picture's path."""
+    log = tmp_path / f"{name}.clf"
+    log.write_text("\n".join(lines) + "\n")
+    pgm = tmp_path / "m.pgm"
+    return run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--map", pgm, "--quiet"), pgm
+
+
 def rows(path: Path):
     return [l for l in path.read_text().splitlines() if l and not l.startswith("#")]
 
@@ -256,10 +265,7 @@ def test_map_picture_has_each_scans_own_points_even_when_it_had_too_few(tmp_path
         f[2:182] = ["0.00"] * 180            # too short: dropped
         f[2 + 85:2 + 95] = ["15.00"] * 10     # ten readings 15 m ahead: a FEW_POINTS scan
         lines[k] = " ".join(f)
-    log = tmp_path / "few.clf"
-    log.write_text("\n".join(lines) + "\n")
-    pgm = tmp_path / "m.pgm"
-    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--map", pgm, "--quiet")
+    res, pgm = nav_with_map(tmp_path, lines, "few")
     assert res.returncode == 0, res.stderr
     assert "few_points     20" in res.stdout, res.stdout
     w, h, px = read_pgm(pgm)
@@ -313,10 +319,7 @@ def test_map_picture_with_no_points_at_first_and_a_teleport_far_away(tmp_path, h
     f[2:182] = ["0.00"] * 180                       # the first scan has no usable point
     lines[0] = " ".join(f)
     lines[10] = with_fields(lines[10], o6="1e18")    # one pose 1e18 m away
-    log = tmp_path / "far.clf"
-    log.write_text("\n".join(lines) + "\n")
-    pgm = tmp_path / "m.pgm"
-    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--map", pgm, "--quiet")
+    res, pgm = nav_with_map(tmp_path, lines, "far")
     assert res.returncode == 0, res.stderr
     assert "left out of the picture" in res.stderr, res.stderr
     assert pgm.read_bytes()[:2] == b"P5"
@@ -326,9 +329,7 @@ def test_map_picture_too_large_says_so(tmp_path, head_log):
     lines = flaser_lines(head_log, 30)
     for k in range(15, 30):
         lines[k] = with_fields(lines[k], o6=str(1500.0 + float(lines[k].split()[-6])))
-    log = tmp_path / "wide.clf"
-    log.write_text("\n".join(lines) + "\n")
-    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--map", tmp_path / "m.pgm", "--quiet")
+    res, _ = nav_with_map(tmp_path, lines, "wide")
     assert res.returncode == 1, res.stderr
     assert "would span" in res.stderr and "1000 m" in res.stderr, res.stderr
 
