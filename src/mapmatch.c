@@ -8,6 +8,7 @@
 #include "rsm/ekf.h"
 #include "rsm/status.h"
 #include "fmath.h"
+#include "tmap_read.h"
 
 /* Smallest prior variance used, so that a filter that starts with a zero
  * covariance still has an invertible prior (m^2 and rad^2). */
@@ -66,7 +67,7 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
         const float wy = x->y + sn * px + c * py;
         float gx;
         float gy;
-        const float m = rsm_tmap_sample_at(map, &cur, wx, wy, &gx, &gy);
+        const float m = rsm_tmap_read_sample(map, &cur, wx, wy, &gx, &gy);
         const float r = 1.0f - m;
         float gt;
         s->cost += r * r;

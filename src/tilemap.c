@@ -9,12 +9,11 @@
 #include "rsm/status.h"
 #include "bits.h"
 #include "fmath.h"
+#include "tmap_read.h"
 
 #define STAMP_MASK 0x3FFFFFFFu
-#define TILE_MASK ((int32_t)RSM_TMAP_TILE_SIDE - 1)
-/* Cells beyond this from the origin (at any level) are refused, so that tile
- * coordinates fit int16 and cell arithmetic never overflows. */
-#define CELL_LIMIT (32000 * RSM_TMAP_TILE_SIDE)
+#define TILE_MASK RSM_TMAP_TILE_MASK
+#define CELL_LIMIT RSM_TMAP_CELL_LIMIT
 
 rsm_tmap_config_t rsm_tmap_config_default(void)
 {
@@ -69,8 +68,7 @@ float rsm_tmap_cell(const rsm_tmap_t *map, uint32_t level)
     return map->cfg.cell_m * (float)(1u << level);
 }
 
-/* Slot of a tile, or RSM_TMAP_NONE. */
-static uint32_t find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
+uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
 {
     uint32_t h = hash_key(level, tx, ty);
     for (;;) {
@@ -206,39 +204,13 @@ typedef rsm_tmap_cursor_t cursor_t;
 
 static void cursor_start(cursor_t *c, uint32_t level)
 {
+    memset(c, 0, sizeof *c);
     c->level = level;
-    c->valid = 0;
-    c->tx = 0;
-    c->ty = 0;
-    c->slot = RSM_TMAP_NONE;
 }
 
 void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level)
 {
     cursor_start(c, level);
-}
-
-static uint32_t cursor_slot(const rsm_tmap_t *map, cursor_t *c, int32_t gx, int32_t gy)
-{
-    const int32_t tx = gx >> RSM_TMAP_TILE_LOG2;
-    const int32_t ty = gy >> RSM_TMAP_TILE_LOG2;
-    if (!c->valid || tx != c->tx || ty != c->ty) {
-        c->tx = tx;
-        c->ty = ty;
-        c->valid = 1;
-        c->slot = find_slot(map, c->level, tx, ty);
-    }
-    return c->slot;
-}
-
-static uint32_t cell_index(int32_t gx, int32_t gy)
-{
-    return ((uint32_t)(gy & TILE_MASK) << RSM_TMAP_TILE_LOG2) | (uint32_t)(gx & TILE_MASK);
-}
-
-static uint32_t get_cell(const rsm_tile_t *t, uint32_t i)
-{
-    return ((uint32_t)t->cell[i >> 1] >> ((i & 1u) << 2)) & 15u;
 }
 
 static void set_cell(rsm_tile_t *t, uint32_t i, uint32_t v)
@@ -258,8 +230,8 @@ uint8_t rsm_tmap_value(const rsm_tmap_t *map, uint32_t level, int32_t gx, int32_
     if (map == NULL || level >= map->cfg.levels || !in_range(gx, gy)) {
         return 0;
     }
-    s = find_slot(map, level, gx >> RSM_TMAP_TILE_LOG2, gy >> RSM_TMAP_TILE_LOG2);
-    return s == RSM_TMAP_NONE ? 0u : (uint8_t)get_cell(&map->tile[s], cell_index(gx, gy));
+    s = rsm_tmap_find_slot(map, level, gx >> RSM_TMAP_TILE_LOG2, gy >> RSM_TMAP_TILE_LOG2);
+    return s == RSM_TMAP_NONE ? 0u : (uint8_t)rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(gx, gy));
 }
 
 uint32_t rsm_tmap_tiles(const rsm_tmap_t *map, uint32_t level)
@@ -319,12 +291,12 @@ static uint32_t clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0,
     int32_t k;
     uint32_t top = 0;
     for (k = 0; k < steps - (int32_t)margin; ++k) {
-        const uint32_t s = cursor_slot(map, c, x0, y0);
+        const uint32_t s = rsm_tmap_cursor_slot(map, c, x0, y0);
         int32_t e2;
         if (s != RSM_TMAP_NONE) {
             rsm_tile_t *t = &map->tile[s];
-            const uint32_t i = cell_index(x0, y0);
-            const uint32_t v = get_cell(t, i);
+            const uint32_t i = rsm_tmap_cell_index(x0, y0);
+            const uint32_t v = rsm_tmap_get_cell(t, i);
             top = v > top ? v : top;
             if (v > dec) {
                 set_cell(t, i, v - dec);
@@ -332,7 +304,7 @@ static uint32_t clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0,
                 set_cell(t, i, 0u);
                 if (tile_empty(t)) {
                     free_slot(map, s);
-                    c->valid = 0;
+                    rsm_tmap_cursor_forget(c);
                 }
             }
         }
@@ -350,13 +322,6 @@ static uint32_t clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0,
     return top;
 }
 
-/* Value of a cell through a cursor; 0 where no tile is held. */
-static uint32_t cell_value(const rsm_tmap_t *map, cursor_t *c, int32_t gx, int32_t gy)
-{
-    const uint32_t s = cursor_slot(map, c, gx, gy);
-    return s == RSM_TMAP_NONE ? 0u : get_cell(&map->tile[s], cell_index(gx, gy));
-}
-
 /* Adds inc to a cell, taking a tile for it if needed. */
 static void add_hit(rsm_tmap_t *map, cursor_t *c, uint32_t level, int32_t gx, int32_t gy, uint32_t inc)
 {
@@ -367,10 +332,10 @@ static void add_hit(rsm_tmap_t *map, cursor_t *c, uint32_t level, int32_t gx, in
     if (inc == 0u) {
         return;
     }
-    s = cursor_slot(map, c, gx, gy);
+    s = rsm_tmap_cursor_slot(map, c, gx, gy);
     if (s == RSM_TMAP_NONE) {
         s = take_slot(map, level, gx >> RSM_TMAP_TILE_LOG2, gy >> RSM_TMAP_TILE_LOG2);
-        c->valid = 0;
+        rsm_tmap_cursor_forget(c);
         if (s == RSM_TMAP_NONE) {
             map->counters.dropped++;
             return;
@@ -378,8 +343,8 @@ static void add_hit(rsm_tmap_t *map, cursor_t *c, uint32_t level, int32_t gx, in
     }
     t = &map->tile[s];
     t->stamp = (level << 30) | map->stamp;
-    i = cell_index(gx, gy);
-    v = get_cell(t, i) + inc;
+    i = rsm_tmap_cell_index(gx, gy);
+    v = rsm_tmap_get_cell(t, i) + inc;
     set_cell(t, i, v > RSM_TMAP_MAX_VALUE ? RSM_TMAP_MAX_VALUE : v);
 }
 
@@ -423,7 +388,7 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                 if (in_range(gx, gy)) {
                     const uint32_t top = clear_beam(map, &c, ox, oy, gx, gy, map->cfg.miss_dec, map->cfg.clear_margin);
                     if (map->cfg.wall_value > 0u && idx == 0u && top >= map->cfg.wall_value &&
-                        k < (size_t)RSM_MAX_BEAMS && cell_value(map, &c, gx, gy) < map->cfg.wall_value) {
+                        k < (size_t)RSM_MAX_BEAMS && rsm_tmap_cell_value(map, &c, gx, gy) < map->cfg.wall_value) {
                         rsm_bit_set(behind, k);
                     }
                 }
@@ -472,11 +437,6 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
     return RSM_OK;
 }
 
-static float occ_at(const rsm_tmap_t *map, cursor_t *c, int32_t gx, int32_t gy)
-{
-    return map->occ[cell_value(map, c, gx, gy)];
-}
-
 float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y)
 {
     cursor_t c;
@@ -489,12 +449,7 @@ float rsm_tmap_occupancy_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x
     const float inv_a = map->inv_cell[c->level];
     const int32_t gx = cell_of(x, inv_a);
     const int32_t gy = cell_of(y, inv_a);
-    uint32_t s;
-    if (!in_range(gx, gy)) {
-        return 0.0f;
-    }
-    s = cursor_slot(map, c, gx, gy);
-    return s == RSM_TMAP_NONE ? 0.0f : map->occ[get_cell(&map->tile[s], cell_index(gx, gy))];
+    return in_range(gx, gy) ? map->occ[rsm_tmap_cell_value(map, c, gx, gy)] : 0.0f;
 }
 
 float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy)
@@ -506,44 +461,5 @@ float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, f
 
 float rsm_tmap_sample_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, float *dx, float *dy)
 {
-    const float inv_a = map->inv_cell[c->level];
-    const rsm_bilinear_t b = rsm_bilinear_at(x, y, inv_a);
-    const int32_t i = b.i;
-    const int32_t j = b.j;
-    const float du = b.du;
-    const float dv = b.dv;
-    float m00;
-    float m10;
-    float m01;
-    float m11;
-    if (!in_range(i, j) || !in_range(i + 1, j + 1)) {
-        *dx = 0.0f;
-        *dy = 0.0f;
-        return 0.0f;
-    }
-    if ((i & TILE_MASK) != TILE_MASK && (j & TILE_MASK) != TILE_MASK) {
-        /* All four cells in one tile: one lookup. */
-        const uint32_t s = cursor_slot(map, c, i, j);
-        if (s == RSM_TMAP_NONE) {
-            *dx = 0.0f;
-            *dy = 0.0f;
-            return 0.0f;
-        }
-        {
-            const rsm_tile_t *t = &map->tile[s];
-            const uint32_t k = cell_index(i, j);
-            m00 = map->occ[get_cell(t, k)];
-            m10 = map->occ[get_cell(t, k + 1u)];
-            m01 = map->occ[get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE)];
-            m11 = map->occ[get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u)];
-        }
-    } else {
-        m00 = occ_at(map, c, i, j);
-        m10 = occ_at(map, c, i + 1, j);
-        m01 = occ_at(map, c, i, j + 1);
-        m11 = occ_at(map, c, i + 1, j + 1);
-    }
-    *dx = ((m10 - m00) * (1.0f - dv) + (m11 - m01) * dv) * inv_a;
-    *dy = ((m01 - m00) * (1.0f - du) + (m11 - m10) * du) * inv_a;
-    return (m00 * (1.0f - du) + m10 * du) * (1.0f - dv) + (m01 * (1.0f - du) + m11 * du) * dv;
+    return rsm_tmap_read_sample(map, c, x, y, dx, dy);
 }

@@ -119,15 +119,21 @@ int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t
 /* Occupancy in [0, 1] of the cell holding world (x, y) on a level. */
 float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y);
 
-/* A read position on one level of one map: remembers the last tile found,
+/* A read position on one level of one map: remembers the last tiles found,
  * so that reads of nearby points (a scan's, in beam order) skip the index.
- * Valid until the map is next written. */
+ * Four ways, one per parity of the tile's column and row, so that the 2 x 2
+ * tiles around a read near a tile's edge are all held at once. Valid until
+ * the map is next written. */
+typedef struct rsm_tmap_way {
+    int16_t tx;
+    int16_t ty;
+    uint16_t slot;   /* RSM_TMAP_NONE: the tile is not held */
+    uint16_t valid;
+} rsm_tmap_way_t;
+
 typedef struct rsm_tmap_cursor {
     uint32_t level;
-    int32_t tx;
-    int32_t ty;
-    uint32_t slot;  /* RSM_TMAP_NONE: the tile is not held */
-    int valid;
+    rsm_tmap_way_t way[4];
 } rsm_tmap_cursor_t;
 
 void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level);

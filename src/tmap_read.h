@@ -1,0 +1,138 @@
+/* Reads of the tile map, inline: the map matcher samples every point of a
+ * scan a dozen times per scan, and a call per read (plus one per tile
+ * lookup) was most of a scan's cost on a Cortex-M4. The public readers in
+ * tilemap.c are these same functions. Internal to the library. */
+#ifndef RSM_TMAP_READ_H
+#define RSM_TMAP_READ_H
+
+#include <stdint.h>
+
+#include "rsm/tilemap.h"
+
+#define RSM_TMAP_TILE_MASK ((int32_t)RSM_TMAP_TILE_SIDE - 1)
+/* Cells beyond this from the origin (at any level) are refused, so that tile
+ * coordinates fit int16 and cell arithmetic never overflows. */
+#define RSM_TMAP_CELL_LIMIT (32000 * RSM_TMAP_TILE_SIDE)
+
+/* Slot of a tile, or RSM_TMAP_NONE (the index lookup, in tilemap.c). */
+uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty);
+
+/* Forgets every tile the cursor holds (after a write moved or freed one). */
+static inline void rsm_tmap_cursor_forget(rsm_tmap_cursor_t *c)
+{
+    c->way[0].valid = 0u;
+    c->way[1].valid = 0u;
+    c->way[2].valid = 0u;
+    c->way[3].valid = 0u;
+}
+
+/* Slot of the tile holding cell (gx, gy) of the cursor's level. */
+static inline uint32_t rsm_tmap_cursor_slot(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy)
+{
+    const int32_t tx = gx >> RSM_TMAP_TILE_LOG2;
+    const int32_t ty = gy >> RSM_TMAP_TILE_LOG2;
+    rsm_tmap_way_t *w = &c->way[(uint32_t)(tx & 1) | ((uint32_t)(ty & 1) << 1)];
+    if (!w->valid || w->tx != tx || w->ty != ty) {
+        w->tx = (int16_t)tx;
+        w->ty = (int16_t)ty;
+        w->valid = 1u;
+        w->slot = (uint16_t)rsm_tmap_find_slot(map, c->level, tx, ty);
+    }
+    return w->slot;
+}
+
+static inline uint32_t rsm_tmap_cell_index(int32_t gx, int32_t gy)
+{
+    return ((uint32_t)(gy & RSM_TMAP_TILE_MASK) << RSM_TMAP_TILE_LOG2) | (uint32_t)(gx & RSM_TMAP_TILE_MASK);
+}
+
+static inline uint32_t rsm_tmap_get_cell(const rsm_tile_t *t, uint32_t i)
+{
+    return ((uint32_t)t->cell[i >> 1] >> ((i & 1u) << 2)) & 15u;
+}
+
+/* Value of a cell through a cursor; 0 where no tile is held. */
+static inline uint32_t rsm_tmap_cell_value(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy)
+{
+    const uint32_t s = rsm_tmap_cursor_slot(map, c, gx, gy);
+    return s == RSM_TMAP_NONE ? 0u : rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(gx, gy));
+}
+
+/* The occupancy of two horizontal neighbours, cells k and k + 1 of a tile's
+ * row (k + 1 in the same row). */
+static inline void rsm_tmap_occ_pair(const rsm_tmap_t *map, const rsm_tile_t *t, uint32_t k, float *left,
+                                     float *right)
+{
+    const uint8_t *b = &t->cell[k >> 1];
+    if ((k & 1u) == 0u) {
+        *left = map->occ[b[0] & 15u];
+        *right = map->occ[b[0] >> 4];
+    } else {
+        *left = map->occ[b[0] >> 4];
+        *right = map->occ[b[1] & 15u];
+    }
+}
+
+/* rsm_tmap_sample_at (see tilemap.h). */
+static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, float *dx,
+                                         float *dy)
+{
+    /* As rsm_bilinear_at, with the floor by conversion: the range test comes
+     * first, so the conversion cannot overflow. u in [1 - L, L - 1) is
+     * exactly floor(u) > -L and floor(u) + 1 < L, the cells' range. */
+    const float lim = (float)(RSM_TMAP_CELL_LIMIT - 1);
+    const float inv_a = map->inv_cell[c->level];
+    const float u = x * inv_a - 0.5f;
+    const float v = y * inv_a - 0.5f;
+    int32_t i;
+    int32_t j;
+    float fu;
+    float fv;
+    float du;
+    float dv;
+    float m00;
+    float m10;
+    float m01;
+    float m11;
+    if (!(u >= -lim && u < lim && v >= -lim && v < lim)) {
+        *dx = 0.0f;
+        *dy = 0.0f;
+        return 0.0f;
+    }
+    i = (int32_t)u;
+    j = (int32_t)v;
+    fu = (float)i;
+    fv = (float)j;
+    if (fu > u) {
+        --i;
+        fu -= 1.0f;
+    }
+    if (fv > v) {
+        --j;
+        fv -= 1.0f;
+    }
+    du = u - fu;
+    dv = v - fv;
+    if ((i & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (j & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK) {
+        /* All four cells in one tile: one lookup. */
+        const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
+        const uint32_t k = rsm_tmap_cell_index(i, j);
+        if (s == RSM_TMAP_NONE) {
+            *dx = 0.0f;
+            *dy = 0.0f;
+            return 0.0f;
+        }
+        rsm_tmap_occ_pair(map, &map->tile[s], k, &m00, &m10);
+        rsm_tmap_occ_pair(map, &map->tile[s], k + (uint32_t)RSM_TMAP_TILE_SIDE, &m01, &m11);
+    } else {
+        m00 = map->occ[rsm_tmap_cell_value(map, c, i, j)];
+        m10 = map->occ[rsm_tmap_cell_value(map, c, i + 1, j)];
+        m01 = map->occ[rsm_tmap_cell_value(map, c, i, j + 1)];
+        m11 = map->occ[rsm_tmap_cell_value(map, c, i + 1, j + 1)];
+    }
+    *dx = ((m10 - m00) * (1.0f - dv) + (m11 - m01) * dv) * inv_a;
+    *dy = ((m01 - m00) * (1.0f - du) + (m11 - m10) * du) * inv_a;
+    return (m00 * (1.0f - du) + m10 * du) * (1.0f - dv) + (m01 * (1.0f - du) + m11 * du) * dv;
+}
+
+#endif /* RSM_TMAP_READ_H */
