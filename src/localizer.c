@@ -48,6 +48,7 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.map_update_rad = 0.5f;
     c.recover_ratio = 0.4f;
     c.recover_m = 1.0f;
+    c.recover_rad = 0.3f;
     c.isolation.tol_m = 0.0f;
     c.isolation.slope = 3.0f;
     c.isolation.window = 2u;
@@ -182,7 +183,9 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
     case RSM_METHOD_MAP:
         if (rsm_mapmatch_check(&cfg->mapmatch) != RSM_OK || !(cfg->map_update_m >= 0.0f) ||
             !(cfg->map_update_rad >= 0.0f) || !(cfg->recover_ratio >= 0.0f && cfg->recover_ratio <= 1.0f) ||
-            !(cfg->recover_m >= 0.0f) || !(cfg->recover_m <= 50.0f * cfg->tmap.cell_m)) {
+            !(cfg->recover_m >= 0.0f) || !(cfg->recover_m <= 50.0f * cfg->tmap.cell_m) ||
+            !(cfg->recover_rad >= 0.0f && cfg->recover_rad <= 1.0f) ||
+            (cfg->recover_rad > 0.0f && !(cfg->recover_rad <= 64.0f * cfg->mapmatch.search_step_rad))) {
             return RSM_ERR_INVAL;
         }
         rc = rsm_tmap_init(&loc->state.persistent.map, &cfg->tmap);
@@ -541,6 +544,43 @@ static void apply_mount(rsm_localizer_t *loc, size_t n)
     }
 }
 
+/* Basins a recovery search descends from. */
+#define RECOVER_STARTS 3
+
+/* One recovery search within +-radius_m and +-recover_rad of pred: descends
+ * from the best few candidates under a prior widened as far and replaces
+ * *res with the best fit if it fits well again (at least half of what was
+ * lost regained). Returns whether it did. */
+static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
+                   rsm_mapmatch_result_t *res)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const float fit = loc->state.persistent.fit;
+    const float need = res->hit + 0.5f * (fit - res->hit);
+    rsm_pose_t start[RECOVER_STARTS];
+    rsm_mapmatch_result_t alt;
+    float wide[9];
+    int found;
+    int k;
+    int took = 0;
+    memcpy(wide, loc->ekf.p, sizeof wide);
+    wide[0] += radius_m * radius_m;
+    wide[4] += radius_m * radius_m;
+    wide[8] += cfg->recover_rad * cfg->recover_rad;
+    found = rsm_mapmatch_search(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, radius_m,
+                                cfg->recover_rad, start, RECOVER_STARTS);
+    /* The coarse score only ranks basins: descend from each. */
+    for (k = 0; k < found; ++k) {
+        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[k], &alt) ==
+                RSM_OK &&
+            alt.hit >= cfg->recover_ratio * fit && alt.hit >= need && (!took || alt.hit > res->hit)) {
+            *res = alt;
+            took = 1;
+        }
+    }
+    return took;
+}
+
 static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
@@ -554,26 +594,16 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &res);
     if (rc == RSM_OK && cfg->recover_m > 0.0f && res.hit < cfg->recover_ratio * loc->state.persistent.fit) {
         /* Far worse than recent scans: odometry may be off by more than any
-         * basin. Search wide, then descend from the best candidate under a
-         * prior widened by the search radius; keep it only if it fits well
-         * again (at least half of what was lost regained: along a corridor a
-         * shifted pose fits a little better for no good reason). */
-        rsm_mapmatch_result_t alt;
-        rsm_pose_t best;
-        float wide[9];
+         * basin. The smallest correction that explains the scan first: a
+         * turn misjudged (every heading within recover_rad, the position
+         * within one coarse cell), and only if that does not fit, a shift up
+         * to recover_m (a bump, a kidnap). Along a corridor a shifted pose
+         * can fit about as well as the right one. */
+        const float near_m = rsm_tmap_cell(&loc->state.persistent.map, (uint32_t)cfg->tmap.levels - 1u);
         loc->counters.searches++;
-        memcpy(wide, loc->ekf.p, sizeof wide);
-        wide[0] += cfg->recover_m * cfg->recover_m;
-        wide[4] += cfg->recover_m * cfg->recover_m;
-        wide[8] += cfg->mapmatch.search_rad * cfg->mapmatch.search_rad;
-        if (rsm_mapmatch_search(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, cfg->recover_m,
-                                &best) == RSM_OK &&
-            rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, wide, &best, &alt) ==
-                RSM_OK &&
-            alt.hit >= cfg->recover_ratio * loc->state.persistent.fit &&
-            alt.hit >= res.hit + 0.5f * (loc->state.persistent.fit - res.hit)) {
+        if (recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res) ||
+            (near_m < cfg->recover_m && recover(loc, npts, &pred, cfg->recover_m, &res))) {
             loc->counters.recovered++;
-            res = alt;
         }
     }
     rep->inliers = res.used;

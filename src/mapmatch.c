@@ -167,53 +167,98 @@ static void full(const float h[6], float w, float out[9])
     out[8] = h[5] * w;
 }
 
+/* Puts a candidate into the list of the k best (ascending cost) unless a
+ * better one lies within one grid step of it; worse ones that close give
+ * up their places. No two kept ones are that close: the list holds k
+ * separate basins, not one basin's neighbours. */
+static void keep_candidate(rsm_pose_t *best, float *cost, int32_t *ij, size_t k, size_t *found, const rsm_pose_t *x,
+                           float c, int32_t i, int32_t j)
+{
+    size_t m;
+    size_t kept = 0;
+    size_t at;
+    for (m = 0; m < *found; ++m) {
+        const int32_t di = ij[2 * m] - i;
+        const int32_t dj = ij[2 * m + 1u] - j;
+        if (di >= -1 && di <= 1 && dj >= -1 && dj <= 1 && cost[m] <= c) {
+            return;
+        }
+    }
+    for (m = 0; m < *found; ++m) {
+        const int32_t di = ij[2 * m] - i;
+        const int32_t dj = ij[2 * m + 1u] - j;
+        if (!(di >= -1 && di <= 1 && dj >= -1 && dj <= 1)) {
+            best[kept] = best[m];
+            cost[kept] = cost[m];
+            ij[2 * kept] = ij[2 * m];
+            ij[2 * kept + 1u] = ij[2 * m + 1u];
+            ++kept;
+        }
+    }
+    if (kept == k) {
+        if (!(c < cost[k - 1u])) {
+            *found = kept;
+            return;
+        }
+        --kept;
+    }
+    for (at = kept; at > 0u && cost[at - 1u] > c; --at) {
+        best[at] = best[at - 1u];
+        cost[at] = cost[at - 1u];
+        ij[2 * at] = ij[2 * at - 2u];
+        ij[2 * at + 1u] = ij[2 * at - 1u];
+    }
+    best[at] = *x;
+    cost[at] = c;
+    ij[2 * at] = i;
+    ij[2 * at + 1u] = j;
+    *found = kept + 1u;
+}
+
 int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                        const rsm_pose_t *x0, float radius_m, rsm_pose_t *best)
+                        const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k)
 {
     const uint32_t level = (uint32_t)map->cfg.levels - 1u;
     const float step = rsm_tmap_cell(map, level);
     const int32_t half = (int32_t)(radius_m / step);
-    const int32_t fan = cfg->search_step_rad > 0.0f ? (int32_t)(cfg->search_rad / cfg->search_step_rad) : 0;
+    const int32_t fan = cfg->search_step_rad > 0.0f ? (int32_t)(radius_rad / cfg->search_step_rad) : 0;
     /* Every stride-th point: the score only ranks candidates. */
     const size_t stride = n > 64u ? (n + 63u) / 64u : 1u;
-    float best_cost = 0.0f;
-    int any = 0;
+    float cost_of[RSM_MAPMATCH_MAX_CANDIDATES];
+    int32_t ij[2 * RSM_MAPMATCH_MAX_CANDIDATES];
+    size_t found = 0;
     int32_t a;
     int32_t i;
     int32_t j;
     if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || best == NULL || !(radius_m >= 0.0f) ||
-        radius_m > 100.0f * step) {
+        radius_m > 100.0f * step || !(radius_rad >= 0.0f) || radius_rad > 1.0f ||
+        (radius_rad > 0.0f && !(radius_rad <= 64.0f * cfg->search_step_rad)) || k < 1u || k > RSM_MAPMATCH_MAX_CANDIDATES) {
         return RSM_ERR_INVAL;
     }
-    *best = *x0;
     for (a = -fan; a <= fan; ++a) {
         const float th = rsm_wrap_angle(x0->theta + (float)a * cfg->search_step_rad);
         const float c = rsm_cosf(th);
         const float sn = rsm_sinf(th);
         for (j = -half; j <= half; ++j) {
             for (i = -half; i <= half; ++i) {
-                const float tx = x0->x + (float)i * step;
-                const float ty = x0->y + (float)j * step;
+                rsm_pose_t x;
                 float cost = 0.0f;
                 rsm_tmap_cursor_t cur;
-                size_t k;
+                size_t q;
+                x.x = x0->x + (float)i * step;
+                x.y = x0->y + (float)j * step;
+                x.theta = th;
                 rsm_tmap_cursor_init(&cur, level);
-                for (k = 0; k < n; k += stride) {
-                    const float r = 1.0f - rsm_tmap_occupancy_at(map, &cur, tx + c * pts[k].x - sn * pts[k].y,
-                                                                 ty + sn * pts[k].x + c * pts[k].y);
+                for (q = 0; q < n; q += stride) {
+                    const float r = 1.0f - rsm_tmap_occupancy_at(map, &cur, x.x + c * pts[q].x - sn * pts[q].y,
+                                                                 x.y + sn * pts[q].x + c * pts[q].y);
                     cost += r * r;
                 }
-                if (!any || cost < best_cost) {
-                    any = 1;
-                    best_cost = cost;
-                    best->x = tx;
-                    best->y = ty;
-                    best->theta = th;
-                }
+                keep_candidate(best, cost_of, ij, k, &found, &x, cost, i, j);
             }
         }
     }
-    return RSM_OK;
+    return (int)found;
 }
 
 /* The prior of a descent: its mean, information and the residual weight. */

@@ -11,7 +11,9 @@
 #include "fmath.h"
 #include "tmap_read.h"
 
-#define STAMP_MASK 0x3FFFFFFFu
+#define STAMP_MASK 0x1FFFFFFFu
+/* Set in a tile's stamp once one of its cells has reached saturation. */
+#define CONFIRMED 0x20000000u
 #define TILE_MASK RSM_TMAP_TILE_MASK
 #define CELL_LIMIT RSM_TMAP_CELL_LIMIT
 
@@ -26,6 +28,7 @@ rsm_tmap_config_t rsm_tmap_config_default(void)
     c.clear_margin = 1u;
     c.splat_from = 1u;
     c.age_shift = 2u;
+    c.unconfirmed_shift = 4u;
     c.wall_level = 1u;
     c.wall_value = 0u;
     return c;
@@ -48,7 +51,8 @@ int rsm_tmap_init(rsm_tmap_t *map, const rsm_tmap_config_t *cfg)
     uint32_t v;
     if (map == NULL || cfg == NULL || !(cfg->cell_m > 0.0f) || !(cfg->cell_m < 1.0e3f) || cfg->levels < 1u ||
         cfg->levels > RSM_TMAP_LEVELS || cfg->hit_inc < 1u || cfg->hit_inc > RSM_TMAP_MAX_VALUE ||
-        cfg->miss_dec > RSM_TMAP_MAX_VALUE || cfg->saturation < 1u || cfg->saturation > RSM_TMAP_MAX_VALUE) {
+        cfg->miss_dec > RSM_TMAP_MAX_VALUE || cfg->saturation < 1u || cfg->saturation > RSM_TMAP_MAX_VALUE ||
+        cfg->age_shift > 8u || cfg->unconfirmed_shift > 16u) {
         return RSM_ERR_INVAL;
     }
     memset(map, 0, sizeof *map);
@@ -117,8 +121,11 @@ static void hash_remove(rsm_tmap_t *map, uint32_t s)
 /* The slot to reuse: the one written longest ago, where a tile's age counts
  * 4^-level (a coarse tile holds 4^level times the area of a fine one for the
  * same bytes, so the building's outline outlives the fine detail around
- * it). Never a slot written by the update in progress; RSM_TMAP_NONE if every
- * slot was. */
+ * it), and 2^unconfirmed_shift times more while no cell of it has reached
+ * saturation (one stray return: a phantom, unless a second return confirms
+ * it; phantoms in free space would otherwise push out the places seen
+ * minutes ago). Never a slot written by the update in progress;
+ * RSM_TMAP_NONE if every slot was. */
 static uint32_t oldest_slot(const rsm_tmap_t *map)
 {
     uint32_t best_age = 0;
@@ -126,7 +133,11 @@ static uint32_t oldest_slot(const rsm_tmap_t *map)
     uint32_t k;
     for (k = 0; k < map->used; ++k) {
         const uint32_t age = (map->stamp - (map->tile[k].stamp & STAMP_MASK)) & STAMP_MASK;
-        const uint32_t scaled = age >> (map->cfg.age_shift * tile_level(&map->tile[k]));
+        uint32_t scaled = age >> (map->cfg.age_shift * tile_level(&map->tile[k]));
+        if ((map->tile[k].stamp & CONFIRMED) == 0u) {
+            scaled = scaled < (STAMP_MASK >> map->cfg.unconfirmed_shift) ? scaled << map->cfg.unconfirmed_shift
+                                                                          : STAMP_MASK;
+        }
         if (age > 0u && (s == RSM_TMAP_NONE || scaled > best_age)) {
             best_age = scaled;
             s = k;
@@ -342,10 +353,11 @@ static void add_hit(rsm_tmap_t *map, cursor_t *c, uint32_t level, int32_t gx, in
         }
     }
     t = &map->tile[s];
-    t->stamp = (level << 30) | map->stamp;
     i = rsm_tmap_cell_index(gx, gy);
     v = rsm_tmap_get_cell(t, i) + inc;
-    set_cell(t, i, v > RSM_TMAP_MAX_VALUE ? RSM_TMAP_MAX_VALUE : v);
+    v = v > RSM_TMAP_MAX_VALUE ? RSM_TMAP_MAX_VALUE : v;
+    t->stamp = (level << 30) | (t->stamp & CONFIRMED) | (v >= map->cfg.saturation ? CONFIRMED : 0u) | map->stamp;
+    set_cell(t, i, v);
 }
 
 int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n)

@@ -99,6 +99,8 @@ typedef struct rsm_localizer_config {
                                      * this share of the recent mean (odometry far off: a slip, a
                                      * bump, a kidnap) triggers a search of +-recover_m; default 0.4 */
     float recover_m;                /* 0 = never search; default 1.0 */
+    float recover_rad;              /* ... and of +-recover_rad in heading (a turn the odometry
+                                     * misjudged); default 0.3 */
     uint8_t map_min_hits;           /* map cells with this many hits are occupied; default 1 */
     uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
     uint16_t min_points;            /* usable readings needed; default 20 */

@@ -82,14 +82,20 @@ typedef struct rsm_mapmatch_result {
 int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
                  const rsm_pose_t *x0, const float p0[9], const rsm_pose_t *start, rsm_mapmatch_result_t *res);
 
-/* Exhaustive search on the coarsest level for the pose that best fits the
+/* Most candidates rsm_mapmatch_search returns. */
+#define RSM_MAPMATCH_MAX_CANDIDATES 8u
+
+/* Exhaustive search on the coarsest level for the poses that best fit the
  * points: positions on that level's cell grid within +-radius_m of x0, each
- * with the heading fan of cfg; points are subsampled to at most 64. For
+ * with headings within +-radius_rad, cfg->search_step_rad apart; points are subsampled to at most 64. For
  * recovery after a large odometry error (about (2r/cell)^2 x fan x 64 cell
- * reads). Writes *best (x0 if nothing fits). RSM_OK or RSM_ERR_INVAL
- * (radius negative or above 100 cells). */
+ * reads). Writes the k (1..RSM_MAPMATCH_MAX_CANDIDATES) lowest-cost poses to
+ * best[], lowest first, no two within one grid step of each other (separate
+ * basins for a descent to start from). Returns how many were written (1..k),
+ * or RSM_ERR_INVAL (radius negative or above 100 cells, radius_rad negative,
+ * above 1 or 64 steps, k out of range). */
 int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                        const rsm_pose_t *x0, float radius_m, rsm_pose_t *best);
+                        const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k);
 
 #ifdef __cplusplus
 }

@@ -11,9 +11,11 @@
  * were.
  *
  * When the pool is full a return in a new tile takes the slot of the tile
- * least recently written (the smallest stamp), never one written by the
- * update in progress; if every slot was, the return is dropped and counted.
- * Travel is unbounded: the oldest places are forgotten first.
+ * least recently written (the smallest stamp), where coarse tiles age more
+ * slowly and tiles that no second return confirmed faster (age_shift,
+ * unconfirmed_shift); never one written by the update in progress; if every
+ * slot was, the return is dropped and counted. Travel is unbounded: the
+ * oldest places are forgotten first.
  *
  * A return adds hit_inc to its own cell on the finest level; on coarser
  * levels (from splat_from) it is shared among the four nearest cells by
@@ -43,7 +45,8 @@ extern "C" {
 typedef struct rsm_tile {
     int16_t tx;                       /* tile column and row at its level */
     int16_t ty;
-    uint32_t stamp;                   /* update that last wrote a return into it; level in bits 30-31 */
+    uint32_t stamp;                   /* update that last wrote a return into it (bits 0-28); bit 29
+                                       * set once a cell reached saturation; level in bits 30-31 */
     uint8_t cell[RSM_TMAP_TILE_BYTES];  /* two 4-bit cells per byte, row-major */
 } rsm_tile_t;
 
@@ -62,6 +65,9 @@ typedef struct rsm_tmap_config {
     uint8_t age_shift;     /* when the pool is full, a tile's age counts 2^-(age_shift * level):
                             * 2 keeps a coarse tile as long as the fine ones covering the same
                             * area. Default 2 */
+    uint8_t unconfirmed_shift;  /* ... and 2^unconfirmed_shift times more while none of its cells
+                            * has reached saturation (a stray return, most likely a phantom,
+                            * goes before the places seen minutes ago), at most 16. Default 4 */
     uint8_t wall_level;    /* level that judges whether a beam crossed a wall; default 1 */
     uint8_t wall_value;    /* a cell at or above this on wall_level is a wall: a return whose
                             * beam crossed one, and that does not itself land on a wall, is
@@ -85,7 +91,7 @@ typedef struct rsm_tmap {
     rsm_tmap_config_t cfg;             /* copied at init */
     float occ[RSM_TMAP_MAX_VALUE + 1u];  /* occupancy in [0, 1] of each cell value */
     float inv_cell[RSM_TMAP_LEVELS];   /* 1 / cell side of each level */
-    uint32_t stamp;                    /* update counter (30 bits used) */
+    uint32_t stamp;                    /* update counter (29 bits used) */
     uint16_t used;                     /* slots in use */
     uint16_t level_used[RSM_TMAP_LEVELS];  /* of those, per level */
     uint16_t hash[RSM_TMAP_HASH];      /* slot of a key, linear probing; RSM_TMAP_NONE empty */

@@ -822,6 +822,49 @@ void test_localizer_scan_should_stay_finite_after_a_one_metre_jump_with_map_on_r
     TEST_ASSERT_EQUAL_UINT32(0u, run_jump());
 }
 
+/* Ten good steps from K0, then the robot is carried `skip` steps along its
+ * path with no odometry (a kidnap, a wheel lifted), then ten more steps;
+ * returns the position error at the end and writes the heading error. */
+static float run_carried(size_t skip, float *rad)
+{
+    rsm_localizer_report_t rep;
+    rsm_pose_t est;
+    size_t k;
+    start_at_k0(&loc, 10u, &odo_err);
+    make_scan(&path[K0 + 9u + skip], NULL, (uint64_t)(K0 + 10u) * STEP_US);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    for (k = K0 + 10u + skip; k < K0 + 20u + skip; ++k) {
+        TEST_ASSERT_EQUAL_INT(RSM_OK, step(&loc, k, &odo_err, NULL, &rep));
+    }
+    est = rsm_localizer_pose(&loc);
+    TEST_ASSERT_TRUE(rsm_synth_pose_finite(&est));
+    *rad = rsm_synth_angle_error(&est, &path[K0 + 19u + skip]);
+    return rsm_synth_pos_error(&est, &path[K0 + 19u + skip]);
+}
+
+/* Steps carried: the rest of the first corner's turn in place (about 0.7
+ * rad) and half a metre along the next leg. */
+#define CARRIED 11u
+
+void test_localizer_scan_should_recover_from_being_carried_by_searching(void)
+{
+    /* Carried that far: beyond the descent's reach under the prior of a
+     * robot that did not move, so without the search the track is lost;
+     * with it the first scan after searches and the track comes back to
+     * the map's quantisation. */
+    float rad;
+    float err;
+    cfg.recover_m = 0.0f;
+    err = run_carried(CARRIED, &rad);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.searches);
+    TEST_ASSERT_TRUE(err > 0.3f);
+    cfg = rsm_localizer_config_default();
+    err = run_carried(CARRIED, &rad);
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT32(1u, loc.counters.recovered);
+    TEST_ASSERT_TRUE(err < QUANT + 0.01f);
+    TEST_ASSERT_TRUE(rad < 1.0f * RSM_PI / 180.0f);
+}
+
 void test_localizer_map_should_survive_poses_far_beyond_its_range(void)
 {
     /* A start (or an odometry stream) far beyond what the map's cells can
@@ -1203,6 +1246,7 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_ignore_a_scan_older_than_the_last);
     RUN_TEST(test_localizer_scan_should_refuse_scans_after_a_one_metre_odometry_jump);
     RUN_TEST(test_localizer_scan_should_stay_finite_after_a_one_metre_jump_with_map_on_reject);
+    RUN_TEST(test_localizer_scan_should_recover_from_being_carried_by_searching);
     RUN_TEST(test_localizer_map_should_survive_poses_far_beyond_its_range);
     RUN_TEST(test_localizer_motion_should_refuse_non_finite_increments);
     RUN_TEST(test_localizer_scan_should_reject_invalid_arguments);

@@ -250,7 +250,7 @@ void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
     pred.y -= 0.5f;
     pred.theta += 4.0f * DEG;
     n = points_at(&truth_w);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, &best));
+    TEST_ASSERT_EQUAL_INT(1, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, &best, 1u));
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&best, &truth) < coarse);
     TEST_ASSERT_TRUE(rsm_synth_angle_error(&best, &truth) < 2.0f * DEG);
     /* and the descent from there lands on it, under the prior widened by
@@ -263,8 +263,34 @@ void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, wide, &best, &res));
     }
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&res.pose, &truth) < 0.02f);
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, -1.0f, &best));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 200.0f * coarse, &best));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, -1.0f, 0.1f, &best, 1u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL,
+                          rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 200.0f * coarse, 0.1f, &best, 1u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, -0.1f, &best, 1u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 1.5f, &best, 1u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 0.1f, &best, 0u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 0.1f, &best,
+                                                             RSM_MAPMATCH_MAX_CANDIDATES + 1u));
+    /* The candidates a recovery descends from: the same best first, then
+     * others no closer than two grid steps to any kept one, so that a wrong
+     * basin ranked first along a corridor does not hide the right one
+     * behind its own neighbours. 5 x 5 positions: room for 9 at most. */
+    {
+        rsm_pose_t some[RSM_MAPMATCH_MAX_CANDIDATES];
+        const int found =
+            rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, some, RSM_MAPMATCH_MAX_CANDIDATES);
+        int a;
+        int b;
+        TEST_ASSERT_TRUE(found >= 2 && found <= 9);
+        rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, &best, 1u);
+        TEST_ASSERT_EQUAL_MEMORY(&best, &some[0], sizeof best);
+        for (a = 0; a < found; ++a) {
+            for (b = a + 1; b < found; ++b) {
+                TEST_ASSERT_TRUE(fabsf(some[a].x - some[b].x) > 1.5f * coarse ||
+                                 fabsf(some[a].y - some[b].y) > 1.5f * coarse);
+            }
+        }
+    }
 }
 
 void test_mapmatch_should_report_an_empty_map_as_degenerate(void)

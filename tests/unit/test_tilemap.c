@@ -199,13 +199,24 @@ void test_tmap_update_should_skip_non_finite_points_and_refuse_bad_arguments(voi
     TEST_ASSERT_EQUAL_UINT32(1u, map.used);
 }
 
-/* Reference model of which tiles the map holds: key and last write. */
+/* Reference model of which tiles the map holds: key, last write, the value
+ * of its one cell, and the slot it sits in (ties in age go to the lowest). */
 typedef struct model_tile {
     int32_t tx;
     int32_t ty;
     uint32_t written;
+    uint32_t value;
+    uint32_t slot;
     int held;
 } model_tile_t;
+
+/* The model's reuse rule, as tilemap.h states it for one level: age, times
+ * 2^unconfirmed_shift while the cell is below saturation. */
+static uint32_t model_score(const model_tile_t *t, uint32_t step)
+{
+    const uint32_t age = step - t->written;
+    return t->value >= cfg.saturation ? age : age << cfg.unconfirmed_shift;
+}
 
 /* More keys than the pool holds, so that slots are reused. */
 #define MODEL_KEYS (RSM_TMAP_TILES + 100)
@@ -231,6 +242,7 @@ void test_tmap_pool_should_match_a_model_through_eviction(void)
 {
     rsm_synth_rng_t rng;
     uint32_t held = 0;
+    uint32_t evictions = 0;
     uint32_t step;
     const float tile_m = cfg.cell_m * (float)RSM_TMAP_TILE_SIDE;
     const rsm_point_t o = {0.0f, 0.0f};
@@ -245,7 +257,8 @@ void test_tmap_pool_should_match_a_model_through_eviction(void)
         model[k].held = 0;
     }
     /* Fill the pool one key per update, then write random keys: each new
-     * one must take the slot of the least recently written. */
+     * one must take the slot of the least recently written, where a tile
+     * written once (below saturation) ages 2^unconfirmed_shift times faster. */
     for (step = 1; step <= (uint32_t)RSM_TMAP_TILES + 3000u; ++step) {
         const size_t i = step <= (uint32_t)RSM_TMAP_TILES ? (size_t)(step - 1u)
                                                            : (size_t)(rsm_synth_rng_next(&rng) % MODEL_KEYS);
@@ -258,16 +271,25 @@ void test_tmap_pool_should_match_a_model_through_eviction(void)
                 size_t j;
                 size_t oldest = MODEL_KEYS;
                 for (j = 0; j < (size_t)MODEL_KEYS; ++j) {
-                    if (model[j].held && (oldest == MODEL_KEYS || model[j].written < model[oldest].written)) {
+                    if (model[j].held &&
+                        (oldest == MODEL_KEYS || model_score(&model[j], step) > model_score(&model[oldest], step) ||
+                         (model_score(&model[j], step) == model_score(&model[oldest], step) &&
+                          model[j].slot < model[oldest].slot))) {
                         oldest = j;
                     }
                 }
                 model[oldest].held = 0;
+                model[i].slot = model[oldest].slot;
                 --held;
+                ++evictions;
+            } else {
+                model[i].slot = held;
             }
             model[i].held = 1;
+            model[i].value = 0u;
             ++held;
         }
+        model[i].value = model[i].value + cfg.hit_inc > 15u ? 15u : model[i].value + cfg.hit_inc;
         model[i].written = step;
         if (step == (uint32_t)RSM_TMAP_TILES || (step > (uint32_t)RSM_TMAP_TILES && step % 500u == 0u)) {
             model_check(step, tile_m);
@@ -276,6 +298,7 @@ void test_tmap_pool_should_match_a_model_through_eviction(void)
     TEST_ASSERT_EQUAL_UINT32(held, map.used);
     TEST_ASSERT_EQUAL_UINT32((uint32_t)RSM_TMAP_TILES, map.used);
     TEST_ASSERT_EQUAL_UINT32(0u, map.counters.dropped);
+    TEST_ASSERT_EQUAL_UINT32(evictions, map.counters.evicted);
     TEST_ASSERT_GREATER_THAN_UINT32(0u, map.counters.evicted);
     TEST_ASSERT_EQUAL_UINT32(map.counters.allocated, map.used);
 }
