@@ -204,7 +204,7 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
     }
-    rsm_odometry_noise(&loc->cfg->odometry, u, q);
+    rsm_odometry_noise(&loc->odo.cfg, u, q);
     if (rsm_ekf_predict(&loc->ekf, u, q) != RSM_OK) {
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
@@ -225,6 +225,14 @@ int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right)
         return rc;
     }
     return rsm_localizer_motion(loc, &u);
+}
+
+int rsm_localizer_set_odometry(rsm_localizer_t *loc, const rsm_odometry_config_t *odo_cfg)
+{
+    if (loc == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    return rsm_odometry_set_config(&loc->odo, odo_cfg);
 }
 
 rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc)

@@ -185,6 +185,9 @@ int rsm_sicklms_connect(rsm_sicklms_t *d)
     }
     d->lost = 0u;
     d->format = d->cfg->format;
+    if (rsm_link_set_baud(d->link, d->cfg->power_up_baud) == RSM_OK) {
+        d->baud = d->cfg->power_up_baud;
+    }
     begin_probing(d, d->cfg->power_up_baud, rsm_link_rx_now(&d->io));
     return RSM_OK;
 }
@@ -612,6 +615,11 @@ static uint64_t until_due_cb(const void *drv, uint64_t now)
 
 static const rsm_link_poll_ops_t sicklms_poll_ops = {drain_cb, timers_cb, until_due_cb,
                                                      silence_cb};
+
+uint64_t rsm_sicklms_next_deadline_us(const rsm_sicklms_t *d)
+{
+    return d == NULL ? UINT64_MAX : rsm_link_next_deadline(&d->io, &sicklms_poll_ops, d);
+}
 
 int rsm_sicklms_poll(rsm_sicklms_t *d, rsm_sicklms_event_t *ev)
 {

@@ -185,7 +185,7 @@ typedef struct rsm_sicklms {
 /* Initialises d in the IDLE state with zero counters; nothing is sent.
  * link, clock and cfg are kept by pointer.
  * Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers, a link without read or
- * write, a clock without now_us, a zero read/ack/reply/mode timeout,
+ * write, a clock without now_us, a zero ack/reply/mode timeout,
  * max_tries 0, an address above 0x7F, rates other than 9600/19200/38400
  * (baud may be 0), or a variant rsm_lms_encode_variant refuses (d is then
  * unchanged). */
@@ -193,8 +193,8 @@ int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t
                      const rsm_sicklms_config_t *cfg);
 
 /* Starts (or restarts) the start-up: sets the link to power_up_baud when it
- * can change rates, then sends the first probe. Returns RSM_OK or
- * RSM_ERR_INVAL (d NULL). */
+ * can change rates (d->baud is then that rate), then sends the first
+ * probe. Returns RSM_OK or RSM_ERR_INVAL (d NULL). */
 int rsm_sicklms_connect(rsm_sicklms_t *d);
 
 /* Converts a decoded 0xB0 scan to a robot-frame scan: scanner angles run
@@ -207,10 +207,18 @@ int rsm_sicklms_connect(rsm_sicklms_t *d);
 int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan_t *out);
 
 /* Runs the state machine once: at most one link read of at most
- * cfg->read_timeout_us, then the timers. *ev receives the event (NONE if
+ * cfg->read_timeout_us (0: only what has already arrived; see
+ * rsm_sicklms_next_deadline_us), then the timers. *ev receives the event (NONE if
  * nothing happened). Returns RSM_OK, RSM_ERR_INVAL (NULL pointers), or the
  * negative status of a failed read (ev NONE; the driver stays usable). */
 int rsm_sicklms_poll(rsm_sicklms_t *d, rsm_sicklms_event_t *ev);
+
+/* Clock time at which the driver next needs a poll even if nothing
+ * arrives (a request's timeout, a pause's end, the stream's silence
+ * check; now when received bytes are still unexamined); UINT64_MAX in
+ * IDLE or for d NULL. As rsm_p3dx_next_deadline_us: one wait for all
+ * links. */
+uint64_t rsm_sicklms_next_deadline_us(const rsm_sicklms_t *d);
 
 /* Starts the shutdown described above, from any state but IDLE (a start-up
  * in progress is abandoned; the requests go out at the current rate).

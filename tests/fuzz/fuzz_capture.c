@@ -47,13 +47,13 @@ static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_lo
     CHECK((unsigned)rep->outcome < (unsigned)RSM_SCAN_OUTCOMES);
 }
 
-static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us, int restart)
+static void sink_encoder(void *ctx, const rsm_odometry_sample_t *sample, int restart)
 {
     run_t *r = (run_t *)ctx;
     if (restart) {
         CHECK(rsm_sync_encoder_restart(&r->sync) == RSM_OK);
     }
-    CHECK(rsm_sync_encoder(&r->sync, (uint32_t)left, (uint32_t)right, stamp_us) == RSM_OK);
+    CHECK(rsm_sync_encoder(&r->sync, sample) == RSM_OK);
     check_finite(&r->loc);
 }
 
@@ -104,6 +104,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     sink.encoder = sink_encoder;
     sink.scan = sink_scan;
     sink.tick = sink_tick;
+    sink.calibration = NULL;
     nav_stream_init(&stream);
     st = cap_open(&reader, fp, 1);
     if (st == CAP_OK) {

@@ -278,7 +278,7 @@ static int poll_robot(rsm_p3dx_t *d, const nav_stream_sink_t *sink, int quiet)
     case RSM_P3DX_EVENT_ENCODER:
         /* The first packet of a connection starts the counts over (a robot
          * that restarted counts from 0): the driver says so. */
-        sink->encoder(sink->ctx, ev.encoder.left, ev.encoder.right, ev.stamp_us, !ev.encoder.has_delta);
+        sink->encoder(sink->ctx, &ev.encoder.sample, !ev.encoder.has_delta);
         if (sink->tick != NULL) {
             sink->tick(sink->ctx, ev.stamp_us); /* a scan waiting for this sample goes on */
         }
@@ -290,6 +290,10 @@ static int poll_robot(rsm_p3dx_t *d, const nav_stream_sink_t *sink, int quiet)
                     "AutoBaud %u\n",
                     d->robot.name, d->robot.robot_class, d->robot.subclass, (unsigned)d->baud,
                     (unsigned)d->ticks_mm, (unsigned)d->watchdog_ms, (unsigned)d->auto_baud);
+        }
+        if (sink->calibration != NULL) {
+            /* The robot's own TicksMM (its CONFIGpac's, else the driver's default). */
+            sink->calibration(sink->ctx, (float)d->ticks_mm * 1000.0f);
         }
         break;
     case RSM_P3DX_EVENT_LINK_LOST:

@@ -207,6 +207,8 @@ typedef struct nav {
     uint64_t scan_index;
     uint64_t encoders;
     FILE *events;          /* --events: decoded inputs, one line each, in processing order */
+    int ticks_from_flag;   /* --ticks-per-m given: the robot's calibration is not taken */
+    unsigned calibrations; /* robot calibrations taken (live mode) */
     int have_x0;           /* --initial-pose given: overrides any other start */
     rsm_pose_t x0;
     /* Far from the origin the localizer runs in a frame shifted by this
@@ -396,7 +398,7 @@ static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_lo
 }
 
 /* Stream sink callbacks (capture and live modes). */
-static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us, int restart)
+static void sink_encoder(void *ctx, const rsm_odometry_sample_t *sample, int restart)
 {
     nav_t *nav = (nav_t *)ctx;
     if (nav_start(nav, NULL, "the default") != 0) {
@@ -407,10 +409,36 @@ static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_
     }
     nav->encoders++;
     if (nav->events != NULL) {
-        fprintf(nav->events, "E %ld %ld\n", (long)left, (long)right);
+        /* Printed as the packet's signed 32-bit values. */
+        fprintf(nav->events, "E %ld %ld\n", (long)rsm_odometry_count_delta(sample->left, 0u, 32u),
+                (long)rsm_odometry_count_delta(sample->right, 0u, 32u));
     }
     nav->call_t0 = now_s();
-    (void)rsm_sync_encoder(&nav->sync, (uint32_t)left, (uint32_t)right, stamp_us);
+    (void)rsm_sync_encoder(&nav->sync, sample);
+}
+
+/* The robot reported its TicksMM: the odometry takes it from the next
+ * encoder sample on, unless --ticks-per-m gave the geometry. */
+static void sink_calibration(void *ctx, float ticks_per_m)
+{
+    nav_t *nav = (nav_t *)ctx;
+    rsm_odometry_config_t odo;
+    if (nav->ticks_from_flag || nav_start(nav, NULL, "the default") != 0) {
+        return;
+    }
+    odo = nav->loc.odo.cfg;
+    odo.ticks_per_m_left = ticks_per_m;
+    odo.ticks_per_m_right = ticks_per_m;
+    if (rsm_localizer_set_odometry(&nav->loc, &odo) != RSM_OK) {
+        fprintf(stderr, "rsm-nav: the robot's calibration (%.0f ticks/m) refused; odometry unchanged\n",
+                (double)ticks_per_m);
+        return;
+    }
+    nav->calibrations++;
+    if (!nav->quiet) {
+        fprintf(stderr, "rsm-nav: odometry from the robot: %.0f ticks/m, wheel base %.3f m\n",
+                (double)ticks_per_m, (double)odo.wheel_base_m);
+    }
 }
 
 static void sink_tick(void *ctx, uint64_t now_us)
@@ -1035,6 +1063,8 @@ int main(int argc, char **argv)
     sink.encoder = sink_encoder;
     sink.scan = sink_scan;
     sink.tick = sink_tick;
+    sink.calibration = sink_calibration;
+    nav.ticks_from_flag = ticks_per_m > 0.0f;
     nav.sync_cfg = rsm_sync_config_default();
     if (carmen != NULL) {
         rc = run_carmen(&nav, carmen, fov179);

@@ -27,8 +27,12 @@ void nav_stream_robot(nav_stream_t *s, const uint8_t *data, size_t n, uint64_t s
         {
             rsm_aria_encoder_t enc;
             if (rsm_aria_decode_encoder(&pkt, &enc) == RSM_OK) {
+                rsm_odometry_sample_t smp;
+                smp.stamp_us = stamp_us;
+                smp.left = (uint32_t)enc.left;
+                smp.right = (uint32_t)enc.right;
                 s->encoder_packets++;
-                sink->encoder(sink->ctx, enc.left, enc.right, stamp_us, 0);
+                sink->encoder(sink->ctx, &smp, 0);
             } else {
                 s->other_packets++;
             }

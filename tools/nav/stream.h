@@ -11,13 +11,18 @@
 
 #include "rsm/aria.h"
 #include "rsm/lms.h"
+#include "rsm/odometry.h"
 #include "rsm/scan.h"
 
 typedef struct nav_stream_sink {
     void *ctx;
-    /* An ENCODER packet: raw 32-bit counters. restart: the first packet of
-     * a new connection, whose counts need not follow the previous ones. */
-    void (*encoder)(void *ctx, int32_t left, int32_t right, uint64_t stamp_us, int restart);
+    /* An ENCODER packet: raw 32-bit counters and their stamp. restart: the
+     * first packet of a new connection, whose counts need not follow the
+     * previous ones. */
+    void (*encoder)(void *ctx, const rsm_odometry_sample_t *sample, int restart);
+    /* The robot reported its calibration (a P3-DX connection's CONFIGpac):
+     * encoder ticks per metre. May be NULL. */
+    void (*calibration)(void *ctx, float ticks_per_m);
     /* A complete 0xB0 scan converted to the robot frame, stamped with the
      * arrival of its telegram's first byte. */
     void (*scan)(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us);
