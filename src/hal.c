@@ -119,6 +119,7 @@ int rsm_link_rx_init(rsm_link_rx_t *rx, const rsm_link_t *link, const rsm_clock_
     rx->len = 0u;
     rx->stamp_us = 0u;
     rx->last_rx_us = 0u;
+    rx->bytes = 0u;
     return RSM_OK;
 }
 
@@ -186,6 +187,7 @@ int rsm_link_poll(rsm_link_rx_t *rx, const rsm_link_poll_ops_t *ops, void *drv)
         rx->len = (size_t)n;
         rx->stamp_us = now;
         rx->last_rx_us = now;
+        rx->bytes += (uint64_t)n;
         if (ops->drain(drv, now)) {
             return RSM_OK;
         }

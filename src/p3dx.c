@@ -173,6 +173,18 @@ int rsm_p3dx_connect(rsm_p3dx_t *d)
     return RSM_OK;
 }
 
+int rsm_p3dx_listen(rsm_p3dx_t *d)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    forget_motion(d);
+    d->have_enc = 0u;
+    d->lost = 0u;
+    d->state = RSM_P3DX_LISTENING;
+    return RSM_OK;
+}
+
 /* OPEN was acknowledged by the SYNC2 reply: start the session. */
 static void open_session(rsm_p3dx_t *d, uint64_t now)
 {
@@ -330,24 +342,26 @@ static void handle_config(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt)
 }
 
 /* A packet while a session is open (CONFIG_WAIT, BAUD_CHECK, CONNECTED,
- * DISCONNECTING). Only CONNECTED gives SIP and ENCODER events. */
+ * DISCONNECTING) or while listening. Only CONNECTED and LISTENING give SIP
+ * and ENCODER events. */
 static void handle_session_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t now)
 {
     const rsm_p3dx_state_t before = d->state;
+    const int events = before == RSM_P3DX_CONNECTED || before == RSM_P3DX_LISTENING;
     if (pkt->id == RSM_ARIA_PAC_SIP_STOPPED || pkt->id == RSM_ARIA_PAC_SIP_MOVING) {
         if (rsm_aria_decode_sip(pkt, &d->sip) != RSM_OK) {
             d->stats.unknown_packets++;
         } else {
             d->stats.sips++;
             d->last_sip_us = d->io.stamp_us;
-            if (before == RSM_P3DX_CONNECTED) {
+            if (events) {
                 d->out.type = RSM_P3DX_EVENT_SIP;
                 d->out.sip = &d->sip;
                 d->out.stamp_us = d->io.stamp_us;
             }
         }
     } else if (pkt->id == RSM_ARIA_PAC_ENCODER) {
-        if (before == RSM_P3DX_CONNECTED) {
+        if (events) {
             handle_encoder(d, pkt);
         } else {
             d->stats.unknown_packets++;
@@ -377,6 +391,7 @@ static void handle_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t 
     case RSM_P3DX_BAUD_CHECK:
     case RSM_P3DX_CONNECTED:
     case RSM_P3DX_DISCONNECTING:
+    case RSM_P3DX_LISTENING:
         handle_session_packet(d, pkt, now);
         break;
     case RSM_P3DX_IDLE:
@@ -586,6 +601,7 @@ static uint64_t until_due_cb(const void *drv, uint64_t now)
         }
         break;
     case RSM_P3DX_IDLE:
+    case RSM_P3DX_LISTENING:
     default:
         return UINT64_MAX;
     }

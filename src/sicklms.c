@@ -192,6 +192,17 @@ int rsm_sicklms_connect(rsm_sicklms_t *d)
     return RSM_OK;
 }
 
+int rsm_sicklms_listen(rsm_sicklms_t *d)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    d->lost = 0u;
+    d->format = d->cfg->format;
+    d->state = RSM_SICKLMS_LISTENING;
+    return RSM_OK;
+}
+
 /* The shutdown is over (status RSM_OK) or given up. */
 static void end_shutdown(rsm_sicklms_t *d, int status, uint64_t now)
 {
@@ -225,6 +236,10 @@ int rsm_sicklms_disconnect(rsm_sicklms_t *d)
         return RSM_ERR_INVAL;
     }
     if (d->state == RSM_SICKLMS_IDLE || d->state == RSM_SICKLMS_STOPPING) {
+        return RSM_OK;
+    }
+    if (d->state == RSM_SICKLMS_LISTENING) {
+        d->state = RSM_SICKLMS_IDLE; /* it never spoke to the unit */
         return RSM_OK;
     }
     start_step(d, STEP_STOP, rsm_link_rx_now(&d->io));
@@ -460,7 +475,7 @@ static void handle_event(rsm_sicklms_t *d, const rsm_lms_event_t *e, uint64_t no
     if (e->type == RSM_LMS_EVENT_TELEGRAM) {
         d->stats.telegrams++;
     }
-    if (d->state == RSM_SICKLMS_STREAMING) {
+    if (d->state == RSM_SICKLMS_STREAMING || d->state == RSM_SICKLMS_LISTENING) {
         /* 0x06/0x15 bytes mean nothing while streaming. */
         if (e->type == RSM_LMS_EVENT_TELEGRAM) {
             handle_stream_telegram(d, &e->telegram);
@@ -605,7 +620,7 @@ static uint64_t until_due_cb(const void *drv, uint64_t now)
 {
     const rsm_sicklms_t *d = (const rsm_sicklms_t *)drv;
     uint64_t due;
-    if (d->state == RSM_SICKLMS_IDLE) {
+    if (d->state == RSM_SICKLMS_IDLE || d->state == RSM_SICKLMS_LISTENING) {
         return UINT64_MAX;
     }
     due = d->state == RSM_SICKLMS_STREAMING ? d->last_tel_us + d->cfg->stream_timeout_us

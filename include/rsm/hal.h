@@ -150,6 +150,7 @@ typedef struct rsm_link_rx {
     size_t len;               /* bytes of the last read in buf */
     uint64_t stamp_us;        /* clock time right after the read that filled buf */
     uint64_t last_rx_us;      /* clock time of the last read that returned bytes */
+    uint64_t bytes;           /* bytes received since rsm_link_rx_init */
 } rsm_link_rx_t;
 
 /* The steps of one driver, called with the driver's state pointer drv.

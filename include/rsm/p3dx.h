@@ -99,7 +99,8 @@ typedef enum rsm_p3dx_state {
     RSM_P3DX_CONFIG_WAIT = 3,   /* OPEN (and CONFIG) sent, awaiting CONFIGpac */
     RSM_P3DX_CONNECTED = 4,
     RSM_P3DX_DISCONNECTING = 5, /* STOP and ENABLE 0 sent, CLOSE follows */
-    RSM_P3DX_BAUD_CHECK = 6     /* HOSTBAUD sent, awaiting a packet at the new rate */
+    RSM_P3DX_BAUD_CHECK = 6,    /* HOSTBAUD sent, awaiting a packet at the new rate */
+    RSM_P3DX_LISTENING = 7      /* listen-only (rsm_p3dx_listen): decodes, sends nothing */
 } rsm_p3dx_state_t;
 
 typedef enum rsm_p3dx_event_type {
@@ -219,6 +220,17 @@ int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *cloc
  * error from the write (the handshake still proceeds: a timeout will
  * resend). */
 int rsm_p3dx_connect(rsm_p3dx_t *d);
+
+/* Listen-only mode, from any state: the driver sends nothing, never
+ * changes the link's rate and runs no timer; it decodes what arrives
+ * (another program drives the robot, or a capture is replayed) and gives
+ * SIP and ENCODER events exactly as when connected, stamped the same way
+ * (the clock time right after the read that completed the packet); the
+ * first ENCODER packet has has_delta 0. A CONFIGpac updates ticks_mm and
+ * the rest as in a session. rsm_p3dx_connect leaves the mode,
+ * rsm_p3dx_disconnect goes to IDLE (nothing sent). Received input is kept.
+ * Returns RSM_OK or RSM_ERR_INVAL (d NULL). */
+int rsm_p3dx_listen(rsm_p3dx_t *d);
 
 /* Runs the state machine once: at most one link read of at most
  * cfg->read_timeout_us (0: the read only takes what has already arrived,

@@ -98,7 +98,8 @@ typedef enum rsm_sicklms_state {
     RSM_SICKLMS_SETTLE = 2,    /* pause after a rate change */
     RSM_SICKLMS_BACKOFF = 3,   /* pause after an ERROR */
     RSM_SICKLMS_STREAMING = 4,
-    RSM_SICKLMS_STOPPING = 5   /* a shutdown request is in flight */
+    RSM_SICKLMS_STOPPING = 5,  /* a shutdown request is in flight */
+    RSM_SICKLMS_LISTENING = 6  /* listen-only (rsm_sicklms_listen): decodes, sends nothing */
 } rsm_sicklms_state_t;
 
 typedef enum rsm_sicklms_event_type {
@@ -196,6 +197,18 @@ int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t
  * can change rates (d->baud is then that rate), then sends the first
  * probe. Returns RSM_OK or RSM_ERR_INVAL (d NULL). */
 int rsm_sicklms_connect(rsm_sicklms_t *d);
+
+/* Listen-only mode, from any state: the driver sends nothing, never
+ * changes the link's rate and runs no timer; every 0xB0 telegram that
+ * arrives (from a unit another program started, or a replayed capture) is
+ * decoded with cfg->format and given as a SCAN event exactly as when
+ * streaming, stamped the same way (the receive time of the read that
+ * brought the telegram's first byte, less latency_us). A telegram cut
+ * short is abandoned after byte_timeout_us of silence, as always.
+ * rsm_sicklms_connect leaves the mode; rsm_sicklms_disconnect goes to IDLE
+ * (nothing sent). Received input is kept. Returns RSM_OK or RSM_ERR_INVAL
+ * (d NULL). */
+int rsm_sicklms_listen(rsm_sicklms_t *d);
 
 /* Converts a decoded 0xB0 scan to a robot-frame scan: scanner angles run
  * 0..180 deg from the right, the robot's 0 is ahead (mirrored when

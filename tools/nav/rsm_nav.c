@@ -17,7 +17,7 @@
 #include "carmen.h"
 #include "live.h"
 #include "pgm.h"
-#include "stream.h"
+#include "devices.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"
 #include "rsm/sync.h"
@@ -38,6 +38,7 @@ static void usage(FILE *f)
             "  --ticks-per-m N --wheel-base M   odometry geometry for encoder packets\n"
             "                            (default: the capture's, else the P3-DX defaults)\n"
             "  --events FILE             write every decoded input (E left right / S count hash)\n"
+            "  --summary-json FILE       write the summary as JSON too (scans, outcomes, times, map)\n"
             "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
             "                            the capture's robot.initial_pose, else zero)\n"
             "  --laser-pose X Y THETA    the laser's pose on the robot (m, m, rad; x forward,\n"
@@ -450,10 +451,11 @@ static void sink_tick(void *ctx, uint64_t now_us)
     }
 }
 
-static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
+static void sink_scan(void *ctx, const rsm_scan_t *scan)
 {
     static rsm_scan_t copy;
     nav_t *nav = (nav_t *)ctx;
+    const uint64_t stamp_us = scan->stamp_us;
     double file_s = (double)stamp_us * 1e-6;
     size_t k;
     while (nav->restore_next < nav->nrestore && nav->restore_idx[nav->restore_next] < nav->scan_index) {
@@ -664,11 +666,14 @@ static int positive_meta(const char *path, const char *key, const char *text, fl
     return 0;
 }
 
-static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *sink)
+static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink)
 {
     static cap_reader reader;
-    static nav_stream_t stream;
+    static nav_devices_t dev;
     static uint8_t buf[CAP_MAX_CHUNK];
+    nav_feed_t feed[2];
+    rsm_link_t link[2];
+    rsm_clock_t clock[2];
     FILE *fp = fopen(path, "rb");
     int robot_id = -1;
     int laser_id = -1;
@@ -730,7 +735,18 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
             return 2;
         }
     }
-    nav_stream_init(&stream);
+    /* The drivers, listen-only, decode the recorded bytes (one path with
+     * live mode), each from its own memory link whose clock reads the
+     * record's time. */
+    nav_devices_defaults(&dev, 1, nav->quiet);
+    for (i = 0; i < 2; ++i) {
+        nav_feed_init(&feed[i], &link[i], &clock[i]);
+        if (nav_devices_start(&dev, i == 0, &link[i], &clock[i]) != 0) {
+            cap_close(&reader);
+            fclose(fp);
+            return 1;
+        }
+    }
     status = 0;
     for (;;) {
         cap_record rec;
@@ -752,9 +768,9 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
             continue;
         }
         if ((int)rec.channel == robot_id) {
-            nav_stream_robot(&stream, buf, rec.length, rec.timestamp_us, sink);
+            nav_devices_feed(&dev, 1, &feed[0], buf, rec.length, rec.timestamp_us, sink);
         } else if ((int)rec.channel == laser_id) {
-            nav_stream_laser(&stream, buf, rec.length, rec.timestamp_us, sink);
+            nav_devices_feed(&dev, 0, &feed[1], buf, rec.length, rec.timestamp_us, sink);
         }
     }
     printf("rsm-nav summary\n");
@@ -765,12 +781,14 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
            (unsigned long long)reader.count.truncated, (unsigned long long)reader.count.out_of_order,
            (unsigned long long)reader.count.unknown_channel, (unsigned long long)reader.count.skipped_bytes,
            (unsigned long long)reader.count.crc_bytes);
-    printf("  robot link      %llu encoder packets, %llu other; checksum errors %u, bytes skipped %u\n",
-           (unsigned long long)stream.encoder_packets, (unsigned long long)stream.other_packets,
-           (unsigned)stream.aria.stats.checksum_errors, (unsigned)stream.aria.stats.bytes_skipped);
-    printf("  laser link      %llu scans, %llu bad; CRC errors %u, bytes skipped %u\n",
-           (unsigned long long)stream.lms_scans, (unsigned long long)stream.bad_scans,
-           (unsigned)stream.lms.stats.crc_errors, (unsigned)stream.lms.stats.bytes_skipped);
+    printf("  robot link      %u encoder packets, %u other; checksum errors %u, bytes skipped %u\n",
+           (unsigned)dev.robot.stats.encoder_packets,
+           (unsigned)(dev.robot.stats.sips + dev.robot.stats.config_packets + dev.robot.stats.unknown_packets),
+           (unsigned)dev.robot.parser.stats.checksum_errors, (unsigned)dev.robot.parser.stats.bytes_skipped);
+    printf("  laser link      %u scans, %u bad, %u other; CRC errors %u, bytes skipped %u\n",
+           (unsigned)dev.laser.stats.scans, (unsigned)dev.laser.stats.bad_scans,
+           (unsigned)dev.laser.stats.unexpected, (unsigned)dev.laser.parser.stats.crc_errors,
+           (unsigned)dev.laser.parser.stats.bytes_skipped);
     cap_close(&reader);
     if (fclose(fp) != 0 && status == 0) {
         fprintf(stderr, "rsm-nav: error closing %s: %s\n", path, strerror(errno));
@@ -784,6 +802,17 @@ static const char *method_name(rsm_method_t m)
     switch (m) {
     case RSM_METHOD_MAP: return "rsm (persistent map)";
     case RSM_METHOD_PAPER: return "paper (key points + RANSAC)";
+    case RSM_METHOD_ICP: return "icp";
+    default: return "odometry";
+    }
+}
+
+/* The --method word that selects m. */
+static const char *method_key(rsm_method_t m)
+{
+    switch (m) {
+    case RSM_METHOD_MAP: return "rsm";
+    case RSM_METHOD_PAPER: return "paper";
     case RSM_METHOD_ICP: return "icp";
     default: return "odometry";
     }
@@ -822,17 +851,85 @@ static void print_peak_memory(void)
     fclose(f);
 }
 
+/* Median and 95th percentile of the per-scan wall times, in seconds. */
+static void time_stats(nav_t *nav, double *median, double *p95)
+{
+    *median = 0.0;
+    *p95 = 0.0;
+    if (nav->ntimes > 0) {
+        qsort(nav->times, nav->ntimes, sizeof *nav->times, cmp_double);
+        *median = nav->times[nav->ntimes / 2];
+        *p95 = nav->times[(nav->ntimes * 95) / 100 < nav->ntimes ? (nav->ntimes * 95) / 100 : nav->ntimes - 1];
+    }
+}
+
+/* --summary-json: what the printed summary says, for programs (the bench).
+ * Keys: method, scans, outcomes {name: count}, median_us, p95_us,
+ * timestamps {clamped, odd, jumps}, drops {nan, too_short, too_long},
+ * alignment {...} (capture and live modes), odometry_calibrations, and for
+ * the persistent map tmap {writes, tiles [per level], taken, evicted,
+ * dropped, freed, behind, unconfirmed} and recovery {searches, taken}.
+ * Returns 0, or -1 if the file cannot be written. */
+static int write_summary_json(nav_t *nav, const char *path)
+{
+    const rsm_localizer_counters_t *c = &nav->loc.counters;
+    double median;
+    double p95;
+    int o;
+    int first = 1;
+    FILE *f = fopen(path, "w");
+    if (f == NULL) {
+        return -1;
+    }
+    time_stats(nav, &median, &p95);
+    fprintf(f, "{\n  \"method\": \"%s\",\n  \"scans\": %u,\n  \"outcomes\": {", method_key(nav->cfg.method),
+            (unsigned)c->scans);
+    for (o = 0; o < RSM_SCAN_OUTCOMES; ++o) {
+        if (c->outcome[o] != 0) {
+            fprintf(f, "%s\"%s\": %u", first ? "" : ", ", rsm_outcome_name((rsm_outcome_t)o), (unsigned)c->outcome[o]);
+            first = 0;
+        }
+    }
+    fprintf(f, "},\n  \"median_us\": %.1f,\n  \"p95_us\": %.1f,\n", median * 1e6, p95 * 1e6);
+    fprintf(f, "  \"timestamps\": {\"clamped\": %llu, \"odd\": %llu, \"jumps\": %llu},\n",
+            (unsigned long long)nav->clamped, (unsigned long long)nav->odd_stamps, (unsigned long long)nav->time_jumps);
+    fprintf(f, "  \"drops\": {\"nan\": %u, \"too_short\": %u, \"too_long\": %u},\n", (unsigned)c->drops.nan,
+            (unsigned)c->drops.too_short, (unsigned)c->drops.too_long);
+    fprintf(f, "  \"odometry_calibrations\": %u,\n", nav->calibrations);
+    {
+        const rsm_sync_counters_t *a = &nav->sync.counters;
+        fprintf(f,
+                "  \"alignment\": {\"scans\": %u, \"encoders\": %u, \"interpolated\": %u, \"exact\": %u, "
+                "\"late\": %u, \"timed_out\": %u, \"superseded\": %u, \"encoder_backwards\": %u, "
+                "\"encoder_overflow\": %u, \"restarts\": %u}",
+                (unsigned)a->scans, (unsigned)a->encoders, (unsigned)a->interpolated, (unsigned)a->exact,
+                (unsigned)a->late, (unsigned)a->timed_out, (unsigned)a->superseded, (unsigned)a->encoder_backwards,
+                (unsigned)a->encoder_overflow, (unsigned)a->restarts);
+    }
+    if (nav->cfg.method == RSM_METHOD_MAP && nav->initialised) {
+        const rsm_tmap_t *m = &nav->loc.state.persistent.map;
+        uint32_t level;
+        fprintf(f, ",\n  \"tmap\": {\"writes\": %u, \"tiles\": [", (unsigned)m->counters.updates);
+        for (level = 0; level < m->cfg.levels; ++level) {
+            fprintf(f, "%s%u", level > 0u ? ", " : "", (unsigned)rsm_tmap_tiles(m, level));
+        }
+        fprintf(f, "], \"taken\": %u, \"evicted\": %u, \"dropped\": %u, \"freed\": %u, \"behind\": %u, "
+                   "\"unconfirmed\": %u},\n  \"recovery\": {\"searches\": %u, \"taken\": %u}",
+                (unsigned)m->counters.allocated, (unsigned)m->counters.evicted, (unsigned)m->counters.dropped,
+                (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed,
+                (unsigned)c->searches, (unsigned)c->recovered);
+    }
+    fprintf(f, "\n}\n");
+    return fclose(f) == 0 ? 0 : -1;
+}
+
 static void print_summary(nav_t *nav)
 {
     const rsm_localizer_counters_t *c = &nav->loc.counters;
-    double median = 0.0;
-    double p95 = 0.0;
+    double median;
+    double p95;
     int o;
-    if (nav->ntimes > 0) {
-        qsort(nav->times, nav->ntimes, sizeof *nav->times, cmp_double);
-        median = nav->times[nav->ntimes / 2];
-        p95 = nav->times[(nav->ntimes * 95) / 100 < nav->ntimes ? (nav->ntimes * 95) / 100 : nav->ntimes - 1];
-    }
+    time_stats(nav, &median, &p95);
     printf("  method          %s\n", method_name(nav->cfg.method));
     print_mount(nav);
     if (nav->cfg.method == RSM_METHOD_MAP) {
@@ -882,8 +979,9 @@ int main(int argc, char **argv)
     const char *carmen = NULL;
     const char *capture = NULL;
     const char *trajectory = NULL;
+    const char *summary_json = NULL;
     nav_live_options_t live;
-    nav_stream_sink_t sink;
+    nav_sink_t sink;
     float ticks_per_m = 0.0f;
     float wheel_base = 0.0f;
     int fov179 = 0;
@@ -976,6 +1074,8 @@ int main(int argc, char **argv)
             nav.cfg.laser_upside_down = 1u;
         } else if (strcmp(a, "--trajectory") == 0 && next) {
             trajectory = argv[++i];
+        } else if (strcmp(a, "--summary-json") == 0 && next) {
+            summary_json = argv[++i];
         } else if (strcmp(a, "--events") == 0 && next) {
             nav.events = fopen(argv[++i], "w");
             if (nav.events == NULL) {
@@ -1116,6 +1216,11 @@ int main(int argc, char **argv)
         }
     }
     if (rc == 0) {
+        /* Written before the printed summary, whose timing sort it shares. */
+        if (summary_json != NULL && write_summary_json(&nav, summary_json) != 0) {
+            fprintf(stderr, "rsm-nav: cannot write %s: %s\n", summary_json, strerror(errno));
+            rc = 1;
+        }
         print_summary(&nav);
     }
     hitmap_free(&nav.hits);
