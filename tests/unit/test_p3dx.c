@@ -367,6 +367,43 @@ void test_p3dx_next_deadline_should_follow_the_timers_and_calibration_the_config
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_odometry_config(NULL, &odo));
 }
 
+void test_p3dx_listen_should_give_encoder_events_and_send_nothing(void)
+{
+    uint8_t pkt[2][16];
+    uint8_t payload[8] = {0x10, 0x00, 0x00, 0x00, 0xFF, 0xFF, 0xFF, 0xFF}; /* 16, -1 */
+    rsm_p3dx_event_t ev;
+    int n0;
+    int n1;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_listen(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_P3DX_LISTENING, drv.state);
+    TEST_ASSERT_TRUE(rsm_p3dx_next_deadline_us(&drv) == UINT64_MAX); /* no keep-alive, no link loss */
+    n0 = rsm_aria_encode_raw(RSM_ARIA_PAC_ENCODER, payload, sizeof payload, pkt[0], sizeof pkt[0]);
+    payload[0] = 0x30; /* 48: 32 ticks on */
+    payload[4] = 0x01; /* 0xFFFFFF01 */
+    n1 = rsm_aria_encode_raw(RSM_ARIA_PAC_ENCODER, payload, sizeof payload, pkt[1], sizeof pkt[1]);
+    TEST_ASSERT_GREATER_THAN_INT(0, n0);
+    TEST_ASSERT_GREATER_THAN_INT(0, n1);
+    rsm_fakelink_inject(&fl, pkt[0], (size_t)n0, 1000u);
+    rsm_fakelink_inject(&fl, pkt[1], (size_t)n1, 100000u);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(16u, ev.encoder.sample.left);
+    TEST_ASSERT_EQUAL_UINT32(0xFFFFFFFFu, ev.encoder.sample.right);
+    TEST_ASSERT_EQUAL_UINT8(0u, ev.encoder.has_delta);
+    TEST_ASSERT_EQUAL_UINT64(ev.stamp_us, ev.encoder.sample.stamp_us);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+    TEST_ASSERT_EQUAL_UINT8(1u, ev.encoder.has_delta);
+    TEST_ASSERT_EQUAL_INT32(32, ev.encoder.d_left);
+    TEST_ASSERT_EQUAL_INT32(-254, ev.encoder.d_right);
+    /* Seconds of silence: no keep-alive, no LINK_LOST, nothing written. */
+    TEST_ASSERT_EQUAL_INT(0, run_until(RSM_P3DX_EVENT_LINK_LOST, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_P3DX_IDLE, drv.state);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_listen(NULL));
+}
+
 void test_p3dx_connect_should_complete_the_handshake_with_a_scripted_robot(void)
 {
     uint8_t expect[64];
@@ -951,6 +988,7 @@ int main(void)
     RUN_TEST(test_p3dx_init_should_reject_bad_arguments);
     RUN_TEST(test_p3dx_connect_should_put_the_link_at_the_configured_rate);
     RUN_TEST(test_p3dx_next_deadline_should_follow_the_timers_and_calibration_the_configpac);
+    RUN_TEST(test_p3dx_listen_should_give_encoder_events_and_send_nothing);
     RUN_TEST(test_p3dx_connect_should_complete_the_handshake_with_a_scripted_robot);
     RUN_TEST(test_p3dx_connect_should_keep_config_defaults_when_no_configpac_arrives);
     RUN_TEST(test_p3dx_poll_should_yield_encoder_ticks_including_32_bit_wrap);

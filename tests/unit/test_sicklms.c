@@ -661,6 +661,29 @@ void test_sicklms_poll_should_stamp_a_scan_with_the_arrival_of_its_first_byte(vo
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.bad_scans);
 }
 
+void test_sicklms_listen_should_decode_and_stamp_scans_as_streaming_and_send_nothing(void)
+{
+    rsm_sicklms_event_t ev;
+    lms.split_scan_us = 40000u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_listen(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_LISTENING, drv.state);
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(&drv) == UINT64_MAX); /* no timer at all */
+    lms_send_scan();
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 1000000u, &ev));
+    /* The same rule as streaming: the arrival of the telegram's first byte. */
+    TEST_ASSERT_EQUAL_UINT64(lms.scan_sent_us, ev.scan->stamp_us);
+    TEST_ASSERT_EQUAL_UINT32(181u, (uint32_t)ev.scan->count);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.5f, ev.scan->range_m[0]);
+    /* Silence is no link loss while listening, and nothing was ever sent. */
+    TEST_ASSERT_EQUAL_INT(0, run_until(RSM_SICKLMS_EVENT_LINK_LOST, 3000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_IDLE, drv.state);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_listen(NULL));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -682,5 +705,6 @@ int main(void)
     RUN_TEST(test_sicklms_disconnect_at_the_power_up_rate_should_only_stop_the_stream);
     RUN_TEST(test_sicklms_disconnect_should_give_up_on_a_silent_unit_after_max_tries);
     RUN_TEST(test_sicklms_poll_should_stamp_a_scan_with_the_arrival_of_its_first_byte);
+    RUN_TEST(test_sicklms_listen_should_decode_and_stamp_scans_as_streaming_and_send_nothing);
     return UNITY_END();
 }

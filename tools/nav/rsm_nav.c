@@ -16,6 +16,7 @@
 #include "capture.h"
 #include "carmen.h"
 #include "live.h"
+#include "logrun.h"
 #include "pgm.h"
 #include "devices.h"
 #include "rsm/localizer.h"
@@ -190,15 +191,7 @@ typedef struct nav {
     double *times;
     size_t ntimes;
     size_t cap_times;
-    uint64_t last_us;      /* the localizer's time of the last scan */
-    uint64_t clamped;
-    int have_stamp;
-    uint64_t src_last_us;  /* the source's stamp of the last scan taken */
-    uint64_t base_us;      /* localizer time = source stamp + base (modulo 2^64) */
-    int have_odd;
-    uint64_t odd_us;       /* a stamp far from the previous one, not yet confirmed */
-    uint64_t odd_stamps;
-    uint64_t time_jumps;
+    stamp_repair_t repair; /* scan stamps as the localizer gets them */
     double t_start;
     /* Capture mode: original stamps of scans whose stamp the converter clamped. */
     uint64_t *restore_idx;
@@ -281,47 +274,6 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
     return 0;
 }
 
-/* Log and capture timestamps can jitter backwards while the order of the
- * records is the true order (the Intel log does so 631 times): the
- * localizer gets a clamped stamp, counted; the trajectory keeps the original.
- * One stamp far from its neighbours (a negative or far-future stamp in a
- * log) is not trusted alone, or it would clamp every later scan: it gets
- * the previous stamp (counted as odd) unless the next one agrees with it;
- * then the clock really jumped and the localizer's time carries on from
- * where it was (no time passes across the jump). */
-#define NAV_MAX_STEP_US 3600000000ull
-
-static uint64_t stamp_gap(uint64_t a, uint64_t b)
-{
-    return a > b ? a - b : b - a;
-}
-
-static void nav_clamp(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us)
-{
-    uint64_t t;
-    if (nav->have_stamp && stamp_gap(stamp_us, nav->src_last_us) > NAV_MAX_STEP_US) {
-        if (!nav->have_odd || stamp_gap(stamp_us, nav->odd_us) > NAV_MAX_STEP_US) {
-            nav->odd_us = stamp_us;
-            nav->have_odd = 1;
-            nav->odd_stamps++;
-            scan->stamp_us = nav->last_us;
-            return;
-        }
-        nav->time_jumps++;
-        nav->base_us = nav->last_us - stamp_us; /* modulo 2^64, so either direction works */
-    }
-    nav->have_odd = 0;
-    nav->have_stamp = 1;
-    nav->src_last_us = stamp_us;
-    t = stamp_us + nav->base_us;
-    if (t < nav->last_us) {
-        t = nav->last_us;
-        nav->clamped++;
-    }
-    nav->last_us = t;
-    scan->stamp_us = t;
-}
-
 /* This scan's usable readings (the localizer's robot-frame points, filled
  * for every scan) placed at its estimate, into the --map picture. Not
  * loc.world: the core fills that only for scans it writes into its map. */
@@ -366,21 +318,6 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
     if (!nav->quiet && nav->ntimes % 1000 == 0) {
         fprintf(stderr, "rsm-nav: %zu scans, %.1f s\n", nav->ntimes, now_s() - nav->t_start);
     }
-}
-
-/* Runs one scan directly (CARMEN logs carry the odometry of each scan). */
-static void nav_scan(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us, double file_stamp_s)
-{
-    rsm_localizer_report_t rep;
-    double t0;
-    int rc;
-    if (nav_start(nav, NULL, "the default") != 0) {
-        return;
-    }
-    nav_clamp(nav, scan, stamp_us);
-    t0 = now_s();
-    rc = rsm_localizer_scan(&nav->loc, scan, &rep);
-    nav_result(nav, rc, &rep, now_s() - t0, file_stamp_s);
 }
 
 /* The aligner fused a scan (capture and live modes). */
@@ -478,7 +415,7 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan)
         return;
     }
     copy = *scan;
-    nav_clamp(nav, &copy, stamp_us);
+    copy.stamp_us = stamp_repair(&nav->repair, stamp_us);
     /* At most two scans are ever inside the aligner (one waiting, one new). */
     nav->file_s[(nav->file_head + nav->file_count) % 4u] = file_s;
     nav->file_count++;
@@ -533,65 +470,64 @@ static void carmen_mount(nav_t *nav, const char *path, int fov179, rsm_pose_t *l
     carmen_close(&ahead);
 }
 
+/* logrun ops for --carmen (CARMEN logs carry the odometry of each scan). */
+typedef struct carmen_run {
+    nav_t *nav;
+    rsm_pose_t log_mount;
+    int have_log_mount;
+} carmen_run_t;
+
+static int carmen_start_cb(void *ctx, const carmen_record_t *rec)
+{
+    carmen_run_t *cr = (carmen_run_t *)ctx;
+    /* Start in the odometry frame so the trajectories are comparable. */
+    return nav_start(cr->nav, rec->odom_d, "the log's first pose");
+}
+
+static void carmen_motion_cb(void *ctx, const rsm_motion_t *u)
+{
+    (void)rsm_localizer_motion(&((carmen_run_t *)ctx)->nav->loc, u);
+}
+
+static void carmen_scan_cb(void *ctx, const carmen_record_t *rec, uint64_t stamp_us)
+{
+    static rsm_scan_t scan;
+    carmen_run_t *cr = (carmen_run_t *)ctx;
+    nav_t *nav = cr->nav;
+    rsm_localizer_report_t rep;
+    double t0;
+    int rc;
+    if (cr->have_log_mount && rec->has_mount &&
+        (fabsf(rec->mount.x - cr->log_mount.x) > NAV_MOUNT_TOL_M ||
+         fabsf(rec->mount.y - cr->log_mount.y) > NAV_MOUNT_TOL_M ||
+         fabsf(rsm_wrap_angle(rec->mount.theta - cr->log_mount.theta)) > NAV_MOUNT_TOL_RAD)) {
+        nav->mount_disagree++;
+    }
+    logrun_scan(rec, &scan);
+    scan.stamp_us = stamp_us;
+    t0 = now_s();
+    rc = rsm_localizer_scan(&nav->loc, &scan, &rep);
+    nav_result(nav, rc, &rep, now_s() - t0, rec->stamp_s);
+}
+
 static int run_carmen(nav_t *nav, const char *path, int fov179)
 {
+    static const logrun_ops_t ops = {carmen_start_cb, NULL, carmen_motion_cb, carmen_scan_cb, NULL};
     static carmen_reader_t reader;
     static carmen_record_t rec;
-    static rsm_scan_t scan;
-    double last_odom[3] = {0.0, 0.0, 0.0};
-    rsm_pose_t log_mount = {0.0f, 0.0f, 0.0f};
-    int have_log_mount;
-    int have_odom = 0;
-    int status = 0;
-    carmen_mount(nav, path, fov179, &log_mount, &have_log_mount);
+    carmen_run_t cr;
+    int status;
+    cr.nav = nav;
+    cr.log_mount.x = cr.log_mount.y = cr.log_mount.theta = 0.0f;
+    carmen_mount(nav, path, fov179, &cr.log_mount, &cr.have_log_mount);
     reader.fov179 = fov179;
-    if (carmen_open(&reader, path) != 0) {
-        fprintf(stderr, "rsm-nav: cannot open %s: %s\n", path, strerror(errno));
-        return 1;
+    status = logrun_carmen(&reader, &rec, path, "rsm-nav", &nav->repair, &ops, &cr);
+    if (status < 0) {
+        return 1; /* not even opened: nothing to sum up */
     }
-    for (;;) {
-        const carmen_kind_t k = carmen_next(&reader, &rec);
-        size_t b;
-        if (k == CARMEN_EOF) {
-            break;
-        }
-        if (k == CARMEN_ERROR) {
-            /* What was read so far is kept (the caller flushes it). */
-            fprintf(stderr, "rsm-nav: cannot read %s: %s\n", path, carmen_error(&reader));
-            status = 1;
-            break;
-        }
-        if (k != CARMEN_SCAN) {
-            continue; /* odometry comes from the pose carried by each laser line */
-        }
-        if (have_log_mount && rec.has_mount &&
-            (fabsf(rec.mount.x - log_mount.x) > NAV_MOUNT_TOL_M || fabsf(rec.mount.y - log_mount.y) > NAV_MOUNT_TOL_M ||
-             fabsf(rsm_wrap_angle(rec.mount.theta - log_mount.theta)) > NAV_MOUNT_TOL_RAD)) {
-            nav->mount_disagree++;
-        }
-        /* Start in the odometry frame so the trajectories are comparable. */
-        if (nav_start(nav, rec.odom_d, "the log's first pose") != 0) {
-            carmen_close(&reader);
-            return 2;
-        }
-        if (have_odom) {
-            /* In double: far from the origin a float difference loses centimetres. */
-            const rsm_pose_t d = carmen_between(last_odom, rec.odom_d);
-            const rsm_motion_t u = {d.x, d.y, d.theta};
-            (void)rsm_localizer_motion(&nav->loc, &u);
-        }
-        memcpy(last_odom, rec.odom_d, sizeof last_odom);
-        have_odom = 1;
-        for (b = 0; b < rec.count; ++b) {
-            scan.range_m[b] = rec.range_m[b];
-        }
-        (void)rsm_scan_set_uniform(&scan, rec.count, rec.start_rad, rec.step_rad);
-        /* A negative or absurd stamp becomes the farthest one: odd to nav_clamp. */
-        nav_scan(nav, &scan,
-                 rec.stamp_s >= 0.0 && rec.stamp_s < 1.8e13 ? (uint64_t)llround(rec.stamp_s * 1e6) : UINT64_MAX,
-                 rec.stamp_s);
+    if (status == 2) {
+        return 2;
     }
-    carmen_close(&reader);
     printf("rsm-nav summary\n");
     printf("  source          CARMEN log %s\n", path);
     printf("  lines           %llu (scans %llu, odometry %llu, comments %llu, unknown %llu, malformed %llu, too many beams %llu, too long %llu)\n",
@@ -892,7 +828,8 @@ static int write_summary_json(nav_t *nav, const char *path)
     }
     fprintf(f, "},\n  \"median_us\": %.1f,\n  \"p95_us\": %.1f,\n", median * 1e6, p95 * 1e6);
     fprintf(f, "  \"timestamps\": {\"clamped\": %llu, \"odd\": %llu, \"jumps\": %llu},\n",
-            (unsigned long long)nav->clamped, (unsigned long long)nav->odd_stamps, (unsigned long long)nav->time_jumps);
+            (unsigned long long)nav->repair.clamped, (unsigned long long)nav->repair.odd_stamps,
+            (unsigned long long)nav->repair.time_jumps);
     fprintf(f, "  \"drops\": {\"nan\": %u, \"too_short\": %u, \"too_long\": %u},\n", (unsigned)c->drops.nan,
             (unsigned)c->drops.too_short, (unsigned)c->drops.too_long);
     fprintf(f, "  \"odometry_calibrations\": %u,\n", nav->calibrations);
@@ -947,8 +884,8 @@ static void print_summary(nav_t *nav)
     }
     printf("  timestamps      %llu clamped (went backwards), %llu odd (far from both neighbours: replaced),"
            " %llu jumps of the clock\n",
-           (unsigned long long)nav->clamped, (unsigned long long)nav->odd_stamps,
-           (unsigned long long)nav->time_jumps);
+           (unsigned long long)nav->repair.clamped, (unsigned long long)nav->repair.odd_stamps,
+           (unsigned long long)nav->repair.time_jumps);
     printf("  scans           %u\n", (unsigned)c->scans);
     for (o = 0; o < RSM_SCAN_OUTCOMES; ++o) {
         if (c->outcome[o] != 0) {
