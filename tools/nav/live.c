@@ -119,10 +119,20 @@ typedef struct live {
     const nav_sink_t *sink;
     endpoint_t *ep[2];        /* robot, laser */
     nav_devices_t dev;
-    rsm_clock_t clock;
+    rsm_clock_t clock;        /* reads now_us: one time for a whole cycle */
+    uint64_t now_us;          /* the monotonic clock when the cycle began */
     uint64_t bytes;
     double last_data;         /* when bytes last came */
 } live_t;
+
+/* The drivers' clock: the time the current cycle began. Everything that
+ * arrived in one wake-up is stamped alike on both links, as a capture
+ * stamps the records of one instant (a lockstep replay then gives the
+ * capture-mode run bit for bit, whatever the load). */
+static uint64_t live_now(void *ctx)
+{
+    return ((const live_t *)ctx)->now_us;
+}
 
 /* Whether endpoint i is open and its driver usable. */
 static int live_up(const live_t *lv, int i)
@@ -189,6 +199,7 @@ static uint64_t live_cycle(live_t *lv)
 {
     uint64_t got = 0;
     int i;
+    lv->now_us = rsm_posix_clock_now_us(NULL);
     for (i = 0; i < 2; ++i) {
         endpoint_t *e = lv->ep[i];
         long r;
@@ -219,7 +230,7 @@ static uint64_t live_cycle(live_t *lv)
     } else if (lv->sink->tick != NULL) {
         /* Idle: a scan waiting for odometry may time out. The drivers
          * stamp with this clock, so the aligner's times agree. */
-        lv->sink->tick(lv->sink->ctx, rsm_posix_clock_now_us(NULL));
+        lv->sink->tick(lv->sink->ctx, lv->now_us);
     }
     return got;
 }
@@ -242,6 +253,7 @@ static int live_shutdown(live_t *lv)
     while (mono_s() < t_end && ((live_up(lv, 0) && lv->dev.robot.state != RSM_P3DX_IDLE) ||
                                 (live_up(lv, 1) && lv->dev.laser.state != RSM_SICKLMS_IDLE))) {
         int i;
+        lv->now_us = rsm_posix_clock_now_us(NULL);
         for (i = 0; i < 2; ++i) {
             if (live_up(lv, i) && (i == 0 ? lv->dev.robot.state != RSM_P3DX_IDLE
                                           : lv->dev.laser.state != RSM_SICKLMS_IDLE) &&
@@ -279,7 +291,9 @@ static int live_run(live_t *lv)
     const double t0 = mono_s();
     int i;
     nav_devices_defaults(&lv->dev, opt->listen_only, opt->quiet);
-    (void)rsm_posix_clock_init(&lv->clock);
+    lv->clock.now_us = live_now;
+    lv->clock.ctx = lv;
+    lv->now_us = rsm_posix_clock_now_us(NULL);
     /* One wait serves both links (live_wait): the drivers never block. */
     lv->dev.pcfg.read_timeout_us = 0u;
     lv->dev.lcfg.read_timeout_us = 0u;

@@ -4,7 +4,8 @@
  * start-up and continuous output); listen-only mode (the drivers' own)
  * sends nothing and decodes what arrives, e.g. from rsm-replay. Both wait
  * once for all links: until bytes arrive or the earliest driver deadline,
- * then poll each driver without waiting. */
+ * then poll each driver without waiting, on a clock that reads the time the
+ * wake-up began (so both links stamp what came in one wake-up alike). */
 #ifndef RSM_NAV_LIVE_H
 #define RSM_NAV_LIVE_H
 
