@@ -250,6 +250,25 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
  * unchanged. */
 int rsm_localizer_set_odometry(rsm_localizer_t *loc, const rsm_odometry_config_t *odo_cfg);
 
+/* What the last scan looked like to the localizer: its usable readings
+ * (within the range limits, the laser mount applied) in the robot frame,
+ * as rsm_localizer_scan matched them (place them at the report's pose to
+ * draw them). Copies min(cap, count) points to out (out may be NULL when
+ * cap is 0) and returns count: the usable readings of the last scan
+ * processed (0 before the first; a scan refused as out of order leaves the
+ * previous one's). 0 for loc NULL. Reads only. */
+size_t rsm_localizer_scan_points(const rsm_localizer_t *loc, rsm_point_t *out, size_t cap);
+
+/* What the persistent map looks like (RSM_METHOD_MAP): the occupancy in
+ * [0, 1] of the finest cell holding world point (x, y) (0 where nothing
+ * was seen, or the tile was reused), in *occupancy; and, with
+ * rsm_localizer_map_bounds, the world box (metres) of the finest tiles
+ * held (RSM_ERR_DEGENERATE while the map is empty). Both return RSM_OK,
+ * RSM_ERR_NOSYS for another method, or RSM_ERR_INVAL for NULL pointers
+ * (outputs untouched on error). Read only. */
+int rsm_localizer_map_occupancy(const rsm_localizer_t *loc, float x, float y, float *occupancy);
+int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, float *x1, float *y1);
+
 /* Current estimate. */
 rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc);
 

@@ -274,18 +274,18 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
     return 0;
 }
 
-/* This scan's usable readings (the localizer's robot-frame points, filled
- * for every scan) placed at its estimate, into the --map picture. Not
- * loc.world: the core fills that only for scans it writes into its map. */
+/* This scan's usable readings, as the localizer saw them, placed at its
+ * estimate, into the --map picture. */
 static void nav_map_points(nav_t *nav, const rsm_localizer_report_t *rep)
 {
-    static rsm_point_t world[RSM_MAX_BEAMS];
+    static rsm_point_t pts[RSM_MAX_BEAMS];
     size_t k;
-    const size_t n = rep->points <= RSM_MAX_BEAMS ? rep->points : RSM_MAX_BEAMS;
+    const size_t got = rsm_localizer_scan_points(&nav->loc, pts, RSM_MAX_BEAMS);
+    const size_t n = got <= RSM_MAX_BEAMS ? got : RSM_MAX_BEAMS;
     for (k = 0; k < n; ++k) {
-        world[k] = rsm_pose_apply(&rep->pose, &nav->loc.pts[k]);
+        pts[k] = rsm_pose_apply(&rep->pose, &pts[k]);
     }
-    if (hitmap_add(&nav->hits, world, n) != 0) {
+    if (hitmap_add(&nav->hits, pts, n) != 0) {
         fprintf(stderr, "rsm-nav: out of memory for the map picture\n");
         exit(1);
     }
