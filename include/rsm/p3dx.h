@@ -66,7 +66,7 @@ typedef struct rsm_p3dx_config {
     uint8_t request_config;      /* 1: send CONFIG and wait for the CONFIGpac [1] */
     uint8_t enable_motors;       /* 1: send ENABLE 1 after connecting [1] */
     uint8_t request_encoder;     /* 1: send ENCODER 2 after connecting [1] */
-    uint32_t read_timeout_us;    /* longest wait inside one poll, > 0 [10 000] */
+    uint32_t read_timeout_us;    /* longest wait inside one poll; 0: never wait [10 000] */
     uint32_t step_timeout_us;    /* handshake reply timeout per step [1 000 000] */
     uint32_t close_wait_us;      /* wait after CLOSE of a stale session [200 000] */
     uint32_t config_timeout_us;  /* wait for the CONFIGpac [1 000 000] */

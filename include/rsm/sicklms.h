@@ -71,7 +71,7 @@ typedef struct rsm_sicklms_config {
     uint16_t resolution_cdeg;   /* variant: 100, 50 or 25 (1/100 deg) [100] */
     uint8_t upside_down;        /* 1: scanner mounted upside down [0] */
     uint8_t max_tries;          /* sends per request, >= 1 [3] */
-    uint32_t read_timeout_us;   /* longest wait inside one poll, > 0 [10 000] */
+    uint32_t read_timeout_us;   /* longest wait inside one poll; 0: never wait [10 000] */
     uint32_t ack_timeout_us;    /* ACK/NAK wait [200 000] */
     uint32_t reply_timeout_us;  /* reply wait after the ACK [1 000 000] */
     uint32_t mode_timeout_us;   /* reply wait after a 0x20 request [3 000 000] */
