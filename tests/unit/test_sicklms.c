@@ -661,6 +661,19 @@ void test_sicklms_poll_should_stamp_a_scan_with_the_arrival_of_its_first_byte(vo
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.bad_scans);
 }
 
+void test_sicklms_next_deadline_should_follow_the_request_and_stream_timers(void)
+{
+    rsm_sicklms_event_t ev;
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(&drv) == UINT64_MAX); /* IDLE */
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(NULL) == UINT64_MAX);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    /* The first probe is out: its ACK is awaited ack_timeout_us. */
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(&drv) == fl.now_us + cfg.ack_timeout_us);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 5000000u, &ev));
+    /* Streaming: silence for stream_timeout_us after the last telegram is a link loss. */
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(&drv) == drv.last_tel_us + cfg.stream_timeout_us);
+}
+
 void test_sicklms_listen_should_decode_and_stamp_scans_as_streaming_and_send_nothing(void)
 {
     rsm_sicklms_event_t ev;
@@ -705,6 +718,7 @@ int main(void)
     RUN_TEST(test_sicklms_disconnect_at_the_power_up_rate_should_only_stop_the_stream);
     RUN_TEST(test_sicklms_disconnect_should_give_up_on_a_silent_unit_after_max_tries);
     RUN_TEST(test_sicklms_poll_should_stamp_a_scan_with_the_arrival_of_its_first_byte);
+    RUN_TEST(test_sicklms_next_deadline_should_follow_the_request_and_stream_timers);
     RUN_TEST(test_sicklms_listen_should_decode_and_stamp_scans_as_streaming_and_send_nothing);
     return UNITY_END();
 }
