@@ -858,11 +858,6 @@ int16_t rsm_aria_pos_delta15(uint16_t now, uint16_t prev)
     return (int16_t)((int32_t)d - 0x4000);
 }
 
-int32_t rsm_aria_count_delta(int32_t now, int32_t prev)
-{
-    return s32_of((uint32_t)now - (uint32_t)prev);
-}
-
 float rsm_aria_th_to_rad(int32_t th_units)
 {
     /* Reduce in integers first so that the float step is exact-ish and

@@ -108,7 +108,7 @@ int rsm_link_rx_init(rsm_link_rx_t *rx, const rsm_link_t *link, const rsm_clock_
                      uint32_t read_timeout_us, uint32_t byte_timeout_us)
 {
     if (rx == NULL || link == NULL || clock == NULL || link->read == NULL ||
-        link->write == NULL || clock->now_us == NULL || read_timeout_us == 0u) {
+        link->write == NULL || clock->now_us == NULL) {
         return RSM_ERR_INVAL;
     }
     rx->link = link;
@@ -119,6 +119,7 @@ int rsm_link_rx_init(rsm_link_rx_t *rx, const rsm_link_t *link, const rsm_clock_
     rx->len = 0u;
     rx->stamp_us = 0u;
     rx->last_rx_us = 0u;
+    rx->bytes = 0u;
     return RSM_OK;
 }
 
@@ -139,6 +140,21 @@ uint64_t rsm_link_rx_now(const rsm_link_rx_t *rx)
         (void)rsm_clock_now_us(rx->clock, &t);
     }
     return t;
+}
+
+uint64_t rsm_link_next_deadline(const rsm_link_rx_t *rx, const rsm_link_poll_ops_t *ops, const void *drv)
+{
+    uint64_t now;
+    uint64_t wait;
+    if (rx == NULL || ops == NULL || ops->until_due == NULL) {
+        return UINT64_MAX;
+    }
+    now = rsm_link_rx_now(rx);
+    if (rx->off < rx->len) {
+        return now;
+    }
+    wait = ops->until_due(drv, now);
+    return wait > UINT64_MAX - now ? UINT64_MAX : now + wait;
 }
 
 int rsm_link_poll(rsm_link_rx_t *rx, const rsm_link_poll_ops_t *ops, void *drv)
@@ -171,6 +187,7 @@ int rsm_link_poll(rsm_link_rx_t *rx, const rsm_link_poll_ops_t *ops, void *drv)
         rx->len = (size_t)n;
         rx->stamp_us = now;
         rx->last_rx_us = now;
+        rx->bytes += (uint64_t)n;
         if (ops->drain(drv, now)) {
             return RSM_OK;
         }

@@ -207,7 +207,7 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
     }
-    rsm_odometry_noise(&loc->cfg->odometry, u, q);
+    rsm_odometry_noise(&loc->odo.cfg, u, q);
     if (rsm_ekf_predict(&loc->ekf, u, q) != RSM_OK) {
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
@@ -228,6 +228,61 @@ int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right)
         return rc;
     }
     return rsm_localizer_motion(loc, &u);
+}
+
+int rsm_localizer_set_odometry(rsm_localizer_t *loc, const rsm_odometry_config_t *odo_cfg)
+{
+    if (loc == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    return rsm_odometry_set_config(&loc->odo, odo_cfg);
+}
+
+size_t rsm_localizer_scan_points(const rsm_localizer_t *loc, rsm_point_t *out, size_t cap)
+{
+    size_t n;
+    size_t k;
+    if (loc == NULL) {
+        return 0u;
+    }
+    n = loc->last.points <= RSM_MAX_BEAMS ? (size_t)loc->last.points : (size_t)RSM_MAX_BEAMS;
+    for (k = 0; out != NULL && k < n && k < cap; ++k) {
+        out[k] = loc->pts[k];
+    }
+    return n;
+}
+
+int rsm_localizer_map_occupancy(const rsm_localizer_t *loc, float x, float y, float *occupancy)
+{
+    if (loc == NULL || loc->cfg == NULL || occupancy == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (loc->cfg->method != RSM_METHOD_MAP) {
+        return RSM_ERR_NOSYS;
+    }
+    *occupancy = rsm_tmap_occupancy(&loc->state.persistent.map, 0u, x, y);
+    return RSM_OK;
+}
+
+int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, float *x1, float *y1)
+{
+    int32_t g[4];
+    float a;
+    if (loc == NULL || loc->cfg == NULL || x0 == NULL || y0 == NULL || x1 == NULL || y1 == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (loc->cfg->method != RSM_METHOD_MAP) {
+        return RSM_ERR_NOSYS;
+    }
+    if (!rsm_tmap_bounds(&loc->state.persistent.map, 0u, &g[0], &g[1], &g[2], &g[3])) {
+        return RSM_ERR_DEGENERATE;
+    }
+    a = rsm_tmap_cell(&loc->state.persistent.map, 0u);
+    *x0 = (float)g[0] * a;
+    *y0 = (float)g[1] * a;
+    *x1 = (float)(g[2] + 1) * a;
+    *y1 = (float)(g[3] + 1) * a;
+    return RSM_OK;
 }
 
 rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc)

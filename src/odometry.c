@@ -48,26 +48,35 @@ static int non_negative_finite(float v)
     return isfinite(v) && v >= 0.0f;
 }
 
+static int config_ok(const rsm_odometry_config_t *cfg)
+{
+    return positive_finite(cfg->ticks_per_m_left) && positive_finite(cfg->ticks_per_m_right) &&
+           positive_finite(cfg->wheel_base_m) && cfg->counter_bits >= 16u && cfg->counter_bits <= 32u &&
+           non_negative_finite(cfg->sigma_trans_per_m) && non_negative_finite(cfg->sigma_rot_per_rad) &&
+           non_negative_finite(cfg->sigma_rot_per_m) && non_negative_finite(cfg->sigma_trans_min_m) &&
+           non_negative_finite(cfg->sigma_rot_min_rad) && non_negative_finite(cfg->max_wheel_speed_mps) &&
+           non_negative_finite(cfg->max_turn_rate_rps) && non_negative_finite(cfg->slack_s);
+}
+
 int rsm_odometry_init(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg)
 {
-    if (odo == NULL || cfg == NULL) {
-        return RSM_ERR_INVAL;
-    }
-    if (!positive_finite(cfg->ticks_per_m_left) || !positive_finite(cfg->ticks_per_m_right) ||
-        !positive_finite(cfg->wheel_base_m)) {
-        return RSM_ERR_INVAL;
-    }
-    if (cfg->counter_bits < 16u || cfg->counter_bits > 32u) {
-        return RSM_ERR_INVAL;
-    }
-    if (!non_negative_finite(cfg->sigma_trans_per_m) || !non_negative_finite(cfg->sigma_rot_per_rad) ||
-        !non_negative_finite(cfg->sigma_rot_per_m) || !non_negative_finite(cfg->sigma_trans_min_m) ||
-        !non_negative_finite(cfg->sigma_rot_min_rad) || !non_negative_finite(cfg->max_wheel_speed_mps) ||
-        !non_negative_finite(cfg->max_turn_rate_rps) || !non_negative_finite(cfg->slack_s)) {
+    if (odo == NULL || cfg == NULL || !config_ok(cfg)) {
         return RSM_ERR_INVAL;
     }
     memset(odo, 0, sizeof *odo);
-    odo->cfg = cfg;
+    odo->cfg = *cfg;
+    return RSM_OK;
+}
+
+int rsm_odometry_set_config(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg)
+{
+    if (odo == NULL || cfg == NULL || !config_ok(cfg)) {
+        return RSM_ERR_INVAL;
+    }
+    if (cfg->counter_bits != odo->cfg.counter_bits) {
+        rsm_odometry_restart(odo); /* the latched counts were masked to the old width */
+    }
+    odo->cfg = *cfg;
     return RSM_OK;
 }
 
@@ -81,23 +90,19 @@ void rsm_odometry_restart(rsm_odometry_t *odo)
 
 static uint32_t counter_mask(uint8_t bits)
 {
-    /* bits is 16..32 (validated); a shift by 32 would be undefined. */
-    return bits >= 32u ? 0xFFFFFFFFu : ((1u << bits) - 1u);
+    /* A shift by 32 would be undefined. */
+    return (bits >= 32u || bits == 0u) ? 0xFFFFFFFFu : ((1u << bits) - 1u);
 }
 
-/* (cur - last) modulo 2^bits, read as a two's-complement number of that
- * width: a counter that wrapped forwards gives a small positive step, one
- * that wrapped backwards a small negative step. */
-static int32_t counter_delta(uint32_t cur, uint32_t last, uint8_t bits)
+int32_t rsm_odometry_count_delta(uint32_t to, uint32_t from, uint8_t bits)
 {
     const uint32_t mask = counter_mask(bits);
-    const uint32_t half = 1u << (bits - 1u);
-    const uint32_t d = (cur - last) & mask;
+    const uint32_t d = (to - from) & mask;
     uint32_t mag;
-    if (d < half) {
+    if (d <= (mask >> 1)) {
         return (int32_t)d;
     }
-    /* Negative: magnitude is 2^bits - d, in [1, half]. Built without
+    /* Negative: magnitude is 2^bits - d, in [1, 2^(bits-1)]. Built without
      * relying on implementation-defined unsigned-to-signed conversion. */
     mag = (mask - d) + 1u;
     if (mag > 0x7FFFFFFFu) {
@@ -165,10 +170,10 @@ int rsm_odometry_update_ticks_at(rsm_odometry_t *odo, uint32_t left, uint32_t ri
     uint8_t bits;
     int32_t dl;
     int32_t dr;
-    if (odo == NULL || odo->cfg == NULL || out == NULL) {
+    if (odo == NULL || out == NULL) {
         return RSM_ERR_INVAL;
     }
-    cfg = odo->cfg;
+    cfg = &odo->cfg;
     bits = cfg->counter_bits;
     if (bits < 16u || bits > 32u) {
         return RSM_ERR_INVAL;
@@ -180,12 +185,12 @@ int rsm_odometry_update_ticks_at(rsm_odometry_t *odo, uint32_t left, uint32_t ri
         latch(odo, left, right, stamp_us);
         return RSM_ERR_AGAIN;
     }
-    dl = counter_delta(left, odo->last_left, bits);
-    dr = counter_delta(right, odo->last_right, bits);
+    dl = rsm_odometry_count_delta(left, odo->last_left, bits);
+    dr = rsm_odometry_count_delta(right, odo->last_right, bits);
     if (!plausible(cfg, dl, dr, elapsed_s(odo->have_time, odo->last_us, stamp_us))) {
         if (odo->have_cand) {
-            const int32_t cl = counter_delta(left, odo->cand_left, bits);
-            const int32_t cr = counter_delta(right, odo->cand_right, bits);
+            const int32_t cl = rsm_odometry_count_delta(left, odo->cand_left, bits);
+            const int32_t cr = rsm_odometry_count_delta(right, odo->cand_right, bits);
             if (plausible(cfg, cl, cr, elapsed_s(odo->cand_has_time, odo->cand_us, stamp_us))) {
                 /* The counters started over at the refused sample. */
                 latch(odo, left, right, stamp_us);

@@ -164,7 +164,24 @@ int rsm_p3dx_connect(rsm_p3dx_t *d)
         return RSM_ERR_INVAL;
     }
     d->lost = 0u;
+    /* The line may be at any rate (a previous session's HOSTBAUD, a probe):
+     * start where the configuration says. */
+    if (rsm_link_set_baud(d->link, d->cfg->baud) == RSM_OK) {
+        d->baud = d->cfg->baud;
+    }
     begin_handshake(d, rsm_link_rx_now(&d->io));
+    return RSM_OK;
+}
+
+int rsm_p3dx_listen(rsm_p3dx_t *d)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    forget_motion(d);
+    d->have_enc = 0u;
+    d->lost = 0u;
+    d->state = RSM_P3DX_LISTENING;
     return RSM_OK;
 }
 
@@ -288,16 +305,17 @@ static void handle_encoder(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt)
     d->stats.encoder_packets++;
     ev->type = RSM_P3DX_EVENT_ENCODER;
     ev->stamp_us = d->io.stamp_us;
-    ev->encoder.left = enc.left;
-    ev->encoder.right = enc.right;
-    ev->encoder.stamp_us = d->io.stamp_us;
+    /* Two's complement on the wire: the same bits as an unsigned counter. */
+    ev->encoder.sample.left = (uint32_t)enc.left;
+    ev->encoder.sample.right = (uint32_t)enc.right;
+    ev->encoder.sample.stamp_us = d->io.stamp_us;
     if (d->have_enc) {
-        ev->encoder.d_left = rsm_aria_count_delta(enc.left, d->last_left);
-        ev->encoder.d_right = rsm_aria_count_delta(enc.right, d->last_right);
+        ev->encoder.d_left = rsm_odometry_count_delta(ev->encoder.sample.left, d->last_left, 32u);
+        ev->encoder.d_right = rsm_odometry_count_delta(ev->encoder.sample.right, d->last_right, 32u);
         ev->encoder.has_delta = 1u;
     }
-    d->last_left = enc.left;
-    d->last_right = enc.right;
+    d->last_left = ev->encoder.sample.left;
+    d->last_right = ev->encoder.sample.right;
     d->have_enc = 1u;
 }
 
@@ -324,24 +342,26 @@ static void handle_config(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt)
 }
 
 /* A packet while a session is open (CONFIG_WAIT, BAUD_CHECK, CONNECTED,
- * DISCONNECTING). Only CONNECTED gives SIP and ENCODER events. */
+ * DISCONNECTING) or while listening. Only CONNECTED and LISTENING give SIP
+ * and ENCODER events. */
 static void handle_session_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t now)
 {
     const rsm_p3dx_state_t before = d->state;
+    const int events = before == RSM_P3DX_CONNECTED || before == RSM_P3DX_LISTENING;
     if (pkt->id == RSM_ARIA_PAC_SIP_STOPPED || pkt->id == RSM_ARIA_PAC_SIP_MOVING) {
         if (rsm_aria_decode_sip(pkt, &d->sip) != RSM_OK) {
             d->stats.unknown_packets++;
         } else {
             d->stats.sips++;
             d->last_sip_us = d->io.stamp_us;
-            if (before == RSM_P3DX_CONNECTED) {
+            if (events) {
                 d->out.type = RSM_P3DX_EVENT_SIP;
                 d->out.sip = &d->sip;
                 d->out.stamp_us = d->io.stamp_us;
             }
         }
     } else if (pkt->id == RSM_ARIA_PAC_ENCODER) {
-        if (before == RSM_P3DX_CONNECTED) {
+        if (events) {
             handle_encoder(d, pkt);
         } else {
             d->stats.unknown_packets++;
@@ -371,6 +391,7 @@ static void handle_packet(rsm_p3dx_t *d, const rsm_aria_packet_t *pkt, uint64_t 
     case RSM_P3DX_BAUD_CHECK:
     case RSM_P3DX_CONNECTED:
     case RSM_P3DX_DISCONNECTING:
+    case RSM_P3DX_LISTENING:
         handle_session_packet(d, pkt, now);
         break;
     case RSM_P3DX_IDLE:
@@ -580,6 +601,7 @@ static uint64_t until_due_cb(const void *drv, uint64_t now)
         }
         break;
     case RSM_P3DX_IDLE:
+    case RSM_P3DX_LISTENING:
     default:
         return UINT64_MAX;
     }
@@ -587,6 +609,22 @@ static uint64_t until_due_cb(const void *drv, uint64_t now)
 }
 
 static const rsm_link_poll_ops_t p3dx_poll_ops = {drain_cb, timers_cb, until_due_cb, silence_cb};
+
+uint64_t rsm_p3dx_next_deadline_us(const rsm_p3dx_t *d)
+{
+    return d == NULL ? UINT64_MAX : rsm_link_next_deadline(&d->io, &p3dx_poll_ops, d);
+}
+
+int rsm_p3dx_odometry_config(const rsm_p3dx_t *d, rsm_odometry_config_t *cfg)
+{
+    if (d == NULL || cfg == NULL || d->ticks_mm == 0u) {
+        return RSM_ERR_INVAL;
+    }
+    cfg->ticks_per_m_left = (float)d->ticks_mm * 1000.0f;
+    cfg->ticks_per_m_right = cfg->ticks_per_m_left;
+    cfg->counter_bits = 32u;
+    return RSM_OK;
+}
 
 int rsm_p3dx_poll(rsm_p3dx_t *d, rsm_p3dx_event_t *ev)
 {

@@ -185,7 +185,21 @@ int rsm_sicklms_connect(rsm_sicklms_t *d)
     }
     d->lost = 0u;
     d->format = d->cfg->format;
+    if (rsm_link_set_baud(d->link, d->cfg->power_up_baud) == RSM_OK) {
+        d->baud = d->cfg->power_up_baud;
+    }
     begin_probing(d, d->cfg->power_up_baud, rsm_link_rx_now(&d->io));
+    return RSM_OK;
+}
+
+int rsm_sicklms_listen(rsm_sicklms_t *d)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    d->lost = 0u;
+    d->format = d->cfg->format;
+    d->state = RSM_SICKLMS_LISTENING;
     return RSM_OK;
 }
 
@@ -222,6 +236,10 @@ int rsm_sicklms_disconnect(rsm_sicklms_t *d)
         return RSM_ERR_INVAL;
     }
     if (d->state == RSM_SICKLMS_IDLE || d->state == RSM_SICKLMS_STOPPING) {
+        return RSM_OK;
+    }
+    if (d->state == RSM_SICKLMS_LISTENING) {
+        d->state = RSM_SICKLMS_IDLE; /* it never spoke to the unit */
         return RSM_OK;
     }
     start_step(d, STEP_STOP, rsm_link_rx_now(&d->io));
@@ -457,7 +475,7 @@ static void handle_event(rsm_sicklms_t *d, const rsm_lms_event_t *e, uint64_t no
     if (e->type == RSM_LMS_EVENT_TELEGRAM) {
         d->stats.telegrams++;
     }
-    if (d->state == RSM_SICKLMS_STREAMING) {
+    if (d->state == RSM_SICKLMS_STREAMING || d->state == RSM_SICKLMS_LISTENING) {
         /* 0x06/0x15 bytes mean nothing while streaming. */
         if (e->type == RSM_LMS_EVENT_TELEGRAM) {
             handle_stream_telegram(d, &e->telegram);
@@ -602,7 +620,7 @@ static uint64_t until_due_cb(const void *drv, uint64_t now)
 {
     const rsm_sicklms_t *d = (const rsm_sicklms_t *)drv;
     uint64_t due;
-    if (d->state == RSM_SICKLMS_IDLE) {
+    if (d->state == RSM_SICKLMS_IDLE || d->state == RSM_SICKLMS_LISTENING) {
         return UINT64_MAX;
     }
     due = d->state == RSM_SICKLMS_STREAMING ? d->last_tel_us + d->cfg->stream_timeout_us
@@ -612,6 +630,11 @@ static uint64_t until_due_cb(const void *drv, uint64_t now)
 
 static const rsm_link_poll_ops_t sicklms_poll_ops = {drain_cb, timers_cb, until_due_cb,
                                                      silence_cb};
+
+uint64_t rsm_sicklms_next_deadline_us(const rsm_sicklms_t *d)
+{
+    return d == NULL ? UINT64_MAX : rsm_link_next_deadline(&d->io, &sicklms_poll_ops, d);
+}
 
 int rsm_sicklms_poll(rsm_sicklms_t *d, rsm_sicklms_event_t *ev)
 {

@@ -23,31 +23,20 @@ rsm_sync_config_t rsm_sync_config_default(void)
     return c;
 }
 
-static uint32_t counter_mask(const rsm_sync_t *s)
-{
-    const unsigned bits = s->loc->cfg->odometry.counter_bits;
-    return bits >= 32u ? 0xFFFFFFFFu : ((1u << bits) - 1u);
-}
-
-/* Signed difference to - from of two counters, modulo their width. */
-static int64_t counter_diff(uint32_t mask, uint32_t from, uint32_t to)
-{
-    const int64_t d = (int64_t)((to - from) & mask);
-    return d > (int64_t)(mask >> 1) ? d - ((int64_t)mask + 1) : d;
-}
-
 /* from + (to - from) * num / den, rounded to nearest; den > 0, num <= den.
- * |diff| < 2^31 and num < 2^32 keep the product inside int64. */
-static uint32_t counter_lerp(uint32_t mask, uint32_t from, uint32_t to, uint64_t num, uint64_t den)
+ * |diff| <= 2^31 and num < 2^32 keep the product inside int64. The result
+ * is not masked: every reader of the counts takes differences modulo the
+ * counter width (rsm_odometry_count_delta). */
+static uint32_t counter_lerp(uint8_t bits, uint32_t from, uint32_t to, uint64_t num, uint64_t den)
 {
-    const int64_t d = counter_diff(mask, from, to);
+    const int64_t d = rsm_odometry_count_delta(to, from, bits);
     const int64_t p = d * (int64_t)num;
     const int64_t half = (int64_t)(den / 2u);
     const int64_t part = p >= 0 ? (p + half) / (int64_t)den : -((-p + half) / (int64_t)den);
-    return (uint32_t)((uint32_t)((int64_t)from + part) & mask);
+    return (uint32_t)((int64_t)from + part);
 }
 
-static void apply(rsm_sync_t *s, const rsm_sync_sample_t *smp)
+static void apply(rsm_sync_t *s, const rsm_odometry_sample_t *smp)
 {
     rsm_motion_t u;
     /* The first sample only latches the counters (RSM_ERR_AGAIN); an
@@ -60,12 +49,12 @@ static void apply(rsm_sync_t *s, const rsm_sync_sample_t *smp)
     s->have_base = 1u;
 }
 
-static const rsm_sync_sample_t *front(const rsm_sync_t *s)
+static const rsm_odometry_sample_t *front(const rsm_sync_t *s)
 {
     return s->count > 0u ? &s->ring[s->head] : NULL;
 }
 
-static const rsm_sync_sample_t *newest(const rsm_sync_t *s)
+static const rsm_odometry_sample_t *newest(const rsm_sync_t *s)
 {
     if (s->count > 0u) {
         return &s->ring[(s->head + s->count - 1u) % RSM_SYNC_DEPTH];
@@ -75,7 +64,7 @@ static const rsm_sync_sample_t *newest(const rsm_sync_t *s)
 
 static void apply_front(rsm_sync_t *s)
 {
-    const rsm_sync_sample_t smp = s->ring[s->head];
+    const rsm_odometry_sample_t smp = s->ring[s->head];
     s->head = (s->head + 1u) % RSM_SYNC_DEPTH;
     s->count--;
     apply(s, &smp);
@@ -97,7 +86,7 @@ static uint64_t scan_time(const rsm_sync_t *s, const rsm_scan_t *scan)
 static void fuse(rsm_sync_t *s, const rsm_scan_t *scan, uint64_t t, fuse_class_t cls)
 {
     rsm_localizer_report_t rep;
-    const rsm_sync_sample_t *next;
+    const rsm_odometry_sample_t *next;
     int rc;
     while ((next = front(s)) != NULL && next->stamp_us <= t) {
         apply_front(s);
@@ -113,16 +102,16 @@ static void fuse(rsm_sync_t *s, const rsm_scan_t *scan, uint64_t t, fuse_class_t
             s->counters.exact++;
         } else {
             /* next is past t: split the step between base and next at t. */
-            const uint32_t mask = counter_mask(s);
+            const uint8_t bits = s->loc->odo.cfg.counter_bits;
             const uint64_t den = next->stamp_us - s->base.stamp_us;
             const uint64_t num = t - s->base.stamp_us;
-            rsm_sync_sample_t mid;
+            rsm_odometry_sample_t mid;
             if (den > 0xFFFFFFFFu) {
                 mid = s->base; /* over an hour between samples: nothing to interpolate */
             } else {
                 mid.stamp_us = t;
-                mid.left = counter_lerp(mask, s->base.left, next->left, num, den);
-                mid.right = counter_lerp(mask, s->base.right, next->right, num, den);
+                mid.left = counter_lerp(bits, s->base.left, next->left, num, den);
+                mid.right = counter_lerp(bits, s->base.right, next->right, num, den);
             }
             apply(s, &mid);
             s->counters.interpolated++;
@@ -164,23 +153,23 @@ int rsm_sync_init(rsm_sync_t *s, rsm_localizer_t *loc, const rsm_sync_config_t *
     return RSM_OK;
 }
 
-int rsm_sync_encoder(rsm_sync_t *s, uint32_t left, uint32_t right, uint64_t stamp_us)
+int rsm_sync_encoder(rsm_sync_t *s, const rsm_odometry_sample_t *sample)
 {
-    const rsm_sync_sample_t *last;
-    rsm_sync_sample_t smp;
-    if (s == NULL || s->loc == NULL) {
+    const rsm_odometry_sample_t *last;
+    rsm_odometry_sample_t smp;
+    uint64_t stamp_us;
+    if (s == NULL || s->loc == NULL || sample == NULL) {
         return RSM_ERR_INVAL;
     }
     s->counters.encoders++;
+    smp = *sample;
     last = newest(s);
-    if (last != NULL && stamp_us < last->stamp_us) {
+    if (last != NULL && smp.stamp_us < last->stamp_us) {
         /* Arrival order is the true order of one link's packets. */
-        stamp_us = last->stamp_us;
+        smp.stamp_us = last->stamp_us;
         s->counters.encoder_backwards++;
     }
-    smp.stamp_us = stamp_us;
-    smp.left = left;
-    smp.right = right;
+    stamp_us = smp.stamp_us;
     if (s->count == RSM_SYNC_DEPTH) {
         apply_front(s);
         s->counters.encoder_overflow++;
@@ -216,7 +205,7 @@ int rsm_sync_encoder_restart(rsm_sync_t *s)
 
 int rsm_sync_scan(rsm_sync_t *s, const rsm_scan_t *scan)
 {
-    const rsm_sync_sample_t *last;
+    const rsm_odometry_sample_t *last;
     uint64_t t;
     if (s == NULL || s->loc == NULL || scan == NULL) {
         return RSM_ERR_INVAL;
@@ -276,13 +265,13 @@ int rsm_sync_flush(rsm_sync_t *s)
 rsm_pose_t rsm_sync_pose(const rsm_sync_t *s)
 {
     rsm_pose_t pose = rsm_localizer_pose(s->loc);
-    const rsm_sync_sample_t *from = s->have_base ? &s->base : front(s);
-    const rsm_sync_sample_t *to = newest(s);
+    const rsm_odometry_sample_t *from = s->have_base ? &s->base : front(s);
+    const rsm_odometry_sample_t *to = newest(s);
     if (from != NULL && to != NULL && from != to) {
-        const uint32_t mask = counter_mask(s);
-        const int64_t dl = counter_diff(mask, from->left, to->left);
-        const int64_t dr = counter_diff(mask, from->right, to->right);
-        const rsm_motion_t u = rsm_odometry_from_ticks(&s->loc->cfg->odometry, (int32_t)dl, (int32_t)dr);
+        const uint8_t bits = s->loc->odo.cfg.counter_bits;
+        const int32_t dl = rsm_odometry_count_delta(to->left, from->left, bits);
+        const int32_t dr = rsm_odometry_count_delta(to->right, from->right, bits);
+        const rsm_motion_t u = rsm_odometry_from_ticks(&s->loc->odo.cfg, dl, dr);
         pose = rsm_odometry_apply(&pose, &u);
     }
     return pose;

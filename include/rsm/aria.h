@@ -550,9 +550,7 @@ int rsm_aria_decode_config(const rsm_aria_packet_t *pkt, rsm_aria_config_t *out)
  * P3-DX). Example: prev 32760, now 10 -> +18. Pure, reentrant. */
 int16_t rsm_aria_pos_delta15(uint16_t now, uint16_t prev);
 
-/* Difference now - prev of two free-running 32-bit encoder counts, taken
- * modulo 2^32 into [-2^31, 2^31 - 1] ticks. Pure, reentrant. */
-int32_t rsm_aria_count_delta(int32_t now, int32_t prev);
+/* (Encoder counts: rsm_odometry_count_delta in rsm/odometry.h, with 32 bits.) */
 
 /* Converts a THPOS value, or a difference of two (4096 units per turn), to
  * radians wrapped to (-pi, pi]. Example: 1024 -> pi/2. Pure, reentrant. */

@@ -141,7 +141,8 @@ int rsm_clock_now_us(const rsm_clock_t *clock, uint64_t *now_us);
 typedef struct rsm_link_rx {
     const rsm_link_t *link;   /* kept by pointer: must outlive the driver */
     const rsm_clock_t *clock; /* kept by pointer */
-    uint32_t read_timeout_us; /* longest wait inside one poll, > 0 */
+    uint32_t read_timeout_us; /* longest wait inside one poll (0: never wait,
+                                 take what has arrived) */
     uint32_t byte_timeout_us; /* silence after which a partial frame is
                                  abandoned (0: at the first empty read) */
     uint8_t buf[RSM_LINK_RX_CHUNK];
@@ -149,6 +150,7 @@ typedef struct rsm_link_rx {
     size_t len;               /* bytes of the last read in buf */
     uint64_t stamp_us;        /* clock time right after the read that filled buf */
     uint64_t last_rx_us;      /* clock time of the last read that returned bytes */
+    uint64_t bytes;           /* bytes received since rsm_link_rx_init */
 } rsm_link_rx_t;
 
 /* The steps of one driver, called with the driver's state pointer drv.
@@ -172,9 +174,11 @@ typedef struct rsm_link_poll_ops {
 } rsm_link_poll_ops_t;
 
 /* Sets *rx up for link and clock (kept by pointer) with an empty chunk and
- * last_rx_us 0. Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers, a link
- * without read or write, a clock without now_us, or read_timeout_us 0
- * (*rx untouched). Nothing is read or sent. */
+ * last_rx_us 0. read_timeout_us 0 makes every poll non-blocking (the
+ * caller waits for all its links at once, up to the drivers' next
+ * deadlines). Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers, a link
+ * without read or write, or a clock without now_us (*rx untouched).
+ * Nothing is read or sent. */
 int rsm_link_rx_init(rsm_link_rx_t *rx, const rsm_link_t *link, const rsm_clock_t *clock,
                      uint32_t read_timeout_us, uint32_t byte_timeout_us);
 
@@ -186,6 +190,13 @@ void rsm_link_rx_drop(rsm_link_rx_t *rx);
 /* The clock's current time, in microseconds; 0 for NULL or a clock that
  * cannot be read (rsm_clock_now_us failed). */
 uint64_t rsm_link_rx_now(const rsm_link_rx_t *rx);
+
+/* Clock time at which driver drv next needs rsm_link_poll whatever
+ * arrives: now when bytes of the chunk are still unexamined, else now plus
+ * ops->until_due (UINT64_MAX when no timer is set, or for NULL arguments).
+ * A partial frame is abandoned at the first poll after byte_timeout_us of
+ * silence, not at a deadline of its own. Changes nothing. */
+uint64_t rsm_link_next_deadline(const rsm_link_rx_t *rx, const rsm_link_poll_ops_t *ops, const void *drv);
 
 /* Runs the cycle above once for driver drv. The one read asks for at most
  * RSM_LINK_RX_CHUNK bytes with a timeout of min(read_timeout_us,

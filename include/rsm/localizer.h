@@ -205,7 +205,9 @@ typedef struct rsm_localizer {
  * beyond it; the maps drop points beyond it), and floats resolve only
  * centimetres from about 1e5 m on: far from the origin, work in a frame
  * centred near the robot (docs/robustness.md, "Coordinates").
- * cfg is kept by pointer, not copied: it must outlive loc.
+ * cfg is kept by pointer, not copied: it must outlive loc; its odometry
+ * part alone is copied (into loc->odo.cfg), so that
+ * rsm_localizer_set_odometry can change it later.
  * A macro: it passes the caller's sizeof(rsm_localizer_t) and capacity
  * digest (RSM_CONFIG_FINGERPRINT), so that an application compiled with
  * other capacities than the library gets RSM_ERR_CONFIG, with nothing
@@ -236,6 +238,38 @@ int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right);
  * when its timestamp is older than the previous scan's, RSM_ERR_INVAL for
  * bad arguments or a count above RSM_MAX_BEAMS. */
 int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep);
+
+/* Sets the odometry geometry and noise at run time, e.g. from the robot's
+ * own calibration once its driver has read it (rsm_p3dx_odometry_config).
+ * odo_cfg is validated as rsm_localizer_init validates cfg->odometry and
+ * copied into loc (loc->odo.cfg; the caller's struct is free on return,
+ * and loc->cfg->odometry, read only by init, is not touched). Increments
+ * from the next encoder sample on use it; the latched counts are kept
+ * unless counter_bits changes (the next sample then only latches).
+ * Returns RSM_OK, or RSM_ERR_INVAL (loc or odo_cfg NULL, a non-positive or
+ * non-finite ticks_per_m_left/right or wheel_base_m, counter_bits outside
+ * 16..32, a negative or non-finite noise or plausibility figure) with loc
+ * unchanged. */
+int rsm_localizer_set_odometry(rsm_localizer_t *loc, const rsm_odometry_config_t *odo_cfg);
+
+/* What the last scan looked like to the localizer: its usable readings
+ * (within the range limits, the laser mount applied) in the robot frame,
+ * as rsm_localizer_scan matched them (place them at the report's pose to
+ * draw them). Copies min(cap, count) points to out (out may be NULL when
+ * cap is 0) and returns count: the usable readings of the last scan
+ * processed (0 before the first; a scan refused as out of order leaves the
+ * previous one's). 0 for loc NULL. Reads only. */
+size_t rsm_localizer_scan_points(const rsm_localizer_t *loc, rsm_point_t *out, size_t cap);
+
+/* What the persistent map looks like (RSM_METHOD_MAP): the occupancy in
+ * [0, 1] of the finest cell holding world point (x, y) (0 where nothing
+ * was seen, or the tile was reused), in *occupancy; and, with
+ * rsm_localizer_map_bounds, the world box (metres) of the finest tiles
+ * held (RSM_ERR_DEGENERATE while the map is empty). Both return RSM_OK,
+ * RSM_ERR_NOSYS for another method, or RSM_ERR_INVAL for NULL pointers
+ * (outputs untouched on error). Read only. */
+int rsm_localizer_map_occupancy(const rsm_localizer_t *loc, float x, float y, float *occupancy);
+int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, float *x1, float *y1);
 
 /* Current estimate. */
 rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc);

@@ -47,8 +47,18 @@ typedef struct rsm_odometry_config {
  * 3 m and turn up to 2 turns). */
 rsm_odometry_config_t rsm_odometry_config_default(void);
 
+/* One reading of the wheel encoders, as it travels from a driver through the
+ * aligner (rsm/sync.h) to the odometry: free-running counters (only the low
+ * counter_bits count; differences are taken modulo 2^counter_bits, see
+ * rsm_odometry_count_delta) and the time they were read. */
+typedef struct rsm_odometry_sample {
+    uint64_t stamp_us;        /* clock time of the reading */
+    uint32_t left;            /* left wheel counter, ticks */
+    uint32_t right;           /* right wheel counter, ticks */
+} rsm_odometry_sample_t;
+
 typedef struct rsm_odometry {
-    const rsm_odometry_config_t *cfg; /* kept by pointer: must outlive the state */
+    rsm_odometry_config_t cfg; /* a copy: rsm_odometry_set_config changes it at run time */
     uint32_t last_left;
     uint32_t last_right;
     uint8_t have_last;
@@ -78,8 +88,24 @@ typedef struct rsm_motion {
 } rsm_motion_t;
 
 /* Validates cfg (positive geometry, 16 <= counter_bits <= 32, non-negative
- * noise) and resets the state. Returns RSM_OK or RSM_ERR_INVAL. */
+ * noise), copies it (the caller's struct is free on return) and resets the
+ * state. Returns RSM_OK or RSM_ERR_INVAL (odo unchanged). */
 int rsm_odometry_init(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg);
+
+/* Replaces the configuration at run time (a robot's calibration read after
+ * start-up), validated as rsm_odometry_init does and copied. The baseline
+ * counts and the counters are kept, so the next sample's increment is
+ * converted with the new geometry; a new counter_bits restarts the counts
+ * (the next sample only latches). Returns RSM_OK or RSM_ERR_INVAL (odo
+ * unchanged). */
+int rsm_odometry_set_config(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg);
+
+/* to - from of two counters counter_bits wide (16..32; others read as 32),
+ * taken modulo 2^bits and read as a two's-complement number of that width:
+ * a counter that wrapped forwards gives a small positive step, one that
+ * wrapped backwards a small negative one (-2^(bits-1) for half a turn of
+ * the counter). The one place counter wrap-around is handled. Pure. */
+int32_t rsm_odometry_count_delta(uint32_t to, uint32_t from, uint8_t bits);
 
 /* Feeds raw counter values (only the low counter_bits are used). The first
  * call only latches the counts and returns RSM_ERR_AGAIN with *out zeroed;

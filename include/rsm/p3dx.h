@@ -51,6 +51,7 @@
 
 #include "rsm/aria.h"
 #include "rsm/hal.h"
+#include "rsm/odometry.h"
 #include "rsm/status.h"
 
 #ifdef __cplusplus
@@ -65,7 +66,7 @@ typedef struct rsm_p3dx_config {
     uint8_t request_config;      /* 1: send CONFIG and wait for the CONFIGpac [1] */
     uint8_t enable_motors;       /* 1: send ENABLE 1 after connecting [1] */
     uint8_t request_encoder;     /* 1: send ENCODER 2 after connecting [1] */
-    uint32_t read_timeout_us;    /* longest wait inside one poll, > 0 [10 000] */
+    uint32_t read_timeout_us;    /* longest wait inside one poll; 0: never wait [10 000] */
     uint32_t step_timeout_us;    /* handshake reply timeout per step [1 000 000] */
     uint32_t close_wait_us;      /* wait after CLOSE of a stale session [200 000] */
     uint32_t config_timeout_us;  /* wait for the CONFIGpac [1 000 000] */
@@ -98,7 +99,8 @@ typedef enum rsm_p3dx_state {
     RSM_P3DX_CONFIG_WAIT = 3,   /* OPEN (and CONFIG) sent, awaiting CONFIGpac */
     RSM_P3DX_CONNECTED = 4,
     RSM_P3DX_DISCONNECTING = 5, /* STOP and ENABLE 0 sent, CLOSE follows */
-    RSM_P3DX_BAUD_CHECK = 6     /* HOSTBAUD sent, awaiting a packet at the new rate */
+    RSM_P3DX_BAUD_CHECK = 6,    /* HOSTBAUD sent, awaiting a packet at the new rate */
+    RSM_P3DX_LISTENING = 7      /* listen-only (rsm_p3dx_listen): decodes, sends nothing */
 } rsm_p3dx_state_t;
 
 typedef enum rsm_p3dx_event_type {
@@ -110,14 +112,15 @@ typedef enum rsm_p3dx_event_type {
     RSM_P3DX_EVENT_DISCONNECTED = 5  /* CLOSE sent after rsm_p3dx_disconnect */
 } rsm_p3dx_event_type_t;
 
-/* One encoder reading: raw free-running counts and the receive time. */
+/* One encoder reading: the free-running counts as the odometry sample the
+ * aligner takes (rsm_sync_encoder), and the step from the previous one. */
 typedef struct rsm_p3dx_encoder {
-    int32_t left;       /* left wheel count, ticks */
-    int32_t right;      /* right wheel count, ticks */
+    rsm_odometry_sample_t sample; /* left/right counts (the packet's 32-bit
+                                     values as unsigned counters) and the clock
+                                     time of the read that completed the packet */
     int32_t d_left;     /* left - previous left, modulo 2^32 (0 if !has_delta) */
     int32_t d_right;    /* right - previous right, modulo 2^32 */
     uint8_t has_delta;  /* 0 for the first packet of a connection */
-    uint64_t stamp_us;  /* clock time of the read that completed the packet */
 } rsm_p3dx_encoder_t;
 
 typedef struct rsm_p3dx_event {
@@ -182,8 +185,8 @@ typedef struct rsm_p3dx {
     uint8_t probe_idx;
     uint8_t lost;             /* a link loss is being recovered */
     uint8_t have_enc;
-    int32_t last_left;
-    int32_t last_right;
+    uint32_t last_left;
+    uint32_t last_right;
     uint64_t deadline_us;
     uint64_t last_tx_us;      /* last command of any kind */
     uint64_t last_sip_us;
@@ -205,24 +208,58 @@ typedef struct rsm_p3dx {
 /* Initialises d in the IDLE state with zero counters. link, clock and cfg
  * are kept by pointer and must outlive d. Nothing is sent.
  * Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers, a link without read or
- * write, a clock without now_us, read_timeout_us 0, sync_tries 0, a zero
+ * write, a clock without now_us, sync_tries 0, a zero
  * timeout, a host_baud HOSTBAUD cannot select, or host_baud with
  * baud_check_us 0 (d is then unchanged). */
 int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
                   const rsm_p3dx_config_t *cfg);
 
-/* Starts the handshake (sends SYNC0 at d->baud). Also restarts it from any
- * other state. Returns RSM_OK, RSM_ERR_INVAL (d NULL) or a link error from
- * the write (the handshake still proceeds: a timeout will resend). */
+/* Starts the handshake: puts the link at cfg->baud (where the link can
+ * change rates; d->baud is then that rate) and sends SYNC0. Also restarts
+ * it from any other state. Returns RSM_OK, RSM_ERR_INVAL (d NULL) or a link
+ * error from the write (the handshake still proceeds: a timeout will
+ * resend). */
 int rsm_p3dx_connect(rsm_p3dx_t *d);
 
+/* Listen-only mode, from any state: the driver sends nothing, never
+ * changes the link's rate and runs no timer; it decodes what arrives
+ * (another program drives the robot, or a capture is replayed) and gives
+ * SIP and ENCODER events exactly as when connected, stamped the same way
+ * (the clock time right after the read that completed the packet); the
+ * first ENCODER packet has has_delta 0. A CONFIGpac updates ticks_mm and
+ * the rest as in a session. rsm_p3dx_connect leaves the mode,
+ * rsm_p3dx_disconnect goes to IDLE (nothing sent). Received input is kept.
+ * Returns RSM_OK or RSM_ERR_INVAL (d NULL). */
+int rsm_p3dx_listen(rsm_p3dx_t *d);
+
 /* Runs the state machine once: at most one link read of at most
- * cfg->read_timeout_us, then the timers. *ev receives the event (type NONE
+ * cfg->read_timeout_us (0: the read only takes what has already arrived,
+ * so a caller waiting on several links at once never blocks here; see
+ * rsm_p3dx_next_deadline_us), then the timers. *ev receives the event (type NONE
  * if nothing happened). Returns RSM_OK, RSM_ERR_INVAL (NULL pointers), or a
  * negative link status if the read failed (ev type NONE; the driver stays
  * usable). Never blocks longer than the read timeout plus the link's write
  * time. */
 int rsm_p3dx_poll(rsm_p3dx_t *d, rsm_p3dx_event_t *ev);
+
+/* Clock time (the driver's clock, microseconds) at which the driver next
+ * needs a poll even if nothing arrives: a handshake step's timeout, the
+ * keep-alive, a motion re-send, the link-loss check; the current time when
+ * received bytes are still unexamined or a command is queued; UINT64_MAX
+ * in IDLE or for d NULL. A caller serving several links waits until the
+ * earliest deadline of all or until bytes arrive, then polls each driver
+ * (with read_timeout_us 0) until it gives no event. */
+uint64_t rsm_p3dx_next_deadline_us(const rsm_p3dx_t *d);
+
+/* The robot's odometry geometry as this connection reported it: *cfg
+ * (filled by the caller, e.g. with the localizer's current odometry
+ * configuration, loc->odo.cfg) gets ticks_per_m_left/right = TicksMM * 1000
+ * (d->ticks_mm: the CONFIGpac's, else config.ticks_mm) and counter_bits 32
+ * (ENCODER packets carry 32-bit counts); the wheel base and the noise stay
+ * (the CONFIGpac does not carry DiffConvFactor). For
+ * rsm_localizer_set_odometry once a CONNECTED event came. Returns RSM_OK,
+ * or RSM_ERR_INVAL (NULL pointers, or ticks_mm 0; *cfg untouched). */
+int rsm_p3dx_odometry_config(const rsm_p3dx_t *d, rsm_odometry_config_t *cfg);
 
 /* Queues VEL mm_s (|mm_s| <= 32767, mm/s) and RVEL deg_s (deg/s, CCW
  * positive); the next poll sends them while connected, and they are re-sent

@@ -71,7 +71,7 @@ typedef struct rsm_sicklms_config {
     uint16_t resolution_cdeg;   /* variant: 100, 50 or 25 (1/100 deg) [100] */
     uint8_t upside_down;        /* 1: scanner mounted upside down [0] */
     uint8_t max_tries;          /* sends per request, >= 1 [3] */
-    uint32_t read_timeout_us;   /* longest wait inside one poll, > 0 [10 000] */
+    uint32_t read_timeout_us;   /* longest wait inside one poll; 0: never wait [10 000] */
     uint32_t ack_timeout_us;    /* ACK/NAK wait [200 000] */
     uint32_t reply_timeout_us;  /* reply wait after the ACK [1 000 000] */
     uint32_t mode_timeout_us;   /* reply wait after a 0x20 request [3 000 000] */
@@ -98,7 +98,8 @@ typedef enum rsm_sicklms_state {
     RSM_SICKLMS_SETTLE = 2,    /* pause after a rate change */
     RSM_SICKLMS_BACKOFF = 3,   /* pause after an ERROR */
     RSM_SICKLMS_STREAMING = 4,
-    RSM_SICKLMS_STOPPING = 5   /* a shutdown request is in flight */
+    RSM_SICKLMS_STOPPING = 5,  /* a shutdown request is in flight */
+    RSM_SICKLMS_LISTENING = 6  /* listen-only (rsm_sicklms_listen): decodes, sends nothing */
 } rsm_sicklms_state_t;
 
 typedef enum rsm_sicklms_event_type {
@@ -185,7 +186,7 @@ typedef struct rsm_sicklms {
 /* Initialises d in the IDLE state with zero counters; nothing is sent.
  * link, clock and cfg are kept by pointer.
  * Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers, a link without read or
- * write, a clock without now_us, a zero read/ack/reply/mode timeout,
+ * write, a clock without now_us, a zero ack/reply/mode timeout,
  * max_tries 0, an address above 0x7F, rates other than 9600/19200/38400
  * (baud may be 0), or a variant rsm_lms_encode_variant refuses (d is then
  * unchanged). */
@@ -193,9 +194,21 @@ int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t
                      const rsm_sicklms_config_t *cfg);
 
 /* Starts (or restarts) the start-up: sets the link to power_up_baud when it
- * can change rates, then sends the first probe. Returns RSM_OK or
- * RSM_ERR_INVAL (d NULL). */
+ * can change rates (d->baud is then that rate), then sends the first
+ * probe. Returns RSM_OK or RSM_ERR_INVAL (d NULL). */
 int rsm_sicklms_connect(rsm_sicklms_t *d);
+
+/* Listen-only mode, from any state: the driver sends nothing, never
+ * changes the link's rate and runs no timer; every 0xB0 telegram that
+ * arrives (from a unit another program started, or a replayed capture) is
+ * decoded with cfg->format and given as a SCAN event exactly as when
+ * streaming, stamped the same way (the receive time of the read that
+ * brought the telegram's first byte, less latency_us). A telegram cut
+ * short is abandoned after byte_timeout_us of silence, as always.
+ * rsm_sicklms_connect leaves the mode; rsm_sicklms_disconnect goes to IDLE
+ * (nothing sent). Received input is kept. Returns RSM_OK or RSM_ERR_INVAL
+ * (d NULL). */
+int rsm_sicklms_listen(rsm_sicklms_t *d);
 
 /* Converts a decoded 0xB0 scan to a robot-frame scan: scanner angles run
  * 0..180 deg from the right, the robot's 0 is ahead (mirrored when
@@ -207,10 +220,18 @@ int rsm_sicklms_connect(rsm_sicklms_t *d);
 int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan_t *out);
 
 /* Runs the state machine once: at most one link read of at most
- * cfg->read_timeout_us, then the timers. *ev receives the event (NONE if
+ * cfg->read_timeout_us (0: only what has already arrived; see
+ * rsm_sicklms_next_deadline_us), then the timers. *ev receives the event (NONE if
  * nothing happened). Returns RSM_OK, RSM_ERR_INVAL (NULL pointers), or the
  * negative status of a failed read (ev NONE; the driver stays usable). */
 int rsm_sicklms_poll(rsm_sicklms_t *d, rsm_sicklms_event_t *ev);
+
+/* Clock time at which the driver next needs a poll even if nothing
+ * arrives (a request's timeout, a pause's end, the stream's silence
+ * check; now when received bytes are still unexamined); UINT64_MAX in
+ * IDLE or for d NULL. As rsm_p3dx_next_deadline_us: one wait for all
+ * links. */
+uint64_t rsm_sicklms_next_deadline_us(const rsm_sicklms_t *d);
 
 /* Starts the shutdown described above, from any state but IDLE (a start-up
  * in progress is abandoned; the requests go out at the current rate).

@@ -28,6 +28,7 @@
 #include "rsm/config.h"
 #include "rsm/geom.h"
 #include "rsm/localizer.h"
+#include "rsm/odometry.h"
 #include "rsm/scan.h"
 
 #ifdef __cplusplus
@@ -64,21 +65,15 @@ typedef struct rsm_sync_counters {
 typedef void (*rsm_sync_result_fn)(void *ctx, const rsm_scan_t *scan, int status,
                                    const rsm_localizer_report_t *rep);
 
-typedef struct rsm_sync_sample {
-    uint64_t stamp_us;
-    uint32_t left;
-    uint32_t right;
-} rsm_sync_sample_t;
-
 typedef struct rsm_sync {
     rsm_localizer_t *loc;
     const rsm_sync_config_t *cfg;     /* kept by pointer */
     rsm_sync_result_fn on_result;
     void *ctx;
-    rsm_sync_sample_t ring[RSM_SYNC_DEPTH]; /* samples not yet applied, oldest first */
+    rsm_odometry_sample_t ring[RSM_SYNC_DEPTH]; /* samples not yet applied, oldest first */
     uint32_t head;
     uint32_t count;
-    rsm_sync_sample_t base;           /* the last counts applied to the localizer */
+    rsm_odometry_sample_t base;           /* the last counts applied to the localizer */
     uint8_t have_base;
     uint8_t holding;                  /* a scan waits in held */
     uint64_t held_since_us;           /* its (offset) stamp: the wait runs from here */
@@ -91,9 +86,10 @@ typedef struct rsm_sync {
 int rsm_sync_init(rsm_sync_t *s, rsm_localizer_t *loc, const rsm_sync_config_t *cfg,
                   rsm_sync_result_fn on_result, void *ctx);
 
-/* An encoder sample: raw counters (as rsm_localizer_ticks takes them) read at
- * stamp_us. May fuse a waiting scan. Returns RSM_OK or RSM_ERR_INVAL. */
-int rsm_sync_encoder(rsm_sync_t *s, uint32_t left, uint32_t right, uint64_t stamp_us);
+/* An encoder sample (raw counters, as a driver delivers them: rsm/p3dx.h
+ * ENCODER events; copied). May fuse a waiting scan. Returns RSM_OK or
+ * RSM_ERR_INVAL (NULL). */
+int rsm_sync_encoder(rsm_sync_t *s, const rsm_odometry_sample_t *sample);
 
 /* The encoder counters start over (the first sample of a new connection
  * follows: a robot that restarted counts from 0). Held samples are applied

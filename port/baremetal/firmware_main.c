@@ -172,11 +172,18 @@ int main(void)
         {
             rsm_p3dx_event_t rev;
             rsm_sicklms_event_t lev;
-            if (rsm_p3dx_poll(&fw_robot, &rev) == RSM_OK && rev.type == RSM_P3DX_EVENT_ENCODER) {
-                (void)rsm_sync_encoder(&fw_sync, (uint32_t)rev.encoder.left, (uint32_t)rev.encoder.right,
-                                       rev.stamp_us);
+            const int rst = rsm_p3dx_poll(&fw_robot, &rev);
+            if (rst == RSM_OK && rev.type == RSM_P3DX_EVENT_ENCODER) {
+                (void)rsm_sync_encoder(&fw_sync, &rev.encoder.sample);
                 fw_stats.encoder_events++;
                 moved = 1;
+            } else if (rst == RSM_OK && rev.type == RSM_P3DX_EVENT_CONNECTED) {
+                /* The robot's own calibration (its CONFIGpac's TicksMM),
+                 * from the next encoder sample on. */
+                rsm_odometry_config_t odo = fw_localizer.odo.cfg;
+                if (rsm_p3dx_odometry_config(&fw_robot, &odo) == RSM_OK) {
+                    (void)rsm_localizer_set_odometry(&fw_localizer, &odo);
+                }
             }
             if (rsm_sicklms_poll(&fw_laser, &lev) == RSM_OK && lev.type == RSM_SICKLMS_EVENT_SCAN &&
                 lev.scan != NULL) {

@@ -24,6 +24,7 @@
 #include <string.h>
 
 #include "rsm/aria.h"
+#include "rsm/odometry.h"
 
 #include "fuzz_check.h"
 
@@ -166,7 +167,7 @@ static void check_packet(const rsm_aria_packet_t *pkt)
             uint32_t l = (uint32_t)pl[0] | ((uint32_t)pl[1] << 8) | ((uint32_t)pl[2] << 16) |
                          ((uint32_t)pl[3] << 24);
             CHECK(r == RSM_OK && (uint32_t)e.left == l);
-            CHECK((uint32_t)rsm_aria_count_delta(e.left, e.right) ==
+            CHECK((uint32_t)rsm_odometry_count_delta((uint32_t)(e.left), (uint32_t)(e.right), 32u) ==
                   (uint32_t)e.left - (uint32_t)e.right);
         } else {
             CHECK((r == RSM_ERR_INVAL || r == RSM_ERR_RANGE) && memcmp(&e, &e0, sizeof(e)) == 0);

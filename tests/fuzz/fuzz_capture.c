@@ -1,6 +1,6 @@
 /* libFuzzer target: a capture file through rsm-nav's whole capture path
- * (tools/nav/capture.c reader, lenient; tools/nav/stream.c ARIA and LMS
- * decoding; src/sync.c alignment) into the localizer.
+ * (tools/nav/capture.c reader, lenient; the P3-DX and LMS drivers listening
+ * through tools/nav/devices.c; src/sync.c alignment) into the localizer.
  *
  * The input is the file. Whatever it holds, the reader returns documented
  * statuses and never a record longer than a chunk, every decoded scan fits
@@ -14,7 +14,7 @@
 #include <string.h>
 
 #include "capture.h"
-#include "stream.h"
+#include "devices.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"
 #include "rsm/sync.h"
@@ -47,19 +47,20 @@ static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_lo
     CHECK((unsigned)rep->outcome < (unsigned)RSM_SCAN_OUTCOMES);
 }
 
-static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us, int restart)
+static void sink_encoder(void *ctx, const rsm_odometry_sample_t *sample, int restart)
 {
     run_t *r = (run_t *)ctx;
     if (restart) {
         CHECK(rsm_sync_encoder_restart(&r->sync) == RSM_OK);
     }
-    CHECK(rsm_sync_encoder(&r->sync, (uint32_t)left, (uint32_t)right, stamp_us) == RSM_OK);
+    CHECK(rsm_sync_encoder(&r->sync, sample) == RSM_OK);
     check_finite(&r->loc);
 }
 
-static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
+static void sink_scan(void *ctx, const rsm_scan_t *scan)
 {
     run_t *r = (run_t *)ctx;
+    const uint64_t stamp_us = scan->stamp_us;
     CHECK(scan->count <= RSM_MAX_BEAMS);
     r->copy = *scan;
     /* rsm-nav clamps stamps that go backwards; so does this. */
@@ -82,10 +83,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     static run_t run;
     static cap_reader reader;
-    static nav_stream_t stream;
+    static nav_devices_t dev;
     static uint8_t buf[CAP_MAX_CHUNK];
     const rsm_pose_t start = {0.0f, 0.0f, 0.0f};
-    nav_stream_sink_t sink;
+    nav_feed_t feed[2];
+    rsm_link_t link[2];
+    rsm_clock_t clock[2];
+    nav_sink_t sink;
+    int i;
     FILE *fp;
     int st;
     if (size == 0u) {
@@ -104,7 +109,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     sink.encoder = sink_encoder;
     sink.scan = sink_scan;
     sink.tick = sink_tick;
-    nav_stream_init(&stream);
+    sink.calibration = NULL;
+    nav_devices_defaults(&dev, 1, 1);
+    for (i = 0; i < 2; ++i) {
+        nav_feed_init(&feed[i], &link[i], &clock[i]);
+        CHECK(nav_devices_start(&dev, i == 0, &link[i], &clock[i]) == 0);
+    }
     st = cap_open(&reader, fp, 1);
     if (st == CAP_OK) {
         for (;;) {
@@ -121,9 +131,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             }
             /* Channel 0 as the robot, the rest as the laser: every byte is decoded. */
             if (rec.channel == reader.channels[0].id) {
-                nav_stream_robot(&stream, buf, rec.length, rec.timestamp_us, &sink);
+                nav_devices_feed(&dev, 1, &feed[0], buf, rec.length, rec.timestamp_us, &sink);
             } else {
-                nav_stream_laser(&stream, buf, rec.length, rec.timestamp_us, &sink);
+                nav_devices_feed(&dev, 0, &feed[1], buf, rec.length, rec.timestamp_us, &sink);
             }
         }
         CHECK(reader.count.records + reader.count.corrupt + reader.count.truncated <= size);

@@ -44,7 +44,8 @@ static void poll_robot(rsm_p3dx_t *d, const rsm_p3dx_config_t *cfg, side_t *s)
     CHECK(d->stats.encoder_packets >= before.encoder_packets && d->stats.connects >= before.connects &&
           d->stats.keepalives >= before.keepalives && d->stats.link_lost >= before.link_lost);
     if (ev.type == RSM_P3DX_EVENT_ENCODER && ev.encoder.has_delta) {
-        CHECK(ev.encoder.d_left == rsm_aria_count_delta(ev.encoder.left, ev.encoder.left - ev.encoder.d_left));
+        CHECK(ev.encoder.d_left == rsm_odometry_count_delta(ev.encoder.sample.left,
+                                                            ev.encoder.sample.left - (uint32_t)ev.encoder.d_left, 32u));
     }
 }
 

@@ -479,25 +479,31 @@ def test_cross_check_output_is_parsed():
     assert len(p["checks"]) == 2 and p["passed"]
 
 
-def test_summary_parser_reads_outcomes_times_and_the_persistent_map():
-    text = ("rsm-nav summary\n  method          rsm (persistent map)\n"
-            "  persistent map  12 writes, tiles 30/12/5 per level, 47 taken, 2 evicted, 1 returns dropped\n"
-            "  recovery        3 searches, 1 taken\n"
-            "  timestamps      0 clamped (went backwards)\n  scans           12\n    accepted       9\n"
-            "    jump           3\n  readings dropped: nan 0, too short 0, too long 1\n"
-            "  time per scan   median 98.1 us, p95 167.6 us (this machine, wall clock)\n")
-    s = bench.parse_summary(text)
-    assert s["scans"] == 12 and s["outcomes"] == {"accepted": 9, "jump": 3}
-    assert s["median_us"] == 98.1 and s["p95_us"] == 167.6
-    assert s["tmap"] == {"writes": 12, "tiles": [30, 12, 5], "taken": 47, "evicted": 2, "dropped": 1}
-    assert s["recovery"] == {"searches": 3, "taken": 1}
-    assert math.isclose(bench.fused_percent(s), 75.0)
-    s = bench.parse_summary(text.replace("rsm (persistent map)", "icp").split("  persistent")[0]
-                            + "  scans           2\n    accepted       2\n"
-                              "  time per scan   median 1.0 us, p95 2.0 us\n")
-    assert s["tmap"] is None and s["recovery"] is None
+def test_bench_reads_the_summary_rsm_nav_writes_as_json(tmp_path, head_log):
+    """run_nav asks rsm-nav for --summary-json and reads that, not the
+    printed text: the counts agree with the printed summary."""
+    for method in ("rsm", "icp"):
+        r = bench.run_nav(rsm_nav_binary(), head_log, method, tmp_path / f"{method}.txt")
+        s = r["parsed"]
+        assert s["method"] == method and s["scans"] == 600
+        assert sum(s["outcomes"].values()) == 600 and s["outcomes"]["accepted"] > 300
+        assert re.search(rf"^\s+scans\s+{s['scans']}$", r["summary"], re.M)
+        for name, count in s["outcomes"].items():
+            assert re.search(rf"^\s+{name}\s+{count}$", r["summary"], re.M), (name, r["summary"])
+        assert 0 < s["median_us"] <= s["p95_us"]
+        assert 0 < bench.fused_percent(s) <= 100
+        if method == "rsm":
+            t = s["tmap"]
+            assert f"{t['writes']} writes, tiles {'/'.join(map(str, t['tiles']))} per level" in r["summary"]
+            assert s["recovery"]["searches"] >= s["recovery"]["taken"] >= 0
+        else:
+            assert s["tmap"] is None and s["recovery"] is None
+    bad = tmp_path / "bad.json"
+    bad.write_text("{\"scans\": \"many\"}")
     with pytest.raises(bench.BenchError):
-        bench.parse_summary("no summary here")
+        bench.load_summary(bad)
+    with pytest.raises(bench.BenchError):
+        bench.load_summary(tmp_path / "missing.json")
 
 
 # ---------------------------------------------------------------------------

@@ -13,12 +13,15 @@ Timing is never asserted: the runs are long compared with what they need
 (a handshake takes well under a second), and every count has a wide margin.
 """
 
+import math
 import re
 import subprocess
 
 import pytest
 
 from conftest import FakeDevices, rsm_nav_binary
+from rsm_tools import capture as cap
+from rsm_tools.fakedev import scale_counts
 
 NAV_TIMEOUT = 180
 
@@ -43,10 +46,11 @@ def split_events(path):
     return enc, scans
 
 
-def run_nav(tmp, paths, seconds):
+def run_nav(tmp, paths, seconds, *extra):
     traj, events = tmp / "live.txt", tmp / "live.events"
     res = subprocess.run([str(rsm_nav_binary()), "--robot", paths["robot"], "--lms", paths["laser"],
-                          "--seconds", str(seconds), "--trajectory", str(traj), "--events", str(events)],
+                          "--seconds", str(seconds), "--trajectory", str(traj), "--events", str(events),
+                          *extra],
                          capture_output=True, text=True, timeout=NAV_TIMEOUT + seconds)
     assert res.returncode == 0, res.stderr
     rows = [l for l in traj.read_text().splitlines() if l and not l.startswith("#")]
@@ -80,6 +84,12 @@ def in_order(items, reference):
         if j == len(reference):
             return False
     return True
+
+
+def scaled_event(line, ticks_mm):
+    """An "E left right" events line as a robot counting ticks_mm per mm sends it."""
+    _, left, right = line.split()
+    return "E %d %d" % scale_counts((int(left), int(right)), ticks_mm)
 
 
 def commands(log):
@@ -166,8 +176,11 @@ def test_active_mode_connects_switches_rates_streams_and_shuts_down(tmp_path, ex
     assert in_order(live_scans, cap_scans), "a scan that is not the capture's, or out of order"
     assert live_scans[0] == cap_scans[0]
     assert len(rows) == len(live_scans)
+    # The fake robot counts 131 ticks per mm: the capture's counts scaled.
     assert len(live_enc) >= 10, stderr
-    assert in_order(live_enc, cap_enc), "an encoder reading that is not the capture's, or out of order"
+    assert in_order(live_enc, [scaled_event(e, 131) for e in cap_enc]), \
+        "an encoder reading that is not the capture's, or out of order"
+    assert "rsm-nav: odometry from the robot: 131000 ticks/m" in stderr
     robot, laser = report(stderr, "robot"), report(stderr, "laser")
     assert robot["connects"] == robot["reconnects"] + 1 and robot["baud"] == 38400
     assert laser["connects"] == laser["reconnects"] + 1 and laser["bad_scans"] == 0
@@ -217,3 +230,77 @@ def test_active_mode_reports_link_loss_and_reconnects_after_the_lines_come_back(
     assert len(live_enc) == robot["encoders"]
 
     assert_orderly_shutdown(log, stderr)
+
+
+def rows_of(path):
+    return [tuple(map(float, l.split()[1:])) for l in path.read_text().splitlines() if l and not l.startswith("#")]
+
+
+def relative(a, b):
+    """Pose b in the frame of pose a (x, y, theta)."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    c, s = math.cos(a[2]), math.sin(a[2])
+    dth = math.atan2(math.sin(b[2] - a[2]), math.cos(b[2] - a[2]))
+    return (c * dx + s * dy, -s * dx + c * dy, dth)
+
+
+def test_active_mode_takes_the_robots_ticksmm_and_tracks_as_well_as_with_128(tmp_path, excerpt_capture):
+    """The fake robot counts TicksMM ticks per mm and says so in its
+    CONFIGpac; rsm-nav sets the localizer's odometry from it
+    (rsm_localizer_set_odometry). Run with odometry alone, so that nothing
+    but the encoder geometry moves the estimate: over the same stretch of
+    the excerpt, the motion rsm-nav reports with TicksMM 200 agrees with the
+    capture-mode run as closely as with 128. Had the 200 been ignored, every
+    distance would come out 200/128 times too long (about 1.6 m over this
+    stretch). Only the shape of the motion between the first and the last
+    scan both runs saw is compared, with margins far above what the live
+    run's own encoder sampling moves (the live clock is not asserted)."""
+    # The robot mostly stands or turns in place for its first 300 scans: start there.
+    header, records, _ = cap.read_capture(excerpt_capture)
+    laser_id = header.channel("laser").id
+    laser_times = [r.timestamp for r in records if r.channel == laser_id and r.direction == cap.RX]
+    t_cut = laser_times[300]  # one record per scan
+    moving = tmp_path / "moving.cap"
+    with cap.CaptureWriter(moving, header.channels, header.metadata) as w:
+        for r in records:
+            if r.timestamp >= t_cut:
+                w.write(r.timestamp, r.channel, r.data, r.direction)
+    ref_traj, ref_events = tmp_path / "ref.txt", tmp_path / "ref.events"
+    res = subprocess.run([str(rsm_nav_binary()), "--capture", str(moving), "--method", "odometry",
+                          "--trajectory", str(ref_traj), "--events", str(ref_events), "--quiet"],
+                         capture_output=True, text=True, timeout=NAV_TIMEOUT)
+    assert res.returncode == 0, res.stderr
+    ref_rows = rows_of(ref_traj)
+    _, ref_scans = split_events(ref_events)
+
+    errors = {}
+    for ticks_mm in (128, 200):
+        run_dir = tmp_path / str(ticks_mm)
+        run_dir.mkdir()
+        fake = FakeDevices(run_dir, "--capture", str(moving), "--ticks-mm", str(ticks_mm))
+        try:
+            stderr, rows, (_, live_scans) = run_nav(run_dir, fake.paths, 10, "--method", "odometry")
+        finally:
+            fake.stop()
+        assert f"odometry from the robot: {ticks_mm * 1000} ticks/m" in stderr
+        live_rows = [tuple(map(float, r.split()[1:])) for r in rows]
+        assert len(live_rows) == len(live_scans) >= 40, stderr
+        # Each live scan is one of the capture's, in order (the last one repeats at the end).
+        idx, j = [], 0
+        for sc in live_scans:
+            while ref_scans[j] != sc:
+                j += 1
+            idx.append(j)
+        last = max(k for k in range(len(idx)) if idx[k] == idx[-1] and (k == 0 or idx[k - 1] != idx[k]))
+        ref_move = relative(ref_rows[idx[0]], ref_rows[idx[last]])
+        live_move = relative(live_rows[0], live_rows[last])
+        path = sum(math.dist(ref_rows[k][:2], ref_rows[k + 1][:2]) for k in range(idx[0], idx[last]))
+        assert path > 1.5, "the stretch compared must move the robot"
+        errors[ticks_mm] = (math.hypot(live_move[0] - ref_move[0], live_move[1] - ref_move[1]),
+                            abs(math.atan2(math.sin(live_move[2] - ref_move[2]),
+                                           math.cos(live_move[2] - ref_move[2]))))
+        print(f"\nTicksMM {ticks_mm}: {path:.2f} m compared, off by {errors[ticks_mm][0]:.3f} m, "
+              f"{math.degrees(errors[ticks_mm][1]):.2f} deg")
+    for ticks_mm, (trans, rot) in errors.items():
+        assert trans < 0.3 and rot < 0.15, (ticks_mm, errors)
+    assert errors[200][0] < errors[128][0] + 0.15 and errors[200][1] < errors[128][1] + 0.08, errors

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "rsm/aria.h"
+#include "rsm/odometry.h"
 #include "unity.h"
 
 /* ---- reference vectors (vectors.json, bytes in wire order) ------------------ */
@@ -649,8 +650,8 @@ void test_decode_encoder_should_recover_aria_encoder_packet_wrapped(void)
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_decode_encoder(&pkt, &e));
     TEST_ASSERT_EQUAL_INT32(-2147483596, e.left);
     TEST_ASSERT_EQUAL_INT32(2147483600, e.right);
-    TEST_ASSERT_EQUAL_INT32(100, rsm_aria_count_delta(e.left, 2147483600));
-    TEST_ASSERT_EQUAL_INT32(-100, rsm_aria_count_delta(e.right, -2147483596));
+    TEST_ASSERT_EQUAL_INT32(100, rsm_odometry_count_delta((uint32_t)(e.left), (uint32_t)(2147483600), 32u));
+    TEST_ASSERT_EQUAL_INT32(-100, rsm_odometry_count_delta((uint32_t)(e.right), (uint32_t)(-2147483596), 32u));
 }
 
 /* ---- encoder errors and limits --------------------------------------------------------- */
@@ -1744,8 +1745,8 @@ void test_decode_encoder_should_give_exact_deltas_across_counter_wrap_around(voi
     for (i = 1u; i < 16u; ++i) {
         rsm_aria_encoder_t cur;
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_decode_encoder(&pkts[i], &cur));
-        TEST_ASSERT_EQUAL_INT32(1000, rsm_aria_count_delta(cur.left, prev.left));
-        TEST_ASSERT_EQUAL_INT32(-1000, rsm_aria_count_delta(cur.right, prev.right));
+        TEST_ASSERT_EQUAL_INT32(1000, rsm_odometry_count_delta((uint32_t)(cur.left), (uint32_t)(prev.left), 32u));
+        TEST_ASSERT_EQUAL_INT32(-1000, rsm_odometry_count_delta((uint32_t)(cur.right), (uint32_t)(prev.right), 32u));
         prev = cur;
     }
     /* The counters did wrap. */
@@ -2042,15 +2043,15 @@ void test_pos_delta15_should_wrap_modulo_32768(void)
     TEST_ASSERT_EQUAL_INT16(-1, rsm_aria_pos_delta15(32767u, 0u));
 }
 
-void test_count_delta_should_wrap_modulo_2_pow_32(void)
+void test_odometry_count_delta_should_wrap_aria_counts_modulo_2_pow_32(void)
 {
-    TEST_ASSERT_EQUAL_INT32(100, rsm_aria_count_delta(-2147483596, 2147483600));
-    TEST_ASSERT_EQUAL_INT32(-100, rsm_aria_count_delta(2147483600, -2147483596));
-    TEST_ASSERT_EQUAL_INT32(1, rsm_aria_count_delta(INT32_MIN, INT32_MAX));
-    TEST_ASSERT_EQUAL_INT32(-1, rsm_aria_count_delta(INT32_MAX, INT32_MIN));
-    TEST_ASSERT_EQUAL_INT32(INT32_MIN, rsm_aria_count_delta(INT32_MIN, 0));
-    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rsm_aria_count_delta(INT32_MAX, 0));
-    TEST_ASSERT_EQUAL_INT32(-777, rsm_aria_count_delta(-1000, -223));
+    TEST_ASSERT_EQUAL_INT32(100, rsm_odometry_count_delta((uint32_t)(-2147483596), (uint32_t)(2147483600), 32u));
+    TEST_ASSERT_EQUAL_INT32(-100, rsm_odometry_count_delta((uint32_t)(2147483600), (uint32_t)(-2147483596), 32u));
+    TEST_ASSERT_EQUAL_INT32(1, rsm_odometry_count_delta((uint32_t)(INT32_MIN), (uint32_t)(INT32_MAX), 32u));
+    TEST_ASSERT_EQUAL_INT32(-1, rsm_odometry_count_delta((uint32_t)(INT32_MAX), (uint32_t)(INT32_MIN), 32u));
+    TEST_ASSERT_EQUAL_INT32(INT32_MIN, rsm_odometry_count_delta((uint32_t)(INT32_MIN), (uint32_t)(0), 32u));
+    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rsm_odometry_count_delta((uint32_t)(INT32_MAX), (uint32_t)(0), 32u));
+    TEST_ASSERT_EQUAL_INT32(-777, rsm_odometry_count_delta((uint32_t)(-1000), (uint32_t)(-223), 32u));
 }
 
 void test_th_to_rad_should_use_4096_units_per_turn(void)
@@ -2152,7 +2153,7 @@ int main(void)
     RUN_TEST(test_decode_config_should_cut_long_strings_and_keep_later_fields);
     RUN_TEST(test_decode_sync2_should_cut_long_names_and_count_missing_strings);
     RUN_TEST(test_pos_delta15_should_wrap_modulo_32768);
-    RUN_TEST(test_count_delta_should_wrap_modulo_2_pow_32);
+    RUN_TEST(test_odometry_count_delta_should_wrap_aria_counts_modulo_2_pow_32);
     RUN_TEST(test_th_to_rad_should_use_4096_units_per_turn);
     return UNITY_END();
 }

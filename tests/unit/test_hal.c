@@ -405,7 +405,6 @@ void test_link_rx_init_should_check_its_arguments(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(NULL, &the_link, &the_clock, 10u, 0u));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(&rx, NULL, &the_clock, 10u, 0u));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(&rx, &the_link, NULL, 10u, 0u));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(&rx, &the_link, &the_clock, 0u, 0u));
     l.write = NULL;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_link_rx_init(&rx, &l, &the_clock, 10u, 0u));
     l = the_link;
@@ -457,6 +456,33 @@ void test_link_poll_should_not_wait_past_the_next_deadline(void)
     drv.due_us = 1001u;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
     TEST_ASSERT_EQUAL_UINT32(1000u, fake.last_timeout_us);
+}
+
+void test_link_poll_with_a_zero_read_timeout_should_never_wait(void)
+{
+    trace_setup(0u, 0u);
+    drv.due_us = 250u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_poll(&drv.rx, &trace_ops, &drv));
+    TEST_ASSERT_EQUAL_INT(1, fake.reads);
+    TEST_ASSERT_EQUAL_UINT32(0u, fake.last_timeout_us);
+}
+
+void test_link_next_deadline_should_be_now_plus_the_next_timer_or_now_with_bytes_left(void)
+{
+    fake.now = 5000u;
+    trace_setup(1000u, 0u);
+    TEST_ASSERT_TRUE(rsm_link_next_deadline(&drv.rx, &trace_ops, &drv) == UINT64_MAX);
+    drv.due_us = 250u;
+    TEST_ASSERT_TRUE(rsm_link_next_deadline(&drv.rx, &trace_ops, &drv) == 5250u);
+    drv.due_us = UINT64_MAX - 10u; /* no overflow past the end of time */
+    TEST_ASSERT_TRUE(rsm_link_next_deadline(&drv.rx, &trace_ops, &drv) == UINT64_MAX);
+    drv.rx.len = 3u; /* a read left bytes unexamined: poll again at once */
+    drv.rx.off = 1u;
+    TEST_ASSERT_TRUE(rsm_link_next_deadline(&drv.rx, &trace_ops, &drv) == 5000u);
+    TEST_ASSERT_TRUE(rsm_link_next_deadline(NULL, &trace_ops, &drv) == UINT64_MAX);
+    TEST_ASSERT_TRUE(rsm_link_next_deadline(&drv.rx, NULL, &drv) == UINT64_MAX);
+    TEST_ASSERT_EQUAL_INT(0, fake.reads); /* nothing read, nothing changed */
+    TEST_ASSERT_EQUAL_STRING("UUU", calls);
 }
 
 void test_link_poll_should_stop_at_the_first_event(void)
@@ -577,6 +603,8 @@ int main(void)
     RUN_TEST(test_link_rx_init_should_check_its_arguments);
     RUN_TEST(test_link_poll_should_run_the_steps_in_order_and_stamp_what_it_read);
     RUN_TEST(test_link_poll_should_not_wait_past_the_next_deadline);
+    RUN_TEST(test_link_poll_with_a_zero_read_timeout_should_never_wait);
+    RUN_TEST(test_link_next_deadline_should_be_now_plus_the_next_timer_or_now_with_bytes_left);
     RUN_TEST(test_link_poll_should_stop_at_the_first_event);
     RUN_TEST(test_link_poll_should_call_silence_only_after_the_byte_timeout);
     RUN_TEST(test_link_poll_should_return_a_read_error_and_stay_usable);

@@ -226,6 +226,50 @@ void test_synth_path_should_follow_the_legs(void)
 
 /* ---- init ------------------------------------------------------------------ */
 
+void test_accessors_should_show_the_last_scan_and_the_persistent_map(void)
+{
+    static rsm_point_t pts[RSM_MAX_BEAMS];
+    rsm_localizer_report_t rep;
+    float occ = -1.0f;
+    float x0 = 0.0f;
+    float y0 = 0.0f;
+    float x1 = 0.0f;
+    float y1 = 0.0f;
+    size_t n;
+    size_t k;
+    size_t near_wall = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &path[0], p0_start));
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_localizer_scan_points(&loc, pts, RSM_MAX_BEAMS));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_DEGENERATE, rsm_localizer_map_bounds(&loc, &x0, &y0, &x1, &y1));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, step(&loc, 0u, NULL, NULL, &rep));
+    /* The scan: as many points as the report says, where the room's walls are. */
+    n = rsm_localizer_scan_points(&loc, pts, RSM_MAX_BEAMS);
+    TEST_ASSERT_EQUAL_size_t((size_t)rep.points, n);
+    TEST_ASSERT_TRUE(n > 100u);
+    TEST_ASSERT_EQUAL_size_t(n, rsm_localizer_scan_points(&loc, NULL, 0u)); /* count only */
+    for (k = 0; k < n; ++k) {
+        const rsm_point_t w = rsm_pose_apply(&rep.pose, &pts[k]);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_map_occupancy(&loc, w.x, w.y, &occ));
+        TEST_ASSERT_TRUE(occ >= 0.0f && occ <= 1.0f);
+        near_wall += occ > 0.0f;
+    }
+    /* The map: the first scan was written, so its returns are on cells seen occupied ... */
+    TEST_ASSERT_TRUE(near_wall * 10u >= n * 9u);
+    /* ... and where the robot stands is not. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_map_occupancy(&loc, path[0].x, path[0].y, &occ));
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, occ);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_map_bounds(&loc, &x0, &y0, &x1, &y1));
+    TEST_ASSERT_TRUE(x0 <= path[0].x && path[0].x <= x1 && y0 <= path[0].y && path[0].y <= y1);
+    /* Bad arguments and other methods. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_map_occupancy(&loc, 0.0f, 0.0f, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_map_bounds(NULL, &x0, &y0, &x1, &y1));
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_localizer_scan_points(NULL, pts, RSM_MAX_BEAMS));
+    cfg.method = RSM_METHOD_ICP;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc2, &cfg, &path[0], p0_start));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_NOSYS, rsm_localizer_map_occupancy(&loc2, 0.0f, 0.0f, &occ));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_NOSYS, rsm_localizer_map_bounds(&loc2, &x0, &y0, &x1, &y1));
+}
+
 void test_localizer_config_default_should_be_valid(void)
 {
     const rsm_pose_t x0 = {1.0f, -2.0f, 0.5f};
@@ -1230,6 +1274,7 @@ int main(void)
     RUN_TEST(test_synth_scan_should_cast_exact_ranges);
     RUN_TEST(test_synth_scan_should_replace_exactly_the_outlier_share_deterministically);
     RUN_TEST(test_synth_path_should_follow_the_legs);
+    RUN_TEST(test_accessors_should_show_the_last_scan_and_the_persistent_map);
     RUN_TEST(test_localizer_config_default_should_be_valid);
     RUN_TEST(test_localizer_init_should_refuse_a_caller_built_with_other_capacities);
     RUN_TEST(test_localizer_init_should_reject_bad_configs);

@@ -39,7 +39,7 @@ void test_config_default_should_describe_a_p3dx(void)
     TEST_ASSERT_EQUAL_FLOAT(0.002f, cfg.sigma_trans_min_m);
     TEST_ASSERT_EQUAL_FLOAT(0.002f, cfg.sigma_rot_min_rad);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
-    TEST_ASSERT_TRUE(odo.cfg == &cfg);
+    TEST_ASSERT_EQUAL_MEMORY(&cfg, &odo.cfg, sizeof cfg); /* a copy */
     TEST_ASSERT_EQUAL_INT(0, odo.have_last);
     TEST_ASSERT_EQUAL_UINT32(0u, odo.steps);
 }
@@ -296,6 +296,7 @@ void test_update_ticks_should_allow_more_travel_after_a_longer_gap(void)
     /* Zero turns a check off. */
     cfg.max_wheel_speed_mps = 0.0f;
     cfg.max_turn_rate_rps = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_set_config(&odo, &cfg));
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 20u * five_m, 20u * five_m, &u));
     /* Negative or non-finite bounds are refused at init. */
     cfg.slack_s = -1.0f;
@@ -324,6 +325,57 @@ void test_update_ticks_should_unwrap_16_bit_counters_both_ways(void)
     /* Just under half the range forwards is positive: +32767 ticks. */
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 0xFEFFu, 0xFEFFu, &u));
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, 32767.0f / 128000.0f, u.dx);
+}
+
+void test_count_delta_should_wrap_at_the_counter_width(void)
+{
+    TEST_ASSERT_EQUAL_INT32(512, rsm_odometry_count_delta(0x0100u, 0xFF00u, 16u));
+    TEST_ASSERT_EQUAL_INT32(-512, rsm_odometry_count_delta(0xFF00u, 0x0100u, 16u));
+    TEST_ASSERT_EQUAL_INT32(-32768, rsm_odometry_count_delta(0x7F00u, 0xFF00u, 16u));
+    TEST_ASSERT_EQUAL_INT32(32767, rsm_odometry_count_delta(0xFEFFu, 0x7F00u, 16u));
+    TEST_ASSERT_EQUAL_INT32(0, rsm_odometry_count_delta(0xABCDFF00u, 0x1234FF00u, 16u));
+    TEST_ASSERT_EQUAL_INT32(100, rsm_odometry_count_delta(0x80000034u, 0x7FFFFFD0u, 32u));
+    TEST_ASSERT_EQUAL_INT32(INT32_MIN, rsm_odometry_count_delta(0x80000000u, 0u, 32u));
+    TEST_ASSERT_EQUAL_INT32(INT32_MAX, rsm_odometry_count_delta(0x7FFFFFFFu, 0u, 32u));
+    TEST_ASSERT_EQUAL_INT32(-8, rsm_odometry_count_delta(0x1FFFF8u, 0u, 21u));
+}
+
+void test_set_config_should_copy_validate_and_keep_the_baseline(void)
+{
+    rsm_odometry_config_t c2 = cfg;
+    rsm_odometry_config_t bad;
+    rsm_odometry_t before;
+    rsm_motion_t u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_init(&odo, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks(&odo, 1000u, 1000u, &u));
+    /* A robot reporting TicksMM 256: the same counts are half the travel. */
+    c2.ticks_per_m_left = 256000.0f;
+    c2.ticks_per_m_right = 256000.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_set_config(&odo, &c2));
+    c2.ticks_per_m_left = -1.0f; /* the caller's struct is free: a copy was taken */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_update_ticks(&odo, 1000u + 256000u, 1000u + 256000u, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 1.0f, u.dx);
+    TEST_ASSERT_EQUAL_UINT32(1u, odo.steps);
+    /* Refused, and nothing changed. */
+    before = odo;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_set_config(&odo, &c2));
+    bad = cfg;
+    bad.wheel_base_m = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_set_config(&odo, &bad));
+    bad = cfg;
+    bad.counter_bits = 33u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_set_config(&odo, &bad));
+    bad = cfg;
+    bad.sigma_rot_per_m = NAN;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_set_config(&odo, &bad));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_set_config(&odo, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_set_config(NULL, &cfg));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &odo, sizeof odo);
+    /* Another counter width restarts the counts: the next sample latches. */
+    bad = odo.cfg;
+    bad.counter_bits = 16u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_set_config(&odo, &bad));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_AGAIN, rsm_odometry_update_ticks(&odo, 5u, 5u, &u));
 }
 
 void test_from_poses_should_round_trip_through_apply(void)
@@ -518,6 +570,8 @@ int main(void)
     RUN_TEST(test_update_ticks_should_unwrap_16_bit_counters_both_ways);
     RUN_TEST(test_from_poses_should_round_trip_through_apply);
     RUN_TEST(test_from_poses_should_express_motion_in_the_start_frame);
+    RUN_TEST(test_count_delta_should_wrap_at_the_counter_width);
+    RUN_TEST(test_set_config_should_copy_validate_and_keep_the_baseline);
     RUN_TEST(test_apply_should_chain_with_ticks);
     RUN_TEST(test_jacobians_should_match_finite_differences);
     RUN_TEST(test_noise_should_grow_with_travel_and_turn);

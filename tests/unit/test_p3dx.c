@@ -324,14 +324,84 @@ void test_p3dx_init_should_reject_bad_arguments(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, NULL, &clk, &cfg));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &link, NULL, &cfg));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &link, &clk, NULL));
-    bad.read_timeout_us = 0u;
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &link, &clk, &bad));
+    bad.read_timeout_us = 0u; /* a poll that never waits: the caller waits for all links */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_init(&drv, &link, &clk, &bad));
     bad = cfg;
     bad.sync_tries = 0u;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &link, &clk, &bad));
     nolink.read = NULL;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&drv, &nolink, &clk, &cfg));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_config_default(NULL));
+}
+
+void test_p3dx_connect_should_put_the_link_at_the_configured_rate(void)
+{
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_set_baud(&link, 38400u)); /* a previous session's HOSTBAUD */
+    fl.set_baud_calls = 0u;
+    drv.baud = 38400u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_connect(&drv));
+    TEST_ASSERT_EQUAL_UINT32(9600u, fl.host_baud);
+    TEST_ASSERT_EQUAL_UINT32(9600u, drv.baud);
+    TEST_ASSERT_EQUAL_UINT32(1u, fl.set_baud_calls);
+}
+
+void test_p3dx_next_deadline_should_follow_the_timers_and_calibration_the_configpac(void)
+{
+    rsm_odometry_config_t odo = rsm_odometry_config_default();
+    rsm_p3dx_event_t ev;
+    TEST_ASSERT_TRUE(rsm_p3dx_next_deadline_us(&drv) == UINT64_MAX); /* IDLE: no timer */
+    TEST_ASSERT_TRUE(rsm_p3dx_next_deadline_us(NULL) == UINT64_MAX);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_connect(&drv));
+    /* SYNC0 sent: its reply is awaited step_timeout_us. */
+    TEST_ASSERT_TRUE(rsm_p3dx_next_deadline_us(&drv) == fl.now_us + cfg.step_timeout_us);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_CONNECTED, 5000000u, &ev));
+    /* Connected: the keep-alive is the nearest timer. */
+    TEST_ASSERT_TRUE(rsm_p3dx_next_deadline_us(&drv) == drv.last_tx_us + cfg.keepalive_us);
+    /* The scripted robot reports TicksMM 132: 132000 ticks per metre, the rest kept. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_odometry_config(&drv, &odo));
+    TEST_ASSERT_EQUAL_FLOAT(132000.0f, odo.ticks_per_m_left);
+    TEST_ASSERT_EQUAL_FLOAT(132000.0f, odo.ticks_per_m_right);
+    TEST_ASSERT_EQUAL_FLOAT(rsm_odometry_config_default().wheel_base_m, odo.wheel_base_m);
+    TEST_ASSERT_EQUAL_UINT8(32u, odo.counter_bits);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_odometry_config(&drv, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_odometry_config(NULL, &odo));
+}
+
+void test_p3dx_listen_should_give_encoder_events_and_send_nothing(void)
+{
+    uint8_t pkt[2][16];
+    uint8_t payload[8] = {0x10, 0x00, 0x00, 0x00, 0xFF, 0xFF, 0xFF, 0xFF}; /* 16, -1 */
+    rsm_p3dx_event_t ev;
+    int n0;
+    int n1;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_listen(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_P3DX_LISTENING, drv.state);
+    TEST_ASSERT_TRUE(rsm_p3dx_next_deadline_us(&drv) == UINT64_MAX); /* no keep-alive, no link loss */
+    n0 = rsm_aria_encode_raw(RSM_ARIA_PAC_ENCODER, payload, sizeof payload, pkt[0], sizeof pkt[0]);
+    payload[0] = 0x30; /* 48: 32 ticks on */
+    payload[4] = 0x01; /* 0xFFFFFF01 */
+    n1 = rsm_aria_encode_raw(RSM_ARIA_PAC_ENCODER, payload, sizeof payload, pkt[1], sizeof pkt[1]);
+    TEST_ASSERT_GREATER_THAN_INT(0, n0);
+    TEST_ASSERT_GREATER_THAN_INT(0, n1);
+    rsm_fakelink_inject(&fl, pkt[0], (size_t)n0, 1000u);
+    rsm_fakelink_inject(&fl, pkt[1], (size_t)n1, 100000u);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(16u, ev.encoder.sample.left);
+    TEST_ASSERT_EQUAL_UINT32(0xFFFFFFFFu, ev.encoder.sample.right);
+    TEST_ASSERT_EQUAL_UINT8(0u, ev.encoder.has_delta);
+    TEST_ASSERT_EQUAL_UINT64(ev.stamp_us, ev.encoder.sample.stamp_us);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
+    TEST_ASSERT_EQUAL_UINT8(1u, ev.encoder.has_delta);
+    TEST_ASSERT_EQUAL_INT32(32, ev.encoder.d_left);
+    TEST_ASSERT_EQUAL_INT32(-254, ev.encoder.d_right);
+    /* Seconds of silence: no keep-alive, no LINK_LOST, nothing written. */
+    TEST_ASSERT_EQUAL_INT(0, run_until(RSM_P3DX_EVENT_LINK_LOST, 5000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_P3DX_IDLE, drv.state);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_listen(NULL));
 }
 
 void test_p3dx_connect_should_complete_the_handshake_with_a_scripted_robot(void)
@@ -366,7 +436,7 @@ void test_p3dx_connect_should_complete_the_handshake_with_a_scripted_robot(void)
     TEST_ASSERT_EQUAL_INT(1, robot.connected);
     TEST_ASSERT_EQUAL_INT(1, robot.enabled);
     TEST_ASSERT_EQUAL_INT(1, robot.encoder_on);
-    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_UINT32(1u, fl.set_baud_calls);
 }
 
 void test_p3dx_connect_should_keep_config_defaults_when_no_configpac_arrives(void)
@@ -394,10 +464,10 @@ void test_p3dx_poll_should_yield_encoder_ticks_including_32_bit_wrap(void)
     connect_ok();
 
     TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
-    TEST_ASSERT_EQUAL_INT32(0x7FFFFF64, ev.encoder.left);
-    TEST_ASSERT_EQUAL_INT32(-30, ev.encoder.right);
+    TEST_ASSERT_EQUAL_UINT32(0x7FFFFF64u, ev.encoder.sample.left);
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)-30, ev.encoder.sample.right);
     TEST_ASSERT_EQUAL_UINT8(0u, ev.encoder.has_delta);
-    TEST_ASSERT_EQUAL_UINT64(fl.now_us, ev.encoder.stamp_us);
+    TEST_ASSERT_EQUAL_UINT64(fl.now_us, ev.encoder.sample.stamp_us);
     for (i = 0; i < 3; i++) {
         TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
         TEST_ASSERT_EQUAL_UINT8(1u, ev.encoder.has_delta);
@@ -405,8 +475,8 @@ void test_p3dx_poll_should_yield_encoder_ticks_including_32_bit_wrap(void)
         TEST_ASSERT_EQUAL_INT32(20, ev.encoder.d_right);
     }
     /* 0x7FFFFF64 + 300 wrapped past INT32_MAX. */
-    TEST_ASSERT_EQUAL_INT32((int32_t)0x80000090u, ev.encoder.left);
-    TEST_ASSERT_EQUAL_INT32(30, ev.encoder.right);
+    TEST_ASSERT_EQUAL_UINT32(0x80000090u, ev.encoder.sample.left);
+    TEST_ASSERT_EQUAL_UINT32(30u, ev.encoder.sample.right);
     TEST_ASSERT_EQUAL_UINT32(4u, drv.stats.encoder_packets);
     TEST_ASSERT_GREATER_OR_EQUAL_UINT32(4u, drv.stats.sips);
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.unknown_packets);
@@ -696,7 +766,7 @@ void test_p3dx_connect_should_switch_the_robot_to_host_baud_when_autobaud_allows
     TEST_ASSERT_EQUAL_UINT32(38400u, drv.baud);
     TEST_ASSERT_EQUAL_UINT32(38400u, fl.host_baud);
     TEST_ASSERT_EQUAL_UINT32(38400u, fl.peer_baud);
-    TEST_ASSERT_EQUAL_UINT32(1u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_UINT32(2u, fl.set_baud_calls);
     TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.host_baud_switches);
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.host_baud_failures);
     TEST_ASSERT_EQUAL_UINT8(2u, drv.auto_baud);
@@ -726,7 +796,7 @@ void test_p3dx_connect_should_go_back_to_the_old_rate_when_nothing_comes_at_host
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.host_baud_switches);
     TEST_ASSERT_EQUAL_UINT32(9600u, drv.baud);
     TEST_ASSERT_EQUAL_UINT32(9600u, fl.host_baud);
-    TEST_ASSERT_EQUAL_UINT32(2u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_UINT32(3u, fl.set_baud_calls);
     /* Connected only after the whole check time. */
     TEST_ASSERT_EQUAL_UINT64(fl.writes[w].at_us + cfg.baud_check_us, drv.last_sip_us);
     /* The check sent its keep-alive on time (at the rate it was trying). */
@@ -746,7 +816,7 @@ void test_p3dx_connect_should_not_send_hostbaud_unless_the_robot_reports_autobau
     TEST_ASSERT_EQUAL_INT32(-1, (int32_t)rsm_fakelink_find_write(&fl, 0u, hb, (size_t)k));
     TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.host_baud_skipped);
     TEST_ASSERT_EQUAL_UINT32(9600u, drv.baud);
-    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_UINT32(1u, fl.set_baud_calls);
     TEST_ASSERT_EQUAL_UINT32(0u, robot.hostbauds);
 }
 
@@ -907,7 +977,7 @@ void test_p3dx_poll_should_reconnect_at_the_same_rate_to_a_robot_whose_session_s
     TEST_ASSERT_EQUAL_UINT32(1u, robot.closes);
     TEST_ASSERT_EQUAL_UINT32(2u, robot.opens);
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.baud_changes);
-    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_UINT32(1u, fl.set_baud_calls);
     TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.reconnects);
     TEST_ASSERT_EQUAL_INT(1, run_until(RSM_P3DX_EVENT_ENCODER, 500000u, &ev));
 }
@@ -916,6 +986,9 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_p3dx_init_should_reject_bad_arguments);
+    RUN_TEST(test_p3dx_connect_should_put_the_link_at_the_configured_rate);
+    RUN_TEST(test_p3dx_next_deadline_should_follow_the_timers_and_calibration_the_configpac);
+    RUN_TEST(test_p3dx_listen_should_give_encoder_events_and_send_nothing);
     RUN_TEST(test_p3dx_connect_should_complete_the_handshake_with_a_scripted_robot);
     RUN_TEST(test_p3dx_connect_should_keep_config_defaults_when_no_configpac_arrives);
     RUN_TEST(test_p3dx_poll_should_yield_encoder_ticks_including_32_bit_wrap);

@@ -326,7 +326,7 @@ void test_sicklms_connect_should_set_the_variant_and_start_streaming(void)
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.baud_changes);
     TEST_ASSERT_EQUAL_UINT32(1u, drv.stats.connects);
     TEST_ASSERT_EQUAL_UINT32(9600u, drv.baud);
-    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_UINT32(1u, fl.set_baud_calls);
 }
 
 void test_sicklms_connect_should_resend_no_sooner_than_30_ms_after_a_nak(void)
@@ -616,7 +616,7 @@ void test_sicklms_disconnect_at_the_power_up_rate_should_only_stop_the_stream(vo
     TEST_ASSERT_EQUAL_INT(RSM_OK, ev.status);
     TEST_ASSERT_EQUAL_INT32((int32_t)mark, (int32_t)rsm_fakelink_find_write(&fl, mark, stop, (size_t)ns));
     TEST_ASSERT_EQUAL_UINT32((uint32_t)mark + 1u, (uint32_t)fl.n_writes);
-    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_UINT32(1u, fl.set_baud_calls);
     TEST_ASSERT_EQUAL_INT(0, lms.streaming);
 }
 
@@ -661,6 +661,42 @@ void test_sicklms_poll_should_stamp_a_scan_with_the_arrival_of_its_first_byte(vo
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.bad_scans);
 }
 
+void test_sicklms_next_deadline_should_follow_the_request_and_stream_timers(void)
+{
+    rsm_sicklms_event_t ev;
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(&drv) == UINT64_MAX); /* IDLE */
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(NULL) == UINT64_MAX);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
+    /* The first probe is out: its ACK is awaited ack_timeout_us. */
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(&drv) == fl.now_us + cfg.ack_timeout_us);
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 5000000u, &ev));
+    /* Streaming: silence for stream_timeout_us after the last telegram is a link loss. */
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(&drv) == drv.last_tel_us + cfg.stream_timeout_us);
+}
+
+void test_sicklms_listen_should_decode_and_stamp_scans_as_streaming_and_send_nothing(void)
+{
+    rsm_sicklms_event_t ev;
+    lms.split_scan_us = 40000u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_listen(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_LISTENING, drv.state);
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(&drv) == UINT64_MAX); /* no timer at all */
+    lms_send_scan();
+    TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 1000000u, &ev));
+    /* The same rule as streaming: the arrival of the telegram's first byte. */
+    TEST_ASSERT_EQUAL_UINT64(lms.scan_sent_us, ev.scan->stamp_us);
+    TEST_ASSERT_EQUAL_UINT32(181u, (uint32_t)ev.scan->count);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.5f, ev.scan->range_m[0]);
+    /* Silence is no link loss while listening, and nothing was ever sent. */
+    TEST_ASSERT_EQUAL_INT(0, run_until(RSM_SICKLMS_EVENT_LINK_LOST, 3000000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_UINT32(0u, fl.set_baud_calls);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_SICKLMS_IDLE, drv.state);
+    TEST_ASSERT_EQUAL_UINT32(0u, (uint32_t)fl.n_writes);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_listen(NULL));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -682,5 +718,7 @@ int main(void)
     RUN_TEST(test_sicklms_disconnect_at_the_power_up_rate_should_only_stop_the_stream);
     RUN_TEST(test_sicklms_disconnect_should_give_up_on_a_silent_unit_after_max_tries);
     RUN_TEST(test_sicklms_poll_should_stamp_a_scan_with_the_arrival_of_its_first_byte);
+    RUN_TEST(test_sicklms_next_deadline_should_follow_the_request_and_stream_timers);
+    RUN_TEST(test_sicklms_listen_should_decode_and_stamp_scans_as_streaming_and_send_nothing);
     return UNITY_END();
 }

@@ -61,10 +61,22 @@ void tearDown(void)
 {
 }
 
+static const rsm_odometry_sample_t zero_sample = {0u, 0u, 0u};
+
+/* One encoder sample into the aligner. */
+static int encoder(uint32_t left, uint32_t right, uint64_t stamp_us)
+{
+    rsm_odometry_sample_t smp;
+    smp.stamp_us = stamp_us;
+    smp.left = left;
+    smp.right = right;
+    return rsm_sync_encoder(&sync, &smp);
+}
+
 /* Straight-line odometry: both wheels at the same count. */
 static void enc(uint32_t ticks, uint64_t stamp_us)
 {
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_encoder(&sync, ticks, ticks, stamp_us));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, encoder(ticks, ticks, stamp_us));
 }
 
 static void scan_at(uint64_t stamp_us)
@@ -87,7 +99,8 @@ void test_init_should_reject_bad_arguments(void)
     none.max_wait_us = 0u;
     none.hold_us = 0u;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(&sync, &loc, &none, NULL, NULL));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_encoder(NULL, 0u, 0u, 0u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_encoder(NULL, &zero_sample));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_encoder(&sync, NULL));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_scan(&sync, NULL));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_poll(NULL, 0u));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_flush(NULL));
@@ -115,6 +128,32 @@ void test_scan_stamped_with_its_encoder_packet_should_see_exactly_those_counts(v
     enc(38400u, 300u);
     scan_at(300u);
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.3f, res.x[1]);
+}
+
+void test_odometry_set_at_run_time_should_convert_the_next_counts(void)
+{
+    rsm_odometry_config_t odo = loc.odo.cfg;
+    rsm_odometry_config_t bad;
+    enc(0u, 100u);
+    enc(12800u, 200u);
+    scan_at(200u);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.1f, res.x[0]);
+    /* The robot reports TicksMM 256: the same 12800 ticks are 5 cm. The
+     * localizer keeps a copy; the caller's struct is free at once. */
+    odo.ticks_per_m_left = odo.ticks_per_m_right = 256000.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_odometry(&loc, &odo));
+    odo.wheel_base_m = -1.0f;
+    enc(25600u, 300u);
+    scan_at(300u);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.15f, res.x[1]);
+    /* Refused with nothing changed; the configuration given at init untouched. */
+    bad = loc.odo.cfg;
+    bad.ticks_per_m_left = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_odometry(&loc, &bad));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_odometry(&loc, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_odometry(NULL, &bad));
+    TEST_ASSERT_EQUAL_FLOAT(256000.0f, loc.odo.cfg.ticks_per_m_left);
+    TEST_ASSERT_EQUAL_FLOAT(TICKS_PER_M, lcfg.odometry.ticks_per_m_left);
 }
 
 void test_scan_arriving_before_its_odometry_should_wait_and_interpolate(void)
@@ -166,8 +205,8 @@ void test_interpolation_should_not_depend_on_which_link_arrived_first(void)
 
 void test_interpolation_should_follow_counter_wrap_around(void)
 {
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_encoder(&sync, 0xFFFFF000u, 0x00000800u, 100u));
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_encoder(&sync, 0x00001000u, 0x00002800u, 300u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, encoder(0xFFFFF000u, 0x00000800u, 100u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, encoder(0x00001000u, 0x00002800u, 300u));
     scan_at(200u);
     /* Each wheel moves 8192 counts (the left one through zero); half by t = 200. */
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(4096.0), res.x[0]);
@@ -292,7 +331,7 @@ void test_corrupt_encoder_sample_should_be_refused_and_lose_no_motion(void)
     enc(0u, 100000u);
     enc(12800u, 200000u);
     /* Checksum-valid but corrupt: one counter 2^30 ticks (8.4 km) on. */
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_encoder(&sync, 12800u + 0x40000000u, 12800u, 300000u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, encoder(12800u + 0x40000000u, 12800u, 300000u));
     enc(38400u, 400000u);
     scan_at(400000u);
     TEST_ASSERT_EQUAL_size_t(1, res.n);
@@ -407,6 +446,7 @@ int main(void)
     RUN_TEST(test_init_should_reject_bad_arguments);
     RUN_TEST(test_scan_without_any_odometry_should_be_fused_at_once);
     RUN_TEST(test_scan_stamped_with_its_encoder_packet_should_see_exactly_those_counts);
+    RUN_TEST(test_odometry_set_at_run_time_should_convert_the_next_counts);
     RUN_TEST(test_scan_arriving_before_its_odometry_should_wait_and_interpolate);
     RUN_TEST(test_scan_arriving_after_later_odometry_should_be_fused_at_its_own_time);
     RUN_TEST(test_interpolation_should_not_depend_on_which_link_arrived_first);

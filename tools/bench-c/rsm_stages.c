@@ -3,9 +3,9 @@
  *   rsm-stages --carmen LOG [--method rsm|paper|icp] [--beams N] [--limit N] [--fov179]
  *              [--clock ns|none] [--trajectory OUT] [--stack]
  *
- * Runs the localizer over the log exactly as rsm-nav does (same start pose,
- * odometry increments from the poses of the laser lines, the same clamping
- * of timestamps that go backwards) and prints one JSON object: the build's
+ * Runs the localizer over the log with rsm-nav's own loop (tools/nav/logrun.c:
+ * same start pose, odometry increments from the poses of the laser lines,
+ * the same repair of timestamps) and prints one JSON object: the build's
  * capacities and sizes, scan outcomes, the persistent map's use of its tile
  * pool (method rsm), and
  *   - with --clock ns (default): per-stage times from the localizer's timing
@@ -37,6 +37,7 @@
 #include <time.h>
 
 #include "carmen.h"
+#include "logrun.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"
 
@@ -95,8 +96,7 @@ typedef struct run {
     carmen_record_t rec;
     rsm_scan_t scan;
     int initialised;
-    uint64_t last_us;
-    uint64_t clamped;
+    stamp_repair_t repair;
     size_t scans;
     size_t beams_in;
     size_t beams_out;
@@ -277,18 +277,50 @@ static int painted_scan(run_t *r, rsm_localizer_report_t *rep)
 
 /* ---- the run ----------------------------------------------------------------------- */
 
-static void run_scan(run_t *r, uint64_t stamp_us, double file_stamp_s)
+/* logrun ops: the first scan record starts the localizer at its pose. */
+static int start_cb(void *ctx, const carmen_record_t *rec)
 {
+    run_t *r = (run_t *)ctx;
+    if (rsm_localizer_init(&r->loc, &r->cfg, &rec->odom, NULL) != RSM_OK) {
+        fprintf(stderr, "rsm-stages: invalid configuration\n");
+        return -1;
+    }
+    r->initialised = 1;
+    r->beams_in = rec->count;
+    return 0;
+}
+
+/* Resampling needs two readings to span the field of view. */
+static int want_cb(void *ctx, const carmen_record_t *rec)
+{
+    const run_t *r = (const run_t *)ctx;
+    return r->opt.beams == 0u || rec->count >= 2u;
+}
+
+static void motion_cb(void *ctx, const rsm_motion_t *u)
+{
+    run_t *r = (run_t *)ctx;
+    const uint64_t t0 = now_ns();
+    (void)rsm_localizer_motion(&r->loc, u);
+    if (!r->opt.stack) {
+        push(&r->motion, (double)(now_ns() - t0) * 1e-3);
+    }
+}
+
+static void scan_cb(void *ctx, const carmen_record_t *rec, uint64_t stamp_us)
+{
+    run_t *r = (run_t *)ctx;
     rsm_localizer_report_t rep;
     uint64_t t0;
     uint64_t t1;
     int rc;
     size_t s;
-    if (stamp_us < r->last_us) { /* as rsm-nav: feed a clamped stamp, keep the original */
-        stamp_us = r->last_us;
-        r->clamped++;
+    if (r->opt.beams > 0u) {
+        resample(rec, r->opt.beams, &r->cfg.limits, &r->scan);
+    } else {
+        logrun_scan(rec, &r->scan);
     }
-    r->last_us = stamp_us;
+    r->beams_out = r->scan.count;
     r->scan.stamp_us = stamp_us;
     if (r->opt.stack) {
         rc = painted_scan(r, &rep);
@@ -306,72 +338,28 @@ static void run_scan(run_t *r, uint64_t stamp_us, double file_stamp_s)
     }
     r->scans++;
     if (rc != RSM_OK) {
-        fprintf(stderr, "rsm-stages: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
+        fprintf(stderr, "rsm-stages: scan at %.6f: %s\n", rec->stamp_s, rsm_strerror(rc));
         return;
     }
     if (r->traj != NULL) {
-        fprintf(r->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, (double)rep.pose.x, (double)rep.pose.y,
+        fprintf(r->traj, "%.6f %.6f %.6f %.6f\n", rec->stamp_s, (double)rep.pose.x, (double)rep.pose.y,
                 (double)rep.pose.theta);
     }
 }
 
+static int done_cb(void *ctx)
+{
+    const run_t *r = (const run_t *)ctx;
+    return r->opt.limit > 0u && r->scans >= r->opt.limit;
+}
+
 static int run_log(run_t *r)
 {
-    double last_odom[3] = {0.0, 0.0, 0.0};
-    int have_odom = 0;
+    static const logrun_ops_t ops = {start_cb, want_cb, motion_cb, scan_cb, done_cb};
+    int rc;
     r->reader.fov179 = r->opt.fov179;
-    if (carmen_open(&r->reader, r->opt.carmen) != 0) {
-        fprintf(stderr, "rsm-stages: cannot open %s: %s\n", r->opt.carmen, strerror(errno));
-        return 1;
-    }
-    for (;;) {
-        const carmen_kind_t k = carmen_next(&r->reader, &r->rec);
-        size_t b;
-        if (k == CARMEN_EOF || (r->opt.limit > 0u && r->scans >= r->opt.limit)) {
-            break;
-        }
-        if (k == CARMEN_ERROR) {
-            fprintf(stderr, "rsm-stages: cannot read %s: %s\n", r->opt.carmen, carmen_error(&r->reader));
-            carmen_close(&r->reader);
-            return 1;
-        }
-        if (k != CARMEN_SCAN || (r->opt.beams > 0u && r->rec.count < 2u)) {
-            continue;
-        }
-        if (!r->initialised) {
-            if (rsm_localizer_init(&r->loc, &r->cfg, &r->rec.odom, NULL) != RSM_OK) {
-                fprintf(stderr, "rsm-stages: invalid configuration\n");
-                carmen_close(&r->reader);
-                return 2;
-            }
-            r->initialised = 1;
-            r->beams_in = r->rec.count;
-        }
-        if (have_odom) {
-            /* As rsm-nav takes it: between the log's poses in double. */
-            const rsm_pose_t d = carmen_between(last_odom, r->rec.odom_d);
-            const rsm_motion_t u = {d.x, d.y, d.theta};
-            const uint64_t t0 = now_ns();
-            (void)rsm_localizer_motion(&r->loc, &u);
-            if (!r->opt.stack) {
-                push(&r->motion, (double)(now_ns() - t0) * 1e-3);
-            }
-        }
-        memcpy(last_odom, r->rec.odom_d, sizeof last_odom);
-        have_odom = 1;
-        if (r->opt.beams > 0u) {
-            resample(&r->rec, r->opt.beams, &r->cfg.limits, &r->scan);
-        } else {
-            for (b = 0; b < r->rec.count; ++b) {
-                r->scan.range_m[b] = r->rec.range_m[b];
-            }
-            (void)rsm_scan_set_uniform(&r->scan, r->rec.count, r->rec.start_rad, r->rec.step_rad);
-        }
-        r->beams_out = r->scan.count;
-        run_scan(r, (uint64_t)llround(r->rec.stamp_s * 1e6), r->rec.stamp_s);
-    }
-    carmen_close(&r->reader);
-    return 0;
+    rc = logrun_carmen(&r->reader, &r->rec, r->opt.carmen, "rsm-stages", &r->repair, &ops, r);
+    return rc < 0 ? 1 : rc;
 }
 
 /* ---- output ----------------------------------------------------------------------- */
@@ -418,7 +406,7 @@ static void print_json(run_t *r)
     printf("  \"method\": \"%s\",\n",
            r->cfg.method == RSM_METHOD_ICP ? "icp" : r->cfg.method == RSM_METHOD_PAPER ? "paper" : "rsm");
     printf("  \"scans\": %zu,\n  \"beams_in\": %zu,\n  \"beams\": %zu,\n  \"clamped\": %llu,\n", r->scans, r->beams_in,
-           r->beams_out, (unsigned long long)r->clamped);
+           r->beams_out, (unsigned long long)r->repair.clamped);
     printf("  \"config\": {\"RSM_MAX_BEAMS\": %d, \"RSM_MAP_SIZE_LOG2\": %d, \"RSM_MAP_SIZE\": %d, "
            "\"RSM_IMAGE_MAX_CELLS\": %d, \"RSM_MAX_KEYPOINTS\": %d, \"RSM_MAX_CANDIDATES\": %d, "
            "\"RSM_MAX_MATCHES\": %d, \"RSM_ICP_MAX_POINTS\": %d, \"RSM_TMAP_TILES\": %d, "

@@ -7,8 +7,6 @@
 #include <string.h>
 #include <time.h>
 
-#include "rsm/p3dx.h"
-#include "rsm/sicklms.h"
 #include "rsm/status.h"
 #include "rsm_posix.h"
 
@@ -110,357 +108,239 @@ static int endpoint_retry(endpoint_t *e, int quiet)
     return 1;
 }
 
-/* Sleeps until the earlier retry of the links that are down (at most 50 ms),
- * when no open link would make the loop wait. */
-static void nap_while_down(const endpoint_t *a, const endpoint_t *b)
-{
-    double until = mono_s() + 0.05;
-    struct timespec ts;
-    double left;
-    if ((a->open && !a->down) || (b->open && !b->down)) {
-        return; /* the other driver's poll waits on its link */
-    }
-    if (a->open && a->down && a->retry_at < until) {
-        until = a->retry_at;
-    }
-    if (b->open && b->down && b->retry_at < until) {
-        until = b->retry_at;
-    }
-    left = until - mono_s();
-    if (left <= 0.0) {
-        return;
-    }
-    ts.tv_sec = 0;
-    ts.tv_nsec = (long)(left * 1e9);
-    nanosleep(&ts, NULL);
-}
-
 static int endpoint_fd(const endpoint_t *e)
 {
-    return (e->open && !e->ended && e->state.kind == RSM_POSIX_LINK_FD) ? e->state.fd.fd : -1;
+    return (e->open && !e->ended && !e->down && e->state.kind == RSM_POSIX_LINK_FD) ? e->state.fd.fd : -1;
 }
 
-/* Reads what is waiting on one link (no waiting); returns bytes fed or -1 at its end. */
-static int drain(endpoint_t *e, nav_stream_t *s, int robot, const nav_stream_sink_t *sink, uint64_t now_us)
+/* Both links and their drivers. */
+typedef struct live {
+    const nav_live_options_t *opt;
+    const nav_sink_t *sink;
+    endpoint_t *ep[2];        /* robot, laser */
+    nav_devices_t dev;
+    rsm_clock_t clock;        /* reads now_us: one time for a whole cycle */
+    uint64_t now_us;          /* the monotonic clock when the cycle began */
+    uint64_t bytes;
+    double last_data;         /* when bytes last came */
+} live_t;
+
+/* The drivers' clock: the time the current cycle began. Everything that
+ * arrived in one wake-up is stamped alike on both links, as a capture
+ * stamps the records of one instant (a lockstep replay then gives the
+ * capture-mode run bit for bit, whatever the load). */
+static uint64_t live_now(void *ctx)
 {
-    uint8_t buf[4096];
-    int total = 0;
-    while (total < DRAIN_MAX_BYTES) {
-        const int n = rsm_link_read(&e->link, buf, sizeof buf, 0u);
-        if (n < 0) {
+    return ((const live_t *)ctx)->now_us;
+}
+
+/* Whether endpoint i is open and its driver usable. */
+static int live_up(const live_t *lv, int i)
+{
+    const endpoint_t *e = lv->ep[i];
+    return e->open && !e->ended && !e->down;
+}
+
+/* Waits until a link has bytes, the earliest driver deadline or link
+ * retry, or 50 ms: one wait for both links. */
+static void live_wait(live_t *lv)
+{
+    struct pollfd pf[2];
+    nfds_t n = 0;
+    double until = mono_s() + 0.05;
+    const uint64_t now_us = rsm_posix_clock_now_us(NULL);
+    int i;
+    for (i = 0; i < 2; ++i) {
+        const endpoint_t *e = lv->ep[i];
+        const int fd = endpoint_fd(e);
+        if (e->open && e->down && e->retry_at < until) {
+            until = e->retry_at;
+        }
+        if (live_up(lv, i)) {
+            const uint64_t due = i == 0 ? rsm_p3dx_next_deadline_us(&lv->dev.robot)
+                                        : rsm_sicklms_next_deadline_us(&lv->dev.laser);
+            if (due != UINT64_MAX) {
+                const double at = mono_s() + (due > now_us ? (double)(due - now_us) * 1e-6 : 0.0);
+                until = at < until ? at : until;
+            }
+            if (fd < 0) {
+                /* A libserialport link cannot be waited on here: short naps. */
+                until = mono_s() + 0.002 < until ? mono_s() + 0.002 : until;
+            }
+        }
+        if (fd >= 0) {
+            pf[n].fd = fd;
+            pf[n].events = POLLIN;
+            pf[n].revents = 0;
+            ++n;
+        }
+    }
+    {
+        const double left = until - mono_s();
+        /* At least 1 ms: a wait with a zero timeout is no wait (and a
+         * lockstep feeder only writes while the reader truly waits). */
+        const int ms = left <= 0.001 ? 1 : (int)(left * 1000.0 + 0.5);
+        if (n > 0) {
+            (void)poll(pf, n, ms);
+        } else {
+            struct timespec ts;
+            ts.tv_sec = ms / 1000;
+            ts.tv_nsec = (long)(ms % 1000) * 1000000L;
+            nanosleep(&ts, NULL);
+        }
+    }
+}
+
+/* One cycle: each driver (robot first: a replayer writes an encoder packet
+ * before the scan it precedes, and this keeps that order whenever both have
+ * arrived) takes what has arrived; a link that failed is reopened later
+ * (active mode) or has ended (listen-only). Returns the bytes read. */
+static uint64_t live_cycle(live_t *lv)
+{
+    uint64_t got = 0;
+    int i;
+    lv->now_us = rsm_posix_clock_now_us(NULL);
+    for (i = 0; i < 2; ++i) {
+        endpoint_t *e = lv->ep[i];
+        long r;
+        if (!e->open || e->ended) {
+            continue;
+        }
+        if (e->down) {
+            if (endpoint_retry(e, lv->opt->quiet)) {
+                (void)(i == 0 ? rsm_p3dx_connect(&lv->dev.robot) : rsm_sicklms_connect(&lv->dev.laser));
+            }
+            continue;
+        }
+        r = nav_devices_drain(&lv->dev, i == 0, lv->sink, DRAIN_MAX_BYTES);
+        if (r < 0 && lv->dev.listen) {
             /* The far end closed (a replay finished) or the device went away:
              * what was decoded so far stays written. */
             e->ended = 1;
-            fprintf(stderr, "rsm-nav: %s link %s ended (%s)\n", robot ? "robot" : "laser", e->path,
-                    rsm_strerror(n));
-            return total > 0 ? total : -1;
-        }
-        if (n == 0) {
-            return total;
-        }
-        if (robot) {
-            nav_stream_robot(s, buf, (size_t)n, now_us, sink);
+            fprintf(stderr, "rsm-nav: %s link %s ended (%s)\n", e->what, e->path, rsm_strerror((int)r));
+        } else if (r < 0) {
+            endpoint_failed(e, (int)r);
         } else {
-            nav_stream_laser(s, buf, (size_t)n, now_us, sink);
+            got += (uint64_t)r;
         }
-        total += n;
     }
-    return total;
+    if (got > 0u) {
+        lv->bytes += got;
+        lv->last_data = mono_s();
+    } else if (lv->sink->tick != NULL) {
+        /* Idle: a scan waiting for odometry may time out. The drivers
+         * stamp with this clock, so the aligner's times agree. */
+        lv->sink->tick(lv->sink->ctx, lv->now_us);
+    }
+    return got;
 }
 
-static int run_listen(const nav_live_options_t *opt, endpoint_t *robot, endpoint_t *laser,
-                      const nav_stream_sink_t *sink)
+/* Orderly shutdown of both, run by the drivers' own polls: the robot gets
+ * STOP and ENABLE 0, then CLOSE; the laser stops its stream and goes back
+ * to its power-up rate. Bounded in time whatever the devices do. Then the
+ * counters. Returns 0, or 1 if a device never connected. */
+static int live_shutdown(live_t *lv)
 {
-    static nav_stream_t stream;
-    const double t0 = mono_s();
-    double last_data = 0.0;
-    uint64_t bytes = 0;
-    nav_stream_init(&stream);
-    while (!stop_requested && !(robot->ended && laser->ended)) {
-        struct pollfd pf[2];
-        nfds_t n = 0;
-        const int fr = endpoint_fd(robot);
-        const int fl = endpoint_fd(laser);
-        uint64_t now_us;
-        int got;
-        if (fr >= 0) {
-            pf[n].fd = fr;
-            pf[n].events = POLLIN;
-            pf[n].revents = 0;
-            ++n;
+    const double t_end = mono_s() + 5.0;
+    const int robot_open = lv->ep[0]->open;
+    const int laser_open = lv->ep[1]->open;
+    if (live_up(lv, 0)) {
+        (void)rsm_p3dx_disconnect(&lv->dev.robot);
+    }
+    if (live_up(lv, 1)) {
+        (void)rsm_sicklms_disconnect(&lv->dev.laser);
+    }
+    while (mono_s() < t_end && ((live_up(lv, 0) && lv->dev.robot.state != RSM_P3DX_IDLE) ||
+                                (live_up(lv, 1) && lv->dev.laser.state != RSM_SICKLMS_IDLE))) {
+        int i;
+        lv->now_us = rsm_posix_clock_now_us(NULL);
+        for (i = 0; i < 2; ++i) {
+            if (live_up(lv, i) && (i == 0 ? lv->dev.robot.state != RSM_P3DX_IDLE
+                                          : lv->dev.laser.state != RSM_SICKLMS_IDLE) &&
+                nav_devices_poll(&lv->dev, i == 0, lv->sink) < 0) {
+                lv->ep[i]->ended = 1; /* gone: nothing more to say to it */
+            }
         }
-        if (fl >= 0) {
-            pf[n].fd = fl;
-            pf[n].events = POLLIN;
-            pf[n].revents = 0;
-            ++n;
+        live_wait(lv);
+    }
+    if (!lv->opt->quiet) {
+        if (robot_open) {
+            nav_devices_report(&lv->dev, 1);
+            fprintf(stderr, "rsm-nav: robot link reopened %u times\n", lv->ep[0]->reopens);
         }
-        if (n > 0) {
-            (void)poll(pf, n, 50);
-        } else {
-            struct timespec ts = {0, 2000000L}; /* libserialport links: short naps */
-            nanosleep(&ts, NULL);
-        }
-        now_us = (uint64_t)((mono_s() - t0) * 1e6);
-        /* Robot before laser within one wake-up: a replayer writes an
-         * encoder packet before the scan it precedes, and this keeps that
-         * order whenever both have arrived. */
-        got = 0;
-        if (!robot->ended) {
-            const int r = drain(robot, &stream, 1, sink, now_us);
-            got += r > 0 ? r : 0;
-        }
-        if (!laser->ended) {
-            const int r = drain(laser, &stream, 0, sink, now_us);
-            got += r > 0 ? r : 0;
-        }
-        if (got > 0) {
-            bytes += (uint64_t)got;
-            last_data = mono_s();
-        } else if (sink->tick != NULL) {
-            sink->tick(sink->ctx, now_us); /* a scan waiting for odometry may time out */
-        }
-        if (opt->seconds > 0.0 && mono_s() - t0 >= opt->seconds) {
-            break;
-        }
-        if (opt->idle_exit_s > 0.0 && bytes > 0 && mono_s() - last_data >= opt->idle_exit_s) {
-            break;
+        if (laser_open) {
+            nav_devices_report(&lv->dev, 0);
+            fprintf(stderr, "rsm-nav: laser link reopened %u times\n", lv->ep[1]->reopens);
         }
     }
-    if (!opt->quiet) {
-        fprintf(stderr, "rsm-nav: listen-only: %llu bytes, %llu encoder packets, %llu scans, %llu bad scans\n",
-                (unsigned long long)bytes, (unsigned long long)stream.encoder_packets,
-                (unsigned long long)stream.lms_scans, (unsigned long long)stream.bad_scans);
-    }
-    if (bytes == 0u && !stop_requested) {
-        fprintf(stderr, "rsm-nav: nothing arrived on any link\n");
-        return 1;
+    {
+        const int robot_never = robot_open && lv->dev.robot.stats.connects == 0u;
+        const int laser_never = laser_open && lv->dev.laser.stats.connects == 0u;
+        if (robot_never || laser_never) {
+            fprintf(stderr, "rsm-nav: no %s ever connected\n",
+                    robot_never ? (laser_never ? "device" : "robot") : "laser");
+            return 1;
+        }
     }
     return 0;
 }
 
-static void report_robot(const rsm_p3dx_t *d)
+static int live_run(live_t *lv)
 {
-    const rsm_p3dx_stats_t *st = &d->stats;
-    fprintf(stderr,
-            "rsm-nav: robot: %u Bd, %u connects (%u after a link loss), %u link losses, %u SIPs, "
-            "%u encoder packets, %u keep-alives, %u motion commands, HOSTBAUD %u switched / "
-            "%u failed / %u skipped; checksum errors %u, bytes skipped %u\n",
-            (unsigned)d->baud, (unsigned)st->connects, (unsigned)st->reconnects,
-            (unsigned)st->link_lost, (unsigned)st->sips, (unsigned)st->encoder_packets,
-            (unsigned)st->keepalives, (unsigned)st->commands, (unsigned)st->host_baud_switches,
-            (unsigned)st->host_baud_failures, (unsigned)st->host_baud_skipped,
-            (unsigned)d->parser.stats.checksum_errors, (unsigned)d->parser.stats.bytes_skipped);
-}
-
-static void report_laser(const rsm_sicklms_t *d)
-{
-    const rsm_sicklms_stats_t *st = &d->stats;
-    fprintf(stderr,
-            "rsm-nav: laser: %u Bd, %u connects (%u after a link loss), %u link losses, %u scans, "
-            "%u bad scans, %u start-up errors, %u shutdowns; CRC errors %u, bytes skipped %u\n",
-            (unsigned)d->baud, (unsigned)st->connects, (unsigned)st->reconnects,
-            (unsigned)st->link_lost, (unsigned)st->scans, (unsigned)st->bad_scans,
-            (unsigned)st->errors, (unsigned)st->disconnects, (unsigned)d->parser.stats.crc_errors,
-            (unsigned)d->parser.stats.bytes_skipped);
-}
-
-/* One poll of the robot driver; encoder packets go to the sink. Returns 1
- * if the poll gave an event, 0 if not, a negative status if the link failed. */
-static int poll_robot(rsm_p3dx_t *d, const nav_stream_sink_t *sink, int quiet)
-{
-    rsm_p3dx_event_t ev;
-    const int st = rsm_p3dx_poll(d, &ev);
-    if (st != RSM_OK) {
-        return st < 0 ? st : 0;
-    }
-    switch (ev.type) {
-    case RSM_P3DX_EVENT_ENCODER:
-        /* The first packet of a connection starts the counts over (a robot
-         * that restarted counts from 0): the driver says so. */
-        sink->encoder(sink->ctx, ev.encoder.left, ev.encoder.right, ev.stamp_us, !ev.encoder.has_delta);
-        if (sink->tick != NULL) {
-            sink->tick(sink->ctx, ev.stamp_us); /* a scan waiting for this sample goes on */
-        }
-        break;
-    case RSM_P3DX_EVENT_CONNECTED:
-        if (!quiet) {
-            fprintf(stderr,
-                    "rsm-nav: robot connected: %s (%s %s) at %u Bd; TicksMM %u, watchdog %u ms, "
-                    "AutoBaud %u\n",
-                    d->robot.name, d->robot.robot_class, d->robot.subclass, (unsigned)d->baud,
-                    (unsigned)d->ticks_mm, (unsigned)d->watchdog_ms, (unsigned)d->auto_baud);
-        }
-        break;
-    case RSM_P3DX_EVENT_LINK_LOST:
-        fprintf(stderr, "rsm-nav: robot link lost, reconnecting\n");
-        break;
-    case RSM_P3DX_EVENT_DISCONNECTED:
-        if (!quiet) {
-            fprintf(stderr, "rsm-nav: robot disconnected (STOP, ENABLE 0, CLOSE sent)\n");
-        }
-        break;
-    default:
-        break;
-    }
-    return ev.type != RSM_P3DX_EVENT_NONE;
-}
-
-/* One poll of the laser driver; scans go to the sink. Returns 1 if the poll
- * gave an event, 0 if not, a negative status if the link failed. */
-static int poll_laser(rsm_sicklms_t *d, const nav_stream_sink_t *sink, int quiet)
-{
-    rsm_sicklms_event_t ev;
-    const int st = rsm_sicklms_poll(d, &ev);
-    if (st != RSM_OK) {
-        return st < 0 ? st : 0;
-    }
-    switch (ev.type) {
-    case RSM_SICKLMS_EVENT_SCAN:
-        if (ev.scan != NULL) {
-            sink->scan(sink->ctx, ev.scan, ev.stamp_us);
-        }
-        break;
-    case RSM_SICKLMS_EVENT_CONNECTED:
-        if (!quiet) {
-            fprintf(stderr, "rsm-nav: laser streaming at %u Bd (measuring mode 0x%02X, %u distance bits)\n",
-                    (unsigned)d->baud, d->have_config ? (unsigned)d->config.measuring_mode : 0u,
-                    (unsigned)d->format.distance_bits);
-        }
-        break;
-    case RSM_SICKLMS_EVENT_LINK_LOST:
-        fprintf(stderr, "rsm-nav: laser link lost, starting again\n");
-        break;
-    case RSM_SICKLMS_EVENT_ERROR:
-        fprintf(stderr, "rsm-nav: laser start-up step failed: %s\n", rsm_strerror(ev.status));
-        break;
-    case RSM_SICKLMS_EVENT_DISCONNECTED:
-        if (ev.status != RSM_OK) {
-            fprintf(stderr, "rsm-nav: laser shutdown incomplete: %s\n", rsm_strerror(ev.status));
-        } else if (!quiet) {
-            fprintf(stderr, "rsm-nav: laser stopped and back at %u Bd\n", (unsigned)d->baud);
-        }
-        break;
-    default:
-        break;
-    }
-    return ev.type != RSM_SICKLMS_EVENT_NONE;
-}
-
-static int run_active(const nav_live_options_t *opt, endpoint_t *robot, endpoint_t *laser,
-                      const nav_stream_sink_t *sink)
-{
-    static rsm_p3dx_t p3dx;
-    static rsm_sicklms_t lms;
-    rsm_p3dx_config_t pcfg;
-    rsm_sicklms_config_t lcfg;
-    rsm_clock_t clock;
+    const nav_live_options_t *opt = lv->opt;
     const double t0 = mono_s();
-    double t_end;
-    int robot_live;
-    int laser_live;
-    (void)rsm_p3dx_config_default(&pcfg);
-    (void)rsm_sicklms_config_default(&lcfg);
-    (void)rsm_posix_clock_init(&clock);
+    int i;
+    nav_devices_defaults(&lv->dev, opt->listen_only, opt->quiet);
+    lv->clock.now_us = live_now;
+    lv->clock.ctx = lv;
+    lv->now_us = rsm_posix_clock_now_us(NULL);
+    /* One wait serves both links (live_wait): the drivers never block. */
+    lv->dev.pcfg.read_timeout_us = 0u;
+    lv->dev.lcfg.read_timeout_us = 0u;
     /* ARIA's parameter file for the p3dx-sh moves the robot to 38400 after
      * connecting; the driver does so only when the robot allows it. */
-    pcfg.host_baud = 38400u;
+    lv->dev.pcfg.host_baud = 38400u;
     if (opt->robot_baud != 0u) {
-        pcfg.baud = opt->robot_baud;
+        lv->dev.pcfg.baud = opt->robot_baud;
     }
     if (opt->lms_baud != 0u) {
-        lcfg.baud = opt->lms_baud;
+        lv->dev.lcfg.baud = opt->lms_baud;
     }
-    if (robot->open && (rsm_p3dx_init(&p3dx, &robot->link, &clock, &pcfg) != RSM_OK || rsm_p3dx_connect(&p3dx) != RSM_OK)) {
-        fprintf(stderr, "rsm-nav: cannot start the P3-DX driver\n");
-        return 1;
+    for (i = 0; i < 2; ++i) {
+        if (lv->ep[i]->open && nav_devices_start(&lv->dev, i == 0, &lv->ep[i]->link, &lv->clock) != 0) {
+            return 1;
+        }
     }
-    if (laser->open && (rsm_sicklms_init(&lms, &laser->link, &clock, &lcfg) != RSM_OK || rsm_sicklms_connect(&lms) != RSM_OK)) {
-        fprintf(stderr, "rsm-nav: cannot start the LMS driver\n");
-        return 1;
-    }
-    while (!stop_requested) {
-        int events = 0;
-        if (robot->open && robot->down) {
-            if (endpoint_retry(robot, opt->quiet)) {
-                (void)rsm_p3dx_connect(&p3dx);
-            }
-        } else if (robot->open) {
-            const int r = poll_robot(&p3dx, sink, opt->quiet);
-            if (r < 0) {
-                endpoint_failed(robot, r);
-            } else {
-                events += r;
-            }
-        }
-        if (laser->open && laser->down) {
-            if (endpoint_retry(laser, opt->quiet)) {
-                (void)rsm_sicklms_connect(&lms);
-            }
-        } else if (laser->open) {
-            const int r = poll_laser(&lms, sink, opt->quiet);
-            if (r < 0) {
-                endpoint_failed(laser, r);
-            } else {
-                events += r;
-            }
-        }
-        nap_while_down(robot, laser);
-        if (events == 0 && sink->tick != NULL) {
-            /* Idle: a scan waiting for odometry may time out. The drivers
-             * stamp with this clock, so the aligner's times agree. */
-            sink->tick(sink->ctx, rsm_posix_clock_now_us(NULL));
-        }
+    while (!stop_requested && !(lv->ep[0]->ended && lv->ep[1]->ended)) {
+        (void)live_cycle(lv);
         if (opt->seconds > 0.0 && mono_s() - t0 >= opt->seconds) {
             break;
         }
-    }
-    /* Orderly shutdown of both, run by the drivers' own polls: the robot
-     * gets STOP and ENABLE 0, then CLOSE; the laser stops its stream and
-     * goes back to its power-up rate. Bounded in time whatever the
-     * devices do. */
-    if (robot->open && !robot->down) {
-        (void)rsm_p3dx_disconnect(&p3dx);
-    }
-    if (laser->open && !laser->down) {
-        (void)rsm_sicklms_disconnect(&lms);
-    }
-    t_end = mono_s() + 5.0;
-    robot_live = robot->open && !robot->down;
-    laser_live = laser->open && !laser->down;
-    while (mono_s() < t_end && ((robot_live && p3dx.state != RSM_P3DX_IDLE) ||
-                                (laser_live && lms.state != RSM_SICKLMS_IDLE))) {
-        if (robot_live && p3dx.state != RSM_P3DX_IDLE && poll_robot(&p3dx, sink, opt->quiet) < 0) {
-            robot_live = 0; /* gone: nothing more to say to it */
+        if (opt->idle_exit_s > 0.0 && lv->bytes > 0u && mono_s() - lv->last_data >= opt->idle_exit_s) {
+            break;
         }
-        if (laser_live && lms.state != RSM_SICKLMS_IDLE && poll_laser(&lms, sink, opt->quiet) < 0) {
-            laser_live = 0;
-        }
+        live_wait(lv);
     }
-    if (!opt->quiet) {
-        if (robot->open) {
-            report_robot(&p3dx);
-            fprintf(stderr, "rsm-nav: robot link reopened %u times\n", robot->reopens);
+    if (lv->dev.listen) {
+        if (!opt->quiet) {
+            fprintf(stderr, "rsm-nav: listen-only: %llu bytes, %u encoder packets, %u scans, %u bad scans\n",
+                    (unsigned long long)lv->bytes, (unsigned)lv->dev.robot.stats.encoder_packets,
+                    (unsigned)lv->dev.laser.stats.scans, (unsigned)lv->dev.laser.stats.bad_scans);
         }
-        if (laser->open) {
-            report_laser(&lms);
-            fprintf(stderr, "rsm-nav: laser link reopened %u times\n", laser->reopens);
+        if (lv->bytes == 0u && !stop_requested) {
+            fprintf(stderr, "rsm-nav: nothing arrived on any link\n");
+            return 1;
         }
+        return 0;
     }
-    if ((robot->open && p3dx.stats.connects == 0u) || (laser->open && lms.stats.connects == 0u)) {
-        fprintf(stderr, "rsm-nav: no %s ever connected\n",
-                robot->open && p3dx.stats.connects == 0u
-                    ? (laser->open && lms.stats.connects == 0u ? "device" : "robot")
-                    : "laser");
-        return 1;
-    }
-    return 0;
+    return live_shutdown(lv);
 }
 
-int nav_live_run(const nav_live_options_t *opt, const nav_stream_sink_t *sink)
+int nav_live_run(const nav_live_options_t *opt, const nav_sink_t *sink)
 {
     static endpoint_t robot;
     static endpoint_t laser;
+    static live_t lv;
     struct sigaction sa;
     int rc;
     memset(&sa, 0, sizeof sa);
@@ -476,7 +356,12 @@ int nav_live_run(const nav_live_options_t *opt, const nav_stream_sink_t *sink)
         }
         return 1;
     }
-    rc = opt->listen_only ? run_listen(opt, &robot, &laser, sink) : run_active(opt, &robot, &laser, sink);
+    memset(&lv, 0, sizeof lv);
+    lv.opt = opt;
+    lv.sink = sink;
+    lv.ep[0] = &robot;
+    lv.ep[1] = &laser;
+    rc = live_run(&lv);
     if (stop_requested && !opt->quiet) {
         fprintf(stderr, "rsm-nav: stopped by signal\n");
     }

@@ -16,8 +16,9 @@
 #include "capture.h"
 #include "carmen.h"
 #include "live.h"
+#include "logrun.h"
 #include "pgm.h"
-#include "stream.h"
+#include "devices.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"
 #include "rsm/sync.h"
@@ -38,6 +39,7 @@ static void usage(FILE *f)
             "  --ticks-per-m N --wheel-base M   odometry geometry for encoder packets\n"
             "                            (default: the capture's, else the P3-DX defaults)\n"
             "  --events FILE             write every decoded input (E left right / S count hash)\n"
+            "  --summary-json FILE       write the summary as JSON too (scans, outcomes, times, map)\n"
             "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
             "                            the capture's robot.initial_pose, else zero)\n"
             "  --laser-pose X Y THETA    the laser's pose on the robot (m, m, rad; x forward,\n"
@@ -191,15 +193,7 @@ typedef struct nav {
     double *times;
     size_t ntimes;
     size_t cap_times;
-    uint64_t last_us;      /* the localizer's time of the last scan */
-    uint64_t clamped;
-    int have_stamp;
-    uint64_t src_last_us;  /* the source's stamp of the last scan taken */
-    uint64_t base_us;      /* localizer time = source stamp + base (modulo 2^64) */
-    int have_odd;
-    uint64_t odd_us;       /* a stamp far from the previous one, not yet confirmed */
-    uint64_t odd_stamps;
-    uint64_t time_jumps;
+    stamp_repair_t repair; /* scan stamps as the localizer gets them */
     double t_start;
     /* Capture mode: original stamps of scans whose stamp the converter clamped. */
     uint64_t *restore_idx;
@@ -209,6 +203,8 @@ typedef struct nav {
     uint64_t scan_index;
     uint64_t encoders;
     FILE *events;          /* --events: decoded inputs, one line each, in processing order */
+    int ticks_from_flag;   /* --ticks-per-m given: the robot's calibration is not taken */
+    unsigned calibrations; /* robot calibrations taken (live mode) */
     int have_x0;           /* --initial-pose given: overrides any other start */
     rsm_pose_t x0;
     /* Far from the origin the localizer runs in a frame shifted by this
@@ -280,59 +276,18 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
     return 0;
 }
 
-/* Log and capture timestamps can jitter backwards while the order of the
- * records is the true order (the Intel log does so 631 times): the
- * localizer gets a clamped stamp, counted; the trajectory keeps the original.
- * One stamp far from its neighbours (a negative or far-future stamp in a
- * log) is not trusted alone, or it would clamp every later scan: it gets
- * the previous stamp (counted as odd) unless the next one agrees with it;
- * then the clock really jumped and the localizer's time carries on from
- * where it was (no time passes across the jump). */
-#define NAV_MAX_STEP_US 3600000000ull
-
-static uint64_t stamp_gap(uint64_t a, uint64_t b)
-{
-    return a > b ? a - b : b - a;
-}
-
-static void nav_clamp(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us)
-{
-    uint64_t t;
-    if (nav->have_stamp && stamp_gap(stamp_us, nav->src_last_us) > NAV_MAX_STEP_US) {
-        if (!nav->have_odd || stamp_gap(stamp_us, nav->odd_us) > NAV_MAX_STEP_US) {
-            nav->odd_us = stamp_us;
-            nav->have_odd = 1;
-            nav->odd_stamps++;
-            scan->stamp_us = nav->last_us;
-            return;
-        }
-        nav->time_jumps++;
-        nav->base_us = nav->last_us - stamp_us; /* modulo 2^64, so either direction works */
-    }
-    nav->have_odd = 0;
-    nav->have_stamp = 1;
-    nav->src_last_us = stamp_us;
-    t = stamp_us + nav->base_us;
-    if (t < nav->last_us) {
-        t = nav->last_us;
-        nav->clamped++;
-    }
-    nav->last_us = t;
-    scan->stamp_us = t;
-}
-
-/* This scan's usable readings (the localizer's robot-frame points, filled
- * for every scan) placed at its estimate, into the --map picture. Not
- * loc.world: the core fills that only for scans it writes into its map. */
+/* This scan's usable readings, as the localizer saw them, placed at its
+ * estimate, into the --map picture. */
 static void nav_map_points(nav_t *nav, const rsm_localizer_report_t *rep)
 {
-    static rsm_point_t world[RSM_MAX_BEAMS];
+    static rsm_point_t pts[RSM_MAX_BEAMS];
     size_t k;
-    const size_t n = rep->points <= RSM_MAX_BEAMS ? rep->points : RSM_MAX_BEAMS;
+    const size_t got = rsm_localizer_scan_points(&nav->loc, pts, RSM_MAX_BEAMS);
+    const size_t n = got <= RSM_MAX_BEAMS ? got : RSM_MAX_BEAMS;
     for (k = 0; k < n; ++k) {
-        world[k] = rsm_pose_apply(&rep->pose, &nav->loc.pts[k]);
+        pts[k] = rsm_pose_apply(&rep->pose, &pts[k]);
     }
-    if (hitmap_add(&nav->hits, world, n) != 0) {
+    if (hitmap_add(&nav->hits, pts, n) != 0) {
         fprintf(stderr, "rsm-nav: out of memory for the map picture\n");
         exit(1);
     }
@@ -367,21 +322,6 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
     }
 }
 
-/* Runs one scan directly (CARMEN logs carry the odometry of each scan). */
-static void nav_scan(nav_t *nav, rsm_scan_t *scan, uint64_t stamp_us, double file_stamp_s)
-{
-    rsm_localizer_report_t rep;
-    double t0;
-    int rc;
-    if (nav_start(nav, NULL, "the default") != 0) {
-        return;
-    }
-    nav_clamp(nav, scan, stamp_us);
-    t0 = now_s();
-    rc = rsm_localizer_scan(&nav->loc, scan, &rep);
-    nav_result(nav, rc, &rep, now_s() - t0, file_stamp_s);
-}
-
 /* The aligner fused a scan (capture and live modes). */
 static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep)
 {
@@ -398,7 +338,7 @@ static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_lo
 }
 
 /* Stream sink callbacks (capture and live modes). */
-static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_us, int restart)
+static void sink_encoder(void *ctx, const rsm_odometry_sample_t *sample, int restart)
 {
     nav_t *nav = (nav_t *)ctx;
     if (nav_start(nav, NULL, "the default") != 0) {
@@ -409,10 +349,36 @@ static void sink_encoder(void *ctx, int32_t left, int32_t right, uint64_t stamp_
     }
     nav->encoders++;
     if (nav->events != NULL) {
-        fprintf(nav->events, "E %ld %ld\n", (long)left, (long)right);
+        /* Printed as the packet's signed 32-bit values. */
+        fprintf(nav->events, "E %ld %ld\n", (long)rsm_odometry_count_delta(sample->left, 0u, 32u),
+                (long)rsm_odometry_count_delta(sample->right, 0u, 32u));
     }
     nav->call_t0 = now_s();
-    (void)rsm_sync_encoder(&nav->sync, (uint32_t)left, (uint32_t)right, stamp_us);
+    (void)rsm_sync_encoder(&nav->sync, sample);
+}
+
+/* The robot reported its TicksMM: the odometry takes it from the next
+ * encoder sample on, unless --ticks-per-m gave the geometry. */
+static void sink_calibration(void *ctx, float ticks_per_m)
+{
+    nav_t *nav = (nav_t *)ctx;
+    rsm_odometry_config_t odo;
+    if (nav->ticks_from_flag || nav_start(nav, NULL, "the default") != 0) {
+        return;
+    }
+    odo = nav->loc.odo.cfg;
+    odo.ticks_per_m_left = ticks_per_m;
+    odo.ticks_per_m_right = ticks_per_m;
+    if (rsm_localizer_set_odometry(&nav->loc, &odo) != RSM_OK) {
+        fprintf(stderr, "rsm-nav: the robot's calibration (%.0f ticks/m) refused; odometry unchanged\n",
+                (double)ticks_per_m);
+        return;
+    }
+    nav->calibrations++;
+    if (!nav->quiet) {
+        fprintf(stderr, "rsm-nav: odometry from the robot: %.0f ticks/m, wheel base %.3f m\n",
+                (double)ticks_per_m, (double)odo.wheel_base_m);
+    }
 }
 
 static void sink_tick(void *ctx, uint64_t now_us)
@@ -424,10 +390,11 @@ static void sink_tick(void *ctx, uint64_t now_us)
     }
 }
 
-static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
+static void sink_scan(void *ctx, const rsm_scan_t *scan)
 {
     static rsm_scan_t copy;
     nav_t *nav = (nav_t *)ctx;
+    const uint64_t stamp_us = scan->stamp_us;
     double file_s = (double)stamp_us * 1e-6;
     size_t k;
     while (nav->restore_next < nav->nrestore && nav->restore_idx[nav->restore_next] < nav->scan_index) {
@@ -450,7 +417,7 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan, uint64_t stamp_us)
         return;
     }
     copy = *scan;
-    nav_clamp(nav, &copy, stamp_us);
+    copy.stamp_us = stamp_repair(&nav->repair, stamp_us);
     /* At most two scans are ever inside the aligner (one waiting, one new). */
     nav->file_s[(nav->file_head + nav->file_count) % 4u] = file_s;
     nav->file_count++;
@@ -505,65 +472,64 @@ static void carmen_mount(nav_t *nav, const char *path, int fov179, rsm_pose_t *l
     carmen_close(&ahead);
 }
 
+/* logrun ops for --carmen (CARMEN logs carry the odometry of each scan). */
+typedef struct carmen_run {
+    nav_t *nav;
+    rsm_pose_t log_mount;
+    int have_log_mount;
+} carmen_run_t;
+
+static int carmen_start_cb(void *ctx, const carmen_record_t *rec)
+{
+    carmen_run_t *cr = (carmen_run_t *)ctx;
+    /* Start in the odometry frame so the trajectories are comparable. */
+    return nav_start(cr->nav, rec->odom_d, "the log's first pose");
+}
+
+static void carmen_motion_cb(void *ctx, const rsm_motion_t *u)
+{
+    (void)rsm_localizer_motion(&((carmen_run_t *)ctx)->nav->loc, u);
+}
+
+static void carmen_scan_cb(void *ctx, const carmen_record_t *rec, uint64_t stamp_us)
+{
+    static rsm_scan_t scan;
+    carmen_run_t *cr = (carmen_run_t *)ctx;
+    nav_t *nav = cr->nav;
+    rsm_localizer_report_t rep;
+    double t0;
+    int rc;
+    if (cr->have_log_mount && rec->has_mount &&
+        (fabsf(rec->mount.x - cr->log_mount.x) > NAV_MOUNT_TOL_M ||
+         fabsf(rec->mount.y - cr->log_mount.y) > NAV_MOUNT_TOL_M ||
+         fabsf(rsm_wrap_angle(rec->mount.theta - cr->log_mount.theta)) > NAV_MOUNT_TOL_RAD)) {
+        nav->mount_disagree++;
+    }
+    logrun_scan(rec, &scan);
+    scan.stamp_us = stamp_us;
+    t0 = now_s();
+    rc = rsm_localizer_scan(&nav->loc, &scan, &rep);
+    nav_result(nav, rc, &rep, now_s() - t0, rec->stamp_s);
+}
+
 static int run_carmen(nav_t *nav, const char *path, int fov179)
 {
+    static const logrun_ops_t ops = {carmen_start_cb, NULL, carmen_motion_cb, carmen_scan_cb, NULL};
     static carmen_reader_t reader;
     static carmen_record_t rec;
-    static rsm_scan_t scan;
-    double last_odom[3] = {0.0, 0.0, 0.0};
-    rsm_pose_t log_mount = {0.0f, 0.0f, 0.0f};
-    int have_log_mount;
-    int have_odom = 0;
-    int status = 0;
-    carmen_mount(nav, path, fov179, &log_mount, &have_log_mount);
+    carmen_run_t cr;
+    int status;
+    cr.nav = nav;
+    cr.log_mount.x = cr.log_mount.y = cr.log_mount.theta = 0.0f;
+    carmen_mount(nav, path, fov179, &cr.log_mount, &cr.have_log_mount);
     reader.fov179 = fov179;
-    if (carmen_open(&reader, path) != 0) {
-        fprintf(stderr, "rsm-nav: cannot open %s: %s\n", path, strerror(errno));
-        return 1;
+    status = logrun_carmen(&reader, &rec, path, "rsm-nav", &nav->repair, &ops, &cr);
+    if (status < 0) {
+        return 1; /* not even opened: nothing to sum up */
     }
-    for (;;) {
-        const carmen_kind_t k = carmen_next(&reader, &rec);
-        size_t b;
-        if (k == CARMEN_EOF) {
-            break;
-        }
-        if (k == CARMEN_ERROR) {
-            /* What was read so far is kept (the caller flushes it). */
-            fprintf(stderr, "rsm-nav: cannot read %s: %s\n", path, carmen_error(&reader));
-            status = 1;
-            break;
-        }
-        if (k != CARMEN_SCAN) {
-            continue; /* odometry comes from the pose carried by each laser line */
-        }
-        if (have_log_mount && rec.has_mount &&
-            (fabsf(rec.mount.x - log_mount.x) > NAV_MOUNT_TOL_M || fabsf(rec.mount.y - log_mount.y) > NAV_MOUNT_TOL_M ||
-             fabsf(rsm_wrap_angle(rec.mount.theta - log_mount.theta)) > NAV_MOUNT_TOL_RAD)) {
-            nav->mount_disagree++;
-        }
-        /* Start in the odometry frame so the trajectories are comparable. */
-        if (nav_start(nav, rec.odom_d, "the log's first pose") != 0) {
-            carmen_close(&reader);
-            return 2;
-        }
-        if (have_odom) {
-            /* In double: far from the origin a float difference loses centimetres. */
-            const rsm_pose_t d = carmen_between(last_odom, rec.odom_d);
-            const rsm_motion_t u = {d.x, d.y, d.theta};
-            (void)rsm_localizer_motion(&nav->loc, &u);
-        }
-        memcpy(last_odom, rec.odom_d, sizeof last_odom);
-        have_odom = 1;
-        for (b = 0; b < rec.count; ++b) {
-            scan.range_m[b] = rec.range_m[b];
-        }
-        (void)rsm_scan_set_uniform(&scan, rec.count, rec.start_rad, rec.step_rad);
-        /* A negative or absurd stamp becomes the farthest one: odd to nav_clamp. */
-        nav_scan(nav, &scan,
-                 rec.stamp_s >= 0.0 && rec.stamp_s < 1.8e13 ? (uint64_t)llround(rec.stamp_s * 1e6) : UINT64_MAX,
-                 rec.stamp_s);
+    if (status == 2) {
+        return 2;
     }
-    carmen_close(&reader);
     printf("rsm-nav summary\n");
     printf("  source          CARMEN log %s\n", path);
     printf("  lines           %llu (scans %llu, odometry %llu, comments %llu, unknown %llu, malformed %llu, too many beams %llu, too long %llu)\n",
@@ -638,11 +604,14 @@ static int positive_meta(const char *path, const char *key, const char *text, fl
     return 0;
 }
 
-static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *sink)
+static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink)
 {
     static cap_reader reader;
-    static nav_stream_t stream;
+    static nav_devices_t dev;
     static uint8_t buf[CAP_MAX_CHUNK];
+    nav_feed_t feed[2];
+    rsm_link_t link[2];
+    rsm_clock_t clock[2];
     FILE *fp = fopen(path, "rb");
     int robot_id = -1;
     int laser_id = -1;
@@ -704,7 +673,18 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
             return 2;
         }
     }
-    nav_stream_init(&stream);
+    /* The drivers, listen-only, decode the recorded bytes (one path with
+     * live mode), each from its own memory link whose clock reads the
+     * record's time. */
+    nav_devices_defaults(&dev, 1, nav->quiet);
+    for (i = 0; i < 2; ++i) {
+        nav_feed_init(&feed[i], &link[i], &clock[i]);
+        if (nav_devices_start(&dev, i == 0, &link[i], &clock[i]) != 0) {
+            cap_close(&reader);
+            fclose(fp);
+            return 1;
+        }
+    }
     status = 0;
     for (;;) {
         cap_record rec;
@@ -726,9 +706,9 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
             continue;
         }
         if ((int)rec.channel == robot_id) {
-            nav_stream_robot(&stream, buf, rec.length, rec.timestamp_us, sink);
+            nav_devices_feed(&dev, 1, &feed[0], buf, rec.length, rec.timestamp_us, sink);
         } else if ((int)rec.channel == laser_id) {
-            nav_stream_laser(&stream, buf, rec.length, rec.timestamp_us, sink);
+            nav_devices_feed(&dev, 0, &feed[1], buf, rec.length, rec.timestamp_us, sink);
         }
     }
     printf("rsm-nav summary\n");
@@ -739,12 +719,14 @@ static int run_capture(nav_t *nav, const char *path, const nav_stream_sink_t *si
            (unsigned long long)reader.count.truncated, (unsigned long long)reader.count.out_of_order,
            (unsigned long long)reader.count.unknown_channel, (unsigned long long)reader.count.skipped_bytes,
            (unsigned long long)reader.count.crc_bytes);
-    printf("  robot link      %llu encoder packets, %llu other; checksum errors %u, bytes skipped %u\n",
-           (unsigned long long)stream.encoder_packets, (unsigned long long)stream.other_packets,
-           (unsigned)stream.aria.stats.checksum_errors, (unsigned)stream.aria.stats.bytes_skipped);
-    printf("  laser link      %llu scans, %llu bad; CRC errors %u, bytes skipped %u\n",
-           (unsigned long long)stream.lms_scans, (unsigned long long)stream.bad_scans,
-           (unsigned)stream.lms.stats.crc_errors, (unsigned)stream.lms.stats.bytes_skipped);
+    printf("  robot link      %u encoder packets, %u other; checksum errors %u, bytes skipped %u\n",
+           (unsigned)dev.robot.stats.encoder_packets,
+           (unsigned)(dev.robot.stats.sips + dev.robot.stats.config_packets + dev.robot.stats.unknown_packets),
+           (unsigned)dev.robot.parser.stats.checksum_errors, (unsigned)dev.robot.parser.stats.bytes_skipped);
+    printf("  laser link      %u scans, %u bad, %u other; CRC errors %u, bytes skipped %u\n",
+           (unsigned)dev.laser.stats.scans, (unsigned)dev.laser.stats.bad_scans,
+           (unsigned)dev.laser.stats.unexpected, (unsigned)dev.laser.parser.stats.crc_errors,
+           (unsigned)dev.laser.parser.stats.bytes_skipped);
     cap_close(&reader);
     if (fclose(fp) != 0 && status == 0) {
         fprintf(stderr, "rsm-nav: error closing %s: %s\n", path, strerror(errno));
@@ -758,6 +740,17 @@ static const char *method_name(rsm_method_t m)
     switch (m) {
     case RSM_METHOD_MAP: return "rsm (persistent map)";
     case RSM_METHOD_PAPER: return "paper (key points + RANSAC)";
+    case RSM_METHOD_ICP: return "icp";
+    default: return "odometry";
+    }
+}
+
+/* The --method word that selects m. */
+static const char *method_key(rsm_method_t m)
+{
+    switch (m) {
+    case RSM_METHOD_MAP: return "rsm";
+    case RSM_METHOD_PAPER: return "paper";
     case RSM_METHOD_ICP: return "icp";
     default: return "odometry";
     }
@@ -796,17 +789,86 @@ static void print_peak_memory(void)
     fclose(f);
 }
 
+/* Median and 95th percentile of the per-scan wall times, in seconds. */
+static void time_stats(nav_t *nav, double *median, double *p95)
+{
+    *median = 0.0;
+    *p95 = 0.0;
+    if (nav->ntimes > 0) {
+        qsort(nav->times, nav->ntimes, sizeof *nav->times, cmp_double);
+        *median = nav->times[nav->ntimes / 2];
+        *p95 = nav->times[(nav->ntimes * 95) / 100 < nav->ntimes ? (nav->ntimes * 95) / 100 : nav->ntimes - 1];
+    }
+}
+
+/* --summary-json: what the printed summary says, for programs (the bench).
+ * Keys: method, scans, outcomes {name: count}, median_us, p95_us,
+ * timestamps {clamped, odd, jumps}, drops {nan, too_short, too_long},
+ * alignment {...} (capture and live modes), odometry_calibrations, and for
+ * the persistent map tmap {writes, tiles [per level], taken, evicted,
+ * dropped, freed, behind, unconfirmed} and recovery {searches, taken}.
+ * Returns 0, or -1 if the file cannot be written. */
+static int write_summary_json(nav_t *nav, const char *path)
+{
+    const rsm_localizer_counters_t *c = &nav->loc.counters;
+    double median;
+    double p95;
+    int o;
+    int first = 1;
+    FILE *f = fopen(path, "w");
+    if (f == NULL) {
+        return -1;
+    }
+    time_stats(nav, &median, &p95);
+    fprintf(f, "{\n  \"method\": \"%s\",\n  \"scans\": %u,\n  \"outcomes\": {", method_key(nav->cfg.method),
+            (unsigned)c->scans);
+    for (o = 0; o < RSM_SCAN_OUTCOMES; ++o) {
+        if (c->outcome[o] != 0) {
+            fprintf(f, "%s\"%s\": %u", first ? "" : ", ", rsm_outcome_name((rsm_outcome_t)o), (unsigned)c->outcome[o]);
+            first = 0;
+        }
+    }
+    fprintf(f, "},\n  \"median_us\": %.1f,\n  \"p95_us\": %.1f,\n", median * 1e6, p95 * 1e6);
+    fprintf(f, "  \"timestamps\": {\"clamped\": %llu, \"odd\": %llu, \"jumps\": %llu},\n",
+            (unsigned long long)nav->repair.clamped, (unsigned long long)nav->repair.odd_stamps,
+            (unsigned long long)nav->repair.time_jumps);
+    fprintf(f, "  \"drops\": {\"nan\": %u, \"too_short\": %u, \"too_long\": %u},\n", (unsigned)c->drops.nan,
+            (unsigned)c->drops.too_short, (unsigned)c->drops.too_long);
+    fprintf(f, "  \"odometry_calibrations\": %u,\n", nav->calibrations);
+    {
+        const rsm_sync_counters_t *a = &nav->sync.counters;
+        fprintf(f,
+                "  \"alignment\": {\"scans\": %u, \"encoders\": %u, \"interpolated\": %u, \"exact\": %u, "
+                "\"late\": %u, \"timed_out\": %u, \"superseded\": %u, \"encoder_backwards\": %u, "
+                "\"encoder_overflow\": %u, \"restarts\": %u}",
+                (unsigned)a->scans, (unsigned)a->encoders, (unsigned)a->interpolated, (unsigned)a->exact,
+                (unsigned)a->late, (unsigned)a->timed_out, (unsigned)a->superseded, (unsigned)a->encoder_backwards,
+                (unsigned)a->encoder_overflow, (unsigned)a->restarts);
+    }
+    if (nav->cfg.method == RSM_METHOD_MAP && nav->initialised) {
+        const rsm_tmap_t *m = &nav->loc.state.persistent.map;
+        uint32_t level;
+        fprintf(f, ",\n  \"tmap\": {\"writes\": %u, \"tiles\": [", (unsigned)m->counters.updates);
+        for (level = 0; level < m->cfg.levels; ++level) {
+            fprintf(f, "%s%u", level > 0u ? ", " : "", (unsigned)rsm_tmap_tiles(m, level));
+        }
+        fprintf(f, "], \"taken\": %u, \"evicted\": %u, \"dropped\": %u, \"freed\": %u, \"behind\": %u, "
+                   "\"unconfirmed\": %u},\n  \"recovery\": {\"searches\": %u, \"taken\": %u}",
+                (unsigned)m->counters.allocated, (unsigned)m->counters.evicted, (unsigned)m->counters.dropped,
+                (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed,
+                (unsigned)c->searches, (unsigned)c->recovered);
+    }
+    fprintf(f, "\n}\n");
+    return fclose(f) == 0 ? 0 : -1;
+}
+
 static void print_summary(nav_t *nav)
 {
     const rsm_localizer_counters_t *c = &nav->loc.counters;
-    double median = 0.0;
-    double p95 = 0.0;
+    double median;
+    double p95;
     int o;
-    if (nav->ntimes > 0) {
-        qsort(nav->times, nav->ntimes, sizeof *nav->times, cmp_double);
-        median = nav->times[nav->ntimes / 2];
-        p95 = nav->times[(nav->ntimes * 95) / 100 < nav->ntimes ? (nav->ntimes * 95) / 100 : nav->ntimes - 1];
-    }
+    time_stats(nav, &median, &p95);
     printf("  method          %s\n", method_name(nav->cfg.method));
     print_mount(nav);
     if (nav->cfg.method == RSM_METHOD_MAP) {
@@ -824,8 +886,8 @@ static void print_summary(nav_t *nav)
     }
     printf("  timestamps      %llu clamped (went backwards), %llu odd (far from both neighbours: replaced),"
            " %llu jumps of the clock\n",
-           (unsigned long long)nav->clamped, (unsigned long long)nav->odd_stamps,
-           (unsigned long long)nav->time_jumps);
+           (unsigned long long)nav->repair.clamped, (unsigned long long)nav->repair.odd_stamps,
+           (unsigned long long)nav->repair.time_jumps);
     printf("  scans           %u\n", (unsigned)c->scans);
     for (o = 0; o < RSM_SCAN_OUTCOMES; ++o) {
         if (c->outcome[o] != 0) {
@@ -856,8 +918,9 @@ int main(int argc, char **argv)
     const char *carmen = NULL;
     const char *capture = NULL;
     const char *trajectory = NULL;
+    const char *summary_json = NULL;
     nav_live_options_t live;
-    nav_stream_sink_t sink;
+    nav_sink_t sink;
     float ticks_per_m = 0.0f;
     float wheel_base = 0.0f;
     int fov179 = 0;
@@ -950,6 +1013,8 @@ int main(int argc, char **argv)
             nav.cfg.laser_upside_down = 1u;
         } else if (strcmp(a, "--trajectory") == 0 && next) {
             trajectory = argv[++i];
+        } else if (strcmp(a, "--summary-json") == 0 && next) {
+            summary_json = argv[++i];
         } else if (strcmp(a, "--events") == 0 && next) {
             nav.events = fopen(argv[++i], "w");
             if (nav.events == NULL) {
@@ -1037,6 +1102,8 @@ int main(int argc, char **argv)
     sink.encoder = sink_encoder;
     sink.scan = sink_scan;
     sink.tick = sink_tick;
+    sink.calibration = sink_calibration;
+    nav.ticks_from_flag = ticks_per_m > 0.0f;
     nav.sync_cfg = rsm_sync_config_default();
     if (carmen != NULL) {
         rc = run_carmen(&nav, carmen, fov179);
@@ -1088,6 +1155,11 @@ int main(int argc, char **argv)
         }
     }
     if (rc == 0) {
+        /* Written before the printed summary, whose timing sort it shares. */
+        if (summary_json != NULL && write_summary_json(&nav, summary_json) != 0) {
+            fprintf(stderr, "rsm-nav: cannot write %s: %s\n", summary_json, strerror(errno));
+            rc = 1;
+        }
         print_summary(&nav);
     }
     hitmap_free(&nav.hits);

@@ -261,50 +261,18 @@ def provenance_line(p: dict) -> str:
 # rsm-nav
 
 
-_SUMMARY_TIME = re.compile(r"time per scan\s+median\s+([0-9.]+)\s*us,\s*p95\s+([0-9.]+)\s*us")
-_SUMMARY_SCANS = re.compile(r"^\s+scans\s+(\d+)\s*$")
-_SUMMARY_OUTCOME = re.compile(r"^\s{4}([a-z_]+)\s+(\d+)\s*$")
-_SUMMARY_TMAP = re.compile(r"persistent map\s+(\d+) writes, tiles ([\d/]+) per level, (\d+) taken, (\d+) evicted, "
-                           r"(\d+) returns dropped")
-_SUMMARY_RECOVERY = re.compile(r"recovery\s+(\d+) searches, (\d+) taken")
-_SUMMARY_FREED = re.compile(r"map writes\s+(\d+) tiles cleared and freed")
-
-
-def parse_summary(text: str) -> dict:
-    """Scans, outcome counts and per-scan wall times from rsm-nav's summary;
-    for the persistent-map method also its tiles and recovery searches."""
-    out = {"scans": None, "outcomes": {}, "median_us": None, "p95_us": None, "tmap": None, "recovery": None}
-    in_outcomes = False
-    for line in text.splitlines():
-        m = _SUMMARY_TMAP.search(line)
-        if m:
-            out["tmap"] = {"writes": int(m.group(1)), "tiles": [int(v) for v in m.group(2).split("/")],
-                           "taken": int(m.group(3)), "evicted": int(m.group(4)), "dropped": int(m.group(5))}
-            continue
-        m = _SUMMARY_RECOVERY.search(line)
-        if m:
-            out["recovery"] = {"searches": int(m.group(1)), "taken": int(m.group(2))}
-            continue
-        m = _SUMMARY_FREED.search(line)
-        if m and out["tmap"] is not None:
-            out["tmap"]["freed"] = int(m.group(1))
-            continue
-        m = _SUMMARY_SCANS.match(line)
-        if m:
-            out["scans"] = int(m.group(1))
-            in_outcomes = True
-            continue
-        m = _SUMMARY_OUTCOME.match(line)
-        if in_outcomes and m:
-            out["outcomes"][m.group(1)] = int(m.group(2))
-            continue
-        in_outcomes = False
-        m = _SUMMARY_TIME.search(line)
-        if m:
-            out["median_us"] = float(m.group(1))
-            out["p95_us"] = float(m.group(2))
-    if out["scans"] is None or out["median_us"] is None:
-        raise BenchError("rsm-nav printed no summary:\n" + text)
+def load_summary(path: Path) -> dict:
+    """rsm-nav's --summary-json: scans, outcome counts, per-scan wall times
+    (median_us, p95_us); for the persistent-map method also its tiles
+    (tmap) and recovery searches (recovery)."""
+    try:
+        out = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as e:
+        raise BenchError(f"rsm-nav wrote no readable summary {path}: {e}") from e
+    out.setdefault("tmap", None)
+    out.setdefault("recovery", None)
+    if not isinstance(out.get("scans"), int) or "median_us" not in out:
+        raise BenchError(f"rsm-nav's summary {path} lacks scans or times")
     return out
 
 
@@ -315,16 +283,18 @@ def fused_percent(summary: dict) -> float:
 
 def run_nav(nav: Path, log: Path, method: str, traj: Path, prefix: Sequence[str] = ()) -> dict:
     """Runs rsm-nav (optionally under a wrapper such as valgrind); returns its
-    summary text and the wall time of the whole process."""
+    summary text, the summary it wrote as JSON (``parsed``, see
+    load_summary) and the wall time of the whole process."""
     traj.parent.mkdir(parents=True, exist_ok=True)
+    summary = traj.with_suffix(".summary.json")
     cmd = [*prefix, str(nav), "--carmen", str(log), "--method", method,
-           "--trajectory", str(traj), "--quiet"]
+           "--trajectory", str(traj), "--summary-json", str(summary), "--quiet"]
     t0 = time.monotonic()
     res = subprocess.run(cmd, capture_output=True, text=True)
     elapsed = time.monotonic() - t0
     if res.returncode != 0:
         raise BenchError(f"{' '.join(cmd)} failed ({res.returncode}):\n{res.stderr}")
-    return {"summary": res.stdout, "stderr": res.stderr, "seconds": elapsed}
+    return {"summary": res.stdout, "parsed": load_summary(summary), "stderr": res.stderr, "seconds": elapsed}
 
 
 def parallel(fn, items: Iterable, jobs: int) -> list:
@@ -420,7 +390,7 @@ def run_accuracy(navs: Dict[str, Optional[Path]], logs: List[Tuple[str, Path, Pa
                 "method": m,
                 "trajectory": str(traj),
                 "summary_text": r["summary"],
-                "summary": parse_summary(r["summary"]),
+                "summary": r["parsed"],
                 "errors": _strip_errors(errs),
                 "per_relation": errs["all"]["errors"],
             }
@@ -611,7 +581,7 @@ def run_robustness(nav: Path, logs: List[Tuple[str, Path, Path]], acc: dict, lev
             if lab != label:
                 continue
             runs.append({"method": m, "level": level, "seed": seed, "trajectory": str(traj),
-                         "log": str(paths[(str(log), level, seed)]), "summary": parse_summary(r["summary"]),
+                         "log": str(paths[(str(log), level, seed)]), "summary": r["parsed"],
                          "errors": _strip_errors(scoped_errors(traj, relations))})
         lvls = sorted(set(levels[label]) | {0})
         table = {}
@@ -648,7 +618,7 @@ def run_speed(nav: Path, log: Path, repeats: int, work: Path) -> dict:
             traj = work / "speed" / f"{m}-r{k + 1}.txt"
             r = run_nav(nav, log, m, traj)
             runs.append({"method": m, "repeat": k + 1, "trajectory": str(traj),
-                         "summary_text": r["summary"], "summary": parse_summary(r["summary"])})
+                         "summary_text": r["summary"], "summary": r["parsed"]})
     out = {"log": str(log), "repeats": repeats, "runs": runs, "methods": {}}
     for m in ROBUST_METHODS:
         sel = [r["summary"] for r in runs if r["method"] == m]
@@ -723,7 +693,7 @@ def run_callgrind(navs: Dict[str, Optional[Path]], logs: List[Tuple[str, Path, P
         prefix = [valgrind, "--tool=callgrind", "--toggle-collect=rsm_localizer_scan",
                   f"--callgrind-out-file={out}"]
         r = run_nav(nav, Path(heads[label]["log"]), m, traj, prefix)
-        sm = parse_summary(r["summary"])
+        sm = r["parsed"]
         ir = callgrind_ir(out)
         if ir == 0:
             raise BenchError(f"callgrind collected nothing in rsm_localizer_scan for {m} "

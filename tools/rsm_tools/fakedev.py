@@ -35,13 +35,19 @@ devices then answer like the real ones (protocols.md):
   96 ms at 38400 Bd, 385 ms at 9600).
 
 Data: without ``--capture`` the robot drives as commanded in the ``rooms``
-world of rsm-sim (128 encoder ticks per mm, wheel base 357 mm) and the
-laser ray-casts that world from the robot's pose.  With ``--capture`` the
-devices play a capture's ENCODER packets and 0xB0 telegrams (byte for byte)
-instead: scans in capture order, one per slot as above, and with every SIP
+world of rsm-sim (wheel base 357 mm) and the laser ray-casts that world
+from the robot's pose.  With ``--capture`` the devices play a capture's
+ENCODER packets and 0xB0 telegrams (byte for byte; encoder counts scaled as
+below) instead: scans in capture order, one per slot as above, and with every SIP
 the encoder counts of the last ENCODER packet recorded before the next
 scan to be sent (with no laser, the capture's own timing).  At the end of
 the capture the last counts and the last scan are repeated.
+
+Encoders: the robot counts ``--ticks-mm`` ticks per mm of travel, the
+TicksMM its CONFIGpac reports (default 128): the simulated wheels, and a
+capture's counts (recorded at 128 ticks per mm), are scaled by TicksMM/128
+and rounded to the nearest tick, so a host that ignored the CONFIGpac would
+see the wrong distances.
 
 Rates: a pseudo-terminal carries bytes at any rate, but both ends can see
 the rate the host set on it.  Each device keeps its own protocol rate and
@@ -195,6 +201,17 @@ class Cut:
     def active(self, now: float) -> bool:
         return (self.start is not None and self.spec is not None
                 and self.start <= now < self.start + self.spec[1])
+
+
+def scale_counts(counts: Tuple[int, int], ticks_mm: int) -> Tuple[int, int]:
+    """Encoder counts at TICKS_PER_MM as a robot with ticks_mm ticks per mm
+    counts them (nearest tick, halves away from zero)."""
+    def one(c: int) -> int:
+        scaled = abs(c) * ticks_mm
+        q, r = divmod(scaled, int(TICKS_PER_MM))
+        q += 1 if 2 * r >= TICKS_PER_MM else 0
+        return q if c >= 0 else -q
+    return one(counts[0]), one(counts[1])
 
 
 class Body:
@@ -483,6 +500,10 @@ class FakeRobot(Device):
         return a - half, a + half
 
     def counts(self) -> Tuple[int, int]:
+        return scale_counts(self.raw_counts(), self.config.ticks_mm)
+
+    def raw_counts(self) -> Tuple[int, int]:
+        """Counts at 128 ticks per mm."""
         if self.playback is None:
             return int(math.floor(self.body.left)), int(math.floor(self.body.right))
         if self.laser is not None:
@@ -737,7 +758,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                     help="cut the laser's line FOR s, AFTER s after its first stream started")
     ap.add_argument("--watchdog-ms", type=int, default=2000,
                     help="robot watchdog: stop after this long without a command (default 2000)")
-    ap.add_argument("--ticks-mm", type=int, default=128, help="TicksMM in the CONFIGpac (default 128)")
+    ap.add_argument("--ticks-mm", type=int, default=128,
+                    help="TicksMM in the CONFIGpac, and the encoders' ticks per mm (default 128)")
     ap.add_argument("--no-autobaud", action="store_true",
                     help="CONFIGpac says AutoBaud 0 (the host should not send HOSTBAUD)")
     ap.add_argument("--units", choices=("mm", "cm"), default="mm", help="laser units (default mm)")
