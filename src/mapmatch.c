@@ -56,39 +56,68 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
 {
     const float c = rsm_cosf(x->theta);
     const float sn = rsm_sinf(x->theta);
+    const float tx = x->x;
+    const float ty = x->y;
+    /* Sums in locals: through s the compiler would store each one per
+     * point, not knowing that s does not alias the points. */
+    float h0 = 0.0f;
+    float h1 = 0.0f;
+    float h2 = 0.0f;
+    float h3 = 0.0f;
+    float h4 = 0.0f;
+    float h5 = 0.0f;
+    float b0 = 0.0f;
+    float b1 = 0.0f;
+    float b2 = 0.0f;
+    float cost = 0.0f;
+    float cost_used = 0.0f;
+    float hit = 0.0f;
+    uint32_t used = 0;
     rsm_tmap_cursor_t cur;
     size_t k;
     rsm_tmap_cursor_init(&cur, level);
-    memset(s, 0, sizeof *s);
     for (k = 0; k < n; ++k) {
         const float px = pts[k].x;
         const float py = pts[k].y;
-        const float wx = x->x + c * px - sn * py;
-        const float wy = x->y + sn * px + c * py;
+        const float wx = tx + c * px - sn * py;
+        const float wy = ty + sn * px + c * py;
         float gx;
         float gy;
         const float m = rsm_tmap_read_sample(map, &cur, wx, wy, &gx, &gy);
         const float r = 1.0f - m;
         float gt;
-        s->cost += r * r;
-        s->hit += m;
+        cost += r * r;
+        hit += m;
         if (gx == 0.0f && gy == 0.0f) {
             continue;
         }
         /* d(world)/d(theta) = (-s px - c py, c px - s py). */
         gt = gx * (-sn * px - c * py) + gy * (c * px - sn * py);
-        s->h[0] += gx * gx;
-        s->h[1] += gx * gy;
-        s->h[2] += gx * gt;
-        s->h[3] += gy * gy;
-        s->h[4] += gy * gt;
-        s->h[5] += gt * gt;
-        s->b[0] += gx * r;
-        s->b[1] += gy * r;
-        s->b[2] += gt * r;
-        s->cost_used += r * r;
-        s->used++;
+        h0 += gx * gx;
+        h1 += gx * gy;
+        h2 += gx * gt;
+        h3 += gy * gy;
+        h4 += gy * gt;
+        h5 += gt * gt;
+        b0 += gx * r;
+        b1 += gy * r;
+        b2 += gt * r;
+        cost_used += r * r;
+        used++;
     }
+    s->h[0] = h0;
+    s->h[1] = h1;
+    s->h[2] = h2;
+    s->h[3] = h3;
+    s->h[4] = h4;
+    s->h[5] = h5;
+    s->b[0] = b0;
+    s->b[1] = b1;
+    s->b[2] = b2;
+    s->cost = cost;
+    s->cost_used = cost_used;
+    s->hit = hit;
+    s->used = used;
 }
 
 /* Sum of (1 - M)^2 over the points at pose x on a level, each point read
