@@ -16,4 +16,12 @@ uint32_t rsm_test_rng_next(uint32_t *state);
 /* Uniform in [lo, hi) from rsm_test_rng_next. */
 float rsm_test_rng_uniform(uint32_t *state, float lo, float hi);
 
+/* Reads the values of the index-th line (0-based) of the data file
+ * <source tree>/<rel> that starts with the word key: whitespace-separated
+ * numbers in the given base (16 for hex bytes, 10 for decimals), at most cap
+ * of them, into vals. Returns how many were read (0 if the file or the line
+ * is missing). */
+size_t rsm_test_data_values(const char *rel, const char *key, size_t index, int base,
+                            unsigned long *vals, size_t cap);
+
 #endif
