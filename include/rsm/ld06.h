@@ -4,7 +4,7 @@
  *
  * The sensor talks without being asked (230400 Bd, 8N1), a continuous
  * stream of 47-byte packets, multi-byte fields LSB first
- * (docs/reference/protocols.md section 4 names the sources):
+ * (docs/reference/lidars.md section 1; sources in section 3):
  *     0     header 0x54
  *     1     VerLen 0x2C (packet type 1 in bits 5-7, 12 points in bits 0-4)
  *     2-3   speed, degrees per second

@@ -61,3 +61,13 @@ size_t rsm_test_data_values(const char *rel, const char *key, size_t index, int 
     fclose(f);
     return n;
 }
+
+size_t rsm_test_chunk(uint32_t *seed, size_t remaining, size_t max)
+{
+    size_t c;
+    if (*seed == 0u) {
+        return remaining;
+    }
+    c = (size_t)(rsm_test_rng_next(seed) % max) + 1u;
+    return c < remaining ? c : remaining;
+}

@@ -92,12 +92,8 @@ static size_t feed_all(rsm_ld06_parser_t *p, const uint8_t *data, size_t len, ui
     size_t off = 0;
     size_t got = 0;
     while (off < len) {
-        size_t chunk = len - off;
+        const size_t chunk = rsm_test_chunk(&seed, len - off, 60u);
         size_t done = 0;
-        if (seed != 0u) {
-            const size_t c = (size_t)(rsm_test_rng_next(&seed) % 60u) + 1u;
-            chunk = c < chunk ? c : chunk;
-        }
         while (done < chunk) {
             size_t used = 0;
             rsm_ld06_packet_t pkt;
