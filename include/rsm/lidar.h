@@ -17,6 +17,8 @@ typedef struct rsm_lidar_point {
     uint8_t quality; /* RPLIDAR quality (0..63) or LD06 intensity (0..255) */
     uint8_t start;   /* 1: the sensor flagged this point as the first of a new
                         turn (RPLIDAR standard scan S bit); 0 otherwise */
+    uint64_t stamp_us; /* host clock time the point was measured at: 0 from the
+                          codecs (they know no time), set by the drivers */
 } rsm_lidar_point_t;
 
 #ifdef __cplusplus
