@@ -95,7 +95,7 @@ int rsm_rplidar_parser_init(rsm_rplidar_parser_t *p)
     return RSM_OK;
 }
 
-int rsm_rplidar_parser_expect(rsm_rplidar_parser_t *p)
+int rsm_rplidar_parser_flush(rsm_rplidar_parser_t *p)
 {
     if (p == NULL) {
         return RSM_ERR_INVAL;
@@ -104,8 +104,16 @@ int rsm_rplidar_parser_expect(rsm_rplidar_parser_t *p)
         p->stats.unpaired++;
     }
     p->have_prev = 0u;
-    p->mode = MODE_DESCRIPTOR;
     return rsm_drop_partial(&p->n, &p->stats.bytes_skipped, &p->stats.truncated);
+}
+
+int rsm_rplidar_parser_expect(rsm_rplidar_parser_t *p)
+{
+    const int dropped = rsm_rplidar_parser_flush(p);
+    if (dropped >= 0) {
+        p->mode = MODE_DESCRIPTOR;
+    }
+    return dropped;
 }
 
 size_t rsm_rplidar_parser_pending(const rsm_rplidar_parser_t *p)

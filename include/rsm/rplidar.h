@@ -204,6 +204,12 @@ int rsm_rplidar_parser_init(rsm_rplidar_parser_t *p);
  * the bytes dropped or RSM_ERR_INVAL (NULL). */
 int rsm_rplidar_parser_expect(rsm_rplidar_parser_t *p);
 
+/* Drops a partial frame (the line went silent) but goes on awaiting what
+ * it awaited: a descriptor, the answer, or the stream. Counted as in
+ * _expect (a capsule waiting for its successor is dropped too, as
+ * unpaired). Returns the bytes dropped or RSM_ERR_INVAL (NULL). */
+int rsm_rplidar_parser_flush(rsm_rplidar_parser_t *p);
+
 /* Feeds bytes in chunks of any size and stops at the first event.
  * Awaiting a descriptor, the receiver hunts for A5 5A and accepts only the
  * descriptors listed above (type, length and send mode must agree); after
