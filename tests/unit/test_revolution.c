@@ -157,7 +157,7 @@ void test_turning_in_place_deskewed_points_land_on_the_walls_and_smear_without(v
     const uint16_t thin = (uint16_t)((PER_TURN + RSM_MAX_BEAMS - 1u) / RSM_MAX_BEAMS);
     const double with = run(&spin, 1, thin);
     const double without = run(&spin, 0, thin);
-    printf("turning in place at 1.5 rad/s: worst wall error %.4f m with de-skew, %.4f m without\n",
+    printf("turning in place at 1.5 rad/s: worst wall error %.6f m with de-skew, %.6f m without\n",
            with, without);
     TEST_ASSERT_TRUE_MESSAGE(with < 0.005, "de-skewed points within 5 mm of a wall");
     TEST_ASSERT_TRUE_MESSAGE(without > 0.1, "points without de-skew smear by more than 10 cm");
@@ -170,7 +170,7 @@ void test_driving_an_arc_deskewed_points_land_on_the_walls_and_smear_without(voi
     const uint16_t thin = (uint16_t)((PER_TURN + RSM_MAX_BEAMS - 1u) / RSM_MAX_BEAMS);
     const double with = run(&arc, 1, thin);
     const double without = run(&arc, 0, thin);
-    printf("arc at 0.8 m/s, -0.9 rad/s: worst wall error %.4f m with de-skew, %.4f m without\n",
+    printf("arc at 0.8 m/s, -0.9 rad/s: worst wall error %.6f m with de-skew, %.6f m without\n",
            with, without);
     TEST_ASSERT_TRUE(with < 0.005);
     TEST_ASSERT_TRUE(without > 0.05);
