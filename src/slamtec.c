@@ -68,6 +68,9 @@ static void write_req(rsm_slamtec_t *d, const uint8_t *req, size_t len)
  * its answer descriptor. */
 static void send_request(rsm_slamtec_t *d, uint64_t now)
 {
+    /* bytes read before the request went out cannot be its answer */
+    d->stats.stale_bytes += (uint32_t)(d->io.len - d->io.off);
+    d->io.off = d->io.len;
     (void)rsm_rplidar_parser_expect(&d->parser);
     write_req(d, d->req, d->req_len);
     d->tries++;

@@ -129,6 +129,8 @@ typedef struct rsm_slamtec_stats {
     uint32_t resets;          /* RESET requests */
     uint32_t no_samplerate;   /* GET_SAMPLERATE unanswered: cfg.sample_us used */
     uint32_t unexpected;      /* answers nobody asked for, ignored */
+    uint32_t stale_bytes;     /* bytes read before a request went out, dropped
+                                 unexamined (they cannot be its answer) */
     uint32_t errors;          /* ERROR events */
     uint32_t connects;        /* CONNECTED events */
     uint32_t reconnects;      /* CONNECTED after a LINK_LOST */
