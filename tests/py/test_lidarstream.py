@@ -14,9 +14,9 @@ import subprocess
 
 import pytest
 
-from conftest import TEST_DATA, built_tool
+from conftest import TEST_DATA, FakeDevices, built_tool
 from rsm_tools import capture as cap
-from rsm_tools import convert, lidarstream
+from rsm_tools import convert, fakedev, lidarstream, sim
 from rsm_tools.carmen import FLaser, read_log
 
 
@@ -64,12 +64,65 @@ def test_turn_ranges_place_each_beam_at_its_bearing():
     assert (st.returns, st.unplaced) == (180, 180)
 
 
+def run_dump(*args) -> list:
+    out = subprocess.run([str(built_tool("tools/dump/rsm-dump")), *args],
+                         capture_output=True, text=True, timeout=120, check=True)
+    return [json.loads(line) for line in out.stdout.splitlines()]
+
+
 def dump(kind: str, stream: bytes, tmp_path) -> list:
     path = tmp_path / f"{kind}.bin"
     path.write_bytes(stream)
-    out = subprocess.run([str(built_tool("tools/dump/rsm-dump")), "--protocol", kind, str(path)],
-                         capture_output=True, text=True, timeout=120, check=True)
-    return [json.loads(line) for line in out.stdout.splitlines()]
+    return run_dump("--protocol", kind, str(path))
+
+
+def dump_pty(path: str, seconds_ms: int) -> list:
+    """rsm-dump reading an LD06 pseudo-terminal at 230400 Bd until it has been
+    silent for seconds_ms."""
+    return run_dump("--protocol", "ld06", "--baud", "230400", "--timeout-ms", str(seconds_ms), path)
+
+
+def packet_key(o: dict) -> tuple:
+    return (o["start_cdeg"], o["end_cdeg"], o["timestamp_ms"], tuple(p[1] for p in o["points"]))
+
+
+def test_fakedev_plays_a_converted_capture_as_an_ld06(head_log, tmp_path):
+    capture = tmp_path / "ld06.cap"
+    convert.convert(str(head_log), str(capture), lidar="ld06")
+    header, records, _ = cap.read_capture(capture)
+    lidar = header.channel("lidar").id
+    want = {packet_key(o) for o in dump("ld06", b"".join(
+        r.data for r in records if r.channel == lidar), tmp_path)[:-1]}
+    fake = FakeDevices(tmp_path, "--ld06", "--capture", str(capture), "--seconds", "4", "--quiet")
+    try:
+        objs = dump_pty(fake.paths["ld06"], 1500)
+    finally:
+        log = fake.stop()
+    packets = [o for o in objs if o.get("type") == "packet"]
+    # about 150 packets a second (a 30-packet turn per logged scan at ~5 Hz)
+    assert len(packets) > 200
+    assert all(packet_key(o) in want for o in packets)
+    assert objs[-1]["checksum_errors"] <= 1  # at most a packet cut by the pty filling up
+    summary = [e for e in log if e.get("ev") == "summary" and e.get("dev") == "ld06"]
+    assert summary and summary[0]["packets"] >= len(packets)
+
+
+def test_fakedev_ld06_scans_the_simulated_world(tmp_path):
+    fake = FakeDevices(tmp_path, "--ld06", "--seconds", "3", "--quiet")
+    try:
+        objs = dump_pty(fake.paths["ld06"], 1000)
+    finally:
+        fake.stop()
+    packets = [o for o in objs if o.get("type") == "packet"]
+    assert len(packets) > 300  # 300 a second
+    body = fakedev.Body()  # the robot stands where the world's path starts
+    for o in packets[:60]:
+        assert o["speed_dps"] == 3600 and (o["end_cdeg"] - o["start_cdeg"]) % 36000 == 1100
+        for angle, rng, _q, _s in o["points"]:
+            r = sim.raycast(body.x, body.y, body.th - math.radians(angle), body.segs, body.circles,
+                            fakedev.MAX_RANGE_M)
+            want = round(r * 1000.0) / 1000.0 if r < fakedev.MAX_RANGE_M else 0.0
+            assert rng == pytest.approx(want, abs=1.5e-3)
 
 
 @pytest.mark.parametrize("kind", ["ld06", "rplidar"])
