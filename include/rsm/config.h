@@ -146,6 +146,15 @@
 #define RSM_SYNC_DEPTH 16
 #endif
 
+/* ---- spinning lidars (revolution.h) ------------------------------------ */
+
+/* Odometry poses the revolution assembler keeps to place every point of a
+ * turn at the pose the robot had when it was measured (de-skew). 24 bytes
+ * each; at 50 Hz odometry, 32 cover 0.64 s, three turns of a 5 Hz lidar. */
+#ifndef RSM_REV_ODOM_DEPTH
+#define RSM_REV_ODOM_DEPTH 32
+#endif
+
 /* ---- derived values and compile-time checks ---------------------------- */
 
 #define RSM_MAP_SIZE (1 << RSM_MAP_SIZE_LOG2)
@@ -171,6 +180,7 @@ RSM_STATIC_ASSERT(aria_str_size, RSM_ARIA_STR_SIZE >= 8 && RSM_ARIA_STR_SIZE <= 
 RSM_STATIC_ASSERT(lms_telegram_size, RSM_LMS_MAX_TELEGRAM >= 812);
 RSM_STATIC_ASSERT(link_rx_chunk_range, RSM_LINK_RX_CHUNK >= 1 && RSM_LINK_RX_CHUNK <= 65536);
 RSM_STATIC_ASSERT(sync_depth_range, RSM_SYNC_DEPTH >= 2 && RSM_SYNC_DEPTH <= 1024);
+RSM_STATIC_ASSERT(rev_odom_depth_range, RSM_REV_ODOM_DEPTH >= 2 && RSM_REV_ODOM_DEPTH <= 1024);
 
 /* A digest of every capacity above (FNV-1a over their values), as the code
  * including this header sees them. The library compares the caller's with
@@ -179,11 +189,12 @@ RSM_STATIC_ASSERT(sync_depth_range, RSM_SYNC_DEPTH >= 2 && RSM_SYNC_DEPTH <= 102
  * of the wrong size. */
 #define RSM_CONFIG_MIX_(h, v) ((((unsigned long)(h) ^ (unsigned long)(v)) * 16777619ul) & 0xFFFFFFFFul)
 #define RSM_CONFIG_FINGERPRINT                                                                                      \
-    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
+    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(2166136261ul, RSM_MAX_BEAMS), RSM_MAP_SIZE_LOG2),                  \
     RSM_IMAGE_MAX_CELLS), RSM_TMAP_TILE_LOG2), RSM_TMAP_LEVELS), RSM_TMAP_TILES), RSM_TMAP_HASH_LOG2),                \
     RSM_MAX_KEYPOINTS), RSM_MAX_CANDIDATES), RSM_MAX_MATCHES), RSM_ICP_MAX_POINTS), RSM_ARIA_MAX_PACKET),             \
-    RSM_ARIA_MAX_SONAR), RSM_ARIA_STR_SIZE), RSM_LMS_MAX_TELEGRAM), RSM_LINK_RX_CHUNK), RSM_SYNC_DEPTH)
+    RSM_ARIA_MAX_SONAR), RSM_ARIA_STR_SIZE), RSM_LMS_MAX_TELEGRAM), RSM_LINK_RX_CHUNK), RSM_SYNC_DEPTH),          \
+    RSM_REV_ODOM_DEPTH)
 
 #endif /* RSM_CONFIG_H */

@@ -16,4 +16,5 @@
 #define RSM_TMAP_CELL_M 0.1f
 /* Odd and tiny: every frame reaches a driver in many pieces. */
 #define RSM_LINK_RX_CHUNK 7
+#define RSM_REV_ODOM_DEPTH 4
 #endif

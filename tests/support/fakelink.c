@@ -73,7 +73,7 @@ static int fl_set_baud(void *ctx, uint32_t baud)
     rsm_fakelink_t *fl = (rsm_fakelink_t *)ctx;
     fl->set_baud_calls++;
     if (baud != 9600u && baud != 19200u && baud != 38400u && baud != 57600u && baud != 115200u &&
-        baud != 500000u) {
+        baud != 230400u && baud != 256000u && baud != 460800u && baud != 500000u) {
         return RSM_ERR_RANGE;
     }
     fl->host_baud = baud;

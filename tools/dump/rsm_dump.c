@@ -1,6 +1,6 @@
-/* rsm-dump: decodes a raw ARIA or SICK LMS 2xx byte stream (file, pipe,
- * stdin, serial port, pseudo-terminal) and prints one JSON object per frame,
- * then one object with the receiver's counters.
+/* rsm-dump: decodes a raw ARIA, SICK LMS 2xx, LD06/LD19 or RPLIDAR byte
+ * stream (file, pipe, stdin, serial port, pseudo-terminal) and prints one
+ * JSON object per frame, then one object with the receiver's counters.
  *
  * Exit status: 0 when the input was read (whatever it held), 1 when it
  * could not be opened, 2 for bad arguments. */
@@ -14,7 +14,9 @@
 #include "json_out.h"
 #include "rsm/aria.h"
 #include "rsm/hal.h"
+#include "rsm/ld06.h"
 #include "rsm/lms.h"
+#include "rsm/rplidar.h"
 #include "rsm/status.h"
 #include "rsm_posix.h"
 
@@ -22,7 +24,9 @@
  * receive timeout; also used for the LMS), in ms. */
 #define DUMP_GAP_MS 100u
 
-typedef enum dump_proto { PROTO_NONE = 0, PROTO_ARIA, PROTO_LMS } dump_proto_t;
+typedef enum dump_proto { PROTO_NONE = 0, PROTO_ARIA, PROTO_LMS, PROTO_LD06, PROTO_RPLIDAR } dump_proto_t;
+
+static const char *const proto_names[] = {"none", "aria", "lms", "ld06", "rplidar"};
 
 typedef struct dump_opts {
     dump_proto_t proto;
@@ -45,6 +49,9 @@ typedef struct dump_ctx {
     rsm_lms_parser_t lms;
     rsm_lms_b0_format_t fmt;
     rsm_lms_scan_t scan;
+    rsm_ld06_parser_t ld06;
+    rsm_rplidar_parser_t rplidar;
+    rsm_rplidar_event_t rp_event;
 } dump_ctx_t;
 
 static volatile sig_atomic_t stop_requested = 0;
@@ -57,7 +64,7 @@ static void on_signal(int sig)
 
 static void usage(FILE *f)
 {
-    fputs("usage: rsm-dump --protocol aria|lms [--baud N] [--timeout-ms N] [--pretty]\n"
+    fputs("usage: rsm-dump --protocol aria|lms|ld06|rplidar [--baud N] [--timeout-ms N] [--pretty]\n"
           "                [--distance-bits 13..16] INPUT\n"
           "  INPUT         a capture file, a FIFO, a serial port, a pseudo-terminal, or - for stdin\n"
           "  --baud N      line rate for a serial port or pty (default: leave as is)\n"
@@ -98,12 +105,14 @@ static int parse_args(int argc, char **argv, dump_opts_t *o)
             o->pretty = 1;
         } else if (strcmp(a, "--protocol") == 0 && has_val) {
             const char *p = argv[++i];
-            if (strcmp(p, "aria") == 0) {
-                o->proto = PROTO_ARIA;
-            } else if (strcmp(p, "lms") == 0) {
-                o->proto = PROTO_LMS;
-            } else {
-                fprintf(stderr, "rsm-dump: unknown protocol '%s' (aria or lms)\n", p);
+            size_t k;
+            for (k = 1; k < sizeof proto_names / sizeof proto_names[0]; ++k) {
+                if (strcmp(p, proto_names[k]) == 0) {
+                    o->proto = (dump_proto_t)k;
+                }
+            }
+            if (o->proto == PROTO_NONE) {
+                fprintf(stderr, "rsm-dump: unknown protocol '%s' (aria, lms, ld06 or rplidar)\n", p);
                 return 2;
             }
         } else if (strcmp(a, "--baud") == 0 && has_val) {
@@ -135,7 +144,7 @@ static int parse_args(int argc, char **argv, dump_opts_t *o)
         }
     }
     if (o->proto == PROTO_NONE) {
-        fprintf(stderr, "rsm-dump: --protocol aria|lms is required\n");
+        fprintf(stderr, "rsm-dump: --protocol aria|lms|ld06|rplidar is required\n");
         usage(stderr);
         return 2;
     }
@@ -704,24 +713,147 @@ static void lms_gap(dump_ctx_t *d)
     }
 }
 
+/* ---- spinning lidars ----------------------------------------------------------------- */
+
+/* points: [[angle_deg, range_m, quality, start], ...] */
+static void lidar_points(json_out_t *w, const rsm_lidar_point_t *p, size_t n)
+{
+    size_t i;
+    json_key(w, "points");
+    json_begin_arr(w);
+    for (i = 0; i < n; ++i) {
+        json_begin_arr(w);
+        json_double(w, (double)p[i].angle_deg);
+        json_double(w, (double)p[i].range_m);
+        json_int(w, p[i].quality);
+        json_int(w, p[i].start);
+        json_end_arr(w);
+    }
+    json_end_arr(w);
+}
+
+static void ld06_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
+{
+    size_t off = 0;
+    rsm_ld06_packet_t pkt;
+    rsm_lidar_point_t pts[RSM_LD06_POINTS];
+    while (off < len) {
+        size_t used = 0;
+        const int r = rsm_ld06_parser_feed(&d->ld06, buf + off, len - off, &used, &pkt);
+        off += used;
+        if (r != 1) {
+            break;
+        }
+        json_begin_obj(&d->out);
+        kv_int(&d->out, "seq", (int64_t)d->seq++);
+        kv_str(&d->out, "protocol", "ld06");
+        kv_str(&d->out, "type", "packet");
+        kv_int(&d->out, "speed_dps", pkt.speed_dps);
+        kv_int(&d->out, "start_cdeg", pkt.start_cdeg);
+        kv_int(&d->out, "end_cdeg", pkt.end_cdeg);
+        kv_int(&d->out, "timestamp_ms", pkt.timestamp_ms);
+        (void)rsm_ld06_points(&pkt, pts);
+        lidar_points(&d->out, pts, RSM_LD06_POINTS);
+        json_end_obj(&d->out);
+    }
+}
+
+static void emit_rplidar_event(dump_ctx_t *d, const rsm_rplidar_event_t *e)
+{
+    static const char *const names[] = {"none", "descriptor", "info", "health", "samplerate",
+                                        "points"};
+    json_out_t *w = &d->out;
+    json_begin_obj(w);
+    kv_int(w, "seq", (int64_t)d->seq++);
+    kv_str(w, "protocol", "rplidar");
+    kv_str(w, "type", names[e->type]);
+    kv_hex(w, "answer", e->answer, 2);
+    switch (e->type) {
+    case RSM_RPLIDAR_EVENT_INFO:
+        kv_int(w, "model", e->info.model);
+        kv_int(w, "firmware_major", e->info.firmware_major);
+        kv_int(w, "firmware_minor", e->info.firmware_minor);
+        kv_int(w, "hardware", e->info.hardware);
+        json_key(w, "serial_hex");
+        json_hexbytes(w, e->info.serial, sizeof e->info.serial);
+        break;
+    case RSM_RPLIDAR_EVENT_HEALTH:
+        kv_int(w, "status", e->health.status);
+        kv_int(w, "error_code", e->health.error_code);
+        break;
+    case RSM_RPLIDAR_EVENT_SAMPLERATE:
+        kv_int(w, "standard_us", e->samplerate.standard_us);
+        kv_int(w, "express_us", e->samplerate.express_us);
+        break;
+    case RSM_RPLIDAR_EVENT_POINTS:
+        lidar_points(w, e->points, e->count);
+        break;
+    default:
+        break;
+    }
+    json_end_obj(w);
+}
+
+static void rplidar_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
+{
+    size_t off = 0;
+    while (off < len) {
+        size_t used = 0;
+        const int r = rsm_rplidar_parser_feed(&d->rplidar, buf + off, len - off, &used, &d->rp_event);
+        off += used;
+        if (r != 1) {
+            break;
+        }
+        emit_rplidar_event(d, &d->rp_event);
+    }
+}
+
 /* ---- run ---------------------------------------------------------------------------- */
 
 static void feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
 {
-    if (d->opt.proto == PROTO_ARIA) {
+    switch (d->opt.proto) {
+    case PROTO_ARIA:
         aria_feed(d, buf, len);
-    } else {
+        break;
+    case PROTO_LMS:
         lms_feed(d, buf, len);
+        break;
+    case PROTO_LD06:
+        ld06_feed(d, buf, len);
+        break;
+    default:
+        rplidar_feed(d, buf, len);
+        break;
     }
 }
 
 static void gap(dump_ctx_t *d)
 {
-    if (d->opt.proto == PROTO_ARIA) {
+    switch (d->opt.proto) {
+    case PROTO_ARIA:
         aria_gap(d);
-    } else {
+        break;
+    case PROTO_LMS:
         lms_gap(d);
+        break;
+    case PROTO_LD06:
+        (void)rsm_ld06_parser_flush(&d->ld06);
+        break;
+    default:
+        (void)rsm_rplidar_parser_flush(&d->rplidar);
+        break;
     }
+}
+
+/* The counters every receiver keeps, under the same names. */
+static void framing_counts(json_out_t *w, uint32_t frames, uint32_t skipped, uint32_t checksum,
+                           uint32_t truncated)
+{
+    kv_int(w, "frames", frames);
+    kv_int(w, "bytes_skipped", skipped);
+    kv_int(w, "checksum_errors", checksum);
+    kv_int(w, "truncated", truncated);
 }
 
 static void emit_summary(dump_ctx_t *d, const char *end, int err)
@@ -729,22 +861,28 @@ static void emit_summary(dump_ctx_t *d, const char *end, int err)
     json_out_t *w = &d->out;
     json_begin_obj(w);
     kv_bool(w, "summary", 1);
-    kv_str(w, "protocol", d->opt.proto == PROTO_ARIA ? "aria" : "lms");
+    kv_str(w, "protocol", proto_names[d->opt.proto]);
     kv_int(w, "bytes", (int64_t)d->bytes);
     if (d->opt.proto == PROTO_ARIA) {
         const rsm_aria_parser_stats_t *s = &d->aria.stats;
-        kv_int(w, "frames", s->packets_ok);
-        kv_int(w, "bytes_skipped", s->bytes_skipped);
-        kv_int(w, "checksum_errors", s->checksum_errors);
+        framing_counts(w, s->packets_ok, s->bytes_skipped, s->checksum_errors, s->truncated);
         kv_int(w, "bad_length", s->bad_length);
-        kv_int(w, "truncated", s->truncated);
+    } else if (d->opt.proto == PROTO_LD06) {
+        const rsm_ld06_stats_t *s = &d->ld06.stats;
+        framing_counts(w, s->packets_ok, s->bytes_skipped, s->crc_errors, s->truncated);
+        kv_int(w, "bad_fields", s->bad_fields);
+    } else if (d->opt.proto == PROTO_RPLIDAR) {
+        const rsm_rplidar_stats_t *s = &d->rplidar.stats;
+        framing_counts(w, s->descriptors + s->responses + s->nodes + s->capsules, s->bytes_skipped,
+                       s->checksum_errors, s->truncated);
+        kv_int(w, "bad_descriptors", s->bad_descriptors);
+        kv_int(w, "bad_nodes", s->bad_nodes);
+        kv_int(w, "unpaired", s->unpaired);
+        kv_int(w, "points", s->points);
     } else {
         const rsm_lms_parser_stats_t *s = &d->lms.stats;
-        kv_int(w, "frames", s->telegrams_ok);
-        kv_int(w, "bytes_skipped", s->bytes_skipped);
-        kv_int(w, "checksum_errors", s->crc_errors);
+        framing_counts(w, s->telegrams_ok, s->bytes_skipped, s->crc_errors, s->truncated);
         kv_int(w, "bad_length", s->bad_length);
-        kv_int(w, "truncated", s->truncated);
         kv_int(w, "acks", s->acks);
         kv_int(w, "naks", s->naks);
     }
@@ -837,6 +975,8 @@ int main(int argc, char **argv)
     json_out_init(&d.out, stdout, d.opt.pretty);
     (void)rsm_aria_parser_init(&d.aria);
     (void)rsm_lms_parser_init(&d.lms);
+    (void)rsm_ld06_parser_init(&d.ld06);
+    (void)rsm_rplidar_parser_init(&d.rplidar);
     (void)rsm_lms_b0_format_default(&d.fmt);
     if (d.opt.distance_bits != 0) {
         d.fmt.distance_bits = (uint8_t)d.opt.distance_bits;

@@ -28,6 +28,17 @@
   ``convert.clamped`` (``kind index original_us written_us`` per line), so
   every original stamp can be recovered.
 
+With ``--lidar ld06`` or ``--lidar rplidar`` the laser channel is a spinning
+lidar's instead (channel ``lidar``, raw bytes): every FLASER scan becomes one
+turn of an LD06 (30 packets of 12 points) or an RPLIDAR standard scan (360
+nodes after one answer descriptor), the sensor measuring every whole degree
+clockwise, each logged beam at the angle of its own bearing and the other
+angles "no return" (:mod:`rsm_tools.lidarstream`).  A turn lasts
+``1 / --lidar-hz`` seconds, or the time since the previous scan if that is
+shorter, and ends at the scan's stamp; its points are spread over it, but
+they are one logged scan, taken at one instant: de-skew has nothing to
+correct on such a stream.
+
 Details (beam resampling, range codes) are in docs/capture.md.
 """
 
@@ -41,6 +52,7 @@ from dataclasses import dataclass
 from typing import Iterable, List, Optional, Sequence, Tuple
 
 from . import capture as cap
+from . import lidarstream
 from . import protocols as proto
 from .carmen import FLaser, LogStats, Odom, read_log, time_key
 
@@ -51,6 +63,7 @@ DEFAULT_WHEEL_BASE = 0.357
 UNIT_LIMIT_M = {u: proto.LMS_MAX_VALUE * proto._UNIT_SCALE[u] for u in ("mm", "cm")}  # 8.182, 81.82
 DEFAULT_MIN_GAP_US = 10000
 ROBOT, LASER = 0, 1
+POINTS_MIN_US = lidarstream.POINTS_PER_TURN  # a rendered turn lasts at least 1 us a point
 
 
 def wrap(a: float) -> float:
@@ -262,8 +275,16 @@ class ConvertStats:
     longest_m: float = 0.0    # the longest valid reading of the log
     limit_m: float = 0.0      # the longest range sent: the unit's limit or --max-range
     too_far: int = 0          # valid readings beyond limit_m, sent as "too far"
+    lidar: Optional[str] = None  # ld06 or rplidar: the laser is a spinning lidar
+    turns: Optional[lidarstream.TurnStats] = None
 
     def summary(self) -> str:
+        if self.lidar is not None:
+            t = self.turns or lidarstream.TurnStats()
+            return (f"{self.odom} ODOM + {self.scans} FLASER -> {self.packets} ENCODER packets and "
+                    f"{self.scans - self.empty_scans} {self.lidar} turns; of {t.beams} beams {t.returns} "
+                    f"sent, {t.no_return} without a return, {t.too_far} too far for the protocol, "
+                    f"{t.unplaced} at no whole-degree bearing; {self.clamped} timestamps re-placed")
         text = (f"{self.odom} ODOM + {self.scans} FLASER -> {self.packets} ENCODER "
                 f"packets and {self.scans - self.empty_scans} 0xB0 telegrams in {self.units} (longest "
                 f"reading {self.longest_m:.3f} m); {self.clamped} timestamps re-placed "
@@ -284,6 +305,12 @@ class ConvertStats:
 
     def warning(self) -> Optional[str]:
         """The loud line about readings that could not be kept, or None."""
+        if self.lidar is not None:
+            t = self.turns
+            if t is None or t.too_far + t.unplaced == 0:
+                return None
+            return (f"WARNING: {t.too_far} readings too far for {self.lidar} distances and {t.unplaced} "
+                    f"beams at no whole-degree bearing were not sent")
         if self.too_far == 0:
             return None
         return (f"WARNING: {self.too_far} readings longer than {self.limit_m:.3f} m (the most that "
@@ -295,11 +322,16 @@ class ConvertStats:
 def convert(log, out, units: str = "auto", readings: int = 181,
             ticks_per_m: float = DEFAULT_TICKS_PER_M, wheel_base: float = DEFAULT_WHEEL_BASE,
             max_range: Optional[float] = None, start_ticks: int = 0,
-            ground_truth: Optional[str] = None, min_gap_us: int = DEFAULT_MIN_GAP_US) -> ConvertStats:
+            ground_truth: Optional[str] = None, min_gap_us: int = DEFAULT_MIN_GAP_US,
+            lidar: Optional[str] = None, lidar_hz: float = 10.0) -> ConvertStats:
     """Convert the CARMEN log ``log`` to the capture ``out``; returns the counts.
 
     units "auto" picks mm or cm by the longest valid reading (:func:`pick_units`);
-    max_range None sends every reading the unit carries."""
+    max_range None sends every reading the unit carries.  lidar "ld06" or
+    "rplidar" renders the scans as that spinning lidar's stream instead of LMS
+    telegrams, one turn per scan lasting at most 1 / lidar_hz seconds."""
+    if lidar is not None and (lidar not in lidarstream.BAUD or not lidar_hz > 0.0):
+        raise ValueError("lidar must be ld06 or rplidar, with a positive lidar_hz")
     if readings not in (180, 181, 361):
         raise ValueError("readings must be 180, 181 or 361")
     if units not in ("auto", "mm", "cm"):
@@ -355,6 +387,21 @@ def convert(log, out, units: str = "auto", readings: int = 181,
     if ground_truth:
         meta["ground_truth"] = ground_truth
     channels = [cap.Channel(ROBOT, "robot", "aria", 38400), cap.Channel(LASER, "laser", "lms2xx", 38400)]
+    if lidar is not None:
+        for k in ("laser.units", "laser.readings", "laser.fov_deg", "laser.measuring_mode",
+                  "laser.max_range_m", "laser.resampling", "convert.too_far"):
+            del meta[k]
+        meta.update({
+            "laser.model": lidar,
+            "laser.readings": str(lidarstream.POINTS_PER_TURN),
+            "laser.turn_hz": repr(float(lidar_hz)),
+            "laser.clockwise": "1",
+            "laser.resampling": "each beam at the sensor angle of its bearing (beam i of m at "
+                                "90 - i * 180 / m deg clockwise), else no return",
+        })
+        channels[LASER] = cap.Channel(LASER, "lidar", "raw", lidarstream.BAUD[lidar])
+        st.lidar = lidar
+        st.turns = lidarstream.TurnStats()
     # pass 2: tick counts (the split steps also go into the header)
     enc = TickEncoder(first, ticks_per_m, wheel_base, start_ticks)
     packets = []
@@ -366,6 +413,9 @@ def convert(log, out, units: str = "auto", readings: int = 181,
         packets.append(counts)
     st.split = enc.splits
     meta["convert.split_steps"] = " ".join(split)
+    if lidar is not None:
+        _write_lidar_capture(out, channels, meta, recs, stamps, packets, st, lidar, lidar_hz)
+        return st
     with cap.CaptureWriter(out, channels, meta) as w:
         for r, t, counts in zip(recs, stamps, packets):
             for lr in counts:
@@ -381,6 +431,38 @@ def convert(log, out, units: str = "auto", readings: int = 181,
                 rng = resample(r.ranges, readings)
                 w.write(t, LASER, proto.encode_b0_ranges(rng, units, max_range))
     return st
+
+
+def _write_lidar_capture(out, channels, meta, recs, stamps, packets, st: ConvertStats, lidar: str,
+                         lidar_hz: float) -> None:
+    """The records of a --lidar conversion, in time order: a turn's packets
+    begin before the scan's stamp, so they interleave with earlier odometry."""
+    turn_us = int(round(1e6 / lidar_hz))
+    rows = []  # (time, order, channel, bytes)
+    prev_scan = None
+    for r, t, counts in zip(recs, stamps, packets):
+        for lr in counts:
+            rows.append((t, len(rows), ROBOT, proto.encode_encoder(*lr)))
+            st.packets += 1
+        if isinstance(r, Odom):
+            st.odom += 1
+            continue
+        st.scans += 1
+        if not r.ranges:
+            st.empty_scans += 1
+            continue
+        span = turn_us if prev_scan is None else max(POINTS_MIN_US, min(turn_us, t - prev_scan))
+        prev_scan = t
+        for at, data in lidarstream.render_turn(lidar, r.ranges, t, span, st.turns):
+            rows.append((at, len(rows), LASER, data))
+    rows.sort(key=lambda row: (row[0], row[1]))
+    if lidar == "rplidar" and rows:
+        first = next((row[0] for row in rows if row[2] == LASER), rows[0][0])
+        rows.insert(0, (max(0, first - 1), -1, LASER, lidarstream.RPLIDAR_SCAN_DESCRIPTOR))
+        rows.sort(key=lambda row: (row[0], row[1]))
+    with cap.CaptureWriter(out, channels, meta) as w:
+        for at, _order, ch, data in rows:
+            w.write(at, ch, data)
 
 
 def original_scan_stamps(path) -> List[int]:
@@ -416,14 +498,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--start-ticks", type=int, default=0,
                     help="initial value of both tick counters (wraps modulo 2^32)")
     ap.add_argument("--ground-truth", help="name of a ground-truth file to note in the metadata")
+    ap.add_argument("--lidar", choices=sorted(lidarstream.BAUD),
+                    help="render the scans as this spinning lidar's stream (channel 'lidar') "
+                         "instead of LMS telegrams")
+    ap.add_argument("--lidar-hz", type=float, default=10.0,
+                    help="turns per second of the rendered lidar (default 10)")
     a = ap.parse_args(argv)
+    if not a.lidar_hz > 0:
+        ap.error("--lidar-hz must be positive")
     if a.min_gap_ms < 0:
         ap.error("--min-gap-ms must not be negative")
     if a.ticks_per_m <= 0 or a.wheel_base <= 0 or (a.max_range is not None and a.max_range <= 0):
         ap.error("--ticks-per-m, --wheel-base and --max-range must be positive")
     try:
         st = convert(a.log, a.out, a.units, a.readings, a.ticks_per_m, a.wheel_base,
-                     a.max_range, a.start_ticks, a.ground_truth, int(round(a.min_gap_ms * 1000.0)))
+                     a.max_range, a.start_ticks, a.ground_truth, int(round(a.min_gap_ms * 1000.0)),
+                     a.lidar, a.lidar_hz)
     except (OSError, EOFError, zlib.error) as exc:
         # A truncated or corrupt gzip log ends in EOFError or zlib.error.
         print(f"rsm-convert: cannot read {a.log} to the end: {exc or type(exc).__name__}", file=sys.stderr)

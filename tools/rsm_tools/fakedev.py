@@ -1,6 +1,6 @@
 """rsm-fakedev: a fake Pioneer P3-DX and a fake SICK LMS 2xx on pseudo-terminals.
 
-    rsm-fakedev [--robot] [--lms] [--capture CAP] [--log FILE] [--seconds S]
+    rsm-fakedev [--robot] [--lms] [--ld06] [--capture CAP] [--log FILE] [--seconds S]
                 [--robot-drop AFTER:FOR] [--lms-drop AFTER:FOR]
                 [--watchdog-ms MS] [--ticks-mm N] [--no-autobaud] [--units mm|cm]
                 [--quiet]
@@ -56,6 +56,16 @@ host that did not follow a rate change hears only noise); bytes from the
 host are taken as sent at the right rate (a pseudo-terminal cannot tell
 when the host changed its rate).
 
+LD06 (``--ld06``, only when asked for; ``--robot --ld06`` is a cheap-lidar
+robot): listens to nothing and sends, at 230400 Bd, one 47-byte packet of 12
+points every 1/300 s: a head turning clockwise at 10 Hz, one point every
+whole degree (rsm_tools.lidarstream), ray-cast in the ``rooms`` world from the
+robot's pose at the time of each packet, so a robot the host drives turns
+and moves under the turning head.  With ``--capture`` of an
+``rsm-convert --lidar ld06`` capture it plays the capture's lidar records
+instead, byte for byte, at their own times after the first, then stops
+sending (the host sees the link go quiet).
+
 Faults: ``--robot-drop AFTER:FOR`` cuts the robot's line FOR seconds,
 AFTER seconds after its first session opened (nothing is received or sent;
 the robot itself carries on, so its watchdog stops it and its session
@@ -84,6 +94,7 @@ import tty
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from . import capture as cap
+from . import lidarstream
 from . import protocols as proto
 from . import sim
 
@@ -244,6 +255,10 @@ class Playback:
         header, records, _ = cap.read_capture(path)
         robot = next((c.id for c in header.channels if c.protocol == "aria"), None)
         laser = next((c.id for c in header.channels if c.protocol == "lms2xx"), None)
+        lidar = next((c.id for c in header.channels if c.name == "lidar"), None)
+        self.lidar: List[Tuple[int, bytes]] = [(r.timestamp, r.data) for r in records
+                                               if r.channel == lidar and r.direction == cap.RX]
+        self.lidar_model = header.metadata.get("laser.model", "")
         aria = proto.FrameCounter("aria")
         lms = proto.FrameCounter("lms2xx")
         aria.keep = lms.keep = True
@@ -263,9 +278,9 @@ class Playback:
                 for f in lms.take():
                     if f[4] == 0xB0:
                         self.scans.append((r.timestamp, f))
-        if not self.encoders and not self.scans:
-            raise cap.CaptureError("no ENCODER packets and no 0xB0 telegrams in the capture")
-        stamps = [t for t, _, _ in self.encoders] + [t for t, _ in self.scans]
+        if not self.encoders and not self.scans and not self.lidar:
+            raise cap.CaptureError("no ENCODER packets, 0xB0 telegrams or lidar records in the capture")
+        stamps = [t for t, _, _ in self.encoders] + [t for t, _ in self.scans] + [t for t, _ in self.lidar[:1]]
         self.t_first = min(stamps)
         self.next_scan = 0          # index of the next scan to send
         self.enc_idx = 0
@@ -727,6 +742,73 @@ class FakeLaser(Device):
         return {"streaming": self.streaming, "variant": list(self.variant), "units": self.units}
 
 
+class FakeLD06(Device):
+    """An LDRobot LD06: no commands, a packet every 1/300 s (see the module
+    notes)."""
+
+    dev = "ld06"
+    PACKET_S = 1.0 / 300.0   # 12 points at 3600 points per second
+
+    def __init__(self, port: PtyPort, log: Log, body: Body, playback: Optional[Playback],
+                 args: argparse.Namespace) -> None:
+        super().__init__(port, log, body, playback, Cut(None), "aria")
+        self.baud = lidarstream.BAUD["ld06"]
+        self.t0 = time.monotonic()
+        self.next_due = self.t0
+        self.angle = 0           # sensor angle of the next point, whole degrees
+        self.record = 0          # next capture record
+        self.n.update(packets=0, ended=0)
+        if playback is not None and playback.lidar and playback.lidar_model != "ld06":
+            raise cap.CaptureError(f"the capture's lidar is {playback.lidar_model!r}, not ld06")
+
+    def receive(self, data: bytes, now: float) -> None:
+        self.n["dropped_rx_bytes"] += len(data)  # the LD06 takes no commands
+
+    def _rendered(self, now: float) -> bytes:
+        b = self.body
+        pts = []
+        for j in range(lidarstream.LD06_POINTS):
+            a = math.radians(self.angle + j)
+            r = sim.raycast(b.x, b.y, b.th - a, b.segs, b.circles, MAX_RANGE_M)
+            mm = int(round(r * 1000.0)) if r < MAX_RANGE_M else 0
+            pts.append((mm, 200 if mm else 0))
+        first = self.angle
+        self.angle = (self.angle + lidarstream.LD06_POINTS) % lidarstream.POINTS_PER_TURN
+        return lidarstream.ld06_packet(3600, first * 100, (first + lidarstream.LD06_POINTS - 1) * 100,
+                                       int((now - self.t0) * 1000.0), pts)
+
+    def tick(self, now: float) -> None:
+        pb = self.playback
+        if pb is not None and pb.lidar:
+            while self.record < len(pb.lidar) and \
+                    self.t0 + (pb.lidar[self.record][0] - pb.lidar[0][0]) / 1e6 <= now:
+                if self.send(pb.lidar[self.record][1], now):
+                    self.n["packets"] += 1
+                self.record += 1
+            if self.record == len(pb.lidar) and not self.n["ended"]:
+                self.n["ended"] = 1
+                self.log(self.dev, "capture_end", packets=self.n["packets"])
+            return
+        while self.next_due <= now:
+            if self.send(self._rendered(self.next_due), now):
+                self.n["packets"] += 1
+            self.next_due += self.PACKET_S
+
+    def due(self) -> float:
+        pb = self.playback
+        if pb is not None and pb.lidar:
+            if self.record >= len(pb.lidar):
+                return math.inf
+            return self.t0 + (pb.lidar[self.record][0] - pb.lidar[0][0]) / 1e6
+        return self.next_due
+
+    def progress(self) -> Dict[str, int]:
+        return {"packets": self.n["packets"]}
+
+    def state(self) -> Dict[str, object]:
+        return {"angle": self.angle, "record": self.record}
+
+
 def parse_drop(text: str) -> Tuple[float, float]:
     try:
         after, dur = (float(v) for v in text.split(":"))
@@ -749,6 +831,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-fakedev", description=__doc__.split("\n\n")[0])
     ap.add_argument("--robot", action="store_true", help="a fake P3-DX (default: both devices)")
     ap.add_argument("--lms", action="store_true", help="a fake LMS 2xx (default: both devices)")
+    ap.add_argument("--ld06", action="store_true",
+                    help="a fake LDRobot LD06 (only when asked for; with --robot, a cheap-lidar robot)")
     ap.add_argument("--capture", help="play this capture's encoder packets and scans")
     ap.add_argument("--log", help="write what the devices do, one JSON object per line")
     ap.add_argument("--seconds", type=float, default=0.0, help="stop after this long (0: at a signal)")
@@ -769,8 +853,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         ap.error("--watchdog-ms must be 100..65535 and --ticks-mm 1..65535")
     if a.seconds < 0:
         ap.error("--seconds must not be negative")
-    want_robot = a.robot or not a.lms
-    want_lms = a.lms or not a.robot
+    want_robot = a.robot or not (a.lms or a.ld06)
+    want_lms = a.lms or not (a.robot or a.ld06)
 
     playback = None
     if a.capture:
@@ -793,6 +877,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             devices.append(robot)
         if laser is not None:
             devices.append(laser)
+        if a.ld06:
+            devices.append(FakeLD06(PtyPort("ld06"), log, body, playback, a))
         for d in devices:
             print(f"{d.port.name} {d.port.path}", flush=True)
             log(d.dev, "start", path=d.port.path)
@@ -801,6 +887,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                   file=sys.stderr, flush=True)
         run(devices, log, time.monotonic() + a.seconds if a.seconds > 0 else math.inf)
         return 0
+    except cap.CaptureError as exc:
+        print(f"rsm-fakedev: cannot play {a.capture}: {exc}", file=sys.stderr)
+        return 2
     except Stop as exc:
         if not a.quiet:
             print(f"rsm-fakedev: stopped by {exc.args[0]}", file=sys.stderr, flush=True)

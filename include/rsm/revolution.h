@@ -1,0 +1,139 @@
+/* Revolution assembler: the points of a spinning lidar (rsm/lidar.h, from
+ * the LD06 or RPLIDAR drivers) gathered over one turn of the head into one
+ * rsm_scan_t, optionally de-skewed with odometry.
+ *
+ * A turn ends where the sensor angle falls back (by more than wrap_deg: the
+ * head passed its zero); the point that falls back starts the next turn. The
+ * first turn after init, reset or a gap started somewhere in the middle and
+ * is dropped (counted), as is a turn with fewer than min_points points.
+ *
+ * The scan is in the laser frame, as rsm_localizer_t expects it (the
+ * localizer applies laser_mount and laser_upside_down itself): a sensor
+ * angle a (degrees, clockwise seen from above when cfg.clockwise) becomes
+ * the bearing -a (else +a), wrapped to (-pi, pi]; a point without a return
+ * (range 0) stays range 0 at its bearing, so the core drops and counts it.
+ * Points beyond RSM_MAX_BEAMS are dropped and counted; keep_every thins a
+ * dense sensor (an LD06 gives 450 points per turn at 10 Hz) to fit.
+ *
+ * Time: scan.stamp_us is the middle of the turn, halfway between the times
+ * of its first and last points. With de-skew on, every point is moved to
+ * where the laser saw it from the robot's pose at that middle time: the
+ * robot poses at the point's time and at the stamp are interpolated from the
+ * odometry poses given with rsm_rev_odometry (linear in x, y and heading;
+ * extrapolated from the last two past the newest, held before the oldest),
+ * the point taken through the mounting pose into the robot frame at its own
+ * time, moved by the relative motion, and taken back into the laser frame.
+ * Off, the points keep their bearings and ranges: a robot turning at w rad/s
+ * with a lidar turning at f Hz smears each turn over w / f rad.
+ *
+ * All state is in the caller's rsm_rev_t (about 2 scans, 12 bytes per beam
+ * plus 24 per odometry pose); cfg is kept by pointer. Pure computation, no
+ * I/O; one assembler must not be used from two contexts at once. */
+#ifndef RSM_REVOLUTION_H
+#define RSM_REVOLUTION_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/config.h"
+#include "rsm/geom.h"
+#include "rsm/lidar.h"
+#include "rsm/scan.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Runtime settings; rsm_rev_config_default gives the values in brackets. */
+typedef struct rsm_rev_config {
+    rsm_pose_t mount;       /* laser pose in the robot frame: the same value as
+                               rsm_localizer_config_t.laser_mount [0, 0, 0] */
+    uint8_t upside_down;    /* as rsm_localizer_config_t.laser_upside_down [0] */
+    uint8_t clockwise;      /* 1: sensor angles grow clockwise seen from above
+                               (LD06, LD19, RPLIDAR) [1] */
+    uint8_t deskew;         /* 1: move every point to the pose at the stamp [1] */
+    uint16_t keep_every;    /* keep one point in this many, >= 1 [1] */
+    uint16_t min_points;    /* shorter turns are dropped, >= 1 [30] */
+    float wrap_deg;         /* a fall of the sensor angle by more than this ends
+                               a turn, in (0, 360) [180] */
+    uint32_t max_gap_us;    /* a longer silence between two points drops the
+                               turn in progress, > 0 [300 000] */
+} rsm_rev_config_t;
+
+/* Fills *cfg with the defaults. RSM_OK or RSM_ERR_INVAL (NULL). */
+int rsm_rev_config_default(rsm_rev_config_t *cfg);
+
+/* Counters; they only grow (wrapping at 2^32). */
+typedef struct rsm_rev_stats {
+    uint32_t points;        /* points pushed */
+    uint32_t scans;         /* turns delivered */
+    uint32_t partial;       /* turns dropped: the first, cut by a gap or reset,
+                               or shorter than min_points */
+    uint32_t dropped;       /* points of the dropped turns */
+    uint32_t overflow;      /* points beyond RSM_MAX_BEAMS, dropped */
+    uint32_t thinned;       /* points skipped by keep_every */
+    uint32_t invalid;       /* points delivered with range 0 (no return) */
+    uint32_t bad_points;    /* angle outside [0, 360), range negative or not
+                               finite, or stamped before the previous point:
+                               dropped */
+    uint32_t gaps;          /* silences longer than max_gap_us */
+    uint32_t odometry;      /* odometry poses taken */
+    uint32_t odometry_bad;  /* odometry stamped before the newest, or not finite:
+                               dropped */
+    uint32_t not_deskewed;  /* turns delivered without de-skew although it was
+                               on: no odometry pose at all */
+    uint32_t extrapolated;  /* points whose time lay past the newest odometry
+                               pose (extrapolated) or before the oldest (held) */
+} rsm_rev_stats_t;
+
+/* Assembler state, caller owned. stats and scan may be read at any time
+ * (scan holds the last delivered turn); the rest is private. */
+typedef struct rsm_rev {
+    const rsm_rev_config_t *cfg;
+    rsm_rev_stats_t stats;
+    rsm_scan_t scan;
+    /* the turn in progress */
+    float angle_deg[RSM_MAX_BEAMS];
+    float range_m[RSM_MAX_BEAMS];
+    uint32_t dt_us[RSM_MAX_BEAMS]; /* after first_us */
+    size_t n;
+    size_t seen;                   /* points of this turn, kept or not */
+    uint64_t first_us;
+    uint64_t last_us;
+    float last_angle;
+    uint8_t have_last;
+    uint8_t whole;                 /* this turn began at the sensor's zero */
+    /* odometry, oldest first */
+    uint64_t odom_us[RSM_REV_ODOM_DEPTH];
+    rsm_pose_t odom[RSM_REV_ODOM_DEPTH];
+    size_t odom_head;
+    size_t odom_n;
+} rsm_rev_t;
+
+/* Initialises r with no turn in progress and no odometry; cfg is kept by
+ * pointer. Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers or a setting
+ * outside its range (r unchanged). */
+int rsm_rev_init(rsm_rev_t *r, const rsm_rev_config_t *cfg);
+
+/* An odometry pose (any fixed frame: only the motion between two times is
+ * used) at stamp_us, on the clock the points are stamped with. The newest
+ * RSM_REV_ODOM_DEPTH poses are kept. Returns RSM_OK, RSM_ERR_INVAL (NULL),
+ * RSM_ERR_ORDER for a stamp before the newest pose's (dropped, counted) or
+ * RSM_ERR_RANGE for a pose that is not finite (dropped, counted). */
+int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose);
+
+/* One point, in measuring order. Returns 1 if it completed a turn (r->scan
+ * holds it, valid until the next completed turn; the point itself starts the
+ * next turn), 0 if not, RSM_ERR_INVAL for NULL pointers, RSM_ERR_RANGE or
+ * RSM_ERR_ORDER for a point counted in bad_points and dropped. */
+int rsm_rev_push(rsm_rev_t *r, const rsm_lidar_point_t *pt);
+
+/* Drops the turn in progress (counted as partial if it held points): call
+ * it when the link was lost. Odometry is kept. No-op for NULL. */
+void rsm_rev_reset(rsm_rev_t *r);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_REVOLUTION_H */

@@ -1,0 +1,320 @@
+/* Unit tests of the revolution assembler (src/revolution.c): a lidar
+ * turning clockwise at 10 Hz in a square room while the robot turns in place
+ * and while it drives an arc; the points of every turn placed in the room
+ * with the scan's stamp pose and the mount, the way the localizer does it:
+ * with de-skew they land on the walls, without they smear. Then the turn
+ * boundaries, the counters and the argument checks. */
+#include "unity.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "rsm/revolution.h"
+#include "rsm/status.h"
+
+void setUp(void) {}
+void tearDown(void) {}
+
+#define HALF 2.0f          /* the room is [-2, 2] x [-2, 2] m */
+#define TURN_US 100000u    /* 10 Hz */
+#define PER_TURN 360u      /* points per turn, 1 deg apart */
+/* odometry at 50 Hz, or slower when the configured depth would not span a
+ * turn and a half (the small test configuration keeps 4 poses) */
+#define ODOM_US (RSM_REV_ODOM_DEPTH >= 8 ? 20000u : (2u * TURN_US) / (RSM_REV_ODOM_DEPTH - 1u))
+
+static rsm_rev_t rev;
+
+/* Robot motion: constant forward speed v and turn rate w from the origin. */
+typedef struct motion {
+    double v;
+    double w;
+} motion_t;
+
+static void robot_at(const motion_t *m, double t, double *x, double *y, double *th)
+{
+    *th = m->w * t;
+    if (fabs(m->w) < 1e-12) {
+        *x = m->v * t;
+        *y = 0.0;
+    } else {
+        *x = m->v / m->w * sin(m->w * t);
+        *y = m->v / m->w * (1.0 - cos(m->w * t));
+    }
+}
+
+/* Distance from (px, py) along heading a to the room's walls. */
+static double to_wall(double px, double py, double a)
+{
+    const double dx = cos(a);
+    const double dy = sin(a);
+    double best = 1e9;
+    if (dx > 1e-12) best = fmin(best, (HALF - px) / dx);
+    if (dx < -1e-12) best = fmin(best, (-HALF - px) / dx);
+    if (dy > 1e-12) best = fmin(best, (HALF - py) / dy);
+    if (dy < -1e-12) best = fmin(best, (-HALF - py) / dy);
+    return best;
+}
+
+static const rsm_pose_t mount = {0.12f, -0.03f, 0.3f};
+
+/* Point j (from t = 0) of a clockwise lidar on the moving robot; every
+ * 37th has no return. */
+static rsm_lidar_point_t measure(const motion_t *m, unsigned j)
+{
+    rsm_lidar_point_t pt;
+    const double t = (double)j * (double)TURN_US / PER_TURN * 1e-6;
+    const double a_deg = fmod((double)j * 360.0 / PER_TURN + 7.5, 360.0);
+    double x, y, th;
+    double lx, ly, la;
+    robot_at(m, t, &x, &y, &th);
+    lx = x + cos(th) * mount.x - sin(th) * mount.y;
+    ly = y + sin(th) * mount.x + cos(th) * mount.y;
+    la = th + mount.theta - a_deg * 3.14159265358979323846 / 180.0; /* clockwise */
+    memset(&pt, 0, sizeof pt);
+    pt.angle_deg = (float)a_deg;
+    pt.range_m = (j % 37u == 5u) ? 0.0f : (float)to_wall(lx, ly, la);
+    pt.stamp_us = 1000000u + (uint64_t)j * TURN_US / PER_TURN;
+    return pt;
+}
+
+static void feed_odometry(const motion_t *m, uint64_t upto_us, uint64_t *next_us)
+{
+    while (*next_us <= upto_us) {
+        double x, y, th;
+        rsm_pose_t p;
+        robot_at(m, (double)(*next_us - 1000000u) * 1e-6, &x, &y, &th);
+        p.x = (float)x;
+        p.y = (float)y;
+        p.theta = (float)th;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_odometry(&rev, *next_us, &p));
+        *next_us += ODOM_US;
+    }
+}
+
+/* Largest distance of the valid points of a delivered scan from the nearest
+ * wall, the scan placed with the robot pose at its stamp and the mount. */
+static double worst_wall_error(const motion_t *m, const rsm_scan_t *s)
+{
+    double x, y, th;
+    double worst = 0.0;
+    size_t i;
+    robot_at(m, (double)(s->stamp_us - 1000000u) * 1e-6, &x, &y, &th);
+    for (i = 0; i < s->count; ++i) {
+        double px, py, rx, ry, wx, wy, e;
+        if (s->range_m[i] == 0.0f) {
+            continue;
+        }
+        px = s->range_m[i] * cos(s->angle_rad[i]);
+        py = s->range_m[i] * sin(s->angle_rad[i]);
+        rx = mount.x + cos(mount.theta) * px - sin(mount.theta) * py;
+        ry = mount.y + sin(mount.theta) * px + cos(mount.theta) * py;
+        wx = x + cos(th) * rx - sin(th) * ry;
+        wy = y + sin(th) * rx + cos(th) * ry;
+        e = fmin(fabs(fabs(wx) - HALF), fabs(fabs(wy) - HALF));
+        worst = fmax(worst, e);
+    }
+    return worst;
+}
+
+/* Runs three turns (the first is partial and dropped) and returns the worst
+ * wall error of the two delivered ones. */
+static double run(const motion_t *m, int deskew, uint16_t keep_every)
+{
+    rsm_rev_config_t cfg;
+    uint64_t next_odom = 1000000u;
+    double worst = 0.0;
+    unsigned j;
+    unsigned scans = 0;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_config_default(&cfg));
+    cfg.mount = mount;
+    cfg.deskew = (uint8_t)deskew;
+    cfg.keep_every = keep_every;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_init(&rev, &cfg));
+    for (j = 0; j < 3u * PER_TURN + 1u; ++j) {
+        const rsm_lidar_point_t pt = measure(m, j);
+        int rc;
+        feed_odometry(m, pt.stamp_us + ODOM_US, &next_odom); /* odometry runs a little ahead */
+        rc = rsm_rev_push(&rev, &pt);
+        TEST_ASSERT_TRUE(rc == 0 || rc == 1);
+        if (rc == 1) {
+            const size_t kept = (PER_TURN + keep_every - 1u) / keep_every;
+            scans++;
+            TEST_ASSERT_EQUAL_size_t(kept < RSM_MAX_BEAMS ? kept : RSM_MAX_BEAMS, rev.scan.count);
+            worst = fmax(worst, worst_wall_error(m, &rev.scan));
+        }
+    }
+    /* the turn that began at 7.5 deg was cut: dropped; two whole turns */
+    TEST_ASSERT_EQUAL_UINT(2, scans);
+    TEST_ASSERT_EQUAL_UINT32(1, rev.stats.partial);
+    return worst;
+}
+
+void test_turning_in_place_deskewed_points_land_on_the_walls_and_smear_without(void)
+{
+    const motion_t spin = {0.0, 1.5}; /* 1.5 rad/s: 8.6 deg per turn of the lidar */
+    const uint16_t thin = (uint16_t)((PER_TURN + RSM_MAX_BEAMS - 1u) / RSM_MAX_BEAMS);
+    const double with = run(&spin, 1, thin);
+    const double without = run(&spin, 0, thin);
+    printf("turning in place at 1.5 rad/s: worst wall error %.6f m with de-skew, %.6f m without\n",
+           with, without);
+    TEST_ASSERT_TRUE_MESSAGE(with < 0.005, "de-skewed points within 5 mm of a wall");
+    TEST_ASSERT_TRUE_MESSAGE(without > 0.1, "points without de-skew smear by more than 10 cm");
+    TEST_ASSERT_EQUAL_UINT32(0, rev.stats.not_deskewed);
+}
+
+void test_driving_an_arc_deskewed_points_land_on_the_walls_and_smear_without(void)
+{
+    const motion_t arc = {0.8, -0.9};
+    const uint16_t thin = (uint16_t)((PER_TURN + RSM_MAX_BEAMS - 1u) / RSM_MAX_BEAMS);
+    const double with = run(&arc, 1, thin);
+    const double without = run(&arc, 0, thin);
+    printf("arc at 0.8 m/s, -0.9 rad/s: worst wall error %.6f m with de-skew, %.6f m without\n",
+           with, without);
+    TEST_ASSERT_TRUE(with < 0.005);
+    TEST_ASSERT_TRUE(without > 0.05);
+}
+
+void test_scan_stamp_is_the_middle_of_the_turn_and_invalid_points_stay_zero(void)
+{
+    const motion_t still = {0.0, 0.0};
+    const uint16_t keep = (uint16_t)((PER_TURN + RSM_MAX_BEAMS - 1u) / RSM_MAX_BEAMS);
+    rsm_rev_config_t cfg;
+    rsm_lidar_point_t first = {0};
+    rsm_lidar_point_t last = {0};
+    uint32_t zeros = 0;
+    unsigned j;
+    size_t k = 0;
+    (void)rsm_rev_config_default(&cfg);
+    cfg.keep_every = keep;
+    cfg.deskew = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_init(&rev, &cfg));
+    /* 352.5 .. 359.5 deg (a partial turn), then 0.5 .. 359.5 deg (j 353 to
+     * 712), closed by the 0.5 deg of j = 713 */
+    for (j = 345; j <= 713u; ++j) {
+        const rsm_lidar_point_t pt = measure(&still, j);
+        TEST_ASSERT_EQUAL_INT(j == 713u ? 1 : 0, rsm_rev_push(&rev, &pt));
+        if (j == 353u) {
+            first = pt;
+        }
+        if (j == 712u) {
+            last = pt;
+        }
+        if (j >= 353u && j <= 712u && (j - 353u) % keep == 0u && pt.range_m == 0.0f) {
+            zeros++;
+        }
+    }
+    TEST_ASSERT_EQUAL_UINT64(first.stamp_us + (last.stamp_us - first.stamp_us) / 2u, rev.scan.stamp_us);
+    TEST_ASSERT_EQUAL_UINT32(1, rev.stats.partial);
+    TEST_ASSERT_EQUAL_UINT32((8u + keep - 1u) / keep, rev.stats.dropped);
+    TEST_ASSERT_EQUAL_UINT32(zeros, rev.stats.invalid);
+    TEST_ASSERT_TRUE(zeros > 0u);
+    for (j = 353; j <= 712u; j += keep) {
+        const rsm_lidar_point_t pt = measure(&still, j);
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, pt.range_m, rev.scan.range_m[k]);
+        /* clockwise sensor angle a: bearing -a in (-pi, pi] */
+        TEST_ASSERT_FLOAT_WITHIN(1e-5f, rsm_wrap_angle(-pt.angle_deg * (RSM_PI / 180.0f)),
+                                 rev.scan.angle_rad[k]);
+        k++;
+    }
+    TEST_ASSERT_EQUAL_size_t(k, rev.scan.count);
+}
+
+void test_counters_for_overflow_gaps_bad_points_and_reset(void)
+{
+    rsm_rev_config_t cfg;
+    const motion_t still = {0.0, 0.0};
+    rsm_lidar_point_t pt;
+    unsigned j;
+    (void)rsm_rev_config_default(&cfg);
+    cfg.min_points = 1u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_init(&rev, &cfg));
+    /* more points in one turn than RSM_MAX_BEAMS: 2 * RSM_MAX_BEAMS */
+    for (j = 0; j < 2u * RSM_MAX_BEAMS; ++j) {
+        memset(&pt, 0, sizeof pt);
+        pt.angle_deg = 360.0f * (float)j / (float)(2u * RSM_MAX_BEAMS);
+        pt.range_m = 1.0f;
+        pt.stamp_us = 10u + j;
+        TEST_ASSERT_EQUAL_INT(0, rsm_rev_push(&rev, &pt));
+    }
+    TEST_ASSERT_EQUAL_UINT32(RSM_MAX_BEAMS, rev.stats.overflow);
+    /* bad points change nothing but their counter */
+    pt.angle_deg = 360.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_rev_push(&rev, &pt));
+    pt.angle_deg = 10.0f;
+    pt.range_m = -1.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_rev_push(&rev, &pt));
+    pt.range_m = 1.0f;
+    pt.stamp_us = 5u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_ORDER, rsm_rev_push(&rev, &pt));
+    TEST_ASSERT_EQUAL_UINT32(3, rev.stats.bad_points);
+    TEST_ASSERT_EQUAL_UINT32(2u * RSM_MAX_BEAMS, rev.stats.points);
+    /* a gap drops the turn in progress */
+    pt.angle_deg = 1.0f;
+    pt.stamp_us = 10u + 2u * RSM_MAX_BEAMS + cfg.max_gap_us + 1u;
+    TEST_ASSERT_EQUAL_INT(0, rsm_rev_push(&rev, &pt));
+    TEST_ASSERT_EQUAL_UINT32(1, rev.stats.gaps);
+    TEST_ASSERT_EQUAL_UINT32(1, rev.stats.partial);
+    TEST_ASSERT_EQUAL_UINT32(RSM_MAX_BEAMS, rev.stats.dropped);
+    rsm_rev_reset(&rev);
+    TEST_ASSERT_EQUAL_UINT32(2, rev.stats.partial);
+    TEST_ASSERT_EQUAL_UINT32(RSM_MAX_BEAMS + 1u, rev.stats.dropped);
+    TEST_ASSERT_EQUAL_UINT32(0, rev.stats.scans);
+    (void)still;
+}
+
+void test_odometry_out_of_order_is_refused_and_without_any_no_deskew_is_counted(void)
+{
+    rsm_rev_config_t cfg;
+    const motion_t still = {0.0, 0.0};
+    rsm_pose_t p = {1.0f, 2.0f, 0.5f};
+    unsigned j;
+    int delivered = 0;
+    (void)rsm_rev_config_default(&cfg);
+    cfg.keep_every = (uint16_t)((PER_TURN + RSM_MAX_BEAMS - 1u) / RSM_MAX_BEAMS);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_init(&rev, &cfg));
+    for (j = 0; j < 2u * PER_TURN + 1u; ++j) {
+        const rsm_lidar_point_t pt = measure(&still, j);
+        delivered += rsm_rev_push(&rev, &pt);
+    }
+    TEST_ASSERT_EQUAL_INT(1, delivered);
+    TEST_ASSERT_EQUAL_UINT32(1, rev.stats.not_deskewed);
+    TEST_ASSERT_TRUE(worst_wall_error(&still, &rev.scan) < 0.001);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_odometry(&rev, 100, &p));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_ORDER, rsm_rev_odometry(&rev, 99, &p));
+    p.x = NAN;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_rev_odometry(&rev, 200, &p));
+    TEST_ASSERT_EQUAL_UINT32(1, rev.stats.odometry);
+    TEST_ASSERT_EQUAL_UINT32(2, rev.stats.odometry_bad);
+}
+
+void test_init_rejects_bad_settings(void)
+{
+    rsm_rev_config_t cfg;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_config_default(NULL));
+    (void)rsm_rev_config_default(&cfg);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_init(NULL, &cfg));
+    cfg.keep_every = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_init(&rev, &cfg));
+    (void)rsm_rev_config_default(&cfg);
+    cfg.wrap_deg = 360.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_init(&rev, &cfg));
+    (void)rsm_rev_config_default(&cfg);
+    cfg.mount.theta = INFINITY;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_init(&rev, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_push(NULL, NULL));
+    rsm_rev_reset(NULL);
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_turning_in_place_deskewed_points_land_on_the_walls_and_smear_without);
+    RUN_TEST(test_driving_an_arc_deskewed_points_land_on_the_walls_and_smear_without);
+    RUN_TEST(test_scan_stamp_is_the_middle_of_the_turn_and_invalid_points_stay_zero);
+    RUN_TEST(test_counters_for_overflow_gaps_bad_points_and_reset);
+    RUN_TEST(test_odometry_out_of_order_is_refused_and_without_any_no_deskew_is_counted);
+    RUN_TEST(test_init_rejects_bad_settings);
+    return UNITY_END();
+}
