@@ -157,8 +157,7 @@ static void live_wait(live_t *lv)
             until = e->retry_at;
         }
         if (live_up(lv, i)) {
-            const uint64_t due = i == 0 ? rsm_p3dx_next_deadline_us(&lv->dev.robot)
-                                        : rsm_sicklms_next_deadline_us(&lv->dev.laser);
+            const uint64_t due = nav_devices_next_deadline(&lv->dev, i == 0, now_us);
             if (due != UINT64_MAX) {
                 const double at = mono_s() + (due > now_us ? (double)(due - now_us) * 1e-6 : 0.0);
                 until = at < until ? at : until;
@@ -208,7 +207,7 @@ static uint64_t live_cycle(live_t *lv)
         }
         if (e->down) {
             if (endpoint_retry(e, lv->opt->quiet)) {
-                (void)(i == 0 ? rsm_p3dx_connect(&lv->dev.robot) : rsm_sicklms_connect(&lv->dev.laser));
+                nav_devices_restart(&lv->dev, i == 0);
             }
             continue;
         }
@@ -244,19 +243,17 @@ static int live_shutdown(live_t *lv)
     const double t_end = mono_s() + 5.0;
     const int robot_open = lv->ep[0]->open;
     const int laser_open = lv->ep[1]->open;
-    if (live_up(lv, 0)) {
-        (void)rsm_p3dx_disconnect(&lv->dev.robot);
+    int i;
+    for (i = 0; i < 2; ++i) {
+        if (live_up(lv, i)) {
+            nav_devices_stop(&lv->dev, i == 0);
+        }
     }
-    if (live_up(lv, 1)) {
-        (void)rsm_sicklms_disconnect(&lv->dev.laser);
-    }
-    while (mono_s() < t_end && ((live_up(lv, 0) && lv->dev.robot.state != RSM_P3DX_IDLE) ||
-                                (live_up(lv, 1) && lv->dev.laser.state != RSM_SICKLMS_IDLE))) {
-        int i;
+    while (mono_s() < t_end && ((live_up(lv, 0) && nav_devices_busy(&lv->dev, 1)) ||
+                                (live_up(lv, 1) && nav_devices_busy(&lv->dev, 0)))) {
         lv->now_us = rsm_posix_clock_now_us(NULL);
         for (i = 0; i < 2; ++i) {
-            if (live_up(lv, i) && (i == 0 ? lv->dev.robot.state != RSM_P3DX_IDLE
-                                          : lv->dev.laser.state != RSM_SICKLMS_IDLE) &&
+            if (live_up(lv, i) && nav_devices_busy(&lv->dev, i == 0) &&
                 nav_devices_poll(&lv->dev, i == 0, lv->sink) < 0) {
                 lv->ep[i]->ended = 1; /* gone: nothing more to say to it */
             }
@@ -275,7 +272,7 @@ static int live_shutdown(live_t *lv)
     }
     {
         const int robot_never = robot_open && lv->dev.robot.stats.connects == 0u;
-        const int laser_never = laser_open && lv->dev.laser.stats.connects == 0u;
+        const int laser_never = laser_open && nav_devices_connects(&lv->dev, 0) == 0u;
         if (robot_never || laser_never) {
             fprintf(stderr, "rsm-nav: no %s ever connected\n",
                     robot_never ? (laser_never ? "device" : "robot") : "laser");
@@ -305,6 +302,20 @@ static int live_run(live_t *lv)
     }
     if (opt->lms_baud != 0u) {
         lv->dev.lcfg.baud = opt->lms_baud;
+        lv->dev.ldcfg.baud = opt->lms_baud;
+        lv->dev.slcfg.baud = opt->lms_baud;
+    }
+    if (opt->laser != NAV_LASER_LMS) {
+        /* The lidar drivers refuse a zero read timeout: the shortest wait. */
+        lv->dev.ldcfg.read_timeout_us = 1u;
+        lv->dev.slcfg.read_timeout_us = 1u;
+        if (opt->odometry != NULL) {
+            nav_devices_odometry(&lv->dev, opt->odometry);
+        }
+        lv->dev.rcfg.deskew = (uint8_t)(opt->deskew != 0);
+        if (nav_devices_lidar(&lv->dev, opt->laser, &opt->mount, opt->upside_down, opt->lidar_keep) != 0) {
+            return 1;
+        }
     }
     for (i = 0; i < 2; ++i) {
         if (lv->ep[i]->open && nav_devices_start(&lv->dev, i == 0, &lv->ep[i]->link, &lv->clock) != 0) {
@@ -325,7 +336,7 @@ static int live_run(live_t *lv)
         if (!opt->quiet) {
             fprintf(stderr, "rsm-nav: listen-only: %llu bytes, %u encoder packets, %u scans, %u bad scans\n",
                     (unsigned long long)lv->bytes, (unsigned)lv->dev.robot.stats.encoder_packets,
-                    (unsigned)lv->dev.laser.stats.scans, (unsigned)lv->dev.laser.stats.bad_scans);
+                    (unsigned)nav_devices_scans(&lv->dev), (unsigned)lv->dev.laser.stats.bad_scans);
         }
         if (lv->bytes == 0u && !stop_requested) {
             fprintf(stderr, "rsm-nav: nothing arrived on any link\n");
@@ -334,6 +345,21 @@ static int live_run(live_t *lv)
         return 0;
     }
     return live_shutdown(lv);
+}
+
+/* The rate the laser's link opens at: the flag's, else what the device
+ * talks at first (an LMS at power-up 9600, a replayed LMS 38400; a lidar
+ * its only rate). */
+static uint32_t laser_baud(const nav_live_options_t *opt)
+{
+    if (opt->lms_baud != 0u) {
+        return opt->lms_baud;
+    }
+    switch (opt->laser) {
+    case NAV_LASER_LD06: return 230400u;
+    case NAV_LASER_RPLIDAR: return 115200u;
+    default: return opt->listen_only ? 38400u : 9600u;
+    }
 }
 
 int nav_live_run(const nav_live_options_t *opt, const nav_sink_t *sink)
@@ -349,8 +375,7 @@ int nav_live_run(const nav_live_options_t *opt, const nav_sink_t *sink)
     sigaction(SIGTERM, &sa, NULL);
     if (open_endpoint(&robot, "robot", opt->robot,
                       opt->robot_baud ? opt->robot_baud : (opt->listen_only ? 38400u : 9600u)) != 0 ||
-        open_endpoint(&laser, "laser", opt->lms,
-                      opt->lms_baud ? opt->lms_baud : (opt->listen_only ? 38400u : 9600u)) != 0) {
+        open_endpoint(&laser, "laser", opt->lms, laser_baud(opt)) != 0) {
         if (robot.open) {
             (void)rsm_posix_link_close(&robot.state);
         }

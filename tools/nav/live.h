@@ -1,7 +1,8 @@
 /* rsm-nav live mode: the robot and laser serial links (devices or
  * pseudo-terminals) through the POSIX port, with the library's drivers.
  * Active mode drives both devices (P3-DX handshake and encoder packets, LMS
- * start-up and continuous output); listen-only mode (the drivers' own)
+ * start-up and continuous output, or an RPLIDAR's start-up and scan; an
+ * LD06 only ever talks); listen-only mode (the drivers' own)
  * sends nothing and decodes what arrives, e.g. from rsm-replay. Both wait
  * once for all links: until bytes arrive or the earliest driver deadline,
  * then poll each driver without waiting, on a clock that reads the time the
@@ -15,9 +16,15 @@
 
 typedef struct nav_live_options {
     const char *robot;        /* device or pty path, NULL: no robot link */
-    const char *lms;          /* device or pty path */
+    const char *lms;          /* the laser's device or pty path (LMS or lidar) */
+    nav_laser_kind_t laser;   /* which laser is on it */
+    rsm_pose_t mount;         /* lidar: the localizer's laser_mount and upside-down flag, */
+    int upside_down;          /* for the de-skew */
+    unsigned lidar_keep;      /* lidar: keep one point in this many (>= 1) */
+    int deskew;               /* lidar: 1 de-skews every turn with the odometry */
+    const rsm_odometry_config_t *odometry; /* the encoder geometry the de-skew starts with */
     uint32_t robot_baud;      /* default 9600 (active), 38400 (listen) */
-    uint32_t lms_baud;
+    uint32_t lms_baud;        /* 0: the laser driver's default (live), 38400 (LMS listen) */
     int listen_only;          /* 1: send nothing, decode the incoming streams */
     double seconds;           /* stop after this long (0: until the links end or a signal) */
     double idle_exit_s;       /* listen-only: stop after this long without bytes once data flowed (0: never) */

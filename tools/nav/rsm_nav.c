@@ -2,7 +2,8 @@
  * over a CARMEN log, a capture file, or live serial links, and writes the
  * trajectory, the map and a summary.
  *
- *   rsm-nav (--carmen LOG | --capture FILE | --robot DEV --lms DEV) [--method rsm|icp|odometry]
+ *   rsm-nav (--carmen LOG | --capture FILE | --robot DEV (--lms DEV | --lidar ld06|rplidar DEV))
+ *           [--method rsm|icp|odometry]
  *           --trajectory OUT.txt [--map OUT.pgm] [--laser-pose X Y THETA] [--upside-down]
  *           [--set key=value ...] [--quiet]
  */
@@ -32,10 +33,16 @@ static void usage(FILE *f)
             "SOURCE is one of:\n"
             "  --carmen LOG [--fov179]   a CARMEN log, plain or gzip (FLASER/ROBOTLASER1 scans;\n"
             "                            odometry from the pose fields of the laser lines)\n"
-            "  --capture FILE            a capture of the robot (ARIA) and laser (LMS) links\n"
+            "  --capture FILE            a capture of the robot (ARIA) and laser (LMS, or an\n"
+            "                            rsm-convert --lidar ld06 stream) links\n"
             "  --robot DEV --lms DEV     live serial links (devices or pseudo-terminals), with\n"
             "     [--robot-baud N] [--lms-baud N] [--listen] [--seconds S] [--idle-exit S]\n"
             "                            --listen sends nothing and decodes what arrives (replays)\n"
+            "  --robot DEV --lidar ld06|rplidar DEV   the same with a spinning lidar instead of\n"
+            "                            the LMS (--lms-baud sets its rate); its turns become scans,\n"
+            "                            de-skewed with the encoder packets' odometry\n"
+            "  --lidar-keep N            lidar: keep one point in N (an LD06's 450 a turn need 2)\n"
+            "  --no-deskew               lidar: place every point of a turn at the turn's pose\n"
             "  --ticks-per-m N --wheel-base M   odometry geometry for encoder packets\n"
             "                            (default: the capture's, else the P3-DX defaults)\n"
             "  --events FILE             write every decoded input (E left right / S count hash)\n"
@@ -223,6 +230,7 @@ typedef struct nav {
     const char *mount_source;   /* "flag", "log ROBOTLASER1", "log FLASER" or "default zero" */
     char mount_note[224];  /* the log's mount when a flag overrode it, or why it was not used */
     uint64_t mount_disagree;    /* later log laser poses off the first by more than the tolerance */
+    int no_deskew;         /* --no-deskew: a lidar's turns are not de-skewed */
 } nav_t;
 
 static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep);
@@ -604,7 +612,7 @@ static int positive_meta(const char *path, const char *key, const char *text, fl
     return 0;
 }
 
-static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink)
+static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink, const nav_live_options_t *lidar)
 {
     static cap_reader reader;
     static nav_devices_t dev;
@@ -615,6 +623,7 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink)
     FILE *fp = fopen(path, "rb");
     int robot_id = -1;
     int laser_id = -1;
+    nav_laser_kind_t kind = NAV_LASER_LMS;
     size_t i;
     int rc;
     int status;
@@ -635,6 +644,16 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink)
             laser_id = reader.channels[i].id;
         }
     }
+    /* rsm-convert --lidar: the laser is a spinning lidar's raw stream. */
+    if (laser_id < 0 && (v = meta(&reader, "laser.model")) != NULL &&
+        (strcmp(v, "ld06") == 0 || strcmp(v, "rplidar") == 0)) {
+        kind = strcmp(v, "ld06") == 0 ? NAV_LASER_LD06 : NAV_LASER_RPLIDAR;
+        for (i = 0; i < reader.n_channels; ++i) {
+            if (reader.channels[i].protocol == CAP_PROTO_RAW && strcmp(reader.channels[i].name, "lidar") == 0) {
+                laser_id = reader.channels[i].id;
+            }
+        }
+    }
     /* Geometry recorded with the capture, unless given on the command line. */
     if ((v = meta(&reader, "robot.ticks_per_m")) != NULL && nav->cfg.odometry.ticks_per_m_left == 0.0f) {
         if (positive_meta(path, "robot.ticks_per_m", v, &nav->cfg.odometry.ticks_per_m_left) != 0) {
@@ -650,7 +669,8 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink)
         fclose(fp);
         return 1;
     }
-    if ((v = meta(&reader, "convert.clamped")) != NULL) {
+    /* The table is per LMS telegram; a lidar's scans are its turns, stamped mid-turn. */
+    if (kind == NAV_LASER_LMS && (v = meta(&reader, "convert.clamped")) != NULL) {
         load_restore_table(nav, v);
     }
     {
@@ -677,6 +697,14 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink)
      * live mode), each from its own memory link whose clock reads the
      * record's time. */
     nav_devices_defaults(&dev, 1, nav->quiet);
+    nav_devices_odometry(&dev, &nav->cfg.odometry);
+    dev.rcfg.deskew = (uint8_t)(lidar->deskew != 0);
+    if (kind != NAV_LASER_LMS &&
+        nav_devices_lidar(&dev, kind, &lidar->mount, lidar->upside_down, lidar->lidar_keep) != 0) {
+        cap_close(&reader);
+        fclose(fp);
+        return 1;
+    }
     for (i = 0; i < 2; ++i) {
         nav_feed_init(&feed[i], &link[i], &clock[i]);
         if (nav_devices_start(&dev, i == 0, &link[i], &clock[i]) != 0) {
@@ -723,10 +751,17 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink)
            (unsigned)dev.robot.stats.encoder_packets,
            (unsigned)(dev.robot.stats.sips + dev.robot.stats.config_packets + dev.robot.stats.unknown_packets),
            (unsigned)dev.robot.parser.stats.checksum_errors, (unsigned)dev.robot.parser.stats.bytes_skipped);
-    printf("  laser link      %u scans, %u bad, %u other; CRC errors %u, bytes skipped %u\n",
-           (unsigned)dev.laser.stats.scans, (unsigned)dev.laser.stats.bad_scans,
-           (unsigned)dev.laser.stats.unexpected, (unsigned)dev.laser.parser.stats.crc_errors,
-           (unsigned)dev.laser.parser.stats.bytes_skipped);
+    if (kind == NAV_LASER_LMS) {
+        printf("  laser link      %u scans, %u bad, %u other; CRC errors %u, bytes skipped %u\n",
+               (unsigned)dev.laser.stats.scans, (unsigned)dev.laser.stats.bad_scans,
+               (unsigned)dev.laser.stats.unexpected, (unsigned)dev.laser.parser.stats.crc_errors,
+               (unsigned)dev.laser.parser.stats.bytes_skipped);
+    } else {
+        printf("  lidar link      %u packets, %u points, %u turns (%u partial); CRC errors %u, bytes skipped %u\n",
+               (unsigned)dev.ld06.stats.packets, (unsigned)dev.ld06.stats.points, (unsigned)dev.rev.stats.scans,
+               (unsigned)dev.rev.stats.partial, (unsigned)dev.ld06.parser.stats.crc_errors,
+               (unsigned)dev.ld06.parser.stats.bytes_skipped);
+    }
     cap_close(&reader);
     if (fclose(fp) != 0 && status == 0) {
         fprintf(stderr, "rsm-nav: error closing %s: %s\n", path, strerror(errno));
@@ -928,6 +963,7 @@ int main(int argc, char **argv)
     int i;
 
     memset(&live, 0, sizeof live);
+    live.lidar_keep = 1u;
     nav.cfg = rsm_localizer_config_default();
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i];
@@ -940,6 +976,26 @@ int main(int argc, char **argv)
             live.robot = argv[++i];
         } else if (strcmp(a, "--lms") == 0 && next) {
             live.lms = argv[++i];
+        } else if (strcmp(a, "--lidar") == 0 && i + 2 < argc) {
+            if (strcmp(argv[i + 1], "ld06") == 0) {
+                live.laser = NAV_LASER_LD06;
+            } else if (strcmp(argv[i + 1], "rplidar") == 0) {
+                live.laser = NAV_LASER_RPLIDAR;
+            } else {
+                fprintf(stderr, "rsm-nav: --lidar takes ld06 or rplidar, not '%s'\n", argv[i + 1]);
+                return 2;
+            }
+            live.lms = argv[i + 2];
+            i += 2;
+        } else if (strcmp(a, "--lidar-keep") == 0 && next) {
+            const long v = strtol(argv[++i], NULL, 10);
+            if (v < 1 || v > 64) {
+                fprintf(stderr, "rsm-nav: --lidar-keep takes 1 to 64, not '%s'\n", argv[i]);
+                return 2;
+            }
+            live.lidar_keep = (unsigned)v;
+        } else if (strcmp(a, "--no-deskew") == 0) {
+            nav.no_deskew = 1;
         } else if ((strcmp(a, "--robot-baud") == 0 || strcmp(a, "--lms-baud") == 0) && next) {
             const long v = strtol(argv[++i], NULL, 10);
             if (v <= 0) {
@@ -1065,7 +1121,8 @@ int main(int argc, char **argv)
         }
     }
     if (((carmen != NULL) + (capture != NULL) + (live.robot != NULL || live.lms != NULL)) != 1 || trajectory == NULL) {
-        fprintf(stderr, "rsm-nav: give exactly one source (--carmen, --capture, or --robot/--lms) and --trajectory\n");
+        fprintf(stderr, "rsm-nav: give exactly one source (--carmen, --capture, or --robot/--lms/--lidar) and"
+                        " --trajectory\n");
         usage(stderr);
         return 2;
     }
@@ -1105,10 +1162,14 @@ int main(int argc, char **argv)
     sink.calibration = sink_calibration;
     nav.ticks_from_flag = ticks_per_m > 0.0f;
     nav.sync_cfg = rsm_sync_config_default();
+    live.mount = nav.cfg.laser_mount;
+    live.upside_down = nav.cfg.laser_upside_down != 0u;
+    live.odometry = &nav.cfg.odometry;
+    live.deskew = !nav.no_deskew;
     if (carmen != NULL) {
         rc = run_carmen(&nav, carmen, fov179);
     } else if (capture != NULL) {
-        rc = run_capture(&nav, capture, &sink);
+        rc = run_capture(&nav, capture, &sink, &live);
     } else {
         rc = nav_live_run(&live, &sink);
     }
@@ -1119,7 +1180,8 @@ int main(int argc, char **argv)
     if (carmen == NULL && capture == NULL) {
         if (rc == 0) {
             printf("rsm-nav summary\n");
-            printf("  source          live: robot %s, laser %s%s\n", live.robot ? live.robot : "-",
+            printf("  source          live: robot %s, %s %s%s\n", live.robot ? live.robot : "-",
+                   live.laser == NAV_LASER_LD06 ? "LD06" : live.laser == NAV_LASER_RPLIDAR ? "RPLIDAR" : "laser",
                    live.lms ? live.lms : "-", live.listen_only ? " (listen-only)" : "");
             printf("  robot link      %llu encoder packets, %u counter restarts (new connections)\n",
                    (unsigned long long)nav.encoders, (unsigned)nav.sync.counters.restarts);

@@ -34,8 +34,9 @@ turn of an LD06 (30 packets of 12 points) or an RPLIDAR standard scan (360
 nodes after one answer descriptor), the sensor measuring every whole degree
 clockwise, each logged beam at the angle of its own bearing and the other
 angles "no return" (:mod:`rsm_tools.lidarstream`).  A turn lasts
-``1 / --lidar-hz`` seconds, or the time since the previous scan if that is
-shorter, and ends at the scan's stamp; its points are spread over it, but
+``1 / --lidar-hz`` seconds, or the time to the previous or next scan if that
+is shorter, and its middle is the scan's stamp (the time the revolution
+assembler gives a turn); its points are spread over it, but
 they are one logged scan, taken at one instant: de-skew has nothing to
 correct on such a stream.
 
@@ -440,6 +441,8 @@ def _write_lidar_capture(out, channels, meta, recs, stamps, packets, st: Convert
     turn_us = int(round(1e6 / lidar_hz))
     rows = []  # (time, order, channel, bytes)
     prev_scan = None
+    scan_at = [t for r, t in zip(recs, stamps) if isinstance(r, FLaser) and r.ranges]
+    k = 0
     for r, t, counts in zip(recs, stamps, packets):
         for lr in counts:
             rows.append((t, len(rows), ROBOT, proto.encode_encoder(*lr)))
@@ -451,9 +454,19 @@ def _write_lidar_capture(out, channels, meta, recs, stamps, packets, st: Convert
         if not r.ranges:
             st.empty_scans += 1
             continue
-        span = turn_us if prev_scan is None else max(POINTS_MIN_US, min(turn_us, t - prev_scan))
+        # Centred on the scan's stamp (the assembler stamps a turn with its
+        # middle), and no longer than the time to either neighbour: turns
+        # never overlap.
+        k += 1
+        nxt = scan_at[k] if k < len(scan_at) else None
+        span = turn_us
+        for gap in ((t - prev_scan) if prev_scan is not None else None, (nxt - t) if nxt is not None else None):
+            if gap is not None:
+                span = min(span, gap)
+        span = max(POINTS_MIN_US, span)
         prev_scan = t
-        for at, data in lidarstream.render_turn(lidar, r.ranges, t, span, st.turns):
+        end = t + int(round(span * (lidarstream.POINTS_PER_TURN - 1) / (2 * lidarstream.POINTS_PER_TURN)))
+        for at, data in lidarstream.render_turn(lidar, r.ranges, end, span, st.turns):
             rows.append((at, len(rows), LASER, data))
     rows.sort(key=lambda row: (row[0], row[1]))
     if lidar == "rplidar" and rows:
