@@ -217,6 +217,7 @@ static void cursor_start(cursor_t *c, uint32_t level)
 {
     memset(c, 0, sizeof *c);
     c->level = level;
+    rsm_tmap_cursor_forget(c);
 }
 
 void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level)
@@ -301,9 +302,17 @@ static uint32_t clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0,
     int32_t err = dx - dy;
     int32_t k;
     uint32_t top = 0;
+    /* The tile under the beam: looked up only when the beam enters another. */
+    int32_t tx = x0 >> RSM_TMAP_TILE_LOG2;
+    int32_t ty = y0 >> RSM_TMAP_TILE_LOG2;
+    uint32_t s = rsm_tmap_cursor_slot(map, c, x0, y0);
     for (k = 0; k < steps - (int32_t)margin; ++k) {
-        const uint32_t s = rsm_tmap_cursor_slot(map, c, x0, y0);
         int32_t e2;
+        if ((x0 >> RSM_TMAP_TILE_LOG2) != tx || (y0 >> RSM_TMAP_TILE_LOG2) != ty) {
+            tx = x0 >> RSM_TMAP_TILE_LOG2;
+            ty = y0 >> RSM_TMAP_TILE_LOG2;
+            s = rsm_tmap_cursor_slot(map, c, x0, y0);
+        }
         if (s != RSM_TMAP_NONE) {
             rsm_tile_t *t = &map->tile[s];
             const uint32_t i = rsm_tmap_cell_index(x0, y0);
@@ -316,6 +325,7 @@ static uint32_t clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0,
                 if (tile_empty(t)) {
                     free_slot(map, s);
                     rsm_tmap_cursor_forget(c);
+                    s = RSM_TMAP_NONE;
                 }
             }
         }

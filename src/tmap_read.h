@@ -20,10 +20,10 @@ uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, i
 /* Forgets every tile the cursor holds (after a write moved or freed one). */
 static inline void rsm_tmap_cursor_forget(rsm_tmap_cursor_t *c)
 {
-    c->way[0].valid = 0u;
-    c->way[1].valid = 0u;
-    c->way[2].valid = 0u;
-    c->way[3].valid = 0u;
+    c->way[0].key = RSM_TMAP_NO_KEY;
+    c->way[1].key = RSM_TMAP_NO_KEY;
+    c->way[2].key = RSM_TMAP_NO_KEY;
+    c->way[3].key = RSM_TMAP_NO_KEY;
 }
 
 /* Slot of the tile holding cell (gx, gy) of the cursor's level. */
@@ -31,12 +31,11 @@ static inline uint32_t rsm_tmap_cursor_slot(const rsm_tmap_t *map, rsm_tmap_curs
 {
     const int32_t tx = gx >> RSM_TMAP_TILE_LOG2;
     const int32_t ty = gy >> RSM_TMAP_TILE_LOG2;
+    const uint32_t key = (uint32_t)(uint16_t)tx | ((uint32_t)(uint16_t)ty << 16);
     rsm_tmap_way_t *w = &c->way[(uint32_t)(tx & 1) | ((uint32_t)(ty & 1) << 1)];
-    if (!w->valid || w->tx != tx || w->ty != ty) {
-        w->tx = (int16_t)tx;
-        w->ty = (int16_t)ty;
-        w->valid = 1u;
-        w->slot = (uint16_t)rsm_tmap_find_slot(map, c->level, tx, ty);
+    if (w->key != key) {
+        w->key = key;
+        w->slot = rsm_tmap_find_slot(map, c->level, tx, ty);
     }
     return w->slot;
 }

@@ -131,11 +131,12 @@ float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y
  * tiles around a read near a tile's edge are all held at once. Valid until
  * the map is next written. */
 typedef struct rsm_tmap_way {
-    int16_t tx;
-    int16_t ty;
-    uint16_t slot;   /* RSM_TMAP_NONE: the tile is not held */
-    uint16_t valid;
+    uint32_t key;    /* tile column (low half) and row (high half); RSM_TMAP_NO_KEY: empty */
+    uint32_t slot;   /* RSM_TMAP_NONE: the tile is not held */
 } rsm_tmap_way_t;
+
+/* A key no tile has (tile coordinates stay within +-32000). */
+#define RSM_TMAP_NO_KEY 0x80008000u
 
 typedef struct rsm_tmap_cursor {
     uint32_t level;
