@@ -79,6 +79,23 @@ def test_nav_counts_malformed_lines_and_bad_readings_without_stopping(tmp_path, 
     assert len(rows) == 40
 
 
+def test_every_set_key_the_help_lists_is_accepted_and_no_other(tmp_path, head_log):
+    """The help's KEY list and the parser come from one table: every listed
+    key parses (a value out of range is refused for its range, not as an
+    unknown key), and a key not listed is refused as unknown."""
+    text = subprocess.run([str(nav_binary()), "--help"], capture_output=True, text=True,
+                          env=subprocess_env()).stdout
+    listed = text.split("--upside-down):\n", 1)[1]
+    keys = [k.strip() for k in listed.replace("\n", " ").rstrip(". ").split(",")]
+    assert len(keys) > 50 and "recover_rad" in keys and "map_unconfirmed_shift" in keys
+    for key in keys + ["no_such_key"]:
+        res = subprocess.run([str(nav_binary()), "--carmen", str(head_log), "--trajectory", str(tmp_path / "t.txt"),
+                              "--set", f"{key}=-1", "--quiet"], capture_output=True, text=True,
+                             env=subprocess_env())
+        unknown = "unknown key in --set" in res.stderr
+        assert unknown == (key == "no_such_key"), (key, res.stderr)
+
+
 def test_nav_rejects_a_missing_log_with_a_clear_message(tmp_path):
     res = subprocess.run([str(nav_binary()), "--carmen", str(tmp_path / "nope.clf"), "--trajectory",
                           str(tmp_path / "t.txt")], capture_output=True, text=True)

@@ -25,6 +25,99 @@
 #include "rsm/sync.h"
 
 
+/* Every --set KEY: F float field, U unsigned or int field, E enum field
+ * with its largest value. One list for the parser and the help text. */
+#define NAV_SET_KEYS(F, U, E) \
+    F("cell", grid.cell_m) \
+    F("sigma", grid.sigma_m) \
+    E("rule", grid.rule, rsm_grid_rule_t, 2.0) \
+    U("min_hits", map_min_hits, uint8_t) \
+    F("window", match_window_m) \
+    F("search_sigmas", search_sigmas) \
+    F("search_min", search_min_m) \
+    F("search_max", search_max_m) \
+    F("gate", gate_d2) \
+    E("noise", noise, rsm_noise_model_t, 1.0) \
+    F("r_min_xy", r_min_xy_m) \
+    F("r_min_theta", r_min_theta_rad) \
+    F("inlier_tol", ransac.inlier_tol_m) \
+    F("length_tol", ransac.length_tol_m) \
+    U("iterations", ransac.max_iterations, uint32_t) \
+    U("min_support", ransac.min_support, uint32_t) \
+    U("seed", ransac.seed, uint32_t) \
+    U("k_den", harris.k_den, int32_t) \
+    U("nms", harris.nms_radius, int32_t) \
+    U("min_response", harris.min_response, int32_t) \
+    F("max_range", limits.max_range_m) \
+    F("min_range", limits.min_range_m) \
+    U("icp_iterations", icp.max_iterations, uint16_t) \
+    F("icp_pair_dist", icp.max_pair_dist_m) \
+    F("trans_per_m", odometry.sigma_trans_per_m) \
+    F("rot_per_rad", odometry.sigma_rot_per_rad) \
+    F("rot_per_m", odometry.sigma_rot_per_m) \
+    U("map_on_reject", map_on_reject, uint8_t) \
+    U("refine", refine_iterations, uint32_t) \
+    U("refine_sat", refine_saturation, uint8_t) \
+    F("refine_scale", refine_noise_scale) \
+    F("mount_x", laser_mount.x) \
+    F("mount_y", laser_mount.y) \
+    F("mount_theta", laser_mount.theta) \
+    U("upside_down", laser_upside_down, uint8_t) \
+    F("map_cell", tmap.cell_m) \
+    U("map_levels", tmap.levels, uint8_t) \
+    U("map_hit", tmap.hit_inc, uint8_t) \
+    U("map_miss", tmap.miss_dec, uint8_t) \
+    U("map_sat", tmap.saturation, uint8_t) \
+    U("map_margin", tmap.clear_margin, uint8_t) \
+    U("map_splat_from", tmap.splat_from, uint8_t) \
+    U("map_age_shift", tmap.age_shift, uint8_t) \
+    U("map_unconfirmed_shift", tmap.unconfirmed_shift, uint8_t) \
+    U("map_wall_level", tmap.wall_level, uint8_t) \
+    U("map_wall_value", tmap.wall_value, uint8_t) \
+    U("mm_iterations", mapmatch.iterations, uint8_t) \
+    F("mm_sigma", mapmatch.sigma) \
+    F("mm_search", mapmatch.search_rad) \
+    U("mm_fan", mapmatch.fan, uint8_t) \
+    F("mm_gate", mapmatch.gate_d2) \
+    F("recover_ratio", recover_ratio) \
+    F("recover_m", recover_m) \
+    F("recover_rad", recover_rad) \
+    F("mm_search_step", mapmatch.search_step_rad) \
+    F("mm_min_step", mapmatch.min_step_m) \
+    F("mm_min_rad", mapmatch.min_step_rad) \
+    F("map_update_m", map_update_m) \
+    F("map_update_rad", map_update_rad) \
+    F("iso_tol", isolation.tol_m) \
+    F("iso_slope", isolation.slope) \
+    U("iso_window", isolation.window, uint8_t) \
+    U("iso_agree", isolation.agree, uint8_t)
+
+/* Prints the --set keys, comma separated, wrapped before 80 columns. */
+static void print_set_keys(FILE *f)
+{
+#define NAME_F(name, field) name,
+#define NAME_U(name, field, type) name,
+#define NAME_E(name, field, type, maxv) name,
+    static const char *const names[] = {NAV_SET_KEYS(NAME_F, NAME_U, NAME_E)};
+#undef NAME_F
+#undef NAME_U
+#undef NAME_E
+    const size_t n = sizeof names / sizeof names[0];
+    size_t col = 0;
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        const size_t w = strlen(names[k]);
+        if (k > 0u) {
+            const int wrap = col + 2u + w > 79u;
+            fputs(wrap ? ",\n" : ", ", f);
+            col = wrap ? 0u : col + 2u;
+        }
+        fputs(names[k], f);
+        col += w;
+    }
+    fputs(".\n", f);
+}
+
 static void usage(FILE *f)
 {
     fprintf(f,
@@ -57,12 +150,10 @@ static void usage(FILE *f)
             "  --upside-down             the laser is mounted upside down (beam angles mirrored;\n"
             "                            no log says so)\n"
             "Writes one line per scan: timestamp x y theta (s, m, m, rad).\n"
-            "KEY is one of: cell, sigma, rule (0 inside, 1 touch, 2 nearest), min_hits, window,\n"
-            "search_sigmas, search_min, search_max, gate, noise (0 residual, 1 fixed), r_min_xy,\n"
-            "r_min_theta, inlier_tol, length_tol, iterations, min_support, seed, k_den, nms,\n"
-            "max_range, min_range, icp_iterations, icp_pair_dist, trans_per_m, rot_per_rad, rot_per_m,\n"
-            "map_on_reject, refine (iterations, 0 = off), refine_sat, refine_scale,\n"
-            "mount_x, mount_y, mount_theta, upside_down (as --laser-pose and --upside-down).\n");
+            "KEY is one of the names below (rule: 0 inside, 1 touch, 2 nearest; noise: 0 residual,\n"
+            "1 fixed; refine: iterations, 0 = off; mount_* and upside_down as --laser-pose and\n"
+            "--upside-down):\n");
+    print_set_keys(f);
 }
 
 /* The largest value an integer field of this size holds (enums: int). */
@@ -72,8 +163,9 @@ static double set_option_max(size_t size, int is_unsigned)
     return pow(2.0, bits) - 1.0;
 }
 
-/* Sets one KEY=VALUE. Returns 0, -1 (unknown key or not a number) or -2
- * (an integer field and VALUE is not a whole number from 0 to *top_out). */
+/* Sets one KEY=VALUE. Returns 0, -1 (not KEY=number), -2 (an integer
+ * field and VALUE is not a whole number from 0 to *top_out) or -3 (no such
+ * KEY). */
 static int set_option(rsm_localizer_config_t *c, const char *kv, double *top_out)
 {
     const char *eq = strchr(kv, '=');
@@ -105,73 +197,11 @@ static int set_option(rsm_localizer_config_t *c, const char *kv, double *top_out
         c->field = (type)v; \
         return 0; \
     }
-    F("cell", grid.cell_m)
-    F("sigma", grid.sigma_m)
-    E("rule", grid.rule, rsm_grid_rule_t, 2.0)
-    U("min_hits", map_min_hits, uint8_t)
-    F("window", match_window_m)
-    F("search_sigmas", search_sigmas)
-    F("search_min", search_min_m)
-    F("search_max", search_max_m)
-    F("gate", gate_d2)
-    E("noise", noise, rsm_noise_model_t, 1.0)
-    F("r_min_xy", r_min_xy_m)
-    F("r_min_theta", r_min_theta_rad)
-    F("inlier_tol", ransac.inlier_tol_m)
-    F("length_tol", ransac.length_tol_m)
-    U("iterations", ransac.max_iterations, uint32_t)
-    U("min_support", ransac.min_support, uint32_t)
-    U("seed", ransac.seed, uint32_t)
-    U("k_den", harris.k_den, int32_t)
-    U("nms", harris.nms_radius, int32_t)
-    U("min_response", harris.min_response, int32_t)
-    F("max_range", limits.max_range_m)
-    F("min_range", limits.min_range_m)
-    U("icp_iterations", icp.max_iterations, uint16_t)
-    F("icp_pair_dist", icp.max_pair_dist_m)
-    F("trans_per_m", odometry.sigma_trans_per_m)
-    F("rot_per_rad", odometry.sigma_rot_per_rad)
-    F("rot_per_m", odometry.sigma_rot_per_m)
-    U("map_on_reject", map_on_reject, uint8_t)
-    U("refine", refine_iterations, uint32_t)
-    U("refine_sat", refine_saturation, uint8_t)
-    F("refine_scale", refine_noise_scale)
-    F("mount_x", laser_mount.x)
-    F("mount_y", laser_mount.y)
-    F("mount_theta", laser_mount.theta)
-    U("upside_down", laser_upside_down, uint8_t)
-    F("map_cell", tmap.cell_m)
-    U("map_levels", tmap.levels, uint8_t)
-    U("map_hit", tmap.hit_inc, uint8_t)
-    U("map_miss", tmap.miss_dec, uint8_t)
-    U("map_sat", tmap.saturation, uint8_t)
-    U("map_margin", tmap.clear_margin, uint8_t)
-    U("map_splat_from", tmap.splat_from, uint8_t)
-    U("map_age_shift", tmap.age_shift, uint8_t)
-    U("map_unconfirmed_shift", tmap.unconfirmed_shift, uint8_t)
-    U("map_wall_level", tmap.wall_level, uint8_t)
-    U("map_wall_value", tmap.wall_value, uint8_t)
-    U("mm_iterations", mapmatch.iterations, uint8_t)
-    F("mm_sigma", mapmatch.sigma)
-    F("mm_search", mapmatch.search_rad)
-    U("mm_fan", mapmatch.fan, uint8_t)
-    F("mm_gate", mapmatch.gate_d2)
-    F("recover_ratio", recover_ratio)
-    F("recover_m", recover_m)
-    F("recover_rad", recover_rad)
-    F("mm_search_step", mapmatch.search_step_rad)
-    F("mm_min_step", mapmatch.min_step_m)
-    F("mm_min_rad", mapmatch.min_step_rad)
-    F("map_update_m", map_update_m)
-    F("map_update_rad", map_update_rad)
-    F("iso_tol", isolation.tol_m)
-    F("iso_slope", isolation.slope)
-    U("iso_window", isolation.window, uint8_t)
-    U("iso_agree", isolation.agree, uint8_t)
+    NAV_SET_KEYS(F, U, E)
 #undef F
 #undef U
 #undef E
-    return -1;
+    return -3;
 }
 
 static double now_s(void)
@@ -1098,6 +1128,10 @@ int main(int argc, char **argv)
             const int set = set_option(&nav.cfg, argv[++i], &top);
             if (set == -2) {
                 fprintf(stderr, "rsm-nav: bad --set '%s': a whole number from 0 to %.0f\n", argv[i], top);
+                return 2;
+            }
+            if (set == -3) {
+                fprintf(stderr, "rsm-nav: unknown key in --set '%s' (rsm-nav --help lists them)\n", argv[i]);
                 return 2;
             }
             if (set != 0) {
