@@ -79,6 +79,30 @@ def test_nav_counts_malformed_lines_and_bad_readings_without_stopping(tmp_path, 
     assert len(rows) == 40
 
 
+def test_nav_writes_the_trajectory_in_tum_format_too(tmp_path, head_log, head_relations):
+    """--tum writes the same poses as TUM lines (z 0, the heading as a
+    rotation about z); the evaluation reads either file to the same errors."""
+    traj, tum = tmp_path / "t.txt", tmp_path / "t.tum"
+    res = subprocess.run([str(nav_binary()), "--carmen", str(head_log), "--trajectory", str(traj), "--tum", str(tum),
+                          "--quiet"], capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 0, res.stderr
+    plain = [l.split() for l in traj.read_text().splitlines() if not l.startswith("#")]
+    rows = [l.split() for l in tum.read_text().splitlines() if not l.startswith("#")]
+    assert len(rows) == len(plain) == 600
+    for p, q in zip(plain, rows):
+        assert q[:3] == p[:3] and q[3:6] == ["0", "0", "0"]
+        qz, qw = float(q[6]), float(q[7])
+        assert abs(qz * qz + qw * qw - 1.0) < 1e-6
+        assert abs(ev.wrap_angle(2.0 * math.atan2(qz, qw) - float(p[3]))) < 1e-6
+    tr, fmt = ev.load_poses(tum)
+    assert fmt == "tum"
+    a = errors(traj, head_relations)
+    b = ev.evaluate(tr, ev.load_relations(head_relations), tolerance=0.0)
+    # The plain file rounds theta to 1e-6 rad, the quaternion keeps 1e-9.
+    assert a["translation"]["mean"] == pytest.approx(b["translation"]["mean"], abs=1e-6)
+    assert a["rotation"]["mean"] == pytest.approx(b["rotation"]["mean"], abs=1e-4)
+
+
 def test_every_set_key_the_help_lists_is_accepted_and_no_other(tmp_path, head_log):
     """The help's KEY list and the parser come from one table: every listed
     key parses (a value out of range is refused for its range, not as an

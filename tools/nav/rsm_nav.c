@@ -140,6 +140,8 @@ static void usage(FILE *f)
             "                            (default: the capture's, else the P3-DX defaults)\n"
             "  --events FILE             write every decoded input (E left right / S count hash)\n"
             "  --summary-json FILE       write the summary as JSON too (scans, outcomes, times, map)\n"
+            "  --tum FILE                write the trajectory in TUM format too\n"
+            "                            (timestamp x y z qx qy qz qw; what evo reads)\n"
             "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
             "                            the capture's robot.initial_pose, else zero)\n"
             "  --laser-pose X Y THETA    the laser's pose on the robot (m, m, rad; x forward,\n"
@@ -240,6 +242,7 @@ typedef struct nav {
     uint64_t scan_index;
     uint64_t encoders;
     FILE *events;          /* --events: decoded inputs, one line each, in processing order */
+    FILE *tum;             /* --tum: the trajectory again, as TUM lines (what evo reads) */
     int ticks_from_flag;   /* --ticks-per-m given: the robot's calibration is not taken */
     unsigned calibrations; /* robot calibrations taken (live mode) */
     int have_x0;           /* --initial-pose given: overrides any other start */
@@ -352,6 +355,12 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
     }
     fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, nav->off_x + (double)rep->pose.x,
             nav->off_y + (double)rep->pose.y, (double)rep->pose.theta);
+    if (nav->tum != NULL) {
+        /* A rotation about z by theta: the quaternion (0, 0, sin theta/2, cos theta/2). */
+        const double half = 0.5 * (double)rep->pose.theta;
+        fprintf(nav->tum, "%.6f %.6f %.6f 0 0 0 %.9f %.9f\n", file_stamp_s, nav->off_x + (double)rep->pose.x,
+                nav->off_y + (double)rep->pose.y, sin(half), cos(half));
+    }
     if (nav->map_path != NULL) {
         nav_map_points(nav, rep);
     }
@@ -1101,6 +1110,13 @@ int main(int argc, char **argv)
             trajectory = argv[++i];
         } else if (strcmp(a, "--summary-json") == 0 && next) {
             summary_json = argv[++i];
+        } else if (strcmp(a, "--tum") == 0 && next) {
+            nav.tum = fopen(argv[++i], "w");
+            if (nav.tum == NULL) {
+                fprintf(stderr, "rsm-nav: cannot write %s: %s\n", argv[i], strerror(errno));
+                return 1;
+            }
+            fprintf(nav.tum, "# timestamp x y z qx qy qz qw (TUM)\n");
         } else if (strcmp(a, "--events") == 0 && next) {
             nav.events = fopen(argv[++i], "w");
             if (nav.events == NULL) {
@@ -1224,6 +1240,10 @@ int main(int argc, char **argv)
     /* Whatever happened, keep what was written. */
     if (nav.events != NULL && fclose(nav.events) != 0) {
         fprintf(stderr, "rsm-nav: error writing the events file\n");
+        rc = rc ? rc : 1;
+    }
+    if (nav.tum != NULL && fclose(nav.tum) != 0) {
+        fprintf(stderr, "rsm-nav: error writing the TUM file\n");
         rc = rc ? rc : 1;
     }
     if (fclose(nav.traj) != 0) {

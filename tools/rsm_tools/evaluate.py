@@ -181,30 +181,35 @@ def _floats(tokens: Sequence[str], path: PathLike, lineno: int) -> List[float]:
 
 
 def load_poses(path: PathLike) -> Tuple[Trajectory, str]:
-    """Load a trajectory (4 columns) or a corrected-poses file (5 columns).
+    """Load a trajectory (4 columns), a corrected-poses file (5 columns) or
+    a TUM file (8 columns: t x y z qx qy qz qw, as ``rsm-nav --tum`` writes;
+    the heading is the yaw of the quaternion).
 
-    Returns the trajectory and the detected format, ``"trajectory"`` or
-    ``"corrected-poses"``.  The format is decided by the first data row; every
-    row must then have the same number of columns.
+    Returns the trajectory and the detected format, ``"trajectory"``,
+    ``"corrected-poses"`` or ``"tum"``.  The format is decided by the first
+    data row; every row must then have the same number of columns.
     """
     traj = Trajectory()
     ncols = None
     for lineno, tokens in _data_rows(path):
         if ncols is None:
             ncols = len(tokens)
-            if ncols not in (4, 5):
+            if ncols not in (4, 5, 8):
                 raise ValueError(
-                    f"{path}:{lineno}: expected 4 columns (t x y theta) or 5 "
-                    f"(t scan_index x y theta), got {ncols}"
+                    f"{path}:{lineno}: expected 4 columns (t x y theta), 5 "
+                    f"(t scan_index x y theta) or 8 (TUM: t x y z qx qy qz qw), got {ncols}"
                 )
         elif len(tokens) != ncols:
             raise ValueError(f"{path}:{lineno}: expected {ncols} columns, got {len(tokens)}")
         v = _floats(tokens, path, lineno)
         if ncols == 4:
             traj.add(v[0], v[1], v[2], v[3])
-        else:
+        elif ncols == 5:
             traj.add(v[0], v[2], v[3], v[4])
-    return traj, ("corrected-poses" if ncols == 5 else "trajectory")
+        else:
+            qx, qy, qz, qw = v[4:8]
+            traj.add(v[0], v[1], v[2], math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz)))
+    return traj, {4: "trajectory", 5: "corrected-poses", 8: "tum"}[ncols]
 
 
 def load_trajectory(path: PathLike) -> Trajectory:
