@@ -605,7 +605,8 @@ static void apply_mount(rsm_localizer_t *loc, size_t n)
 /* One recovery search within +-radius_m and +-recover_rad of pred: descends
  * from the best few candidates under a prior widened as far and replaces
  * *res with the best fit if it fits well again (at least half of what was
- * lost regained). Returns whether it did. */
+ * lost regained; need is above the first *res, so each replacement fits
+ * better than the last). Returns whether it did. */
 static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
                    rsm_mapmatch_result_t *res)
 {
@@ -628,7 +629,7 @@ static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, fl
     for (k = 0; k < found; ++k) {
         if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[k], &alt) ==
                 RSM_OK &&
-            alt.hit >= cfg->recover_ratio * fit && alt.hit >= need && (!took || alt.hit > res->hit)) {
+            alt.hit >= cfg->recover_ratio * fit && alt.hit >= need && alt.hit > res->hit) {
             *res = alt;
             took = 1;
         }

@@ -120,9 +120,10 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
     s->used = used;
 }
 
-/* Sum of (1 - M)^2 over the points at pose x on a level, each point read
- * at its nearest cell centre (no interpolation: a coarse score). */
-static float coarse_cost(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, const rsm_pose_t *x)
+/* Sum of (1 - M)^2 over every stride-th point at pose x on a level, each
+ * read at its nearest cell centre (no interpolation: a coarse score). */
+static float coarse_cost(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, size_t stride,
+                         const rsm_pose_t *x)
 {
     const float c = rsm_cosf(x->theta);
     const float sn = rsm_sinf(x->theta);
@@ -130,7 +131,7 @@ static float coarse_cost(const rsm_tmap_t *map, uint32_t level, const rsm_point_
     rsm_tmap_cursor_t cur;
     size_t k;
     rsm_tmap_cursor_init(&cur, level);
-    for (k = 0; k < n; ++k) {
+    for (k = 0; k < n; k += stride) {
         const float wx = x->x + c * pts[k].x - sn * pts[k].y;
         const float wy = x->y + sn * pts[k].x + c * pts[k].y;
         const float r = 1.0f - rsm_tmap_occupancy_at(map, &cur, wx, wy);
@@ -154,7 +155,7 @@ static float best_heading(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cf
         rsm_pose_t x = *x0;
         float f;
         x.theta = rsm_wrap_angle(x0->theta + d);
-        f = coarse_cost(map, level, pts, n, &x) * w + d * d * lam_tt;
+        f = coarse_cost(map, level, pts, n, 1u, &x) * w + d * d * lam_tt;
         if (k == -half || f < best_cost) {
             best_cost = f;
             best = x.theta;
@@ -265,25 +266,13 @@ int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg,
         return RSM_ERR_INVAL;
     }
     for (a = -fan; a <= fan; ++a) {
-        const float th = rsm_wrap_angle(x0->theta + (float)a * cfg->search_step_rad);
-        const float c = rsm_cosf(th);
-        const float sn = rsm_sinf(th);
+        rsm_pose_t x;
+        x.theta = rsm_wrap_angle(x0->theta + (float)a * cfg->search_step_rad);
         for (j = -half; j <= half; ++j) {
             for (i = -half; i <= half; ++i) {
-                rsm_pose_t x;
-                float cost = 0.0f;
-                rsm_tmap_cursor_t cur;
-                size_t q;
                 x.x = x0->x + (float)i * step;
                 x.y = x0->y + (float)j * step;
-                x.theta = th;
-                rsm_tmap_cursor_init(&cur, level);
-                for (q = 0; q < n; q += stride) {
-                    const float r = 1.0f - rsm_tmap_occupancy_at(map, &cur, x.x + c * pts[q].x - sn * pts[q].y,
-                                                                 x.y + sn * pts[q].x + c * pts[q].y);
-                    cost += r * r;
-                }
-                keep_candidate(best, cost_of, ij, k, &found, &x, cost, i, j);
+                keep_candidate(best, cost_of, ij, k, &found, &x, coarse_cost(map, level, pts, n, stride, &x), i, j);
             }
         }
     }

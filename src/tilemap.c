@@ -14,8 +14,6 @@
 #define STAMP_MASK 0x1FFFFFFFu
 /* Set in a tile's stamp once one of its cells has reached saturation. */
 #define CONFIRMED 0x20000000u
-#define TILE_MASK RSM_TMAP_TILE_MASK
-#define CELL_LIMIT RSM_TMAP_CELL_LIMIT
 
 rsm_tmap_config_t rsm_tmap_config_default(void)
 {
@@ -211,18 +209,11 @@ static int tile_empty(const rsm_tile_t *t)
     return 1;
 }
 
-typedef rsm_tmap_cursor_t cursor_t;
-
-static void cursor_start(cursor_t *c, uint32_t level)
+void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level)
 {
     memset(c, 0, sizeof *c);
     c->level = level;
     rsm_tmap_cursor_forget(c);
-}
-
-void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level)
-{
-    cursor_start(c, level);
 }
 
 static void set_cell(rsm_tile_t *t, uint32_t i, uint32_t v)
@@ -233,7 +224,8 @@ static void set_cell(rsm_tile_t *t, uint32_t i, uint32_t v)
 
 static int in_range(int32_t gx, int32_t gy)
 {
-    return gx > -CELL_LIMIT && gx < CELL_LIMIT && gy > -CELL_LIMIT && gy < CELL_LIMIT;
+    return gx > -RSM_TMAP_CELL_LIMIT && gx < RSM_TMAP_CELL_LIMIT && gy > -RSM_TMAP_CELL_LIMIT &&
+           gy < RSM_TMAP_CELL_LIMIT;
 }
 
 uint8_t rsm_tmap_value(const rsm_tmap_t *map, uint32_t level, int32_t gx, int32_t gy)
@@ -268,11 +260,11 @@ int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t
         if (!any || y0 < *gy0) {
             *gy0 = y0;
         }
-        if (!any || x0 + TILE_MASK > *gx1) {
-            *gx1 = x0 + TILE_MASK;
+        if (!any || x0 + RSM_TMAP_TILE_MASK > *gx1) {
+            *gx1 = x0 + RSM_TMAP_TILE_MASK;
         }
-        if (!any || y0 + TILE_MASK > *gy1) {
-            *gy1 = y0 + TILE_MASK;
+        if (!any || y0 + RSM_TMAP_TILE_MASK > *gy1) {
+            *gy1 = y0 + RSM_TMAP_TILE_MASK;
         }
         any = 1;
     }
@@ -285,13 +277,13 @@ static int32_t cell_of(float v, float inv_a)
     const float u = rsm_floorf(v * inv_a);
     /* Far beyond the map's range (or NaN): a cell in_range refuses, and no
      * float-to-int conversion that overflows. */
-    return u > -(float)CELL_LIMIT && u < (float)CELL_LIMIT ? (int32_t)u : CELL_LIMIT;
+    return u > -(float)RSM_TMAP_CELL_LIMIT && u < (float)RSM_TMAP_CELL_LIMIT ? (int32_t)u : RSM_TMAP_CELL_LIMIT;
 }
 
 /* Lowers the cells from (x0, y0) towards (x1, y1), stopping margin + 1
  * cells short of the end (Bresenham). Returns the highest value the beam
  * met (before lowering it). */
-static uint32_t clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t dec,
+static uint32_t clear_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t dec,
                        uint32_t margin)
 {
     const int32_t dx = x1 > x0 ? x1 - x0 : x0 - x1;
@@ -344,7 +336,7 @@ static uint32_t clear_beam(rsm_tmap_t *map, cursor_t *c, int32_t x0, int32_t y0,
 }
 
 /* Adds inc to a cell, taking a tile for it if needed. */
-static void add_hit(rsm_tmap_t *map, cursor_t *c, uint32_t level, int32_t gx, int32_t gy, uint32_t inc)
+static void add_hit(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t level, int32_t gx, int32_t gy, uint32_t inc)
 {
     uint32_t s;
     uint32_t i;
@@ -392,12 +384,12 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
         const float inv_a = map->inv_cell[level];
         const int32_t ox = cell_of(origin->x, inv_a);
         const int32_t oy = cell_of(origin->y, inv_a);
-        cursor_t c;
+        rsm_tmap_cursor_t c;
         size_t k;
         if (!in_range(ox, oy)) {
             return RSM_ERR_INVAL;
         }
-        cursor_start(&c, level);
+        rsm_tmap_cursor_init(&c, level);
         if (map->cfg.miss_dec > 0u) {
             for (k = 0; k < n; ++k) {
                 int32_t gx;
@@ -416,7 +408,7 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                 }
             }
         }
-        cursor_start(&c, level);
+        rsm_tmap_cursor_init(&c, level);
         for (k = 0; k < n; ++k) {
             if (!(fabsf(points[k].x) < 1.0e6f && fabsf(points[k].y) < 1.0e6f)) {
                 continue;
@@ -461,8 +453,8 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
 
 float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y)
 {
-    cursor_t c;
-    cursor_start(&c, level);
+    rsm_tmap_cursor_t c;
+    rsm_tmap_cursor_init(&c, level);
     return rsm_tmap_occupancy_at(map, &c, x, y);
 }
 
@@ -476,8 +468,8 @@ float rsm_tmap_occupancy_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x
 
 float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy)
 {
-    cursor_t c;
-    cursor_start(&c, level);
+    rsm_tmap_cursor_t c;
+    rsm_tmap_cursor_init(&c, level);
     return rsm_tmap_sample_at(map, &c, x, y, dx, dy);
 }
 
