@@ -29,6 +29,7 @@ rsm_tmap_config_t rsm_tmap_config_default(void)
     c.unconfirmed_shift = 4u;
     c.wall_level = 1u;
     c.wall_value = 0u;
+    c.wall_echo = 0u;
     return c;
 }
 
@@ -362,23 +363,76 @@ static void add_hit(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t level, int32
     set_cell(t, i, v);
 }
 
+/* Bit of the echo set for a cell (multiplicative hashing of the packed
+ * cell; a collision only lets a phantom through now and then). */
+static uint32_t echo_bit(int32_t gx, int32_t gy)
+{
+    const uint32_t k = (uint32_t)(uint16_t)gx | ((uint32_t)(uint16_t)gy << 16);
+    return (k * 2654435761u) >> (32 - RSM_TMAP_ECHO_LOG2);
+}
+
+/* rsm_tmap_config_t.wall_echo: marks in lone the returns that land neither
+ * within one cell of a saturated cell of level judge nor within one cell of
+ * a return of the previous write, then remembers this write's returns for
+ * the next. */
+static void mark_lone(rsm_tmap_t *map, uint32_t judge, const rsm_point_t *points, size_t n, uint8_t *lone)
+{
+    const float inv_a = map->inv_cell[judge];
+    rsm_tmap_cursor_t c;
+    size_t k;
+    rsm_tmap_cursor_init(&c, judge);
+    for (k = 0; k < n && k < (size_t)RSM_MAX_BEAMS; ++k) {
+        const int32_t gx = cell_of(points[k].x, inv_a);
+        const int32_t gy = cell_of(points[k].y, inv_a);
+        int32_t dx;
+        int32_t dy;
+        int seen = 0;
+        if (!in_range(gx - 1, gy - 1) || !in_range(gx + 1, gy + 1)) {
+            continue; /* refused later as outside */
+        }
+        for (dy = -1; dy <= 1 && !seen; ++dy) {
+            for (dx = -1; dx <= 1 && !seen; ++dx) {
+                seen = rsm_bit_get(map->echo, echo_bit(gx + dx, gy + dy)) ||
+                       rsm_tmap_cell_value(map, &c, gx + dx, gy + dy) >= map->cfg.saturation;
+            }
+        }
+        if (!seen) {
+            rsm_bit_set(lone, k);
+        }
+    }
+    memset(map->echo, 0, sizeof map->echo);
+    for (k = 0; k < n; ++k) {
+        const int32_t gx = cell_of(points[k].x, inv_a);
+        const int32_t gy = cell_of(points[k].y, inv_a);
+        if (in_range(gx, gy)) {
+            rsm_bit_set(map->echo, echo_bit(gx, gy));
+        }
+    }
+}
+
 int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n)
 {
     /* Returns whose beam crossed a wall (a cell at wall_value or above on
      * wall_level) without landing on one: behind a wall the laser cannot
      * see, so the return is a phantom (noise, a reflection) or the wall has
      * gone; either way it is not written until the beams have worn the wall
-     * down. wall_level is written first, so that every level knows. */
+     * down (or, with wall_echo, the last write saw it too). wall_level is
+     * written first, so that every level knows. */
     uint8_t behind[(RSM_MAX_BEAMS + 7) / 8];
+    uint8_t lone[(RSM_MAX_BEAMS + 7) / 8];
     uint32_t judge;
     uint32_t idx;
     memset(behind, 0, sizeof behind);
+    memset(lone, 0, sizeof lone);
     if (map == NULL || origin == NULL || (n > 0u && points == NULL) || !isfinite(origin->x) || !isfinite(origin->y)) {
         return RSM_ERR_INVAL;
     }
     map->stamp = (map->stamp + 1u) & STAMP_MASK;
     map->counters.updates++;
     judge = map->cfg.wall_level < map->cfg.levels ? map->cfg.wall_level : 0u;
+    if (map->cfg.wall_echo != 0u) {
+        mark_lone(map, judge, points, n, lone);
+    }
     for (idx = 0; idx < map->cfg.levels; ++idx) {
         const uint32_t level = idx == 0u ? judge : (idx <= judge ? idx - 1u : idx);
         const float inv_a = map->inv_cell[level];
@@ -402,8 +456,10 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                 if (in_range(gx, gy)) {
                     const uint32_t top = clear_beam(map, &c, ox, oy, gx, gy, map->cfg.miss_dec, map->cfg.clear_margin);
                     if (map->cfg.wall_value > 0u && idx == 0u && top >= map->cfg.wall_value &&
-                        k < (size_t)RSM_MAX_BEAMS && rsm_tmap_cell_value(map, &c, gx, gy) < map->cfg.wall_value) {
+                        k < (size_t)RSM_MAX_BEAMS && (map->cfg.wall_echo == 0u || rsm_bit_get(lone, k)) &&
+                        rsm_tmap_cell_value(map, &c, gx, gy) < map->cfg.wall_value) {
                         rsm_bit_set(behind, k);
+                        map->counters.behind++;
                     }
                 }
             }
@@ -414,9 +470,6 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
                 continue;
             }
             if (k < (size_t)RSM_MAX_BEAMS && rsm_bit_get(behind, k)) {
-                if (idx == 0u) {
-                    map->counters.behind++;
-                }
                 continue;
             }
             if (level >= map->cfg.splat_from) {

@@ -74,6 +74,13 @@
 #define RSM_TMAP_HASH_LOG2 12
 #endif
 
+/* log2 of the bits that remember where the last map write's returns were
+ * (rsm_tmap_config_t.wall_echo, docs/map.md): 2^14 bits = 2 KiB hold a
+ * scan's few hundred cells with few collisions. */
+#ifndef RSM_TMAP_ECHO_LOG2
+#define RSM_TMAP_ECHO_LOG2 14
+#endif
+
 /* ---- key points and matches ------------------------------------------- */
 
 /* Harris key points kept per image (strongest first). 8 bytes each. */
@@ -173,6 +180,7 @@ RSM_STATIC_ASSERT(image_cells_positive, RSM_IMAGE_MAX_CELLS >= RSM_MAX_BEAMS);
 RSM_STATIC_ASSERT(tmap_tile_range, RSM_TMAP_TILE_LOG2 >= 2 && RSM_TMAP_TILE_LOG2 <= 7);
 RSM_STATIC_ASSERT(tmap_levels_range, RSM_TMAP_LEVELS >= 1 && RSM_TMAP_LEVELS <= 4);
 RSM_STATIC_ASSERT(tmap_tiles_range, RSM_TMAP_TILES >= 4 && RSM_TMAP_TILES < 65535);
+RSM_STATIC_ASSERT(tmap_echo_range, RSM_TMAP_ECHO_LOG2 >= 6 && RSM_TMAP_ECHO_LOG2 <= 20);
 RSM_STATIC_ASSERT(tmap_hash_room, RSM_TMAP_HASH_LOG2 <= 16 && (1L << RSM_TMAP_HASH_LOG2) * 3L >= 4L * RSM_TMAP_TILES);
 RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
 RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONAR <= 255);
@@ -190,9 +198,9 @@ RSM_STATIC_ASSERT(rev_odom_depth_range, RSM_REV_ODOM_DEPTH >= 2 && RSM_REV_ODOM_
 #define RSM_CONFIG_MIX_(h, v) ((((unsigned long)(h) ^ (unsigned long)(v)) * 16777619ul) & 0xFFFFFFFFul)
 #define RSM_CONFIG_FINGERPRINT                                                                                      \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
-    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
+    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(2166136261ul, RSM_MAX_BEAMS), RSM_MAP_SIZE_LOG2),                  \
-    RSM_IMAGE_MAX_CELLS), RSM_TMAP_TILE_LOG2), RSM_TMAP_LEVELS), RSM_TMAP_TILES), RSM_TMAP_HASH_LOG2),                \
+    RSM_IMAGE_MAX_CELLS), RSM_TMAP_TILE_LOG2), RSM_TMAP_LEVELS), RSM_TMAP_TILES), RSM_TMAP_HASH_LOG2), RSM_TMAP_ECHO_LOG2), \
     RSM_MAX_KEYPOINTS), RSM_MAX_CANDIDATES), RSM_MAX_MATCHES), RSM_ICP_MAX_POINTS), RSM_ARIA_MAX_PACKET),             \
     RSM_ARIA_MAX_SONAR), RSM_ARIA_STR_SIZE), RSM_LMS_MAX_TELEGRAM), RSM_LINK_RX_CHUNK), RSM_SYNC_DEPTH),          \
     RSM_REV_ODOM_DEPTH)

@@ -41,6 +41,7 @@ extern "C" {
 #define RSM_TMAP_HASH (1 << RSM_TMAP_HASH_LOG2)
 #define RSM_TMAP_NONE 0xFFFFu
 #define RSM_TMAP_MAX_VALUE 15u
+#define RSM_TMAP_ECHO_BYTES ((1u << RSM_TMAP_ECHO_LOG2) / 8u)
 
 typedef struct rsm_tile {
     int16_t tx;                       /* tile column and row at its level */
@@ -73,6 +74,11 @@ typedef struct rsm_tmap_config {
                             * beam crossed one, and that does not itself land on a wall, is
                             * not written; 0 = off. Default 0 (off; 8 is the value measured
                             * in docs/map.md) */
+    uint8_t wall_echo;     /* 1: a return behind a wall is written all the same if the previous
+                            * write had a return within one wall_level cell of it (its echo),
+                            * or it lands within one cell of a saturated one: a phantom is
+                            * random and comes once, a surface seen through a doorway or
+                            * along a grazed wall comes again from the next pose. Default 0 */
 } rsm_tmap_config_t;
 
 rsm_tmap_config_t rsm_tmap_config_default(void);
@@ -82,7 +88,8 @@ typedef struct rsm_tmap_counters {
     uint32_t allocated;     /* tiles taken from free slots */
     uint32_t evicted;       /* tiles whose slot was reused for another */
     uint32_t freed;         /* tiles given back when beams had cleared every cell */
-    uint32_t behind;        /* returns not written: their beam crossed a wall */
+    uint32_t behind;        /* returns not written: their beam crossed a wall (and, with
+                             * wall_echo, the last write saw nothing there) */
     uint32_t dropped;       /* returns lost because every slot was in use by the update */
     uint32_t outside;       /* returns beyond the tile coordinate range */
 } rsm_tmap_counters_t;
@@ -96,6 +103,7 @@ typedef struct rsm_tmap {
     uint16_t level_used[RSM_TMAP_LEVELS];  /* of those, per level */
     uint16_t hash[RSM_TMAP_HASH];      /* slot of a key, linear probing; RSM_TMAP_NONE empty */
     rsm_tile_t tile[RSM_TMAP_TILES];
+    uint8_t echo[RSM_TMAP_ECHO_BYTES];  /* hashed wall_level cells of the last write's returns */
     rsm_tmap_counters_t counters;
 } rsm_tmap_t;
 

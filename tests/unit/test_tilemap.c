@@ -401,6 +401,35 @@ void test_tmap_update_should_not_write_returns_behind_a_wall(void)
     TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(2.05f), 0));
 }
 
+void test_tmap_update_should_write_returns_behind_a_wall_that_the_last_write_saw_too(void)
+{
+    TEST_ASSERT_EQUAL_UINT8(0u, cfg.wall_echo); /* off by default */
+    cfg.wall_value = 8u;
+    cfg.wall_echo = 1u;
+    init();
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    /* Seen once behind the wall: refused, as without the echo rule... */
+    update_one(0.05f, 0.05f, 2.05f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT32(1u, map.counters.behind);
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell(2.05f), 0));
+    TEST_ASSERT_TRUE(rsm_tmap_value(&map, 0u, cell(1.05f), 0) >= cfg.wall_value);
+    /* ...seen again by the next write (through a doorway, say): written. */
+    update_one(0.05f, 0.05f, 2.05f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT32(1u, map.counters.behind);
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(2.05f), 0));
+    /* Only the last write counts: a return two writes later, with the wall
+     * seen in between, is alone again. */
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 2.55f, 0.05f);
+    update_one(0.05f, 0.05f, 1.05f, 0.05f);
+    update_one(0.05f, 0.05f, 2.55f, 0.05f);
+    TEST_ASSERT_EQUAL_UINT32(3u, map.counters.behind);
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell(2.55f), 0));
+}
+
 void test_tmap_update_should_judge_walls_on_wall_level_for_every_level(void)
 {
     /* Two levels, walls judged on the coarse one (no sharing of returns,
@@ -542,6 +571,7 @@ int main(void)
     RUN_TEST(test_tmap_update_should_drop_returns_when_every_tile_is_written_by_it);
     RUN_TEST(test_tmap_update_should_free_a_tile_that_beams_have_cleared);
     RUN_TEST(test_tmap_update_should_not_write_returns_behind_a_wall);
+    RUN_TEST(test_tmap_update_should_write_returns_behind_a_wall_that_the_last_write_saw_too);
     RUN_TEST(test_tmap_update_should_judge_walls_on_wall_level_for_every_level);
     RUN_TEST(test_tmap_pool_should_keep_coarse_tiles_longer_with_age_shift);
     RUN_TEST(test_tmap_sample_should_interpolate_and_give_the_gradient);
