@@ -26,7 +26,7 @@ rsm_tmap_config_t rsm_tmap_config_default(void)
     c.clear_margin = 1u;
     c.splat_from = 1u;
     c.age_shift = 2u;
-    c.unconfirmed_shift = 4u;
+    c.unconfirmed_shift = 8u;
     c.wall_level = 1u;
     c.wall_value = 0u;
     c.wall_echo = 0u;

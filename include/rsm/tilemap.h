@@ -68,7 +68,7 @@ typedef struct rsm_tmap_config {
                             * area. Default 2 */
     uint8_t unconfirmed_shift;  /* ... and 2^unconfirmed_shift times more while none of its cells
                             * has reached saturation (a stray return, most likely a phantom,
-                            * goes before the places seen minutes ago), at most 16. Default 4 */
+                            * goes before the places seen minutes ago), at most 16. Default 8 */
     uint8_t wall_level;    /* level that judges whether a beam crossed a wall; default 1 */
     uint8_t wall_value;    /* a cell at or above this on wall_level is a wall: a return whose
                             * beam crossed one, and that does not itself land on a wall, is
