@@ -1,6 +1,6 @@
 /* Point-to-point ICP baseline and the closed-form 2-D rigid fit it shares
- * with the RANSAC refinement; see include/rsm/icp.h for the contract. */
-#include "rsm/icp.h"
+ * with the RANSAC refinement; see src/icp.h for the contract. */
+#include "icp.h"
 
 #include <math.h>
 

@@ -5,7 +5,16 @@
 
 #include "rsm/status.h"
 #include "bits.h"
+#include "ekf.h"
 #include "fmath.h"
+#include "grid.h"
+#include "harris.h"
+#include "icp.h"
+#include "map.h"
+#include "mapmatch.h"
+#include "match.h"
+#include "ransac.h"
+#include "tilemap.h"
 
 rsm_localizer_config_t rsm_localizer_config_default(void)
 {

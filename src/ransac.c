@@ -1,8 +1,8 @@
-#include "rsm/ransac.h"
+#include "ransac.h"
 
 #include <math.h>
 
-#include "rsm/icp.h"
+#include "icp.h"
 #include "rsm/status.h"
 #include "fmath.h"
 

@@ -1,11 +1,11 @@
 /* Persistent multi-resolution occupancy map in a fixed tile pool; see
  * include/rsm/tilemap.h for the contract and docs/map.md for the design. */
-#include "rsm/tilemap.h"
+#include "tilemap.h"
 
 #include <math.h>
 #include <string.h>
 
-#include "rsm/grid.h"
+#include "grid.h"
 #include "rsm/status.h"
 #include "bits.h"
 #include "fmath.h"

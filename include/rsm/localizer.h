@@ -13,18 +13,10 @@
 #include <stdint.h>
 
 #include "rsm/config.h"
-#include "rsm/ekf.h"
 #include "rsm/geom.h"
-#include "rsm/grid.h"
-#include "rsm/harris.h"
-#include "rsm/icp.h"
-#include "rsm/map.h"
-#include "rsm/mapmatch.h"
-#include "rsm/match.h"
+#include "rsm/localizer_parts.h"
 #include "rsm/odometry.h"
-#include "rsm/ransac.h"
 #include "rsm/scan.h"
-#include "rsm/tilemap.h"
 
 #ifdef __cplusplus
 extern "C" {

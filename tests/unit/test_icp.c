@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "rsm/icp.h"
+#include "icp.h"
 #include "rsm/status.h"
 #include "test_support.h"
 #include "unity.h"

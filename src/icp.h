@@ -10,18 +10,11 @@
 
 #include "rsm/config.h"
 #include "rsm/geom.h"
+#include "rsm/localizer_parts.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-typedef struct rsm_icp_config {
-    uint16_t max_iterations;     /* default 30 (the paper's comparison) */
-    float max_pair_dist_m;       /* pairs farther apart are ignored; default 1.0 */
-    float converged_m;           /* stop when the step moves less; default 1e-4 */
-    float converged_rad;         /* and turns less; default 1e-4 */
-    uint16_t min_pairs;          /* fewer pairs -> RSM_ERR_DEGENERATE; default 10 */
-} rsm_icp_config_t;
 
 rsm_icp_config_t rsm_icp_config_default(void);
 
@@ -31,14 +24,6 @@ typedef struct rsm_icp_result {
     uint16_t pairs;         /* pairs used in the last iteration */
     float rms_m;            /* RMS pair distance after the last iteration */
 } rsm_icp_result_t;
-
-typedef struct rsm_icp {
-    const rsm_icp_config_t *cfg;              /* kept by pointer */
-    rsm_point_t ref[RSM_ICP_MAX_POINTS];      /* world frame */
-    size_t ref_count;
-    rsm_point_t work[RSM_ICP_MAX_POINTS];     /* scratch: reference partner of each
-                                               * current point (NaN: none) */
-} rsm_icp_t;
 
 /* Validates cfg (max_iterations >= 1, max_pair_dist_m > 0, non-negative
  * convergence thresholds, min_pairs <= RSM_ICP_MAX_POINTS; a min_pairs below 2

@@ -30,74 +30,13 @@
 
 #include "rsm/config.h"
 #include "rsm/geom.h"
+#include "rsm/localizer_parts.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-#define RSM_TMAP_TILE_SIDE (1 << RSM_TMAP_TILE_LOG2)
-#define RSM_TMAP_TILE_CELLS (RSM_TMAP_TILE_SIDE * RSM_TMAP_TILE_SIDE)
-#define RSM_TMAP_TILE_BYTES (RSM_TMAP_TILE_CELLS / 2)
-#define RSM_TMAP_HASH (1 << RSM_TMAP_HASH_LOG2)
-#define RSM_TMAP_NONE 0xFFFFu
-#define RSM_TMAP_MAX_VALUE 15u
-
-typedef struct rsm_tile {
-    int16_t tx;                       /* tile column and row at its level */
-    int16_t ty;
-    uint32_t stamp;                   /* update that last wrote a return into it (bits 0-28); bit 29
-                                       * set once a cell reached saturation; level in bits 30-31 */
-    uint8_t cell[RSM_TMAP_TILE_BYTES];  /* two 4-bit cells per byte, row-major */
-} rsm_tile_t;
-
-typedef struct rsm_tmap_config {
-    float cell_m;          /* finest cell side, metres; default RSM_TMAP_CELL_M (0.05) */
-    uint8_t levels;        /* resolutions in use, 1..RSM_TMAP_LEVELS; default RSM_TMAP_LEVELS */
-    uint8_t hit_inc;       /* added by a return; default 4 */
-    uint8_t miss_dec;      /* taken by a beam passing through; default 1 */
-    uint8_t saturation;    /* value read as fully occupied; default 8 */
-    uint8_t clear_margin;  /* cells before a return that its beam does not clear; default 1 */
-    uint8_t splat_from;    /* on this level and coarser ones a return's increment is shared
-                            * among the four cells around it by bilinear weights, so that a
-                            * wall reads where it is, not at a cell centre up to half a
-                            * (coarse) cell away; finer levels give it all to the return's
-                            * cell, which keeps walls one cell thick. Default 1 */
-    uint8_t age_shift;     /* when the pool is full, a tile's age counts 2^-(age_shift * level):
-                            * 2 keeps a coarse tile as long as the fine ones covering the same
-                            * area. Default 2 */
-    uint8_t unconfirmed_shift;  /* ... and 2^unconfirmed_shift times more while none of its cells
-                            * has reached saturation (a stray return, most likely a phantom,
-                            * goes before the places seen minutes ago), at most 16. Default 4 */
-    uint8_t wall_level;    /* level that judges whether a beam crossed a wall; default 1 */
-    uint8_t wall_value;    /* a cell at or above this on wall_level is a wall: a return whose
-                            * beam crossed one, and that does not itself land on a wall, is
-                            * not written; 0 = off. Default 0 (off; 8 is the value measured
-                            * in docs/map.md) */
-} rsm_tmap_config_t;
-
 rsm_tmap_config_t rsm_tmap_config_default(void);
-
-typedef struct rsm_tmap_counters {
-    uint32_t updates;       /* scans written */
-    uint32_t allocated;     /* tiles taken from free slots */
-    uint32_t evicted;       /* tiles whose slot was reused for another */
-    uint32_t freed;         /* tiles given back when beams had cleared every cell */
-    uint32_t behind;        /* returns not written: their beam crossed a wall */
-    uint32_t dropped;       /* returns lost because every slot was in use by the update */
-    uint32_t outside;       /* returns beyond the tile coordinate range */
-} rsm_tmap_counters_t;
-
-typedef struct rsm_tmap {
-    rsm_tmap_config_t cfg;             /* copied at init */
-    float occ[RSM_TMAP_MAX_VALUE + 1u];  /* occupancy in [0, 1] of each cell value */
-    float inv_cell[RSM_TMAP_LEVELS];   /* 1 / cell side of each level */
-    uint32_t stamp;                    /* update counter (29 bits used) */
-    uint16_t used;                     /* slots in use */
-    uint16_t level_used[RSM_TMAP_LEVELS];  /* of those, per level */
-    uint16_t hash[RSM_TMAP_HASH];      /* slot of a key, linear probing; RSM_TMAP_NONE empty */
-    rsm_tile_t tile[RSM_TMAP_TILES];
-    rsm_tmap_counters_t counters;
-} rsm_tmap_t;
 
 /* Empties the map. RSM_ERR_INVAL for a bad config (cell not positive,
  * levels out of range, zero increments, saturation beyond 15). */
