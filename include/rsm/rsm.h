@@ -10,6 +10,7 @@
 #include "rsm/ld06.h"
 #include "rsm/ldlidar.h"
 #include "rsm/lidar.h"
+#include "rsm/link_poll.h"
 #include "rsm/lms.h"
 #include "rsm/localizer.h"
 #include "rsm/odometry.h"

@@ -52,6 +52,7 @@
 #include <stdint.h>
 
 #include "rsm/hal.h"
+#include "rsm/link_poll.h"
 #include "rsm/lms.h"
 #include "rsm/scan.h"
 #include "rsm/status.h"

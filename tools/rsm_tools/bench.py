@@ -2500,7 +2500,7 @@ def _kib(v: Optional[int]) -> str:
     return "n/a" if v is None else f"{v / 1024:.1f}"
 
 
-DRIVER_OBJECTS = ("aria", "lms", "p3dx", "sicklms", "hal")
+DRIVER_OBJECTS = ("aria", "lms", "p3dx", "sicklms", "hal", "link_poll")
 
 
 def object_kind(obj: str) -> str:
