@@ -16,6 +16,14 @@
 extern "C" {
 #endif
 
+/* 1: the baseline is built (CMake option RSM_ICP, on for host builds). 0:
+ * only its config remains; rsm_icp_init and the rest return RSM_ERR_NOSYS,
+ * so rsm_localizer_init refuses RSM_METHOD_ICP with it and no ICP code is
+ * linked into a firmware image. */
+#ifndef RSM_WITH_ICP
+#define RSM_WITH_ICP 1
+#endif
+
 rsm_icp_config_t rsm_icp_config_default(void);
 
 typedef struct rsm_icp_result {
@@ -47,16 +55,6 @@ int rsm_icp_set_reference(rsm_icp_t *icp, const rsm_point_t *pts, size_t n);
  * pairs at the returned pose. Reentrant for distinct states. */
 int rsm_icp_align(rsm_icp_t *icp, const rsm_point_t *pts, size_t n, const rsm_pose_t *guess,
                   rsm_icp_result_t *res);
-
-/* Least-squares rigid transform mapping src[i] onto dst[i] (w may be NULL
- * for unit weights; pairs of weight 0 are ignored): closed form for 2-D.
- * Writes *t such that dst ~= t (+) src. RSM_ERR_DEGENERATE (*t untouched) for
- * fewer than 2 pairs of positive weight, or when the rotation is undetermined
- * (all src or all dst points coincide, or the cost is flat in the angle).
- * RSM_ERR_INVAL for NULL arguments, non-finite points, or weights that are
- * negative or not finite. Shared by ICP and the RANSAC refinement. */
-int rsm_rigid_fit(const rsm_point_t *src, const rsm_point_t *dst, const float *w, size_t n,
-                  rsm_pose_t *t);
 
 #ifdef __cplusplus
 }

@@ -2,9 +2,9 @@
 
 #include <math.h>
 
-#include "icp.h"
 #include "rsm/status.h"
 #include "fmath.h"
+#include "rigid.h"
 
 rsm_ransac_config_t rsm_ransac_config_default(void)
 {

@@ -6,6 +6,7 @@
 
 #include "rsm/config.h"
 #include "icp.h"
+#include "rigid.h"
 #include "rsm/status.h"
 #include "test_support.h"
 #include "unity.h"

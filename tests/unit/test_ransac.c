@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "icp.h"
+#include "rigid.h"
 #include "ransac.h"
 #include "rsm/status.h"
 #include "synth.h"
