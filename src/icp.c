@@ -5,6 +5,7 @@
 #include <math.h>
 
 #include "rsm/status.h"
+#include "check.h"
 #include "fmath.h"
 #include "rigid.h"
 
@@ -22,16 +23,22 @@ rsm_icp_config_t rsm_icp_config_default(void)
     return c;
 }
 
+int rsm_icp_config_check(const rsm_icp_config_t *cfg, const char **field)
+{
+    RSM_CHECK_FIELD(cfg != NULL, "icp");
+    RSM_CHECK_FIELD(cfg->max_iterations >= 1u, "icp.max_iterations");
+    RSM_CHECK_FIELD(isfinite(cfg->max_pair_dist_m) && cfg->max_pair_dist_m > 0.0f, "icp.max_pair_dist_m");
+    RSM_CHECK_FIELD(isfinite(cfg->converged_m) && cfg->converged_m >= 0.0f, "icp.converged_m");
+    RSM_CHECK_FIELD(isfinite(cfg->converged_rad) && cfg->converged_rad >= 0.0f, "icp.converged_rad");
+    RSM_CHECK_FIELD(cfg->min_pairs <= RSM_ICP_MAX_POINTS, "icp.min_pairs");
+    return RSM_OK;
+}
+
 #if RSM_WITH_ICP
 
 int rsm_icp_init(rsm_icp_t *icp, const rsm_icp_config_t *cfg)
 {
-    if (icp == NULL || cfg == NULL) {
-        return RSM_ERR_INVAL;
-    }
-    if (cfg->max_iterations < 1u || !(isfinite(cfg->max_pair_dist_m) && cfg->max_pair_dist_m > 0.0f) ||
-        !(isfinite(cfg->converged_m) && cfg->converged_m >= 0.0f) ||
-        !(isfinite(cfg->converged_rad) && cfg->converged_rad >= 0.0f) || cfg->min_pairs > RSM_ICP_MAX_POINTS) {
+    if (icp == NULL || rsm_icp_config_check(cfg, NULL) != RSM_OK) {
         return RSM_ERR_INVAL;
     }
     icp->cfg = cfg;

@@ -33,6 +33,11 @@ typedef struct rsm_icp_result {
     float rms_m;            /* RMS pair distance after the last iteration */
 } rsm_icp_result_t;
 
+/* RSM_OK if cfg is usable, else RSM_ERR_INVAL naming the first bad field
+ * in *field (field may be NULL; see src/check.h). Reads only; checked
+ * even when the baseline is not built. */
+int rsm_icp_config_check(const rsm_icp_config_t *cfg, const char **field);
+
 /* Validates cfg (max_iterations >= 1, max_pair_dist_m > 0, non-negative
  * convergence thresholds, min_pairs <= RSM_ICP_MAX_POINTS; a min_pairs below 2
  * acts as 2) and clears the reference. RSM_OK or RSM_ERR_INVAL. */

@@ -39,6 +39,10 @@ typedef struct rsm_ransac_result {
     float rms_m;              /* RMS inlier residual after refinement */
 } rsm_ransac_result_t;
 
+/* RSM_OK if cfg is usable, else RSM_ERR_INVAL naming the first bad field
+ * in *field (field may be NULL; see src/check.h). Reads only. */
+int rsm_ransac_config_check(const rsm_ransac_config_t *cfg, const char **field);
+
 /* Validates cfg (positive tolerances, 0 < confidence < 1, budget >= 1,
  * min_support >= 2) and seeds the PRNG. RSM_OK or RSM_ERR_INVAL. */
 int rsm_ransac_init(rsm_ransac_t *rs, const rsm_ransac_config_t *cfg);

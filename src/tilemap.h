@@ -38,6 +38,10 @@ extern "C" {
 
 rsm_tmap_config_t rsm_tmap_config_default(void);
 
+/* RSM_OK if cfg is usable, else RSM_ERR_INVAL naming the first bad field
+ * in *field (field may be NULL; see src/check.h). Reads only. */
+int rsm_tmap_config_check(const rsm_tmap_config_t *cfg, const char **field);
+
 /* Empties the map. RSM_ERR_INVAL for a bad config (cell not positive,
  * levels out of range, zero increments, saturation beyond 15). */
 int rsm_tmap_init(rsm_tmap_t *map, const rsm_tmap_config_t *cfg);

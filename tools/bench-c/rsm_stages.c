@@ -283,7 +283,9 @@ static int start_cb(void *ctx, const carmen_record_t *rec)
 {
     run_t *r = (run_t *)ctx;
     if (rsm_localizer_init(&r->loc, &r->cfg, &rec->odom, NULL) != RSM_OK) {
-        fprintf(stderr, "rsm-stages: invalid configuration\n");
+        const char *field = "none (the start pose is out of range)";
+        (void)rsm_localizer_config_check(&r->cfg, &field);
+        fprintf(stderr, "rsm-stages: invalid configuration: the localizer refuses its field %s\n", field);
         return -1;
     }
     r->initialised = 1;

@@ -306,8 +306,13 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
     start.y = (float)(y - nav->off_y);
     start.theta = rsm_wrap_angle((float)th);
     if (rsm_localizer_init(&nav->loc, &nav->cfg, &start, NULL) != RSM_OK) {
-        fprintf(stderr, "rsm-nav: invalid configuration (a --set value, the laser pose or the odometry"
-                        " geometry is out of range)\n");
+        const char *field = NULL;
+        if (rsm_localizer_config_check(&nav->cfg, &field) != RSM_OK) {
+            fprintf(stderr, "rsm-nav: invalid configuration: the localizer refuses its field %s (a --set value,"
+                            " the laser pose or the odometry geometry is out of range)\n", field);
+        } else {
+            fprintf(stderr, "rsm-nav: invalid configuration (the start pose is out of range)\n");
+        }
         return -1;
     }
     if (rsm_sync_init(&nav->sync, &nav->loc, &nav->sync_cfg, on_fused, nav) != RSM_OK) {
