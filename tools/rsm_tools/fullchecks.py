@@ -185,10 +185,10 @@ def check_rerun(label: str, nav: Path, log: Path, traj: Path, work: Path) -> Lis
 def capture_poses(capf: Path, traj: Path) -> List[Tuple[float, float, float, float]]:
     """A capture run's poses, each at its scan's stamp in the log."""
     stamps = [t / 1e6 for t in convert.original_scan_stamps(capf)]
-    rows = [l.split() for l in traj.read_text().splitlines() if l and not l.startswith("#")]
+    rows = ev.read_poses(traj)[0]
     if len(rows) != len(stamps):
         raise RuntimeError(f"{traj}: {len(rows)} poses for {len(stamps)} scans")
-    return [(stamps[i], float(r[1]), float(r[2]), float(r[3])) for i, r in enumerate(rows)]
+    return [(stamps[i], r.x, r.y, r.theta) for i, r in enumerate(rows)]
 
 
 def check_capture_path(label: str, nav: Path, log: Path, relations: List[ev.Relation],

@@ -542,15 +542,8 @@ def scan_order(traj: Path) -> Dict[float, int]:
     """Scan index (file order) of every timestamp of a trajectory that has one
     line per scan (rsm-nav writes one); the first occurrence counts."""
     out: Dict[float, int] = {}
-    k = 0
-    with open(traj, encoding="utf-8") as fh:
-        for line in fh:
-            s = line.strip()
-            if not s or s.startswith("#"):
-                continue
-            t = round(float(s.split()[0]), 6)
-            out.setdefault(t, k)
-            k += 1
+    for k, p in enumerate(ev.read_poses(traj)[0]):
+        out.setdefault(round(p.t, 6), k)
     return out
 
 
