@@ -12,10 +12,15 @@ import pytest
 from conftest import REPO_ROOT
 
 
+# The commands only the scripts and the tests run, as python -m rsm_tools.NAME.
+INTERNAL = [("rsm-m4", "rsm_tools.m4", "main"), ("rsm-sweep", "rsm_tools.sweep", "main"),
+            ("rsm-fullchecks", "rsm_tools.fullchecks", "main")]
+
+
 def commands():
     text = (REPO_ROOT / "tools" / "pyproject.toml").read_text(encoding="utf-8")
     block = text.split("[project.scripts]", 1)[1].split("\n[", 1)[0]
-    return re.findall(r'^([a-z0-9-]+)\s*=\s*"([a-z0-9_.]+):([a-z_]+)"', block, re.M)
+    return re.findall(r'^([a-z0-9-]+)\s*=\s*"([a-z0-9_.]+):([a-z_]+)"', block, re.M) + INTERNAL
 
 
 class _Parsed(Exception):
@@ -56,8 +61,11 @@ def test_the_commands_are_listed():
 
 @pytest.mark.parametrize("command,module,func", commands())
 def test_module_is_named_after_the_command(command, module, func):
-    """rsm-NAME is rsm_tools.NAME (rsm-bench-report: rsm_tools.bench.report)."""
+    """rsm-NAME is rsm_tools.NAME (rsm-bench-report: rsm_tools.bench.report),
+    and the command calls itself so."""
     assert module == "rsm_tools." + command[len("rsm-"):].replace("-", "."), (command, module)
+    mod = importlib.import_module(module)
+    assert all(p.prog.split()[0] == command for p in parsers_of(mod, func)), command
 
 
 @pytest.mark.parametrize("command,module,func", commands())

@@ -296,7 +296,8 @@ def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], wor
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    from .bench import discover_logs, find_root, shared_dir  # one definition, the bench's
+    from .bench.measure import discover_logs, shared_dir  # one definition, the bench's
+    from .bench.common import find_root
 
     ap = argparse.ArgumentParser(prog="rsm-fullchecks", description=__doc__.split("\n\n")[0])
     ap.add_argument("--nav", type=Path, required=True, help="the rsm-nav to check (a Release build)")
@@ -308,7 +309,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     logs = discover_logs(shared / "data")
     if not logs:
         print(f"rsm-fullchecks: no log in {shared / 'data'} (set RSM_SHARED_DIR or --shared)", file=sys.stderr)
-        return 2
+        return 1
     with tempfile.TemporaryDirectory() as tmp:
         res = run_all(shared, a.nav, logs, Path(tmp), root, say=lambda s: print(f"rsm-fullchecks: {s}",
                                                                                   file=sys.stderr, flush=True))
