@@ -1,6 +1,6 @@
-/* 3-state EKF over (x, y, theta); see include/rsm/ekf.h for the contract.
+/* 3-state EKF over (x, y, theta); see src/ekf.h for the contract.
  * All algebra is explicit 3x3, row-major, single precision. */
-#include "rsm/ekf.h"
+#include "ekf.h"
 
 #include <math.h>
 #include <stddef.h>

@@ -1,4 +1,4 @@
-#include "rsm/grid.h"
+#include "grid.h"
 
 #include <math.h>
 #include <string.h>

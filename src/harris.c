@@ -1,4 +1,4 @@
-#include "rsm/harris.h"
+#include "harris.h"
 
 #include "rsm/status.h"
 

@@ -1,22 +1,16 @@
-/* Point-to-point ICP baseline and the closed-form 2-D rigid fit it shares
- * with the RANSAC refinement; see include/rsm/icp.h for the contract. */
-#include "rsm/icp.h"
+/* Point-to-point ICP baseline, the paper's comparison; see src/icp.h for
+ * the contract. Built only with RSM_WITH_ICP (CMake option RSM_ICP). */
+#include "icp.h"
 
 #include <math.h>
 
 #include "rsm/status.h"
+#include "check.h"
 #include "fmath.h"
+#include "rigid.h"
 
 /* Pair counts are reported in uint16_t. */
 RSM_STATIC_ASSERT(icp_points_fit_u16, RSM_ICP_MAX_POINTS >= 2 && RSM_ICP_MAX_POINTS <= 65535);
-
-/* A point set whose RMS spread about its centroid is below this fraction of
- * its largest coordinate is one point as far as float can tell (the spread
- * would be rounding noise), so it fixes no rotation. */
-#define RSM_FIT_MIN_SPREAD 1e-5f
-/* When the rotation-fixing sums vanish against Cauchy-Schwarz's bound the
- * cost is flat in the angle (e.g. a point set and its mirror image). */
-#define RSM_FIT_MIN_CORR 1e-6f
 
 rsm_icp_config_t rsm_icp_config_default(void)
 {
@@ -29,143 +23,22 @@ rsm_icp_config_t rsm_icp_config_default(void)
     return c;
 }
 
-static int point_finite(const rsm_point_t *p)
+int rsm_icp_config_check(const rsm_icp_config_t *cfg, const char **field)
 {
-    return isfinite(p->x) && isfinite(p->y);
-}
-
-/* The fit proper. Pair i is src[i] (first mapped by src_pose when that is
- * not NULL) onto dst[i]; pairs whose dst is not finite (ICP's "unpaired"
- * mark) or whose weight is zero are skipped. Inputs are otherwise trusted:
- * the public entry points validate them. Two passes, so that the second
- * moments are taken about the centroids and do not cancel in float when the
- * points sit far from the origin. */
-static int fit_core(const rsm_point_t *src, const rsm_pose_t *src_pose, const rsm_point_t *dst, const float *w,
-                    size_t n, rsm_pose_t *t)
-{
-    size_t i;
-    size_t used = 0;
-    float wsum = 0.0f;
-    float scx = 0.0f;
-    float scy = 0.0f;
-    float dcx = 0.0f;
-    float dcy = 0.0f;
-    float smag = 0.0f;
-    float dmag = 0.0f;
-    float dot = 0.0f;
-    float cross = 0.0f;
-    float ss = 0.0f;
-    float sd = 0.0f;
-    float th;
-    float c;
-    float s;
-    float lim;
-
-    for (i = 0; i < n; ++i) {
-        const float wi = w != NULL ? w[i] : 1.0f;
-        rsm_point_t p;
-        if (!point_finite(&dst[i]) || !(wi > 0.0f)) {
-            continue;
-        }
-        p = src_pose != NULL ? rsm_pose_apply(src_pose, &src[i]) : src[i];
-        wsum += wi;
-        scx += wi * p.x;
-        scy += wi * p.y;
-        dcx += wi * dst[i].x;
-        dcy += wi * dst[i].y;
-        smag = fmaxf(smag, fmaxf(fabsf(p.x), fabsf(p.y)));
-        dmag = fmaxf(dmag, fmaxf(fabsf(dst[i].x), fabsf(dst[i].y)));
-        ++used;
-    }
-    if (used < 2u || !(wsum > 0.0f)) {
-        return RSM_ERR_DEGENERATE;
-    }
-    scx /= wsum;
-    scy /= wsum;
-    dcx /= wsum;
-    dcy /= wsum;
-
-    for (i = 0; i < n; ++i) {
-        const float wi = w != NULL ? w[i] : 1.0f;
-        rsm_point_t p;
-        float ax;
-        float ay;
-        float bx;
-        float by;
-        if (!point_finite(&dst[i]) || !(wi > 0.0f)) {
-            continue;
-        }
-        p = src_pose != NULL ? rsm_pose_apply(src_pose, &src[i]) : src[i];
-        ax = p.x - scx;
-        ay = p.y - scy;
-        bx = dst[i].x - dcx;
-        by = dst[i].y - dcy;
-        dot += wi * (ax * bx + ay * by);
-        cross += wi * (ax * by - ay * bx);
-        ss += wi * (ax * ax + ay * ay);
-        sd += wi * (bx * bx + by * by);
-    }
-
-    lim = RSM_FIT_MIN_SPREAD * smag;
-    if (ss <= wsum * lim * lim) {
-        return RSM_ERR_DEGENERATE;
-    }
-    lim = RSM_FIT_MIN_SPREAD * dmag;
-    if (sd <= wsum * lim * lim) {
-        return RSM_ERR_DEGENERATE;
-    }
-    if (sqrtf(dot * dot + cross * cross) <= RSM_FIT_MIN_CORR * sqrtf(ss) * sqrtf(sd)) {
-        return RSM_ERR_DEGENERATE;
-    }
-
-    /* The angle that maximises sum w (R a) . b, i.e. minimises the squared
-     * residuals; atan2 keeps the quadrant (any angle, not only +-90 deg). */
-    th = rsm_atan2f(cross, dot);
-    c = rsm_cosf(th);
-    s = rsm_sinf(th);
-    t->x = dcx - (c * scx - s * scy);
-    t->y = dcy - (s * scx + c * scy);
-    t->theta = rsm_wrap_angle(th);
-    if (!isfinite(t->x) || !isfinite(t->y) || !isfinite(t->theta)) {
-        return RSM_ERR_DEGENERATE;
-    }
+    RSM_CHECK_FIELD(cfg != NULL, "icp");
+    RSM_CHECK_FIELD(cfg->max_iterations >= 1u, "icp.max_iterations");
+    RSM_CHECK_FIELD(isfinite(cfg->max_pair_dist_m) && cfg->max_pair_dist_m > 0.0f, "icp.max_pair_dist_m");
+    RSM_CHECK_FIELD(isfinite(cfg->converged_m) && cfg->converged_m >= 0.0f, "icp.converged_m");
+    RSM_CHECK_FIELD(isfinite(cfg->converged_rad) && cfg->converged_rad >= 0.0f, "icp.converged_rad");
+    RSM_CHECK_FIELD(cfg->min_pairs <= RSM_ICP_MAX_POINTS, "icp.min_pairs");
     return RSM_OK;
 }
 
-int rsm_rigid_fit(const rsm_point_t *src, const rsm_point_t *dst, const float *w, size_t n, rsm_pose_t *t)
-{
-    rsm_pose_t r;
-    size_t i;
-    int st;
-    if (t == NULL || (n > 0u && (src == NULL || dst == NULL))) {
-        return RSM_ERR_INVAL;
-    }
-    for (i = 0; i < n; ++i) {
-        if (!point_finite(&src[i]) || !point_finite(&dst[i])) {
-            return RSM_ERR_INVAL;
-        }
-        if (w != NULL && !(isfinite(w[i]) && w[i] >= 0.0f)) {
-            return RSM_ERR_INVAL;
-        }
-    }
-    if (n < 2u) {
-        return RSM_ERR_DEGENERATE;
-    }
-    st = fit_core(src, NULL, dst, w, n, &r);
-    if (st == RSM_OK) {
-        *t = r;
-    }
-    return st;
-}
+#if RSM_WITH_ICP
 
 int rsm_icp_init(rsm_icp_t *icp, const rsm_icp_config_t *cfg)
 {
-    if (icp == NULL || cfg == NULL) {
-        return RSM_ERR_INVAL;
-    }
-    if (cfg->max_iterations < 1u || !(isfinite(cfg->max_pair_dist_m) && cfg->max_pair_dist_m > 0.0f) ||
-        !(isfinite(cfg->converged_m) && cfg->converged_m >= 0.0f) ||
-        !(isfinite(cfg->converged_rad) && cfg->converged_rad >= 0.0f) || cfg->min_pairs > RSM_ICP_MAX_POINTS) {
+    if (icp == NULL || rsm_icp_config_check(cfg, NULL) != RSM_OK) {
         return RSM_ERR_INVAL;
     }
     icp->cfg = cfg;
@@ -186,7 +59,7 @@ int rsm_icp_set_reference(rsm_icp_t *icp, const rsm_point_t *pts, size_t n)
     for (i = 0; i < n; ++i) {
         /* A non-finite point could never be anyone's nearest neighbour; leaving
          * it out keeps the search loop free of checks. */
-        if (point_finite(&pts[i])) {
+        if (rsm_point_finite(&pts[i])) {
             icp->ref[k++] = pts[i];
         }
     }
@@ -208,7 +81,7 @@ static size_t pair_points(rsm_icp_t *icp, const rsm_point_t *pts, size_t n, cons
         size_t bj = 0;
         icp->work[i].x = NAN;
         icp->work[i].y = NAN;
-        if (!point_finite(&pts[i])) {
+        if (!rsm_point_finite(&pts[i])) {
             continue;
         }
         p = rsm_pose_apply(est, &pts[i]);
@@ -276,7 +149,7 @@ int rsm_icp_align(rsm_icp_t *icp, const rsm_point_t *pts, size_t n, const rsm_po
         pairs = pair_points(icp, pts, n, &est, max_dist2);
         /* delta maps the mapped points onto their partners in the world frame,
          * so the new robot pose is delta (+) est. */
-        if (pairs < min_pairs || fit_core(pts, &est, icp->work, NULL, n, &delta) != RSM_OK) {
+        if (pairs < min_pairs || rsm_rigid_fit_core(pts, &est, icp->work, NULL, n, &delta) != RSM_OK) {
             degenerate_result(res, guess, it, pairs);
             return RSM_ERR_DEGENERATE;
         }
@@ -291,7 +164,7 @@ int rsm_icp_align(rsm_icp_t *icp, const rsm_point_t *pts, size_t n, const rsm_po
 
     /* RMS over the last iteration's pairs, at the pose returned. */
     for (i = 0; i < n; ++i) {
-        if (point_finite(&icp->work[i])) {
+        if (rsm_point_finite(&icp->work[i])) {
             const rsm_point_t p = rsm_pose_apply(&est, &pts[i]);
             const float dx = icp->work[i].x - p.x;
             const float dy = icp->work[i].y - p.y;
@@ -304,3 +177,33 @@ int rsm_icp_align(rsm_icp_t *icp, const rsm_point_t *pts, size_t n, const rsm_po
     res->rms_m = sqrtf(sum2 / (float)pairs);
     return RSM_OK;
 }
+
+#else /* !RSM_WITH_ICP: the baseline is not built; the method is refused */
+
+int rsm_icp_init(rsm_icp_t *icp, const rsm_icp_config_t *cfg)
+{
+    (void)icp;
+    (void)cfg;
+    return RSM_ERR_NOSYS;
+}
+
+int rsm_icp_set_reference(rsm_icp_t *icp, const rsm_point_t *pts, size_t n)
+{
+    (void)icp;
+    (void)pts;
+    (void)n;
+    return RSM_ERR_NOSYS;
+}
+
+int rsm_icp_align(rsm_icp_t *icp, const rsm_point_t *pts, size_t n, const rsm_pose_t *guess,
+                  rsm_icp_result_t *res)
+{
+    (void)icp;
+    (void)pts;
+    (void)n;
+    (void)guess;
+    (void)res;
+    return RSM_ERR_NOSYS;
+}
+
+#endif /* RSM_WITH_ICP */

@@ -605,16 +605,11 @@ static void scan_geometry(size_t n, uint16_t *start_cdeg, uint16_t *step_cdeg)
     }
 }
 
-int rsm_lms_decode_b0(const rsm_lms_telegram_t *t, const rsm_lms_b0_format_t *fmt,
-                      rsm_lms_scan_t *out)
+int rsm_lms_b0_open(const rsm_lms_telegram_t *t, const rsm_lms_b0_format_t *fmt, rsm_lms_b0_view_t *out)
 {
     rsm_lms_b0_format_t f;
-    uint16_t cw;
-    uint8_t units;
-    uint16_t mask;
-    size_t n;
+    rsm_lms_b0_view_t v;
     size_t i;
-    float scale;
 
     if (t == NULL || out == NULL || t->data == NULL) {
         return RSM_ERR_INVAL;
@@ -631,54 +626,87 @@ int rsm_lms_decode_b0(const rsm_lms_telegram_t *t, const rsm_lms_b0_format_t *fm
     if (t->cmd != RSM_LMS_REPLY_VALUES || t->data_len < 3u) {
         return RSM_ERR_PROTO;
     }
-    cw = get_u16(t->data);
-    n = (size_t)(cw & 0x03FFu);
-    units = (uint8_t)(cw >> 14);
-    if (!units_ok(units) || (f.units != RSM_LMS_UNITS_AUTO && f.units != units)) {
+    v.count_word = get_u16(t->data);
+    v.count = (size_t)(v.count_word & 0x03FFu);
+    v.units = (uint8_t)(v.count_word >> 14);
+    if (!units_ok(v.units) || (f.units != RSM_LMS_UNITS_AUTO && f.units != v.units)) {
         return RSM_ERR_PROTO;
     }
-    if (t->data_len != 2u + 2u * n + (size_t)f.index_bytes + 1u) {
+    if (t->data_len != 2u + 2u * v.count + (size_t)f.index_bytes + 1u) {
         return RSM_ERR_PROTO;
     }
-    if (n > (size_t)RSM_MAX_BEAMS) {
+    if (v.count > (size_t)RSM_MAX_BEAMS) {
         return RSM_ERR_NOMEM;
     }
-
-    mask = (uint16_t)((1ul << f.distance_bits) - 1ul);
-    scale = (units == RSM_LMS_UNITS_MM) ? 1000.0f : 100.0f;
-    for (i = 0; i < n; ++i) {
-        const uint16_t raw = get_u16(t->data + 2u + 2u * i);
-        const uint16_t dist = (uint16_t)(raw & mask);
-        rsm_lms_reading_t *r = &out->reading[i];
-        r->raw = raw;
-        r->flags = (uint8_t)(f.distance_bits < 16u ? (unsigned)raw >> f.distance_bits : 0u);
-        if (dist >= (uint16_t)(mask - 8u)) {
-            r->code = reading_code((uint16_t)(mask - dist));
-            r->range_m = 0.0f;
-        } else {
-            r->code = (uint8_t)RSM_LMS_READING_OK;
-            r->range_m = (float)dist / scale;
-        }
-    }
-    out->count = n;
-    out->count_word = cw;
-    out->distance_mask = mask;
-    out->units = units;
-    out->partial = (uint8_t)((cw >> 13) & 0x01u);
-    out->partial_index = (uint8_t)((cw >> 11) & 0x03u);
-    out->index_len = f.index_bytes;
-    out->index[0] = 0u;
-    out->index[1] = 0u;
+    v.values = t->data + 2u;
+    v.distance_bits = f.distance_bits;
+    v.distance_mask = (uint16_t)((1ul << f.distance_bits) - 1ul);
+    v.partial = (uint8_t)((v.count_word >> 13) & 0x01u);
+    v.partial_index = (uint8_t)((v.count_word >> 11) & 0x03u);
+    v.index_len = f.index_bytes;
+    v.index[0] = 0u;
+    v.index[1] = 0u;
     for (i = 0; i < (size_t)f.index_bytes; ++i) {
-        out->index[i] = t->data[2u + 2u * n + i];
+        v.index[i] = t->data[2u + 2u * v.count + i];
     }
-    out->status = t->data[t->data_len - 1u];
-    if (out->partial != 0u) {
-        out->start_cdeg = 0u;
-        out->step_cdeg = 0u;
+    v.status = t->data[t->data_len - 1u];
+    if (v.partial != 0u) {
+        v.start_cdeg = 0u;
+        v.step_cdeg = 0u;
     } else {
-        scan_geometry(n, &out->start_cdeg, &out->step_cdeg);
+        scan_geometry(v.count, &v.start_cdeg, &v.step_cdeg);
     }
+    *out = v;
+    return RSM_OK;
+}
+
+rsm_lms_reading_t rsm_lms_b0_reading(const rsm_lms_b0_view_t *v, size_t i)
+{
+    const uint16_t raw = get_u16(v->values + 2u * i);
+    const uint16_t mask = v->distance_mask;
+    const uint16_t dist = (uint16_t)(raw & mask);
+    const float scale = (v->units == RSM_LMS_UNITS_MM) ? 1000.0f : 100.0f;
+    rsm_lms_reading_t r;
+    r.raw = raw;
+    r.flags = (uint8_t)(v->distance_bits < 16u ? (unsigned)raw >> v->distance_bits : 0u);
+    if (dist >= (uint16_t)(mask - 8u)) {
+        r.code = reading_code((uint16_t)(mask - dist));
+        r.range_m = 0.0f;
+    } else {
+        r.code = (uint8_t)RSM_LMS_READING_OK;
+        r.range_m = (float)dist / scale;
+    }
+    return r;
+}
+
+int rsm_lms_decode_b0(const rsm_lms_telegram_t *t, const rsm_lms_b0_format_t *fmt,
+                      rsm_lms_scan_t *out)
+{
+    rsm_lms_b0_view_t v;
+    size_t i;
+    int rc;
+
+    if (out == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if ((rc = rsm_lms_b0_open(t, fmt, &v)) != RSM_OK) {
+        return rc;
+    }
+    for (i = 0; i < v.count; ++i) {
+        out->reading[i] = rsm_lms_b0_reading(&v, i);
+    }
+    out->count = v.count;
+    out->count_word = v.count_word;
+    out->distance_mask = v.distance_mask;
+    out->units = v.units;
+    out->partial = v.partial;
+    out->partial_index = v.partial_index;
+    out->index_len = v.index_len;
+    out->index[0] = v.index[0];
+    out->index[1] = v.index[1];
+    out->status = v.status;
+    out->start_cdeg = v.start_cdeg;
+    out->step_cdeg = v.step_cdeg;
     return RSM_OK;
 }
 

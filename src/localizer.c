@@ -5,7 +5,16 @@
 
 #include "rsm/status.h"
 #include "bits.h"
+#include "ekf.h"
 #include "fmath.h"
+#include "grid.h"
+#include "harris.h"
+#include "icp.h"
+#include "map.h"
+#include "mapmatch.h"
+#include "match.h"
+#include "ransac.h"
+#include "tilemap.h"
 
 rsm_localizer_config_t rsm_localizer_config_default(void)
 {
@@ -147,20 +156,9 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
     if (loc_size != sizeof(rsm_localizer_t) || fingerprint != (unsigned long)RSM_CONFIG_FINGERPRINT) {
         return RSM_ERR_CONFIG;
     }
-    if (loc == NULL || cfg == NULL || x0 == NULL || cfg->method > RSM_METHOD_MAP ||
-        !(cfg->limits.max_range_m > cfg->limits.min_range_m) || !(cfg->grid.cell_m > 0.0f) ||
-        !(cfg->grid.sigma_m >= 0.0f) || cfg->grid.sigma_m * 2.0f >= cfg->grid.cell_m || cfg->map_min_hits < 1u ||
-        cfg->min_points < 2u || cfg->min_keypoints < 2u || !(cfg->match_window_m >= 0.0f) ||
-        !(cfg->search_min_m > 0.0f) || !(cfg->search_max_m >= cfg->search_min_m) || !(cfg->gate_d2 >= 0.0f) ||
-        !(cfg->r_min_xy_m > 0.0f) || !(cfg->r_min_theta_rad > 0.0f) || cfg->noise > RSM_NOISE_FIXED ||
-        cfg->refine_saturation < 1u || !(cfg->refine_noise_scale > 0.0f) || cfg->harris.k_den <= 0 ||
-        cfg->harris.k_num < 0 || cfg->harris.nms_radius < 0 || cfg->min_keypoints > RSM_MAX_KEYPOINTS ||
-        cfg->min_points > RSM_MAX_BEAMS || !(fabsf(cfg->laser_mount.x) < 100.0f) ||
-        !(fabsf(cfg->laser_mount.y) < 100.0f) || !(fabsf(cfg->laser_mount.theta) <= RSM_TWO_PI) ||
-        cfg->laser_upside_down > 1u) {
-        /* (The Harris part has no init of its own: a bad one would make
-         * every detection fail with RSM_ERR_INVAL, read as no key points;
-         * thresholds beyond the capacities could never be met.) */
+    /* Every part of cfg is checked before anything is written (the
+     * field is named by rsm_localizer_config_check, src/localizer_check.c). */
+    if (loc == NULL || x0 == NULL || rsm_localizer_config_check(cfg, NULL) != RSM_OK) {
         return RSM_ERR_INVAL;
     }
     memset(loc, 0, sizeof *loc);
@@ -181,13 +179,6 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
         rc = rsm_icp_init(&loc->state.icp, &cfg->icp);
         break;
     case RSM_METHOD_MAP:
-        if (rsm_mapmatch_check(&cfg->mapmatch) != RSM_OK || !(cfg->map_update_m >= 0.0f) ||
-            !(cfg->map_update_rad >= 0.0f) || !(cfg->recover_ratio >= 0.0f && cfg->recover_ratio <= 1.0f) ||
-            !(cfg->recover_m >= 0.0f) || !(cfg->recover_m <= 50.0f * cfg->tmap.cell_m) ||
-            !(cfg->recover_rad >= 0.0f && cfg->recover_rad <= 1.0f) ||
-            (cfg->recover_rad > 0.0f && !(cfg->recover_rad <= 64.0f * cfg->mapmatch.search_step_rad))) {
-            return RSM_ERR_INVAL;
-        }
         rc = rsm_tmap_init(&loc->state.persistent.map, &cfg->tmap);
         loc->state.persistent.written = *x0;
         break;

@@ -1,11 +1,11 @@
 /* Coarse-to-fine Gauss-Newton of a scan against the tile map with the
  * prediction as a prior; see include/rsm/mapmatch.h. */
-#include "rsm/mapmatch.h"
+#include "mapmatch.h"
 
 #include <math.h>
 #include <string.h>
 
-#include "rsm/ekf.h"
+#include "ekf.h"
 #include "rsm/status.h"
 #include "fmath.h"
 #include "tmap_read.h"

@@ -1,4 +1,4 @@
-#include "rsm/match.h"
+#include "match.h"
 
 #include <math.h>
 

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "check.h"
 #include "fmath.h"
 
 rsm_odometry_config_t rsm_odometry_config_default(void)
@@ -48,19 +49,27 @@ static int non_negative_finite(float v)
     return isfinite(v) && v >= 0.0f;
 }
 
-static int config_ok(const rsm_odometry_config_t *cfg)
+int rsm_odometry_config_check(const rsm_odometry_config_t *cfg, const char **field)
 {
-    return positive_finite(cfg->ticks_per_m_left) && positive_finite(cfg->ticks_per_m_right) &&
-           positive_finite(cfg->wheel_base_m) && cfg->counter_bits >= 16u && cfg->counter_bits <= 32u &&
-           non_negative_finite(cfg->sigma_trans_per_m) && non_negative_finite(cfg->sigma_rot_per_rad) &&
-           non_negative_finite(cfg->sigma_rot_per_m) && non_negative_finite(cfg->sigma_trans_min_m) &&
-           non_negative_finite(cfg->sigma_rot_min_rad) && non_negative_finite(cfg->max_wheel_speed_mps) &&
-           non_negative_finite(cfg->max_turn_rate_rps) && non_negative_finite(cfg->slack_s);
+    RSM_CHECK_FIELD(cfg != NULL, "odometry");
+    RSM_CHECK_FIELD(positive_finite(cfg->ticks_per_m_left), "odometry.ticks_per_m_left");
+    RSM_CHECK_FIELD(positive_finite(cfg->ticks_per_m_right), "odometry.ticks_per_m_right");
+    RSM_CHECK_FIELD(positive_finite(cfg->wheel_base_m), "odometry.wheel_base_m");
+    RSM_CHECK_FIELD(cfg->counter_bits >= 16u && cfg->counter_bits <= 32u, "odometry.counter_bits");
+    RSM_CHECK_FIELD(non_negative_finite(cfg->sigma_trans_per_m), "odometry.sigma_trans_per_m");
+    RSM_CHECK_FIELD(non_negative_finite(cfg->sigma_rot_per_rad), "odometry.sigma_rot_per_rad");
+    RSM_CHECK_FIELD(non_negative_finite(cfg->sigma_rot_per_m), "odometry.sigma_rot_per_m");
+    RSM_CHECK_FIELD(non_negative_finite(cfg->sigma_trans_min_m), "odometry.sigma_trans_min_m");
+    RSM_CHECK_FIELD(non_negative_finite(cfg->sigma_rot_min_rad), "odometry.sigma_rot_min_rad");
+    RSM_CHECK_FIELD(non_negative_finite(cfg->max_wheel_speed_mps), "odometry.max_wheel_speed_mps");
+    RSM_CHECK_FIELD(non_negative_finite(cfg->max_turn_rate_rps), "odometry.max_turn_rate_rps");
+    RSM_CHECK_FIELD(non_negative_finite(cfg->slack_s), "odometry.slack_s");
+    return RSM_OK;
 }
 
 int rsm_odometry_init(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg)
 {
-    if (odo == NULL || cfg == NULL || !config_ok(cfg)) {
+    if (odo == NULL || rsm_odometry_config_check(cfg, NULL) != RSM_OK) {
         return RSM_ERR_INVAL;
     }
     memset(odo, 0, sizeof *odo);
@@ -70,7 +79,7 @@ int rsm_odometry_init(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg)
 
 int rsm_odometry_set_config(rsm_odometry_t *odo, const rsm_odometry_config_t *cfg)
 {
-    if (odo == NULL || cfg == NULL || !config_ok(cfg)) {
+    if (odo == NULL || rsm_odometry_config_check(cfg, NULL) != RSM_OK) {
         return RSM_ERR_INVAL;
     }
     if (cfg->counter_bits != odo->cfg.counter_bits) {

@@ -1,10 +1,11 @@
-#include "rsm/ransac.h"
+#include "ransac.h"
 
 #include <math.h>
 
-#include "rsm/icp.h"
 #include "rsm/status.h"
+#include "check.h"
 #include "fmath.h"
+#include "rigid.h"
 
 rsm_ransac_config_t rsm_ransac_config_default(void)
 {
@@ -19,11 +20,21 @@ rsm_ransac_config_t rsm_ransac_config_default(void)
     return c;
 }
 
+int rsm_ransac_config_check(const rsm_ransac_config_t *cfg, const char **field)
+{
+    RSM_CHECK_FIELD(cfg != NULL, "ransac");
+    RSM_CHECK_FIELD(cfg->inlier_tol_m > 0.0f, "ransac.inlier_tol_m");
+    RSM_CHECK_FIELD(cfg->length_tol_m > 0.0f, "ransac.length_tol_m");
+    RSM_CHECK_FIELD(cfg->min_pair_sep_m >= 0.0f, "ransac.min_pair_sep_m");
+    RSM_CHECK_FIELD(cfg->confidence > 0.0f && cfg->confidence < 1.0f, "ransac.confidence");
+    RSM_CHECK_FIELD(cfg->max_iterations >= 1u, "ransac.max_iterations");
+    RSM_CHECK_FIELD(cfg->min_support >= 2u, "ransac.min_support");
+    return RSM_OK;
+}
+
 int rsm_ransac_init(rsm_ransac_t *rs, const rsm_ransac_config_t *cfg)
 {
-    if (rs == NULL || cfg == NULL || !(cfg->inlier_tol_m > 0.0f) || !(cfg->length_tol_m > 0.0f) ||
-        !(cfg->min_pair_sep_m >= 0.0f) || !(cfg->confidence > 0.0f && cfg->confidence < 1.0f) ||
-        cfg->max_iterations < 1u || cfg->min_support < 2u) {
+    if (rs == NULL || rsm_ransac_config_check(cfg, NULL) != RSM_OK) {
         return RSM_ERR_INVAL;
     }
     rs->cfg = cfg;

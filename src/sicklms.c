@@ -63,11 +63,11 @@ int rsm_sicklms_config_default(rsm_sicklms_config_t *cfg)
 }
 
 int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
-                     const rsm_sicklms_config_t *cfg)
+                     const rsm_sicklms_config_t *cfg, rsm_scan_t *scan)
 {
     uint8_t probe[16];
     rsm_link_rx_t io;
-    if (d == NULL || cfg == NULL ||
+    if (d == NULL || cfg == NULL || scan == NULL ||
         rsm_link_rx_init(&io, link, clock, cfg->read_timeout_us, cfg->byte_timeout_us) != RSM_OK ||
         cfg->ack_timeout_us == 0u || cfg->reply_timeout_us == 0u || cfg->mode_timeout_us == 0u ||
         cfg->max_tries == 0u || cfg->address > 0x7Fu || rate_index(cfg->power_up_baud) < 0 ||
@@ -80,6 +80,7 @@ int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t
     d->cfg = cfg;
     d->link = link;
     d->clock = clock;
+    d->scan = scan;
     d->io = io;
     d->state = RSM_SICKLMS_IDLE;
     d->baud = cfg->power_up_baud;
@@ -414,6 +415,23 @@ static void step_done(rsm_sicklms_t *d, const rsm_lms_telegram_t *t, uint64_t no
     }
 }
 
+/* Beam i of a scan whose scanner angles are start + i * step (1/100 deg)
+ * into out in the robot frame: the one conversion of both paths below.
+ * Returns 1 when the reading is invalid (range 0, which the core drops). */
+static int put_beam(rsm_scan_t *out, size_t i, uint16_t start_cdeg, uint16_t step_cdeg, uint8_t upside_down,
+                    const rsm_lms_reading_t *r)
+{
+    const int32_t cdeg = (int32_t)start_cdeg + (int32_t)(i * step_cdeg);
+    const int32_t bearing = upside_down ? 9000 - cdeg : cdeg - 9000;
+    out->angle_rad[i] = (float)bearing * (PI_F / 18000.0f);
+    if (r->code == RSM_LMS_READING_OK) {
+        out->range_m[i] = r->range_m;
+        return 0;
+    }
+    out->range_m[i] = 0.0f;
+    return 1;
+}
+
 int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan_t *out)
 {
     size_t i;
@@ -425,31 +443,37 @@ int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan
         return RSM_ERR_PROTO;
     }
     for (i = 0u; i < raw->count; i++) {
-        const int32_t cdeg = (int32_t)raw->start_cdeg + (int32_t)(i * raw->step_cdeg);
-        const int32_t bearing = upside_down ? 9000 - cdeg : cdeg - 9000;
-        out->angle_rad[i] = (float)bearing * (PI_F / 18000.0f);
-        if (raw->reading[i].code == RSM_LMS_READING_OK) {
-            out->range_m[i] = raw->reading[i].range_m;
-        } else {
-            out->range_m[i] = 0.0f;
-            invalid++;
-        }
+        invalid += put_beam(out, i, raw->start_cdeg, raw->step_cdeg, upside_down, &raw->reading[i]);
     }
     out->count = raw->count;
     return invalid;
 }
 
-/* Converts d->raw into d->scan in the robot frame, stamped with the
- * receive time less the configured latency. */
-static int convert_scan(rsm_sicklms_t *d)
+/* Decodes a 0xB0 telegram straight into the caller's scan (d->scan) in the
+ * robot frame, stamped with the receive time less the configured latency:
+ * the same result as rsm_lms_decode_b0 then rsm_sicklms_to_scan, with no
+ * rsm_lms_scan_t between. The scan is untouched when the telegram does not
+ * decode. */
+static int decode_scan(rsm_sicklms_t *d, const rsm_lms_telegram_t *t)
 {
     const uint64_t rx = d->tel_start_us;
-    const int invalid = rsm_sicklms_to_scan(&d->raw, d->cfg->upside_down, &d->scan);
-    if (invalid < 0) {
-        return invalid;
+    rsm_lms_b0_view_t v;
+    size_t i;
+    uint32_t invalid = 0u;
+    int rc;
+    if ((rc = rsm_lms_b0_open(t, &d->format, &v)) != RSM_OK) {
+        return rc;
     }
-    d->scan.stamp_us = rx >= d->cfg->latency_us ? rx - d->cfg->latency_us : 0u;
-    d->stats.invalid_readings += (uint32_t)invalid;
+    if (v.step_cdeg == 0u) {
+        return RSM_ERR_PROTO;
+    }
+    for (i = 0u; i < v.count; i++) {
+        const rsm_lms_reading_t r = rsm_lms_b0_reading(&v, i);
+        invalid += (uint32_t)put_beam(d->scan, i, v.start_cdeg, v.step_cdeg, d->cfg->upside_down, &r);
+    }
+    d->scan->count = v.count;
+    d->scan->stamp_us = rx >= d->cfg->latency_us ? rx - d->cfg->latency_us : 0u;
+    d->stats.invalid_readings += invalid;
     return RSM_OK;
 }
 
@@ -460,14 +484,14 @@ static void handle_stream_telegram(rsm_sicklms_t *d, const rsm_lms_telegram_t *t
         d->stats.unexpected++;
         return;
     }
-    if (rsm_lms_decode_b0(t, &d->format, &d->raw) != RSM_OK || convert_scan(d) != RSM_OK) {
+    if (decode_scan(d, t) != RSM_OK) {
         d->stats.bad_scans++;
         return;
     }
     d->stats.scans++;
     d->out.type = RSM_SICKLMS_EVENT_SCAN;
-    d->out.scan = &d->scan;
-    d->out.stamp_us = d->scan.stamp_us;
+    d->out.scan = d->scan;
+    d->out.stamp_us = d->scan->stamp_us;
 }
 
 static void handle_event(rsm_sicklms_t *d, const rsm_lms_event_t *e, uint64_t now)

@@ -1,13 +1,14 @@
 /* Persistent multi-resolution occupancy map in a fixed tile pool; see
  * include/rsm/tilemap.h for the contract and docs/map.md for the design. */
-#include "rsm/tilemap.h"
+#include "tilemap.h"
 
 #include <math.h>
 #include <string.h>
 
-#include "rsm/grid.h"
+#include "grid.h"
 #include "rsm/status.h"
 #include "bits.h"
+#include "check.h"
 #include "fmath.h"
 #include "tmap_read.h"
 
@@ -45,13 +46,23 @@ static uint32_t hash_key(uint32_t level, int32_t tx, int32_t ty)
     return (k * 2654435761u) >> (32 - RSM_TMAP_HASH_LOG2);
 }
 
+int rsm_tmap_config_check(const rsm_tmap_config_t *cfg, const char **field)
+{
+    RSM_CHECK_FIELD(cfg != NULL, "tmap");
+    RSM_CHECK_FIELD(cfg->cell_m > 0.0f && cfg->cell_m < 1.0e3f, "tmap.cell_m");
+    RSM_CHECK_FIELD(cfg->levels >= 1u && cfg->levels <= RSM_TMAP_LEVELS, "tmap.levels");
+    RSM_CHECK_FIELD(cfg->hit_inc >= 1u && cfg->hit_inc <= RSM_TMAP_MAX_VALUE, "tmap.hit_inc");
+    RSM_CHECK_FIELD(cfg->miss_dec <= RSM_TMAP_MAX_VALUE, "tmap.miss_dec");
+    RSM_CHECK_FIELD(cfg->saturation >= 1u && cfg->saturation <= RSM_TMAP_MAX_VALUE, "tmap.saturation");
+    RSM_CHECK_FIELD(cfg->age_shift <= 8u, "tmap.age_shift");
+    RSM_CHECK_FIELD(cfg->unconfirmed_shift <= 16u, "tmap.unconfirmed_shift");
+    return RSM_OK;
+}
+
 int rsm_tmap_init(rsm_tmap_t *map, const rsm_tmap_config_t *cfg)
 {
     uint32_t v;
-    if (map == NULL || cfg == NULL || !(cfg->cell_m > 0.0f) || !(cfg->cell_m < 1.0e3f) || cfg->levels < 1u ||
-        cfg->levels > RSM_TMAP_LEVELS || cfg->hit_inc < 1u || cfg->hit_inc > RSM_TMAP_MAX_VALUE ||
-        cfg->miss_dec > RSM_TMAP_MAX_VALUE || cfg->saturation < 1u || cfg->saturation > RSM_TMAP_MAX_VALUE ||
-        cfg->age_shift > 8u || cfg->unconfirmed_shift > 16u) {
+    if (map == NULL || rsm_tmap_config_check(cfg, NULL) != RSM_OK) {
         return RSM_ERR_INVAL;
     }
     memset(map, 0, sizeof *map);

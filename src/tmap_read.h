@@ -7,7 +7,7 @@
 
 #include <stdint.h>
 
-#include "rsm/tilemap.h"
+#include "tilemap.h"
 
 #define RSM_TMAP_TILE_MASK ((int32_t)RSM_TMAP_TILE_SIDE - 1)
 /* Cells beyond this from the origin (at any level) are refused, so that tile

@@ -29,6 +29,7 @@
 #include <stdint.h>
 
 #include "rsm/hal.h"
+#include "rsm/link_poll.h"
 #include "rsm/ld06.h"
 #include "rsm/lidar.h"
 

@@ -444,7 +444,37 @@ typedef struct rsm_lms_scan {
     uint16_t step_cdeg;
 } rsm_lms_scan_t;
 
-/* Decodes a 0xB0 reply.
+/* A 0xB0 reply checked and read up to its readings: its header, and where
+ * its values are, so that the readings decode one at a time
+ * (rsm_lms_b0_reading) into whatever the caller keeps (rsm_lms_decode_b0:
+ * an rsm_lms_scan_t; the LMS driver: the caller's rsm_scan_t, with no copy
+ * between). Fields as in rsm_lms_scan_t. */
+typedef struct rsm_lms_b0_view {
+    const uint8_t *values;   /* the 2 * count value bytes, in the telegram
+                                (borrowed: valid while the telegram is) */
+    size_t count;
+    uint16_t count_word;
+    uint16_t distance_mask;
+    uint8_t distance_bits;
+    uint8_t units;
+    uint8_t partial;
+    uint8_t partial_index;
+    uint8_t status;
+    uint8_t index[2];
+    uint8_t index_len;
+    uint16_t start_cdeg;
+    uint16_t step_cdeg;
+} rsm_lms_b0_view_t;
+
+/* Checks a 0xB0 reply as rsm_lms_decode_b0 does (same codes) and fills
+ * *out (untouched on error). Pure. */
+int rsm_lms_b0_open(const rsm_lms_telegram_t *t, const rsm_lms_b0_format_t *fmt, rsm_lms_b0_view_t *out);
+
+/* Reading i (< v->count) of an opened reply, decoded as rsm_lms_decode_b0
+ * describes. Pure. */
+rsm_lms_reading_t rsm_lms_b0_reading(const rsm_lms_b0_view_t *v, size_t i);
+
+/* Decodes a 0xB0 reply (rsm_lms_b0_open, then every reading).
  * Params: fmt may be NULL for rsm_lms_b0_format_default; out must hold
  * RSM_MAX_BEAMS readings.
  * Checks: data_len == 2 (count word) + 2 * count + fmt->index_bytes + 1

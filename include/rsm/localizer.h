@@ -13,18 +13,10 @@
 #include <stdint.h>
 
 #include "rsm/config.h"
-#include "rsm/ekf.h"
 #include "rsm/geom.h"
-#include "rsm/grid.h"
-#include "rsm/harris.h"
-#include "rsm/icp.h"
-#include "rsm/map.h"
-#include "rsm/mapmatch.h"
-#include "rsm/match.h"
+#include "rsm/localizer_parts.h"
 #include "rsm/odometry.h"
-#include "rsm/ransac.h"
 #include "rsm/scan.h"
-#include "rsm/tilemap.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -199,8 +191,18 @@ typedef struct rsm_localizer {
     rsm_localizer_report_t last;
 } rsm_localizer_t;
 
+/* RSM_OK if cfg is one rsm_localizer_init accepts; else RSM_ERR_INVAL
+ * with the first bad field named in *field (when field is not NULL) as its
+ * path in the struct: "grid.sigma_m", "odometry.wheel_base_m", "recover_m",
+ * "mapmatch" (that part as a whole), "cfg" for NULL. Only the chosen
+ * method's part (ransac, icp, or tmap, mapmatch and the map_* and recover_*
+ * fields) is checked. The name is a static string. Reads only. */
+int rsm_localizer_config_check(const rsm_localizer_config_t *cfg, const char **field);
+
 /* Validates cfg (and each module's part) and starts at pose x0 with
- * covariance p0 (NULL: zero). Returns RSM_OK or RSM_ERR_INVAL. Coordinates
+ * covariance p0 (NULL: zero). Returns RSM_OK, or RSM_ERR_INVAL: for a bad
+ * cfg with loc untouched (rsm_localizer_config_check names the field);
+ * else loc or x0 is NULL, or x0 or p0 is unusable. Coordinates
  * must stay within 1e6 m of the origin (the paper's method refuses a start
  * beyond it; the maps drop points beyond it), and floats resolve only
  * centimetres from about 1e5 m on: far from the origin, work in a frame

@@ -87,6 +87,12 @@ typedef struct rsm_motion {
     float dtheta;   /* rad, wrapped to (-pi, pi] */
 } rsm_motion_t;
 
+/* RSM_OK if cfg is usable (positive, finite geometry; 16 <= counter_bits
+ * <= 32; non-negative, finite noise and plausibility figures), else
+ * RSM_ERR_INVAL with the first bad field's name ("odometry.wheel_base_m",
+ * a static string) in *field when field is not NULL. Reads only. */
+int rsm_odometry_config_check(const rsm_odometry_config_t *cfg, const char **field);
+
 /* Validates cfg (positive geometry, 16 <= counter_bits <= 32, non-negative
  * noise), copies it (the caller's struct is free on return) and resets the
  * state. Returns RSM_OK or RSM_ERR_INVAL (odo unchanged). */

@@ -51,6 +51,7 @@
 
 #include "rsm/aria.h"
 #include "rsm/hal.h"
+#include "rsm/link_poll.h"
 #include "rsm/odometry.h"
 #include "rsm/status.h"
 

@@ -1,25 +1,20 @@
-/* Umbrella header: everything a firmware or host program needs from rsm. */
+/* Umbrella header: everything a firmware or host program needs from rsm
+ * (the installed headers; docs/api.md lists them). */
 #ifndef RSM_RSM_H
 #define RSM_RSM_H
 
 #include "rsm/aria.h"
 #include "rsm/config.h"
-#include "rsm/ekf.h"
 #include "rsm/geom.h"
-#include "rsm/grid.h"
 #include "rsm/hal.h"
-#include "rsm/harris.h"
-#include "rsm/icp.h"
 #include "rsm/ld06.h"
 #include "rsm/ldlidar.h"
 #include "rsm/lidar.h"
+#include "rsm/link_poll.h"
 #include "rsm/lms.h"
 #include "rsm/localizer.h"
-#include "rsm/map.h"
-#include "rsm/match.h"
 #include "rsm/odometry.h"
 #include "rsm/p3dx.h"
-#include "rsm/ransac.h"
 #include "rsm/revolution.h"
 #include "rsm/rplidar.h"
 #include "rsm/scan.h"

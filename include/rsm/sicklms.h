@@ -52,6 +52,7 @@
 #include <stdint.h>
 
 #include "rsm/hal.h"
+#include "rsm/link_poll.h"
 #include "rsm/lms.h"
 #include "rsm/scan.h"
 #include "rsm/status.h"
@@ -117,8 +118,9 @@ typedef enum rsm_sicklms_event_type {
 typedef struct rsm_sicklms_event {
     rsm_sicklms_event_type_t type;
     int status;                /* ERROR, DISCONNECTED: see above; else 0 */
-    const rsm_scan_t *scan;    /* SCAN: points to d->scan, valid until the next
-                                  poll; NULL otherwise */
+    const rsm_scan_t *scan;    /* SCAN: the caller's scan given to rsm_sicklms_init
+                                  (d->scan), holding the new scan until the next
+                                  SCAN overwrites it; NULL otherwise */
     uint64_t stamp_us;         /* receive/detection time */
 } rsm_sicklms_event_t;
 
@@ -150,7 +152,7 @@ typedef struct rsm_sicklms_stats {
 } rsm_sicklms_stats_t;
 
 /* Driver state, caller owned. Read-only for the caller: state, stats, baud,
- * scan, format, config and have_config may be read at any time; the rest is
+ * format, config and have_config may be read at any time; the rest is
  * private. */
 typedef struct rsm_sicklms {
     const rsm_sicklms_config_t *cfg;
@@ -164,8 +166,8 @@ typedef struct rsm_sicklms {
     rsm_lms_config_t config;   /* last configuration block read (0x74) */
     uint8_t have_config;       /* 1 once config holds a block from this unit */
     rsm_lms_parser_t parser;
-    rsm_lms_scan_t raw;        /* last decoded 0xB0 */
-    rsm_scan_t scan;           /* last scan in the robot frame */
+    rsm_scan_t *scan;          /* the caller's: each 0xB0 is decoded into it, in the
+                                  robot frame (no copy of the scan is kept here) */
     /* private */
     uint8_t step;              /* start-up step in flight */
     uint8_t sub;               /* awaiting ACK, reply, or NAK pause */
@@ -184,14 +186,17 @@ typedef struct rsm_sicklms {
 } rsm_sicklms_t;
 
 /* Initialises d in the IDLE state with zero counters; nothing is sent.
- * link, clock and cfg are kept by pointer.
+ * link, clock, cfg and scan are kept by pointer: each scan received is
+ * decoded straight into the caller's *scan (overwriting it; a telegram
+ * that does not decode leaves it untouched), so the caller that keeps a
+ * scan while the next arrives copies it (rsm_sync_scan does).
  * Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers, a link without read or
  * write, a clock without now_us, a zero ack/reply/mode timeout,
  * max_tries 0, an address above 0x7F, rates other than 9600/19200/38400
  * (baud may be 0), or a variant rsm_lms_encode_variant refuses (d is then
  * unchanged). */
 int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
-                     const rsm_sicklms_config_t *cfg);
+                     const rsm_sicklms_config_t *cfg, rsm_scan_t *scan);
 
 /* Starts (or restarts) the start-up: sets the link to power_up_baud when it
  * can change rates (d->baud is then that rate), then sends the first

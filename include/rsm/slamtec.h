@@ -52,6 +52,7 @@
 #include <stdint.h>
 
 #include "rsm/hal.h"
+#include "rsm/link_poll.h"
 #include "rsm/lidar.h"
 #include "rsm/rplidar.h"
 

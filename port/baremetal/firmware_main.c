@@ -66,6 +66,10 @@ static RSM_BOARD_CCM rsm_p3dx_config_t fw_robot_cfg;
 static RSM_BOARD_CCM rsm_p3dx_t fw_robot;
 static RSM_BOARD_CCM rsm_sicklms_config_t fw_laser_cfg;
 static RSM_BOARD_CCM rsm_sicklms_t fw_laser;
+/* The one scan the LMS driver decodes into, straight from the telegram;
+ * rsm_sync_scan copies it while it waits for odometry, so the next scan
+ * may arrive meanwhile. */
+static RSM_BOARD_CCM rsm_scan_t fw_scan;
 
 /* ---- board functions behind the HAL ---------------------------------------- */
 
@@ -152,7 +156,7 @@ int main(void)
         if ((rc = rsm_localizer_init(&fw_localizer, &fw_loc_cfg, &start, NULL)) != RSM_OK ||
             (rc = rsm_sync_init(&fw_sync, &fw_localizer, &fw_sync_cfg, NULL, NULL)) != RSM_OK ||
             (rc = rsm_p3dx_init(&fw_robot, &fw_robot_link, &fw_clock, &fw_robot_cfg)) != RSM_OK ||
-            (rc = rsm_sicklms_init(&fw_laser, &fw_laser_link, &fw_clock, &fw_laser_cfg)) != RSM_OK) {
+            (rc = rsm_sicklms_init(&fw_laser, &fw_laser_link, &fw_clock, &fw_laser_cfg, &fw_scan)) != RSM_OK) {
             fw_stop("driver set-up", rc);
         }
         /* Connecting only starts the handshakes; poll drives them. A link

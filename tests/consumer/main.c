@@ -7,6 +7,19 @@
 
 #include "rsm/rsm.h"
 
+/* Whether this program runs under AddressSanitizer (gcc and clang spell it
+ * differently); the install check requires "on" in the sanitizer build. */
+#if defined(__SANITIZE_ADDRESS__)
+#define CONSUMER_ASAN "on"
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define CONSUMER_ASAN "on"
+#endif
+#endif
+#ifndef CONSUMER_ASAN
+#define CONSUMER_ASAN "off"
+#endif
+
 #ifndef EXPECT_MISMATCH
 #define EXPECT_MISMATCH 0
 #endif
@@ -29,7 +42,7 @@ int main(void)
         fprintf(stderr, "rsm_localizer_init: %d (%s), expected %d\n", rc, rsm_strerror(rc), want);
         return 1;
     }
-    printf("rsm consumer ok (%d beams, localizer %lu bytes: %s)\n", RSM_MAX_BEAMS, (unsigned long)sizeof loc,
-           rsm_strerror(rc));
+    printf("rsm consumer ok (%d beams, localizer %lu bytes: %s; AddressSanitizer %s)\n", RSM_MAX_BEAMS,
+           (unsigned long)sizeof loc, rsm_strerror(rc), CONSUMER_ASAN);
     return 0;
 }

@@ -75,6 +75,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     static rsm_sicklms_t lms;
     static rsm_p3dx_config_t pcfg;
     static rsm_sicklms_config_t lcfg;
+    static rsm_scan_t scan;
     size_t i = 0;
     int steps = 0;
     rsm_fakelink_init(&robot.fl, 1000000u, &robot.link, &robot.clock);
@@ -82,7 +83,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     CHECK(rsm_p3dx_config_default(&pcfg) == RSM_OK);
     CHECK(rsm_sicklms_config_default(&lcfg) == RSM_OK);
     CHECK(rsm_p3dx_init(&p3dx, &robot.link, &robot.clock, &pcfg) == RSM_OK);
-    CHECK(rsm_sicklms_init(&lms, &laser.link, &laser.clock, &lcfg) == RSM_OK);
+    CHECK(rsm_sicklms_init(&lms, &laser.link, &laser.clock, &lcfg, &scan) == RSM_OK);
     CHECK(rsm_p3dx_connect(&p3dx) == RSM_OK);
     CHECK(rsm_sicklms_connect(&lms) == RSM_OK);
     while (i < size && steps < 512) {

@@ -20,6 +20,7 @@
 
 #include "rsm/localizer.h"
 #include "rsm/status.h"
+#include "tilemap.h" /* internal (src/): tiles held per level */
 
 #include "fuzz_check.h"
 

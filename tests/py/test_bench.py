@@ -187,6 +187,18 @@ def test_report_has_every_section_and_states_where_it_was_measured(run):
     assert str(run["dir"]) not in report
 
 
+def test_the_report_is_written_from_the_manifest_alone(run, tmp_path):
+    """The measuring part hands the report its figures as JSON: rsm-bench-report
+    writes the same report from the manifest (bench.json) alone, and says
+    so with exit status 0; a manifest it cannot read gives 1."""
+    from rsm_tools.bench import report as bench_report
+    out = tmp_path / "again.md"
+    manifest = run["dir"] / "work" / "bench.json"
+    assert bench_report.main([str(manifest), "--root", str(REPO_ROOT), "--output", str(out)]) == 0
+    assert out.read_text(encoding="utf-8") == run["report"]
+    assert bench_report.main([str(tmp_path / "missing.json"), "--output", str(out)]) == 1
+
+
 def test_every_log_folder_is_found_and_only_those(run):
     man = run["manifest"]
     assert [l["label"] for l in man["logs"]] == ["head", "head10"]

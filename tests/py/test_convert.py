@@ -178,7 +178,7 @@ def test_command_line(tmp_path, head_log):
     assert [c.protocol for c in h.channels] == ["aria", "lms2xx"]
     res = subprocess.run([sys.executable, "-m", "rsm_tools.convert", str(tmp_path / "missing.clf"),
                           str(out)], capture_output=True, text=True, env=subprocess_env())
-    assert res.returncode == 2 and "missing.clf" in res.stderr
+    assert res.returncode == 1 and "missing.clf" in res.stderr
 
 
 def test_monotonic_stamps_keep_the_longest_run_and_re_place_the_glitches():

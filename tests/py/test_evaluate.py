@@ -272,7 +272,7 @@ def test_cli_json_and_exit_codes(tmp_path, capsys):
     assert "no relation matched" in captured.err
 
     rc = ev.main([str(traj), "--relations", str(tmp_path / "missing")])
-    assert rc == 2
+    assert rc == 1
 
 
 def test_cli_odometry_writes_trajectory(tmp_path):

@@ -727,7 +727,7 @@ def test_convert_reports_a_truncated_gzip_log(tmp_path, head_log):
     log = tmp_path / "cut.clf.gz"
     log.write_bytes(data[:len(data) // 2])
     res = run_convert(log, tmp_path / "cut.cap")
-    assert res.returncode == 2, res.stderr
+    assert res.returncode == 1, res.stderr  # a file that fails at run time, as the C tools say
     assert "Traceback" not in res.stderr and "cannot read" in res.stderr, res.stderr
 
 

@@ -120,6 +120,19 @@ def test_every_set_key_the_help_lists_is_accepted_and_no_other(tmp_path, head_lo
         assert unknown == (key == "no_such_key"), (key, res.stderr)
 
 
+def test_nav_names_the_configuration_field_the_localizer_refuses(tmp_path, head_log):
+    """A --set value out of range stops rsm-nav with the localizer's own
+    name for the field (rsm_localizer_config_check)."""
+    out = tmp_path / "t.txt"
+    for key, value, field in (("recover_m", "100", "recover_m"), ("sigma", "0.03", "grid.sigma_m"),
+                              ("map_levels", "0", "tmap.levels"), ("mm_sigma", "0", "mapmatch")):
+        res = subprocess.run([str(nav_binary()), "--carmen", str(head_log), "--trajectory", str(out),
+                              "--set", f"{key}={value}", "--quiet"], capture_output=True, text=True,
+                             env=subprocess_env())
+        assert res.returncode != 0, key
+        assert f"the localizer refuses its field {field} " in res.stderr, (key, res.stderr)
+
+
 def test_nav_rejects_a_missing_log_with_a_clear_message(tmp_path):
     res = subprocess.run([str(nav_binary()), "--carmen", str(tmp_path / "nope.clf"), "--trajectory",
                           str(tmp_path / "t.txt")], capture_output=True, text=True)

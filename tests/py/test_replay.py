@@ -1,4 +1,4 @@
-"""rsm-replay into pseudo-terminals and rsm-capture from pseudo-terminals."""
+"""rsm-replay into pseudo-terminals and rsm-record from pseudo-terminals."""
 
 import os
 import select
@@ -110,7 +110,7 @@ def test_replay_errors(tmp_path, head_cap):
     res = subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(head_cap), "--port",
                           "robot=" + str(tmp_path / "no-such-tty")],
                          capture_output=True, text=True, env=subprocess_env())
-    assert res.returncode == 2 and "cannot open port robot" in res.stderr
+    assert res.returncode == 1 and "cannot open port robot" in res.stderr
     res = subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(head_cap), "--port", "sonar=x"],
                          capture_output=True, text=True, env=subprocess_env())
     assert res.returncode == 2 and "no channel 'sonar'" in res.stderr
@@ -118,7 +118,7 @@ def test_replay_errors(tmp_path, head_cap):
     bad.write_bytes(b"nope")
     res = subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(bad), "--pty"],
                          capture_output=True, text=True, env=subprocess_env())
-    assert res.returncode == 2 and "bad magic" in res.stderr
+    assert res.returncode == 1 and "bad magic" in res.stderr
 
 
 def test_replay_runs_its_reader_and_reports_how_it_ended(tmp_path, head_cap):
@@ -162,7 +162,7 @@ def test_replay_runs_its_reader_and_reports_how_it_ended(tmp_path, head_cap):
 
 
 # ---------------------------------------------------------------------------
-# rsm-capture
+# rsm-record
 
 
 def make_pty():
@@ -225,12 +225,12 @@ def test_record_port_vanishes_and_missing_port(tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
-    assert proc.returncode == 3, err
+    assert proc.returncode == 1, err
     assert "port robot" in err and "vanished" in err
     _, recs, st = cap.read_capture(out)
     assert b"".join(r.data for r in recs) == p.encode_encoder(1, 2)
     res = subprocess.run([sys.executable, "-m", "rsm_tools.record", str(tmp_path / "n.cap"), "--port",
                           f"robot={tmp_path / 'ttyNONE'}@9600"],
                          capture_output=True, text=True, env=subprocess_env())
-    assert res.returncode == 2 and "cannot open port robot" in res.stderr
+    assert res.returncode == 1 and "cannot open port robot" in res.stderr
     assert not (tmp_path / "n.cap").exists()

@@ -35,4 +35,4 @@ def test_poses_get_the_original_scan_stamps_and_counts_must_agree(tmp_path, head
     res = subprocess.run([sys.executable, "-m", "rsm_tools.restamp", str(traj), "--capture",
                           str(tmp_path / "missing.cap"), "-o", str(out2)],
                          capture_output=True, text=True, env=subprocess_env())
-    assert res.returncode == 2 and "rsm-restamp:" in res.stderr
+    assert res.returncode == 1 and "rsm-restamp:" in res.stderr

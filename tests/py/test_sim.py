@@ -9,12 +9,13 @@ import pytest
 from conftest import subprocess_env
 from rsm_tools import capture as cap
 from rsm_tools import convert as cv
+from rsm_tools import evaluate as ev
 from rsm_tools import protocols as p
 from rsm_tools import sim
 
 
 def load_truth(path):
-    return [tuple(map(float, l.split())) for l in path.read_text().splitlines() if not l.startswith("#")]
+    return [tuple(p) for p in ev.read_poses(path)[0]]
 
 
 def odometry(h, recs):

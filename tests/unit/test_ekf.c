@@ -4,7 +4,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "rsm/ekf.h"
+#include "ekf.h"
 #include "rsm/status.h"
 #include "test_support.h"
 #include "unity.h"

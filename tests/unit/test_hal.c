@@ -2,6 +2,7 @@
 #include <string.h>
 
 #include "rsm/hal.h"
+#include "rsm/link_poll.h"
 #include "rsm/status.h"
 #include "unity.h"
 

@@ -9,8 +9,8 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "rsm/grid.h"
-#include "rsm/harris.h"
+#include "grid.h"
+#include "harris.h"
 #include "rsm/status.h"
 #include "synth.h"
 #include "unity.h"

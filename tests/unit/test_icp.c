@@ -5,7 +5,8 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "rsm/icp.h"
+#include "icp.h"
+#include "rigid.h"
 #include "rsm/status.h"
 #include "test_support.h"
 #include "unity.h"

@@ -13,6 +13,7 @@
 #include "rsm/localizer.h"
 #include "rsm/status.h"
 #include "synth.h"
+#include "tilemap.h" /* internal (src/): the persistent map read directly */
 #include "unity.h"
 
 #define DEG (RSM_PI / 180.0f)
@@ -283,10 +284,20 @@ void test_localizer_config_default_should_be_valid(void)
     TEST_ASSERT_EQUAL_INT(0, strcmp("unknown", rsm_outcome_name(RSM_SCAN_OUTCOMES)));
 }
 
+/* A config with one bad field, what: init refuses it with loc untouched,
+ * and rsm_localizer_config_check names that field (the map matcher's part
+ * as a whole). */
 static void assert_rejected(const rsm_localizer_config_t *c, const char *what)
 {
     const rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};
+    const char *field = NULL;
+    const char *want = strncmp(what, "mapmatch.", 9) == 0 ? "mapmatch" : what;
+    memset(&loc, 0xA5, sizeof loc);
+    memcpy(&snapshot, &loc, sizeof loc);
     TEST_ASSERT_EQUAL_INT_MESSAGE(RSM_ERR_INVAL, rsm_localizer_init(&loc, c, &x0, NULL), what);
+    TEST_ASSERT_EQUAL_MEMORY_MESSAGE(&snapshot, &loc, sizeof loc, what);
+    TEST_ASSERT_EQUAL_INT_MESSAGE(RSM_ERR_INVAL, rsm_localizer_config_check(c, &field), what);
+    TEST_ASSERT_EQUAL_STRING(want, field);
 }
 
 void test_localizer_init_should_refuse_a_caller_built_with_other_capacities(void)
@@ -318,6 +329,14 @@ void test_localizer_init_should_reject_bad_configs(void)
     rsm_localizer_config_t c;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(NULL, &cfg, &x0, NULL));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(&loc, NULL, &x0, NULL));
+    {
+        const char *field = "untouched";
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_config_check(&cfg, &field));
+        TEST_ASSERT_EQUAL_STRING("untouched", field);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_config_check(&cfg, NULL));
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_config_check(NULL, &field));
+        TEST_ASSERT_EQUAL_STRING("cfg", field);
+    }
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(&loc, &cfg, NULL, NULL));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(&loc, &cfg, &x0, p_asym));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(&loc, &cfg, &x0, p_neg));

@@ -9,10 +9,10 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "rsm/mapmatch.h"
+#include "mapmatch.h"
 #include "rsm/scan.h"
 #include "rsm/status.h"
-#include "rsm/tilemap.h"
+#include "tilemap.h"
 #include "synth.h"
 #include "unity.h"
 

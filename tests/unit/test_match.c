@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "rsm/match.h"
+#include "match.h"
 #include "rsm/status.h"
 #include "unity.h"
 

@@ -37,6 +37,7 @@ static rsm_clock_t clk;
 static fake_lms_t lms;
 static rsm_sicklms_config_t cfg;
 static rsm_sicklms_t drv;
+static rsm_scan_t drv_scan; /* the caller's scan the driver decodes into */
 
 #define T0_US 1000000u
 #define SCAN_PERIOD_US 200000u
@@ -262,7 +263,7 @@ void setUp(void)
     rsm_fakelink_set_peer(&fl, lms_peer, NULL);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_config_default(&cfg));
     cfg.baud = 9600u; /* most tests stay at the power-up rate */
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_init(&drv, &link, &clk, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_init(&drv, &link, &clk, &cfg, &drv_scan));
 }
 
 void tearDown(void)
@@ -274,20 +275,21 @@ void tearDown(void)
 void test_sicklms_init_should_reject_bad_arguments(void)
 {
     rsm_sicklms_config_t bad = cfg;
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(NULL, &link, &clk, &cfg));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, NULL, &clk, &cfg));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(NULL, &link, &clk, &cfg, &drv_scan));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, NULL, &clk, &cfg, &drv_scan));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, NULL, &drv_scan));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &cfg, NULL));
     bad.resolution_cdeg = 25u; /* 180 deg at 0.25 deg is not a variant */
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad, &drv_scan));
     bad = cfg;
     bad.address = 0x80u;
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad, &drv_scan));
     bad = cfg;
     bad.baud = 57600u;
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad, &drv_scan));
     bad = cfg;
     bad.max_tries = 0u;
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&drv, &link, &clk, &bad, &drv_scan));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_config_default(NULL));
 }
 
@@ -431,7 +433,7 @@ void test_sicklms_poll_should_yield_robot_frame_scans_from_the_b0_stream(void)
     TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_CONNECTED, 5000000u, &ev));
     for (i = 0; i < 3; i++) {
         TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 1000000u, &ev));
-        TEST_ASSERT_EQUAL_PTR(&drv.scan, ev.scan);
+        TEST_ASSERT_EQUAL_PTR(&drv_scan, ev.scan);
         TEST_ASSERT_EQUAL_UINT32(181u, (uint32_t)ev.scan->count);
         TEST_ASSERT_EQUAL_UINT64(fl.now_us, ev.scan->stamp_us);
         TEST_ASSERT_FLOAT_WITHIN(1e-5f, -90.0f * deg, ev.scan->angle_rad[0]);
@@ -518,8 +520,8 @@ void test_sicklms_connect_should_keep_the_flag_bits_in_the_default_measuring_mod
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_connect(&drv));
     TEST_ASSERT_EQUAL_INT(1, run_until(RSM_SICKLMS_EVENT_SCAN, 5000000u, &ev));
     TEST_ASSERT_EQUAL_UINT8(13u, drv.format.distance_bits);
+    /* Bit 13 is a flag, not distance: the range is the 13 bits below it. */
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.600f, ev.scan->range_m[10]);
-    TEST_ASSERT_EQUAL_HEX8(0x01u, drv.raw.reading[10].flags);
 }
 
 void test_sicklms_connect_should_refuse_a_unit_that_measures_reflectivity(void)

@@ -9,7 +9,7 @@
 
 #include "rsm/config.h"
 #include "rsm/status.h"
-#include "rsm/tilemap.h"
+#include "tilemap.h"
 #include "synth.h"
 #include "unity.h"
 

@@ -28,6 +28,7 @@
  * --trajectory writes rsm-nav's trajectory format (one line per scan).
  * The CARMEN reader is rsm-nav's (tools/nav/carmen.c, compiled in). */
 #include <errno.h>
+#include <getopt.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdint.h>
@@ -40,6 +41,7 @@
 #include "logrun.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"
+#include "tilemap.h" /* internal (src/): tiles held per level */
 
 #if defined(__SANITIZE_ADDRESS__)
 #define STAGES_ASAN 1
@@ -282,7 +284,9 @@ static int start_cb(void *ctx, const carmen_record_t *rec)
 {
     run_t *r = (run_t *)ctx;
     if (rsm_localizer_init(&r->loc, &r->cfg, &rec->odom, NULL) != RSM_OK) {
-        fprintf(stderr, "rsm-stages: invalid configuration\n");
+        const char *field = "none (the start pose is out of range)";
+        (void)rsm_localizer_config_check(&r->cfg, &field);
+        fprintf(stderr, "rsm-stages: invalid configuration: the localizer refuses its field %s\n", field);
         return -1;
     }
     r->initialised = 1;
@@ -500,57 +504,82 @@ static size_t parse_count(const char *s, size_t lo, size_t hi)
     return (size_t)v;
 }
 
+enum { OPT_CARMEN = 256, OPT_TRAJECTORY, OPT_METHOD, OPT_BEAMS, OPT_LIMIT, OPT_CLOCK, OPT_FOV179, OPT_STACK };
+
+static const struct option stages_options[] = {
+    {"carmen", required_argument, NULL, OPT_CARMEN},
+    {"trajectory", required_argument, NULL, OPT_TRAJECTORY},
+    {"method", required_argument, NULL, OPT_METHOD},
+    {"beams", required_argument, NULL, OPT_BEAMS},
+    {"limit", required_argument, NULL, OPT_LIMIT},
+    {"clock", required_argument, NULL, OPT_CLOCK},
+    {"fov179", no_argument, NULL, OPT_FOV179},
+    {"stack", no_argument, NULL, OPT_STACK},
+    {"help", no_argument, NULL, 'h'},
+    {NULL, 0, NULL, 0}
+};
+
 int main(int argc, char **argv)
 {
     run_t *r = &g_run;
-    int i;
+    int opt;
     int rc;
     r->opt.method = RSM_METHOD_MAP;
     r->opt.clock_ns = 1;
-    for (i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        const char *next = i + 1 < argc ? argv[i + 1] : NULL;
-        if (strcmp(a, "--carmen") == 0 && next) {
-            r->opt.carmen = argv[++i];
-        } else if (strcmp(a, "--trajectory") == 0 && next) {
-            r->opt.trajectory = argv[++i];
-        } else if (strcmp(a, "--method") == 0 && next) {
-            ++i;
-            if (strcmp(next, "rsm") == 0) {
+    opterr = 0; /* every bad argument gets the usage */
+    while ((opt = getopt_long(argc, argv, "+:h", stages_options, NULL)) != -1) {
+        switch (opt) {
+        case OPT_CARMEN:
+            r->opt.carmen = optarg;
+            break;
+        case OPT_TRAJECTORY:
+            r->opt.trajectory = optarg;
+            break;
+        case OPT_METHOD:
+            if (strcmp(optarg, "rsm") == 0) {
                 r->opt.method = RSM_METHOD_MAP;
-            } else if (strcmp(next, "paper") == 0) {
+            } else if (strcmp(optarg, "paper") == 0) {
                 r->opt.method = RSM_METHOD_PAPER;
-            } else if (strcmp(next, "icp") == 0) {
+            } else if (strcmp(optarg, "icp") == 0) {
                 r->opt.method = RSM_METHOD_ICP;
             } else {
                 usage(stderr);
                 return 2;
             }
-        } else if (strcmp(a, "--beams") == 0 && next) {
-            r->opt.beams = parse_count(argv[++i], 2u, (size_t)RSM_MAX_BEAMS);
-        } else if (strcmp(a, "--limit") == 0 && next) {
-            r->opt.limit = parse_count(argv[++i], 1u, (size_t)-1);
-        } else if (strcmp(a, "--clock") == 0 && next) {
-            ++i;
-            if (strcmp(next, "ns") == 0) {
+            break;
+        case OPT_BEAMS:
+            r->opt.beams = parse_count(optarg, 2u, (size_t)RSM_MAX_BEAMS);
+            break;
+        case OPT_LIMIT:
+            r->opt.limit = parse_count(optarg, 1u, (size_t)-1);
+            break;
+        case OPT_CLOCK:
+            if (strcmp(optarg, "ns") == 0) {
                 r->opt.clock_ns = 1;
-            } else if (strcmp(next, "none") == 0) {
+            } else if (strcmp(optarg, "none") == 0) {
                 r->opt.clock_ns = 0;
             } else {
                 usage(stderr);
                 return 2;
             }
-        } else if (strcmp(a, "--fov179") == 0) {
+            break;
+        case OPT_FOV179:
             r->opt.fov179 = 1;
-        } else if (strcmp(a, "--stack") == 0) {
+            break;
+        case OPT_STACK:
             r->opt.stack = 1;
-        } else if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            break;
+        case 'h':
             usage(stdout);
             return 0;
-        } else {
+        default: /* unknown option, or a value missing */
             usage(stderr);
             return 2;
         }
+    }
+    if (optind < argc) {
+        usage(stderr);
+        return 2;
     }
     if (r->opt.carmen == NULL) {
         usage(stderr);

@@ -5,6 +5,7 @@
  * Exit status: 0 when the input was read (whatever it held), 1 when it
  * could not be opened, 2 for bad arguments. */
 #include <errno.h>
+#include <getopt.h>
 #include <inttypes.h>
 #include <signal.h>
 #include <stdio.h>
@@ -90,58 +91,79 @@ static int parse_u32(const char *s, uint32_t *out)
     return 1;
 }
 
-/* Returns 0 to run, 2 on bad arguments, -1 after --help. */
+enum { OPT_PROTOCOL = 256, OPT_BAUD, OPT_TIMEOUT_MS, OPT_PRETTY, OPT_DISTANCE_BITS };
+
+static const struct option dump_options[] = {
+    {"protocol", required_argument, NULL, OPT_PROTOCOL},
+    {"baud", required_argument, NULL, OPT_BAUD},
+    {"timeout-ms", required_argument, NULL, OPT_TIMEOUT_MS},
+    {"pretty", no_argument, NULL, OPT_PRETTY},
+    {"distance-bits", required_argument, NULL, OPT_DISTANCE_BITS},
+    {"help", no_argument, NULL, 'h'},
+    {NULL, 0, NULL, 0}
+};
+
+/* Returns 0 to run, 2 on bad arguments, -1 after --help. Options and the
+ * input may come in any order ("-" is the input stdin). */
 static int parse_args(int argc, char **argv, dump_opts_t *o)
 {
-    int i;
+    int opt;
     memset(o, 0, sizeof *o);
-    for (i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        const int has_val = i + 1 < argc;
-        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+    opterr = 0; /* this program words its own messages */
+    while ((opt = getopt_long(argc, argv, ":h", dump_options, NULL)) != -1) {
+        switch (opt) {
+        case 'h':
             usage(stdout);
             return -1;
-        } else if (strcmp(a, "--pretty") == 0) {
+        case OPT_PRETTY:
             o->pretty = 1;
-        } else if (strcmp(a, "--protocol") == 0 && has_val) {
-            const char *p = argv[++i];
+            break;
+        case OPT_PROTOCOL: {
             size_t k;
             for (k = 1; k < sizeof proto_names / sizeof proto_names[0]; ++k) {
-                if (strcmp(p, proto_names[k]) == 0) {
+                if (strcmp(optarg, proto_names[k]) == 0) {
                     o->proto = (dump_proto_t)k;
                 }
             }
             if (o->proto == PROTO_NONE) {
-                fprintf(stderr, "rsm-dump: unknown protocol '%s' (aria, lms, ld06 or rplidar)\n", p);
+                fprintf(stderr, "rsm-dump: unknown protocol '%s' (aria, lms, ld06 or rplidar)\n", optarg);
                 return 2;
             }
-        } else if (strcmp(a, "--baud") == 0 && has_val) {
-            if (!parse_u32(argv[++i], &o->baud) || o->baud == 0u) {
+            break;
+        }
+        case OPT_BAUD:
+            if (!parse_u32(optarg, &o->baud) || o->baud == 0u) {
                 fprintf(stderr, "rsm-dump: --baud needs a positive integer\n");
                 return 2;
             }
-        } else if (strcmp(a, "--timeout-ms") == 0 && has_val) {
-            if (!parse_u32(argv[++i], &o->timeout_ms)) {
+            break;
+        case OPT_TIMEOUT_MS:
+            if (!parse_u32(optarg, &o->timeout_ms)) {
                 fprintf(stderr, "rsm-dump: --timeout-ms needs a non-negative integer\n");
                 return 2;
             }
-        } else if (strcmp(a, "--distance-bits") == 0 && has_val) {
+            break;
+        case OPT_DISTANCE_BITS: {
             uint32_t b = 0;
-            if (!parse_u32(argv[++i], &b) || b < 13u || b > 16u) {
+            if (!parse_u32(optarg, &b) || b < 13u || b > 16u) {
                 fprintf(stderr, "rsm-dump: --distance-bits must be 13..16\n");
                 return 2;
             }
             o->distance_bits = (int)b;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            fprintf(stderr, "rsm-dump: unknown or incomplete option '%s'\n", a);
+            break;
+        }
+        default: /* unknown option ('?') or a value missing (':') */
+            fprintf(stderr, "rsm-dump: unknown or incomplete option '%s'\n", argv[optind - 1]);
             usage(stderr);
             return 2;
-        } else if (o->input == NULL) {
-            o->input = a;
-        } else {
-            fprintf(stderr, "rsm-dump: more than one input given ('%s')\n", a);
-            return 2;
         }
+    }
+    if (optind < argc) {
+        o->input = argv[optind++];
+    }
+    if (optind < argc) {
+        fprintf(stderr, "rsm-dump: more than one input given ('%s')\n", argv[optind]);
+        return 2;
     }
     if (o->proto == PROTO_NONE) {
         fprintf(stderr, "rsm-dump: --protocol aria|lms|ld06|rplidar is required\n");

@@ -70,7 +70,7 @@ static int start_laser(nav_devices_t *dv, const rsm_link_t *link, const rsm_cloc
         return !dv->listen && rsm_slamtec_init(&dv->rplidar, link, clock, &dv->slcfg) == RSM_OK &&
                rsm_slamtec_connect(&dv->rplidar) == RSM_OK;
     default:
-        return rsm_sicklms_init(&dv->laser, link, clock, &dv->lcfg) == RSM_OK &&
+        return rsm_sicklms_init(&dv->laser, link, clock, &dv->lcfg, &dv->laser_scan) == RSM_OK &&
                (dv->listen ? rsm_sicklms_listen(&dv->laser) : rsm_sicklms_connect(&dv->laser)) == RSM_OK;
     }
 }

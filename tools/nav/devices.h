@@ -47,6 +47,7 @@ typedef struct nav_devices {
     rsm_rev_config_t rcfg;        /* the lidar's turns (mount: the localizer's) */
     rsm_p3dx_t robot;
     rsm_sicklms_t laser;
+    rsm_scan_t laser_scan;        /* the LMS driver decodes into it */
     rsm_ldlidar_t ld06;
     rsm_slamtec_t rplidar;
     rsm_rev_t rev;

@@ -8,6 +8,7 @@
  *           [--set key=value ...] [--quiet]
  */
 #include <errno.h>
+#include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,6 +24,7 @@
 #include "rsm/localizer.h"
 #include "rsm/status.h"
 #include "rsm/sync.h"
+#include "tilemap.h" /* internal (src/): tiles held per level, for the summary */
 
 
 /* Every --set KEY: F float field, U unsigned or int field, E enum field
@@ -306,8 +308,13 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
     start.y = (float)(y - nav->off_y);
     start.theta = rsm_wrap_angle((float)th);
     if (rsm_localizer_init(&nav->loc, &nav->cfg, &start, NULL) != RSM_OK) {
-        fprintf(stderr, "rsm-nav: invalid configuration (a --set value, the laser pose or the odometry"
-                        " geometry is out of range)\n");
+        const char *field = NULL;
+        if (rsm_localizer_config_check(&nav->cfg, &field) != RSM_OK) {
+            fprintf(stderr, "rsm-nav: invalid configuration: the localizer refuses its field %s (a --set value,"
+                            " the laser pose or the odometry geometry is out of range)\n", field);
+        } else {
+            fprintf(stderr, "rsm-nav: invalid configuration (the start pose is out of range)\n");
+        }
         return -1;
     }
     if (rsm_sync_init(&nav->sync, &nav->loc, &nav->sync_cfg, on_fused, nav) != RSM_OK) {
@@ -987,6 +994,86 @@ static void print_summary(nav_t *nav)
     print_peak_memory();
 }
 
+/* ---- command line ------------------------------------------------------------ */
+
+enum {
+    OPT_CARMEN = 256, OPT_CAPTURE, OPT_ROBOT, OPT_LMS, OPT_LIDAR, OPT_LIDAR_KEEP, OPT_NO_DESKEW,
+    OPT_ROBOT_BAUD, OPT_LMS_BAUD, OPT_LISTEN, OPT_SECONDS, OPT_IDLE_EXIT, OPT_TICKS_PER_M, OPT_WHEEL_BASE,
+    OPT_INITIAL_POSE, OPT_LASER_POSE, OPT_UPSIDE_DOWN, OPT_TRAJECTORY, OPT_SUMMARY_JSON, OPT_TUM, OPT_EVENTS,
+    OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_QUIET
+};
+
+/* --lidar, --initial-pose and --laser-pose take more than one value: the
+ * table gives the first (or none) and the parser reads the rest; "+" in the
+ * short options stops at the first argument that is not an option, so that
+ * a value such as -0.05 is never taken for one. */
+static const struct option nav_options[] = {
+    {"carmen", required_argument, NULL, OPT_CARMEN},
+    {"capture", required_argument, NULL, OPT_CAPTURE},
+    {"robot", required_argument, NULL, OPT_ROBOT},
+    {"lms", required_argument, NULL, OPT_LMS},
+    {"lidar", required_argument, NULL, OPT_LIDAR},
+    {"lidar-keep", required_argument, NULL, OPT_LIDAR_KEEP},
+    {"no-deskew", no_argument, NULL, OPT_NO_DESKEW},
+    {"robot-baud", required_argument, NULL, OPT_ROBOT_BAUD},
+    {"lms-baud", required_argument, NULL, OPT_LMS_BAUD},
+    {"listen", no_argument, NULL, OPT_LISTEN},
+    {"seconds", required_argument, NULL, OPT_SECONDS},
+    {"idle-exit", required_argument, NULL, OPT_IDLE_EXIT},
+    {"ticks-per-m", required_argument, NULL, OPT_TICKS_PER_M},
+    {"wheel-base", required_argument, NULL, OPT_WHEEL_BASE},
+    {"initial-pose", no_argument, NULL, OPT_INITIAL_POSE},
+    {"laser-pose", no_argument, NULL, OPT_LASER_POSE},
+    {"upside-down", no_argument, NULL, OPT_UPSIDE_DOWN},
+    {"trajectory", required_argument, NULL, OPT_TRAJECTORY},
+    {"summary-json", required_argument, NULL, OPT_SUMMARY_JSON},
+    {"tum", required_argument, NULL, OPT_TUM},
+    {"events", required_argument, NULL, OPT_EVENTS},
+    {"map", required_argument, NULL, OPT_MAP},
+    {"method", required_argument, NULL, OPT_METHOD},
+    {"set", required_argument, NULL, OPT_SET},
+    {"fov179", no_argument, NULL, OPT_FOV179},
+    {"quiet", no_argument, NULL, OPT_QUIET},
+    {"help", no_argument, NULL, 'h'},
+    {NULL, 0, NULL, 0}
+};
+
+/* An argument the parser cannot place (or an option whose value is missing):
+ * named, then the usage, exit status 2. */
+static int unexpected(const char *arg)
+{
+    fprintf(stderr, "rsm-nav: unexpected argument '%s'\n", arg);
+    usage(stderr);
+    return 2;
+}
+
+/* Three finite numbers x y theta into *pose; -1 (pose partly written) if
+ * any is not a whole number. */
+static int parse_pose(char *const *v, rsm_pose_t *pose)
+{
+    char *e1;
+    char *e2;
+    char *e3;
+    pose->x = strtof(v[0], &e1);
+    pose->y = strtof(v[1], &e2);
+    pose->theta = strtof(v[2], &e3);
+    if (e1 == v[0] || e2 == v[1] || e3 == v[2] || *e1 != '\0' || *e2 != '\0' || *e3 != '\0' ||
+        !isfinite(pose->x) || !isfinite(pose->y) || !isfinite(pose->theta)) {
+        return -1;
+    }
+    return 0;
+}
+
+/* An output file named on the command line, or NULL after saying why. */
+static FILE *open_output(const char *path)
+{
+    FILE *f = fopen(path, "w");
+    if (f == NULL) {
+        fprintf(stderr, "rsm-nav: cannot write %s: %s\n", path, strerror(errno));
+    }
+    return f;
+}
+
 int main(int argc, char **argv)
 {
     static nav_t nav; /* the localizer is about 48 KiB: keep it off the stack */
@@ -1000,176 +1087,195 @@ int main(int argc, char **argv)
     float wheel_base = 0.0f;
     int fov179 = 0;
     int rc;
-    int i;
+    int opt;
+    int li = 0;
 
     memset(&live, 0, sizeof live);
     live.lidar_keep = 1u;
     nav.cfg = rsm_localizer_config_default();
-    for (i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        const char *next = i + 1 < argc ? argv[i + 1] : NULL;
-        if (strcmp(a, "--carmen") == 0 && next) {
-            carmen = argv[++i];
-        } else if (strcmp(a, "--capture") == 0 && next) {
-            capture = argv[++i];
-        } else if (strcmp(a, "--robot") == 0 && next) {
-            live.robot = argv[++i];
-        } else if (strcmp(a, "--lms") == 0 && next) {
-            live.lms = argv[++i];
-        } else if (strcmp(a, "--lidar") == 0 && i + 2 < argc) {
-            if (strcmp(argv[i + 1], "ld06") == 0) {
+    opterr = 0; /* this program words its own messages */
+    while ((opt = getopt_long(argc, argv, "+:h", nav_options, &li)) != -1) {
+        const char *name = opt == '?' || opt == ':' ? argv[optind - 1] : nav_options[li].name;
+        switch (opt) {
+        case OPT_CARMEN:
+            carmen = optarg;
+            break;
+        case OPT_CAPTURE:
+            capture = optarg;
+            break;
+        case OPT_ROBOT:
+            live.robot = optarg;
+            break;
+        case OPT_LMS:
+            live.lms = optarg;
+            break;
+        case OPT_LIDAR: /* --lidar KIND DEV */
+            if (optind >= argc) {
+                return unexpected("--lidar");
+            }
+            if (strcmp(optarg, "ld06") == 0) {
                 live.laser = NAV_LASER_LD06;
-            } else if (strcmp(argv[i + 1], "rplidar") == 0) {
+            } else if (strcmp(optarg, "rplidar") == 0) {
                 live.laser = NAV_LASER_RPLIDAR;
             } else {
-                fprintf(stderr, "rsm-nav: --lidar takes ld06 or rplidar, not '%s'\n", argv[i + 1]);
+                fprintf(stderr, "rsm-nav: --lidar takes ld06 or rplidar, not '%s'\n", optarg);
                 return 2;
             }
-            live.lms = argv[i + 2];
-            i += 2;
-        } else if (strcmp(a, "--lidar-keep") == 0 && next) {
-            const long v = strtol(argv[++i], NULL, 10);
+            live.lms = argv[optind++];
+            break;
+        case OPT_LIDAR_KEEP: {
+            const long v = strtol(optarg, NULL, 10);
             if (v < 1 || v > 64) {
-                fprintf(stderr, "rsm-nav: --lidar-keep takes 1 to 64, not '%s'\n", argv[i]);
+                fprintf(stderr, "rsm-nav: --lidar-keep takes 1 to 64, not '%s'\n", optarg);
                 return 2;
             }
             live.lidar_keep = (unsigned)v;
-        } else if (strcmp(a, "--no-deskew") == 0) {
+            break;
+        }
+        case OPT_NO_DESKEW:
             nav.no_deskew = 1;
-        } else if ((strcmp(a, "--robot-baud") == 0 || strcmp(a, "--lms-baud") == 0) && next) {
-            const long v = strtol(argv[++i], NULL, 10);
+            break;
+        case OPT_ROBOT_BAUD:
+        case OPT_LMS_BAUD: {
+            const long v = strtol(optarg, NULL, 10);
             if (v <= 0) {
-                fprintf(stderr, "rsm-nav: bad baud rate '%s'\n", argv[i]);
+                fprintf(stderr, "rsm-nav: bad baud rate '%s'\n", optarg);
                 return 2;
             }
-            if (a[2] == 'r') {
+            if (opt == OPT_ROBOT_BAUD) {
                 live.robot_baud = (uint32_t)v;
             } else {
                 live.lms_baud = (uint32_t)v;
             }
-        } else if (strcmp(a, "--listen") == 0) {
+            break;
+        }
+        case OPT_LISTEN:
             live.listen_only = 1;
-        } else if ((strcmp(a, "--seconds") == 0 || strcmp(a, "--idle-exit") == 0) && next) {
-            const double v = strtod(argv[++i], NULL);
+            break;
+        case OPT_SECONDS:
+        case OPT_IDLE_EXIT: {
+            const double v = strtod(optarg, NULL);
             if (!(v > 0.0)) {
-                fprintf(stderr, "rsm-nav: bad duration '%s'\n", argv[i]);
+                fprintf(stderr, "rsm-nav: bad duration '%s'\n", optarg);
                 return 2;
             }
-            if (a[2] == 's') {
+            if (opt == OPT_SECONDS) {
                 live.seconds = v;
             } else {
                 live.idle_exit_s = v;
             }
-        } else if ((strcmp(a, "--ticks-per-m") == 0 || strcmp(a, "--wheel-base") == 0) && next) {
-            const float v = strtof(argv[++i], NULL);
+            break;
+        }
+        case OPT_TICKS_PER_M:
+        case OPT_WHEEL_BASE: {
+            const float v = strtof(optarg, NULL);
             if (!(v > 0.0f)) {
-                fprintf(stderr, "rsm-nav: bad value '%s' for %s\n", argv[i], a);
+                fprintf(stderr, "rsm-nav: bad value '%s' for --%s\n", optarg, name);
                 return 2;
             }
-            if (a[2] == 't') {
+            if (opt == OPT_TICKS_PER_M) {
                 ticks_per_m = v;
             } else {
                 wheel_base = v;
             }
-        } else if (strcmp(a, "--initial-pose") == 0 && i + 3 < argc) {
-            char *e1;
-            char *e2;
-            char *e3;
-            nav.x0.x = strtof(argv[i + 1], &e1);
-            nav.x0.y = strtof(argv[i + 2], &e2);
-            nav.x0.theta = strtof(argv[i + 3], &e3);
-            if (*e1 != '\0' || *e2 != '\0' || *e3 != '\0' || !isfinite(nav.x0.x) || !isfinite(nav.x0.y) ||
-                !isfinite(nav.x0.theta)) {
+            break;
+        }
+        case OPT_INITIAL_POSE: /* three numbers follow */
+            if (optind + 3 > argc) {
+                return unexpected(argv[optind - 1]);
+            }
+            if (parse_pose(argv + optind, &nav.x0) != 0) {
                 fprintf(stderr, "rsm-nav: bad --initial-pose\n");
                 return 2;
             }
             nav.have_x0 = 1;
-            i += 3;
-        } else if (strcmp(a, "--laser-pose") == 0) {
-            char *e1;
-            char *e2;
-            char *e3;
-            if (i + 3 >= argc) {
+            optind += 3;
+            break;
+        case OPT_LASER_POSE:
+            if (optind + 3 > argc) {
                 fprintf(stderr, "rsm-nav: --laser-pose needs three numbers: x y theta\n");
                 return 2;
             }
-            nav.cfg.laser_mount.x = strtof(argv[i + 1], &e1);
-            nav.cfg.laser_mount.y = strtof(argv[i + 2], &e2);
-            nav.cfg.laser_mount.theta = strtof(argv[i + 3], &e3);
-            if (e1 == argv[i + 1] || e2 == argv[i + 2] || e3 == argv[i + 3] || *e1 != '\0' || *e2 != '\0' ||
-                *e3 != '\0' || !isfinite(nav.cfg.laser_mount.x) || !isfinite(nav.cfg.laser_mount.y) ||
-                !isfinite(nav.cfg.laser_mount.theta)) {
+            if (parse_pose(argv + optind, &nav.cfg.laser_mount) != 0) {
                 fprintf(stderr, "rsm-nav: bad --laser-pose (three numbers: x y theta)\n");
                 return 2;
             }
             nav.cfg.laser_mount.theta = rsm_wrap_angle(nav.cfg.laser_mount.theta);
             nav.mount_flag = 1;
-            i += 3;
-        } else if (strcmp(a, "--upside-down") == 0) {
+            optind += 3;
+            break;
+        case OPT_UPSIDE_DOWN:
             nav.cfg.laser_upside_down = 1u;
-        } else if (strcmp(a, "--trajectory") == 0 && next) {
-            trajectory = argv[++i];
-        } else if (strcmp(a, "--summary-json") == 0 && next) {
-            summary_json = argv[++i];
-        } else if (strcmp(a, "--tum") == 0 && next) {
-            nav.tum = fopen(argv[++i], "w");
-            if (nav.tum == NULL) {
-                fprintf(stderr, "rsm-nav: cannot write %s: %s\n", argv[i], strerror(errno));
+            break;
+        case OPT_TRAJECTORY:
+            trajectory = optarg;
+            break;
+        case OPT_SUMMARY_JSON:
+            summary_json = optarg;
+            break;
+        case OPT_TUM:
+            if ((nav.tum = open_output(optarg)) == NULL) {
                 return 1;
             }
             fprintf(nav.tum, "# timestamp x y z qx qy qz qw (TUM)\n");
-        } else if (strcmp(a, "--events") == 0 && next) {
-            nav.events = fopen(argv[++i], "w");
-            if (nav.events == NULL) {
-                fprintf(stderr, "rsm-nav: cannot write %s: %s\n", argv[i], strerror(errno));
+            break;
+        case OPT_EVENTS:
+            if ((nav.events = open_output(optarg)) == NULL) {
                 return 1;
             }
-        } else if (strcmp(a, "--map") == 0 && next) {
-            nav.map_path = argv[++i];
-        } else if (strcmp(a, "--method") == 0 && next) {
-            ++i;
-            if (strcmp(next, "rsm") == 0 || strcmp(next, "map") == 0) {
+            break;
+        case OPT_MAP:
+            nav.map_path = optarg;
+            break;
+        case OPT_METHOD:
+            if (strcmp(optarg, "rsm") == 0 || strcmp(optarg, "map") == 0) {
                 nav.cfg.method = RSM_METHOD_MAP;
-            } else if (strcmp(next, "paper") == 0) {
+            } else if (strcmp(optarg, "paper") == 0) {
                 nav.cfg.method = RSM_METHOD_PAPER;
-            } else if (strcmp(next, "icp") == 0) {
+            } else if (strcmp(optarg, "icp") == 0) {
                 nav.cfg.method = RSM_METHOD_ICP;
-            } else if (strcmp(next, "odometry") == 0) {
+            } else if (strcmp(optarg, "odometry") == 0) {
                 nav.cfg.method = RSM_METHOD_ODOMETRY;
             } else {
-                fprintf(stderr, "rsm-nav: unknown method '%s'\n", next);
+                fprintf(stderr, "rsm-nav: unknown method '%s'\n", optarg);
                 return 2;
             }
-        } else if (strcmp(a, "--set") == 0 && next) {
+            break;
+        case OPT_SET: {
             double top = 0.0;
-            const int set = set_option(&nav.cfg, argv[++i], &top);
+            const int set = set_option(&nav.cfg, optarg, &top);
             if (set == -2) {
-                fprintf(stderr, "rsm-nav: bad --set '%s': a whole number from 0 to %.0f\n", argv[i], top);
+                fprintf(stderr, "rsm-nav: bad --set '%s': a whole number from 0 to %.0f\n", optarg, top);
                 return 2;
             }
             if (set == -3) {
-                fprintf(stderr, "rsm-nav: unknown key in --set '%s' (rsm-nav --help lists them)\n", argv[i]);
+                fprintf(stderr, "rsm-nav: unknown key in --set '%s' (rsm-nav --help lists them)\n", optarg);
                 return 2;
             }
             if (set != 0) {
-                fprintf(stderr, "rsm-nav: bad --set '%s'\n", argv[i]);
+                fprintf(stderr, "rsm-nav: bad --set '%s'\n", optarg);
                 return 2;
             }
-            if (strncmp(argv[i], "mount_", 6) == 0) {
+            if (strncmp(optarg, "mount_", 6) == 0) {
                 nav.mount_flag = 1;
             }
-        } else if (strcmp(a, "--fov179") == 0) {
+            break;
+        }
+        case OPT_FOV179:
             fov179 = 1;
-        } else if (strcmp(a, "--quiet") == 0) {
+            break;
+        case OPT_QUIET:
             nav.quiet = 1;
-        } else if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            break;
+        case 'h':
             usage(stdout);
             return 0;
-        } else {
-            fprintf(stderr, "rsm-nav: unexpected argument '%s'\n", a);
-            usage(stderr);
-            return 2;
+        default: /* unknown option ('?') or a value missing (':') */
+            return unexpected(name);
         }
+    }
+    if (optind < argc) {
+        return unexpected(argv[optind]);
     }
     if (((carmen != NULL) + (capture != NULL) + (live.robot != NULL || live.lms != NULL)) != 1 || trajectory == NULL) {
         fprintf(stderr, "rsm-nav: give exactly one source (--carmen, --capture, or --robot/--lms/--lidar) and"

@@ -499,9 +499,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--units", choices=("auto", "mm", "cm"), default="auto",
                     help="range unit of the 0xB0 telegrams; auto (default): mm when the log's longest valid "
                          "reading fits in 8.182 m, else cm (81.82 m)")
-    ap.add_argument("--readings", type=int, choices=(180, 181, 361), default=181)
-    ap.add_argument("--ticks-per-m", type=float, default=DEFAULT_TICKS_PER_M)
-    ap.add_argument("--wheel-base", type=float, default=DEFAULT_WHEEL_BASE)
+    ap.add_argument("--readings", type=int, choices=(180, 181, 361), default=181,
+                    help="readings per LMS scan telegram (default 181: 180 deg at 1 deg)")
+    ap.add_argument("--ticks-per-m", type=float, default=DEFAULT_TICKS_PER_M,
+                    help=f"encoder ticks per metre of the encoder packets (default {DEFAULT_TICKS_PER_M:g})")
+    ap.add_argument("--wheel-base", type=float, default=DEFAULT_WHEEL_BASE,
+                    help=f"wheel base in metres the ticks are made with (default {DEFAULT_WHEEL_BASE:g})")
     ap.add_argument("--max-range", type=float, default=None,
                     help="longer ranges are sent as the LMS 'too far' code 0x1FF7 (default: only those the "
                          "unit cannot carry); every such reading is counted and reported")
@@ -530,7 +533,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except (OSError, EOFError, zlib.error) as exc:
         # A truncated or corrupt gzip log ends in EOFError or zlib.error.
         print(f"rsm-convert: cannot read {a.log} to the end: {exc or type(exc).__name__}", file=sys.stderr)
-        return 2
+        return 1
     print(f"rsm-convert: {st.summary()}", file=sys.stderr)
     warning = st.warning()
     if warning:

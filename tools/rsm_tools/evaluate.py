@@ -180,16 +180,19 @@ def _floats(tokens: Sequence[str], path: PathLike, lineno: int) -> List[float]:
     return vals
 
 
-def load_poses(path: PathLike) -> Tuple[Trajectory, str]:
-    """Load a trajectory (4 columns), a corrected-poses file (5 columns) or
-    a TUM file (8 columns: t x y z qx qy qz qw, as ``rsm-nav --tum`` writes;
-    the heading is the yaw of the quaternion).
+def read_poses(path: PathLike) -> Tuple[List[TrajectoryPoint], str]:
+    """Every pose of a trajectory file in file order (repeated stamps kept):
+    the one reader of the package's trajectory files, which load_poses and
+    the other tools build on. Reads a trajectory (4 columns), a
+    corrected-poses file (5 columns) or a TUM file (8 columns: t x y z qx qy
+    qz qw, as ``rsm-nav --tum`` writes; the heading is the yaw of the
+    quaternion).
 
-    Returns the trajectory and the detected format, ``"trajectory"``,
+    Returns the poses and the detected format, ``"trajectory"``,
     ``"corrected-poses"`` or ``"tum"``.  The format is decided by the first
     data row; every row must then have the same number of columns.
     """
-    traj = Trajectory()
+    rows: List[TrajectoryPoint] = []
     ncols = None
     for lineno, tokens in _data_rows(path):
         if ncols is None:
@@ -203,13 +206,23 @@ def load_poses(path: PathLike) -> Tuple[Trajectory, str]:
             raise ValueError(f"{path}:{lineno}: expected {ncols} columns, got {len(tokens)}")
         v = _floats(tokens, path, lineno)
         if ncols == 4:
-            traj.add(v[0], v[1], v[2], v[3])
+            rows.append(TrajectoryPoint(v[0], v[1], v[2], v[3]))
         elif ncols == 5:
-            traj.add(v[0], v[2], v[3], v[4])
+            rows.append(TrajectoryPoint(v[0], v[2], v[3], v[4]))
         else:
             qx, qy, qz, qw = v[4:8]
-            traj.add(v[0], v[1], v[2], math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz)))
-    return traj, {4: "trajectory", 5: "corrected-poses", 8: "tum"}[ncols]
+            rows.append(TrajectoryPoint(v[0], v[1], v[2],
+                                        math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))))
+    if ncols is None:
+        return rows, "trajectory"
+    return rows, {4: "trajectory", 5: "corrected-poses", 8: "tum"}[ncols]
+
+
+def load_poses(path: PathLike) -> Tuple[Trajectory, str]:
+    """read_poses as a Trajectory (looked up by stamp; a repeated stamp's
+    last pose wins), with the detected format."""
+    rows, fmt = read_poses(path)
+    return Trajectory(rows), fmt
 
 
 def load_trajectory(path: PathLike) -> Trajectory:
@@ -426,7 +439,7 @@ def _json_safe(obj):
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
-        prog="rsm-eval",
+        prog="rsm-evaluate",
         description=(
             "Relative-pose error (Kuemmerle et al. 2009) of a 2D trajectory against "
             "ground-truth relations or poses."
@@ -470,7 +483,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             st = LogStats()
             points = odometry_trajectory(args.odometry, stats=st)
             if st.malformed_total:
-                print(f"rsm-eval: {args.odometry}: {st.summary()}", file=sys.stderr)
+                print(f"rsm-evaluate: {args.odometry}: {st.summary()}", file=sys.stderr)
             traj = Trajectory(points)
         else:
             traj = load_trajectory(args.trajectory)
@@ -492,8 +505,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             gt, _fmt = load_poses(args.ground_truth)
             rels = relations_from_poses(gt, args.max_span)
     except (OSError, ValueError) as exc:
-        print(f"rsm-eval: error: {exc}", file=sys.stderr)
-        return 2
+        print(f"rsm-evaluate: error: {exc}", file=sys.stderr)
+        return 1
 
     res = evaluate(traj, rels, max_span=args.max_span, min_span=args.min_span,
                    tolerance=args.tolerance)
@@ -505,7 +518,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     else:
         print(format_result(res, args.label))
     if res["matched"] == 0:
-        print("rsm-eval: no relation matched the trajectory", file=sys.stderr)
+        print("rsm-evaluate: no relation matched the trajectory", file=sys.stderr)
         return 1
     return 0
 

@@ -232,7 +232,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(f"poses: {kept} of {total} kept")
     except (OSError, ValueError) as exc:
         print(f"rsm-excerpt: error: {exc}", file=sys.stderr)
-        return 2
+        return 1
     return 0
 
 

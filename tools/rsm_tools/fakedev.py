@@ -76,8 +76,8 @@ do (handshake steps, commands with their argument and the host's rate at
 that moment, rate changes, watchdog stops, requests, ACK/NAK, stream
 starts and stops, cuts), and a ``summary`` object per device at exit.
 SIGINT or SIGTERM (or ``--seconds``) ends the run, after the bytes the host
-had already written are handled; exit status 0, or 2 for bad arguments or
-an unreadable capture.
+had already written are handled; exit status 0, 1 for an unreadable
+capture, 2 for bad arguments (the C tools' convention).
 """
 
 import argparse
@@ -847,7 +847,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--no-autobaud", action="store_true",
                     help="CONFIGpac says AutoBaud 0 (the host should not send HOSTBAUD)")
     ap.add_argument("--units", choices=("mm", "cm"), default="mm", help="laser units (default mm)")
-    ap.add_argument("--quiet", action="store_true")
+    ap.add_argument("--quiet", action="store_true", help="print only the port paths and errors")
     a = ap.parse_args(argv)
     if not 100 <= a.watchdog_ms <= 65535 or not 1 <= a.ticks_mm <= 65535:
         ap.error("--watchdog-ms must be 100..65535 and --ticks-mm 1..65535")
@@ -862,7 +862,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             playback = Playback(a.capture)
         except (OSError, cap.CaptureError) as exc:
             print(f"rsm-fakedev: cannot play {a.capture}: {exc}", file=sys.stderr)
-            return 2
+            return 1
 
     signal.signal(signal.SIGTERM, _raise_stop)
     signal.signal(signal.SIGINT, _raise_stop)
@@ -889,7 +889,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 0
     except cap.CaptureError as exc:
         print(f"rsm-fakedev: cannot play {a.capture}: {exc}", file=sys.stderr)
-        return 2
+        return 1
     except Stop as exc:
         if not a.quiet:
             print(f"rsm-fakedev: stopped by {exc.args[0]}", file=sys.stderr, flush=True)

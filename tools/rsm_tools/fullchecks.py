@@ -185,10 +185,10 @@ def check_rerun(label: str, nav: Path, log: Path, traj: Path, work: Path) -> Lis
 def capture_poses(capf: Path, traj: Path) -> List[Tuple[float, float, float, float]]:
     """A capture run's poses, each at its scan's stamp in the log."""
     stamps = [t / 1e6 for t in convert.original_scan_stamps(capf)]
-    rows = [l.split() for l in traj.read_text().splitlines() if l and not l.startswith("#")]
+    rows = ev.read_poses(traj)[0]
     if len(rows) != len(stamps):
         raise RuntimeError(f"{traj}: {len(rows)} poses for {len(stamps)} scans")
-    return [(stamps[i], float(r[1]), float(r[2]), float(r[3])) for i, r in enumerate(rows)]
+    return [(stamps[i], r.x, r.y, r.theta) for i, r in enumerate(rows)]
 
 
 def check_capture_path(label: str, nav: Path, log: Path, relations: List[ev.Relation],
@@ -296,7 +296,8 @@ def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], wor
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    from .bench import discover_logs, find_root, shared_dir  # one definition, the bench's
+    from .bench.measure import discover_logs, shared_dir  # one definition, the bench's
+    from .bench.common import find_root
 
     ap = argparse.ArgumentParser(prog="rsm-fullchecks", description=__doc__.split("\n\n")[0])
     ap.add_argument("--nav", type=Path, required=True, help="the rsm-nav to check (a Release build)")
@@ -308,7 +309,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     logs = discover_logs(shared / "data")
     if not logs:
         print(f"rsm-fullchecks: no log in {shared / 'data'} (set RSM_SHARED_DIR or --shared)", file=sys.stderr)
-        return 2
+        return 1
     with tempfile.TemporaryDirectory() as tmp:
         res = run_all(shared, a.nav, logs, Path(tmp), root, say=lambda s: print(f"rsm-fullchecks: {s}",
                                                                                   file=sys.stderr, flush=True))

@@ -153,15 +153,15 @@ def costs(out: str) -> dict:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="rsm-m4", description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     e = sub.add_parser("example", help="boot the example firmware and check it")
-    e.add_argument("elf", type=Path)
-    e.add_argument("work", type=Path)
+    e.add_argument("elf", type=Path, help="the example firmware image (rsm_firmware.elf)")
+    e.add_argument("work", type=Path, help="folder for the devices' files and the console output")
     r = sub.add_parser("replay", help="run the replay firmware and compare with the host")
-    r.add_argument("elf", type=Path)
-    r.add_argument("host_exe", type=Path)
-    r.add_argument("work", type=Path)
+    r.add_argument("elf", type=Path, help="the replay firmware image (rsm_replay_m4.elf)")
+    r.add_argument("host_exe", type=Path, help="rsm-replay-host, whose trajectory the target's must equal")
+    r.add_argument("work", type=Path, help="folder for the outputs")
     a = ap.parse_args(argv)
     try:
         if a.cmd == "example":

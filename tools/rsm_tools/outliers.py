@@ -213,12 +213,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     args = build_parser().parse_args(argv)
+    if not (math.isfinite(args.min_range) and math.isfinite(args.max_range)) or args.min_range > args.max_range:
+        # A command-line error (2), as the C tools say; reading or writing failing is 1.
+        print(f"rsm-outliers: error: bad range interval [{args.min_range}, {args.max_range}]", file=sys.stderr)
+        return 2
     try:
         st = inject_file(args.input, args.output, args.percent, args.seed,
                          args.min_range, args.max_range)
     except (OSError, ValueError) as exc:
         print(f"rsm-outliers: error: {exc}", file=sys.stderr)
-        return 2
+        return 1
     msg = (f"{st.scans} scans, {st.replaced} of {st.readings} readings replaced "
            f"({float(args.percent):g}% requested, seed {args.seed})")
     if st.skipped_malformed:

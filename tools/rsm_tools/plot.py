@@ -23,6 +23,8 @@ import sys
 from pathlib import Path
 from typing import List, Optional, Sequence, Tuple
 
+from . import evaluate as ev
+
 EXTRA_HINT = ("rsm-plot needs matplotlib, which the core tools do not install; "
               "install the optional extra: pip install 'rsm-tools[plot]' (or: pip install matplotlib)")
 
@@ -105,19 +107,9 @@ Pose = Tuple[float, float, float, float]
 
 
 def load_trajectory(path: str) -> List[Pose]:
-    """(t, x, y, theta) rows of a trajectory or of a five-column corrected-pose file."""
-    rows = []
-    for n, line in enumerate(Path(path).read_text().splitlines(), 1):
-        s = line.strip()
-        if not s or s.startswith("#"):
-            continue
-        f = s.split()
-        if len(f) == 5:
-            f = [f[0]] + f[2:]
-        if len(f) < 4:
-            raise PlotError(f"{path}:{n}: want 'timestamp x y theta'")
-        rows.append(tuple(float(v) for v in f[:4]))
-    return rows  # type: ignore[return-value]
+    """(t, x, y, theta) rows in file order of a trajectory, a corrected-pose
+    file or a TUM file (rsm_tools.evaluate.read_poses)."""
+    return [tuple(p) for p in ev.read_poses(path)[0]]  # type: ignore[misc]
 
 
 def align_to(truth: Sequence[Pose], traj: Sequence[Pose], tolerance: float = 1e-3) -> List[Pose]:
@@ -186,12 +178,13 @@ def plot(out: str, trajectories: Sequence[Tuple[str, str]], map_arg: Optional[st
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-plot", description=__doc__.split("\n\n")[0])
     ap.add_argument("--map", help="PGM map (YAML beside it) or map_server YAML")
-    ap.add_argument("--trajectory", action="append", default=[], metavar="LABEL=FILE")
-    ap.add_argument("--ground-truth", metavar="FILE")
+    ap.add_argument("--trajectory", action="append", default=[], metavar="LABEL=FILE",
+                    help="a trajectory (t x y theta, corrected poses or TUM) drawn as LABEL (repeatable)")
+    ap.add_argument("--ground-truth", metavar="FILE", help="ground-truth poses, drawn in black")
     ap.add_argument("--align-ground-truth", metavar="LABEL",
                     help="move the ground truth onto trajectory LABEL at their first common stamp")
-    ap.add_argument("-o", "--output", required=True, metavar="OUT.png")
-    ap.add_argument("--title")
+    ap.add_argument("-o", "--output", required=True, metavar="OUT.png", help="the PNG to write")
+    ap.add_argument("--title", help="the figure's title")
     a = ap.parse_args(argv)
     trajs = []
     for spec in a.trajectory:
@@ -204,7 +197,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         plot(a.output, trajs, a.map, a.ground_truth, a.title, a.align_ground_truth)
     except (PlotError, OSError, ValueError) as exc:
         print(f"rsm-plot: {exc}", file=sys.stderr)
-        return 2
+        return 1
     print(f"rsm-plot: wrote {a.output}", file=sys.stderr)
     return 0
 

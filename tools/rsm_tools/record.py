@@ -1,6 +1,6 @@
-"""rsm-capture: record serial ports (real devices or ptys) into a capture file.
+"""rsm-record: record serial ports (real devices or ptys) into a capture file.
 
-    rsm-capture OUT.cap --port CHANNEL=DEVICE@BAUD[:protocol] ... [--seconds N]
+    rsm-record OUT.cap --port CHANNEL=DEVICE@BAUD[:protocol] ... [--seconds N]
                 [--meta KEY=VALUE ...] [--quiet]
 
 Every chunk of bytes read from a port becomes one rx record stamped with the
@@ -10,9 +10,9 @@ channel's decoder and drives the live byte/frame counter on stderr.
 
 Stop with Ctrl-C or SIGTERM (exit status 0): every record read so far is in
 the file (each is flushed as it is written).  A port that cannot be opened:
-exit status 2 and no file is written.  A port that fails or vanishes during
-the run: a message naming it and exit status 3, with the records already
-written intact.
+exit status 1 and no file is written.  A port that fails or vanishes during
+the run: a message naming it and exit status 1, with the records already
+written intact.  A bad command line: 2 (the C tools' convention).
 """
 
 import argparse
@@ -25,8 +25,8 @@ from typing import List, Optional, Sequence, Tuple
 from . import capture as cap
 from .protocols import FrameCounter
 
-EXIT_OPEN = 2
-EXIT_VANISHED = 3
+EXIT_OPEN = 1
+EXIT_VANISHED = 1
 
 
 class Stop(Exception):
@@ -58,13 +58,16 @@ def parse_port(spec: str) -> Tuple[str, str, int, str]:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    ap = argparse.ArgumentParser(prog="rsm-capture", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="rsm-record", description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="capture file to write")
     ap.add_argument("--port", action="append", required=True,
-                    metavar="CHANNEL=DEVICE@BAUD[:protocol]")
+                    metavar="CHANNEL=DEVICE@BAUD[:protocol]",
+                    help="a port to record as channel CHANNEL (robot, laser, ...) at BAUD; protocol aria, "
+                         "lms2xx or raw (default) names its decoder for the live counter; once per port")
     ap.add_argument("--seconds", type=float, help="stop after this many seconds")
-    ap.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE")
-    ap.add_argument("--quiet", action="store_true")
+    ap.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
+                    help="a metadata line for the capture's header (repeatable)")
+    ap.add_argument("--quiet", action="store_true", help="print only errors (no live counter)")
     a = ap.parse_args(argv)
     try:
         specs = [parse_port(s) for s in a.port]
@@ -91,19 +94,19 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             try:
                 ports.append(serial.Serial(device, baudrate=baud, timeout=0))
             except (serial.SerialException, OSError, ValueError) as exc:
-                print(f"rsm-capture: cannot open port {name} ({device}): {exc}", file=sys.stderr)
+                print(f"rsm-record: cannot open port {name} ({device}): {exc}", file=sys.stderr)
                 return EXIT_OPEN
         channels = [cap.Channel(i, n, p, b) for i, (n, _, b, p) in enumerate(specs)]
         t0_wall = time.time_ns() // 1000
         t0_mono = time.monotonic_ns() // 1000
-        meta.setdefault("created_by", "rsm-capture")
+        meta.setdefault("created_by", "rsm-record")
         meta.setdefault("time.start_unix_us", str(t0_wall))
         writer = cap.CaptureWriter(a.out, channels, meta)
         counters = [FrameCounter(p) for _, _, _, p in specs]
         nbytes = [0] * len(specs)
         if not a.quiet:
             for (name, device, baud, proto) in specs:
-                print(f"rsm-capture: recording {name} from {device} at {baud} Bd ({proto})",
+                print(f"rsm-record: recording {name} from {device} at {baud} Bd ({proto})",
                       file=sys.stderr, flush=True)
         fds = {p.fileno(): i for i, p in enumerate(ports)}
         last_show = 0.0
@@ -112,7 +115,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         def show(final: bool = False) -> None:
             parts = [f"{specs[i][0]} {nbytes[i]} B {counters[i].frames} frames"
                      for i in range(len(specs))]
-            print("\rrsm-capture: " + " | ".join(parts), end="\n" if final else "",
+            print("\rrsm-record: " + " | ".join(parts), end="\n" if final else "",
                   file=sys.stderr, flush=True)
 
         while end is None or time.monotonic() < end:
@@ -123,7 +126,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                     data = ports[i].read(max(ports[i].in_waiting, 1))
                 except (serial.SerialException, OSError) as exc:
                     writer.close()
-                    print(f"\nrsm-capture: port {specs[i][0]} ({specs[i][1]}) failed or vanished: "
+                    print(f"\nrsm-record: port {specs[i][0]} ({specs[i][1]}) failed or vanished: "
                           f"{exc}; {writer.records} records already written are intact in {a.out}",
                           file=sys.stderr)
                     return EXIT_VANISHED
@@ -140,13 +143,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             show(True)
     except Stop as exc:
         if not a.quiet:
-            print(f"\nrsm-capture: stopped by {exc.args[0]}", file=sys.stderr)
+            print(f"\nrsm-record: stopped by {exc.args[0]}", file=sys.stderr)
     finally:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         if writer is not None:
             writer.close()
             if not a.quiet:
-                print(f"rsm-capture: {writer.records} records, {writer.bytes} bytes in {a.out}",
+                print(f"rsm-record: {writer.records} records, {writer.bytes} bytes in {a.out}",
                       file=sys.stderr, flush=True)
         for p in ports:
             try:

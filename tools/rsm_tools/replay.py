@@ -18,10 +18,10 @@ seconds (default 5, after scaling) is shortened to it and counted: a capture
 paused for an hour, or a corrupt stamp, does not stall the replay.
 ``--wait-open`` waits for a reader to open every pty first.  Progress goes to
 stderr.  Ctrl-C (SIGINT) or SIGTERM stops the replay cleanly (exit status 0
-after a "stopped" message).  Exit status 1: a problem in the capture, or a
-reader that went away (closed its pty, or read nothing for ``--stall``
-seconds, default 10, while bytes waited).  Exit status 2: bad arguments, an
-unreadable capture or a port that cannot be opened.
+after a "stopped" message).  Exit status 1: an unreadable capture, a port
+that cannot be opened, a problem in the capture, or a reader that went away
+(closed its pty, or read nothing for ``--stall`` seconds, default 10, while
+bytes waited).  Exit status 2: bad arguments (the C tools' convention).
 
 ``--run PROGRAM ARGS...`` starts the reader itself (``{CHANNEL}`` in its
 arguments becomes that channel's pty path) and ends with it: the exit status
@@ -152,8 +152,9 @@ def parse_ports(specs: Sequence[str]) -> Dict[str, str]:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-replay", description=__doc__.split("\n\n")[0])
-    ap.add_argument("capture")
-    ap.add_argument("--port", action="append", default=[], metavar="CHANNEL=DEVICE")
+    ap.add_argument("capture", help="the capture file to play")
+    ap.add_argument("--port", action="append", default=[], metavar="CHANNEL=DEVICE",
+                    help="play channel CHANNEL into serial device DEVICE (repeatable)")
     ap.add_argument("--pty", action="store_true", help="create a pseudo-terminal per other channel")
     g = ap.add_mutually_exclusive_group()
     g.add_argument("--speed", type=float, default=1.0, help="time scale (2 = twice as fast)")
@@ -165,7 +166,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                     help="longest pause, seconds after scaling; longer ones are shortened (default 5)")
     ap.add_argument("--stall", type=float, default=10.0,
                     help="give up when a pty reader takes nothing for this long (default 10 s)")
-    ap.add_argument("--quiet", action="store_true")
+    ap.add_argument("--quiet", action="store_true", help="print only the port paths and errors")
     ap.add_argument("--records", type=int, metavar="N",
                     help="play only the first N records (then the ports close, as if unplugged)")
     ap.add_argument("--lockstep", action="store_true",
@@ -195,7 +196,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             reader = cap.CaptureReader(a.capture)
         except (OSError, cap.CaptureError) as exc:
             print(f"rsm-replay: cannot read {a.capture}: {exc}", file=sys.stderr)
-            return 2
+            return 1
         hdr = reader.header
         for name in ports:
             try:
@@ -210,7 +211,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 except Exception as exc:  # serial.SerialException, OSError
                     print(f"rsm-replay: cannot open port {ch.name} ({ports[ch.name]}): {exc}",
                           file=sys.stderr)
-                    return 2
+                    return 1
             elif a.pty:
                 outs[ch.id] = PtyOut(ch.name, a.stall)
         if not outs:
@@ -299,7 +300,7 @@ def run_with(a, reader, outs, ptys) -> int:
         child = subprocess.Popen(cmd)
     except OSError as exc:
         print(f"rsm-replay: cannot start {cmd[0]}: {exc}", file=sys.stderr)
-        return 2
+        return 1
     step = None
     records = nbytes = groups = 0
     status: Optional[int] = None

@@ -6,10 +6,10 @@ rsm-nav in live mode stamps each pose with the time its scan arrived, which
 says nothing about the log a capture was converted from.  When the capture
 was made by rsm-convert (one 0xB0 telegram per laser record), the k-th pose
 is the k-th scan's, so it gets that scan's stamp as the log had it (undoing
-the converter's moved stamps, see docs/capture.md).  Then rsm-eval and
+the converter's moved stamps, see docs/capture.md).  Then rsm-evaluate and
 rsm-plot can match it against ground truth.  The trajectory must have one
 pose per scan; anything else is an error (exit status 1), as is a capture
-that cannot be read (2).
+that cannot be read; a bad command line exits with 2, as the C tools do.
 """
 
 import argparse
@@ -44,15 +44,15 @@ def restamp(trajectory: str, capture: str) -> List[str]:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-restamp", description=__doc__.split("\n\n")[0])
-    ap.add_argument("trajectory")
+    ap.add_argument("trajectory", help="rsm-nav's trajectory of the replayed capture (one pose per scan)")
     ap.add_argument("--capture", required=True, help="the capture that was replayed")
-    ap.add_argument("-o", "--output", required=True)
+    ap.add_argument("-o", "--output", required=True, help="the restamped trajectory to write")
     a = ap.parse_args(argv)
     try:
         lines = restamp(a.trajectory, a.capture)
     except (OSError, cap.CaptureError, KeyError) as exc:
         print(f"rsm-restamp: {exc}", file=sys.stderr)
-        return 2
+        return 1
     except ValueError as exc:
         print(f"rsm-restamp: {exc}", file=sys.stderr)
         return 1

@@ -264,12 +264,16 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-sim", description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="capture file to write")
     ap.add_argument("--truth", required=True, help="ground-truth trajectory to write")
-    ap.add_argument("--world", choices=("rooms", "corridor", "pillars"), default="rooms")
-    ap.add_argument("--seconds", type=float, default=60.0)
-    ap.add_argument("--slip", type=float, default=0.0)
-    ap.add_argument("--range-noise", type=float, default=0.0)
-    ap.add_argument("--outliers", type=float, default=0.0)
-    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--world", choices=("rooms", "corridor", "pillars"), default="rooms",
+                    help="the world driven through (default rooms)")
+    ap.add_argument("--seconds", type=float, default=60.0, help="length of the drive (default 60)")
+    ap.add_argument("--slip", type=float, default=0.0,
+                    help="each wheel's measured travel scaled by 1 + N(0, X) per step (default 0)")
+    ap.add_argument("--range-noise", type=float, default=0.0,
+                    help="N(0, M) metres added to every reading (default 0)")
+    ap.add_argument("--outliers", type=float, default=0.0,
+                    help="probability that a reading is replaced by a shorter random range (default 0)")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the one random generator (default 1)")
     ap.add_argument("--carmen", action="store_true",
                     help="write OUT as a CARMEN log (ODOM + ROBOTLASER1) instead of a capture")
     ap.add_argument("--laser-pose", type=float, nargs=3, metavar=("X", "Y", "THETA"),

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
 from . import evaluate as ev
-from .bench import outlier_logs
+from .bench.measure import outlier_logs
 
 DEFAULT_UPDATES = "0.34 0.37 0.40 0.43 0.46"
 
@@ -41,7 +41,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                     help=f"map_update_m values, space separated (default: {DEFAULT_UPDATES})")
     ap.add_argument("--seeds", default="7 8", help="outlier seeds, space separated; '' for clean only")
     ap.add_argument("--only", default="", help="run only these NAME-VARIANT pairs (e.g. 'aces-clean intel-s7')")
-    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--jobs", type=int, default=2, help="rsm-nav processes at a time (default 2)")
     a = ap.parse_args(argv)
     root = Path(__file__).resolve().parents[2]
     shared = a.shared or Path(os.environ.get("RSM_SHARED_DIR") or root.parent / "shared")
@@ -49,7 +49,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                   if (d / f"{d.name}.clf.gz").exists() and (d / f"{d.name}.relations").exists())
     if not logs:
         print(f"rsm-sweep: no logs in {shared / 'data'}", file=sys.stderr)
-        return 2
+        return 1
     a.work.mkdir(parents=True, exist_ok=True)
     only = set(a.only.split())
     seeds = [int(s) for s in a.seeds.split()]

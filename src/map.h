@@ -11,19 +11,12 @@
 
 #include "rsm/config.h"
 #include "rsm/geom.h"
-#include "rsm/grid.h"
+#include "rsm/localizer_parts.h"
+#include "grid.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-typedef struct rsm_map {
-    rsm_window_t win;              /* current window */
-    float cell_m;                  /* a, metres */
-    uint8_t hits[RSM_MAP_CELLS];   /* saturating hit counters, toroidal */
-    uint32_t scrolls;              /* window moves so far */
-    uint32_t outside;              /* points dropped because they fell outside */
-} rsm_map_t;
 
 /* Empties the map and centres the window on (x, y). RSM_ERR_INVAL for a
  * non-positive cell size or non-finite centre. */

@@ -15,50 +15,13 @@
 
 #include "rsm/config.h"
 #include "rsm/geom.h"
+#include "rsm/localizer_parts.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* How a reading near a cell border is treated (docs/reference/method.md, step 2). */
-typedef enum rsm_grid_rule {
-    RSM_GRID_SIGMA_INSIDE = 0, /* paper: mark only if the point is >= sigma inside its cell */
-    RSM_GRID_SIGMA_TOUCH = 1,  /* mark every cell the sigma circle touches (1 to 4) */
-    RSM_GRID_NEAREST = 2       /* mark the cell the point falls in */
-} rsm_grid_rule_t;
-
-typedef struct rsm_grid_config {
-    float cell_m;          /* a: cell side, metres; default 0.05 (the paper's 50 mm) */
-    float sigma_m;         /* laser range noise, metres; default 0.005 (the paper's 5 mm) */
-    rsm_grid_rule_t rule;  /* default RSM_GRID_SIGMA_TOUCH */
-} rsm_grid_config_t;
-
 rsm_grid_config_t rsm_grid_config_default(void);
-
-/* The window: global cell of its lower-left corner. */
-typedef struct rsm_window {
-    int32_t ox;
-    int32_t oy;
-} rsm_window_t;
-
-/* A cell's global index. */
-typedef struct rsm_cell {
-    int32_t gx;
-    int32_t gy;
-} rsm_cell_t;
-
-#define RSM_BITMAP_WORDS (RSM_MAP_CELLS / 32)
-
-/* A binary image over the window, with the list of its set cells so that
- * work (and clearing) costs grow with occupied cells, not with image area.
- * RAM: RSM_MAP_CELLS / 8 + 4 * RSM_IMAGE_MAX_CELLS bytes. */
-typedef struct rsm_image {
-    uint32_t bits[RSM_BITMAP_WORDS];
-    uint32_t cells[RSM_IMAGE_MAX_CELLS]; /* toroidal indices of the set cells */
-    size_t count;          /* set cells listed in cells[] */
-    uint32_t outside;      /* cells (or non-finite points) that fell outside the window since the last clear */
-    uint32_t overflow;     /* cells not listed because cells[] was full */
-} rsm_image_t;
 
 /* Global cell of a coordinate: floor(v / a). */
 int32_t rsm_grid_cell_of(float v_m, float cell_m);

@@ -16,26 +16,14 @@
 #include <stdint.h>
 
 #include "rsm/config.h"
-#include "rsm/grid.h"
+#include "rsm/localizer_parts.h"
+#include "grid.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-typedef struct rsm_harris_config {
-    int32_t k_num;         /* k numerator; default 1 */
-    int32_t k_den;         /* k denominator; default 25 (k = 0.04) */
-    int32_t min_response;  /* R (scaled by k_den) must exceed this; default 1 */
-    int32_t nms_radius;    /* suppression radius in cells; default 1 (3x3) */
-} rsm_harris_config_t;
-
 rsm_harris_config_t rsm_harris_config_default(void);
-
-typedef struct rsm_keypoint {
-    int32_t gx;        /* global cell */
-    int32_t gy;
-    int32_t response;  /* scaled Harris response */
-} rsm_keypoint_t;
 
 /* Reads the 5x5 neighbourhood of (gx, gy) as a 25-bit mask, bit
  * (dy + 2) * 5 + (dx + 2) for dx, dy in [-2, 2]. */
@@ -51,12 +39,6 @@ uint32_t rsm_harris_patch_image(const void *ctx, int32_t gx, int32_t gy);
 
 /* Response at a cell from its 5x5 patch. Pure. */
 int32_t rsm_harris_response(const rsm_harris_config_t *cfg, uint32_t patch);
-
-/* Caller-owned scratch for one detection. RAM: 8 * RSM_MAX_CANDIDATES. */
-typedef struct rsm_harris_work {
-    int32_t response[RSM_MAX_CANDIDATES];
-    uint32_t order[RSM_MAX_CANDIDATES];
-} rsm_harris_work_t;
 
 /* Evaluates the response at n candidate cells (at most RSM_MAX_CANDIDATES
  * are evaluated; the rest are counted in *skipped if not NULL), suppresses

@@ -10,21 +10,11 @@
 
 #include "rsm/geom.h"
 #include "rsm/odometry.h"
+#include "rsm/localizer_parts.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-typedef struct rsm_ekf {
-    rsm_pose_t x;     /* state estimate */
-    float p[9];       /* covariance, row-major, symmetric positive definite */
-    uint32_t predicts;
-    uint32_t updates;
-    uint32_t rejected; /* updates refused: non-finite input, singular S, gate
-                        * exceeded or non-finite result */
-    uint32_t lost;     /* predictions whose covariance passed RSM_EKF_LOST_VAR_XY_M2
-                        * or RSM_EKF_LOST_VAR_THETA (reset to a diagonal, see below) */
-} rsm_ekf_t;
 
 /* Beyond these variances the estimate is lost in that respect (a position
  * std over 1 km, a heading std over pi): the linearised correlations mean

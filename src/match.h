@@ -10,15 +10,11 @@
 #include <stdint.h>
 
 #include "rsm/geom.h"
+#include "rsm/localizer_parts.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-typedef struct rsm_match {
-    uint16_t ref; /* index into the reference key points */
-    uint16_t cur; /* index into the current key points */
-} rsm_match_t;
 
 /* ref/cur: key point positions in one frame (metres). max_nn_m: a nearest
  * neighbour farther than this gives no match (from the predicted

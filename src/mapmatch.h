@@ -25,35 +25,12 @@
 #include <stdint.h>
 
 #include "rsm/geom.h"
-#include "rsm/tilemap.h"
+#include "rsm/localizer_parts.h"
+#include "tilemap.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-typedef struct rsm_mapmatch_config {
-    uint8_t iterations;     /* Gauss-Newton steps per level at most; default 6 */
-    float sigma;            /* std of one point's occupancy residual (unitless); smaller
-                             * trusts the scan more against odometry; default 0.3 */
-    float min_step_m;       /* a level has converged when a step is below this times its
-                             * cell's multiple of the finest (and min_step_rad likewise);
-                             * default 0.002 */
-    float min_step_rad;     /* default 0.001 */
-    float search_rad;       /* the heading fan: headings within +-search_rad of a position,
-                             * search_step_rad apart, scored on the coarsest level; used by
-                             * rsm_mapmatch_search and, with fan set, by rsm_mapmatch;
-                             * default 0.1 */
-    float search_step_rad;  /* spacing of those headings; default 0.02 (a point 5 m away
-                             * moves a quarter of a 40 cm coarse cell) */
-    uint8_t fan;            /* 1: rsm_mapmatch also descends from the fan's best heading
-                             * and keeps the lower end; default 0 (the coarse levels reach
-                             * ten degrees on their own; on the logs the fan cost time and
-                             * gained nothing, docs/map.md) */
-    float gate_d2;          /* refuse a result farther than this from the prediction
-                             * ((x - x0)^T P0^-1 (x - x0)); 0 = off, the default: the prior
-                             * is already part of the cost, and refusing scans lets the map
-                             * and the estimate part ways (measured in docs/map.md) */
-} rsm_mapmatch_config_t;
 
 rsm_mapmatch_config_t rsm_mapmatch_config_default(void);
 

@@ -10,18 +10,19 @@
 
 #include "rsm/config.h"
 #include "rsm/geom.h"
+#include "rsm/localizer_parts.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-typedef struct rsm_icp_config {
-    uint16_t max_iterations;     /* default 30 (the paper's comparison) */
-    float max_pair_dist_m;       /* pairs farther apart are ignored; default 1.0 */
-    float converged_m;           /* stop when the step moves less; default 1e-4 */
-    float converged_rad;         /* and turns less; default 1e-4 */
-    uint16_t min_pairs;          /* fewer pairs -> RSM_ERR_DEGENERATE; default 10 */
-} rsm_icp_config_t;
+/* 1: the baseline is built (CMake option RSM_ICP, on for host builds). 0:
+ * only its config remains; rsm_icp_init and the rest return RSM_ERR_NOSYS,
+ * so rsm_localizer_init refuses RSM_METHOD_ICP with it and no ICP code is
+ * linked into a firmware image. */
+#ifndef RSM_WITH_ICP
+#define RSM_WITH_ICP 1
+#endif
 
 rsm_icp_config_t rsm_icp_config_default(void);
 
@@ -32,13 +33,10 @@ typedef struct rsm_icp_result {
     float rms_m;            /* RMS pair distance after the last iteration */
 } rsm_icp_result_t;
 
-typedef struct rsm_icp {
-    const rsm_icp_config_t *cfg;              /* kept by pointer */
-    rsm_point_t ref[RSM_ICP_MAX_POINTS];      /* world frame */
-    size_t ref_count;
-    rsm_point_t work[RSM_ICP_MAX_POINTS];     /* scratch: reference partner of each
-                                               * current point (NaN: none) */
-} rsm_icp_t;
+/* RSM_OK if cfg is usable, else RSM_ERR_INVAL naming the first bad field
+ * in *field (field may be NULL; see src/check.h). Reads only; checked
+ * even when the baseline is not built. */
+int rsm_icp_config_check(const rsm_icp_config_t *cfg, const char **field);
 
 /* Validates cfg (max_iterations >= 1, max_pair_dist_m > 0, non-negative
  * convergence thresholds, min_pairs <= RSM_ICP_MAX_POINTS; a min_pairs below 2
@@ -62,16 +60,6 @@ int rsm_icp_set_reference(rsm_icp_t *icp, const rsm_point_t *pts, size_t n);
  * pairs at the returned pose. Reentrant for distinct states. */
 int rsm_icp_align(rsm_icp_t *icp, const rsm_point_t *pts, size_t n, const rsm_pose_t *guess,
                   rsm_icp_result_t *res);
-
-/* Least-squares rigid transform mapping src[i] onto dst[i] (w may be NULL
- * for unit weights; pairs of weight 0 are ignored): closed form for 2-D.
- * Writes *t such that dst ~= t (+) src. RSM_ERR_DEGENERATE (*t untouched) for
- * fewer than 2 pairs of positive weight, or when the rotation is undetermined
- * (all src or all dst points coincide, or the cost is flat in the angle).
- * RSM_ERR_INVAL for NULL arguments, non-finite points, or weights that are
- * negative or not finite. Shared by ICP and the RANSAC refinement. */
-int rsm_rigid_fit(const rsm_point_t *src, const rsm_point_t *dst, const float *w, size_t n,
-                  rsm_pose_t *t);
 
 #ifdef __cplusplus
 }

@@ -21,31 +21,14 @@
 
 #include "rsm/config.h"
 #include "rsm/geom.h"
-#include "rsm/match.h"
+#include "rsm/localizer_parts.h"
+#include "match.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-typedef struct rsm_ransac_config {
-    float inlier_tol_m;      /* support distance; default 0.075 (1.5 cells) */
-    float length_tol_m;      /* early length test | |A| - |C| |; default 0.1 */
-    float min_pair_sep_m;    /* reject samples whose points are closer; default 0.2 */
-    float confidence;        /* delta of eq. 16; default 0.99 */
-    uint32_t max_iterations; /* hypothesis budget; default 300 */
-    uint32_t min_support;    /* fewer inliers is a failure; default 5 */
-    uint32_t seed;           /* PRNG seed (non-zero); default 0x2545F491 */
-} rsm_ransac_config_t;
-
 rsm_ransac_config_t rsm_ransac_config_default(void);
-
-typedef struct rsm_ransac {
-    const rsm_ransac_config_t *cfg;  /* kept by pointer */
-    uint32_t rng;                    /* xorshift32 state */
-    uint8_t inlier[RSM_MAX_MATCHES]; /* inliers of the returned transform */
-    rsm_point_t src[RSM_MAX_MATCHES];
-    rsm_point_t dst[RSM_MAX_MATCHES];
-} rsm_ransac_t;
 
 typedef struct rsm_ransac_result {
     rsm_pose_t t;             /* ref ~= t (+) cur */
@@ -55,6 +38,10 @@ typedef struct rsm_ransac_result {
     uint32_t exhaustive;      /* 1 if every pair was tried */
     float rms_m;              /* RMS inlier residual after refinement */
 } rsm_ransac_result_t;
+
+/* RSM_OK if cfg is usable, else RSM_ERR_INVAL naming the first bad field
+ * in *field (field may be NULL; see src/check.h). Reads only. */
+int rsm_ransac_config_check(const rsm_ransac_config_t *cfg, const char **field);
 
 /* Validates cfg (positive tolerances, 0 < confidence < 1, budget >= 1,
  * min_support >= 2) and seeds the PRNG. RSM_OK or RSM_ERR_INVAL. */

@@ -1,0 +1,254 @@
+/* The parts of the localizer's state and of its config, laid out here so
+ * that the caller can own an rsm_localizer_t (statically or on the stack)
+ * and tune each stage through rsm_localizer_config_t.
+ *
+ * Public: the *_config_t structs, which rsm_localizer_config_default fills
+ * and the caller may change before rsm_localizer_init. Layout only: the
+ * state structs (grid image, key points, RANSAC, ICP, EKF, window map,
+ * persistent map); read them through the rsm_localizer_* accessors, not
+ * directly, since their members change between versions. The functions on
+ * these types are the core's own and not installed (src/grid.h,
+ * src/tilemap.h, ...). */
+#ifndef RSM_LOCALIZER_PARTS_H
+#define RSM_LOCALIZER_PARTS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/config.h"
+#include "rsm/geom.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- grid.h ------------------------------------------------------------------ */
+
+/* How a reading near a cell border is treated (docs/reference/method.md, step 2). */
+typedef enum rsm_grid_rule {
+    RSM_GRID_SIGMA_INSIDE = 0, /* paper: mark only if the point is >= sigma inside its cell */
+    RSM_GRID_SIGMA_TOUCH = 1,  /* mark every cell the sigma circle touches (1 to 4) */
+    RSM_GRID_NEAREST = 2       /* mark the cell the point falls in */
+} rsm_grid_rule_t;
+
+typedef struct rsm_grid_config {
+    float cell_m;          /* a: cell side, metres; default 0.05 (the paper's 50 mm) */
+    float sigma_m;         /* laser range noise, metres; default 0.005 (the paper's 5 mm) */
+    rsm_grid_rule_t rule;  /* default RSM_GRID_SIGMA_TOUCH */
+} rsm_grid_config_t;
+
+/* The window: global cell of its lower-left corner. */
+typedef struct rsm_window {
+    int32_t ox;
+    int32_t oy;
+} rsm_window_t;
+
+/* A cell's global index. */
+typedef struct rsm_cell {
+    int32_t gx;
+    int32_t gy;
+} rsm_cell_t;
+
+#define RSM_BITMAP_WORDS (RSM_MAP_CELLS / 32)
+/* A binary image over the window, with the list of its set cells so that
+ * work (and clearing) costs grow with occupied cells, not with image area.
+ * RAM: RSM_MAP_CELLS / 8 + 4 * RSM_IMAGE_MAX_CELLS bytes. */
+typedef struct rsm_image {
+    uint32_t bits[RSM_BITMAP_WORDS];
+    uint32_t cells[RSM_IMAGE_MAX_CELLS]; /* toroidal indices of the set cells */
+    size_t count;          /* set cells listed in cells[] */
+    uint32_t outside;      /* cells (or non-finite points) that fell outside the window since the last clear */
+    uint32_t overflow;     /* cells not listed because cells[] was full */
+} rsm_image_t;
+
+/* ---- harris.h ---------------------------------------------------------------- */
+
+typedef struct rsm_harris_config {
+    int32_t k_num;         /* k numerator; default 1 */
+    int32_t k_den;         /* k denominator; default 25 (k = 0.04) */
+    int32_t min_response;  /* R (scaled by k_den) must exceed this; default 1 */
+    int32_t nms_radius;    /* suppression radius in cells; default 1 (3x3) */
+} rsm_harris_config_t;
+
+typedef struct rsm_keypoint {
+    int32_t gx;        /* global cell */
+    int32_t gy;
+    int32_t response;  /* scaled Harris response */
+} rsm_keypoint_t;
+
+/* Caller-owned scratch for one detection. RAM: 8 * RSM_MAX_CANDIDATES. */
+typedef struct rsm_harris_work {
+    int32_t response[RSM_MAX_CANDIDATES];
+    uint32_t order[RSM_MAX_CANDIDATES];
+} rsm_harris_work_t;
+
+/* ---- match.h ----------------------------------------------------------------- */
+
+typedef struct rsm_match {
+    uint16_t ref; /* index into the reference key points */
+    uint16_t cur; /* index into the current key points */
+} rsm_match_t;
+
+/* ---- ransac.h ---------------------------------------------------------------- */
+
+typedef struct rsm_ransac_config {
+    float inlier_tol_m;      /* support distance; default 0.075 (1.5 cells) */
+    float length_tol_m;      /* early length test | |A| - |C| |; default 0.1 */
+    float min_pair_sep_m;    /* reject samples whose points are closer; default 0.2 */
+    float confidence;        /* delta of eq. 16; default 0.99 */
+    uint32_t max_iterations; /* hypothesis budget; default 300 */
+    uint32_t min_support;    /* fewer inliers is a failure; default 5 */
+    uint32_t seed;           /* PRNG seed (non-zero); default 0x2545F491 */
+} rsm_ransac_config_t;
+
+typedef struct rsm_ransac {
+    const rsm_ransac_config_t *cfg;  /* kept by pointer */
+    uint32_t rng;                    /* xorshift32 state */
+    uint8_t inlier[RSM_MAX_MATCHES]; /* inliers of the returned transform */
+    rsm_point_t src[RSM_MAX_MATCHES];
+    rsm_point_t dst[RSM_MAX_MATCHES];
+} rsm_ransac_t;
+
+/* ---- icp.h ------------------------------------------------------------------- */
+
+typedef struct rsm_icp_config {
+    uint16_t max_iterations;     /* default 30 (the paper's comparison) */
+    float max_pair_dist_m;       /* pairs farther apart are ignored; default 1.0 */
+    float converged_m;           /* stop when the step moves less; default 1e-4 */
+    float converged_rad;         /* and turns less; default 1e-4 */
+    uint16_t min_pairs;          /* fewer pairs -> RSM_ERR_DEGENERATE; default 10 */
+} rsm_icp_config_t;
+
+typedef struct rsm_icp {
+    const rsm_icp_config_t *cfg;              /* kept by pointer */
+    rsm_point_t ref[RSM_ICP_MAX_POINTS];      /* world frame */
+    size_t ref_count;
+    rsm_point_t work[RSM_ICP_MAX_POINTS];     /* scratch: reference partner of each
+                                               * current point (NaN: none) */
+} rsm_icp_t;
+
+/* ---- ekf.h ------------------------------------------------------------------- */
+
+typedef struct rsm_ekf {
+    rsm_pose_t x;     /* state estimate */
+    float p[9];       /* covariance, row-major, symmetric positive definite */
+    uint32_t predicts;
+    uint32_t updates;
+    uint32_t rejected; /* updates refused: non-finite input, singular S, gate
+                        * exceeded or non-finite result */
+    uint32_t lost;     /* predictions whose covariance passed RSM_EKF_LOST_VAR_XY_M2
+                        * or RSM_EKF_LOST_VAR_THETA (reset to a diagonal, see below) */
+} rsm_ekf_t;
+
+/* ---- map.h ------------------------------------------------------------------- */
+
+typedef struct rsm_map {
+    rsm_window_t win;              /* current window */
+    float cell_m;                  /* a, metres */
+    uint8_t hits[RSM_MAP_CELLS];   /* saturating hit counters, toroidal */
+    uint32_t scrolls;              /* window moves so far */
+    uint32_t outside;              /* points dropped because they fell outside */
+} rsm_map_t;
+
+/* ---- tilemap.h --------------------------------------------------------------- */
+
+#define RSM_TMAP_TILE_SIDE (1 << RSM_TMAP_TILE_LOG2)
+#define RSM_TMAP_TILE_CELLS (RSM_TMAP_TILE_SIDE * RSM_TMAP_TILE_SIDE)
+#define RSM_TMAP_TILE_BYTES (RSM_TMAP_TILE_CELLS / 2)
+#define RSM_TMAP_HASH (1 << RSM_TMAP_HASH_LOG2)
+#define RSM_TMAP_NONE 0xFFFFu
+#define RSM_TMAP_MAX_VALUE 15u
+#define RSM_TMAP_ECHO_BYTES ((1u << RSM_TMAP_ECHO_LOG2) / 8u)
+
+typedef struct rsm_tile {
+    int16_t tx;                       /* tile column and row at its level */
+    int16_t ty;
+    uint32_t stamp;                   /* update that last wrote a return into it (bits 0-28); bit 29
+                                       * set once a cell reached saturation; level in bits 30-31 */
+    uint8_t cell[RSM_TMAP_TILE_BYTES];  /* two 4-bit cells per byte, row-major */
+} rsm_tile_t;
+
+typedef struct rsm_tmap_config {
+    float cell_m;          /* finest cell side, metres; default RSM_TMAP_CELL_M (0.05) */
+    uint8_t levels;        /* resolutions in use, 1..RSM_TMAP_LEVELS; default RSM_TMAP_LEVELS */
+    uint8_t hit_inc;       /* added by a return; default 4 */
+    uint8_t miss_dec;      /* taken by a beam passing through; default 1 */
+    uint8_t saturation;    /* value read as fully occupied; default 8 */
+    uint8_t clear_margin;  /* cells before a return that its beam does not clear; default 1 */
+    uint8_t splat_from;    /* on this level and coarser ones a return's increment is shared
+                            * among the four cells around it by bilinear weights, so that a
+                            * wall reads where it is, not at a cell centre up to half a
+                            * (coarse) cell away; finer levels give it all to the return's
+                            * cell, which keeps walls one cell thick. Default 1 */
+    uint8_t age_shift;     /* when the pool is full, a tile's age counts 2^-(age_shift * level):
+                            * 2 keeps a coarse tile as long as the fine ones covering the same
+                            * area. Default 2 */
+    uint8_t unconfirmed_shift;  /* ... and 2^unconfirmed_shift times more while none of its cells
+                            * has reached saturation (a stray return, most likely a phantom,
+                            * goes before the places seen minutes ago), at most 16. Default 8 */
+    uint8_t wall_level;    /* level that judges whether a beam crossed a wall; default 1 */
+    uint8_t wall_value;    /* a cell at or above this on wall_level is a wall: a return whose
+                            * beam crossed one, and that does not itself land on a wall, is
+                            * not written; 0 = off. Default 0 (off; 8 is the value measured
+                            * in docs/map.md) */
+    uint8_t wall_echo;     /* 1: a return behind a wall is written all the same if the previous
+                            * write had a return within one wall_level cell of it (its echo),
+                            * or it lands within one cell of a saturated one: a phantom is
+                            * random and comes once, a surface seen through a doorway or
+                            * along a grazed wall comes again from the next pose. Default 0 */
+} rsm_tmap_config_t;
+
+typedef struct rsm_tmap_counters {
+    uint32_t updates;       /* scans written */
+    uint32_t allocated;     /* tiles taken from free slots */
+    uint32_t evicted;       /* tiles whose slot was reused for another */
+    uint32_t freed;         /* tiles given back when beams had cleared every cell */
+    uint32_t behind;        /* returns not written: their beam crossed a wall (and, with
+                             * wall_echo, the last write saw nothing there) */
+    uint32_t dropped;       /* returns lost because every slot was in use by the update */
+    uint32_t outside;       /* returns beyond the tile coordinate range */
+} rsm_tmap_counters_t;
+
+typedef struct rsm_tmap {
+    rsm_tmap_config_t cfg;             /* copied at init */
+    float occ[RSM_TMAP_MAX_VALUE + 1u];  /* occupancy in [0, 1] of each cell value */
+    float inv_cell[RSM_TMAP_LEVELS];   /* 1 / cell side of each level */
+    uint32_t stamp;                    /* update counter (29 bits used) */
+    uint16_t used;                     /* slots in use */
+    uint16_t level_used[RSM_TMAP_LEVELS];  /* of those, per level */
+    uint16_t hash[RSM_TMAP_HASH];      /* slot of a key, linear probing; RSM_TMAP_NONE empty */
+    rsm_tile_t tile[RSM_TMAP_TILES];
+    uint8_t echo[RSM_TMAP_ECHO_BYTES];  /* hashed wall_level cells of the last write's returns */
+    rsm_tmap_counters_t counters;
+} rsm_tmap_t;
+
+/* ---- mapmatch.h -------------------------------------------------------------- */
+
+typedef struct rsm_mapmatch_config {
+    uint8_t iterations;     /* Gauss-Newton steps per level at most; default 6 */
+    float sigma;            /* std of one point's occupancy residual (unitless); smaller
+                             * trusts the scan more against odometry; default 0.3 */
+    float min_step_m;       /* a level has converged when a step is below this times its
+                             * cell's multiple of the finest (and min_step_rad likewise);
+                             * default 0.002 */
+    float min_step_rad;     /* default 0.001 */
+    float search_rad;       /* the heading fan: headings within +-search_rad of a position,
+                             * search_step_rad apart, scored on the coarsest level; used by
+                             * rsm_mapmatch_search and, with fan set, by rsm_mapmatch;
+                             * default 0.1 */
+    float search_step_rad;  /* spacing of those headings; default 0.02 (a point 5 m away
+                             * moves a quarter of a 40 cm coarse cell) */
+    uint8_t fan;            /* 1: rsm_mapmatch also descends from the fan's best heading
+                             * and keeps the lower end; default 0 (the coarse levels reach
+                             * ten degrees on their own; on the logs the fan cost time and
+                             * gained nothing, docs/map.md) */
+    float gate_d2;          /* refuse a result farther than this from the prediction
+                             * ((x - x0)^T P0^-1 (x - x0)); 0 = off, the default: the prior
+                             * is already part of the cost, and refusing scans lets the map
+                             * and the estimate part ways (measured in docs/map.md) */
+} rsm_mapmatch_config_t;
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_LOCALIZER_PARTS_H */

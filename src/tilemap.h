@@ -1,0 +1,104 @@
+/* The persistent map: occupancy at several resolutions in a fixed pool of
+ * tiles (docs/map.md has the design and the measurements behind it).
+ *
+ * Level l has cells of cell_m * 2^l. Space is cut into square tiles of
+ * RSM_TMAP_TILE_SIDE x RSM_TMAP_TILE_SIDE cells; a tile takes a pool slot the
+ * first time a laser return lands in it, so the map costs memory only where
+ * there are walls, wherever the robot goes. Each cell is a 4-bit occupancy
+ * value: a return adds hit_inc, a beam passing through subtracts miss_dec,
+ * clamped to 0..15; a missing tile reads as 0 (free or never seen). So moving
+ * people, outliers and wrongly placed scans fade once beams pass where they
+ * were.
+ *
+ * When the pool is full a return in a new tile takes the slot of the tile
+ * least recently written (the smallest stamp), where coarse tiles age more
+ * slowly and tiles that no second return confirmed faster (age_shift,
+ * unconfirmed_shift); never one written by the update in progress; if every
+ * slot was, the return is dropped and counted. Travel is unbounded: the
+ * oldest places are forgotten first.
+ *
+ * A return adds hit_inc to its own cell on the finest level; on coarser
+ * levels (from splat_from) it is shared among the four nearest cells by
+ * bilinear weights (rounded), which keeps the coarse levels unbiased.
+ *
+ * RAM: RSM_TMAP_TILES * (RSM_TMAP_TILE_BYTES + 8) + 2 * RSM_TMAP_HASH bytes. */
+#ifndef RSM_TILEMAP_H
+#define RSM_TILEMAP_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/config.h"
+#include "rsm/geom.h"
+#include "rsm/localizer_parts.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+rsm_tmap_config_t rsm_tmap_config_default(void);
+
+/* RSM_OK if cfg is usable, else RSM_ERR_INVAL naming the first bad field
+ * in *field (field may be NULL; see src/check.h). Reads only. */
+int rsm_tmap_config_check(const rsm_tmap_config_t *cfg, const char **field);
+
+/* Empties the map. RSM_ERR_INVAL for a bad config (cell not positive,
+ * levels out of range, zero increments, saturation beyond 15). */
+int rsm_tmap_init(rsm_tmap_t *map, const rsm_tmap_config_t *cfg);
+
+/* Writes one scan into every level: points[k] (world frame, metres) is the
+ * return of a beam from origin (the laser's position). Cells along each beam
+ * lose miss_dec (except the clear_margin cells before the return), the cell of
+ * each return gains hit_inc; all misses of a scan are applied before its hits.
+ * Non-finite points are skipped. Returns RSM_OK or RSM_ERR_INVAL. */
+int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n);
+
+/* Cell value (0..15) of cell (gx, gy) at a level; 0 where no tile is held. */
+uint8_t rsm_tmap_value(const rsm_tmap_t *map, uint32_t level, int32_t gx, int32_t gy);
+
+/* Cell side at a level, metres. */
+float rsm_tmap_cell(const rsm_tmap_t *map, uint32_t level);
+
+/* Tiles held at a level. */
+uint32_t rsm_tmap_tiles(const rsm_tmap_t *map, uint32_t level);
+
+/* Bounding box (cells, inclusive) of the tiles held at a level; 0 if none. */
+int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t *gy0, int32_t *gx1, int32_t *gy1);
+
+/* Occupancy in [0, 1] of the cell holding world (x, y) on a level. */
+float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y);
+
+/* A read position on one level of one map: remembers the last tiles found,
+ * so that reads of nearby points (a scan's, in beam order) skip the index.
+ * Four ways, one per parity of the tile's column and row, so that the 2 x 2
+ * tiles around a read near a tile's edge are all held at once. Valid until
+ * the map is next written. */
+typedef struct rsm_tmap_way {
+    uint32_t key;    /* tile column (low half) and row (high half); RSM_TMAP_NO_KEY: empty */
+    uint32_t slot;   /* RSM_TMAP_NONE: the tile is not held */
+} rsm_tmap_way_t;
+
+/* A key no tile has (tile coordinates stay within +-32000). */
+#define RSM_TMAP_NO_KEY 0x80008000u
+
+typedef struct rsm_tmap_cursor {
+    uint32_t level;
+    rsm_tmap_way_t way[4];
+} rsm_tmap_cursor_t;
+
+void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level);
+
+/* rsm_tmap_occupancy and rsm_tmap_sample through a cursor (its level);
+ * same results. */
+float rsm_tmap_occupancy_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y);
+float rsm_tmap_sample_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, float *dx, float *dy);
+
+/* Occupancy interpolated bilinearly between cell centres at world (x, y) on
+ * a level, and its gradient per metre. Reentrant. */
+float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_TILEMAP_H */
