@@ -25,18 +25,10 @@ void nav_devices_defaults(nav_devices_t *dv, int listen, int quiet)
 /* A silence a listen-only run waits out (an hour): a replay held back, a
  * capture with a gap. */
 #define NAV_LISTEN_PATIENCE_US 3600000000u
-/* The lidar drivers have no deadline accessor: their timers (start-up
- * pauses, answer waits, the stream timeout) are polled this often. */
-#define NAV_LIDAR_TIMER_US 5000u
 
 int nav_devices_lidar(nav_devices_t *dv, nav_laser_kind_t kind, const rsm_pose_t *mount, int upside_down,
                       unsigned keep_every)
 {
-    if (kind == NAV_LASER_RPLIDAR && dv->listen) {
-        fprintf(stderr, "rsm-nav: the RPLIDAR driver runs the sensor (requests and answers): it cannot"
-                        " listen only\n");
-        return -1;
-    }
     if (keep_every < 1u || keep_every > 64u) {
         fprintf(stderr, "rsm-nav: --lidar-keep must be 1 to 64\n");
         return -1;
@@ -48,6 +40,7 @@ int nav_devices_lidar(nav_devices_t *dv, nav_laser_kind_t kind, const rsm_pose_t
     if (dv->listen) {
         dv->rcfg.max_gap_us = NAV_LISTEN_PATIENCE_US;
         dv->ldcfg.stream_timeout_us = NAV_LISTEN_PATIENCE_US;
+        dv->slcfg.stream_timeout_us = NAV_LISTEN_PATIENCE_US;
     }
     return 0;
 }
@@ -67,8 +60,8 @@ static int start_laser(nav_devices_t *dv, const rsm_link_t *link, const rsm_cloc
         return rsm_ldlidar_init(&dv->ld06, link, clock, &dv->ldcfg) == RSM_OK &&
                rsm_ldlidar_connect(&dv->ld06) == RSM_OK;
     case NAV_LASER_RPLIDAR:
-        return !dv->listen && rsm_slamtec_init(&dv->rplidar, link, clock, &dv->slcfg) == RSM_OK &&
-               rsm_slamtec_connect(&dv->rplidar) == RSM_OK;
+        return rsm_slamtec_init(&dv->rplidar, link, clock, &dv->slcfg) == RSM_OK &&
+               (dv->listen ? rsm_slamtec_listen(&dv->rplidar) : rsm_slamtec_connect(&dv->rplidar)) == RSM_OK;
     default:
         return rsm_sicklms_init(&dv->laser, link, clock, &dv->lcfg) == RSM_OK &&
                (dv->listen ? rsm_sicklms_listen(&dv->laser) : rsm_sicklms_connect(&dv->laser)) == RSM_OK;
@@ -485,14 +478,14 @@ uint32_t nav_devices_scans(const nav_devices_t *dv)
     return dv->kind == NAV_LASER_LMS ? dv->laser.stats.scans : dv->rev.stats.scans;
 }
 
-uint64_t nav_devices_next_deadline(const nav_devices_t *dv, int robot, uint64_t now_us)
+uint64_t nav_devices_next_deadline(const nav_devices_t *dv, int robot)
 {
     if (robot) {
         return rsm_p3dx_next_deadline_us(&dv->robot);
     }
-    if (dv->kind == NAV_LASER_LMS) {
-        return rsm_sicklms_next_deadline_us(&dv->laser);
+    switch (dv->kind) {
+    case NAV_LASER_LD06: return rsm_ldlidar_next_deadline_us(&dv->ld06);
+    case NAV_LASER_RPLIDAR: return rsm_slamtec_next_deadline_us(&dv->rplidar);
+    default: return rsm_sicklms_next_deadline_us(&dv->laser);
     }
-    /* The lidar drivers keep their timers inside the poll: look again soon. */
-    return now_us + NAV_LIDAR_TIMER_US;
 }
