@@ -28,7 +28,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO_ROOT, rsm_nav_binary as nav_binary, subprocess_env
+from conftest import REPO_ROOT, FakeDevices, rsm_nav_binary as nav_binary, subprocess_env
 from rsm_tools import capture as cap
 from rsm_tools import convert
 from rsm_tools import evaluate as ev
@@ -139,3 +139,38 @@ def test_lidar_flags_are_checked(tmp_path, head_log):
     res = subprocess.run([str(nav_binary()), "--capture", str(capture), "--lidar-keep", "0",
                           "--trajectory", str(tmp_path / "t.txt")], capture_output=True, text=True, timeout=60)
     assert res.returncode == 2 and "--lidar-keep" in res.stderr
+
+
+def test_rplidar_driver_runs_a_fake_rplidar_and_gets_every_turn_unchanged(tmp_path, head_log):
+    """rsm-nav active on rsm-fakedev's cheap-lidar robot (a P3-DX and an
+    RPLIDAR playing the rendered excerpt in real time): the driver's
+    start-up requests, the scan, STOP on exit; every turn rsm-nav fuses is
+    one of the capture-mode run's turns, in order, byte for byte. Its
+    trajectory depends on the timing, so it is only printed."""
+    capture = tmp_path / "rplidar.cap"
+    convert.convert(str(head_log), str(capture), lidar="rplidar")
+    _, cap_events, _ = run_capture_mode(capture, tmp_path)
+    fake = FakeDevices(tmp_path, "--robot", "--rplidar", "--capture", str(capture), "--quiet")
+    try:
+        traj, events = tmp_path / "active.txt", tmp_path / "active.events"
+        res = subprocess.run([str(nav_binary()), "--robot", fake.paths["robot"], "--lidar", "rplidar",
+                              fake.paths["rplidar"], "--no-deskew", "--seconds", "8", "--trajectory", str(traj),
+                              "--events", str(events)], capture_output=True, text=True, timeout=120)
+    finally:
+        log = fake.stop()
+    assert res.returncode == 0, res.stderr
+    assert "RPLIDAR scanning: model 0x18, firmware 1.29, health 0" in res.stderr, res.stderr
+    assert "RPLIDAR: 6 requests (0 retries, 0 timeouts)" in res.stderr, res.stderr
+    assert "1 connects, 0 link losses, 0 errors" in res.stderr, res.stderr
+    assert " 0 bad points" in res.stderr, res.stderr
+    # STOP, GET_HEALTH, GET_INFO, GET_SAMPLERATE, SCAN; STOP on exit
+    assert [e["cmd"] for e in log if e["ev"] == "request"] == [0x25, 0x52, 0x50, 0x59, 0x20, 0x25]
+    summary = [e for e in log if e["ev"] == "summary" and e["dev"] == "rplidar"][0]
+    assert summary["stops"] == 1 and not summary["scanning"] and summary["bad_requests"] == 0
+    want = [l for l in cap_events.read_text().splitlines() if l.startswith("S ")]
+    got = [l for l in events.read_text().splitlines() if l.startswith("S ")]
+    assert len(got) >= 20  # about 5 turns a second for 8 s
+    first = want.index(got[0])
+    assert want[first:first + len(got)] == got
+    print(f"\nRPLIDAR active on rsm-fakedev: {len(got)} turns, the capture's turns {first + 1} to "
+          f"{first + len(got)}; {len(rows(traj))} poses")
