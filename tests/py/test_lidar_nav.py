@@ -144,13 +144,14 @@ def test_lidar_flags_are_checked(tmp_path, head_log):
 def test_rplidar_driver_runs_a_fake_rplidar_and_gets_every_turn_unchanged(tmp_path, head_log):
     """rsm-nav active on rsm-fakedev's cheap-lidar robot (a P3-DX and an
     RPLIDAR playing the rendered excerpt in real time): the driver's
-    start-up requests, the scan, STOP on exit; every turn rsm-nav fuses is
-    one of the capture-mode run's turns, in order, byte for byte. Its
+    start-up requests, the scan, STOP on exit; the robot's TicksMM taken
+    by the de-skew's odometry as by the localizer's; every turn rsm-nav
+    fuses is one of the capture-mode run's turns, in order, byte for byte. Its
     trajectory depends on the timing, so it is only printed."""
     capture = tmp_path / "rplidar.cap"
     convert.convert(str(head_log), str(capture), lidar="rplidar")
     _, cap_events, _ = run_capture_mode(capture, tmp_path)
-    fake = FakeDevices(tmp_path, "--robot", "--rplidar", "--capture", str(capture), "--quiet")
+    fake = FakeDevices(tmp_path, "--robot", "--rplidar", "--capture", str(capture), "--ticks-mm", "64", "--quiet")
     try:
         traj, events = tmp_path / "active.txt", tmp_path / "active.events"
         res = subprocess.run([str(nav_binary()), "--robot", fake.paths["robot"], "--lidar", "rplidar",
@@ -163,6 +164,9 @@ def test_rplidar_driver_runs_a_fake_rplidar_and_gets_every_turn_unchanged(tmp_pa
     assert "RPLIDAR: 6 requests (0 retries, 0 timeouts)" in res.stderr, res.stderr
     assert "1 connects, 0 link losses, 0 errors" in res.stderr, res.stderr
     assert " 0 bad points" in res.stderr, res.stderr
+    # the robot's TicksMM (the fake counts 64 a mm) for the localizer and for the de-skew alike
+    assert "odometry from the robot: 64000 ticks/m" in res.stderr, res.stderr
+    assert "de-skew odometry 64000 ticks/m" in res.stderr, res.stderr
     # STOP, GET_HEALTH, GET_INFO, GET_SAMPLERATE, SCAN; STOP on exit
     assert [e["cmd"] for e in log if e["ev"] == "request"] == [0x25, 0x52, 0x50, 0x59, 0x20, 0x25]
     summary = [e for e in log if e["ev"] == "summary" and e["dev"] == "rplidar"][0]

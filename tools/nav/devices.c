@@ -133,10 +133,12 @@ static int poll_robot(nav_devices_t *dv, const nav_sink_t *sink)
                     (unsigned)d->ticks_mm, (unsigned)d->watchdog_ms, (unsigned)d->auto_baud);
         }
         if (sink->calibration != NULL) {
-            /* The robot's own TicksMM (its CONFIGpac's, else the driver's default). */
-            rsm_odometry_config_t odo = rsm_odometry_config_default();
-            if (rsm_p3dx_odometry_config(d, &odo) == RSM_OK) {
-                sink->calibration(sink->ctx, odo.ticks_per_m_left);
+            /* The robot's own TicksMM (its CONFIGpac's, else the driver's
+             * default). When the run takes it, a lidar's de-skew converts
+             * the counts with it too: the same motion as the localizer's. */
+            rsm_odometry_config_t odo = dv->odo.cfg;
+            if (rsm_p3dx_odometry_config(d, &odo) == RSM_OK && sink->calibration(sink->ctx, odo.ticks_per_m_left)) {
+                (void)rsm_odometry_set_config(&dv->odo, &odo);
             }
         }
         break;
@@ -343,10 +345,10 @@ void nav_devices_report(const nav_devices_t *dv, int robot)
         }
         fprintf(stderr,
                 "rsm-nav: turns: %u scans, %u partial (%u points), %u points over the scan size, %u thinned,"
-                " %u without return, %u bad points, %u not de-skewed\n",
+                " %u without return, %u bad points, %u not de-skewed; de-skew odometry %.0f ticks/m\n",
                 (unsigned)rs->scans, (unsigned)rs->partial, (unsigned)rs->dropped, (unsigned)rs->overflow,
                 (unsigned)rs->thinned, (unsigned)rs->invalid, (unsigned)rs->bad_points,
-                (unsigned)rs->not_deskewed);
+                (unsigned)rs->not_deskewed, (double)dv->odo.cfg.ticks_per_m_left);
     } else {
         const rsm_sicklms_t *d = &dv->laser;
         const rsm_sicklms_stats_t *st = &d->stats;

@@ -35,8 +35,9 @@ typedef struct nav_sink {
     /* Time passes (after each input, and while the links idle). */
     void (*tick)(void *ctx, uint64_t now_us);
     /* The robot reported its calibration (a connection's CONFIGpac, active
-     * mode): encoder ticks per metre. May be NULL. */
-    void (*calibration)(void *ctx, float ticks_per_m);
+     * mode): encoder ticks per metre. Returns 1 if the run takes it (a
+     * lidar's de-skew then takes it too), 0 if not. May be NULL. */
+    int (*calibration)(void *ctx, float ticks_per_m);
 } nav_sink_t;
 
 typedef struct nav_devices {

@@ -405,13 +405,13 @@ static void sink_encoder(void *ctx, const rsm_odometry_sample_t *sample, int res
 }
 
 /* The robot reported its TicksMM: the odometry takes it from the next
- * encoder sample on, unless --ticks-per-m gave the geometry. */
-static void sink_calibration(void *ctx, float ticks_per_m)
+ * encoder sample on, unless --ticks-per-m gave the geometry. 1 if taken. */
+static int sink_calibration(void *ctx, float ticks_per_m)
 {
     nav_t *nav = (nav_t *)ctx;
     rsm_odometry_config_t odo;
     if (nav->ticks_from_flag || nav_start(nav, NULL, "the default") != 0) {
-        return;
+        return 0;
     }
     odo = nav->loc.odo.cfg;
     odo.ticks_per_m_left = ticks_per_m;
@@ -419,13 +419,14 @@ static void sink_calibration(void *ctx, float ticks_per_m)
     if (rsm_localizer_set_odometry(&nav->loc, &odo) != RSM_OK) {
         fprintf(stderr, "rsm-nav: the robot's calibration (%.0f ticks/m) refused; odometry unchanged\n",
                 (double)ticks_per_m);
-        return;
+        return 0;
     }
     nav->calibrations++;
     if (!nav->quiet) {
         fprintf(stderr, "rsm-nav: odometry from the robot: %.0f ticks/m, wheel base %.3f m\n",
                 (double)ticks_per_m, (double)odo.wheel_base_m);
     }
+    return 1;
 }
 
 static void sink_tick(void *ctx, uint64_t now_us)
