@@ -1,12 +1,13 @@
-"""rsm-fakedev: a fake Pioneer P3-DX and a fake SICK LMS 2xx on pseudo-terminals.
+"""rsm-fakedev: a fake Pioneer P3-DX, SICK LMS 2xx, LDRobot LD06 and Slamtec RPLIDAR on pseudo-terminals.
 
     rsm-fakedev [--robot] [--lms] [--ld06] [--rplidar] [--capture CAP] [--log FILE] [--seconds S]
                 [--robot-drop AFTER:FOR] [--lms-drop AFTER:FOR]
                 [--watchdog-ms MS] [--ticks-mm N] [--no-autobaud] [--units mm|cm]
                 [--quiet]
 
-Creates one pseudo-terminal per device (both when neither ``--robot`` nor
-``--lms`` is given) and prints one ``robot PATH`` / ``laser PATH`` line per
+Creates one pseudo-terminal per device (the robot and the LMS when none of
+``--robot``, ``--lms``, ``--ld06``, ``--rplidar`` is given) and prints one
+``robot PATH`` / ``laser PATH`` / ``ld06 PATH`` / ``rplidar PATH`` line per
 device on stdout, flushed, before anything else happens, so that another
 program (``rsm-nav --robot PATH --lms PATH``, a test) can open them.  The
 devices then answer like the real ones (protocols.md):
