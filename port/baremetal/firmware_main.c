@@ -20,15 +20,18 @@
  * RSM_FIRMWARE_LASER picks, at compile time, what the laser port carries:
  *   RSM_FIRMWARE_LMS   a SICK LMS 2xx (the default; 9600 Bd at power-up,
  *                      switched to 38400);
- *   RSM_FIRMWARE_LD06  an LDRobot LD06/LD19 at 230400 Bd (listen only): its
- *                      points go through the revolution assembler, one scan
- *                      a turn (every second point kept: 450 a turn at 10 Hz
- *                      is more than RSM_MAX_BEAMS), de-skewed with the pose
- *                      the robot's encoder packets give, converted with the
- *                      same geometry (and TicksMM) as the localizer's.
- * The LD06 image polls both drivers without waiting (read timeouts 0) and
- * sleeps until the next interrupt only when neither driver has a deadline
- * due (rsm_p3dx_next_deadline_us, rsm_ldlidar_next_deadline_us). */
+ *   RSM_FIRMWARE_LD06  an LDRobot LD06/LD19 at 230400 Bd (listen only);
+ *   RSM_FIRMWARE_RPLIDAR  a Slamtec RPLIDAR at 115200 Bd (A1, A2M8), run by
+ *                      its driver: start-up requests, standard scan, no
+ *                      motor command (an A1's motor line is the board's).
+ * A spinning lidar's points go through the revolution assembler, one scan
+ * a turn (every second point kept: an LD06's 450 a turn at 10 Hz are more
+ * than RSM_MAX_BEAMS), de-skewed with the pose the robot's encoder packets
+ * give, converted with the same geometry (and TicksMM) as the localizer's.
+ * Those images poll both drivers without waiting (read timeouts 0) and
+ * sleep until the next interrupt only when neither driver has a deadline
+ * due (rsm_p3dx_next_deadline_us, rsm_ldlidar_next_deadline_us,
+ * rsm_slamtec_next_deadline_us). */
 #include <stddef.h>
 #include <stdint.h>
 
@@ -47,22 +50,30 @@
 
 #define RSM_FIRMWARE_LMS 0
 #define RSM_FIRMWARE_LD06 1
+#define RSM_FIRMWARE_RPLIDAR 2
 #ifndef RSM_FIRMWARE_LASER
 #define RSM_FIRMWARE_LASER RSM_FIRMWARE_LMS
 #endif
 
 #if RSM_FIRMWARE_LASER == RSM_FIRMWARE_LD06
 #include "rsm/ldlidar.h"
-#include "rsm/odometry.h"
-#include "rsm/revolution.h"
 #define FW_LASER_NAME "LD06"
 #define FW_LASER_BAUD 230400u /* the LD06's only rate */
+#elif RSM_FIRMWARE_LASER == RSM_FIRMWARE_RPLIDAR
+#include "rsm/slamtec.h"
+#define FW_LASER_NAME "RPLIDAR"
+#define FW_LASER_BAUD 115200u /* A1, A2M8 */
 #elif RSM_FIRMWARE_LASER == RSM_FIRMWARE_LMS
 #include "rsm/sicklms.h"
 #define FW_LASER_NAME "LMS 2xx"
 #define FW_LASER_BAUD 9600u   /* the LMS's power-up rate */
 #else
-#error "RSM_FIRMWARE_LASER: RSM_FIRMWARE_LMS or RSM_FIRMWARE_LD06"
+#error "RSM_FIRMWARE_LASER: RSM_FIRMWARE_LMS, RSM_FIRMWARE_LD06 or RSM_FIRMWARE_RPLIDAR"
+#endif
+#define FW_SPINNING (RSM_FIRMWARE_LASER != RSM_FIRMWARE_LMS)
+#if FW_SPINNING
+#include "rsm/odometry.h"
+#include "rsm/revolution.h"
 #endif
 
 /* ---- the application's state (caller-owned rsm state, static here) -------- */
@@ -99,13 +110,19 @@ static RSM_BOARD_CCM rsm_p3dx_t fw_robot;
 #if RSM_FIRMWARE_LASER == RSM_FIRMWARE_LD06
 static RSM_BOARD_CCM rsm_ldlidar_config_t fw_laser_cfg;
 static RSM_BOARD_CCM rsm_ldlidar_t fw_laser;
+#elif RSM_FIRMWARE_LASER == RSM_FIRMWARE_RPLIDAR
+static RSM_BOARD_CCM rsm_slamtec_config_t fw_laser_cfg;
+static RSM_BOARD_CCM rsm_slamtec_t fw_laser;
+static RSM_BOARD_CCM rsm_slamtec_event_t fw_laser_ev; /* a capsule's points: not on the stack */
+#else
+static RSM_BOARD_CCM rsm_sicklms_config_t fw_laser_cfg;
+static RSM_BOARD_CCM rsm_sicklms_t fw_laser;
+#endif
+#if FW_SPINNING
 static RSM_BOARD_CCM rsm_rev_config_t fw_rev_cfg;
 static RSM_BOARD_CCM rsm_rev_t fw_rev;          /* the turn being gathered, and the last scan */
 static RSM_BOARD_CCM rsm_odometry_t fw_rev_odo; /* the encoder counts as a pose, for the de-skew */
 static RSM_BOARD_CCM rsm_pose_t fw_rev_pose;
-#else
-static RSM_BOARD_CCM rsm_sicklms_config_t fw_laser_cfg;
-static RSM_BOARD_CCM rsm_sicklms_t fw_laser;
 #endif
 
 /* ---- board functions behind the HAL ---------------------------------------- */
@@ -152,22 +169,19 @@ static void fw_stop(const char *what, int status)
 
 /* ---- the laser: set-up, encoder samples, poll ------------------------------------ */
 
-#if RSM_FIRMWARE_LASER == RSM_FIRMWARE_LD06
-static int fw_laser_init(void)
+#if FW_SPINNING
+/* The revolution assembler and the de-skew's odometry, either lidar's. */
+static int fw_turns_init(void)
 {
     int rc;
-    (void)rsm_ldlidar_config_default(&fw_laser_cfg);
-    fw_laser_cfg.read_timeout_us = 0u; /* one wait for both links: see the main loop */
     (void)rsm_rev_config_default(&fw_rev_cfg);
     fw_rev_cfg.mount = fw_loc_cfg.laser_mount; /* the localizer's, for the de-skew */
     fw_rev_cfg.upside_down = fw_loc_cfg.laser_upside_down;
-    fw_rev_cfg.keep_every = 2u;                 /* 450 points a turn at 10 Hz */
-    if ((rc = rsm_ldlidar_init(&fw_laser, &fw_laser_link, &fw_clock, &fw_laser_cfg)) != RSM_OK ||
-        (rc = rsm_rev_init(&fw_rev, &fw_rev_cfg)) != RSM_OK ||
-        (rc = rsm_odometry_init(&fw_rev_odo, &fw_loc_cfg.odometry)) != RSM_OK) {
+    fw_rev_cfg.keep_every = 2u;                 /* an LD06's 450 points a turn at 10 Hz */
+    if ((rc = rsm_rev_init(&fw_rev, &fw_rev_cfg)) != RSM_OK) {
         return rc;
     }
-    return rsm_ldlidar_connect(&fw_laser);
+    return rsm_odometry_init(&fw_rev_odo, &fw_loc_cfg.odometry);
 }
 
 /* An encoder sample, for the de-skew: the pose it gives, at its stamp.
@@ -190,30 +204,81 @@ static void fw_laser_odometry(const rsm_odometry_config_t *odo)
     (void)rsm_odometry_set_config(&fw_rev_odo, odo);
 }
 
+/* A driver's points into the assembler; each whole turn to the fusion. */
+static void fw_turn_points(const rsm_lidar_point_t *pts, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        if (rsm_rev_push(&fw_rev, &pts[i]) == 1) {
+            (void)rsm_sync_scan(&fw_sync, &fw_rev.scan);
+            fw_stats.scan_events++;
+        }
+    }
+}
+#endif
+
+#if RSM_FIRMWARE_LASER == RSM_FIRMWARE_LD06
+static int fw_laser_init(void)
+{
+    int rc;
+    (void)rsm_ldlidar_config_default(&fw_laser_cfg);
+    fw_laser_cfg.read_timeout_us = 0u; /* one wait for both links: see the main loop */
+    if ((rc = fw_turns_init()) != RSM_OK ||
+        (rc = rsm_ldlidar_init(&fw_laser, &fw_laser_link, &fw_clock, &fw_laser_cfg)) != RSM_OK) {
+        return rc;
+    }
+    return rsm_ldlidar_connect(&fw_laser);
+}
+
 /* One poll; returns 1 if something happened. */
 static int fw_laser_poll(void)
 {
     rsm_ldlidar_event_t ev;
-    size_t i;
     if (rsm_ldlidar_poll(&fw_laser, &ev) != RSM_OK) {
         return 0;
     }
     if (ev.type == RSM_LDLIDAR_EVENT_LINK_LOST) {
         rsm_rev_reset(&fw_rev); /* the turn in progress has a hole */
-    }
-    for (i = 0; ev.type == RSM_LDLIDAR_EVENT_POINTS && i < ev.count; ++i) {
-        if (rsm_rev_push(&fw_rev, &ev.points[i]) == 1) {
-            (void)rsm_sync_scan(&fw_sync, &fw_rev.scan);
-            fw_stats.scan_events++;
-        }
+    } else if (ev.type == RSM_LDLIDAR_EVENT_POINTS) {
+        fw_turn_points(ev.points, ev.count);
     }
     return ev.type != RSM_LDLIDAR_EVENT_NONE;
 }
 
-/* Whether either driver has something to do now even without new bytes. */
-static int fw_deadline_due(uint64_t now_us)
+static uint64_t fw_laser_deadline(void)
 {
-    return rsm_p3dx_next_deadline_us(&fw_robot) <= now_us || rsm_ldlidar_next_deadline_us(&fw_laser) <= now_us;
+    return rsm_ldlidar_next_deadline_us(&fw_laser);
+}
+#elif RSM_FIRMWARE_LASER == RSM_FIRMWARE_RPLIDAR
+static int fw_laser_init(void)
+{
+    int rc;
+    (void)rsm_slamtec_config_default(&fw_laser_cfg);
+    fw_laser_cfg.read_timeout_us = 0u; /* one wait for both links: see the main loop */
+    if ((rc = fw_turns_init()) != RSM_OK ||
+        (rc = rsm_slamtec_init(&fw_laser, &fw_laser_link, &fw_clock, &fw_laser_cfg)) != RSM_OK) {
+        return rc;
+    }
+    /* Connecting only starts the start-up requests; poll drives them. */
+    return rsm_slamtec_connect(&fw_laser);
+}
+
+static int fw_laser_poll(void)
+{
+    if (rsm_slamtec_poll(&fw_laser, &fw_laser_ev) != RSM_OK) {
+        return 0;
+    }
+    if (fw_laser_ev.type == RSM_SLAMTEC_EVENT_LINK_LOST) {
+        rsm_rev_reset(&fw_rev); /* the turn in progress has a hole */
+    } else if (fw_laser_ev.type == RSM_SLAMTEC_EVENT_POINTS) {
+        fw_turn_points(fw_laser_ev.points, fw_laser_ev.count);
+    }
+    return fw_laser_ev.type != RSM_SLAMTEC_EVENT_NONE;
+}
+
+static uint64_t fw_laser_deadline(void)
+{
+    return rsm_slamtec_next_deadline_us(&fw_laser);
 }
 #else
 static int fw_laser_init(void)
@@ -249,14 +314,19 @@ static int fw_laser_poll(void)
     }
     return 0;
 }
+#endif
 
-/* The drivers wait inside their polls (read timeouts): nothing else is due. */
+/* Whether either driver has something to do now even without new bytes
+ * (the LMS image's drivers wait inside their polls: never). */
 static int fw_deadline_due(uint64_t now_us)
 {
+#if FW_SPINNING
+    return rsm_p3dx_next_deadline_us(&fw_robot) <= now_us || fw_laser_deadline() <= now_us;
+#else
     (void)now_us;
     return 0;
-}
 #endif
+}
 
 /* ---- start-up and main loop ------------------------------------------------- */
 
@@ -295,7 +365,7 @@ int main(void)
         const rsm_pose_t start = {0.0f, 0.0f, 0.0f};
         fw_loc_cfg = rsm_localizer_config_default();
         (void)rsm_p3dx_config_default(&fw_robot_cfg);
-#if RSM_FIRMWARE_LASER == RSM_FIRMWARE_LD06
+#if FW_SPINNING
         fw_robot_cfg.read_timeout_us = 0u; /* one wait for both links */
 #endif
         fw_sync_cfg = rsm_sync_config_default();

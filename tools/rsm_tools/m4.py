@@ -2,6 +2,7 @@
 
     python3 tools/rsm_tools/m4.py example ELF WORKDIR
     python3 tools/rsm_tools/m4.py example-ld06 ELF WORKDIR
+    python3 tools/rsm_tools/m4.py example-rplidar ELF WORKDIR
     python3 tools/rsm_tools/m4.py replay ELF HOST_EXE WORKDIR
 
 ``example`` boots the example firmware with its two device ports on files and
@@ -14,7 +15,12 @@ read by QEMU as the UART takes bytes): the banner names the LD06, the
 firmware sends nothing on the laser port (the sensor takes no commands),
 loses no byte, and turns the packets into scans; how many bytes QEMU hands
 the UART per emulated millisecond is QEMU's business, so only "at least
-one scan" is asserted, with a wide margin (about 9 of the 20 turns sent).  ``replay`` boots the
+one scan" is asserted, with a wide margin (about 9 of the 20 turns sent).
+``example-rplidar`` boots the example built for an RPLIDAR with nothing
+answering on the laser port: the driver's start-up goes out there and, the
+unit silent, repeats on its own timers (STOP, GET_HEALTH sent three times,
+then after the back-off STOP and GET_HEALTH again), timers that run on
+SysTick.  ``replay`` boots the
 replay firmware, checks its start-up, the instruction-count calibration (the
 known loop) and that its trajectory equals the host's (``HOST_EXE``, the same
 source built for the host) bit for bit.  Both fail on a fault report, a
@@ -37,7 +43,7 @@ import subprocess
 import sys
 import threading
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 ICOUNT_SHIFT = 3
 TIMER_HZ = 25_000_000  # mps2-an386 SYSCLK, which clocks its APB timers
@@ -89,24 +95,35 @@ def lines_of(text: str, tag: str) -> List[List[str]]:
     return [l.split()[1:] for l in text.splitlines() if l.startswith(tag + " ")]
 
 
-def check_example(elf: Path, work: Path) -> str:
-    work.mkdir(parents=True, exist_ok=True)
-    robot, laser = work / "robot.bin", work / "laser.bin"
-    for f in (robot, laser):
-        f.unlink(missing_ok=True)
-    out = run(elf, [robot, laser])
-    if "rsm example firmware on mps2-an386" not in out:
-        raise M4Error(f"no banner in:\n{out}")
+def check_console(out: str, laser: str) -> None:
+    """The example's banner names the board and laser; its run ended with a summary."""
+    if f"rsm example firmware on mps2-an386, laser: {laser}\n" not in out:
+        raise M4Error(f"no banner naming the {laser} in:\n{out}")
     if "rsm example firmware: ran " not in out:
         raise M4Error(f"no end-of-run summary in:\n{out}")
-    sent = robot.read_bytes()
+
+
+def boot_example(elf: Path, work: Path, laser: str) -> Tuple[str, bytes, bytes]:
+    """One run of an example image with its robot and laser ports on files:
+    (console, robot port bytes, laser port bytes)."""
+    work.mkdir(parents=True, exist_ok=True)
+    robot, port = work / "robot.bin", work / "laser.bin"
+    for f in (robot, port):
+        f.unlink(missing_ok=True)
+    out = run(elf, [robot, port])
+    check_console(out, laser)
+    return out, robot.read_bytes(), port.read_bytes()
+
+
+def check_example(elf: Path, work: Path) -> str:
+    _, sent, laser_sent = boot_example(elf, work, "LMS 2xx")
     n_sync = sent.count(SYNC0)
     # step_timeout_us is 1 s: SYNC0 at 0, 1, 2 and 3 s of the 3.5 s run.
     if n_sync < 3 or sent != SYNC0 * n_sync:
         raise M4Error(f"robot port: expected SYNC0 repeated at least 3 times, got {sent.hex()}")
-    if not laser.read_bytes().startswith(b"\x02"):
-        raise M4Error(f"laser port: expected an LMS telegram (STX), got {laser.read_bytes()[:16].hex()}")
-    return f"example: booted, {n_sync} SYNC0 on the robot port, {len(laser.read_bytes())} bytes on the laser port"
+    if not laser_sent.startswith(b"\x02"):
+        raise M4Error(f"laser port: expected an LMS telegram (STX), got {laser_sent[:16].hex()}")
+    return f"example: booted, {n_sync} SYNC0 on the robot port, {len(laser_sent)} bytes on the laser port"
 
 
 def ld06_room(turns: int) -> bytes:
@@ -157,8 +174,7 @@ def check_example_ld06(elf: Path, work: Path, turns: int = 20) -> str:
     out = run(elf, [robot], pipe=pipe)
     for t in threads:
         t.join(timeout=10)
-    if "rsm example firmware on mps2-an386, laser: LD06" not in out:
-        raise M4Error(f"no LD06 banner in:\n{out}")
+    check_console(out, "LD06")
     m = re.search(r"ran (\d+) ms: encoder events \d+, scans (\d+), receive overflows (\d+)", out)
     if m is None:
         raise M4Error(f"no end-of-run summary in:\n{out}")
@@ -170,6 +186,22 @@ def check_example_ld06(elf: Path, work: Path, turns: int = 20) -> str:
     if overflows != 0 or scans < 1:
         raise M4Error(f"LD06 packets of {turns} turns gave {scans} scans, {overflows} receive overflows:\n{out}")
     return f"example-ld06: booted, {scans} scans from the LD06 port in {m.group(1)} ms, nothing sent to it"
+
+
+RP_STOP, RP_HEALTH = bytes([0xA5, 0x25]), bytes([0xA5, 0x52])  # RPLIDAR requests (docs lidars.md 2)
+
+
+def check_example_rplidar(elf: Path, work: Path) -> str:
+    _, robot, sent = boot_example(elf, work, "RPLIDAR")
+    if not robot.startswith(SYNC0):
+        raise M4Error(f"robot port: expected the P3-DX handshake, got {robot[:16].hex()}")
+    # reply_timeout 0.5 s, three tries, back-off 1 s: in the 3.5 s run the
+    # second start-up has begun
+    want = RP_STOP + RP_HEALTH * 3 + RP_STOP + RP_HEALTH
+    rest = sent[len(want):]
+    if not sent.startswith(want) or rest != RP_HEALTH * (len(rest) // 2):
+        raise M4Error(f"laser port: expected STOP, GET_HEALTH x3, STOP, GET_HEALTH..., got {sent.hex()}")
+    return f"example-rplidar: booted, the RPLIDAR start-up sent and repeated ({len(sent)} bytes)"
 
 
 def calibration(out: str) -> Dict[str, float]:
@@ -241,6 +273,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     e6 = sub.add_parser("example-ld06", help="boot the example firmware built for an LD06, feed it packets")
     e6.add_argument("elf", type=Path)
     e6.add_argument("work", type=Path)
+    e7 = sub.add_parser("example-rplidar", help="boot the example firmware built for an RPLIDAR")
+    e7.add_argument("elf", type=Path)
+    e7.add_argument("work", type=Path)
     r = sub.add_parser("replay", help="run the replay firmware and compare with the host")
     r.add_argument("elf", type=Path)
     r.add_argument("host_exe", type=Path)
@@ -251,6 +286,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(check_example(a.elf, a.work))
         elif a.cmd == "example-ld06":
             print(check_example_ld06(a.elf, a.work))
+        elif a.cmd == "example-rplidar":
+            print(check_example_rplidar(a.elf, a.work))
         else:
             print(check_replay(a.elf, a.host_exe, a.work))
     except M4Error as err:
