@@ -185,6 +185,11 @@ static uint64_t until_due_cb(const void *drv, uint64_t now)
 static const rsm_link_poll_ops_t ldlidar_poll_ops = {drain_cb, timers_cb, until_due_cb,
                                                      silence_cb};
 
+uint64_t rsm_ldlidar_next_deadline_us(const rsm_ldlidar_t *d)
+{
+    return d == NULL ? UINT64_MAX : rsm_link_next_deadline(&d->io, &ldlidar_poll_ops, d);
+}
+
 int rsm_ldlidar_poll(rsm_ldlidar_t *d, rsm_ldlidar_event_t *ev)
 {
     int st;

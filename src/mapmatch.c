@@ -1,5 +1,5 @@
 /* Coarse-to-fine Gauss-Newton of a scan against the tile map with the
- * prediction as a prior; see include/rsm/mapmatch.h. */
+ * prediction as a prior; see src/mapmatch.h. */
 #include "mapmatch.h"
 
 #include <math.h>

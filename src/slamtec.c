@@ -175,21 +175,45 @@ static void fail(rsm_slamtec_t *d, int status, uint64_t now)
     d->out.stamp_us = now;
 }
 
-int rsm_slamtec_connect(rsm_slamtec_t *d)
+/* What connect and listen share: the link's rate, a fresh session. */
+static void start_session(rsm_slamtec_t *d, uint8_t listen)
 {
-    int st;
-    if (d == NULL) {
-        return RSM_ERR_INVAL;
-    }
     if (d->cfg->baud != 0u) {
-        st = rsm_link_set_baud(d->io.link, d->cfg->baud);
+        const int st = rsm_link_set_baud(d->io.link, d->cfg->baud);
         if (st != RSM_OK && st != RSM_ERR_NOSYS) {
             d->stats.baud_errors++;
         }
     }
+    d->listen = listen;
     d->lost = 0u;
     memset(&d->samplerate, 0, sizeof d->samplerate);
+}
+
+int rsm_slamtec_connect(rsm_slamtec_t *d)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    start_session(d, 0u);
     begin_step(d, STEP_STOP, rsm_link_rx_now(&d->io));
+    return RSM_OK;
+}
+
+/* Listen-only: await a descriptor, whatever came before it. */
+static void await_descriptor(rsm_slamtec_t *d)
+{
+    d->state = RSM_SLAMTEC_LISTENING;
+    rsm_link_rx_drop(&d->io);
+    (void)rsm_rplidar_parser_expect(&d->parser);
+}
+
+int rsm_slamtec_listen(rsm_slamtec_t *d)
+{
+    if (d == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    start_session(d, 1u);
+    await_descriptor(d);
     return RSM_OK;
 }
 
@@ -197,6 +221,11 @@ int rsm_slamtec_disconnect(rsm_slamtec_t *d)
 {
     if (d == NULL) {
         return RSM_ERR_INVAL;
+    }
+    if (d->listen) {
+        d->state = RSM_SLAMTEC_IDLE; /* nothing was ever sent: nothing to stop */
+        d->listen = 0u;
+        return RSM_OK;
     }
     if (d->state != RSM_SLAMTEC_IDLE && d->state != RSM_SLAMTEC_STOPPING) {
         begin_step(d, STEP_HALT, rsm_link_rx_now(&d->io));
@@ -232,6 +261,19 @@ static void take_points(rsm_slamtec_t *d, const rsm_rplidar_event_t *e)
     d->stats.stamp_shifts += (uint32_t)rsm_stamps_in_order(first, e->count, &d->last_point_us);
     d->stats.points += (uint32_t)e->count;
     d->out.type = RSM_SLAMTEC_EVENT_POINTS;
+}
+
+/* A scan descriptor came: the stream of answer type `answer` begins. */
+static void stream_started(rsm_slamtec_t *d, uint8_t answer, uint64_t now)
+{
+    d->answer = answer;
+    d->state = RSM_SLAMTEC_STREAMING;
+    d->last_data_us = now;
+    d->stats.connects++;
+    d->stats.reconnects += d->lost;
+    d->lost = 0u;
+    d->out.type = RSM_SLAMTEC_EVENT_CONNECTED;
+    d->out.stamp_us = now;
 }
 
 /* An answer during the start-up. */
@@ -272,18 +314,29 @@ static void startup_answer(rsm_slamtec_t *d, const rsm_rplidar_event_t *e, uint6
             d->stats.unexpected++;
             return;
         }
-        d->answer = e->answer;
-        d->state = RSM_SLAMTEC_STREAMING;
-        d->last_data_us = now;
-        d->stats.connects++;
-        d->stats.reconnects += d->lost;
-        d->lost = 0u;
-        d->out.type = RSM_SLAMTEC_EVENT_CONNECTED;
-        d->out.stamp_us = now;
+        stream_started(d, e->answer, now);
         return;
     }
     }
     next_step(d, now);
+}
+
+/* Listen-only: what the sensor says to whoever runs it. Answers are kept,
+ * a scan descriptor starts the stream. */
+static void overheard(rsm_slamtec_t *d, const rsm_rplidar_event_t *e, uint64_t now)
+{
+    switch (e->type) {
+    case RSM_RPLIDAR_EVENT_HEALTH: d->health = e->health; break;
+    case RSM_RPLIDAR_EVENT_INFO: d->info = e->info; break;
+    case RSM_RPLIDAR_EVENT_SAMPLERATE: d->samplerate = e->samplerate; break;
+    case RSM_RPLIDAR_EVENT_DESCRIPTOR:
+        if (e->answer == RSM_RPLIDAR_ANS_NODE || e->answer == RSM_RPLIDAR_ANS_CAPSULE ||
+            e->answer == RSM_RPLIDAR_ANS_DENSE) {
+            stream_started(d, e->answer, now);
+        }
+        break; /* the descriptor of an answer: the answer follows */
+    default: d->stats.unexpected++; break;
+    }
 }
 
 /* rsm_link_poll step 1/4: feeds the held bytes; stops at an event, or when
@@ -313,6 +366,8 @@ static int drain_cb(void *drv, uint64_t now)
             }
         } else if (d->state == RSM_SLAMTEC_STARTING) {
             startup_answer(d, &d->ev, now);
+        } else if (d->state == RSM_SLAMTEC_LISTENING) {
+            overheard(d, &d->ev, now);
         } else if (d->ev.type != RSM_RPLIDAR_EVENT_DESCRIPTOR) {
             d->stats.unexpected++;
         }
@@ -379,9 +434,14 @@ static int timers_cb(void *drv, uint64_t now)
             d->lost = 1u;
             d->out.type = RSM_SLAMTEC_EVENT_LINK_LOST;
             d->out.stamp_us = now;
-            begin_step(d, STEP_STOP, now);
+            if (d->listen) {
+                await_descriptor(d);
+            } else {
+                begin_step(d, STEP_STOP, now);
+            }
         }
         break;
+    case RSM_SLAMTEC_LISTENING: /* no timer: the sensor speaks when it is run */
     case RSM_SLAMTEC_IDLE:
     default:
         break;
@@ -393,7 +453,7 @@ static uint64_t until_due_cb(const void *drv, uint64_t now)
 {
     const rsm_slamtec_t *d = (const rsm_slamtec_t *)drv;
     uint64_t due;
-    if (d->state == RSM_SLAMTEC_IDLE) {
+    if (d->state == RSM_SLAMTEC_IDLE || d->state == RSM_SLAMTEC_LISTENING) {
         return UINT64_MAX;
     }
     due = d->state == RSM_SLAMTEC_STREAMING ? d->last_data_us + d->cfg->stream_timeout_us
@@ -403,6 +463,11 @@ static uint64_t until_due_cb(const void *drv, uint64_t now)
 
 static const rsm_link_poll_ops_t slamtec_poll_ops = {drain_cb, timers_cb, until_due_cb,
                                                      silence_cb};
+
+uint64_t rsm_slamtec_next_deadline_us(const rsm_slamtec_t *d)
+{
+    return d == NULL ? UINT64_MAX : rsm_link_next_deadline(&d->io, &slamtec_poll_ops, d);
+}
 
 int rsm_slamtec_poll(rsm_slamtec_t *d, rsm_slamtec_event_t *ev)
 {

@@ -1,5 +1,5 @@
 /* Persistent multi-resolution occupancy map in a fixed tile pool; see
- * include/rsm/tilemap.h for the contract and docs/map.md for the design. */
+ * src/tilemap.h for the contract and docs/map.md for the design. */
 #include "tilemap.h"
 
 #include <math.h>

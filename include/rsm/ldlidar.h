@@ -40,7 +40,8 @@ extern "C" {
 /* Runtime settings; rsm_ldlidar_config_default gives the values in brackets. */
 typedef struct rsm_ldlidar_config {
     uint32_t baud;              /* link rate, set at connect if the link has one [230400] */
-    uint32_t read_timeout_us;   /* longest wait inside one poll, > 0 [10 000] */
+    uint32_t read_timeout_us;   /* longest wait inside one poll; 0: take only what
+                                   has arrived (see rsm_ldlidar_next_deadline_us) [10 000] */
     uint32_t byte_timeout_us;   /* a partial packet is dropped after this silence [20 000] */
     uint32_t stream_timeout_us; /* no verified packet this long = link lost, > 0 [500 000] */
     uint32_t latency_us;        /* subtracted from the arrival of a packet [0] */
@@ -117,6 +118,15 @@ int rsm_ldlidar_disconnect(rsm_ldlidar_t *d);
  * *ev receives the event (NONE if nothing happened). Returns RSM_OK,
  * RSM_ERR_INVAL (NULL pointers) or the status of a failed read. */
 int rsm_ldlidar_poll(rsm_ldlidar_t *d, rsm_ldlidar_event_t *ev);
+
+/* Clock time (the driver's clock, microseconds) at which the driver next
+ * needs a poll even if nothing arrives: the stream's silence check; the
+ * current time when received bytes are still unexamined or a packet waits
+ * to be delivered; UINT64_MAX in IDLE or for d NULL. As
+ * rsm_p3dx_next_deadline_us: a caller serving several links waits until
+ * the earliest deadline of all or until bytes arrive, then polls each
+ * driver (read_timeout_us 0) until it gives no event. */
+uint64_t rsm_ldlidar_next_deadline_us(const rsm_ldlidar_t *d);
 
 /* The stamped points of packet pkt whose last point was measured at
  * last_us (the driver's rule above; pure, for log readers and tests).

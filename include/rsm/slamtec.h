@@ -38,6 +38,15 @@
  * it (stamp_shifts), so stamps never go back. Nothing valid for
  * stream_timeout_us gives LINK_LOST and the start-up again.
  *
+ * Listen-only (rsm_slamtec_listen): nothing is sent; the driver decodes
+ * what the sensor sends while another host runs it (or a capture or a
+ * replay of such a session): health, info and sample-rate answers are
+ * kept in d->health, d->info and d->samplerate, a scan descriptor gives
+ * CONNECTED and the nodes or capsules after it POINTS, stamped as above. A
+ * stream picked up without its descriptor is not decoded (the descriptor
+ * says what the bytes are). Nothing valid for stream_timeout_us gives
+ * LINK_LOST and the driver awaits the next descriptor.
+ *
  * Shutdown (rsm_slamtec_disconnect, run by later polls): STOP, then the
  * motor stop command if cfg.motor set one (PWM 0 / 0 rpm), a pause of
  * stop_wait_us, DISCONNECTED and IDLE.
@@ -78,7 +87,8 @@ typedef struct rsm_slamtec_config {
     uint8_t reset;              /* 1: RESET at every start-up [0] */
     uint8_t max_tries;          /* sends per request, >= 1 [3] */
     uint16_t sample_us;         /* sample time until GET_SAMPLERATE answers [250] */
-    uint32_t read_timeout_us;   /* longest wait inside one poll, > 0 [10 000] */
+    uint32_t read_timeout_us;   /* longest wait inside one poll; 0: take only what
+                                   has arrived (see rsm_slamtec_next_deadline_us) [10 000] */
     uint32_t byte_timeout_us;   /* silence that ends a partial answer [50 000] */
     uint32_t reply_timeout_us;  /* answer wait, > 0 [500 000] */
     uint32_t stop_wait_us;      /* pause after STOP [20 000] */
@@ -97,7 +107,8 @@ typedef enum rsm_slamtec_state {
     RSM_SLAMTEC_STARTING = 1, /* a start-up step in flight (or its pause) */
     RSM_SLAMTEC_BACKOFF = 2,  /* pause after an ERROR */
     RSM_SLAMTEC_STREAMING = 3,
-    RSM_SLAMTEC_STOPPING = 4
+    RSM_SLAMTEC_STOPPING = 4,
+    RSM_SLAMTEC_LISTENING = 5 /* listen-only, awaiting a scan descriptor */
 } rsm_slamtec_state_t;
 
 typedef enum rsm_slamtec_event_type {
@@ -161,6 +172,7 @@ typedef struct rsm_slamtec {
     uint8_t lost;
     uint8_t need_reset;
     uint8_t answer;           /* answer type of the stream */
+    uint8_t listen;           /* 1: listen-only (nothing is sent) */
     uint8_t req[16];
     size_t req_len;
     uint64_t deadline_us;
@@ -181,14 +193,32 @@ int rsm_slamtec_init(rsm_slamtec_t *d, const rsm_link_t *link, const rsm_clock_t
 /* Starts (or restarts) the start-up. RSM_OK or RSM_ERR_INVAL (d NULL). */
 int rsm_slamtec_connect(rsm_slamtec_t *d);
 
+/* Listen-only mode (see above): drops what was received, awaits a scan
+ * descriptor and sends nothing, ever; the link's rate is set to cfg.baud
+ * where the link has one. rsm_slamtec_connect leaves the mode,
+ * rsm_slamtec_disconnect goes straight to IDLE (nothing sent, no event).
+ * RSM_OK or RSM_ERR_INVAL (d NULL). */
+int rsm_slamtec_listen(rsm_slamtec_t *d);
+
 /* Starts the shutdown from any state but IDLE; later polls finish it and
- * give DISCONNECTED. RSM_OK or RSM_ERR_INVAL (d NULL). */
+ * give DISCONNECTED (listen-only: IDLE at once, no event). RSM_OK or
+ * RSM_ERR_INVAL (d NULL). */
 int rsm_slamtec_disconnect(rsm_slamtec_t *d);
 
 /* One cycle: at most one read of at most read_timeout_us, then the timers.
  * *ev receives the event (NONE if nothing happened). Returns RSM_OK,
  * RSM_ERR_INVAL (NULL pointers) or the status of a failed read. */
 int rsm_slamtec_poll(rsm_slamtec_t *d, rsm_slamtec_event_t *ev);
+
+/* Clock time (the driver's clock, microseconds) at which the driver next
+ * needs a poll even if nothing arrives: a start-up pause or answer
+ * timeout, the pause after an error, the stream's silence check; the
+ * current time when received bytes are still unexamined; UINT64_MAX in
+ * IDLE, while listening for a descriptor, or for d NULL. As
+ * rsm_p3dx_next_deadline_us: a caller serving several links waits until
+ * the earliest deadline of all or until bytes arrive, then polls each
+ * driver (read_timeout_us 0) until it gives no event. */
+uint64_t rsm_slamtec_next_deadline_us(const rsm_slamtec_t *d);
 
 #ifdef __cplusplus
 }

@@ -10,13 +10,16 @@
  *            link (after a delay from the next byte, in 100 us);
  *            1 time passes (the next byte, in 10 ms);
  *            2 the driver connects, or 3 disconnects;
- *   bit 3   the RPLIDAR runs express scans (taken at its next connect).
+ *   bit 3   the RPLIDAR runs express scans (taken at its next connect);
+ *   bit 4   the RPLIDAR's connect is a listen-only start instead.
  * Both drivers are polled after every step. Whatever arrives, every poll
  * returns RSM_OK or a negative status, waits no longer than its read
  * timeout, gives a documented event, points with angles in [0, 360),
  * finite non-negative ranges and stamps that never go back, so the
  * assembler takes every point; its scans hold at most RSM_MAX_BEAMS finite
- * readings. Invariants that fail stop the run with __builtin_trap(). */
+ * readings; a listening RPLIDAR driver writes nothing at all; a driver in
+ * IDLE has no deadline. Invariants that fail stop the run with
+ * __builtin_trap(). */
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -37,6 +40,7 @@ typedef struct side {
     rsm_rev_t rev;
     uint64_t last_stamp;
     uint64_t next_odom;
+    size_t writes_at_listen; /* host writes when the driver began listening */
 } side_t;
 
 /* Odometry up to time t: turning on the spot at 1 rad/s. */
@@ -85,6 +89,8 @@ static void poll_ld(rsm_ldlidar_t *d, const rsm_ldlidar_config_t *cfg, side_t *s
     CHECK(ev.type <= RSM_LDLIDAR_EVENT_LINK_LOST);
     CHECK(ev.count <= RSM_LD06_POINTS);
     CHECK(ev.type == RSM_LDLIDAR_EVENT_POINTS || ev.count == 0u);
+    CHECK(s->fl.n_writes == 0u); /* the LD06 takes no commands */
+    CHECK(d->state != RSM_LDLIDAR_IDLE || rsm_ldlidar_next_deadline_us(d) == UINT64_MAX);
     if (ev.type == RSM_LDLIDAR_EVENT_LINK_LOST) {
         rsm_rev_reset(&s->rev);
     }
@@ -107,6 +113,8 @@ static void poll_rp(rsm_slamtec_t *d, const rsm_slamtec_config_t *cfg, side_t *s
     /* a poll sends at most one request after each of its two drains and
      * two timer runs: no request storm whatever the unit says */
     CHECK(d->stats.requests >= requests && d->stats.requests - requests <= 4u);
+    CHECK(!d->listen || s->fl.n_writes == s->writes_at_listen); /* listening sends nothing */
+    CHECK(d->state != RSM_SLAMTEC_IDLE || rsm_slamtec_next_deadline_us(d) == UINT64_MAX);
     if (ev.type == RSM_SLAMTEC_EVENT_LINK_LOST) {
         rsm_rev_reset(&s->rev);
     }
@@ -160,7 +168,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         case 2:
             if (op & 1u) {
                 scfg.scan_mode = (op & 8u) ? RSM_SLAMTEC_SCAN_EXPRESS : RSM_SLAMTEC_SCAN_STANDARD;
-                CHECK(rsm_slamtec_connect(&rpd) == RSM_OK);
+                rp.writes_at_listen = rp.fl.n_writes;
+                CHECK(((op & 16u) ? rsm_slamtec_listen(&rpd) : rsm_slamtec_connect(&rpd)) == RSM_OK);
             } else {
                 CHECK(rsm_ldlidar_connect(&ldd) == RSM_OK);
             }

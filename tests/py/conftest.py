@@ -102,7 +102,7 @@ FAKEDEV_TIMEOUT = 30.0
 
 
 class FakeDevices:
-    """rsm-fakedev in a subprocess: ``paths`` maps ``robot``/``laser``/``ld06`` to its
+    """rsm-fakedev in a subprocess: ``paths`` maps ``robot``/``laser``/``ld06``/``rplidar`` to its
     pseudo-terminals; ``stop()`` ends it (SIGTERM) and returns its log, one
     dict per JSON line."""
 
@@ -111,7 +111,7 @@ class FakeDevices:
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "rsm_tools.fakedev", "--log", str(self.log_path), *args],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=subprocess_env())
-        flags = [f for f in ("--robot", "--lms", "--ld06") if f in args]
+        flags = [f for f in ("--robot", "--lms", "--ld06", "--rplidar") if f in args]
         want = len(flags) if flags else 2
         out = b""
         end = time.monotonic() + FAKEDEV_TIMEOUT

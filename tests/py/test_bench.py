@@ -26,7 +26,7 @@ from pathlib import Path
 import pytest
 
 from conftest import REPO_ROOT, build_dir, rsm_nav_binary, subprocess_env
-from rsm_tools import bench
+from rsm_tools import bench, lidarbench
 from rsm_tools import evaluate as ev
 from rsm_tools import outliers
 
@@ -1030,3 +1030,19 @@ def test_full_log_checks_are_reported_with_the_floors(run):
         assert len(capture) == 2
         for f in capture:
             assert f["status"] == ("PASS" if f["value"] <= 1.02 else "MISS") and "readings past" in f["line"]
+
+
+def test_logs_as_lidar_streams_are_reported_with_the_floors(run):
+    """rsm_tools.lidarbench on the made-up shared folder: every log as an LD06
+    and as an RPLIDAR stream in capture mode, local and all relations, each a
+    PASS or MISS line against x1.10 of the direct run, in the report."""
+    man = run["manifest"]
+    lidar = [f for f in man["floors"] if f["kind"] == "lidar"]
+    lines = floor_lines(run["report"])
+    assert all(f["line"] in lines for f in lidar)
+    for label in ("head", "head10"):
+        mine = [f for f in lidar if f["log"] == label]
+        assert len(mine) == 4
+        assert sum("LD06 stream" in f["line"] for f in mine) == 2 and sum("RPLIDAR" in f["line"] for f in mine) == 2
+        for f in mine:
+            assert f["status"] == ("PASS" if f["value"] <= lidarbench.TOLERANCE else "MISS")

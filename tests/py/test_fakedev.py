@@ -1,10 +1,11 @@
-"""rsm-fakedev on its own: the fake P3-DX and LMS 2xx answer a host that
-talks to their pseudo-terminals directly, as the real devices would
-(protocols.md), and they notice a host at the wrong rate.
+"""rsm-fakedev on its own: the fake P3-DX, LMS 2xx and RPLIDAR answer a
+host that talks to their pseudo-terminals directly, as the real devices
+would (protocols.md, lidars.md), and they notice a host at the wrong rate.
 
 Waits are generous and never the thing being measured: every check is on
 what came back, not on how fast."""
 
+import math
 import os
 import select
 import struct
@@ -13,6 +14,7 @@ import time
 import tty
 
 from conftest import FakeDevices, load_vectors
+from rsm_tools import fakedev, lidarstream, sim
 from rsm_tools import protocols as p
 
 TIMEOUT = 30.0
@@ -241,3 +243,67 @@ def test_the_encoders_the_fakes_use_match_the_reference():
     block = p.lms_config_block(p.UNITS_MM, 0x03, 0x02)
     assert len(block) == 32 and block[4:7] == b"\x02\x03\x01"
     assert p.LMS_VARIANTS[(180, 50)] == (361, 0) and p.LMS_VARIANTS[(100, 25)] == (401, 4000)
+
+
+def rplidar_vectors():
+    """The documented requests and answers of tests/data/rplidar_frames.txt."""
+    out = {}
+    path = os.path.join(os.path.dirname(__file__), "..", "data", "rplidar_frames.txt")
+    with open(path, encoding="utf-8") as fh:
+        for line in fh:
+            if line.strip() and not line.startswith("#"):
+                kind, *hexes = line.split()
+                if kind == "samples":
+                    continue  # decoded values, not bytes
+                out.setdefault(kind, []).append(bytes(int(h, 16) for h in hexes))
+    return out
+
+
+def test_rplidar_answers_requests_and_scans_the_simulated_world(tmp_path):
+    """The fake RPLIDAR answers health, info and sample rate laid out as
+    the documented vectors, keeps a motor command, ignores a request with a
+    bad checksum, streams nodes of the simulated world after SCAN and
+    stops at STOP."""
+    vec = rplidar_vectors()
+    stop, _reset, scan, get_info, get_health = vec["request"][:5]
+    pwm_660 = vec["request"][7]
+    fake = FakeDevices(tmp_path, "--rplidar", "--quiet")
+    host = Host(fake.paths["rplidar"], 115200)
+    try:
+        host.send(get_health)
+        assert host.read_until(lambda d: len(d) >= 10) == vec["health"][0][:7] + b"\x00\x00\x00"
+        host.send(get_info)
+        info = host.read_until(lambda d: len(d) >= 27)
+        assert len(info) == 27 and info[:11] == vec["info"][0][:11]   # model 0x18, firmware 1.29, hw 7
+        host.send(b"\xa5\x59")                                         # GET_SAMPLERATE
+        rate = host.read_until(lambda d: len(d) >= 11)
+        assert rate[:7] == bytes.fromhex("a55a0400000015")
+        assert struct.unpack("<HH", rate[7:]) == (556, 556)            # 360 nodes a turn at 5 Hz
+        host.send(pwm_660[:-1] + bytes([pwm_660[-1] ^ 0xFF]))           # bad checksum: ignored
+        host.send(pwm_660)
+        host.send(scan)
+        data = host.read_until(lambda d: len(d) >= 7 + 5 * 400)
+        assert data[:7] == vec["nodes"][0][:7]                         # the standard-scan descriptor
+        host.send(stop)
+        host.read_until(lambda d: False, timeout=0.3)
+        assert host.read_until(lambda d: False, timeout=0.5) == b""    # stopped
+    finally:
+        host.close()
+        log = fake.stop()
+    nodes = [data[k:k + 5] for k in range(7, len(data) - 4, 5)]
+    body = fakedev.Body()  # the robot stands where the world's path starts
+    for k, node in enumerate(nodes[:400]):
+        start, not_start = node[0] & 1, (node[0] >> 1) & 1
+        angle_q6 = struct.unpack_from("<H", node, 1)[0]
+        assert start != not_start and angle_q6 & 1 == 1
+        angle = (angle_q6 >> 1) / 64.0
+        assert angle == k % 360 and start == (k % 360 == 0)
+        r = sim.raycast(body.x, body.y, body.th - math.radians(angle), body.segs, body.circles,
+                        fakedev.MAX_RANGE_M)
+        want = round(r * 1000.0) if r < fakedev.MAX_RANGE_M else 0
+        assert struct.unpack_from("<H", node, 3)[0] == 4 * want
+        assert (node[0] >> 2) == (lidarstream.RPLIDAR_QUALITY if want else 0)
+    summary = [e for e in log if e["ev"] == "summary" and e["dev"] == "rplidar"][0]
+    assert summary["bad_requests"] == 1 and summary["motor"] == 660
+    assert summary["scans_started"] == 1 and summary["stops"] == 1 and not summary["scanning"]
+    assert [e["cmd"] for e in log if e["ev"] == "request"] == [0x52, 0x50, 0x59, 0xF0, 0x20, 0x25]

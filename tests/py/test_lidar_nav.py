@@ -1,23 +1,25 @@
 """The cheap-lidar floor on the shipped Intel excerpt: the log rendered as an
-LD06 stream (rsm-convert --lidar ld06) and run through rsm-nav's lidar path
-(the LD06 driver and the revolution assembler in tools/nav/devices.c) tracks
-within 10 % of the direct rsm-nav --carmen run, on the local relations and
-on all of them.
+LD06 stream and as an RPLIDAR stream (rsm-convert --lidar ld06|rplidar) and
+run through rsm-nav's lidar path (the LD06 or RPLIDAR driver and the
+revolution assembler in tools/nav/devices.c) tracks within 10 % of the
+direct rsm-nav --carmen run, on the local relations and on all of them.
 
 What is asserted is deterministic. The capture-mode run (the recorded bytes
 through the same drivers on a memory link, stamped with the record times) is
-a function of the bytes alone, and carries the verdict. Over pseudo-terminals
-(rsm-replay --lockstep into rsm-nav --robot --lidar ld06 --listen) every
-byte, packet and turn must arrive unchanged, which the events show; its
-trajectory is not asserted: a lockstep replay runs faster than the sensor
-turns, and the LD06 driver stamps its points from the arrival times and the
-head's speed, so the odometry each turn is fused with depends on the
-machine. Its figures are printed.
+a function of the bytes alone. The live run over pseudo-terminals
+(rsm-replay --lockstep into rsm-nav --robot --lidar KIND --listen) is made
+one too: the feeder writes each instant's records while rsm-nav waits for
+them, and its RSM_LOCKSTEP_CLOCK file gives rsm-nav's drivers the capture's
+time for them, so the live run must give the capture-mode run's events and
+trajectory bit for bit, whatever the machine's speed or load, and both are
+held to the floor. (With the machine's own clock, the lidar drivers stamp
+points by arrival and the trajectory would depend on how fast the replay
+went.)
 
 De-skew is off here: each rendered turn is one logged scan, measured at one
 instant, so moving its points by the motion over the turn would only add
-error (the converter says so too); de-skew is measured in
-tests/unit/test_revolution.c.
+error (the converter says so too); de-skew is measured on rsm-sim's
+spinning lidar (tests/py/test_deskew.py) and in tests/unit/test_revolution.c.
 """
 
 import subprocess
@@ -26,7 +28,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO_ROOT, rsm_nav_binary as nav_binary, subprocess_env
+from conftest import REPO_ROOT, FakeDevices, rsm_nav_binary as nav_binary, subprocess_env
 from rsm_tools import capture as cap
 from rsm_tools import convert
 from rsm_tools import evaluate as ev
@@ -47,11 +49,11 @@ def direct(tmp_path_factory, head_log):
     return rows(out)
 
 
-@pytest.fixture(scope="module")
-def ld06_capture(tmp_path_factory, head_log):
-    out = tmp_path_factory.mktemp("ld06") / "ld06.cap"
-    convert.convert(str(head_log), str(out), lidar="ld06")
-    return out
+@pytest.fixture(scope="module", params=["ld06", "rplidar"])
+def lidar_capture(request, tmp_path_factory, head_log):
+    out = tmp_path_factory.mktemp(request.param) / f"{request.param}.cap"
+    convert.convert(str(head_log), str(out), lidar=request.param)
+    return request.param, out
 
 
 def errors(traj, relations):
@@ -79,46 +81,106 @@ def run_capture_mode(capture: Path, tmp: Path):
     return traj, events, res.stdout
 
 
-def test_ld06_stream_tracks_within_ten_percent_of_the_direct_run(tmp_path, ld06_capture, direct, head_relations):
-    traj, _, summary = run_capture_mode(ld06_capture, tmp_path)
-    assert "18000 packets, 216000 points, 598 turns (1 partial); CRC errors 0, bytes skipped 0" in summary, summary
+# What rsm-nav's summary says of the lidar link in capture mode: every
+# rendered point decoded, 598 turns (the first is dropped: the assembler
+# joined it mid-turn), nothing skipped.
+LINK_SUMMARY = {
+    "ld06": "18000 packets, 216000 points, 598 turns (1 partial); CRC errors 0, bytes skipped 0",
+    "rplidar": "1 descriptors, 216000 nodes, 0 capsules, 216000 points, 598 turns (1 partial);"
+               " bad nodes 0, checksum errors 0, bytes skipped 0",
+}
+
+
+def assert_within_floor(label, traj, direct, head_relations):
     rel = ev.load_relations(head_relations)
     lidar = errors(lidar_traj(traj, direct), rel)
     ref = errors([tuple(r) for r in direct], rel)
     for name in ("local", "all"):
         (m, u, t, r), (m0, _, t0, r0) = lidar[name], ref[name]
-        print(f"\nLD06 stream {name}: {t:.4f} m {r:.3f} deg; direct {t0:.4f} m {r0:.3f} deg ({m} relations)")
+        print(f"\n{label} {name}: {t:.4f} m {r:.3f} deg; direct {t0:.4f} m {r0:.3f} deg ({m} relations)")
         assert u <= 1 and m >= m0 - 1  # the first scan has no turn
-        assert t <= TOLERANCE * t0, (name, t, t0)
-        assert r <= TOLERANCE * r0, (name, r, r0)
+        assert t <= TOLERANCE * t0, (label, name, t, t0)
+        assert r <= TOLERANCE * r0, (label, name, r, r0)
 
 
-def test_ld06_stream_over_ptys_delivers_every_turn_unchanged(tmp_path, ld06_capture, direct, head_relations):
-    _, cap_events, _ = run_capture_mode(ld06_capture, tmp_path)
-    header, _, _ = cap.read_capture(ld06_capture)
+def test_lidar_stream_tracks_within_ten_percent_of_the_direct_run(tmp_path, lidar_capture, direct, head_relations):
+    kind, capture = lidar_capture
+    traj, _, summary = run_capture_mode(capture, tmp_path)
+    assert LINK_SUMMARY[kind] in summary, summary
+    assert_within_floor(f"{kind} stream, capture mode", traj, direct, head_relations)
+
+
+def test_lidar_stream_over_ptys_is_the_capture_mode_run_bit_for_bit(tmp_path, lidar_capture, direct,
+                                                                    head_relations):
+    kind, capture = lidar_capture
+    cap_traj, cap_events, _ = run_capture_mode(capture, tmp_path)
+    header, _, _ = cap.read_capture(capture)
     x0 = header.metadata["robot.initial_pose"].split()
     traj, events = tmp_path / "live.txt", tmp_path / "live.events"
-    cmd = [sys.executable, "-m", "rsm_tools.replay", str(ld06_capture), "--pty", "--lockstep", "--linger", "0.2",
-           "--run", str(nav_binary()), "--robot", "{robot}", "--lidar", "ld06", "{lidar}", "--listen",
+    cmd = [sys.executable, "-m", "rsm_tools.replay", str(capture), "--pty", "--lockstep", "--linger", "0.2",
+           "--run", str(nav_binary()), "--robot", "{robot}", "--lidar", kind, "{lidar}", "--listen",
            "--no-deskew", "--initial-pose", *x0, "--trajectory", str(traj), "--events", str(events)]
     res = subprocess.run(cmd, capture_output=True, text=True, env=subprocess_env(), cwd=REPO_ROOT, timeout=600)
     assert res.returncode == 0, res.stderr
+    assert "clock: the lockstep feeder's capture time" in res.stderr, res.stderr
     assert "2221 encoder packets, 598 scans" in res.stderr, res.stderr
     assert events.read_text() == cap_events.read_text()
-    live = errors(lidar_traj(traj, direct), ev.load_relations(head_relations))
-    for name in ("local", "all"):
-        print(f"\nLD06 over ptys (lockstep, not asserted) {name}: {live[name][2]:.4f} m {live[name][3]:.3f} deg")
+    # the same poses at the same times (the header names the source)
+    assert rows(traj) == rows(cap_traj)
+    assert_within_floor(f"{kind} stream over ptys (lockstep)", traj, direct, head_relations)
 
 
-def test_lidar_flags_are_checked(tmp_path, ld06_capture):
+def test_lidar_flags_are_checked(tmp_path, head_log):
     res = subprocess.run([str(nav_binary()), "--robot", "/dev/null", "--lidar", "vlp16", "/dev/null",
                           "--trajectory", str(tmp_path / "t.txt")], capture_output=True, text=True, timeout=60)
     assert res.returncode == 2 and "ld06 or rplidar" in res.stderr
-    res = subprocess.run([str(nav_binary()), "--capture", str(ld06_capture), "--lidar-keep", "0",
+    capture = tmp_path / "ld06.cap"
+    convert.convert(str(head_log), str(capture), lidar="ld06")
+    res = subprocess.run([str(nav_binary()), "--capture", str(capture), "--lidar-keep", "0",
                           "--trajectory", str(tmp_path / "t.txt")], capture_output=True, text=True, timeout=60)
     assert res.returncode == 2 and "--lidar-keep" in res.stderr
-    rp = tmp_path / "rp.cap"
-    convert.convert(str(REPO_ROOT / "tests" / "data" / "intel_head.clf.gz"), str(rp), lidar="rplidar")
-    res = subprocess.run([str(nav_binary()), "--capture", str(rp), "--trajectory", str(tmp_path / "t.txt")],
-                         capture_output=True, text=True, timeout=60)
-    assert res.returncode == 1 and "cannot listen only" in res.stderr
+
+
+def test_rplidar_driver_runs_a_fake_rplidar_and_gets_every_turn_unchanged(tmp_path, head_log):
+    """rsm-nav active on rsm-fakedev's cheap-lidar robot (a P3-DX and an
+    RPLIDAR playing the rendered excerpt in real time): the driver's
+    start-up requests in order, the scan, STOP on exit; the robot's TicksMM
+    taken by the de-skew's odometry as by the localizer's; every turn
+    rsm-nav fuses is one of the capture-mode run's turns, in order, byte for
+    byte. Its
+    trajectory depends on the timing, so it is only printed."""
+    capture = tmp_path / "rplidar.cap"
+    convert.convert(str(head_log), str(capture), lidar="rplidar")
+    _, cap_events, _ = run_capture_mode(capture, tmp_path)
+    fake = FakeDevices(tmp_path, "--robot", "--rplidar", "--capture", str(capture), "--ticks-mm", "64", "--quiet")
+    try:
+        traj, events = tmp_path / "active.txt", tmp_path / "active.events"
+        res = subprocess.run([str(nav_binary()), "--robot", fake.paths["robot"], "--lidar", "rplidar",
+                              fake.paths["rplidar"], "--no-deskew", "--seconds", "8", "--trajectory", str(traj),
+                              "--events", str(events)], capture_output=True, text=True, timeout=120)
+    finally:
+        log = fake.stop()
+    assert res.returncode == 0, res.stderr
+    assert "RPLIDAR scanning: model 0x18, firmware 1.29, health 0" in res.stderr, res.stderr
+    assert " 0 bad points" in res.stderr, res.stderr
+    # the robot's TicksMM (the fake counts 64 a mm) for the localizer and for the de-skew alike
+    assert "odometry from the robot: 64000 ticks/m" in res.stderr, res.stderr
+    assert "de-skew odometry 64000 ticks/m" in res.stderr, res.stderr
+    # STOP, GET_HEALTH, GET_INFO, GET_SAMPLERATE, SCAN; STOP on exit. (A
+    # machine so loaded that an answer took half a second would see a
+    # request sent again, or the start-up run again after a silence: the
+    # same requests in the same order.)
+    cmds = [e["cmd"] for e in log if e["ev"] == "request"]
+    steps = [c for i, c in enumerate(cmds) if i == 0 or c != cmds[i - 1]]
+    assert steps[:5] == [0x25, 0x52, 0x50, 0x59, 0x20] and steps[-1] == 0x25, cmds
+    summary = [e for e in log if e["ev"] == "summary" and e["dev"] == "rplidar"][0]
+    assert not summary["scanning"] and summary["bad_requests"] == 0
+    # every turn fused is one of the capture's, whole and in order
+    want = [l for l in cap_events.read_text().splitlines() if l.startswith("S ")]
+    got = [l for l in events.read_text().splitlines() if l.startswith("S ")]
+    assert len(got) >= 20  # about 5 turns a second for 8 s
+    at = 0
+    for turn in got:
+        at = want.index(turn, at) + 1
+    print(f"\nRPLIDAR active on rsm-fakedev: {len(got)} turns, each one of the capture's, in order;"
+          f" {len(rows(traj))} poses")

@@ -121,6 +121,40 @@ def test_replay_errors(tmp_path, head_cap):
     assert res.returncode == 1 and "bad magic" in res.stderr
 
 
+def clocked_reader(tmp_path):
+    """A --run reader of the robot and laser ptys that prints ``start T``,
+    then ``T BYTES`` for every wake-up that brought bytes: T the time in
+    the RSM_LOCKSTEP_CLOCK file then, BYTES what it read on both links."""
+    reader = tmp_path / "clocked.py"
+    reader.write_text(
+        "import os, select, sys, tty\n"
+        "clock = os.open(os.environ['RSM_LOCKSTEP_CLOCK'], os.O_RDONLY)\n"
+        "def now(): return int.from_bytes(os.pread(clock, 8, 0), 'little')\n"
+        "print('start', now())\n"
+        "fds = [os.open(p, os.O_RDONLY | os.O_NOCTTY) for p in sys.argv[1:3]]\n"
+        "for fd in fds: tty.setraw(fd)\n"
+        "while fds:\n"
+        "    ready, _, _ = select.select(fds, [], [], 60)\n"
+        "    t, got = now(), 0\n"
+        "    for fd in ready:\n"
+        "        try:\n"
+        "            data = os.read(fd, 65536)\n"
+        "        except OSError:\n"
+        "            data = b''\n"
+        "        if not data:\n"
+        "            fds.remove(fd)\n"
+        "        got += len(data)\n"
+        "    if got:\n"
+        "        print(t, got)\n")
+    return reader
+
+
+def wakeups(stdout):
+    """The clocked reader's lines, parsed (rsm-replay's path lines left out)."""
+    return [[int(v) if v.isdigit() else v for v in l.split()] for l in stdout.splitlines()
+            if not l.startswith(("robot ", "laser "))]
+
+
 def test_replay_runs_its_reader_and_reports_how_it_ended(tmp_path, head_cap):
     """--run: the reader gets the pty paths, rsm-replay ends with it and
     returns its failure; --lockstep feeds it every record; wrong uses are refused."""
@@ -134,31 +168,38 @@ def test_replay_runs_its_reader_and_reports_how_it_ended(tmp_path, head_cap):
     assert res.returncode == 2 and "no channel" in res.stderr
     res = replay("--pty", "--fast", "--linger", "0", "--run", sys.executable, "-c", "import sys; sys.exit(3)")
     assert res.returncode == 3 and "exited with status 3" in res.stderr
-    # a reader that counts what it gets, fed in lockstep, the first 300 records only
-    reader = tmp_path / "count.py"
-    reader.write_text(
-        "import os, select, sys, tty\n"
-        "fds = [os.open(p, os.O_RDONLY | os.O_NOCTTY) for p in sys.argv[1:3]]\n"
-        "for fd in fds: tty.setraw(fd)\n"
-        "got = 0\n"
-        "while fds:\n"
-        "    ready, _, _ = select.select(fds, [], [], 60)\n"
-        "    for fd in ready:\n"
-        "        try:\n"
-        "            data = os.read(fd, 65536)\n"
-        "        except OSError:\n"
-        "            data = b''\n"
-        "        if not data:\n"
-        "            fds.remove(fd)\n"
-        "        got += len(data)\n"
-        "print(got)\n")
+    # the clocked reader, fed in lockstep, the first 300 records only
+    reader = clocked_reader(tmp_path)
     _, records, _ = cap.read_capture(head_cap)
     want = sum(len(r.data) for r in records[:300] if r.direction == cap.RX)
     res = replay("--pty", "--lockstep", "--records", "300", "--linger", "0.2", "--run", sys.executable, reader,
                  "{robot}", "{laser}")
     assert res.returncode == 0, res.stderr
-    assert int(res.stdout.split()[-1]) == want
+    assert sum(t_got[1] for t_got in wakeups(res.stdout)[1:]) == want
     assert "300 records" in res.stderr and "lockstep with" in res.stderr
+
+
+def test_lockstep_gives_the_reader_each_instants_capture_time(tmp_path, head_cap):
+    """--lockstep: the file RSM_LOCKSTEP_CLOCK names holds 0 before the first
+    instant, then, whenever the reader wakes up to bytes, the capture time
+    of exactly the records it finds: each instant (the records with one
+    timestamp, on both links) arrives whole, in one wake-up, with its own
+    time."""
+    reader = clocked_reader(tmp_path)
+    _, records, _ = cap.read_capture(head_cap)
+    want = []
+    for r in [r for r in records if r.direction == cap.RX][:200]:
+        if want and want[-1][0] == r.timestamp:
+            want[-1][1] += len(r.data)
+        else:
+            want.append([r.timestamp, len(r.data)])
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(head_cap), "--pty", "--lockstep",
+                          "--records", "200", "--linger", "0.2", "--run", sys.executable, str(reader),
+                          "{robot}", "{laser}"], capture_output=True, text=True, env=subprocess_env(), timeout=300)
+    assert res.returncode == 0, res.stderr
+    got = wakeups(res.stdout)
+    assert got[0] == ["start", 0]
+    assert got[1:] == want
 
 
 # ---------------------------------------------------------------------------

@@ -284,6 +284,48 @@ void test_stamp_and_init_reject_bad_arguments(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_ldlidar_poll(&drv, NULL));
 }
 
+/* A host serving several links polls with a zero read timeout and waits
+ * until bytes come or the driver's next deadline: never blocked inside the
+ * poll, it still sees the packets, and the link loss exactly when due. */
+void test_next_deadline_serves_a_caller_that_never_blocks(void)
+{
+    rsm_ldlidar_event_t ev;
+    unsigned points = 0;
+    uint64_t due;
+    TEST_ASSERT_TRUE(rsm_ldlidar_next_deadline_us(&drv) == UINT64_MAX); /* IDLE */
+    TEST_ASSERT_TRUE(rsm_ldlidar_next_deadline_us(NULL) == UINT64_MAX);
+    cfg.read_timeout_us = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ldlidar_init(&drv, &link, &clk, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ldlidar_connect(&drv));
+    TEST_ASSERT_TRUE(rsm_ldlidar_next_deadline_us(&drv) == fl.now_us + cfg.stream_timeout_us);
+    while (points < 600u) {
+        const uint64_t before = fl.now_us;
+        const rsm_ldlidar_event_type_t t = step(&ev);
+        TEST_ASSERT_TRUE(fl.now_us == before); /* the poll did not wait */
+        if (t == RSM_LDLIDAR_EVENT_CONNECTED) {
+            /* the packet's points wait for the next poll */
+            TEST_ASSERT_TRUE(rsm_ldlidar_next_deadline_us(&drv) == fl.now_us);
+        } else if (t == RSM_LDLIDAR_EVENT_POINTS) {
+            points += (unsigned)ev.count;
+        } else if (t == RSM_LDLIDAR_EVENT_NONE) {
+            due = rsm_ldlidar_next_deadline_us(&drv);
+            TEST_ASSERT_TRUE(due == drv.last_packet_us + cfg.stream_timeout_us);
+            /* the wait: until the next packet is sent, or the deadline */
+            rsm_fakelink_advance(&fl, (next_send_us < due ? next_send_us + 300u : due) - fl.now_us);
+        }
+    }
+    TEST_ASSERT_EQUAL_UINT32(0, drv.stats.link_lost);
+    sending = 0;
+    (void)step(&ev);
+    (void)step(&ev);
+    due = rsm_ldlidar_next_deadline_us(&drv);
+    rsm_fakelink_advance(&fl, due - fl.now_us - 1u);
+    TEST_ASSERT_EQUAL_INT(RSM_LDLIDAR_EVENT_NONE, step(&ev)); /* not yet */
+    rsm_fakelink_advance(&fl, 1u);
+    TEST_ASSERT_EQUAL_INT(RSM_LDLIDAR_EVENT_LINK_LOST, step(&ev));
+    TEST_ASSERT_TRUE(ev.stamp_us == due);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -295,5 +337,6 @@ int main(void)
     RUN_TEST(test_disconnected_driver_reads_nothing_into_events);
     RUN_TEST(test_points_through_the_assembler_make_whole_turns_on_the_walls);
     RUN_TEST(test_stamp_and_init_reject_bad_arguments);
+    RUN_TEST(test_next_deadline_serves_a_caller_that_never_blocks);
     return UNITY_END();
 }

@@ -415,6 +415,101 @@ void test_init_rejects_bad_settings(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_slamtec_config_default(NULL));
 }
 
+/* Another host runs the sensor: the listener keeps its answers, follows
+ * the scan from its descriptor, waits out a silence as a link loss and
+ * picks the next scan up, and never writes a byte. */
+void test_listen_decodes_a_scan_run_by_another_host_and_sends_nothing(void)
+{
+    static const uint8_t info[20] = {0x41, 24, 1, 5};
+    static const uint8_t rate[4] = {0xF4, 0x01, 0xFA, 0x00};
+    static const uint8_t health[3] = {1, 0x34, 0x12};
+    rsm_slamtec_event_t ev;
+    unsigned points = 0;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_slamtec_listen(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_SLAMTEC_LISTENING, drv.state);
+    answer(RSM_RPLIDAR_ANS_HEALTH, 3u, 0u, health);
+    answer(RSM_RPLIDAR_ANS_INFO, 20u, 0u, info);
+    answer(RSM_RPLIDAR_ANS_SAMPLERATE, 4u, 0u, rate);
+    TEST_ASSERT_FALSE(run_until(RSM_SLAMTEC_EVENT_CONNECTED, 200000u, &ev)); /* answers only */
+    TEST_ASSERT_EQUAL_HEX8(0x41, drv.info.model);
+    TEST_ASSERT_EQUAL_UINT16(0x1234, drv.health.error_code);
+    TEST_ASSERT_EQUAL_UINT16(500, drv.samplerate.standard_us);
+    answer(RSM_RPLIDAR_ANS_NODE, 5u, 1u, NULL);
+    dev.streaming = 1;
+    dev.next_us = fl.now_us + 2000u;
+    TEST_ASSERT_TRUE(run_until(RSM_SLAMTEC_EVENT_CONNECTED, 100000u, &ev));
+    while (points < 400u && run_until(RSM_SLAMTEC_EVENT_POINTS, 100000u, &ev)) {
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, 2.0f, ev.points[0].range_m);
+        points += (unsigned)ev.count;
+    }
+    TEST_ASSERT_TRUE(points >= 400u);
+    dev.unplugged = 1;
+    TEST_ASSERT_TRUE(run_until(RSM_SLAMTEC_EVENT_LINK_LOST, cfg.stream_timeout_us + 100000u, &ev));
+    TEST_ASSERT_EQUAL_INT(RSM_SLAMTEC_LISTENING, drv.state);
+    dev.unplugged = 0;
+    dev.streaming = 0;
+    answer(RSM_RPLIDAR_ANS_NODE, 5u, 1u, NULL);
+    dev.streaming = 1;
+    dev.next_us = fl.now_us + 2000u;
+    TEST_ASSERT_TRUE(run_until(RSM_SLAMTEC_EVENT_CONNECTED, 100000u, &ev));
+    TEST_ASSERT_EQUAL_UINT32(2, drv.stats.connects);
+    TEST_ASSERT_EQUAL_UINT32(1, drv.stats.reconnects);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_slamtec_disconnect(&drv));
+    TEST_ASSERT_EQUAL_INT(RSM_SLAMTEC_IDLE, drv.state);
+    TEST_ASSERT_FALSE(run_until(RSM_SLAMTEC_EVENT_POINTS, 100000u, &ev));
+    TEST_ASSERT_EQUAL_size_t(0, fl.n_writes);
+    TEST_ASSERT_EQUAL_UINT32(0, drv.stats.requests);
+    TEST_ASSERT_EQUAL_UINT32(0, drv.stats.disconnects);
+}
+
+/* With a zero read timeout the driver never waits inside a poll; a host
+ * that sleeps until bytes come or the next deadline runs the whole
+ * start-up, the scan, and sees the link loss exactly when due. */
+void test_next_deadline_serves_a_caller_that_never_blocks(void)
+{
+    rsm_slamtec_event_t ev;
+    unsigned points = 0;
+    uint64_t due;
+    TEST_ASSERT_TRUE(rsm_slamtec_next_deadline_us(&drv) == UINT64_MAX); /* IDLE */
+    TEST_ASSERT_TRUE(rsm_slamtec_next_deadline_us(NULL) == UINT64_MAX);
+    cfg.read_timeout_us = 0u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_slamtec_init(&drv, &link, &clk, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_slamtec_connect(&drv));
+    /* STOP went out: its pause */
+    TEST_ASSERT_TRUE(rsm_slamtec_next_deadline_us(&drv) == fl.now_us + cfg.stop_wait_us);
+    while (points < 400u) {
+        const uint64_t before = fl.now_us;
+        const rsm_slamtec_event_type_t t = step(&ev);
+        TEST_ASSERT_TRUE(fl.now_us == before); /* the poll did not wait */
+        if (t == RSM_SLAMTEC_EVENT_POINTS) {
+            points += (unsigned)ev.count;
+        } else if (t == RSM_SLAMTEC_EVENT_NONE) {
+            due = rsm_slamtec_next_deadline_us(&drv);
+            TEST_ASSERT_TRUE(due > fl.now_us && due != UINT64_MAX);
+            if (drv.state == RSM_SLAMTEC_STREAMING) {
+                TEST_ASSERT_TRUE(due == drv.last_data_us + cfg.stream_timeout_us);
+            }
+            /* the wait: bytes come within a millisecond here, or the deadline */
+            rsm_fakelink_advance(&fl, due - fl.now_us < 1000u ? due - fl.now_us : 1000u);
+        }
+        TEST_ASSERT_TRUE(t != RSM_SLAMTEC_EVENT_ERROR && t != RSM_SLAMTEC_EVENT_LINK_LOST);
+    }
+    TEST_ASSERT_EQUAL_UINT32(1, drv.stats.connects);
+    TEST_ASSERT_EQUAL_UINT32(0, drv.stats.retries);
+    dev.unplugged = 1;
+    (void)step(&ev);
+    (void)step(&ev);
+    due = rsm_slamtec_next_deadline_us(&drv);
+    rsm_fakelink_advance(&fl, due - fl.now_us - 1u);
+    TEST_ASSERT_EQUAL_INT(RSM_SLAMTEC_EVENT_NONE, step(&ev)); /* not yet */
+    rsm_fakelink_advance(&fl, 1u);
+    TEST_ASSERT_EQUAL_INT(RSM_SLAMTEC_EVENT_LINK_LOST, step(&ev));
+    TEST_ASSERT_TRUE(ev.stamp_us == due);
+    /* listening has no timer at all */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_slamtec_listen(&drv));
+    TEST_ASSERT_TRUE(rsm_slamtec_next_deadline_us(&drv) == UINT64_MAX);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -425,6 +520,8 @@ int main(void)
     RUN_TEST(test_old_firmware_without_samplerate_still_connects);
     RUN_TEST(test_a_silent_stream_is_a_link_loss_and_the_startup_runs_again);
     RUN_TEST(test_disconnect_stops_the_scan_and_the_motor);
+    RUN_TEST(test_listen_decodes_a_scan_run_by_another_host_and_sends_nothing);
     RUN_TEST(test_init_rejects_bad_settings);
+    RUN_TEST(test_next_deadline_serves_a_caller_that_never_blocks);
     return UNITY_END();
 }

@@ -25,18 +25,10 @@ void nav_devices_defaults(nav_devices_t *dv, int listen, int quiet)
 /* A silence a listen-only run waits out (an hour): a replay held back, a
  * capture with a gap. */
 #define NAV_LISTEN_PATIENCE_US 3600000000u
-/* The lidar drivers have no deadline accessor: their timers (start-up
- * pauses, answer waits, the stream timeout) are polled this often. */
-#define NAV_LIDAR_TIMER_US 5000u
 
 int nav_devices_lidar(nav_devices_t *dv, nav_laser_kind_t kind, const rsm_pose_t *mount, int upside_down,
                       unsigned keep_every)
 {
-    if (kind == NAV_LASER_RPLIDAR && dv->listen) {
-        fprintf(stderr, "rsm-nav: the RPLIDAR driver runs the sensor (requests and answers): it cannot"
-                        " listen only\n");
-        return -1;
-    }
     if (keep_every < 1u || keep_every > 64u) {
         fprintf(stderr, "rsm-nav: --lidar-keep must be 1 to 64\n");
         return -1;
@@ -48,6 +40,7 @@ int nav_devices_lidar(nav_devices_t *dv, nav_laser_kind_t kind, const rsm_pose_t
     if (dv->listen) {
         dv->rcfg.max_gap_us = NAV_LISTEN_PATIENCE_US;
         dv->ldcfg.stream_timeout_us = NAV_LISTEN_PATIENCE_US;
+        dv->slcfg.stream_timeout_us = NAV_LISTEN_PATIENCE_US;
     }
     return 0;
 }
@@ -67,8 +60,8 @@ static int start_laser(nav_devices_t *dv, const rsm_link_t *link, const rsm_cloc
         return rsm_ldlidar_init(&dv->ld06, link, clock, &dv->ldcfg) == RSM_OK &&
                rsm_ldlidar_connect(&dv->ld06) == RSM_OK;
     case NAV_LASER_RPLIDAR:
-        return !dv->listen && rsm_slamtec_init(&dv->rplidar, link, clock, &dv->slcfg) == RSM_OK &&
-               rsm_slamtec_connect(&dv->rplidar) == RSM_OK;
+        return rsm_slamtec_init(&dv->rplidar, link, clock, &dv->slcfg) == RSM_OK &&
+               (dv->listen ? rsm_slamtec_listen(&dv->rplidar) : rsm_slamtec_connect(&dv->rplidar)) == RSM_OK;
     default:
         return rsm_sicklms_init(&dv->laser, link, clock, &dv->lcfg, &dv->laser_scan) == RSM_OK &&
                (dv->listen ? rsm_sicklms_listen(&dv->laser) : rsm_sicklms_connect(&dv->laser)) == RSM_OK;
@@ -140,10 +133,12 @@ static int poll_robot(nav_devices_t *dv, const nav_sink_t *sink)
                     (unsigned)d->ticks_mm, (unsigned)d->watchdog_ms, (unsigned)d->auto_baud);
         }
         if (sink->calibration != NULL) {
-            /* The robot's own TicksMM (its CONFIGpac's, else the driver's default). */
-            rsm_odometry_config_t odo = rsm_odometry_config_default();
-            if (rsm_p3dx_odometry_config(d, &odo) == RSM_OK) {
-                sink->calibration(sink->ctx, odo.ticks_per_m_left);
+            /* The robot's own TicksMM (its CONFIGpac's, else the driver's
+             * default). When the run takes it, a lidar's de-skew converts
+             * the counts with it too: the same motion as the localizer's. */
+            rsm_odometry_config_t odo = dv->odo.cfg;
+            if (rsm_p3dx_odometry_config(d, &odo) == RSM_OK && sink->calibration(sink->ctx, odo.ticks_per_m_left)) {
+                (void)rsm_odometry_set_config(&dv->odo, &odo);
             }
         }
         break;
@@ -350,10 +345,10 @@ void nav_devices_report(const nav_devices_t *dv, int robot)
         }
         fprintf(stderr,
                 "rsm-nav: turns: %u scans, %u partial (%u points), %u points over the scan size, %u thinned,"
-                " %u without return, %u bad points, %u not de-skewed\n",
+                " %u without return, %u bad points, %u not de-skewed; de-skew odometry %.0f ticks/m\n",
                 (unsigned)rs->scans, (unsigned)rs->partial, (unsigned)rs->dropped, (unsigned)rs->overflow,
                 (unsigned)rs->thinned, (unsigned)rs->invalid, (unsigned)rs->bad_points,
-                (unsigned)rs->not_deskewed);
+                (unsigned)rs->not_deskewed, (double)dv->odo.cfg.ticks_per_m_left);
     } else {
         const rsm_sicklms_t *d = &dv->laser;
         const rsm_sicklms_stats_t *st = &d->stats;
@@ -485,14 +480,14 @@ uint32_t nav_devices_scans(const nav_devices_t *dv)
     return dv->kind == NAV_LASER_LMS ? dv->laser.stats.scans : dv->rev.stats.scans;
 }
 
-uint64_t nav_devices_next_deadline(const nav_devices_t *dv, int robot, uint64_t now_us)
+uint64_t nav_devices_next_deadline(const nav_devices_t *dv, int robot)
 {
     if (robot) {
         return rsm_p3dx_next_deadline_us(&dv->robot);
     }
-    if (dv->kind == NAV_LASER_LMS) {
-        return rsm_sicklms_next_deadline_us(&dv->laser);
+    switch (dv->kind) {
+    case NAV_LASER_LD06: return rsm_ldlidar_next_deadline_us(&dv->ld06);
+    case NAV_LASER_RPLIDAR: return rsm_slamtec_next_deadline_us(&dv->rplidar);
+    default: return rsm_sicklms_next_deadline_us(&dv->laser);
     }
-    /* The lidar drivers keep their timers inside the poll: look again soon. */
-    return now_us + NAV_LIDAR_TIMER_US;
 }

@@ -35,8 +35,9 @@ typedef struct nav_sink {
     /* Time passes (after each input, and while the links idle). */
     void (*tick)(void *ctx, uint64_t now_us);
     /* The robot reported its calibration (a connection's CONFIGpac, active
-     * mode): encoder ticks per metre. May be NULL. */
-    void (*calibration)(void *ctx, float ticks_per_m);
+     * mode): encoder ticks per metre. Returns 1 if the run takes it (a
+     * lidar's de-skew then takes it too), 0 if not. May be NULL. */
+    int (*calibration)(void *ctx, float ticks_per_m);
 } nav_sink_t;
 
 typedef struct nav_devices {
@@ -68,8 +69,7 @@ void nav_devices_defaults(nav_devices_t *dv, int listen, int quiet);
  * mount and orientation as the localizer has them, one point in keep_every
  * kept. Listen-only runs (a replay's pace is not the sensor's) wait out
  * silences: neither the link nor a turn is given up for them. 0, or -1 for
- * a lidar that cannot listen (the RPLIDAR answers requests) or a bad value
- * (message on stderr). */
+ * a bad value (message on stderr). */
 int nav_devices_lidar(nav_devices_t *dv, nav_laser_kind_t kind, const rsm_pose_t *mount, int upside_down,
                       unsigned keep_every);
 
@@ -100,7 +100,7 @@ void nav_devices_stop(nav_devices_t *dv, int robot);
 int nav_devices_busy(const nav_devices_t *dv, int robot);
 uint32_t nav_devices_connects(const nav_devices_t *dv, int robot);
 uint32_t nav_devices_scans(const nav_devices_t *dv);
-uint64_t nav_devices_next_deadline(const nav_devices_t *dv, int robot, uint64_t now_us);
+uint64_t nav_devices_next_deadline(const nav_devices_t *dv, int robot);
 
 /* Bytes one link delivered in all. */
 uint64_t nav_devices_bytes(const nav_devices_t *dv, int robot);

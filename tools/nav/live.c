@@ -1,11 +1,14 @@
 #include "live.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "rsm/status.h"
 #include "rsm_posix.h"
@@ -123,7 +126,34 @@ typedef struct live {
     uint64_t now_us;          /* the monotonic clock when the cycle began */
     uint64_t bytes;
     double last_data;         /* when bytes last came */
+    int clock_fd;             /* the lockstep feeder's clock file, or -1 */
 } live_t;
+
+/* rsm-replay --lockstep names, in this variable, a file holding the capture
+ * time (8 bytes, little-endian microseconds) of the group of records it
+ * wrote last, rewritten while the reader is held before each group. Taken
+ * as the drivers' clock, it makes a live run a function of the capture
+ * alone, times included: the run a capture gives in capture mode, over
+ * pseudo-terminals and this loop. */
+#define LIVE_LOCKSTEP_CLOCK_ENV "RSM_LOCKSTEP_CLOCK"
+
+/* The time the drivers see: the feeder's clock file, else the monotonic
+ * clock. */
+static uint64_t live_clock_us(const live_t *lv)
+{
+    if (lv->clock_fd >= 0) {
+        uint8_t b[8];
+        if (pread(lv->clock_fd, b, sizeof b, 0) == (ssize_t)sizeof b) {
+            uint64_t t = 0;
+            int i;
+            for (i = 7; i >= 0; --i) {
+                t = (t << 8) | b[i];
+            }
+            return t;
+        }
+    }
+    return rsm_posix_clock_now_us(NULL);
+}
 
 /* The drivers' clock: the time the current cycle began. Everything that
  * arrived in one wake-up is stamped alike on both links, as a capture
@@ -148,7 +178,7 @@ static void live_wait(live_t *lv)
     struct pollfd pf[2];
     nfds_t n = 0;
     double until = mono_s() + 0.05;
-    const uint64_t now_us = rsm_posix_clock_now_us(NULL);
+    const uint64_t now_us = live_clock_us(lv);
     int i;
     for (i = 0; i < 2; ++i) {
         const endpoint_t *e = lv->ep[i];
@@ -157,7 +187,7 @@ static void live_wait(live_t *lv)
             until = e->retry_at;
         }
         if (live_up(lv, i)) {
-            const uint64_t due = nav_devices_next_deadline(&lv->dev, i == 0, now_us);
+            const uint64_t due = nav_devices_next_deadline(&lv->dev, i == 0);
             if (due != UINT64_MAX) {
                 const double at = mono_s() + (due > now_us ? (double)(due - now_us) * 1e-6 : 0.0);
                 until = at < until ? at : until;
@@ -198,7 +228,7 @@ static uint64_t live_cycle(live_t *lv)
 {
     uint64_t got = 0;
     int i;
-    lv->now_us = rsm_posix_clock_now_us(NULL);
+    lv->now_us = live_clock_us(lv);
     for (i = 0; i < 2; ++i) {
         endpoint_t *e = lv->ep[i];
         long r;
@@ -251,7 +281,7 @@ static int live_shutdown(live_t *lv)
     }
     while (mono_s() < t_end && ((live_up(lv, 0) && nav_devices_busy(&lv->dev, 1)) ||
                                 (live_up(lv, 1) && nav_devices_busy(&lv->dev, 0)))) {
-        lv->now_us = rsm_posix_clock_now_us(NULL);
+        lv->now_us = live_clock_us(lv);
         for (i = 0; i < 2; ++i) {
             if (live_up(lv, i) && nav_devices_busy(&lv->dev, i == 0) &&
                 nav_devices_poll(&lv->dev, i == 0, lv->sink) < 0) {
@@ -290,7 +320,7 @@ static int live_run(live_t *lv)
     nav_devices_defaults(&lv->dev, opt->listen_only, opt->quiet);
     lv->clock.now_us = live_now;
     lv->clock.ctx = lv;
-    lv->now_us = rsm_posix_clock_now_us(NULL);
+    lv->now_us = live_clock_us(lv);
     /* One wait serves both links (live_wait): the drivers never block. */
     lv->dev.pcfg.read_timeout_us = 0u;
     lv->dev.lcfg.read_timeout_us = 0u;
@@ -305,10 +335,9 @@ static int live_run(live_t *lv)
         lv->dev.ldcfg.baud = opt->lms_baud;
         lv->dev.slcfg.baud = opt->lms_baud;
     }
+    lv->dev.ldcfg.read_timeout_us = 0u;
+    lv->dev.slcfg.read_timeout_us = 0u;
     if (opt->laser != NAV_LASER_LMS) {
-        /* The lidar drivers refuse a zero read timeout: the shortest wait. */
-        lv->dev.ldcfg.read_timeout_us = 1u;
-        lv->dev.slcfg.read_timeout_us = 1u;
         if (opt->odometry != NULL) {
             nav_devices_odometry(&lv->dev, opt->odometry);
         }
@@ -382,11 +411,34 @@ int nav_live_run(const nav_live_options_t *opt, const nav_sink_t *sink)
         return 1;
     }
     memset(&lv, 0, sizeof lv);
+    lv.clock_fd = -1;
+    {
+        const char *clock_path = getenv(LIVE_LOCKSTEP_CLOCK_ENV);
+        if (clock_path != NULL && clock_path[0] != '\0') {
+            lv.clock_fd = open(clock_path, O_RDONLY);
+            if (lv.clock_fd < 0) {
+                fprintf(stderr, "rsm-nav: cannot open the lockstep clock %s: %s\n", clock_path, strerror(errno));
+                if (robot.open) {
+                    (void)rsm_posix_link_close(&robot.state);
+                }
+                if (laser.open) {
+                    (void)rsm_posix_link_close(&laser.state);
+                }
+                return 1;
+            }
+            if (!opt->quiet) {
+                fprintf(stderr, "rsm-nav: clock: the lockstep feeder's capture time (%s)\n", clock_path);
+            }
+        }
+    }
     lv.opt = opt;
     lv.sink = sink;
     lv.ep[0] = &robot;
     lv.ep[1] = &laser;
     rc = live_run(&lv);
+    if (lv.clock_fd >= 0) {
+        (void)close(lv.clock_fd);
+    }
     if (stop_requested && !opt->quiet) {
         fprintf(stderr, "rsm-nav: stopped by signal\n");
     }

@@ -130,7 +130,7 @@ static void usage(FILE *f)
             "  --carmen LOG [--fov179]   a CARMEN log, plain or gzip (FLASER/ROBOTLASER1 scans;\n"
             "                            odometry from the pose fields of the laser lines)\n"
             "  --capture FILE            a capture of the robot (ARIA) and laser (LMS, or an\n"
-            "                            rsm-convert --lidar ld06 stream) links\n"
+            "                            rsm-convert --lidar ld06|rplidar stream) links\n"
             "  --robot DEV --lms DEV     live serial links (devices or pseudo-terminals), with\n"
             "     [--robot-baud N] [--lms-baud N] [--listen] [--seconds S] [--idle-exit S]\n"
             "                            --listen sends nothing and decodes what arrives (replays)\n"
@@ -413,13 +413,13 @@ static void sink_encoder(void *ctx, const rsm_odometry_sample_t *sample, int res
 }
 
 /* The robot reported its TicksMM: the odometry takes it from the next
- * encoder sample on, unless --ticks-per-m gave the geometry. */
-static void sink_calibration(void *ctx, float ticks_per_m)
+ * encoder sample on, unless --ticks-per-m gave the geometry. 1 if taken. */
+static int sink_calibration(void *ctx, float ticks_per_m)
 {
     nav_t *nav = (nav_t *)ctx;
     rsm_odometry_config_t odo;
     if (nav->ticks_from_flag || nav_start(nav, NULL, "the default") != 0) {
-        return;
+        return 0;
     }
     odo = nav->loc.odo.cfg;
     odo.ticks_per_m_left = ticks_per_m;
@@ -427,13 +427,14 @@ static void sink_calibration(void *ctx, float ticks_per_m)
     if (rsm_localizer_set_odometry(&nav->loc, &odo) != RSM_OK) {
         fprintf(stderr, "rsm-nav: the robot's calibration (%.0f ticks/m) refused; odometry unchanged\n",
                 (double)ticks_per_m);
-        return;
+        return 0;
     }
     nav->calibrations++;
     if (!nav->quiet) {
         fprintf(stderr, "rsm-nav: odometry from the robot: %.0f ticks/m, wheel base %.3f m\n",
                 (double)ticks_per_m, (double)odo.wheel_base_m);
     }
+    return 1;
 }
 
 static void sink_tick(void *ctx, uint64_t now_us)
@@ -803,11 +804,18 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink, con
                (unsigned)dev.laser.stats.scans, (unsigned)dev.laser.stats.bad_scans,
                (unsigned)dev.laser.stats.unexpected, (unsigned)dev.laser.parser.stats.crc_errors,
                (unsigned)dev.laser.parser.stats.bytes_skipped);
-    } else {
+    } else if (kind == NAV_LASER_LD06) {
         printf("  lidar link      %u packets, %u points, %u turns (%u partial); CRC errors %u, bytes skipped %u\n",
                (unsigned)dev.ld06.stats.packets, (unsigned)dev.ld06.stats.points, (unsigned)dev.rev.stats.scans,
                (unsigned)dev.rev.stats.partial, (unsigned)dev.ld06.parser.stats.crc_errors,
                (unsigned)dev.ld06.parser.stats.bytes_skipped);
+    } else {
+        const rsm_rplidar_stats_t *ps = &dev.rplidar.parser.stats;
+        printf("  lidar link      %u descriptors, %u nodes, %u capsules, %u points, %u turns (%u partial);"
+               " bad nodes %u, checksum errors %u, bytes skipped %u\n",
+               (unsigned)ps->descriptors, (unsigned)ps->nodes, (unsigned)ps->capsules,
+               (unsigned)dev.rplidar.stats.points, (unsigned)dev.rev.stats.scans, (unsigned)dev.rev.stats.partial,
+               (unsigned)ps->bad_nodes, (unsigned)ps->checksum_errors, (unsigned)ps->bytes_skipped);
     }
     cap_close(&reader);
     if (fclose(fp) != 0 && status == 0) {

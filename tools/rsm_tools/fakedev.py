@@ -1,12 +1,13 @@
-"""rsm-fakedev: a fake Pioneer P3-DX and a fake SICK LMS 2xx on pseudo-terminals.
+"""rsm-fakedev: a fake Pioneer P3-DX, SICK LMS 2xx, LDRobot LD06 and Slamtec RPLIDAR on pseudo-terminals.
 
-    rsm-fakedev [--robot] [--lms] [--ld06] [--capture CAP] [--log FILE] [--seconds S]
+    rsm-fakedev [--robot] [--lms] [--ld06] [--rplidar] [--capture CAP] [--log FILE] [--seconds S]
                 [--robot-drop AFTER:FOR] [--lms-drop AFTER:FOR]
                 [--watchdog-ms MS] [--ticks-mm N] [--no-autobaud] [--units mm|cm]
                 [--quiet]
 
-Creates one pseudo-terminal per device (both when neither ``--robot`` nor
-``--lms`` is given) and prints one ``robot PATH`` / ``laser PATH`` line per
+Creates one pseudo-terminal per device (the robot and the LMS when none of
+``--robot``, ``--lms``, ``--ld06``, ``--rplidar`` is given) and prints one
+``robot PATH`` / ``laser PATH`` / ``ld06 PATH`` / ``rplidar PATH`` line per
 device on stdout, flushed, before anything else happens, so that another
 program (``rsm-nav --robot PATH --lms PATH``, a test) can open them.  The
 devices then answer like the real ones (protocols.md):
@@ -65,6 +66,22 @@ and moves under the turning head.  With ``--capture`` of an
 ``rsm-convert --lidar ld06`` capture it plays the capture's lidar records
 instead, byte for byte, at their own times after the first, then stops
 sending (the host sees the link go quiet).
+
+RPLIDAR (``--rplidar``, only when asked for; ``--robot --rplidar`` is a
+cheap-lidar robot): an A1-like unit at 115200 Bd that answers the requests
+of docs/reference/lidars.md section 2: GET_HEALTH (good), GET_INFO (model
+0x18, firmware 1.29, hardware 7), GET_SAMPLERATE (one node's time, for both
+modes), SCAN and FORCE_SCAN (the standard-scan descriptor, then nodes until
+STOP), RESET (a boot text; scanning stops), SET_MOTOR_PWM and
+MOTOR_SPEED_CTRL (kept; the head turns whatever they say, as an A1's on
+its adapter does); requests with a bad checksum and the express scans get
+no answer.  The nodes: a head turning clockwise at 5 Hz, one node every
+whole degree, 12 nodes every 1/150 s (9000 bytes a second, which 115200 Bd
+carries), ray-cast in the ``rooms`` world as for the LD06; with
+``--capture`` of an ``rsm-convert --lidar rplidar`` capture, the capture's
+node records at their own times on the robot's clock (its session's start
+is the capture's start; without a robot, the scan's start is), records
+the head measured while nobody scanned being skipped.
 
 Faults: ``--robot-drop AFTER:FOR`` cuts the robot's line FOR seconds,
 AFTER seconds after its first session opened (nothing is received or sent;
@@ -259,6 +276,10 @@ class Playback:
         self.lidar: List[Tuple[int, bytes]] = [(r.timestamp, r.data) for r in records
                                                if r.channel == lidar and r.direction == cap.RX]
         self.lidar_model = header.metadata.get("laser.model", "")
+        try:
+            self.turn_hz = float(header.metadata.get("laser.turn_hz", "0"))
+        except ValueError:
+            self.turn_hz = 0.0
         aria = proto.FrameCounter("aria")
         lms = proto.FrameCounter("lms2xx")
         aria.keep = lms.keep = True
@@ -354,6 +375,12 @@ class Device:
     def on_bad(self, count: int, now: float) -> None:
         """count frames failed their checksum or CRC."""
         raise NotImplementedError
+
+    def capture_over(self, over: bool, **fields) -> None:
+        """A lidar playing a capture: logs its end once (``ended`` counter)."""
+        if over and not self.n.get("ended"):
+            self.n["ended"] = 1
+            self.log(self.dev, "capture_end", **fields)
 
     def on_frame(self, frame: bytes, now: float) -> None:
         """A frame from the host whose checksum or CRC verified."""
@@ -785,9 +812,7 @@ class FakeLD06(Device):
                 if self.send(pb.lidar[self.record][1], now):
                     self.n["packets"] += 1
                 self.record += 1
-            if self.record == len(pb.lidar) and not self.n["ended"]:
-                self.n["ended"] = 1
-                self.log(self.dev, "capture_end", packets=self.n["packets"])
+            self.capture_over(self.record == len(pb.lidar), packets=self.n["packets"])
             return
         while self.next_due <= now:
             if self.send(self._rendered(self.next_due), now):
@@ -807,6 +832,161 @@ class FakeLD06(Device):
 
     def state(self) -> Dict[str, object]:
         return {"angle": self.angle, "record": self.record}
+
+
+class FakeRPLIDAR(Device):
+    """A Slamtec RPLIDAR (A1-like) that answers the requests of
+    docs/reference/lidars.md section 2 (see the module notes)."""
+
+    dev = "rplidar"
+    TURN_HZ = 5.0            # the sim world's head: 360 nodes a turn, 9000 bytes/s
+    CHUNK = 12               # nodes sent together
+    MODEL, FW_MINOR, FW_MAJOR, HARDWARE = 0x18, 29, 1, 7
+    SERIAL = bytes(range(1, 17))
+    BOOT_TEXT = b"RP LIDAR System.\r\nFirmware Ver 1.29 - rtm, HW Ver 7\r\nModel: 24\r\n"
+
+    def __init__(self, port: PtyPort, log: Log, body: Body, playback: Optional[Playback],
+                 args: argparse.Namespace) -> None:
+        super().__init__(port, log, body, playback, Cut(None), "aria")
+        self.baud = lidarstream.BAUD["rplidar"]
+        self.robot: Optional["FakeRobot"] = None
+        self.rx = bytearray()
+        self.scanning = False
+        self.t_scan = 0.0        # when the running scan began
+        self.next_due = math.inf # the next chunk of the simulated world
+        self.angle = 0           # sensor angle of the next node, whole degrees
+        self.motor = 0           # last motor PWM or rpm asked for
+        self.nodes: List[Tuple[int, bytes]] = []   # a capture's node records (not its descriptor)
+        self.record = 0
+        self.turn_hz = self.TURN_HZ
+        self.n.update(requests=0, bad_requests=0, unsupported=0, scans_started=0, stops=0, resets=0,
+                      node_chunks=0, skipped_records=0, ended=0)
+        if playback is not None and playback.lidar:
+            if playback.lidar_model != "rplidar":
+                raise cap.CaptureError(f"the capture's lidar is {playback.lidar_model!r}, not rplidar")
+            self.nodes = [(t, d) for t, d in playback.lidar if d != lidarstream.RPLIDAR_SCAN_DESCRIPTOR]
+            self.turn_hz = float(playback.turn_hz or self.TURN_HZ)
+        self.sample_us = int(round(1e6 / (self.turn_hz * lidarstream.POINTS_PER_TURN)))
+
+    # -- requests -----------------------------------------------------------------------
+    def receive(self, data: bytes, now: float) -> None:
+        """Requests: A5 cmd, or A5 cmd size payload checksum (XOR of all before)."""
+        self.rx += data
+        while self.rx:
+            if self.rx[0] != 0xA5:
+                self.n["dropped_rx_bytes"] += 1
+                del self.rx[0]
+                continue
+            if len(self.rx) < 2:
+                return
+            cmd = self.rx[1]
+            if not cmd & 0x80:
+                del self.rx[:2]
+                self.handle(cmd, b"", now)
+                continue
+            if len(self.rx) < 3 or len(self.rx) < 4 + self.rx[2]:
+                return
+            n = self.rx[2]
+            frame = bytes(self.rx[:4 + n])
+            del self.rx[:4 + n]
+            check = 0
+            for b in frame[:-1]:
+                check ^= b
+            if check != frame[-1]:
+                self.n["bad_requests"] += 1   # ignored, as the sensor does
+                self.log(self.dev, "bad_request", data=frame.hex())
+                continue
+            self.handle(cmd, frame[3:-1], now)
+
+    def answer(self, kind: int, body: bytes, now: float) -> None:
+        desc = bytes([0xA5, 0x5A]) + len(body).to_bytes(4, "little") + bytes([kind])
+        self.send(desc + body, now)
+
+    def handle(self, cmd: int, payload: bytes, now: float) -> None:
+        self.n["requests"] += 1
+        self.log(self.dev, "request", cmd=cmd, data=payload.hex(), host_baud=self.port.host_baud())
+        if cmd == 0x25:                                   # STOP
+            self.n["stops"] += self.scanning
+            self.scanning = False
+            self.next_due = math.inf
+        elif cmd == 0x40:                                 # RESET
+            self.n["resets"] += 1
+            self.scanning = False
+            self.next_due = math.inf
+            self.send(self.BOOT_TEXT, now)
+        elif cmd == 0x52:                                 # GET_HEALTH: good
+            self.answer(0x06, bytes([0, 0, 0]), now)
+        elif cmd == 0x50:                                 # GET_INFO
+            self.answer(0x04, bytes([self.MODEL, self.FW_MINOR, self.FW_MAJOR, self.HARDWARE]) + self.SERIAL,
+                        now)
+        elif cmd == 0x59:                                 # GET_SAMPLERATE
+            self.answer(0x15, struct.pack("<HH", self.sample_us, self.sample_us), now)
+        elif cmd in (0x20, 0x21):                         # SCAN, FORCE_SCAN
+            self.send(lidarstream.RPLIDAR_SCAN_DESCRIPTOR, now)
+            if not self.scanning:
+                self.scanning = True
+                self.t_scan = now
+                self.next_due = now
+                self.n["scans_started"] += 1
+                self.log(self.dev, "scan_start")
+        elif cmd in (0xF0, 0xA8) and len(payload) == 2:   # motor PWM / rpm
+            self.motor = struct.unpack("<H", payload)[0]
+            self.log(self.dev, "motor", value=self.motor)
+        else:                                             # express scans and the rest: no answer
+            self.n["unsupported"] += 1
+
+    # -- the stream ---------------------------------------------------------------------
+    def capture_time(self, now: float) -> int:
+        """The capture's time (us) now: on the robot's clock when it plays the
+        same capture (its session's start is the capture's start), else from
+        the scan's start."""
+        if self.robot is not None and self.robot.t_open is not None:
+            return self.playback.t_first + int((now - self.robot.t_open) * 1e6)  # type: ignore[union-attr]
+        return self.nodes[0][0] + int((now - self.t_scan) * 1e6)
+
+    def _rendered(self) -> bytes:
+        b = self.body
+        out = bytearray()
+        for j in range(self.CHUNK):
+            a = self.angle + j
+            r = sim.raycast(b.x, b.y, b.th - math.radians(a), b.segs, b.circles, MAX_RANGE_M)
+            mm = int(round(r * 1000.0)) if r < MAX_RANGE_M else 0
+            out += lidarstream.rplidar_node(a * 64, mm * 4, lidarstream.RPLIDAR_QUALITY if mm else 0, a == 0)
+        self.angle = (self.angle + self.CHUNK) % lidarstream.POINTS_PER_TURN
+        return bytes(out)
+
+    def tick(self, now: float) -> None:
+        if not self.scanning:
+            return
+        if self.nodes:
+            t = self.capture_time(now)
+            # records the head measured while nobody scanned are gone
+            while self.record < len(self.nodes) and self.nodes[self.record][0] < t - 200000:
+                self.record += 1
+                self.n["skipped_records"] += 1
+            while self.record < len(self.nodes) and self.nodes[self.record][0] <= t:
+                self.n["node_chunks"] += self.send(self.nodes[self.record][1], now)
+                self.record += 1
+            self.capture_over(self.record == len(self.nodes), chunks=self.n["node_chunks"])
+            return
+        while self.next_due <= now:
+            self.n["node_chunks"] += self.send(self._rendered(), now)
+            self.next_due += self.CHUNK / (self.turn_hz * lidarstream.POINTS_PER_TURN)
+
+    def due(self) -> float:
+        if not self.scanning:
+            return math.inf
+        if self.nodes:
+            if self.record >= len(self.nodes):
+                return math.inf
+            return time.monotonic() + max(0.0, (self.nodes[self.record][0] - self.capture_time(time.monotonic())) / 1e6)
+        return self.next_due
+
+    def progress(self) -> Dict[str, int]:
+        return {"node_chunks": self.n["node_chunks"]}
+
+    def state(self) -> Dict[str, object]:
+        return {"scanning": self.scanning, "motor": self.motor, "record": self.record, "angle": self.angle}
 
 
 def parse_drop(text: str) -> Tuple[float, float]:
@@ -833,6 +1013,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--lms", action="store_true", help="a fake LMS 2xx (default: both devices)")
     ap.add_argument("--ld06", action="store_true",
                     help="a fake LDRobot LD06 (only when asked for; with --robot, a cheap-lidar robot)")
+    ap.add_argument("--rplidar", action="store_true",
+                    help="a fake Slamtec RPLIDAR (only when asked for; with --robot, a cheap-lidar robot)")
     ap.add_argument("--capture", help="play this capture's encoder packets and scans")
     ap.add_argument("--log", help="write what the devices do, one JSON object per line")
     ap.add_argument("--seconds", type=float, default=0.0, help="stop after this long (0: at a signal)")
@@ -853,8 +1035,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         ap.error("--watchdog-ms must be 100..65535 and --ticks-mm 1..65535")
     if a.seconds < 0:
         ap.error("--seconds must not be negative")
-    want_robot = a.robot or not (a.lms or a.ld06)
-    want_lms = a.lms or not (a.robot or a.ld06)
+    want_robot = a.robot or not (a.lms or a.ld06 or a.rplidar)
+    want_lms = a.lms or not (a.robot or a.ld06 or a.rplidar)
 
     playback = None
     if a.capture:
@@ -879,6 +1061,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             devices.append(laser)
         if a.ld06:
             devices.append(FakeLD06(PtyPort("ld06"), log, body, playback, a))
+        if a.rplidar:
+            rplidar = FakeRPLIDAR(PtyPort("rplidar"), log, body, playback, a)
+            rplidar.robot = robot
+            devices.append(rplidar)
         for d in devices:
             print(f"{d.port.name} {d.port.path}", flush=True)
             log(d.dev, "start", path=d.port.path)

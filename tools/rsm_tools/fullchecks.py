@@ -295,12 +295,15 @@ def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], wor
     return out
 
 
-def main(argv: Optional[Sequence[str]] = None) -> int:
-    from .bench.measure import discover_logs, shared_dir  # one definition, the bench's
+def cli_logs(prog: str, doc: str, argv: Optional[Sequence[str]]):
+    """The command line the full-log modules share (--nav, --shared, --root):
+    (args, repository root, shared folder, logs); exits with 1 when the
+    shared folder holds no log."""
     from .bench.common import find_root
+    from .bench.measure import discover_logs, shared_dir  # one definition, the bench's
 
-    ap = argparse.ArgumentParser(prog="rsm-fullchecks", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--nav", type=Path, required=True, help="the rsm-nav to check (a Release build)")
+    ap = argparse.ArgumentParser(prog=prog, description=doc.split("\n\n")[0])
+    ap.add_argument("--nav", type=Path, required=True, help="the rsm-nav to run (a Release build)")
     ap.add_argument("--shared", type=Path, help="the shared folder (default: $RSM_SHARED_DIR, else ../shared)")
     ap.add_argument("--root", type=Path, help="repository root (default: found from the current folder)")
     a = ap.parse_args(argv)
@@ -308,8 +311,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     shared = shared_dir(a.shared, root)
     logs = discover_logs(shared / "data")
     if not logs:
-        print(f"rsm-fullchecks: no log in {shared / 'data'} (set RSM_SHARED_DIR or --shared)", file=sys.stderr)
-        return 1
+        print(f"{prog}: no log in {shared / 'data'} (set RSM_SHARED_DIR or --shared)", file=sys.stderr)
+        sys.exit(1)
+    return a, root, shared, logs
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    a, root, shared, logs = cli_logs("rsm-fullchecks", __doc__, argv)
     with tempfile.TemporaryDirectory() as tmp:
         res = run_all(shared, a.nav, logs, Path(tmp), root, say=lambda s: print(f"rsm-fullchecks: {s}",
                                                                                   file=sys.stderr, flush=True))

@@ -25,13 +25,22 @@ RPLIDAR_SCAN_DESCRIPTOR = bytes([0xA5, 0x5A, 0x05, 0x00, 0x00, 0x40, 0x81])
 BAUD = {"ld06": 230400, "rplidar": 115200}
 
 
+def _crc8_step(crc: int) -> int:
+    for _ in range(8):
+        crc = ((crc << 1) ^ 0x4D) & 0xFF if crc & 0x80 else (crc << 1) & 0xFF
+    return crc
+
+
+# One byte of the CRC at a time (the bitwise rule above, tabulated once):
+# rendering a whole log's turns calls it for every packet.
+_CRC8_TABLE = bytes(_crc8_step(v) for v in range(256))
+
+
 def ld06_crc8(data: bytes) -> int:
     """CRC-8 of the LD06 packet: polynomial 0x4D, initial 0, MSB first."""
     crc = 0
     for b in data:
-        crc ^= b
-        for _ in range(8):
-            crc = ((crc << 1) ^ 0x4D) & 0xFF if crc & 0x80 else (crc << 1) & 0xFF
+        crc = _CRC8_TABLE[crc ^ b]
     return crc
 
 

@@ -1,12 +1,26 @@
 """rsm-m4: runs the Cortex-M4F firmware images under QEMU (mps2-an386) and checks them.
 
     python3 tools/rsm_tools/m4.py example ELF WORKDIR
+    python3 tools/rsm_tools/m4.py example-ld06 ELF WORKDIR
+    python3 tools/rsm_tools/m4.py example-rplidar ELF WORKDIR
     python3 tools/rsm_tools/m4.py replay ELF HOST_EXE WORKDIR
 
 ``example`` boots the example firmware with its two device ports on files and
 checks the banner, the end-of-run summary and that the P3-DX handshake went
 out on the robot port (SYNC0, repeated after each step timeout, which needs
-SysTick interrupts) and something on the laser port.  ``replay`` boots the
+SysTick interrupts) and something on the laser port.  ``example-ld06`` boots
+the example built for an LD06 (RSM_FIRMWARE_LASER) with LD06 packets of a
+head turning at 10 Hz in a 4 m square room on the laser port (a named pipe,
+read by QEMU as the UART takes bytes): the banner names the LD06, the
+firmware sends nothing on the laser port (the sensor takes no commands),
+loses no byte, and turns the packets into scans; how many bytes QEMU hands
+the UART per emulated millisecond is QEMU's business, so only "at least
+one scan" is asserted, with a wide margin (about 9 of the 20 turns sent).
+``example-rplidar`` boots the example built for an RPLIDAR with nothing
+answering on the laser port: the driver's start-up goes out there and, the
+unit silent, repeats on its own timers (STOP, GET_HEALTH sent three times,
+then after the back-off STOP and GET_HEALTH again), timers that run on
+SysTick.  ``replay`` boots the
 replay firmware, checks its start-up, the instruction-count calibration (the
 known loop) and that its trajectory equals the host's (``HOST_EXE``, the same
 source built for the host) bit for bit.  Both fail on a fault report, a
@@ -20,12 +34,16 @@ that ctest can run it with any python3; ``rsm_tools.bench`` imports it.
 """
 
 import argparse
+import math
+import os
+import re
 import shutil
 import statistics
 import subprocess
 import sys
+import threading
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 ICOUNT_SHIFT = 3
 TIMER_HZ = 25_000_000  # mps2-an386 SYSCLK, which clocks its APB timers
@@ -40,7 +58,9 @@ class M4Error(RuntimeError):
     """A run or a check failed."""
 
 
-def qemu_command(elf: Path, serial_files: Sequence[Path] = ()) -> List[str]:
+def qemu_command(elf: Path, serial_files: Sequence[Path] = (), pipe: Optional[Path] = None) -> List[str]:
+    """Console on stdio, then one UART per serial file (output only), then,
+    with ``pipe``, one on the named pipes PIPE.in (input) and PIPE.out."""
     qemu = shutil.which("qemu-system-arm")
     if qemu is None:
         raise M4Error("qemu-system-arm not found (Debian: qemu-system-arm; ./tools/test installs it)")
@@ -48,14 +68,17 @@ def qemu_command(elf: Path, serial_files: Sequence[Path] = ()) -> List[str]:
            "-serial", "stdio"]
     for f in serial_files:
         cmd += ["-serial", f"file:{f}"]
+    if pipe is not None:
+        cmd += ["-chardev", f"pipe,id=fed,path={pipe}", "-serial", "chardev:fed"]
     cmd += ["-semihosting-config", "enable=on,target=native",
             "-icount", f"shift={ICOUNT_SHIFT},sleep=off", "-no-reboot"]
     return cmd
 
 
-def run(elf: Path, serial_files: Sequence[Path] = (), timeout: float = TIMEOUT_S) -> str:
+def run(elf: Path, serial_files: Sequence[Path] = (), timeout: float = TIMEOUT_S,
+        pipe: Optional[Path] = None) -> str:
     """Console output of one run; M4Error unless it ended by itself with status 0."""
-    cmd = qemu_command(elf, serial_files)
+    cmd = qemu_command(elf, serial_files, pipe)
     try:
         res = subprocess.run(cmd, stdin=subprocess.DEVNULL, capture_output=True, timeout=timeout)
     except subprocess.TimeoutExpired as e:
@@ -72,24 +95,113 @@ def lines_of(text: str, tag: str) -> List[List[str]]:
     return [l.split()[1:] for l in text.splitlines() if l.startswith(tag + " ")]
 
 
-def check_example(elf: Path, work: Path) -> str:
-    work.mkdir(parents=True, exist_ok=True)
-    robot, laser = work / "robot.bin", work / "laser.bin"
-    for f in (robot, laser):
-        f.unlink(missing_ok=True)
-    out = run(elf, [robot, laser])
-    if "rsm example firmware on mps2-an386" not in out:
-        raise M4Error(f"no banner in:\n{out}")
+def check_console(out: str, laser: str) -> None:
+    """The example's banner names the board and laser; its run ended with a summary."""
+    if f"rsm example firmware on mps2-an386, laser: {laser}\n" not in out:
+        raise M4Error(f"no banner naming the {laser} in:\n{out}")
     if "rsm example firmware: ran " not in out:
         raise M4Error(f"no end-of-run summary in:\n{out}")
-    sent = robot.read_bytes()
+
+
+def boot_example(elf: Path, work: Path, laser: str) -> Tuple[str, bytes, bytes]:
+    """One run of an example image with its robot and laser ports on files:
+    (console, robot port bytes, laser port bytes)."""
+    work.mkdir(parents=True, exist_ok=True)
+    robot, port = work / "robot.bin", work / "laser.bin"
+    for f in (robot, port):
+        f.unlink(missing_ok=True)
+    out = run(elf, [robot, port])
+    check_console(out, laser)
+    return out, robot.read_bytes(), port.read_bytes()
+
+
+def check_example(elf: Path, work: Path) -> str:
+    _, sent, laser_sent = boot_example(elf, work, "LMS 2xx")
     n_sync = sent.count(SYNC0)
     # step_timeout_us is 1 s: SYNC0 at 0, 1, 2 and 3 s of the 3.5 s run.
     if n_sync < 3 or sent != SYNC0 * n_sync:
         raise M4Error(f"robot port: expected SYNC0 repeated at least 3 times, got {sent.hex()}")
-    if not laser.read_bytes().startswith(b"\x02"):
-        raise M4Error(f"laser port: expected an LMS telegram (STX), got {laser.read_bytes()[:16].hex()}")
-    return f"example: booted, {n_sync} SYNC0 on the robot port, {len(laser.read_bytes())} bytes on the laser port"
+    if not laser_sent.startswith(b"\x02"):
+        raise M4Error(f"laser port: expected an LMS telegram (STX), got {laser_sent[:16].hex()}")
+    return f"example: booted, {n_sync} SYNC0 on the robot port, {len(laser_sent)} bytes on the laser port"
+
+
+def ld06_room(turns: int) -> bytes:
+    """LD06 packets of a head turning clockwise at 10 Hz, one point a degree,
+    in the middle of a 4 m square room."""
+    try:
+        from . import lidarstream
+    except ImportError:  # run as a script: the package is beside this file
+        sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+        from rsm_tools import lidarstream
+    out = bytearray()
+    for k in range(turns * lidarstream.POINTS_PER_TURN // lidarstream.LD06_POINTS):
+        first = (k * lidarstream.LD06_POINTS) % lidarstream.POINTS_PER_TURN
+        pts = []
+        for a in range(first, first + lidarstream.LD06_POINTS):
+            c, s = abs(math.cos(math.radians(a))), abs(math.sin(math.radians(a)))
+            pts.append((int(round(2000.0 / max(c, s))), 200))
+        out += lidarstream.ld06_packet(3600, first * 100, (first + lidarstream.LD06_POINTS - 1) * 100,
+                                       k * 10 // 3, pts)
+    return bytes(out)
+
+
+def check_example_ld06(elf: Path, work: Path, turns: int = 20) -> str:
+    work.mkdir(parents=True, exist_ok=True)
+    robot, pipe = work / "robot.bin", work / "laser"
+    fifo_in, fifo_out = Path(f"{pipe}.in"), Path(f"{pipe}.out")
+    for f in (robot, fifo_in, fifo_out):
+        f.unlink(missing_ok=True)
+    os.mkfifo(fifo_in)
+    os.mkfifo(fifo_out)
+    sent = ld06_room(turns)
+    heard = bytearray()
+
+    def feed() -> None:
+        with open(fifo_in, "wb") as fh:   # opens once QEMU opens its end
+            try:
+                fh.write(sent)
+            except BrokenPipeError:
+                pass                       # the run ended before taking it all
+
+    def listen() -> None:
+        with open(fifo_out, "rb") as fh:
+            heard.extend(fh.read())
+
+    threads = [threading.Thread(target=feed, daemon=True), threading.Thread(target=listen, daemon=True)]
+    for t in threads:
+        t.start()
+    out = run(elf, [robot], pipe=pipe)
+    for t in threads:
+        t.join(timeout=10)
+    check_console(out, "LD06")
+    m = re.search(r"ran (\d+) ms: encoder events \d+, scans (\d+), receive overflows (\d+)", out)
+    if m is None:
+        raise M4Error(f"no end-of-run summary in:\n{out}")
+    scans, overflows = int(m.group(2)), int(m.group(3))
+    if not robot.read_bytes().startswith(SYNC0):
+        raise M4Error(f"robot port: expected the P3-DX handshake, got {robot.read_bytes()[:16].hex()}")
+    if heard:
+        raise M4Error(f"laser port: the LD06 takes no commands, but the firmware sent {bytes(heard[:16]).hex()}")
+    if overflows != 0 or scans < 1:
+        raise M4Error(f"LD06 packets of {turns} turns gave {scans} scans, {overflows} receive overflows:\n{out}")
+    return f"example-ld06: booted, {scans} scans from the LD06 port in {m.group(1)} ms, nothing sent to it"
+
+
+RP_STOP, RP_HEALTH = bytes([0xA5, 0x25]), bytes([0xA5, 0x52])  # RPLIDAR requests (docs lidars.md 2)
+
+
+def check_example_rplidar(elf: Path, work: Path) -> str:
+    _, robot, sent = boot_example(elf, work, "RPLIDAR")
+    if not robot.startswith(SYNC0):
+        raise M4Error(f"robot port: expected the P3-DX handshake, got {robot[:16].hex()}")
+    # reply_timeout 0.5 s, three tries, back-off 1 s: in the 3.5 s run the
+    # second start-up has begun
+    want = RP_STOP + RP_HEALTH * 3 + RP_STOP + RP_HEALTH
+    rest = sent[len(want):]
+    if not sent.startswith(want) or rest != RP_HEALTH * (len(rest) // 2):
+        raise M4Error(f"laser port: expected STOP, GET_HEALTH x3, STOP, GET_HEALTH..., got {sent.hex()}")
+    return f"example-rplidar: booted, the RPLIDAR start-up sent and repeated ({len(sent)} bytes)"
 
 
 def calibration(out: str) -> Dict[str, float]:
@@ -158,6 +270,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     e = sub.add_parser("example", help="boot the example firmware and check it")
     e.add_argument("elf", type=Path, help="the example firmware image (rsm_firmware.elf)")
     e.add_argument("work", type=Path, help="folder for the devices' files and the console output")
+    e6 = sub.add_parser("example-ld06", help="boot the example firmware built for an LD06, feed it packets")
+    e6.add_argument("elf", type=Path, help="the example firmware image built for an LD06")
+    e6.add_argument("work", type=Path, help="folder for the devices' files and the console output")
+    e7 = sub.add_parser("example-rplidar", help="boot the example firmware built for an RPLIDAR")
+    e7.add_argument("elf", type=Path, help="the example firmware image built for an RPLIDAR")
+    e7.add_argument("work", type=Path, help="folder for the devices' files and the console output")
     r = sub.add_parser("replay", help="run the replay firmware and compare with the host")
     r.add_argument("elf", type=Path, help="the replay firmware image (rsm_replay_m4.elf)")
     r.add_argument("host_exe", type=Path, help="rsm-replay-host, whose trajectory the target's must equal")
@@ -166,6 +284,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         if a.cmd == "example":
             print(check_example(a.elf, a.work))
+        elif a.cmd == "example-ld06":
+            print(check_example_ld06(a.elf, a.work))
+        elif a.cmd == "example-rplidar":
+            print(check_example_rplidar(a.elf, a.work))
         else:
             print(check_replay(a.elf, a.host_exe, a.work))
     except M4Error as err:

@@ -30,7 +30,12 @@ the reader's result independent of the machine's speed and load (see
 :mod:`rsm_tools.lockstep`): before each group of records with one timestamp
 rsm-replay waits until the reader has read everything and is blocked waiting
 for more, then writes the whole group while it is held there; timing options
-are ignored.
+are ignored.  The reader's clock can follow the capture's too: the
+environment variable ``RSM_LOCKSTEP_CLOCK`` names a file that holds the
+timestamp of the group written last (8 bytes, little-endian microseconds; 0
+before the first), rewritten while the reader is held.  rsm-nav takes it as
+its drivers' clock, so its live run then gets the very bytes and times a
+capture-mode run gets.
 """
 
 import argparse
@@ -38,6 +43,7 @@ import os
 import select
 import signal
 import sys
+import tempfile
 import time
 import tty
 from typing import Dict, List, Optional, Sequence
@@ -285,6 +291,29 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             reader.close()
 
 
+class LockstepClock:
+    """The capture time of the group written last, in a file the reader
+    may read (see the module notes)."""
+
+    ENV = "RSM_LOCKSTEP_CLOCK"
+
+    def __init__(self) -> None:
+        self.dir = tempfile.TemporaryDirectory(prefix="rsm-lockstep-")
+        self.path = os.path.join(self.dir.name, "clock")
+        self.fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_TRUNC, 0o600)
+        self.set(0)
+
+    def set(self, t_us: int) -> None:
+        os.pwrite(self.fd, int(t_us).to_bytes(8, "little"), 0)
+
+    def environ(self) -> Dict[str, str]:
+        return dict(os.environ, **{self.ENV: self.path})
+
+    def close(self) -> None:
+        os.close(self.fd)
+        self.dir.cleanup()
+
+
 def run_with(a, reader, outs, ptys) -> int:
     """Starts the --run program on the ptys and plays into them, in lockstep
     with it when asked; returns the program's failure status, else 0."""
@@ -296,10 +325,13 @@ def run_with(a, reader, outs, ptys) -> int:
     except (KeyError, IndexError, ValueError) as exc:
         print(f"rsm-replay: --run: no channel for {exc} in {' '.join(a.run)}", file=sys.stderr)
         return 2
+    clock = LockstepClock() if a.lockstep else None
     try:
-        child = subprocess.Popen(cmd)
+        child = subprocess.Popen(cmd, env=clock.environ() if clock is not None else None)
     except OSError as exc:
         print(f"rsm-replay: cannot start {cmd[0]}: {exc}", file=sys.stderr)
+        if clock is not None:
+            clock.close()
         return 1
     step = None
     records = nbytes = groups = 0
@@ -332,6 +364,7 @@ def run_with(a, reader, outs, ptys) -> int:
                 return
             if step is not None:
                 step.hold()
+                clock.set(group[0].timestamp)  # type: ignore[union-attr]
             elif not a.fast:  # recorded timing, scaled
                 if t_first is None:
                     t_first = group[0].timestamp
@@ -375,6 +408,8 @@ def run_with(a, reader, outs, ptys) -> int:
         for o in outs.values():
             o.close()  # type: ignore[attr-defined]
         outs.clear()
+        if clock is not None:
+            clock.close()
     if status is None:
         rc = child.wait()
     else:  # reaped by the lockstep's waitpid

@@ -3,6 +3,7 @@
     rsm-sim OUT.cap --truth OUT.txt [--world rooms|corridor|pillars] [--seconds N]
             [--slip X] [--range-noise M] [--outliers P] [--seed S]
             [--carmen] [--laser-pose X Y THETA] [--upside-down]
+            [--lidar ld06|rplidar] [--drive loop|curves]
 
 The world is line segments and circles.  The robot follows a closed loop of
 waypoints at 0.4 m/s (turning on the spot at each corner), integrated at
@@ -33,6 +34,20 @@ then points at -a): the scans are ray-cast from there.  A capture records the
 mount only as metadata (``sim.laser_pose``, ``sim.laser_upside_down``); a
 CARMEN log carries the pose in its ROBOTLASER1 lines and nothing says
 "upside down", as in real logs.  The truth stays the robot's centre.
+
+``--lidar ld06|rplidar`` puts a spinning lidar where the LMS was (a capture
+only): a head turning clockwise, one point every whole degree (360 a turn),
+each point ray-cast from the laser's pose at its own measuring time (the
+robot's motion within the 10 ms integration step interpolated), so a turn
+taken while the robot moves is skewed as a real one is.  The LD06 turns at
+10 Hz and sends 12-point packets (230400 Bd); the RPLIDAR at 5 Hz (what
+115200 Bd carries) sends the standard-scan descriptor, then its nodes, 12
+to a record; each record is stamped with its last point's time.  The truth
+file then has one line per whole turn, at its middle (the time the
+revolution assembler stamps a turn with).  ``--drive curves`` drives the
+waypoints differently, to exercise de-skew: arcs at 0.5 m/s turning at up to
+1 rad/s, and turns in place at 1.5 rad/s where a waypoint lies more than
+0.8 rad off the heading.
 """
 
 import argparse
@@ -43,6 +58,7 @@ from typing import List, Optional, Sequence, Tuple
 
 from . import capture as cap
 from . import carmen as cm
+from . import lidarstream
 from . import protocols as proto
 from .convert import integrate, wrap
 from .fileio import open_text_output
@@ -58,6 +74,12 @@ DT = 0.01
 MAX_RANGE = 8.0
 CARMEN_NO_RETURN = 81.9     # what CARMEN writes (and gives as max range) for a SICK
 T0_US = 1_000_000_000_000  # 1e6 s: an arbitrary epoch
+LIDAR_TURN_HZ = {"ld06": 10.0, "rplidar": 5.0}
+CURVE_SPEED = 0.5          # --drive curves: arcs at this speed (m/s),
+CURVE_MAX_TURN = 1.0       # turning at most this fast (rad/s),
+SPIN_RATE = 1.5            # and turns in place at this rate (rad/s)
+SPIN_ABOVE = 0.8           # when the waypoint lies this far off (rad)
+CURVE_REACH = 0.3          # a waypoint counts as reached this close (m)
 
 
 def _box(x0, y0, x1, y1) -> List[Segment]:
@@ -155,13 +177,93 @@ class _CarmenOut:
             tv, rv, 0.0, 0.0, 0.0, t, "rsm-sim", t - self.t0))
 
 
+class _SpinningLidar:
+    """The spinning head of ``--lidar``: points at fixed times, gathered
+    into the protocol's records (see the module's text)."""
+
+    def __init__(self, kind: str, writer, channel: int) -> None:
+        self.kind = kind
+        self.w = writer
+        self.ch = channel
+        self.period_us = 1e6 / (LIDAR_TURN_HZ[kind] * lidarstream.POINTS_PER_TURN)
+        self.index = 0                  # the next point, counted from T0_US
+        self.pending: List[Tuple[int, int]] = []   # (angle, mm) of the record being filled
+        if kind == "rplidar":
+            writer.write(T0_US, channel, lidarstream.RPLIDAR_SCAN_DESCRIPTOR)
+
+    def point_us(self, i: int) -> float:
+        return T0_US + i * self.period_us
+
+    def mid_turn_us(self, turn: int) -> float:
+        """Middle of a whole turn: halfway between its first and last points."""
+        return self.point_us(turn * lidarstream.POINTS_PER_TURN + (lidarstream.POINTS_PER_TURN - 1) / 2.0)
+
+    def add(self, mm: int) -> None:
+        """The next point's distance (0: no return); writes a full record."""
+        angle = self.index % lidarstream.POINTS_PER_TURN
+        self.pending.append((angle, mm))
+        self.index += 1
+        if len(self.pending) < lidarstream.LD06_POINTS:
+            return
+        t = int(round(self.point_us(self.index - 1)))
+        first = self.pending[0][0]
+        if self.kind == "ld06":
+            speed = int(round(360.0 * LIDAR_TURN_HZ["ld06"]))
+            data = lidarstream.ld06_packet(speed, first * 100, self.pending[-1][0] * 100, t // 1000,
+                                           [(d, 200 if d else 0) for _, d in self.pending])
+        else:
+            data = b"".join(lidarstream.rplidar_node(a * 64, d * 4, lidarstream.RPLIDAR_QUALITY if d else 0, a == 0)
+                            for a, d in self.pending)
+        self.w.write(t, self.ch, data)
+        self.pending = []
+
+
+def _measured(r: float, rng: random.Random, outliers: float, range_noise: float) -> float:
+    """A true range as the laser reports it: an outlier in front of the wall
+    with probability ``outliers``, then N(0, range_noise) added (only within
+    MAX_RANGE; beyond it stays beyond)."""
+    if r <= MAX_RANGE:
+        if outliers and rng.random() < outliers:
+            r = rng.uniform(0.1, r)
+        if range_noise:
+            r = max(0.001, r + rng.gauss(0.0, range_noise))
+    return r
+
+
+def _pose_at(step: Tuple[float, float, float, float, float, float], t_us: float) -> Tuple[float, float, float]:
+    """The true pose at t_us within an integration step (start time, pose,
+    ds, dth): the midpoint model's arc, a fraction of the way along."""
+    t0, x, y, th, ds, dth = step
+    f = (t_us - t0) / 10_000
+    return (x + f * ds * math.cos(th + 0.5 * f * dth), y + f * ds * math.sin(th + 0.5 * f * dth), th + f * dth)
+
+
+def _drive(x: float, y: float, th: float, gx: float, gy: float, curves: bool) -> Tuple[float, float, bool]:
+    """(v, omega, reached) towards the waypoint (gx, gy)."""
+    err = wrap(math.atan2(gy - y, gx - x) - th)
+    if math.hypot(gx - x, gy - y) < (CURVE_REACH if curves else 0.05):
+        return 0.0, 0.0, True
+    if curves:
+        if abs(err) > SPIN_ABOVE:
+            return 0.0, math.copysign(SPIN_RATE, err), False
+        return CURVE_SPEED, max(-CURVE_MAX_TURN, min(CURVE_MAX_TURN, 2.5 * err)), False
+    if abs(err) > 0.05:
+        return 0.0, max(-TURN_RATE, min(TURN_RATE, 3.0 * err)), False
+    return SPEED, 2.0 * err, False
+
+
 def simulate(out, truth, world_name: str = "rooms", seconds: float = 60.0, slip: float = 0.0,
              range_noise: float = 0.0, outliers: float = 0.0, seed: int = 1,
              carmen: bool = False, laser_pose: cm.Pose = (0.0, 0.0, 0.0),
-             upside_down: bool = False) -> int:
+             upside_down: bool = False, lidar: Optional[str] = None, drive: str = "loop") -> int:
     """Write the capture (or with ``carmen`` the CARMEN log) and the truth
-    file; returns the number of scans.  ``laser_pose`` and ``upside_down``
-    mount the laser (see the module's text)."""
+    file; returns the number of scans (whole turns with ``lidar``).
+    ``laser_pose`` and ``upside_down`` mount the laser, ``lidar`` makes it
+    a spinning one, ``drive`` picks the motion (see the module's text)."""
+    if lidar is not None and (carmen or lidar not in LIDAR_TURN_HZ):
+        raise ValueError("lidar: ld06 or rplidar, in a capture only")
+    if drive not in ("loop", "curves"):
+        raise ValueError("drive: loop or curves")
     segs, circles, path = world(world_name)
     rng = random.Random(seed)
     x, y = path[0]
@@ -183,6 +285,14 @@ def simulate(out, truth, world_name: str = "rooms", seconds: float = 60.0, slip:
         "sim.outliers": repr(outliers), "sim.seconds": repr(seconds),
         "ground_truth": str(getattr(truth, "name", truth)).rsplit("/", 1)[-1],
     }
+    if lidar is not None:
+        channels[1] = cap.Channel(1, "lidar", "raw", lidarstream.BAUD[lidar])
+        for key in ("laser.units", "laser.fov_deg", "laser.measuring_mode"):
+            del meta[key]
+        meta.update({"laser.model": lidar, "laser.readings": str(lidarstream.POINTS_PER_TURN),
+                     "laser.turn_hz": repr(LIDAR_TURN_HZ[lidar]), "laser.clockwise": "1"})
+    if drive != "loop":  # only then, so that the default drive gives the same bytes as ever
+        meta["sim.drive"] = drive
     mounted = tuple(laser_pose) != (0.0, 0.0, 0.0) or upside_down
     if mounted:  # only then, so that a centred laser gives the same bytes as ever
         meta["sim.laser_pose"] = f"{mx!r} {my!r} {mt!r}"
@@ -198,7 +308,10 @@ def simulate(out, truth, world_name: str = "rooms", seconds: float = 60.0, slip:
     steps = int(round(seconds / DT))
     scans = 0
     with sink as w, open(truth, "w") as tf:
-        tf.write("# timestamp x y theta   (rsm-sim ground truth at each scan)\n")
+        tf.write("# timestamp x y theta   (rsm-sim ground truth at each "
+                 + ("whole turn's middle)\n" if lidar else "scan)\n"))
+        head = _SpinningLidar(lidar, w, 1) if lidar is not None else None
+        steps_seen: List[Tuple[float, float, float, float, float, float]] = []
         for k in range(steps + 1):
             t_us = T0_US + k * 10_000
             if k % 10 == 0:
@@ -206,7 +319,34 @@ def simulate(out, truth, world_name: str = "rooms", seconds: float = 60.0, slip:
                     w.encoder(t_us / 1e6, left, right)
                 else:
                     w.write(t_us, 0, proto.encode_encoder(left, right))
-            if k % 20 == 0:
+            # motion for the next step: towards the waypoint
+            v, om, reached = _drive(x, y, th, *path[wp], drive == "curves")
+            if reached:
+                wp = (wp + 1) % len(path)
+            dl = (v - 0.5 * om * WHEEL_BASE) * DT
+            dr = (v + 0.5 * om * WHEEL_BASE) * DT
+            ds, dth = 0.5 * (dl + dr), (dr - dl) / WHEEL_BASE
+            if head is not None:
+                steps_seen.append((t_us, x, y, th, ds, dth))
+                del steps_seen[:-200]  # two seconds: more than a turn
+                # every point measured during this step, from the pose it had then
+                t_end = t_us + 10_000 if k < steps else t_us
+                while head.point_us(head.index) < t_end:
+                    px, py, pth = _pose_at(steps_seen[-1], head.point_us(head.index))
+                    c, s_ = math.cos(pth), math.sin(pth)
+                    a = pth + mt - flip * math.radians(head.index % lidarstream.POINTS_PER_TURN)
+                    r = _measured(raycast(px + c * mx - s_ * my, py + s_ * mx + c * my, a, segs, circles,
+                                          MAX_RANGE + 1), rng, outliers, range_noise)
+                    head.add(int(round(r * 1000.0)) if r <= MAX_RANGE else 0)
+                    turn = head.index // lidarstream.POINTS_PER_TURN
+                    if head.index % lidarstream.POINTS_PER_TURN == 0:
+                        # a turn is whole: the truth at its middle
+                        tm = head.mid_turn_us(turn - 1)
+                        step = next(h for h in reversed(steps_seen) if h[0] <= tm)
+                        mx_, my_, mth_ = _pose_at(step, tm)
+                        tf.write(f"{tm / 1e6:.6f} {mx_:.6f} {my_:.6f} {wrap(mth_):.6f}\n")
+                        scans += 1
+            elif k % 20 == 0:
                 vals = []
                 ranges = []
                 # the laser's own pose; beam j sits at (j - 90) deg in its own frame
@@ -214,12 +354,7 @@ def simulate(out, truth, world_name: str = "rooms", seconds: float = 60.0, slip:
                 lx, ly = x + c * mx - s * my, y + s * mx + c * my
                 for j in range(181):
                     a = th + mt + flip * math.radians(j - 90)
-                    r = raycast(lx, ly, a, segs, circles, MAX_RANGE + 1)
-                    if r <= MAX_RANGE:
-                        if outliers and rng.random() < outliers:
-                            r = rng.uniform(0.1, r)
-                        if range_noise:
-                            r = max(0.001, r + rng.gauss(0.0, range_noise))
+                    r = _measured(raycast(lx, ly, a, segs, circles, MAX_RANGE + 1), rng, outliers, range_noise)
                     if carmen:
                         ranges.append(r if r <= MAX_RANGE else CARMEN_NO_RETURN)
                     else:
@@ -230,20 +365,7 @@ def simulate(out, truth, world_name: str = "rooms", seconds: float = 60.0, slip:
                     w.write(t_us, 1, proto.encode_b0(vals, "mm"))
                 tf.write(f"{t_us / 1e6:.6f} {x:.6f} {y:.6f} {th:.6f}\n")
                 scans += 1
-            # motion for the next step: turn towards the waypoint, then drive
-            gx, gy = path[wp]
-            err = wrap(math.atan2(gy - y, gx - x) - th)
-            if math.hypot(gx - x, gy - y) < 0.05:
-                wp = (wp + 1) % len(path)
-                v = om = 0.0
-            elif abs(err) > 0.05:
-                v, om = 0.0, max(-TURN_RATE, min(TURN_RATE, 3.0 * err))
-            else:
-                v, om = SPEED, 2.0 * err
-            dl = (v - 0.5 * om * WHEEL_BASE) * DT
-            dr = (v + 0.5 * om * WHEEL_BASE) * DT
             # truth: midpoint step
-            ds, dth = 0.5 * (dl + dr), (dr - dl) / WHEEL_BASE
             x += ds * math.cos(th + 0.5 * dth)
             y += ds * math.sin(th + 0.5 * dth)
             th = wrap(th + dth)
@@ -280,13 +402,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                     default=(0.0, 0.0, 0.0),
                     help="the laser's pose on the robot (m, m, rad; x forward, y left)")
     ap.add_argument("--upside-down", action="store_true", help="the laser is mounted upside down")
+    ap.add_argument("--lidar", choices=("ld06", "rplidar"),
+                    help="a spinning lidar instead of the LMS, each point measured at its own time")
+    ap.add_argument("--drive", choices=("loop", "curves"), default="loop",
+                    help="loop: straight legs, slow turns on the spot; curves: arcs and fast turns in place")
     a = ap.parse_args(argv)
+    if a.lidar and a.carmen:
+        ap.error("--lidar writes a capture, not a CARMEN log")
     if a.seconds <= 0 or a.slip < 0 or a.range_noise < 0 or not 0 <= a.outliers <= 1:
         ap.error("--seconds > 0, --slip >= 0, --range-noise >= 0, 0 <= --outliers <= 1")
     if not all(math.isfinite(v) for v in a.laser_pose) or math.hypot(*a.laser_pose[:2]) > 5.0:
         ap.error("--laser-pose: finite numbers, the laser within 5 m of the robot's centre")
     n = simulate(a.out, a.truth, a.world, a.seconds, a.slip, a.range_noise, a.outliers, a.seed,
-                 carmen=a.carmen, laser_pose=tuple(a.laser_pose), upside_down=a.upside_down)
+                 carmen=a.carmen, laser_pose=tuple(a.laser_pose), upside_down=a.upside_down,
+                 lidar=a.lidar, drive=a.drive)
     print(f"rsm-sim: {n} scans, {a.seconds:g} s in world {a.world} -> {a.out}"
           f"{' (CARMEN)' if a.carmen else ''}, truth {a.truth}", file=sys.stderr)
     return 0
