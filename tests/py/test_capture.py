@@ -6,6 +6,7 @@ import random
 import shutil
 import struct
 import subprocess
+import zlib
 from pathlib import Path
 
 import pytest
@@ -262,3 +263,21 @@ def test_golden_files_are_what_the_writer_writes_and_the_reader_reads(tmp_path, 
             assert c_dump(c_reader, committed / f"{name}.cap", mode == "lenient") == want
     # every kind of fault is in the damaged file, each counted once
     assert want[-1] == "end records=11 corrupt=3 truncated=1 order=1 channel=1 skipped=77"
+
+
+def test_protocol_tags_read_alike_and_unknown_codes_read_as_raw(tmp_path, c_reader):
+    """Codes 0-4 name raw, aria, lms2xx, ld06 and rplidar in both readers; a
+    code neither knows reads as raw (docs/capture.md)."""
+    names = ["raw", "aria", "lms2xx", "ld06", "rplidar"]
+    channels = [cap.Channel(i, chr(ord("a") + i), n, 115200) for i, n in enumerate(names + ["raw"])]
+    head = bytearray(cap.encode_header(cap.Header(channels)))
+    assert [head[17 + 8 * i + 1] for i in range(6)] == [0, 1, 2, 3, 4, 0]
+    head[17 + 8 * 5 + 1] = 9                       # channel f: a code from a later writer
+    head[-4:] = struct.pack("<I", zlib.crc32(bytes(head[:-4])))
+    f = tmp_path / "tags.cap"
+    f.write_bytes(bytes(head) + cap.encode_record(1, 3, cap.RX, b"\x54\x2c"))
+    h, recs, _ = cap.read_capture(f)
+    assert [c.protocol for c in h.channels] == names + ["raw"]
+    py = python_dump(f, False)
+    assert [line.split()[3] for line in py if line.startswith("channel ")] == names + ["raw"]
+    assert c_dump(c_reader, f, False) == py

@@ -184,3 +184,26 @@ def test_rplidar_driver_runs_a_fake_rplidar_and_gets_every_turn_unchanged(tmp_pa
         at = want.index(turn, at) + 1
     print(f"\nRPLIDAR active on rsm-fakedev: {len(got)} turns, each one of the capture's, in order;"
           f" {len(rows(traj))} poses")
+
+
+def test_a_capture_tagged_by_rsm_record_runs_as_the_converted_one(tmp_path, lidar_capture):
+    """rsm-record --port NAME=DEV@BAUD:ld06|rplidar tags the lidar's channel
+    in the header (protocol 3 or 4) instead of a "lidar" raw channel with
+    laser.model: rsm-nav takes the tag alone and decodes the same turns."""
+    kind, capture = lidar_capture
+    header, records, _ = cap.read_capture(capture)
+    lidar = header.channel("lidar")
+    channels = [cap.Channel(c.id, "scanner", kind, c.baud) if c.id == lidar.id else c for c in header.channels]
+    meta = {k: v for k, v in header.metadata.items() if k != "laser.model"}
+    tagged = tmp_path / "tagged.cap"
+    with cap.CaptureWriter(tagged, channels, meta) as w:
+        for r in records:
+            w.write(r.timestamp, r.channel, r.data, r.direction)
+    assert [c.protocol for c in cap.read_capture(tagged)[0].channels] == ["aria", kind]
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    ref_traj, ref_events, _ = run_capture_mode(capture, tmp_path / "a")
+    traj, events, summary = run_capture_mode(tagged, tmp_path / "b")
+    assert LINK_SUMMARY[kind] in summary, summary
+    assert events.read_text() == ref_events.read_text()
+    assert rows(traj) == rows(ref_traj)

@@ -9,6 +9,7 @@ rsm-dump comes from the CMake build named by RSM_BUILD_DIR (ctest sets it).
 """
 
 import json
+import random
 import math
 import subprocess
 
@@ -155,3 +156,91 @@ def test_rendered_log_decodes_back_to_the_logged_beams(kind, head_log, tmp_path)
                 want = mm if mm <= limit else 0
             assert rng == pytest.approx(want / 1000.0, abs=1e-6), (k, a)
     assert st.turns.returns == sum(1 for p in points if p[1] > 0)
+
+
+# ---------------------------------------------------------------------------
+# The Python receivers (rsm-record's and rsm-replay's counters) count as the
+# C receivers do: every counter rsm-dump reports, on damaged streams fed in
+# arbitrary chunks.
+
+def capsule(start_q6: int, new_turn: bool, body: bytes) -> bytes:
+    """An express capsule (docs/reference/lidars.md 2): sync nibbles, XOR of bytes 2..83."""
+    rest = (start_q6 | (0x8000 if new_turn else 0)).to_bytes(2, "little") + body
+    s = 0
+    for x in rest:
+        s ^= x
+    return bytes([0xA0 | (s & 0x0F), 0x50 | (s >> 4)]) + rest
+
+
+def damaged_streams() -> dict:
+    rng = random.Random(14)
+    pk = [lidarstream.ld06_packet(3600, (k * 1200) % 36000, (k * 1200 + 1100) % 36000, k,
+                                  [(rng.randrange(1, 12000), rng.randrange(256)) for _ in range(12)])
+          for k in range(30)]
+    flipped = bytearray(pk[3])
+    flipped[20] ^= 0x10                                      # CRC error
+    bad_angle = lidarstream.ld06_packet(3600, 36000, 100, 0, [(1, 1)] * 12)  # CRC fine, start >= 360 deg
+    ld06 = (b"\x00\x54\x2c\x13" + pk[0] + pk[1] + pk[2][:30] + pk[2] + bytes(flipped) + pk[4]
+            + bad_angle + bytes(rng.randrange(256) for _ in range(300)) + b"".join(pk[5:]) + pk[0][:25])
+    d = lidarstream.RPLIDAR_SCAN_DESCRIPTOR
+    nodes = [lidarstream.rplidar_node(j * 64, rng.randrange(0, 40000), rng.randrange(64), j == 0)
+             for j in range(360)]
+    health = bytes([0xA5, 0x5A, 3, 0, 0, 0, 0x06]) + bytes([0, 0, 0])
+    info = bytes([0xA5, 0x5A, 20, 0, 0, 0, 0x04]) + bytes(range(20))
+    unknown = bytes([0xA5, 0x5A, 3, 0, 0, 0, 0x07])          # no such answer type
+    bad_node = bytes([nodes[7][0] | 3]) + nodes[7][1:]        # S and not-S both set
+    no_check = nodes[8][:1] + bytes([nodes[8][1] & 0xFE]) + nodes[8][2:]
+    rp_nodes = (b"\x11" + health + unknown + info + d + b"".join(nodes[:7]) + bad_node + no_check
+                + b"".join(nodes[9:]) + nodes[0][:3])
+    caps = [capsule((k * 1000) % 23040, k % 23 == 0, bytes(rng.randrange(256) for _ in range(80)))
+            for k in range(40)]
+    bad_sum = bytearray(caps[5])
+    bad_sum[40] ^= 1
+    express = bytes([0xA5, 0x5A, 84, 0, 0, 0x40, 0x82])
+    rp_caps = (health + express + b"".join(caps[:5]) + bytes(bad_sum) + b"".join(caps[6:])
+               + capsule(0x7FFF, False, bytes(80)) + caps[0][:50])
+    return {"ld06": [ld06], "rplidar": [rp_nodes, rp_caps]}
+
+
+def feed_in_chunks(receiver, stream: bytes, seed: int) -> list:
+    rng = random.Random(seed)
+    got, i = [], 0
+    while i < len(stream):
+        n = rng.choice([1, 2, 5, 47, 84, 200])
+        got += receiver.feed(stream[i:i + n])
+        i += n
+    return got
+
+
+def test_python_receivers_count_every_byte_as_rsm_dump_does(tmp_path):
+    for kind, streams in damaged_streams().items():
+        for k, stream in enumerate(streams):
+            objs = dump(kind, stream, tmp_path)
+            summary = objs[-1]
+            r = lidarstream.LD06Receiver() if kind == "ld06" else lidarstream.RplidarReceiver()
+            frames = feed_in_chunks(r, stream, k)
+            pending = len(r.buf)
+            assert r.bytes_fed == len(stream) == summary["bytes"]
+            # rsm-dump flushes at the end of the file: a partial candidate is skipped, one truncated
+            assert (r.bytes_skipped + pending, 1 if pending else 0) == (summary["bytes_skipped"],
+                                                                        summary["truncated"]), kind
+            if kind == "ld06":
+                assert (r.packets_ok, r.crc_errors, r.bad_fields) == (
+                    summary["frames"], summary["checksum_errors"], summary["bad_fields"])
+                # the flipped bit and the cut packet fail their CRC; the rest are lost candidates
+                assert (r.packets_ok, r.bad_fields) == (29, 1) and r.crc_errors >= 2
+                assert [f[4] | f[5] << 8 for f in frames] == [o["start_cdeg"] for o in objs[:-1]]
+                assert r.bytes_skipped + pending + 47 * r.packets_ok == len(stream)
+            else:
+                assert (r.descriptors + r.responses + r.nodes + r.capsules, r.checksum_errors,
+                        r.bad_descriptors, r.bad_nodes) == (
+                    summary["frames"], summary["checksum_errors"], summary["bad_descriptors"],
+                    summary["bad_nodes"])
+                assert r.bytes_skipped + pending + r.bytes_framed == len(stream)
+                if k == 0:   # two responses, the scan descriptor, the nodes; the unknown type rejected
+                    assert (r.descriptors, r.responses, r.bad_descriptors) == (3, 2, 1)
+                    # the two broken nodes rejected (resynchronising may find a node inside them)
+                    assert 358 <= r.nodes <= 359 and r.bad_nodes >= 2
+                    assert [t for t, _ in frames[:5]] == [0, 0x06, 0, 0x04, 0]
+                else:        # 39 good capsules, one bad checksum, one start angle >= 360 deg
+                    assert (r.capsules, r.checksum_errors, r.bad_capsules) == (39, 1, 1)

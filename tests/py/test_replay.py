@@ -13,6 +13,7 @@ import pytest
 from conftest import subprocess_env
 from rsm_tools import capture as cap
 from rsm_tools import convert as cv
+from rsm_tools import lidarstream
 from rsm_tools import protocols as p
 
 
@@ -218,21 +219,33 @@ def wait_recording(proc, n):
         assert "recording" in line, line + proc.stderr.read()
 
 
-def test_record_two_ptys_then_ctrl_c(tmp_path):
-    m1, s1, path1 = make_pty()
-    m2, s2, path2 = make_pty()
-    out = tmp_path / "rec.cap"
-    proc = start("record", out, "--port", f"robot={path1}@38400:aria", "--port",
-                 f"laser={path2}@38400:lms2xx")
+def wait_for_bytes(path, want: int, timeout: float = 60.0) -> None:
+    """Until the capture being written holds ``want`` data bytes (each record
+    is flushed whole, so a lenient read of the growing file is exact)."""
+    end = time.monotonic() + timeout
+    got = -1
+    while time.monotonic() < end:
+        if path.exists():
+            got = cap.read_capture(path, lenient=True)[2].bytes
+            if got >= want:
+                return
+        time.sleep(0.05)
+    raise AssertionError(f"{path} holds {got} of {want} bytes")
+
+
+def record_two(out, specs, streams, chunk: int) -> str:
+    """rsm-record of two ptys (``specs``: ``CHANNEL=@BAUD:protocol``, the
+    pty's path put in), fed ``streams`` in chunks, stopped by SIGINT once the
+    file holds every byte; returns its stderr."""
+    (m1, s1, path1), (m2, s2, path2) = make_pty(), make_pty()
+    proc = start("record", out, "--port", specs[0].replace("=@", f"={path1}@"), "--port",
+                 specs[1].replace("=@", f"={path2}@"))
     try:
         wait_recording(proc, 2)
-        enc = b"".join(p.encode_encoder(i * 100, -i * 100) for i in range(50))
-        scans = b"".join(p.encode_b0_ranges([1.0 + i * 0.001] * 181) for i in range(5))
-        for i in range(0, len(enc), 70):
-            os.write(m1, enc[i:i + 70])
-            time.sleep(0.002)
-        os.write(m2, scans)
-        time.sleep(1.2)
+        for m, data in ((m1, streams[0]), (m2, streams[1])):
+            for i in range(0, len(data), chunk):
+                os.write(m, data[i:i + chunk])
+        wait_for_bytes(out, len(streams[0]) + len(streams[1]))
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=10)
     finally:
@@ -241,8 +254,17 @@ def test_record_two_ptys_then_ctrl_c(tmp_path):
         for fd in (m1, s1, m2, s2):
             os.close(fd)
     assert proc.returncode == 0, err
-    assert "robot 700 B 50 frames" in err and "laser 1860 B 5 frames" in err
+    return err
+
+
+def test_record_two_ptys_then_ctrl_c(tmp_path):
+    out = tmp_path / "rec.cap"
+    enc = b"".join(p.encode_encoder(i * 100, -i * 100) for i in range(50))
+    scans = b"".join(p.encode_b0_ranges([1.0 + i * 0.001] * 181) for i in range(5))
+    err = record_two(out, ["robot=@38400:aria", "laser=@38400:lms2xx"], [enc, scans], 70)
     assert "stopped by SIGINT" in err
+    assert err.splitlines()[-2] == ("rsm-record: robot 700 B 50 frames, 0 checksum errors | "
+                                    "laser 1860 B 5 frames, 0 CRC errors"), err
     h, recs, st = cap.read_capture(out)
     assert [(c.name, c.protocol, c.baud) for c in h.channels] == [
         ("robot", "aria", 38400), ("laser", "lms2xx", 38400)]
@@ -274,4 +296,68 @@ def test_record_port_vanishes_and_missing_port(tmp_path):
                           f"robot={tmp_path / 'ttyNONE'}@9600"],
                          capture_output=True, text=True, env=subprocess_env())
     assert res.returncode == 1 and "cannot open port robot" in res.stderr
+    assert not (tmp_path / "n.cap").exists()
+
+
+def lidar_streams():
+    """An LD06 stream with one packet's CRC broken, and an RPLIDAR's health
+    answer, scan descriptor and one turn of nodes."""
+    pk = [lidarstream.ld06_packet(3600, (k * 1200) % 36000, (k * 1200 + 1100) % 36000, k,
+                                  [(1000 + k, 200)] * 12) for k in range(100)]
+    broken = bytearray(pk[50])
+    broken[10] ^= 0x01
+    ld06 = b"".join(pk[:50]) + bytes(broken) + b"".join(pk[51:])
+    health = bytes([0xA5, 0x5A, 3, 0, 0, 0, 0x06, 0, 0, 0])
+    rp = health + lidarstream.RPLIDAR_SCAN_DESCRIPTOR + b"".join(
+        lidarstream.rplidar_node(j * 64, 4000 + j, 47, j == 0) for j in range(360))
+    return ld06, rp
+
+
+LD06_COUNTS = "99 packets (1188 points), 1 CRC errors, 0 bad angles, 47 B skipped"
+RPLIDAR_COUNTS = "2 descriptors, 1 responses, 360 nodes, 0 capsules, 0 checksum errors, 0 bad, 0 B skipped"
+
+
+def test_record_and_replay_know_the_lidar_channels(tmp_path):
+    """:ld06 and :rplidar tags: the header carries them, rsm-record's counter
+    and rsm-replay's summary decode the channel (packets and nodes, CRC and
+    checksum failures) with the receivers of rsm_tools.lidarstream."""
+    ld06, rp = lidar_streams()
+    out = tmp_path / "lidars.cap"
+    # chunks of 500 bytes cut the packets and nodes
+    err = record_two(out, ["ld=@230400:ld06", "rp=@115200:rplidar"], [ld06, rp], 500)
+    final = err.splitlines()[-2]   # the counters after "stopped by SIGINT"; then the file line
+    assert final == (f"rsm-record: ld {len(ld06)} B {LD06_COUNTS} | rp {len(rp)} B {RPLIDAR_COUNTS}"), err
+    h, recs, _ = cap.read_capture(out)
+    assert [(c.name, c.protocol, c.baud) for c in h.channels] == [("ld", "ld06", 230400),
+                                                                  ("rp", "rplidar", 115200)]
+    assert b"".join(r.data for r in recs if r.channel == 0) == ld06
+    assert b"".join(r.data for r in recs if r.channel == 1) == rp
+
+    # rsm-replay plays the recording and says what each tagged channel carried
+    proc = start("replay", out, "--pty", "--fast", "--wait-open", "--linger", "0.2")
+    try:
+        paths = read_pty_lines(proc, 2)
+        fds = {}
+        for name, path in paths.items():
+            fd = os.open(path, os.O_RDWR | os.O_NOCTTY)
+            tty.setraw(fd)
+            fds[name] = fd
+        got = drain(list(fds.values()), {fds["ld"]: len(ld06), fds["rp"]: len(rp)})
+        assert bytes(got[fds["ld"]]) == ld06 and bytes(got[fds["rp"]]) == rp
+        _, err = proc.communicate(timeout=20)
+    finally:
+        for fd in fds.values():
+            os.close(fd)
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    assert f"rsm-replay:   ld (ld06): {len(ld06)} B, {LD06_COUNTS}" in err.splitlines(), err
+    assert f"rsm-replay:   rp (rplidar): {len(rp)} B, {RPLIDAR_COUNTS}" in err.splitlines(), err
+
+
+def test_record_refuses_an_unknown_protocol_tag(tmp_path):
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.record", str(tmp_path / "n.cap"), "--port",
+                          "lidar=/dev/null@230400:ld19"], capture_output=True, text=True, env=subprocess_env())
+    assert res.returncode == 2 and "unknown protocol 'ld19'" in res.stderr
+    assert "ld06" in res.stderr and "rplidar" in res.stderr
     assert not (tmp_path / "n.cap").exists()

@@ -204,7 +204,7 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
         cap_channel *c = &r->channels[i];
         if (off + 7u > hlen) goto malformed;
         c->id = body[off];
-        c->protocol = body[off + 1] <= 2u ? body[off + 1] : (uint8_t)CAP_PROTO_RAW;
+        c->protocol = body[off + 1] <= (uint8_t)CAP_PROTO_RPLIDAR ? body[off + 1] : (uint8_t)CAP_PROTO_RAW;
         c->baud = rd32(body + off + 2);
         nl = body[off + 6];
         off += 7;
@@ -519,7 +519,8 @@ int cap_next(cap_reader *r, cap_record *rec, uint8_t *buf, size_t cap)
 
 static const char *proto_name(uint8_t p)
 {
-    return p == CAP_PROTO_ARIA ? "aria" : p == CAP_PROTO_LMS2XX ? "lms2xx" : "raw";
+    static const char *const names[] = {"raw", "aria", "lms2xx", "ld06", "rplidar"};
+    return p < sizeof names / sizeof names[0] ? names[p] : "raw";
 }
 
 static const cap_reader *sort_reader;

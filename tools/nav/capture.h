@@ -35,7 +35,13 @@ enum cap_status {
     CAP_ERR_BUFFER = -8      /* caller buffer smaller than the record (record skipped) */
 };
 
-enum cap_protocol { CAP_PROTO_RAW = 0, CAP_PROTO_ARIA = 1, CAP_PROTO_LMS2XX = 2 };
+enum cap_protocol {
+    CAP_PROTO_RAW = 0,
+    CAP_PROTO_ARIA = 1,
+    CAP_PROTO_LMS2XX = 2,
+    CAP_PROTO_LD06 = 3,
+    CAP_PROTO_RPLIDAR = 4
+};
 enum cap_direction { CAP_RX = 0, CAP_TX = 1 };
 
 typedef struct {

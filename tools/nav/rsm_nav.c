@@ -690,6 +690,11 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink, con
             robot_id = reader.channels[i].id;
         } else if (reader.channels[i].protocol == CAP_PROTO_LMS2XX && laser_id < 0) {
             laser_id = reader.channels[i].id;
+        } else if ((reader.channels[i].protocol == CAP_PROTO_LD06 ||
+                    reader.channels[i].protocol == CAP_PROTO_RPLIDAR) && laser_id < 0) {
+            /* rsm-record --port NAME=DEV@BAUD:ld06|rplidar tags the lidar's channel */
+            laser_id = reader.channels[i].id;
+            kind = reader.channels[i].protocol == CAP_PROTO_LD06 ? NAV_LASER_LD06 : NAV_LASER_RPLIDAR;
         }
     }
     /* rsm-convert --lidar: the laser is a spinning lidar's raw stream. */

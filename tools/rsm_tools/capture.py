@@ -6,7 +6,8 @@ little-endian)::
     header:  magic "\\x89RSMCAP\\n" | u16 version (1) | u16 flags (0) |
              u32 body length H | body (H bytes) | u32 CRC-32 of all before
     body:    u8 channel count, then per channel:
-                 u8 id | u8 protocol (0 raw, 1 aria, 2 lms2xx) | u32 baud |
+                 u8 id | u8 protocol (0 raw, 1 aria, 2 lms2xx, 3 ld06, 4 rplidar) |
+                 u32 baud |
                  u8 name length | name (UTF-8)
              u16 metadata count, then per entry:
                  u16 key length | key | u32 value length | value (UTF-8)
@@ -41,7 +42,7 @@ MAX_CHANNELS = 32
 RX, TX = 0, 1
 DIRECTIONS = {"rx": RX, "tx": TX}
 
-PROTOCOLS = {"raw": 0, "aria": 1, "lms2xx": 2}
+PROTOCOLS = {"raw": 0, "aria": 1, "lms2xx": 2, "ld06": 3, "rplidar": 4}
 PROTOCOL_NAMES = {v: k for k, v in PROTOCOLS.items()}
 
 #: metadata every writer adds unless given

@@ -124,3 +124,159 @@ def render_turn(kind: str, ranges: Sequence[float], end_us: int, turn_us: int,
                              for j in range(first, first + LD06_POINTS))
             records.append((at[first + LD06_POINTS - 1], chunk))
     return records
+
+
+# --------------------------------------------------------------------------
+# Receivers: the Python twins of the C receivers in src/ld06.c and
+# src/rplidar.c (same framing, same resynchronisation, counters under the
+# same names), for the host tools' live counters.  tests/py/test_lidarstream.py
+# checks every counter against rsm-dump's on clean and damaged streams.
+
+LD06_HEADER, LD06_VERLEN, LD06_PACKET = 0x54, 0x2C, 47
+LD06_MAX_CDEG = 36000
+
+
+class LD06Receiver:
+    """Streaming LD06/LD19 packet receiver; :meth:`feed` returns the whole
+    packets (47 bytes each) that passed the CRC and the angle checks."""
+
+    def __init__(self) -> None:
+        self.buf = bytearray()
+        self.bytes_fed = self.bytes_skipped = 0
+        self.packets_ok = self.crc_errors = self.bad_fields = self.resyncs = 0
+
+    def _resync(self) -> None:
+        # drop the candidate's first byte and whatever cannot start a packet
+        b = self.buf
+        self.resyncs += 1
+        while True:
+            del b[0]
+            self.bytes_skipped += 1
+            if not b or (b[0] == LD06_HEADER and (len(b) < 2 or b[1] == LD06_VERLEN)):
+                return
+
+    def feed(self, data: bytes) -> List[bytes]:
+        out = []
+        b = self.buf
+        for x in data:
+            self.bytes_fed += 1
+            if not b and x != LD06_HEADER:
+                self.bytes_skipped += 1
+                continue
+            b.append(x)
+            if len(b) == 2 and x != LD06_VERLEN:
+                self._resync()
+            elif len(b) == LD06_PACKET:
+                if ld06_crc8(bytes(b[:-1])) != b[-1]:
+                    self.crc_errors += 1
+                elif (b[4] | b[5] << 8) >= LD06_MAX_CDEG or (b[42] | b[43] << 8) >= LD06_MAX_CDEG:
+                    self.bad_fields += 1
+                else:
+                    self.packets_ok += 1
+                    out.append(bytes(b))
+                    b.clear()
+                    continue
+                self._resync()
+        return out
+
+
+RP_DESCRIPTOR, RP_RESPONSE, RP_NODES, RP_CAPSULES = range(4)
+RP_NODE, RP_CAPSULE, RP_FULL_TURN_Q6 = 5, 84, 360 * 64
+#: answer type -> (length, send mode) of the answers the receiver knows
+RP_ANSWERS = {0x04: (20, 0), 0x06: (3, 0), 0x15: (4, 0), 0x81: (RP_NODE, 1),
+              0x82: (RP_CAPSULE, 1), 0x85: (RP_CAPSULE, 1)}
+_NEED, _DONE, _REJECT, _BAD_SUM, _BAD_FIELD = 0, 1, -1, -2, -3
+
+
+class RplidarReceiver:
+    """Streaming receiver of an RPLIDAR's answers (descriptor, responses,
+    standard-scan nodes, express/dense capsules); :meth:`feed` returns
+    ``(answer_type, frame)`` for every accepted descriptor (type 0),
+    response and node or capsule."""
+
+    def __init__(self) -> None:
+        self.buf = bytearray()
+        self.mode = RP_DESCRIPTOR
+        self.answer = 0
+        self.length = 0
+        self.bytes_fed = self.bytes_skipped = self.bytes_framed = 0
+        self.descriptors = self.bad_descriptors = self.responses = 0
+        self.nodes = self.bad_nodes = self.capsules = 0
+        self.checksum_errors = self.bad_capsules = 0
+
+    def expect(self) -> None:
+        """A request went out: drop a partial candidate, await a descriptor."""
+        self.bytes_skipped += len(self.buf)
+        self.buf.clear()
+        self.mode = RP_DESCRIPTOR
+
+    def _check(self) -> int:
+        b, n = self.buf, len(self.buf)
+        if self.mode == RP_DESCRIPTOR:
+            if b[0] != 0xA5 or (n >= 2 and b[1] != 0x5A):
+                return _REJECT
+            if n < 7:
+                return _NEED
+            w = int.from_bytes(b[2:6], "little")
+            return _DONE if RP_ANSWERS.get(b[6]) == (w & 0x3FFFFFFF, w >> 30) else _REJECT
+        if self.mode == RP_RESPONSE:
+            return _NEED if n < self.length else _DONE
+        if self.mode == RP_NODES:
+            if (not (b[0] ^ (b[0] >> 1)) & 1 or (n >= 2 and not b[1] & 1)
+                    or (n >= 3 and (b[1] | b[2] << 8) >> 1 >= RP_FULL_TURN_Q6)):
+                return _REJECT
+            return _NEED if n < RP_NODE else _DONE
+        if b[0] >> 4 != 0xA or (n >= 2 and b[1] >> 4 != 0x5):
+            return _REJECT
+        if n < RP_CAPSULE:
+            return _NEED
+        s = 0
+        for x in b[2:]:
+            s ^= x
+        if s != (b[0] & 0x0F) | ((b[1] << 4) & 0xF0):
+            return _BAD_SUM
+        return _DONE if (b[2] | b[3] << 8) & 0x7FFF < RP_FULL_TURN_Q6 else _BAD_FIELD
+
+    def _take(self) -> Tuple[int, bytes]:
+        frame = bytes(self.buf)
+        self.bytes_framed += len(frame)
+        self.buf.clear()
+        if self.mode == RP_DESCRIPTOR:
+            self.descriptors += 1
+            self.answer = frame[6]
+            self.length = int.from_bytes(frame[2:6], "little") & 0x3FFFFFFF
+            self.mode = (RP_RESPONSE if frame[5] >> 6 == 0 else
+                         RP_NODES if self.answer == 0x81 else RP_CAPSULES)
+            return 0, frame
+        if self.mode == RP_RESPONSE:
+            self.responses += 1
+            self.mode = RP_DESCRIPTOR
+        elif self.mode == RP_NODES:
+            self.nodes += 1
+        else:
+            self.capsules += 1
+        return self.answer, frame
+
+    def feed(self, data: bytes) -> List[Tuple[int, bytes]]:
+        out = []
+        for x in data:
+            self.buf.append(x)
+            self.bytes_fed += 1
+            verdict = self._check()
+            if verdict == _DONE:
+                out.append(self._take())
+            elif verdict < 0:
+                if verdict == _BAD_SUM:
+                    self.checksum_errors += 1
+                elif verdict == _BAD_FIELD:
+                    self.bad_capsules += 1
+                elif self.mode == RP_DESCRIPTOR and len(self.buf) == 7:
+                    self.bad_descriptors += 1
+                elif self.mode == RP_NODES:
+                    self.bad_nodes += 1
+                while True:  # drop the first byte, then whatever cannot start a candidate
+                    del self.buf[0]
+                    self.bytes_skipped += 1
+                    if not self.buf or self._check() >= 0:
+                        break
+        return out

@@ -18,6 +18,8 @@ import struct
 from dataclasses import dataclass, field
 from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
+from . import lidarstream
+
 # --------------------------------------------------------------------------
 # ARIA
 
@@ -454,10 +456,13 @@ def decode_b0(frame: bytes) -> B0Scan:
 class FrameCounter:
     """Counts valid frames in a byte stream of one protocol, fed in chunks.
 
-    ``protocol`` is ``"aria"`` or ``"lms2xx"``; other protocols count nothing.
-    ``types`` counts frames by packet type / reply code; ``bad`` counts
-    candidates whose checksum or CRC failed.  With ``keep`` set, the frames
-    found are also appended to ``frames_seen`` (see :meth:`take`).
+    ``protocol`` is ``"aria"``, ``"lms2xx"``, ``"ld06"`` or ``"rplidar"``
+    (the lidars through the receivers of :mod:`rsm_tools.lidarstream`);
+    other protocols count nothing.  ``types`` counts frames by packet type /
+    reply code (the LD06: 0x54; the RPLIDAR: the answer type, 0 for a
+    descriptor); ``bad`` counts candidates whose checksum or CRC failed.
+    With ``keep`` set, the frames found are also appended to
+    ``frames_seen`` (see :meth:`take`).
     """
 
     def __init__(self, protocol: str) -> None:
@@ -468,6 +473,8 @@ class FrameCounter:
         self.types: Dict[int, int] = {}
         self.frames_seen: List[bytes] = []
         self.keep = False
+        self.receiver = {"ld06": lidarstream.LD06Receiver,
+                         "rplidar": lidarstream.RplidarReceiver}.get(protocol, lambda: None)()
 
     def _ok(self, frame: bytes, t: int) -> None:
         self.frames += 1
@@ -485,6 +492,30 @@ class FrameCounter:
             self._feed_aria(data)
         elif self.protocol == "lms2xx":
             self._feed_lms(data)
+        elif self.protocol == "ld06":
+            for frame in self.receiver.feed(data):
+                self._ok(frame, frame[0])
+            self.bad = self.receiver.crc_errors
+        elif self.protocol == "rplidar":
+            for t, frame in self.receiver.feed(data):
+                self._ok(frame, t)
+            self.bad = self.receiver.checksum_errors
+
+    def describe(self) -> str:
+        """The live counter's words: what was decoded and what failed its check."""
+        r = self.receiver
+        if self.protocol == "ld06":
+            return (f"{self.frames} packets ({lidarstream.LD06_POINTS * self.frames} points), "
+                    f"{r.crc_errors} CRC errors, {r.bad_fields} bad angles, {r.bytes_skipped} B skipped")
+        if self.protocol == "rplidar":
+            bad = r.bad_descriptors + r.bad_nodes + r.bad_capsules
+            return (f"{r.descriptors} descriptors, {r.responses} responses, {r.nodes} nodes, "
+                    f"{r.capsules} capsules, {r.checksum_errors} checksum errors, {bad} bad, "
+                    f"{r.bytes_skipped} B skipped")
+        if self.protocol in ("aria", "lms2xx"):
+            what = "checksum" if self.protocol == "aria" else "CRC"
+            return f"{self.frames} frames, {self.bad} {what} errors"
+        return "not decoded (raw)"
 
     def _feed_aria(self, data: bytes) -> None:
         b = self.buf

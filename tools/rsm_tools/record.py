@@ -5,8 +5,11 @@
 
 Every chunk of bytes read from a port becomes one rx record stamped with the
 time it was read (microseconds since the Unix epoch, kept monotonic).  The
-protocol (``aria``, ``lms2xx`` or ``raw``; default ``raw``) names the
-channel's decoder and drives the live byte/frame counter on stderr.
+protocol (``aria``, ``lms2xx``, ``ld06``, ``rplidar`` or ``raw``; default
+``raw``) is written into the capture's header and names the channel's
+decoder, which drives the live counter on stderr: bytes, decoded frames
+(ARIA packets, LMS telegrams, LD06 packets, RPLIDAR answers and nodes or
+capsules) and the candidates that failed their checksum or CRC.
 
 Stop with Ctrl-C or SIGTERM (exit status 0): every record read so far is in
 the file (each is flushed as it is written).  A port that cannot be opened:
@@ -47,7 +50,7 @@ def parse_port(spec: str) -> Tuple[str, str, int, str]:
     if ":" in rest:
         rest, proto = rest.split(":", 1)
     if proto not in cap.PROTOCOLS:
-        raise ValueError(f"unknown protocol {proto!r} in {spec!r} (aria, lms2xx or raw)")
+        raise ValueError(f"unknown protocol {proto!r} in {spec!r} ({', '.join(cap.PROTOCOLS)})")
     try:
         baud = int(rest)
     except ValueError:
@@ -63,7 +66,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--port", action="append", required=True,
                     metavar="CHANNEL=DEVICE@BAUD[:protocol]",
                     help="a port to record as channel CHANNEL (robot, laser, ...) at BAUD; protocol aria, "
-                         "lms2xx or raw (default) names its decoder for the live counter; once per port")
+                         "lms2xx, ld06, rplidar or raw (default) names its decoder for the live counter "
+                         "and goes into the capture's header; once per port")
     ap.add_argument("--seconds", type=float, help="stop after this many seconds")
     ap.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
                     help="a metadata line for the capture's header (repeatable)")
@@ -89,6 +93,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ports: List = []
     writer = None
     status = 0
+    counters = [FrameCounter(p) for _, _, _, p in specs]
+    nbytes = [0] * len(specs)
+
+    def show(final: bool = False) -> None:
+        parts = [f"{specs[i][0]} {nbytes[i]} B {counters[i].describe()}" for i in range(len(specs))]
+        print("\rrsm-record: " + " | ".join(parts), end="\n" if final else "",
+              file=sys.stderr, flush=True)
+
     try:
         for name, device, baud, _ in specs:
             try:
@@ -102,8 +114,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         meta.setdefault("created_by", "rsm-record")
         meta.setdefault("time.start_unix_us", str(t0_wall))
         writer = cap.CaptureWriter(a.out, channels, meta)
-        counters = [FrameCounter(p) for _, _, _, p in specs]
-        nbytes = [0] * len(specs)
         if not a.quiet:
             for (name, device, baud, proto) in specs:
                 print(f"rsm-record: recording {name} from {device} at {baud} Bd ({proto})",
@@ -111,12 +121,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         fds = {p.fileno(): i for i, p in enumerate(ports)}
         last_show = 0.0
         end = time.monotonic() + a.seconds if a.seconds else None
-
-        def show(final: bool = False) -> None:
-            parts = [f"{specs[i][0]} {nbytes[i]} B {counters[i].frames} frames"
-                     for i in range(len(specs))]
-            print("\rrsm-record: " + " | ".join(parts), end="\n" if final else "",
-                  file=sys.stderr, flush=True)
 
         while end is None or time.monotonic() < end:
             ready, _, _ = select.select(list(fds), [], [], 0.1)
@@ -132,9 +136,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                     return EXIT_VANISHED
                 if data:
                     ts = t0_wall + (time.monotonic_ns() // 1000 - t0_mono)
-                    writer.write(ts, i, data)
+                    # counted first: once a chunk is in the file, the counters have it
                     nbytes[i] += len(data)
                     counters[i].feed(data)
+                    writer.write(ts, i, data)
             now = time.monotonic()
             if not a.quiet and now - last_show >= 0.5:
                 last_show = now
@@ -144,6 +149,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except Stop as exc:
         if not a.quiet:
             print(f"\nrsm-record: stopped by {exc.args[0]}", file=sys.stderr)
+            show(True)  # the final counts, whatever the live line last showed
     finally:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         if writer is not None:

@@ -17,11 +17,13 @@ while the pty buffer is full).  A recorded pause longer than ``--max-gap``
 seconds (default 5, after scaling) is shortened to it and counted: a capture
 paused for an hour, or a corrupt stamp, does not stall the replay.
 ``--wait-open`` waits for a reader to open every pty first.  Progress goes to
-stderr.  Ctrl-C (SIGINT) or SIGTERM stops the replay cleanly (exit status 0
-after a "stopped" message).  Exit status 1: an unreadable capture, a port
-that cannot be opened, a problem in the capture, or a reader that went away
-(closed its pty, or read nothing for ``--stall`` seconds, default 10, while
-bytes waited).  Exit status 2: bad arguments (the C tools' convention).
+stderr; the summary has a line per channel with what the decoder its
+protocol tag names (aria, lms2xx, ld06, rplidar) found in the bytes played:
+frames, packets or nodes, and checksum/CRC failures.  Ctrl-C (SIGINT) or
+SIGTERM stops the replay cleanly (exit status 0 after a "stopped" message).
+Exit status 1: an unreadable capture, a port that cannot be opened, a
+problem in the capture, or a reader that went away (closed its pty, or read
+nothing for ``--stall`` seconds, default 10, while bytes waited).  Exit status 2: bad arguments (the C tools' convention).
 
 ``--run PROGRAM ARGS...`` starts the reader itself (``{CHANNEL}`` in its
 arguments becomes that channel's pty path) and ends with it: the exit status
@@ -50,6 +52,7 @@ from typing import Dict, List, Optional, Sequence
 
 from . import capture as cap
 from . import lockstep as ls
+from .protocols import FrameCounter
 
 
 class Stop(Exception):
@@ -132,6 +135,25 @@ class SerialOut:
             self.port.flush()
         finally:
             self.port.close()
+
+
+class Tally:
+    """What was played, per channel, through the decoder its protocol tag
+    names in the capture's header (the summary's per-channel lines)."""
+
+    def __init__(self, header: cap.Header, outs) -> None:
+        self.channels = [c for c in header.channels if c.id in outs]
+        self.counters = {c.id: FrameCounter(c.protocol) for c in self.channels}
+        self.bytes = {c.id: 0 for c in self.channels}
+
+    def feed(self, rec: cap.Record) -> None:
+        self.counters[rec.channel].feed(rec.data)
+        self.bytes[rec.channel] += len(rec.data)
+
+    def report(self) -> None:
+        for c in self.channels:
+            print(f"rsm-replay:   {c.name} ({c.protocol}): {self.bytes[c.id]} B, "
+                  f"{self.counters[c.id].describe()}", file=sys.stderr, flush=True)
 
 
 def played(reader, outs, limit: Optional[int]):
@@ -227,8 +249,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         for o in outs.values():
             print(f"{o.name} {o.path}", flush=True)
         ptys = [o for o in outs.values() if isinstance(o, PtyOut)]
+        tally = Tally(hdr, outs)
         if a.run:
-            return run_with(a, reader, outs, ptys)
+            return run_with(a, reader, outs, ptys, tally)
         if a.wait_open and ptys:
             for o in ptys:
                 o.release_slave()
@@ -254,6 +277,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 if delay > 0:
                     time.sleep(delay)
             outs[rec.channel].write(rec.data)  # type: ignore[attr-defined]
+            tally.feed(rec)
             records += 1
             nbytes += len(rec.data)
             t_last = rec.timestamp
@@ -267,6 +291,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                   + (f", {(t_last - t_first) / 1e6:.1f} s of capture" if t_first is not None else "")
                   + (f"; {shortened} pauses over {a.max_gap:g} s shortened" if shortened else ""),
                   file=sys.stderr, flush=True)
+            tally.report()
         if ptys and a.linger > 0:
             time.sleep(a.linger)
         return 0
@@ -314,7 +339,7 @@ class LockstepClock:
         self.dir.cleanup()
 
 
-def run_with(a, reader, outs, ptys) -> int:
+def run_with(a, reader, outs, ptys, tally: Tally) -> int:
     """Starts the --run program on the ptys and plays into them, in lockstep
     with it when asked; returns the program's failure status, else 0."""
     import subprocess
@@ -375,6 +400,7 @@ def run_with(a, reader, outs, ptys) -> int:
             for rec in group:
                 out = outs[rec.channel]
                 write_to(out, rec.data)
+                tally.feed(rec)
                 written[out.name] += len(rec.data)  # type: ignore[attr-defined]
                 records += 1
                 nbytes += len(rec.data)
@@ -395,6 +421,7 @@ def run_with(a, reader, outs, ptys) -> int:
             print(f"rsm-replay: done: {records} records, {nbytes} bytes in {groups} groups"
                   + (f", lockstep with {step.retries} retries" if step is not None else ""),
                   file=sys.stderr, flush=True)
+            tally.report()
         if a.linger > 0:
             time.sleep(a.linger)
     except ls.ReaderGone as exc:
