@@ -3,6 +3,7 @@
     python3 tools/rsm_tools/m4.py example ELF WORKDIR
     python3 tools/rsm_tools/m4.py example-ld06 ELF WORKDIR
     python3 tools/rsm_tools/m4.py example-rplidar ELF WORKDIR
+    python3 tools/rsm_tools/m4.py example-rplidar-answered ELF WORKDIR
     python3 tools/rsm_tools/m4.py replay ELF HOST_EXE WORKDIR
 
 ``example`` boots the example firmware with its two device ports on files and
@@ -20,7 +21,16 @@ one scan" is asserted, with a wide margin (about 9 of the 20 turns sent).
 answering on the laser port: the driver's start-up goes out there and, the
 unit silent, repeats on its own timers (STOP, GET_HEALTH sent three times,
 then after the back-off STOP and GET_HEALTH again), timers that run on
-SysTick.  ``replay`` boots the
+SysTick.  ``example-rplidar-answered`` boots the same image with its laser
+UART on the pseudo-terminal of ``rsm-fakedev --rplidar``, which answers
+each request as the sensor does and streams the nodes of a head turning at
+5 Hz in its ray-cast room: the fake must hear the driver's start-up in
+order (STOP, GET_HEALTH, GET_INFO, GET_SAMPLERATE, SCAN; a request repeated
+after a late answer counts once), and the firmware must lose no byte and
+assemble at least one scan.  The fake answers and streams in the host's
+time, so this run lets the board's clock follow the host's while it idles
+(``-icount sleep=on``); how many scans it gets then depends on the machine,
+and only "at least one" is asserted.  ``replay`` boots the
 replay firmware, checks its start-up, the instruction-count calibration (the
 known loop) and that its trajectory equals the host's (``HOST_EXE``, the same
 source built for the host) bit for bit.  Both fail on a fault report, a
@@ -29,11 +39,13 @@ non-zero exit status or a time-out: a locked-up image never hangs the test.
 QEMU runs with ``-icount shift=ICOUNT_SHIFT,sleep=off``: the virtual clock
 advances exactly 2^shift ns per executed instruction, so the board's 25 MHz
 timer counts one tick per 40 / 2^shift instructions, the same on every
-machine, and idle time (WFI) is skipped.  Python standard library only, so
-that ctest can run it with any python3; ``rsm_tools.bench`` imports it.
+machine, and idle time (WFI) is skipped (but for ``example-rplidar-answered``,
+see above).  Python standard library only, so that ctest can run it with any
+python3 (``rsm-fakedev`` too); ``rsm_tools.bench`` imports it.
 """
 
 import argparse
+import json
 import math
 import os
 import re
@@ -58,9 +70,14 @@ class M4Error(RuntimeError):
     """A run or a check failed."""
 
 
-def qemu_command(elf: Path, serial_files: Sequence[Path] = (), pipe: Optional[Path] = None) -> List[str]:
+def qemu_command(elf: Path, serial_files: Sequence[Path] = (), pipe: Optional[Path] = None,
+                 tty: Optional[str] = None) -> List[str]:
     """Console on stdio, then one UART per serial file (output only), then,
-    with ``pipe``, one on the named pipes PIPE.in (input) and PIPE.out."""
+    with ``pipe``, one on the named pipes PIPE.in (input) and PIPE.out, or,
+    with ``tty``, one on that terminal (a pseudo-terminal a device answers
+    on; QEMU sets its rate as the firmware sets the UART's).  With a tty the
+    virtual clock follows the host's while the board idles (``sleep=on``):
+    the device on the other end answers and streams in the host's time."""
     qemu = shutil.which("qemu-system-arm")
     if qemu is None:
         raise M4Error("qemu-system-arm not found (Debian: qemu-system-arm; ./tools/test installs it)")
@@ -70,15 +87,17 @@ def qemu_command(elf: Path, serial_files: Sequence[Path] = (), pipe: Optional[Pa
         cmd += ["-serial", f"file:{f}"]
     if pipe is not None:
         cmd += ["-chardev", f"pipe,id=fed,path={pipe}", "-serial", "chardev:fed"]
+    if tty is not None:
+        cmd += ["-chardev", f"serial,id=dev,path={tty}", "-serial", "chardev:dev"]
     cmd += ["-semihosting-config", "enable=on,target=native",
-            "-icount", f"shift={ICOUNT_SHIFT},sleep=off", "-no-reboot"]
+            "-icount", f"shift={ICOUNT_SHIFT},sleep={'on' if tty else 'off'}", "-no-reboot"]
     return cmd
 
 
 def run(elf: Path, serial_files: Sequence[Path] = (), timeout: float = TIMEOUT_S,
-        pipe: Optional[Path] = None) -> str:
+        pipe: Optional[Path] = None, tty: Optional[str] = None) -> str:
     """Console output of one run; M4Error unless it ended by itself with status 0."""
-    cmd = qemu_command(elf, serial_files, pipe)
+    cmd = qemu_command(elf, serial_files, pipe, tty)
     try:
         res = subprocess.run(cmd, stdin=subprocess.DEVNULL, capture_output=True, timeout=timeout)
     except subprocess.TimeoutExpired as e:
@@ -175,20 +194,79 @@ def check_example_ld06(elf: Path, work: Path, turns: int = 20) -> str:
     for t in threads:
         t.join(timeout=10)
     check_console(out, "LD06")
-    m = re.search(r"ran (\d+) ms: encoder events \d+, scans (\d+), receive overflows (\d+)", out)
-    if m is None:
-        raise M4Error(f"no end-of-run summary in:\n{out}")
-    scans, overflows = int(m.group(2)), int(m.group(3))
+    ms, scans, overflows = summary_counts(out)
     if not robot.read_bytes().startswith(SYNC0):
         raise M4Error(f"robot port: expected the P3-DX handshake, got {robot.read_bytes()[:16].hex()}")
     if heard:
         raise M4Error(f"laser port: the LD06 takes no commands, but the firmware sent {bytes(heard[:16]).hex()}")
     if overflows != 0 or scans < 1:
         raise M4Error(f"LD06 packets of {turns} turns gave {scans} scans, {overflows} receive overflows:\n{out}")
-    return f"example-ld06: booted, {scans} scans from the LD06 port in {m.group(1)} ms, nothing sent to it"
+    return f"example-ld06: booted, {scans} scans from the LD06 port in {ms} ms, nothing sent to it"
 
 
 RP_STOP, RP_HEALTH = bytes([0xA5, 0x25]), bytes([0xA5, 0x52])  # RPLIDAR requests (docs lidars.md 2)
+# STOP, GET_HEALTH, GET_INFO, GET_SAMPLERATE, SCAN: the driver's start-up (src/slamtec.c)
+RP_STARTUP = (0x25, 0x52, 0x50, 0x59, 0x20)
+
+
+def summary_counts(out: str) -> Tuple[int, int, int]:
+    """(ms run, scans, receive overflows) from the example's end-of-run line."""
+    m = re.search(r"ran (\d+) ms: encoder events \d+, scans (\d+), receive overflows (\d+)", out)
+    if m is None:
+        raise M4Error(f"no end-of-run summary in:\n{out}")
+    return int(m.group(1)), int(m.group(2)), int(m.group(3))
+
+
+def fake_rplidar(log: Path) -> Tuple[subprocess.Popen, str]:
+    """rsm-fakedev --rplidar (tools/rsm_tools/fakedev.py, its answers and its
+    ray-cast room) on a pseudo-terminal: the process and the terminal's path."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(Path(__file__).resolve().parent.parent)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
+    proc = subprocess.Popen([sys.executable, "-m", "rsm_tools.fakedev", "--rplidar", "--quiet",
+                             "--log", str(log), "--seconds", str(TIMEOUT_S)],
+                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, text=True, env=env)
+    line = proc.stdout.readline().split() if proc.stdout is not None else []
+    if len(line) != 2 or line[0] != "rplidar":
+        proc.kill()
+        proc.wait()
+        raise M4Error(f"rsm-fakedev --rplidar did not name its terminal (got {line})")
+    return proc, line[1]
+
+
+def check_example_rplidar_answered(elf: Path, work: Path) -> str:
+    """The RPLIDAR image against rsm-fakedev's RPLIDAR: the start-up requests
+    in order (a request the firmware repeated, had an answer come late, is one
+    step), the scan started, and turns of its nodes assembled into scans."""
+    work.mkdir(parents=True, exist_ok=True)
+    robot, log = work / "robot.bin", work / "fakedev.log"
+    for f in (robot, log):
+        f.unlink(missing_ok=True)
+    fake, tty = fake_rplidar(log)
+    try:
+        out = run(elf, [robot], tty=tty)
+    finally:
+        fake.terminate()   # our own child, by its handle
+        fake.wait(timeout=30)
+    check_console(out, "RPLIDAR")
+    ms, scans, overflows = summary_counts(out)
+    events = [json.loads(l) for l in log.read_text().splitlines() if l.strip()]
+    cmds = [e["cmd"] for e in events if e.get("ev") == "request"]
+    steps = [c for i, c in enumerate(cmds) if i == 0 or c != cmds[i - 1]]
+    summary = [e for e in events if e.get("ev") == "summary" and e.get("dev") == "rplidar"]
+    if tuple(steps[:len(RP_STARTUP)]) != RP_STARTUP:
+        raise M4Error("the fake RPLIDAR heard " + " ".join(f"{c:02X}" for c in cmds) +
+                      ", not STOP, GET_HEALTH, GET_INFO, GET_SAMPLERATE, SCAN")
+    if not summary or summary[0].get("bad_requests") != 0 or summary[0].get("garbled_frames") != 0 \
+            or summary[0].get("scans_started", 0) < 1:
+        raise M4Error(f"the fake RPLIDAR's summary: {summary}")
+    if not robot.read_bytes().startswith(SYNC0):
+        raise M4Error(f"robot port: expected the P3-DX handshake, got {robot.read_bytes()[:16].hex()}")
+    if overflows != 0 or scans < 1:
+        raise M4Error(f"the RPLIDAR's nodes ({summary[0].get('node_chunks')} chunks of 12) gave {scans} scans, "
+                      f"{overflows} receive overflows:\n{out}")
+    return (f"example-rplidar: booted against rsm-fakedev --rplidar, start-up "
+            f"{' '.join(f'{c:02X}' for c in steps[:len(RP_STARTUP)])} answered, {scans} scans from "
+            f"{summary[0].get('node_chunks')} chunks of nodes in {ms} ms")
 
 
 def check_example_rplidar(elf: Path, work: Path) -> str:
@@ -276,6 +354,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     e7 = sub.add_parser("example-rplidar", help="boot the example firmware built for an RPLIDAR")
     e7.add_argument("elf", type=Path, help="the example firmware image built for an RPLIDAR")
     e7.add_argument("work", type=Path, help="folder for the devices' files and the console output")
+    e8 = sub.add_parser("example-rplidar-answered",
+                        help="boot the example firmware built for an RPLIDAR against rsm-fakedev --rplidar")
+    e8.add_argument("elf", type=Path, help="the example firmware image built for an RPLIDAR")
+    e8.add_argument("work", type=Path, help="folder for the devices' files, the fake's log and the console output")
     r = sub.add_parser("replay", help="run the replay firmware and compare with the host")
     r.add_argument("elf", type=Path, help="the replay firmware image (rsm_replay_m4.elf)")
     r.add_argument("host_exe", type=Path, help="rsm-replay-host, whose trajectory the target's must equal")
@@ -288,6 +370,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(check_example_ld06(a.elf, a.work))
         elif a.cmd == "example-rplidar":
             print(check_example_rplidar(a.elf, a.work))
+        elif a.cmd == "example-rplidar-answered":
+            print(check_example_rplidar_answered(a.elf, a.work))
         else:
             print(check_replay(a.elf, a.host_exe, a.work))
     except M4Error as err:
