@@ -1,4 +1,5 @@
-"""The byte streams of the spinning lidars, rendered from logged scans.
+"""The byte streams of the spinning lidars: rendered from logged scans, and
+received (framed and counted) by the host tools.
 
 Encoders for the LDRobot LD06/LD19 packet and the Slamtec RPLIDAR standard
 scan (descriptor and 5-byte nodes), written from the layouts in
@@ -10,6 +11,8 @@ counter-clockwise; the sensor angle is its negative), so the geometry stays
 as logged; sensor angles no beam points at (the back half, and the odd
 angles of a finer scan) carry "no return" (0).  The C decoders
 (src/ld06.c, src/rplidar.c) read these streams back: tests/py/test_lidarstream.py.
+:class:`LD06Receiver` and :class:`RplidarReceiver` are those C receivers'
+Python twins, for rsm-record's and rsm-replay's counters.
 """
 
 import math
