@@ -248,23 +248,32 @@ static void keep_candidate(rsm_pose_t *best, float *cost, int32_t *ij, size_t k,
 int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
                         const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k)
 {
-    const uint32_t level = (uint32_t)map->cfg.levels - 1u;
-    const float step = rsm_tmap_cell(map, level);
-    const int32_t half = (int32_t)(radius_m / step);
-    const int32_t fan = cfg->search_step_rad > 0.0f ? (int32_t)(radius_rad / cfg->search_step_rad) : 0;
     /* Every stride-th point: the score only ranks candidates. */
     const size_t stride = n > 64u ? (n + 63u) / 64u : 1u;
     float cost_of[RSM_MAPMATCH_MAX_CANDIDATES];
     int32_t ij[2 * RSM_MAPMATCH_MAX_CANDIDATES];
     size_t found = 0;
+    uint32_t level;
+    float step;
+    int32_t half;
+    int32_t fan;
     int32_t a;
     int32_t i;
     int32_t j;
-    if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || best == NULL || !(radius_m >= 0.0f) ||
-        radius_m > 100.0f * step || !(radius_rad >= 0.0f) || radius_rad > 1.0f ||
-        (radius_rad > 0.0f && !(radius_rad <= 64.0f * cfg->search_step_rad)) || k < 1u || k > RSM_MAPMATCH_MAX_CANDIDATES) {
+    /* Everything is checked before map or cfg is read, and the radii before
+     * they are converted to counts. */
+    if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || best == NULL || k < 1u ||
+        k > RSM_MAPMATCH_MAX_CANDIDATES) {
         return RSM_ERR_INVAL;
     }
+    level = (uint32_t)map->cfg.levels - 1u;
+    step = rsm_tmap_cell(map, level);
+    if (!(radius_m >= 0.0f) || radius_m > 100.0f * step || !(radius_rad >= 0.0f) || radius_rad > 1.0f ||
+        (radius_rad > 0.0f && !(radius_rad <= 64.0f * cfg->search_step_rad))) {
+        return RSM_ERR_INVAL;
+    }
+    half = (int32_t)(radius_m / step);
+    fan = cfg->search_step_rad > 0.0f ? (int32_t)(radius_rad / cfg->search_step_rad) : 0;
     for (a = -fan; a <= fan; ++a) {
         rsm_pose_t x;
         x.theta = rsm_wrap_angle(x0->theta + (float)a * cfg->search_step_rad);

@@ -271,6 +271,12 @@ void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 0.1f, &best, 0u));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 0.1f, &best,
                                                              RSM_MAPMATCH_MAX_CANDIDATES + 1u));
+    /* NULL map or config, and NaN radii, are refused before anything is
+     * read or converted (the sanitizer build would flag either). */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(NULL, &cfg, pts, n, &pred, 1.0f, 0.1f, &best, 1u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, NULL, pts, n, &pred, 1.0f, 0.1f, &best, 1u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, NAN, 0.1f, &best, 1u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, NAN, &best, 1u));
     /* The candidates a recovery descends from: the same best first, then
      * others no closer than two grid steps to any kept one, so that a wrong
      * basin ranked first along a corridor does not hide the right one
