@@ -39,11 +39,15 @@ static uint32_t tile_level(const rsm_tile_t *t)
     return t->stamp >> 30;
 }
 
+/* Multiplicative mixing of a packed key; the top bits are the result. */
+static uint32_t mix_bits(uint32_t k, unsigned bits)
+{
+    return (k * 2654435761u) >> (32u - bits);
+}
+
 static uint32_t hash_key(uint32_t level, int32_t tx, int32_t ty)
 {
-    /* Multiplicative mixing of the packed key; the top bits index the table. */
-    const uint32_t k = ((uint32_t)(uint16_t)tx | ((uint32_t)(uint16_t)ty << 16)) ^ (level * 0x9E3779B9u);
-    return (k * 2654435761u) >> (32 - RSM_TMAP_HASH_LOG2);
+    return mix_bits(rsm_tmap_pack(tx, ty) ^ (level * 0x9E3779B9u), RSM_TMAP_HASH_LOG2);
 }
 
 int rsm_tmap_config_check(const rsm_tmap_config_t *cfg, const char **field)
@@ -378,8 +382,7 @@ static void add_hit(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t level, int32
  * cell; a collision only lets a phantom through now and then). */
 static uint32_t echo_bit(int32_t gx, int32_t gy)
 {
-    const uint32_t k = (uint32_t)(uint16_t)gx | ((uint32_t)(uint16_t)gy << 16);
-    return (k * 2654435761u) >> (32 - RSM_TMAP_ECHO_LOG2);
+    return mix_bits(rsm_tmap_pack(gx, gy), RSM_TMAP_ECHO_LOG2);
 }
 
 /* rsm_tmap_config_t.wall_echo: marks in lone the returns that land neither
@@ -441,7 +444,7 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
     map->stamp = (map->stamp + 1u) & STAMP_MASK;
     map->counters.updates++;
     judge = map->cfg.wall_level < map->cfg.levels ? map->cfg.wall_level : 0u;
-    if (map->cfg.wall_echo != 0u) {
+    if (map->cfg.wall_echo != 0u && map->cfg.wall_value > 0u) {
         mark_lone(map, judge, points, n, lone);
     }
     for (idx = 0; idx < map->cfg.levels; ++idx) {

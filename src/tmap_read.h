@@ -14,6 +14,13 @@
  * coordinates fit int16 and cell arithmetic never overflows. */
 #define RSM_TMAP_CELL_LIMIT (32000 * RSM_TMAP_TILE_SIDE)
 
+/* A pair of tile (or cell) coordinates as one word: the cursor's key, and
+ * what the index and the echo set hash. */
+static inline uint32_t rsm_tmap_pack(int32_t x, int32_t y)
+{
+    return (uint32_t)(uint16_t)x | ((uint32_t)(uint16_t)y << 16);
+}
+
 /* Slot of a tile, or RSM_TMAP_NONE (the index lookup, in tilemap.c). */
 uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty);
 
@@ -31,7 +38,7 @@ static inline uint32_t rsm_tmap_cursor_slot(const rsm_tmap_t *map, rsm_tmap_curs
 {
     const int32_t tx = gx >> RSM_TMAP_TILE_LOG2;
     const int32_t ty = gy >> RSM_TMAP_TILE_LOG2;
-    const uint32_t key = (uint32_t)(uint16_t)tx | ((uint32_t)(uint16_t)ty << 16);
+    const uint32_t key = rsm_tmap_pack(tx, ty);
     rsm_tmap_way_t *w = &c->way[(uint32_t)(tx & 1) | ((uint32_t)(ty & 1) << 1)];
     if (w->key != key) {
         w->key = key;
