@@ -678,17 +678,22 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     return RSM_SCAN_ACCEPTED;
 }
 
-/* Writes the scan into the persistent map at est once the robot has moved
- * far enough since the last write (or for the first scan). */
+/* Starts writing the scan into the persistent map at est once the robot has
+ * moved far enough since the last write (or for the first scan); the write
+ * then runs over this and the next scans (tmap.write_cells), from loc->world,
+ * which nothing else writes meanwhile. A write still running when the next
+ * one is due is finished first. */
 static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, int first)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
+    rsm_tmap_t *map = &loc->state.persistent.map;
     const rsm_pose_t d = rsm_pose_between(&loc->state.persistent.written, est);
     uint8_t isolated[(RSM_MAX_BEAMS + 7) / 8];
     rsm_point_t origin;
     if (!first && sqrtf(d.x * d.x + d.y * d.y) < cfg->map_update_m && fabsf(d.theta) < cfg->map_update_rad) {
         return;
     }
+    (void)rsm_tmap_write_run(map, loc->world, 0u);
     to_world(loc, est, npts);
     origin.x = cfg->laser_mount.x;
     origin.y = cfg->laser_mount.y;
@@ -709,7 +714,7 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
         }
         npts = kept;
     }
-    if (rsm_tmap_update(&loc->state.persistent.map, &origin, loc->world, npts) == RSM_OK) {
+    if (rsm_tmap_write_begin(map, &origin, loc->world, npts) == RSM_OK) {
         loc->state.persistent.written = *est;
     }
 }
@@ -814,6 +819,9 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
             break;
         }
         loc->have_scan = 1u;
+    }
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->world, loc->cfg->tmap.write_cells);
     }
     loc->last_stamp_us = scan->stamp_us;
     loc->counters.outcome[outcome]++;

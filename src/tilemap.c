@@ -31,6 +31,7 @@ rsm_tmap_config_t rsm_tmap_config_default(void)
     c.wall_level = 1u;
     c.wall_value = 0u;
     c.wall_echo = 0u;
+    c.write_cells = 4096u;
     return c;
 }
 
@@ -424,98 +425,169 @@ static void mark_lone(rsm_tmap_t *map, uint32_t judge, const rsm_point_t *points
     }
 }
 
-int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n)
+/* Level of pass index idx: with the wall rule on, wall_level is written
+ * first, so that every level knows which returns lie behind a wall; else
+ * finest first, the level a write delayed over scans would cost most. */
+static uint32_t pass_level(const rsm_tmap_t *map, uint32_t idx)
 {
-    /* Returns whose beam crossed a wall (a cell at wall_value or above on
-     * wall_level) without landing on one: behind a wall the laser cannot
-     * see, so the return is a phantom (noise, a reflection) or the wall has
-     * gone; either way it is not written until the beams have worn the wall
-     * down (or, with wall_echo, the last write saw it too). wall_level is
-     * written first, so that every level knows. */
-    uint8_t behind[(RSM_MAX_BEAMS + 7) / 8];
-    uint8_t lone[(RSM_MAX_BEAMS + 7) / 8];
-    uint32_t judge;
-    uint32_t idx;
-    memset(behind, 0, sizeof behind);
-    memset(lone, 0, sizeof lone);
-    if (map == NULL || origin == NULL || (n > 0u && points == NULL) || !isfinite(origin->x) || !isfinite(origin->y)) {
+    const uint32_t judge =
+        map->cfg.wall_value > 0u && map->cfg.wall_level < map->cfg.levels ? map->cfg.wall_level : 0u;
+    return idx == 0u ? judge : (idx <= judge ? idx - 1u : idx);
+}
+
+int rsm_tmap_write_begin(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n)
+{
+    rsm_tmap_job_t *job;
+    uint32_t level;
+    if (map == NULL || origin == NULL || (n > 0u && points == NULL) || !isfinite(origin->x) ||
+        !isfinite(origin->y) || n > 0xFFFFFFFFu || map->job.n != 0u) {
         return RSM_ERR_INVAL;
     }
-    map->stamp = (map->stamp + 1u) & STAMP_MASK;
-    map->counters.updates++;
-    judge = map->cfg.wall_level < map->cfg.levels ? map->cfg.wall_level : 0u;
-    if (map->cfg.wall_echo != 0u && map->cfg.wall_value > 0u) {
-        mark_lone(map, judge, points, n, lone);
-    }
-    for (idx = 0; idx < map->cfg.levels; ++idx) {
-        const uint32_t level = idx == 0u ? judge : (idx <= judge ? idx - 1u : idx);
-        const float inv_a = map->inv_cell[level];
-        const int32_t ox = cell_of(origin->x, inv_a);
-        const int32_t oy = cell_of(origin->y, inv_a);
-        rsm_tmap_cursor_t c;
-        size_t k;
-        if (!in_range(ox, oy)) {
+    for (level = 0; level < map->cfg.levels; ++level) {
+        if (!in_range(cell_of(origin->x, map->inv_cell[level]), cell_of(origin->y, map->inv_cell[level]))) {
             return RSM_ERR_INVAL;
         }
+    }
+    job = &map->job;
+    memset(job, 0, sizeof *job);
+    map->stamp = (map->stamp + 1u) & STAMP_MASK;
+    map->counters.updates++;
+    if (map->cfg.wall_echo != 0u && map->cfg.wall_value > 0u) {
+        mark_lone(map, pass_level(map, 0u), points, n, job->lone);
+    }
+    job->origin = *origin;
+    job->n = (uint32_t)n;
+    return RSM_OK;
+}
+
+/* The beam pass of one return: clears its beam and, on wall_level, marks
+ * the return behind a wall. Returns the cells it visited. */
+static uint32_t clear_one(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t idx, int32_t ox, int32_t oy,
+                          const rsm_point_t *p, size_t k)
+{
+    rsm_tmap_job_t *job = &map->job;
+    const float inv_a = map->inv_cell[c->level];
+    int32_t gx;
+    int32_t gy;
+    uint32_t top;
+    if (!(fabsf(p->x) < 1.0e6f && fabsf(p->y) < 1.0e6f)) {
+        return 1u;
+    }
+    gx = cell_of(p->x, inv_a);
+    gy = cell_of(p->y, inv_a);
+    if (!in_range(gx, gy)) {
+        return 1u;
+    }
+    top = clear_beam(map, c, ox, oy, gx, gy, map->cfg.miss_dec, map->cfg.clear_margin);
+    if (map->cfg.wall_value > 0u && idx == 0u && top >= map->cfg.wall_value && k < (size_t)RSM_MAX_BEAMS &&
+        (map->cfg.wall_echo == 0u || rsm_bit_get(job->lone, k)) &&
+        rsm_tmap_cell_value(map, c, gx, gy) < map->cfg.wall_value) {
+        rsm_bit_set(job->behind, k);
+        map->counters.behind++;
+    }
+    gx = gx > ox ? gx - ox : ox - gx;
+    gy = gy > oy ? gy - oy : oy - gy;
+    return 1u + (uint32_t)(gx > gy ? gx : gy);
+}
+
+/* The return pass of one return: adds its hit. */
+static void hit_one(rsm_tmap_t *map, rsm_tmap_cursor_t *c, const rsm_point_t *p, size_t k)
+{
+    const uint32_t level = c->level;
+    const float inv_a = map->inv_cell[level];
+    if (!(fabsf(p->x) < 1.0e6f && fabsf(p->y) < 1.0e6f)) {
+        return;
+    }
+    if (k < (size_t)RSM_MAX_BEAMS && rsm_bit_get(map->job.behind, k)) {
+        return;
+    }
+    if (level >= map->cfg.splat_from) {
+        /* Share the increment among the four cells around the point by
+         * bilinear weights, so that the interpolated occupancy peaks where
+         * the returns are, not at cell centres. */
+        const rsm_bilinear_t b = rsm_bilinear_at(p->x, p->y, inv_a);
+        const int32_t gx = b.i;
+        const int32_t gy = b.j;
+        const float du = b.du;
+        const float dv = b.dv;
+        const float f = (float)map->cfg.hit_inc;
+        if (!in_range(gx, gy) || !in_range(gx + 1, gy + 1)) {
+            map->counters.outside++;
+            return;
+        }
+        add_hit(map, c, level, gx, gy, (uint32_t)(f * (1.0f - du) * (1.0f - dv) + 0.5f));
+        add_hit(map, c, level, gx + 1, gy, (uint32_t)(f * du * (1.0f - dv) + 0.5f));
+        add_hit(map, c, level, gx, gy + 1, (uint32_t)(f * (1.0f - du) * dv + 0.5f));
+        add_hit(map, c, level, gx + 1, gy + 1, (uint32_t)(f * du * dv + 0.5f));
+    } else {
+        const int32_t gx = cell_of(p->x, inv_a);
+        const int32_t gy = cell_of(p->y, inv_a);
+        if (!in_range(gx, gy)) {
+            map->counters.outside++;
+            return;
+        }
+        add_hit(map, c, level, gx, gy, map->cfg.hit_inc);
+    }
+}
+
+int rsm_tmap_write_run(rsm_tmap_t *map, const rsm_point_t *points, uint32_t budget)
+{
+    rsm_tmap_job_t *job;
+    uint32_t spent = 0;
+    if (map == NULL || (map->job.n > 0u && points == NULL)) {
+        return 0;
+    }
+    job = &map->job;
+    while (job->n > 0u) {
+        const uint32_t idx = job->pass >> 1;
+        const uint32_t level = pass_level(map, idx);
+        const float inv_a = map->inv_cell[level];
+        const int32_t ox = cell_of(job->origin.x, inv_a);
+        const int32_t oy = cell_of(job->origin.y, inv_a);
+        const int beams = (job->pass & 1u) == 0u;
+        rsm_tmap_cursor_t c;
         rsm_tmap_cursor_init(&c, level);
-        if (map->cfg.miss_dec > 0u) {
-            for (k = 0; k < n; ++k) {
-                int32_t gx;
-                int32_t gy;
-                if (!(fabsf(points[k].x) < 1.0e6f && fabsf(points[k].y) < 1.0e6f)) {
-                    continue;
-                }
-                gx = cell_of(points[k].x, inv_a);
-                gy = cell_of(points[k].y, inv_a);
-                if (in_range(gx, gy)) {
-                    const uint32_t top = clear_beam(map, &c, ox, oy, gx, gy, map->cfg.miss_dec, map->cfg.clear_margin);
-                    if (map->cfg.wall_value > 0u && idx == 0u && top >= map->cfg.wall_value &&
-                        k < (size_t)RSM_MAX_BEAMS && (map->cfg.wall_echo == 0u || rsm_bit_get(lone, k)) &&
-                        rsm_tmap_cell_value(map, &c, gx, gy) < map->cfg.wall_value) {
-                        rsm_bit_set(behind, k);
-                        map->counters.behind++;
-                    }
-                }
+        if (beams && map->cfg.miss_dec == 0u) {
+            job->next = job->n;
+        }
+        while (job->next < job->n) {
+            const uint32_t k = job->next++;
+            if (beams) {
+                spent += clear_one(map, &c, idx, ox, oy, &points[k], k);
+            } else {
+                hit_one(map, &c, &points[k], k);
+                spent += 1u;
             }
         }
-        rsm_tmap_cursor_init(&c, level);
-        for (k = 0; k < n; ++k) {
-            if (!(fabsf(points[k].x) < 1.0e6f && fabsf(points[k].y) < 1.0e6f)) {
-                continue;
-            }
-            if (k < (size_t)RSM_MAX_BEAMS && rsm_bit_get(behind, k)) {
-                continue;
-            }
-            if (level >= map->cfg.splat_from) {
-                /* Share the increment among the four cells around the point
-                 * by bilinear weights, so that the interpolated occupancy
-                 * peaks where the returns are, not at cell centres. */
-                const rsm_bilinear_t b = rsm_bilinear_at(points[k].x, points[k].y, inv_a);
-                const int32_t gx = b.i;
-                const int32_t gy = b.j;
-                const float du = b.du;
-                const float dv = b.dv;
-                const float f = (float)map->cfg.hit_inc;
-                if (!in_range(gx, gy) || !in_range(gx + 1, gy + 1)) {
-                    map->counters.outside++;
-                    continue;
-                }
-                add_hit(map, &c, level, gx, gy, (uint32_t)(f * (1.0f - du) * (1.0f - dv) + 0.5f));
-                add_hit(map, &c, level, gx + 1, gy, (uint32_t)(f * du * (1.0f - dv) + 0.5f));
-                add_hit(map, &c, level, gx, gy + 1, (uint32_t)(f * (1.0f - du) * dv + 0.5f));
-                add_hit(map, &c, level, gx + 1, gy + 1, (uint32_t)(f * du * dv + 0.5f));
-            } else {
-                const int32_t gx = cell_of(points[k].x, inv_a);
-                const int32_t gy = cell_of(points[k].y, inv_a);
-                if (!in_range(gx, gy)) {
-                    map->counters.outside++;
-                    continue;
-                }
-                add_hit(map, &c, level, gx, gy, map->cfg.hit_inc);
-            }
+        job->next = 0;
+        job->pass++;
+        if ((job->pass >> 1) >= map->cfg.levels) {
+            job->n = 0;
+            return 0;
+        }
+        if (budget > 0u && spent >= budget && (job->pass & 1u) == 0u) {
+            return 1;
         }
     }
-    return RSM_OK;
+    return 0;
+}
+
+int rsm_tmap_writing(const rsm_tmap_t *map)
+{
+    return map != NULL && map->job.n > 0u;
+}
+
+int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n)
+{
+    int rc;
+    if (map != NULL && map->job.n > 0u) {
+        return RSM_ERR_INVAL;
+    }
+    rc = rsm_tmap_write_begin(map, origin, points, n);
+    if (rc == RSM_OK) {
+        (void)rsm_tmap_write_run(map, points, 0u);
+    }
+    return rc;
 }
 
 float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y)

@@ -53,6 +53,20 @@ int rsm_tmap_init(rsm_tmap_t *map, const rsm_tmap_config_t *cfg);
  * Non-finite points are skipped. Returns RSM_OK or RSM_ERR_INVAL. */
 int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n);
 
+/* The same write spread over several calls, so that a scan pays a bounded
+ * share of it: begin stamps the map and remembers origin and n (RSM_ERR_INVAL
+ * as above, or while a write is in progress); each run continues it over the
+ * same points (unchanged by the caller until the write ends) for about
+ * budget cells (beam steps plus returns; 0: to the end) and returns 1 while
+ * work remains, 0 once the write is complete. The order of the cells is the
+ * one rsm_tmap_update uses, so a write run in pieces with no other write in
+ * between leaves the same map. Reads see the map as far as it is written. */
+int rsm_tmap_write_begin(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n);
+int rsm_tmap_write_run(rsm_tmap_t *map, const rsm_point_t *points, uint32_t budget);
+
+/* 1 while a write is in progress. */
+int rsm_tmap_writing(const rsm_tmap_t *map);
+
 /* Cell value (0..15) of cell (gx, gy) at a level; 0 where no tile is held. */
 uint8_t rsm_tmap_value(const rsm_tmap_t *map, uint32_t level, int32_t gx, int32_t gy);
 

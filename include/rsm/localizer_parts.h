@@ -196,6 +196,9 @@ typedef struct rsm_tmap_config {
                             * or it lands within one cell of a saturated one: a phantom is
                             * random and comes once, a surface seen through a doorway or
                             * along a grazed wall comes again from the next pose. Default 0 */
+    uint16_t write_cells;  /* a write runs over the next scans, about this many cells (beam
+                            * steps and returns) per scan, so that no scan pays for a whole
+                            * write; 0 = each write at once. Default 4096 */
 } rsm_tmap_config_t;
 
 typedef struct rsm_tmap_counters {
@@ -209,6 +212,18 @@ typedef struct rsm_tmap_counters {
     uint32_t outside;       /* returns beyond the tile coordinate range */
 } rsm_tmap_counters_t;
 
+/* The write in progress: the pass (two per level, beams then returns,
+ * wall_level first) and the next return of it; the returns themselves stay
+ * with the caller until the write ends. */
+typedef struct rsm_tmap_job {
+    rsm_point_t origin;                /* the laser's position for the write */
+    uint32_t n;                        /* returns of the write; 0: none in progress */
+    uint32_t next;                     /* next return of the pass */
+    uint32_t pass;                     /* 2 * level index + (0 beams, 1 returns) */
+    uint8_t behind[(RSM_MAX_BEAMS + 7) / 8];  /* returns not written (wall_value) */
+    uint8_t lone[(RSM_MAX_BEAMS + 7) / 8];    /* returns no echo confirmed (wall_echo) */
+} rsm_tmap_job_t;
+
 typedef struct rsm_tmap {
     rsm_tmap_config_t cfg;             /* copied at init */
     float occ[RSM_TMAP_MAX_VALUE + 1u];  /* occupancy in [0, 1] of each cell value */
@@ -219,6 +234,7 @@ typedef struct rsm_tmap {
     uint16_t hash[RSM_TMAP_HASH];      /* slot of a key, linear probing; RSM_TMAP_NONE empty */
     rsm_tile_t tile[RSM_TMAP_TILES];
     uint8_t echo[RSM_TMAP_ECHO_BYTES];  /* hashed wall_level cells of the last write's returns */
+    rsm_tmap_job_t job;
     rsm_tmap_counters_t counters;
 } rsm_tmap_t;
 

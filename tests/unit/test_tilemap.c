@@ -557,6 +557,66 @@ void test_tmap_bounds_should_cover_the_held_tiles(void)
     TEST_ASSERT_EQUAL_INT32(RSM_TMAP_TILE_SIDE - 1, (x1 - x0) % RSM_TMAP_TILE_SIDE);
 }
 
+/* A room's worth of returns seen from (ox, oy): a circle of radius r. */
+static size_t ring(rsm_point_t *pts, size_t n, float ox, float oy, float r)
+{
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        const float a = 6.2831853f * (float)k / (float)n;
+        pts[k].x = ox + r * cosf(a);
+        pts[k].y = oy + r * sinf(a);
+    }
+    return n;
+}
+
+void test_tmap_write_should_run_over_several_calls_finest_level_first_and_end_as_one_write(void)
+{
+    static rsm_tmap_t whole;
+    static rsm_tmap_t before;
+    rsm_point_t pts[90];
+    const rsm_point_t o1 = {0.3f, 0.2f};
+    const rsm_point_t o2 = {9.93f, -0.37f}; /* new ground; returns off cell borders */
+    uint32_t calls = 0;
+    size_t n;
+    cfg.levels = 3u;
+    init();
+    whole = map;
+    /* The first write at once in both maps; the second in pieces in one. */
+    n = ring(pts, 90u, o1.x, o1.y, 2.0f);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&whole, &o1, pts, n));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o1, pts, n));
+    before = map;
+    n = ring(pts, 90u, o2.x, o2.y, 1.7f);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&whole, &o2, pts, n));
+    TEST_ASSERT_EQUAL_INT(0, rsm_tmap_writing(&map));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_write_begin(&map, &o2, pts, n));
+    TEST_ASSERT_EQUAL_INT(1, rsm_tmap_writing(&map));
+    /* No second write while one runs, whole or in pieces. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tmap_write_begin(&map, &o2, pts, n));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tmap_update(&map, &o2, pts, n));
+    /* A budget of one cell: one level per call, the finest first. */
+    TEST_ASSERT_EQUAL_INT(1, rsm_tmap_write_run(&map, pts, 1u));
+    ++calls;
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(pts[0].x), cell(pts[0].y)));
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&before, 0u, cell(pts[0].x), cell(pts[0].y)));
+    TEST_ASSERT_EQUAL_UINT16(before.level_used[2], map.level_used[2]);
+    TEST_ASSERT_TRUE(whole.level_used[2] > before.level_used[2]);
+    while (rsm_tmap_write_run(&map, pts, 1u) != 0) {
+        ++calls;
+        TEST_ASSERT_TRUE(calls < 10u);
+    }
+    ++calls;
+    TEST_ASSERT_EQUAL_UINT32(3u, calls);
+    TEST_ASSERT_EQUAL_INT(0, rsm_tmap_writing(&map));
+    TEST_ASSERT_EQUAL_INT(0, rsm_tmap_write_run(&map, pts, 1u)); /* nothing left */
+    /* The same map as the write at once: every tile, the index, the counters. */
+    TEST_ASSERT_EQUAL_UINT16(whole.used, map.used);
+    TEST_ASSERT_EQUAL_MEMORY(whole.tile, map.tile, sizeof map.tile);
+    TEST_ASSERT_EQUAL_MEMORY(whole.hash, map.hash, sizeof map.hash);
+    TEST_ASSERT_EQUAL_MEMORY(&whole.counters, &map.counters, sizeof map.counters);
+    TEST_ASSERT_TRUE(map.counters.updates == 2u && map.used > 0u);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -576,5 +636,6 @@ int main(void)
     RUN_TEST(test_tmap_pool_should_keep_coarse_tiles_longer_with_age_shift);
     RUN_TEST(test_tmap_sample_should_interpolate_and_give_the_gradient);
     RUN_TEST(test_tmap_bounds_should_cover_the_held_tiles);
+    RUN_TEST(test_tmap_write_should_run_over_several_calls_finest_level_first_and_end_as_one_write);
     return UNITY_END();
 }

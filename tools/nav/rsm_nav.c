@@ -77,6 +77,7 @@
     U("map_wall_level", tmap.wall_level, uint8_t) \
     U("map_wall_value", tmap.wall_value, uint8_t) \
     U("map_wall_echo", tmap.wall_echo, uint8_t) \
+    U("map_write_cells", tmap.write_cells, uint16_t) \
     U("mm_iterations", mapmatch.iterations, uint8_t) \
     F("mm_sigma", mapmatch.sigma) \
     F("mm_search", mapmatch.search_rad) \
