@@ -51,13 +51,32 @@ typedef struct sums {
     uint32_t used;
 } sums_t;
 
-static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, const rsm_pose_t *x,
-                       sums_t *s)
+/* The largest |x| + |y| of the points (a bound on how far from the pose
+ * any of them lands, whatever the heading); NaN if one is not finite. */
+static float points_reach(const rsm_point_t *pts, size_t n)
+{
+    float reach = 0.0f;
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        const float a = fabsf(pts[k].x) + fabsf(pts[k].y);
+        if (!(a <= reach)) {
+            reach = a;
+        }
+    }
+    return reach;
+}
+
+/* reach: points_reach of pts. */
+static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, float reach,
+                       const rsm_pose_t *x, sums_t *s)
 {
     const float c = rsm_cosf(x->theta);
     const float sn = rsm_sinf(x->theta);
     const float tx = x->x;
     const float ty = x->y;
+    const float most = rsm_tmap_read_reach(map);
+    /* Every point within the map's range: no range test per point. */
+    const int inside = fabsf(tx) + reach < most && fabsf(ty) + reach < most;
     /* Sums in locals: through s the compiler would store each one per
      * point, not knowing that s does not alias the points. */
     float h0 = 0.0f;
@@ -83,7 +102,7 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
         const float wy = ty + sn * px + c * py;
         float gx;
         float gy;
-        const float m = rsm_tmap_read_sample(map, &cur, wx, wy, &gx, &gy);
+        const float m = rsm_tmap_read_sample(map, &cur, wx, wy, inside, &gx, &gy);
         const float r = 1.0f - m;
         float gt;
         cost += r * r;
@@ -288,11 +307,13 @@ int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg,
     return (int)found;
 }
 
-/* The prior of a descent: its mean, information and the residual weight. */
+/* The prior of a descent: its mean, information and the residual weight;
+ * and how far the scan reaches. */
 typedef struct prior {
     const rsm_pose_t *x0;
     float lam[9];
     float w;
+    float reach; /* points_reach of the scan */
 } prior_t;
 
 /* Gauss-Newton from x on every level, coarse to fine. On return x is the
@@ -307,7 +328,7 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
     for (level = (int)map->cfg.levels - 1; level >= 0; --level) {
         float e[3];
         uint32_t it;
-        level_sums(map, (uint32_t)level, pts, n, x, s);
+        level_sums(map, (uint32_t)level, pts, n, pr->reach, x, s);
         diff(x, pr->x0, e);
         f = s->cost * pr->w + quad(pr->lam, e);
         for (it = 0; it < cfg->iterations; ++it) {
@@ -344,7 +365,7 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
                 cand.x = x->x + step[0];
                 cand.y = x->y + step[1];
                 cand.theta = rsm_wrap_angle(x->theta + step[2]);
-                level_sums(map, (uint32_t)level, pts, n, &cand, &cs);
+                level_sums(map, (uint32_t)level, pts, n, pr->reach, &cand, &cs);
                 diff(&cand, pr->x0, ce);
                 cf = cs.cost * pr->w + quad(pr->lam, ce);
                 if (cf < f) {
@@ -397,6 +418,7 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
     }
     pr.x0 = x0;
     pr.w = 1.0f / (cfg->sigma * cfg->sigma);
+    pr.reach = points_reach(pts, n);
     x = start != NULL ? *start : *x0;
     {
         const float f = descend(map, cfg, pts, n, &pr, &x, &s, &res->iterations);

@@ -614,5 +614,5 @@ float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, f
 
 float rsm_tmap_sample_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, float *dx, float *dy)
 {
-    return rsm_tmap_read_sample(map, c, x, y, dx, dy);
+    return rsm_tmap_read_sample(map, c, x, y, 0, dx, dy);
 }

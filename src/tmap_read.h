@@ -79,9 +79,18 @@ static inline void rsm_tmap_occ_pair(const rsm_tmap_t *map, const rsm_tile_t *t,
     }
 }
 
-/* rsm_tmap_sample_at (see tilemap.h). */
-static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, float *dx,
-                                         float *dy)
+/* Metres from the origin within which every read is inside the cells'
+ * range on every level (two finest cells short of it, for rounding). */
+static inline float rsm_tmap_read_reach(const rsm_tmap_t *map)
+{
+    return (float)(RSM_TMAP_CELL_LIMIT - 3) / map->inv_cell[0];
+}
+
+/* rsm_tmap_sample_at (see tilemap.h); inside: the caller knows (x, y) to be
+ * within rsm_tmap_read_reach of the origin on both axes, so the range test
+ * can go (the map matcher checks that once per pass, not once per point). */
+static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, int inside,
+                                         float *dx, float *dy)
 {
     /* As rsm_bilinear_at, with the floor by conversion: the range test comes
      * first, so the conversion cannot overflow. u in [1 - L, L - 1) is
@@ -100,7 +109,7 @@ static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_
     float m10;
     float m01;
     float m11;
-    if (!(u >= -lim && u < lim && v >= -lim && v < lim)) {
+    if (!inside && !(u >= -lim && u < lim && v >= -lim && v < lim)) {
         *dx = 0.0f;
         *dy = 0.0f;
         return 0.0f;
