@@ -95,9 +95,15 @@ typedef struct rsm_tmap_way {
 /* A key no tile has (tile coordinates stay within +-32000). */
 #define RSM_TMAP_NO_KEY 0x80008000u
 
+/* last, bx, by: the tile of the last sample whose four cells lay in one
+ * tile (NULL if none is held there) and that tile's first cell; a sample in
+ * the same tile's interior needs no lookup at all. */
 typedef struct rsm_tmap_cursor {
     uint32_t level;
     rsm_tmap_way_t way[4];
+    const rsm_tile_t *last;
+    int32_t bx;
+    int32_t by;
 } rsm_tmap_cursor_t;
 
 void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level);

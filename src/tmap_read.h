@@ -31,6 +31,10 @@ static inline void rsm_tmap_cursor_forget(rsm_tmap_cursor_t *c)
     c->way[1].key = RSM_TMAP_NO_KEY;
     c->way[2].key = RSM_TMAP_NO_KEY;
     c->way[3].key = RSM_TMAP_NO_KEY;
+    /* A first cell no sample is ever TILE_SIDE - 1 cells from. */
+    c->bx = INT32_MIN;
+    c->by = INT32_MIN;
+    c->last = NULL;
 }
 
 /* Slot of the tile holding cell (gx, gy) of the cursor's level. */
@@ -128,10 +132,24 @@ static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_
     }
     du = u - fu;
     dv = v - fv;
-    if ((i & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (j & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK) {
+    if ((uint32_t)i - (uint32_t)c->bx < (uint32_t)RSM_TMAP_TILE_MASK &&
+        (uint32_t)j - (uint32_t)c->by < (uint32_t)RSM_TMAP_TILE_MASK) {
+        /* In the interior of the last sample's tile: no lookup. */
+        const uint32_t k = rsm_tmap_cell_index(i, j);
+        if (c->last == NULL) {
+            *dx = 0.0f;
+            *dy = 0.0f;
+            return 0.0f;
+        }
+        rsm_tmap_occ_pair(map, c->last, k, &m00, &m10);
+        rsm_tmap_occ_pair(map, c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE, &m01, &m11);
+    } else if ((i & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (j & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK) {
         /* All four cells in one tile: one lookup. */
         const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
         const uint32_t k = rsm_tmap_cell_index(i, j);
+        c->bx = i & ~RSM_TMAP_TILE_MASK;
+        c->by = j & ~RSM_TMAP_TILE_MASK;
+        c->last = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
         if (s == RSM_TMAP_NONE) {
             *dx = 0.0f;
             *dy = 0.0f;
