@@ -337,12 +337,12 @@ def test_capture_path_keeps_every_reading_and_tracks_as_the_direct_run(tmp_path,
     process noise before the first scan. Until the robot first moves its
     inputs are identical bit for bit, and so is every pose (before those
     fixes only the first pose was). From then on the encoder counts carry
-    the log's odometry only to a tick (7.8 um, 2.2e-5 rad), and the two
-    runs part: one flipped decision of the matcher changes the rest. On this
-    excerpt a jitter of +-0.5 um on the direct run's own odometry increments
-    moves its error by up to 3 %; the capture run's error must stay within
-    5 % of the direct run's either way (before the fixes it was 7 and 9 %
-    lower: a wider prior, from a prediction per encoder packet)."""
+    the log's odometry only to about a tick (7.8 um, 2.2e-5 rad), and the
+    two runs part: one flipped decision of the matcher changes the rest. On
+    this excerpt a jitter of +-0.5 um on the direct run's own odometry
+    increments moves its error by up to 3 % either way, so the error ratio
+    of one run is no measure of the capture path; it is printed, and held
+    only to the 10 % of the lidar streams' floor (test_lidar_nav.py)."""
     direct = tmp_path / "direct.txt"
     d_sum = run_nav(head_log, direct, "rsm")
     runs = {}
@@ -377,4 +377,4 @@ def test_capture_path_keeps_every_reading_and_tracks_as_the_direct_run(tmp_path,
         want = errors(direct, head_relations, max_span=span)["translation"]["mean"]
         got = capture_errors(capf, traj, head_relations, max_span=span)["translation"]["mean"]
         print(f"max span {span}: capture {got:.4f} m, direct {want:.4f} m, ratio {got / want:.3f}")
-        assert 0.95 * want <= got <= 1.05 * want
+        assert got <= 1.10 * want

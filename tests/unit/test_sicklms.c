@@ -480,6 +480,9 @@ void test_sicklms_to_scan_should_lay_out_bearings_as_a_carmen_scan_bit_for_bit(v
     size_t c;
     size_t i;
     for (c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        if (cases[c].n > RSM_MAX_BEAMS) {
+            continue; /* a small build cannot hold a half-degree scan */
+        }
         lms_layout(&raw, cases[c].n, 0u, cases[c].step);
         TEST_ASSERT_EQUAL_INT(0, rsm_sicklms_to_scan(&raw, 0u, &got));
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_scan_set_uniform(&want, cases[c].n, -RSM_PI / 2.0f, RSM_PI / cases[c].carmen_n));
