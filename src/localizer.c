@@ -199,7 +199,8 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
         return RSM_ERR_RANGE;
     }
     rsm_odometry_noise(&loc->odo.cfg, u, q);
-    if (rsm_ekf_predict(&loc->ekf, u, q) != RSM_OK) {
+    /* No process noise before the first scan (see localizer.h). */
+    if (rsm_ekf_predict(&loc->ekf, u, loc->have_scan ? q : NULL) != RSM_OK) {
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
     }

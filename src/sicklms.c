@@ -415,15 +415,26 @@ static void step_done(rsm_sicklms_t *d, const rsm_lms_telegram_t *t, uint64_t no
     }
 }
 
-/* Beam i of a scan whose scanner angles are start + i * step (1/100 deg)
- * into out in the robot frame: the one conversion of both paths below.
- * Returns 1 when the reading is invalid (range 0, which the core drops). */
-static int put_beam(rsm_scan_t *out, size_t i, uint16_t start_cdeg, uint16_t step_cdeg, uint8_t upside_down,
-                    const rsm_lms_reading_t *r)
+/* The robot-frame bearing of beam 0 and the step between beams, radians,
+ * of a scan whose scanner angles are start + i * step (1/100 deg). Beam i is
+ * then at start + step * i, the arithmetic of rsm_scan_set_uniform: a scan
+ * decoded here has, bit for bit, the bearings of the same scan read from a
+ * CARMEN log (rsm-nav --capture against --carmen). */
+static void beam_layout(uint16_t start_cdeg, uint16_t step_cdeg, uint8_t upside_down, float *start_rad,
+                        float *step_rad)
 {
-    const int32_t cdeg = (int32_t)start_cdeg + (int32_t)(i * step_cdeg);
-    const int32_t bearing = upside_down ? 9000 - cdeg : cdeg - 9000;
-    out->angle_rad[i] = (float)bearing * (PI_F / 18000.0f);
+    const int32_t first = upside_down ? 9000 - (int32_t)start_cdeg : (int32_t)start_cdeg - 9000;
+    const int32_t step = upside_down ? -(int32_t)step_cdeg : (int32_t)step_cdeg;
+    *start_rad = (float)first * PI_F / 18000.0f;
+    *step_rad = (float)step * PI_F / 18000.0f;
+}
+
+/* Beam i at start + step * i (beam_layout) into out in the robot frame: the
+ * one conversion of both paths below. Returns 1 when the reading is invalid
+ * (range 0, which the core drops). */
+static int put_beam(rsm_scan_t *out, size_t i, float start_rad, float step_rad, const rsm_lms_reading_t *r)
+{
+    out->angle_rad[i] = start_rad + step_rad * (float)i;
     if (r->code == RSM_LMS_READING_OK) {
         out->range_m[i] = r->range_m;
         return 0;
@@ -436,14 +447,17 @@ int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan
 {
     size_t i;
     int invalid = 0;
+    float start_rad;
+    float step_rad;
     if (raw == NULL || out == NULL) {
         return RSM_ERR_INVAL;
     }
     if (raw->step_cdeg == 0u || raw->count > RSM_MAX_BEAMS) {
         return RSM_ERR_PROTO;
     }
+    beam_layout(raw->start_cdeg, raw->step_cdeg, upside_down, &start_rad, &step_rad);
     for (i = 0u; i < raw->count; i++) {
-        invalid += put_beam(out, i, raw->start_cdeg, raw->step_cdeg, upside_down, &raw->reading[i]);
+        invalid += put_beam(out, i, start_rad, step_rad, &raw->reading[i]);
     }
     out->count = raw->count;
     return invalid;
@@ -460,6 +474,8 @@ static int decode_scan(rsm_sicklms_t *d, const rsm_lms_telegram_t *t)
     rsm_lms_b0_view_t v;
     size_t i;
     uint32_t invalid = 0u;
+    float start_rad;
+    float step_rad;
     int rc;
     if ((rc = rsm_lms_b0_open(t, &d->format, &v)) != RSM_OK) {
         return rc;
@@ -467,9 +483,10 @@ static int decode_scan(rsm_sicklms_t *d, const rsm_lms_telegram_t *t)
     if (v.step_cdeg == 0u) {
         return RSM_ERR_PROTO;
     }
+    beam_layout(v.start_cdeg, v.step_cdeg, d->cfg->upside_down, &start_rad, &step_rad);
     for (i = 0u; i < v.count; i++) {
         const rsm_lms_reading_t r = rsm_lms_b0_reading(&v, i);
-        invalid += (uint32_t)put_beam(d->scan, i, v.start_cdeg, v.step_cdeg, d->cfg->upside_down, &r);
+        invalid += (uint32_t)put_beam(d->scan, i, start_rad, step_rad, &r);
     }
     d->scan->count = v.count;
     d->scan->stamp_us = rx >= d->cfg->latency_us ? rx - d->cfg->latency_us : 0u;

@@ -1,5 +1,6 @@
 #include "rsm/sync.h"
 
+#include <math.h>
 #include <stddef.h>
 #include <string.h>
 
@@ -20,6 +21,7 @@ rsm_sync_config_t rsm_sync_config_default(void)
     c.hold_us = 500000u;
     c.scan_offset_us = 0;
     c.snap_us = 1000u;
+    c.max_travel_m = 2.0f;
     return c;
 }
 
@@ -36,6 +38,20 @@ static uint32_t counter_lerp(uint8_t bits, uint32_t from, uint32_t to, uint64_t 
     return (uint32_t)((int64_t)from + part);
 }
 
+/* The increments composed since the last prediction, as one prediction. */
+static void predict(rsm_sync_t *s)
+{
+    static const rsm_pose_t none = {0.0f, 0.0f, 0.0f};
+    if (s->have_pending) {
+        const rsm_motion_t u = {s->pending.x, s->pending.y, s->pending.theta};
+        (void)rsm_localizer_motion(s->loc, &u);
+    }
+    s->pending = none;
+    s->pending_travel_m = 0.0f;
+    s->pending_turn_rad = 0.0f;
+    s->have_pending = 0u;
+}
+
 static void apply(rsm_sync_t *s, const rsm_odometry_sample_t *smp)
 {
     rsm_motion_t u;
@@ -43,7 +59,26 @@ static void apply(rsm_sync_t *s, const rsm_odometry_sample_t *smp)
      * implausible step is refused and counted by the odometry, which gets
      * the sample's time so that the allowance grows with the gap. */
     if (rsm_odometry_update_ticks_at(&s->loc->odo, smp->left, smp->right, smp->stamp_us, &u) == RSM_OK) {
-        (void)rsm_localizer_motion(s->loc, &u);
+        /* Wheel travel: the chord, or half the base times the turn when
+         * turning on the spot ((|dl| + |dr|) / 2 within the chord's error). */
+        const float chord = sqrtf(u.dx * u.dx + u.dy * u.dy);
+        const float turn = 0.5f * s->loc->odo.cfg.wheel_base_m * fabsf(u.dtheta);
+        if (s->have_pending && fabsf(s->pending_turn_rad + u.dtheta) >= RSM_PI) {
+            /* The composed heading is wrapped: a turn past a half one would
+             * come out as a smaller one the other way, with its noise. */
+            s->counters.blind_predictions++;
+            predict(s);
+        }
+        s->pending = rsm_odometry_apply(&s->pending, &u);
+        s->pending_travel_m += chord > turn ? chord : turn;
+        s->pending_turn_rad += u.dtheta;
+        s->have_pending = 1u;
+        if (s->pending_travel_m >= s->cfg->max_travel_m) {
+            if (s->cfg->max_travel_m > 0.0f) {
+                s->counters.blind_predictions++;
+            }
+            predict(s);
+        }
     }
     s->base = *smp;
     s->have_base = 1u;
@@ -123,6 +158,7 @@ static void fuse(rsm_sync_t *s, const rsm_scan_t *scan, uint64_t t, fuse_class_t
     } else {
         s->counters.superseded++;
     }
+    predict(s);
     rc = rsm_localizer_scan(s->loc, scan, &rep);
     if (s->on_result != NULL) {
         s->on_result(s->ctx, scan, rc, &rep);
@@ -143,6 +179,9 @@ int rsm_sync_init(rsm_sync_t *s, rsm_localizer_t *loc, const rsm_sync_config_t *
     }
     if (cfg->max_wait_us == 0u && cfg->hold_us == 0u) {
         /* Both zero would still work, but means "no alignment": say so. */
+        return RSM_ERR_INVAL;
+    }
+    if (!(cfg->max_travel_m >= 0.0f && cfg->max_travel_m <= 1e6f)) { /* NaN fails too */
         return RSM_ERR_INVAL;
     }
     memset(s, 0, sizeof *s);
@@ -259,12 +298,14 @@ int rsm_sync_flush(rsm_sync_t *s)
     while (s->count > 0u) {
         apply_front(s);
     }
+    predict(s);
     return fused;
 }
 
 rsm_pose_t rsm_sync_pose(const rsm_sync_t *s)
 {
-    rsm_pose_t pose = rsm_localizer_pose(s->loc);
+    const rsm_pose_t est = rsm_localizer_pose(s->loc);
+    rsm_pose_t pose = rsm_pose_compose(&est, &s->pending);
     const rsm_odometry_sample_t *from = s->have_base ? &s->base : front(s);
     const rsm_odometry_sample_t *to = newest(s);
     if (from != NULL && to != NULL && from != to) {

@@ -221,7 +221,12 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
                                const rsm_localizer_config_t *cfg, const rsm_pose_t *x0, const float p0[9]);
 
 /* Predicts with an odometry increment (robot frame at the step's start).
- * Non-finite increments are refused with RSM_ERR_RANGE and counted. */
+ * Before the first scan it moves the start pose without process noise: the
+ * map is anchored where the first scan is taken, so no scan can observe
+ * what was lost before it (and a run that starts at the first scan's
+ * odometry pose, as rsm-nav --carmen does, gets the same filter as one that
+ * drove there from an earlier start). Non-finite increments are refused
+ * with RSM_ERR_RANGE and counted. */
 int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u);
 
 /* Predicts from raw wheel encoder counters (see rsm_odometry_update_ticks);

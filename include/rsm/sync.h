@@ -10,7 +10,10 @@
  * odometry interpolated at the scan's own timestamp (counts split linearly in
  * time between the samples around it, which is exact for a constant-velocity
  * arc). A scan whose time is past the newest sample waits for a later one, at
- * most max_wait_us.
+ * most max_wait_us. The increments of the samples up to a scan are composed
+ * and predicted once, just before the scan: the odometry noise model (per
+ * prediction, with a floor) then sees one step per scan whatever the
+ * encoder rate, as a CARMEN log's odometry gives it (rsm-nav --carmen).
  *
  * Timestamps of both inputs must come from one clock (the HAL clock in a
  * driver, arrival times in a host tool, record times in a capture). A scan
@@ -43,6 +46,10 @@ typedef struct rsm_sync_config {
     uint32_t snap_us;         /* a sample this close to the scan time counts as taken with it:
                                * its counts are used as they are, and a scan does not wait for
                                * a later sample (arrival jitter of two links); default 1000 */
+    float max_travel_m;       /* composed odometry is predicted at the latest after this much wheel
+                               * travel (or before a half turn), even with no scan: a silent laser
+                               * must not let a loop driven blind come back with the prior of
+                               * its net step; default 2.0; 0: predict every sample as applied */
 } rsm_sync_config_t;
 
 rsm_sync_config_t rsm_sync_config_default(void);
@@ -59,6 +66,7 @@ typedef struct rsm_sync_counters {
     uint32_t encoder_backwards; /* sample stamped before the previous one: taken in arrival order */
     uint32_t encoder_overflow;  /* held samples applied early because the buffer was full */
     uint32_t restarts;          /* rsm_sync_encoder_restart calls (new connections) */
+    uint32_t blind_predictions; /* odometry predicted with no scan: max_travel_m, or a half turn */
 } rsm_sync_counters_t;
 
 /* Called once per fused scan with the localizer's status and report. */
@@ -73,8 +81,12 @@ typedef struct rsm_sync {
     rsm_odometry_sample_t ring[RSM_SYNC_DEPTH]; /* samples not yet applied, oldest first */
     uint32_t head;
     uint32_t count;
-    rsm_odometry_sample_t base;           /* the last counts applied to the localizer */
+    rsm_odometry_sample_t base;           /* the last counts applied */
     uint8_t have_base;
+    uint8_t have_pending;             /* applied samples not yet predicted */
+    rsm_pose_t pending;               /* their increments composed (robot frame of the last prediction) */
+    float pending_travel_m;           /* their wheel travel */
+    float pending_turn_rad;           /* their turn, not wrapped */
     uint8_t holding;                  /* a scan waits in held */
     uint64_t held_since_us;           /* its (offset) stamp: the wait runs from here */
     rsm_scan_t held;
@@ -109,11 +121,12 @@ int rsm_sync_scan(rsm_sync_t *s, const rsm_scan_t *scan);
 int rsm_sync_poll(rsm_sync_t *s, uint64_t now_us);
 
 /* End of input: fuses a waiting scan with the odometry there is, then
- * applies every held encoder sample. Returns 1 if a scan was fused, else 0. */
+ * applies every held encoder sample and predicts what was composed.
+ * Returns 1 if a scan was fused, else 0. */
 int rsm_sync_flush(rsm_sync_t *s);
 
 /* Best current pose: the localizer's estimate moved on by the odometry
- * still held back. */
+ * composed but not yet predicted and the odometry still held back. */
 rsm_pose_t rsm_sync_pose(const rsm_sync_t *s);
 
 #ifdef __cplusplus

@@ -327,9 +327,22 @@ def capture_errors(capf: Path, traj: Path, relations: Path, max_span=None) -> di
 def test_capture_path_keeps_every_reading_and_tracks_as_the_direct_run(tmp_path, head_log, head_relations):
     """rsm-convert picks the unit that carries the log's readings and rsm-nav
     decodes it: the capture run uses exactly the readings the direct run
-    uses (the 181st reading of each telegram has no beam behind it), and
-    tracks within 2 % of it. A capture in mm units cut at 8 m (what rsm-convert
-    wrote before) loses readings, so this check can fail."""
+    uses (the 181st reading of each telegram has no beam behind it). A
+    capture in mm units cut at 8 m (what rsm-convert wrote before) loses
+    readings, so this check can fail.
+
+    Then the capture run is the direct run's filter: the same bearings (the
+    LMS driver lays them out as the CARMEN reader does), one prediction per
+    scan (the aligner composes the encoder increments between scans), no
+    process noise before the first scan. Until the robot first moves its
+    inputs are identical bit for bit, and so is every pose (before those
+    fixes only the first pose was). From then on the encoder counts carry
+    the log's odometry only to about a tick (7.8 um, 2.2e-5 rad), and the
+    two runs part: one flipped decision of the matcher changes the rest. On
+    this excerpt a jitter of +-0.5 um on the direct run's own odometry
+    increments moves its error by up to 3 % either way, so the error ratio
+    of one run is no measure of the capture path; it is printed, and held
+    only to the 10 % of the lidar streams' floor (test_lidar_nav.py)."""
     direct = tmp_path / "direct.txt"
     d_sum = run_nav(head_log, direct, "rsm")
     runs = {}
@@ -353,8 +366,15 @@ def test_capture_path_keeps_every_reading_and_tracks_as_the_direct_run(tmp_path,
         else:
             assert used < used_direct
     capf, traj, _ = runs["auto"]
+    still = cm.first_scan_after_motion(head_log)
+    assert still >= 100  # the excerpt's robot stands for its first 143 scans
+    mine, theirs = ev.printed_poses(traj), ev.printed_poses(direct)
+    assert len(mine) == len(theirs) == n
+    same = next((k for k, (a, b) in enumerate(zip(mine, theirs)) if a != b), n)
+    print(f"\ncapture poses equal to the direct run's: the first {same} (the robot first moves at scan {still})")
+    assert same >= still
     for span in (None, 2.0):
         want = errors(direct, head_relations, max_span=span)["translation"]["mean"]
         got = capture_errors(capf, traj, head_relations, max_span=span)["translation"]["mean"]
         print(f"max span {span}: capture {got:.4f} m, direct {want:.4f} m, ratio {got / want:.3f}")
-        assert got <= 1.02 * want
+        assert got <= 1.10 * want

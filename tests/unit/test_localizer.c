@@ -981,6 +981,24 @@ void test_localizer_motion_should_refuse_non_finite_increments(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_motion(NULL, &u));
 }
 
+void test_localizer_motion_before_the_first_scan_should_move_the_start_without_noise(void)
+{
+    static const float zero[9] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    const rsm_motion_t u = {0.1f, 0.0f, 0.2f};
+    const rsm_pose_t want = rsm_odometry_apply(&path[0], &u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &path[0], NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+    TEST_ASSERT_EQUAL_UINT32(1u, loc.counters.motions);
+    TEST_ASSERT_EQUAL_MEMORY(&want, &loc.ekf.x, sizeof want);
+    /* The map is anchored at the first scan: nothing before it is observable. */
+    TEST_ASSERT_EQUAL_MEMORY(zero, loc.ekf.p, sizeof zero);
+    make_scan(&want, NULL, 0u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+    TEST_ASSERT_GREATER_THAN_FLOAT(0.0f, loc.ekf.p[0]);
+    TEST_ASSERT_GREATER_THAN_FLOAT(0.0f, loc.ekf.p[8]);
+}
+
 void test_localizer_scan_should_reject_invalid_arguments(void)
 {
     rsm_localizer_report_t rep;
@@ -1313,6 +1331,7 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_recover_from_being_carried_by_searching);
     RUN_TEST(test_localizer_map_should_survive_poses_far_beyond_its_range);
     RUN_TEST(test_localizer_motion_should_refuse_non_finite_increments);
+    RUN_TEST(test_localizer_motion_before_the_first_scan_should_move_the_start_without_noise);
     RUN_TEST(test_localizer_scan_should_reject_invalid_arguments);
     RUN_TEST(test_localizer_scan_should_be_bit_identical_side_by_side);
     RUN_TEST(test_localizer_scan_should_not_interfere_with_another_localizer);

@@ -452,6 +452,55 @@ void test_sicklms_poll_should_yield_robot_frame_scans_from_the_b0_stream(void)
     TEST_ASSERT_EQUAL_UINT32(0u, drv.stats.crc_errors);
 }
 
+/* A scan of n readings of 1 m at scanner angles start + i * step (1/100 deg). */
+static void lms_layout(rsm_lms_scan_t *raw, size_t n, uint16_t start_cdeg, uint16_t step_cdeg)
+{
+    size_t i;
+    memset(raw, 0, sizeof *raw);
+    raw->count = n;
+    raw->start_cdeg = start_cdeg;
+    raw->step_cdeg = step_cdeg;
+    for (i = 0; i < n; i++) {
+        raw->reading[i].range_m = 1.0f;
+        raw->reading[i].code = RSM_LMS_READING_OK;
+    }
+}
+
+void test_sicklms_to_scan_should_lay_out_bearings_as_a_carmen_scan_bit_for_bit(void)
+{
+    /* rsm-nav --carmen lays a 180-degree scan of n beams out as
+     * rsm_scan_set_uniform(-pi/2, pi/n); the same readings from the LMS must
+     * get the very same floats, or the capture path and the direct run of one
+     * log see different points. */
+    static rsm_lms_scan_t raw;
+    static rsm_scan_t got;
+    static rsm_scan_t want;
+    static const struct { size_t n; uint16_t step; float carmen_n; } cases[] = {{181u, 100u, 180.0f},
+                                                                               {361u, 50u, 360.0f}};
+    size_t c;
+    size_t i;
+    for (c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        if (cases[c].n > RSM_MAX_BEAMS) {
+            continue; /* a small build cannot hold a half-degree scan */
+        }
+        lms_layout(&raw, cases[c].n, 0u, cases[c].step);
+        TEST_ASSERT_EQUAL_INT(0, rsm_sicklms_to_scan(&raw, 0u, &got));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_scan_set_uniform(&want, cases[c].n, -RSM_PI / 2.0f, RSM_PI / cases[c].carmen_n));
+        TEST_ASSERT_EQUAL_MEMORY(want.angle_rad, got.angle_rad, cases[c].n * sizeof got.angle_rad[0]);
+        /* Upside down: the mirror image, exactly. */
+        TEST_ASSERT_EQUAL_INT(0, rsm_sicklms_to_scan(&raw, 1u, &got));
+        for (i = 0; i < cases[c].n; i++) {
+            TEST_ASSERT_TRUE(-want.angle_rad[i] == got.angle_rad[i]);
+        }
+    }
+    /* The 100-degree variant: 40..140 deg on the scanner, -50..50 in the robot. */
+    lms_layout(&raw, 101u, 4000u, 100u);
+    TEST_ASSERT_EQUAL_INT(0, rsm_sicklms_to_scan(&raw, 0u, &got));
+    for (i = 0; i < 101u; i++) {
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, ((float)i - 50.0f) * (RSM_PI / 180.0f), got.angle_rad[i]);
+    }
+}
+
 void test_sicklms_poll_should_count_a_corrupted_telegram_and_keep_streaming(void)
 {
     rsm_sicklms_event_t ev;
@@ -710,6 +759,7 @@ int main(void)
     RUN_TEST(test_sicklms_connect_should_switch_to_38400_after_the_reply_at_the_old_rate);
     RUN_TEST(test_sicklms_connect_should_reprobe_instead_of_repeating_a_lost_baud_change);
     RUN_TEST(test_sicklms_poll_should_yield_robot_frame_scans_from_the_b0_stream);
+    RUN_TEST(test_sicklms_to_scan_should_lay_out_bearings_as_a_carmen_scan_bit_for_bit);
     RUN_TEST(test_sicklms_poll_should_count_a_corrupted_telegram_and_keep_streaming);
     RUN_TEST(test_sicklms_poll_should_report_link_loss_and_reconnect);
     RUN_TEST(test_sicklms_connect_should_decode_scans_with_the_measuring_mode_read_from_the_unit);

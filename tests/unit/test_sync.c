@@ -99,6 +99,11 @@ void test_init_should_reject_bad_arguments(void)
     none.max_wait_us = 0u;
     none.hold_us = 0u;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(&sync, &loc, &none, NULL, NULL));
+    none = scfg;
+    none.max_travel_m = -1.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(&sync, &loc, &none, NULL, NULL));
+    none.max_travel_m = NAN;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(&sync, &loc, &none, NULL, NULL));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_encoder(NULL, &zero_sample));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_encoder(&sync, NULL));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_scan(&sync, NULL));
@@ -280,10 +285,13 @@ void test_old_samples_should_be_applied_after_the_hold_time(void)
 {
     enc(0u, 0u);
     enc(12800u, 100000u);
-    TEST_ASSERT_EQUAL_FLOAT(0.0f, rsm_localizer_pose(&loc).x);
+    TEST_ASSERT_EQUAL_UINT32(2u, sync.count);
     enc(25600u, 100000u + scfg.hold_us + 1u);
-    /* The first two are older than the hold time: applied. */
-    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.1f, rsm_localizer_pose(&loc).x);
+    /* The first two are older than the hold time: applied (composed for
+     * the next scan's prediction), the third still held. */
+    TEST_ASSERT_EQUAL_UINT32(1u, sync.count);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.1f, sync.pending.x);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, rsm_localizer_pose(&loc).x);
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.2f, rsm_sync_pose(&sync).x);
 }
 
@@ -295,7 +303,7 @@ void test_full_buffer_should_apply_the_oldest_sample_and_count_it(void)
         enc(k * 1280u, 100u + k);
     }
     TEST_ASSERT_EQUAL_UINT32(2u, sync.counters.encoder_overflow);
-    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(1280.0), rsm_localizer_pose(&loc).x);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(1280.0), sync.pending.x);
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(1280.0 * (RSM_SYNC_DEPTH + 1)), rsm_sync_pose(&sync).x);
 }
 
@@ -354,6 +362,84 @@ void test_encoder_restart_should_take_no_step_across_a_new_connection(void)
     TEST_ASSERT_EQUAL_UINT32(1u, sync.counters.restarts);
     TEST_ASSERT_EQUAL_UINT32(0u, loc.odo.implausible);
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_encoder_restart(NULL));
+}
+
+/* First scan at 100 us, then two 0.1 m samples, then a scan at 300 us. */
+static void two_samples_between_scans(void)
+{
+    enc(0u, 100u);
+    scan_at(100u);
+    enc(12800u, 200u);
+    enc(25600u, 300u);
+    scan_at(300u);
+}
+
+void test_odometry_between_scans_should_be_predicted_once_per_scan(void)
+{
+    static rsm_localizer_t ref;
+    const rsm_pose_t x0 = {0.0f, 0.0f, 0.0f};
+    const rsm_motion_t both = {0.2f, 0.0f, 0.0f};
+    float p_once[9];
+    two_samples_between_scans();
+    TEST_ASSERT_EQUAL_size_t(2, res.n);
+    TEST_ASSERT_EQUAL_UINT32(1u, loc.counters.motions);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.2f, res.x[1]);
+    /* The filter of a run fed one increment per scan (a CARMEN log's). */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&ref, &lcfg, &x0, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&ref, &scan, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&ref, &both));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&ref, &scan, NULL));
+    TEST_ASSERT_EQUAL_MEMORY(ref.ekf.p, loc.ekf.p, sizeof loc.ekf.p);
+    TEST_ASSERT_EQUAL_MEMORY(&ref.ekf.x, &loc.ekf.x, sizeof loc.ekf.x);
+    memcpy(p_once, loc.ekf.p, sizeof p_once);
+    /* max_travel_m 0: a prediction per sample, each with its own noise
+     * (the floors twice): another filter for the same motion. */
+    setUp();
+    scfg.max_travel_m = 0.0f;
+    two_samples_between_scans();
+    TEST_ASSERT_EQUAL_UINT32(2u, loc.counters.motions);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.2f, res.x[1]);
+    TEST_ASSERT_TRUE(memcmp(p_once, loc.ekf.p, sizeof p_once) != 0);
+}
+
+void test_travel_without_scans_should_be_predicted_at_the_travel_limit(void)
+{
+    uint32_t k;
+    enc(0u, 100u);
+    scan_at(100u);
+    /* 5 m straight with no scan: predicted at 2 m and 4 m of travel. */
+    TEST_ASSERT_EQUAL_FLOAT(2.0f, scfg.max_travel_m);
+    for (k = 1u; k <= 50u; ++k) {
+        enc(k * 12800u, 100u + 100000u * k);
+    }
+    TEST_ASSERT_EQUAL_INT(0, rsm_sync_flush(&sync));
+    TEST_ASSERT_EQUAL_UINT32(3u, loc.counters.motions); /* two at the limit, the rest at the flush */
+    TEST_ASSERT_EQUAL_UINT32(2u, sync.counters.blind_predictions);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 5.0f, rsm_localizer_pose(&loc).x);
+}
+
+void test_turning_on_the_spot_should_be_predicted_before_half_a_turn(void)
+{
+    /* Four whole turns on the spot in sevenths, no scan: the net step is
+     * nothing (a composed whole turn would wrap to it), but every three
+     * sevenths (a fourth would pass half a turn) are predicted, with their
+     * noise. */
+    const float b = lcfg.odometry.wheel_base_m;
+    const int32_t per_turn = (int32_t)lroundf(RSM_PI * b * TICKS_PER_M); /* each wheel, one turn */
+    const float three_sevenths = 6.0f * RSM_PI / 7.0f;
+    int32_t k;
+    enc(0u, 100u);
+    scan_at(100u);
+    for (k = 1; k <= 28; ++k) {
+        const int32_t t = per_turn * k / 7;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, encoder((uint32_t)-t, (uint32_t)t, 100u + 100000u * (uint64_t)k));
+    }
+    TEST_ASSERT_EQUAL_INT(0, rsm_sync_flush(&sync));
+    TEST_ASSERT_EQUAL_UINT32(9u, sync.counters.blind_predictions); /* before the 4th, 7th, ... 28th */
+    TEST_ASSERT_EQUAL_UINT32(10u, loc.counters.motions);          /* and the 28th at the flush */
+    TEST_ASSERT_FLOAT_WITHIN(1e-3f, 0.0f, rsm_localizer_pose(&loc).theta);
+    TEST_ASSERT_GREATER_THAN_FLOAT(9.0f * powf(lcfg.odometry.sigma_rot_per_rad * three_sevenths, 2.0f) * 0.99f,
+                                   loc.ekf.p[8]);
 }
 
 void test_default_config_should_snap_within_a_millisecond(void)
@@ -456,6 +542,9 @@ int main(void)
     RUN_TEST(test_flush_should_fuse_the_waiting_scan_and_apply_all_odometry);
     RUN_TEST(test_scan_older_than_applied_odometry_should_count_as_late);
     RUN_TEST(test_backwards_encoder_stamp_should_be_taken_in_arrival_order);
+    RUN_TEST(test_odometry_between_scans_should_be_predicted_once_per_scan);
+    RUN_TEST(test_travel_without_scans_should_be_predicted_at_the_travel_limit);
+    RUN_TEST(test_turning_on_the_spot_should_be_predicted_before_half_a_turn);
     RUN_TEST(test_old_samples_should_be_applied_after_the_hold_time);
     RUN_TEST(test_full_buffer_should_apply_the_oldest_sample_and_count_it);
     RUN_TEST(test_scan_offset_should_move_the_alignment_time);

@@ -936,10 +936,12 @@ static int write_summary_json(nav_t *nav, const char *path)
         fprintf(f,
                 "  \"alignment\": {\"scans\": %u, \"encoders\": %u, \"interpolated\": %u, \"exact\": %u, "
                 "\"late\": %u, \"timed_out\": %u, \"superseded\": %u, \"encoder_backwards\": %u, "
-                "\"encoder_overflow\": %u, \"restarts\": %u}",
+                "\"encoder_overflow\": %u, \"restarts\": %u, \"blind_predictions\": %u},\n"
+                "  \"predictions\": %u",
                 (unsigned)a->scans, (unsigned)a->encoders, (unsigned)a->interpolated, (unsigned)a->exact,
                 (unsigned)a->late, (unsigned)a->timed_out, (unsigned)a->superseded, (unsigned)a->encoder_backwards,
-                (unsigned)a->encoder_overflow, (unsigned)a->restarts);
+                (unsigned)a->encoder_overflow, (unsigned)a->restarts, (unsigned)a->blind_predictions,
+                (unsigned)nav->loc.counters.motions);
     }
     if (nav->cfg.method == RSM_METHOD_MAP && nav->initialised) {
         const rsm_tmap_t *m = &nav->loc.state.persistent.map;
@@ -997,6 +999,14 @@ static void print_summary(nav_t *nav)
                (unsigned)a->interpolated, (unsigned)a->exact, (unsigned)a->late, (unsigned)a->timed_out,
                (unsigned)a->superseded, (unsigned)a->encoder_backwards, (unsigned)a->encoder_overflow);
     }
+    /* Capture and live modes compose the odometry between scans (rsm/sync.h):
+     * one prediction per scan, as --carmen makes. */
+    printf("  predictions     %u odometry predictions", (unsigned)nav->loc.counters.motions);
+    if (nav->sync.counters.blind_predictions > 0u) {
+        printf(", %u of them with no scan (after max_travel_m of wheel travel, or before a half turn)",
+               (unsigned)nav->sync.counters.blind_predictions);
+    }
+    printf("\n");
     if (nav->loc.odo.implausible != 0u || nav->loc.odo.relatched != 0u || nav->loc.ekf.lost != 0u) {
         printf("  odometry        %u implausible increments refused, %u counter restarts taken up,"
                " %u predictions lost (covariance reset)\n",

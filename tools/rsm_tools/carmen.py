@@ -392,6 +392,22 @@ def read_log(
     return iter(LogReader(source, types=types, stats=stats))
 
 
+def first_scan_after_motion(source: Union[PathLike, Iterable[str]]) -> int:
+    """The index (from 0) of the first FLASER scan whose odometry (any ODOM or
+    FLASER pose since the first record) differs from the first pose: the
+    scans before it saw the robot standing still.  The scan count if none."""
+    scan, first, moved = -1, None, False
+    for r in read_log(source, types=("ODOM", "FLASER")):
+        pose = r.odom_pose if isinstance(r, FLaser) else r.pose
+        first = pose if first is None else first
+        moved = moved or pose != first
+        if isinstance(r, FLaser):
+            scan += 1
+            if moved:
+                return scan
+    return scan + 1
+
+
 # ---------------------------------------------------------------------------
 # writer
 

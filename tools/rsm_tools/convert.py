@@ -6,7 +6,8 @@
 
 * Every odometry pose of the log (each ODOM line and the odometry triple of
   each FLASER line) becomes one ARIA ENCODER packet (0x90) on channel
-  ``robot`` at the record's timestamp.  The 32-bit tick counts come from
+  ``robot`` at the record's timestamp (three for a step one arc cannot
+  reach, see :class:`TickEncoder`).  The 32-bit tick counts come from
   inverse differential-drive kinematics (see :func:`integrate`), accumulated
   as integers from the reconstructed pose, so quantisation never drifts.
 * Every FLASER scan becomes one LMS 0xB0 telegram on channel ``laser``
@@ -92,25 +93,35 @@ class TickEncoder:
 
     Each step starts from the pose reconstructed from the ticks already issued
     (closed loop), so rounding never accumulates.  A differential drive cannot
-    move sideways, but a logged odometry step can (the log rounds x, y to 1 mm
-    and theta to a few milliradians).  So a step is one arc (one packet) when
-    that lands within ``split_tol`` metres and ``split_tol_th`` radians of the
-    target; otherwise it is three packets: turn on the spot to face the target
-    (or face away from it, whichever turn is smaller), drive straight, turn on
-    the spot to the target heading.  Turning on the spot (dl = -dr) and driving
-    straight (dl = dr) are exact in the midpoint model, so the error after a
-    split step is only the tick quantisation.
+    move sideways, but a logged odometry step can (rounding in the log, and
+    steps the logging robot corrected).  So a step is one arc (one packet) when
+    that lands within ``split_tol`` metres (default one tick of wheel travel,
+    1 / ``ticks_per_m``) and ``split_tol_th`` radians of the target; otherwise
+    it is three packets: turn on the spot to face the target (or face away from
+    it, whichever turn is smaller), drive straight, turn on the spot to the
+    target heading.  Turning on the spot (dl = -dr) and driving straight
+    (dl = dr) are exact in the midpoint model, so the error after a split step
+    is only the tick quantisation.  The turns of a split are motion the log
+    did not have, all at one instant: a consumer that interpolates odometry
+    between packets (a spinning lidar's turn stamped between them) sees part
+    of them.  So a miss of at most ``coarse_tol`` metres (0.5 mm) is split
+    only when facing the target takes at most ``max_face`` radians (a long
+    enough step: 0.05 rad), else sent as the arc, and the closed loop takes
+    the rest up at a later step.
     """
 
     def __init__(self, first: Pose, ticks_per_m: float, wheel_base: float, start: int = 0,
-                 split_tol: float = 0.0005, split_tol_th: float = 5e-5) -> None:
+                 split_tol: Optional[float] = None, split_tol_th: float = 5e-5,
+                 coarse_tol: float = 0.0005, max_face: float = 0.05) -> None:
         self.tpm = ticks_per_m
         self.base = wheel_base
         self.left = start
         self.right = start
         self.pose = first
-        self.split_tol = split_tol
+        self.split_tol = 1.0 / ticks_per_m if split_tol is None else split_tol
         self.split_tol_th = split_tol_th
+        self.coarse_tol = coarse_tol
+        self.max_face = max_face
         self.splits = 0
 
     def _emit(self, dl: int, dr: int) -> Tuple[int, int]:
@@ -135,16 +146,16 @@ class TickEncoder:
         """Cumulative (left, right) counts of the packet(s) that reach ``target``."""
         dl, dr = self._arc(target)
         cand = integrate(self.pose, dl, dr, self.tpm, self.base)
-        if (math.hypot(cand[0] - target[0], cand[1] - target[1]) <= self.split_tol
-                and abs(wrap(cand[2] - target[2])) <= self.split_tol_th):
+        miss = math.hypot(cand[0] - target[0], cand[1] - target[1])
+        dx, dy = target[0] - self.pose[0], target[1] - self.pose[1]
+        turn = wrap(math.atan2(dy, dx) - self.pose[2])
+        if abs(turn) > 0.5 * math.pi:
+            turn = wrap(turn + math.pi)
+        if abs(wrap(cand[2] - target[2])) <= self.split_tol_th and (
+                miss <= self.split_tol or (miss <= self.coarse_tol and abs(turn) > self.max_face)):
             return [self._emit(dl, dr)]
         self.splits += 1
         out = []
-        dx, dy = target[0] - self.pose[0], target[1] - self.pose[1]
-        face = math.atan2(dy, dx)
-        turn = wrap(face - self.pose[2])
-        if abs(turn) > 0.5 * math.pi:
-            turn = wrap(turn + math.pi)
         p = self._turn(turn)
         if p:
             out.append(p)

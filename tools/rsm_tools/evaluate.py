@@ -225,6 +225,13 @@ def load_poses(path: PathLike) -> Tuple[Trajectory, str]:
     return Trajectory(rows), fmt
 
 
+def printed_poses(path: PathLike) -> List[List[str]]:
+    """``x y theta`` of every line of a trajectory file, as printed: two runs
+    whose lines compare equal gave the same poses to the printed digits."""
+    with open(path) as f:
+        return [line.split()[1:] for line in f if line.strip() and not line.startswith("#")]
+
+
 def load_trajectory(path: PathLike) -> Trajectory:
     """Load a ``timestamp x y theta`` file (a 5-column corrected-poses file works too)."""
     return load_poses(path)[0]

@@ -12,9 +12,10 @@ folder (``RSM_SHARED_DIR``, see docs/reference/README.md) is here, and
   and poses are those of the full files (tests/data/README.md);
 * on every log, rsm is more accurate than the ICP baseline and odometry alone
   on every measure, and a second run is bit-identical;
-* the capture path (rsm-convert, then ``rsm-nav --capture``) tracks within 2 %
-  of the direct run on the log (``rsm-nav --carmen``), on all relations and on
-  local ones;
+* the capture path (rsm-convert, then ``rsm-nav --capture``) gives the direct
+  run's poses (``rsm-nav --carmen``) until the robot first moves, and tracks
+  within 2 % of it, on all relations and on local ones (docs/capture.md says
+  why the all-relations figure can miss it on one run);
 * a figure that depends on the machine's speed and load, so it is no test: the
   shipped excerpt replayed over pseudo-terminals in real time (8x) into
   ``rsm-nav --listen``, its local error against the 0.03 m floor and how many
@@ -37,7 +38,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 from . import capture as cap
 from . import convert
 from . import evaluate as ev
-from .carmen import LogStats, read_log, time_key
+from .carmen import LogStats, first_scan_after_motion, read_log, time_key
 from .excerpt import excerpt_log, excerpt_poses, excerpt_relations
 from .fileio import open_binary
 
@@ -192,14 +193,21 @@ def capture_poses(capf: Path, traj: Path) -> List[Tuple[float, float, float, flo
 
 
 def check_capture_path(label: str, nav: Path, log: Path, relations: List[ev.Relation],
-                       direct: Dict[str, dict], work: Path) -> List[dict]:
-    """The log as serial bytes (rsm-convert) through rsm-nav --capture, beside the direct run."""
+                       direct: Dict[str, dict], work: Path, direct_traj: Path) -> List[dict]:
+    """The log as serial bytes (rsm-convert) through rsm-nav --capture, beside
+    the direct run: the same poses until the robot first moves (the inputs
+    are the same bits until then), and the errors within CAPTURE_TOLERANCE."""
     capf = work / f"{label}.cap"
     st = convert.convert(log, capf)
     traj = work / f"{label}-capture.txt"
     run_nav(nav, ["--capture", str(capf)], traj)
     got = errors(capture_poses(capf, traj), relations)
-    out = []
+    mine, theirs = ev.printed_poses(traj), ev.printed_poses(direct_traj)
+    same = next((k for k, (a, b) in enumerate(zip(mine, theirs)) if a != b), min(len(mine), len(theirs)))
+    still = first_scan_after_motion(log)
+    out = [check(same >= still, "capture", label, f"{label}: capture path: the first {same} poses equal to the "
+                 f"direct run's ({'>=' if same >= still else '<'} {still}, the scans before the robot first moves)",
+                 same, still)]
     for scope in ("all", "local"):
         mine, ref = got[scope]["translation"]["mean"], direct[scope]["translation"]["mean"]
         r = mine / ref if ref > 0 else float("inf")
@@ -229,16 +237,12 @@ def check_live_replay(nav: Path, root: Path, work: Path) -> List[dict]:
     rels = ev.load_relations(data / "intel_head.relations")
     got = errors(capture_poses(capf, live), rels)["local"]["translation"]["mean"]
     want = errors(capture_poses(capf, ref), rels)["local"]["translation"]["mean"]
-    same = sum(a == b for a, b in zip(_poses(live), _poses(ref)))
+    same = sum(a == b for a, b in zip(ev.printed_poses(live), ev.printed_poses(ref)))
     ok = got <= LIVE_FLOOR
     return [check(ok, "live", "excerpt", f"excerpt replayed in real time ({LIVE_SPEED}x) into rsm-nav --listen: "
                   f"local translation {got:.4f} m ({'<=' if ok else '>'} {LIVE_FLOOR} m; capture mode {want:.4f} m), "
-                  f"{same} of {len(_poses(ref))} poses equal to capture mode's (this machine, this load)",
+                  f"{same} of {len(ev.printed_poses(ref))} poses equal to capture mode's (this machine, this load)",
                   got, LIVE_FLOOR)]
-
-
-def _poses(traj: Path) -> List[List[str]]:
-    return [l.split()[1:] for l in traj.read_text().splitlines() if l and not l.startswith("#")]
 
 
 def _tools_env() -> dict:
@@ -291,7 +295,7 @@ def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], wor
             errs[m] = errors(ev.load_trajectory(traj), relations)
         out += check_baselines(label, errs)
         out += check_rerun(label, nav, log, trajs["rsm"], work)
-        out += check_capture_path(label, nav, log, relations, errs["rsm"], work)
+        out += check_capture_path(label, nav, log, relations, errs["rsm"], work, trajs["rsm"])
     return out
 
 
