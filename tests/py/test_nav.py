@@ -177,6 +177,17 @@ def test_mount_from_a_hand_written_robotlaser1_line(tmp_path):
                                    "(log ROBOTLASER1; line 2)")
 
 
+def test_readings_at_a_robotlaser1_lines_maximum_range_are_no_returns(tmp_path):
+    # The line's laser says 81.9 m: its 3 m reading is a return. Saying 2.5 m,
+    # the same reading is that laser's no-return code, below the localizer's
+    # own 20 m limit: dropped as too long, not placed as a wall 3 m away.
+    s = run_nav(write_log(tmp_path / "a.clf", [RL1_MOUNTED]), tmp_path / "t.txt")
+    assert "readings dropped: nan 0, too short 0, too long 0" in s, s
+    short = RL1_MOUNTED.replace(" 81.900000 ", " 2.500000 ")
+    s = run_nav(write_log(tmp_path / "b.clf", [short]), tmp_path / "t.txt")
+    assert "readings dropped: nan 0, too short 0, too long 1" in s, s
+
+
 def test_mount_skips_a_nan_pose_and_counts_later_disagreement(tmp_path):
     nan = RL1_MOUNTED.replace("0.950000 2.220000", "nan 2.220000")
     robot = (3.0, -1.0, 2.5)

@@ -1,6 +1,7 @@
 #include "logrun.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -47,7 +48,10 @@ void logrun_scan(const carmen_record_t *rec, rsm_scan_t *scan)
 {
     size_t b;
     for (b = 0; b < rec->count; ++b) {
-        scan->range_m[b] = rec->range_m[b];
+        /* A reading at the range the record says the laser has is its
+         * no-return code, whatever the localizer's own limit: dropped as
+         * too long (counted there). */
+        scan->range_m[b] = rec->max_range_m > 0.0f && rec->range_m[b] >= rec->max_range_m ? FLT_MAX : rec->range_m[b];
     }
     (void)rsm_scan_set_uniform(scan, rec->count, rec->start_rad, rec->step_rad);
 }
