@@ -461,7 +461,11 @@ int rsm_tmap_write_begin(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_p
 }
 
 /* The beam pass of one return: clears its beam and, on wall_level, marks
- * the return behind a wall. Returns the cells it visited. */
+ * the return behind a wall when its beam crossed one (a cell at wall_value
+ * or above) without landing on one: behind a wall the laser cannot see, so
+ * the return is a phantom (noise, a reflection) or the wall has gone;
+ * either way it is not written until the beams have worn the wall down (or,
+ * with wall_echo, the last write saw it too). Returns the cells it visited. */
 static uint32_t clear_one(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t idx, int32_t ox, int32_t oy,
                           const rsm_point_t *p, size_t k)
 {
