@@ -822,7 +822,10 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         loc->have_scan = 1u;
     }
     if (loc->cfg->method == RSM_METHOD_MAP) {
-        (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->world, loc->cfg->tmap.write_cells);
+        /* The first scan matched nothing, so it has the time to write all
+         * of itself, and the second has a whole map to match. */
+        (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->world,
+                                 outcome == RSM_SCAN_FIRST ? 0u : loc->cfg->tmap.write_cells);
     }
     loc->last_stamp_us = scan->stamp_us;
     loc->counters.outcome[outcome]++;

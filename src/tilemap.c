@@ -543,33 +543,41 @@ int rsm_tmap_write_run(rsm_tmap_t *map, const rsm_point_t *points, uint32_t budg
     }
     job = &map->job;
     while (job->n > 0u) {
-        const uint32_t idx = job->pass >> 1;
+        const uint32_t idx = job->pass;
         const uint32_t level = pass_level(map, idx);
         const float inv_a = map->inv_cell[level];
         const int32_t ox = cell_of(job->origin.x, inv_a);
         const int32_t oy = cell_of(job->origin.y, inv_a);
-        const int beams = (job->pass & 1u) == 0u;
+        uint32_t end = job->next;
+        uint32_t k;
         rsm_tmap_cursor_t c;
+        /* A sector of consecutive beams within the budget, then their
+         * returns: beams of one sector seldom cross the returns of
+         * another, so a level written sector by sector over several scans
+         * ends nearly as one written whole, and never reads worn. */
         rsm_tmap_cursor_init(&c, level);
-        if (beams && map->cfg.miss_dec == 0u) {
-            job->next = job->n;
+        if (map->cfg.miss_dec == 0u) {
+            end = job->n;
         }
-        while (job->next < job->n) {
-            const uint32_t k = job->next++;
-            if (beams) {
-                spent += clear_one(map, &c, idx, ox, oy, &points[k], k);
-            } else {
-                hit_one(map, &c, &points[k], k);
-                spent += 1u;
+        while (end < job->n && (budget == 0u || spent < budget)) {
+            spent += clear_one(map, &c, idx, ox, oy, &points[end], end);
+            ++end;
+        }
+        rsm_tmap_cursor_init(&c, level);
+        for (k = job->next; k < end; ++k) {
+            hit_one(map, &c, &points[k], k);
+            spent += 1u;
+        }
+        job->next = end;
+        if (end == job->n) {
+            job->next = 0;
+            job->pass++;
+            if (job->pass >= map->cfg.levels) {
+                job->n = 0;
+                return 0;
             }
         }
-        job->next = 0;
-        job->pass++;
-        if ((job->pass >> 1) >= map->cfg.levels) {
-            job->n = 0;
-            return 0;
-        }
-        if (budget > 0u && spent >= budget && (job->pass & 1u) == 0u) {
+        if (budget > 0u && spent >= budget) {
             return 1;
         }
     }

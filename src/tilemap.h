@@ -56,11 +56,15 @@ int rsm_tmap_update(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_
 /* The same write spread over several calls, so that a scan pays a bounded
  * share of it: begin stamps the map and remembers origin and n (RSM_ERR_INVAL
  * as above, or while a write is in progress); each run continues it over the
- * same points (unchanged by the caller until the write ends) for about
- * budget cells (beam steps plus returns; 0: to the end) and returns 1 while
- * work remains, 0 once the write is complete. The order of the cells is the
- * one rsm_tmap_update uses, so a write run in pieces with no other write in
- * between leaves the same map. Reads see the map as far as it is written. */
+ * same points (unchanged by the caller until the write ends) and returns 1
+ * while work remains, 0 once the write is complete. Levels go one after the
+ * other, the finest first (wall_level first with the wall rule on); within
+ * a level a run takes consecutive beams until they have cost budget cells
+ * (beam steps; at least one beam) and then writes their returns, so the
+ * misses-before-hits rule holds per sector of beams, and no level ever
+ * reads with its beams cleared but its returns not yet written. Budget 0
+ * runs to the end in exactly rsm_tmap_update's order. Reads see the map as
+ * far as it is written. */
 int rsm_tmap_write_begin(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_point_t *points, size_t n);
 int rsm_tmap_write_run(rsm_tmap_t *map, const rsm_point_t *points, uint32_t budget);
 

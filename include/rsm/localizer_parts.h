@@ -197,8 +197,9 @@ typedef struct rsm_tmap_config {
                             * random and comes once, a surface seen through a doorway or
                             * along a grazed wall comes again from the next pose. Default 0 */
     uint16_t write_cells;  /* a write runs over the next scans, about this many cells (beam
-                            * steps and returns) per scan, so that no scan pays for a whole
-                            * write; 0 = each write at once. Default 4096 */
+                            * steps and returns) per scan, sector by sector of beams and
+                            * level by level (finest first), so that no scan pays for a
+                            * whole write; 0 = each write at once. Default 4096 */
 } rsm_tmap_config_t;
 
 typedef struct rsm_tmap_counters {

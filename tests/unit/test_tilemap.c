@@ -569,52 +569,69 @@ static size_t ring(rsm_point_t *pts, size_t n, float ox, float oy, float r)
     return n;
 }
 
-void test_tmap_write_should_run_over_several_calls_finest_level_first_and_end_as_one_write(void)
+void test_tmap_write_should_run_over_several_calls_sector_by_sector_finest_level_first(void)
 {
     static rsm_tmap_t whole;
     static rsm_tmap_t before;
+    static rsm_tmap_t once;
     rsm_point_t pts[90];
     const rsm_point_t o1 = {0.3f, 0.2f};
     const rsm_point_t o2 = {9.93f, -0.37f}; /* new ground; returns off cell borders */
     uint32_t calls = 0;
+    uint32_t level;
     size_t n;
+    size_t k;
     cfg.levels = 3u;
     init();
     whole = map;
-    /* The first write at once in both maps; the second in pieces in one. */
+    /* The first write at once in every map; the second whole in one... */
     n = ring(pts, 90u, o1.x, o1.y, 2.0f);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&whole, &o1, pts, n));
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o1, pts, n));
     before = map;
+    once = map;
     n = ring(pts, 90u, o2.x, o2.y, 1.7f);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&whole, &o2, pts, n));
+    /* ...and run without a budget in another: the same map, byte for byte. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_write_begin(&once, &o2, pts, n));
+    TEST_ASSERT_EQUAL_INT(0, rsm_tmap_write_run(&once, pts, 0u));
+    TEST_ASSERT_EQUAL_MEMORY(whole.tile, once.tile, sizeof once.tile);
+    TEST_ASSERT_EQUAL_MEMORY(whole.hash, once.hash, sizeof once.hash);
+    TEST_ASSERT_EQUAL_MEMORY(&whole.counters, &once.counters, sizeof once.counters);
+    /* In pieces in the third. */
     TEST_ASSERT_EQUAL_INT(0, rsm_tmap_writing(&map));
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_write_begin(&map, &o2, pts, n));
     TEST_ASSERT_EQUAL_INT(1, rsm_tmap_writing(&map));
     /* No second write while one runs, whole or in pieces. */
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tmap_write_begin(&map, &o2, pts, n));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tmap_update(&map, &o2, pts, n));
-    /* A budget of one cell: one level per call, the finest first. */
+    /* A budget of one cell: one beam and its return per call, on the
+     * finest level first. */
     TEST_ASSERT_EQUAL_INT(1, rsm_tmap_write_run(&map, pts, 1u));
     ++calls;
-    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(pts[0].x), cell(pts[0].y)));
     TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&before, 0u, cell(pts[0].x), cell(pts[0].y)));
+    TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, cell(pts[0].x), cell(pts[0].y)));
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell(pts[1].x), cell(pts[1].y)));
     TEST_ASSERT_EQUAL_UINT16(before.level_used[2], map.level_used[2]);
     TEST_ASSERT_TRUE(whole.level_used[2] > before.level_used[2]);
     while (rsm_tmap_write_run(&map, pts, 1u) != 0) {
         ++calls;
-        TEST_ASSERT_TRUE(calls < 10u);
+        TEST_ASSERT_TRUE(calls < 1000u);
     }
     ++calls;
-    TEST_ASSERT_EQUAL_UINT32(3u, calls);
+    TEST_ASSERT_EQUAL_UINT32(3u * (uint32_t)n, calls);
     TEST_ASSERT_EQUAL_INT(0, rsm_tmap_writing(&map));
     TEST_ASSERT_EQUAL_INT(0, rsm_tmap_write_run(&map, pts, 1u)); /* nothing left */
-    /* The same map as the write at once: every tile, the index, the counters. */
-    TEST_ASSERT_EQUAL_UINT16(whole.used, map.used);
-    TEST_ASSERT_EQUAL_MEMORY(whole.tile, map.tile, sizeof map.tile);
-    TEST_ASSERT_EQUAL_MEMORY(whole.hash, map.hash, sizeof map.hash);
-    TEST_ASSERT_EQUAL_MEMORY(&whole.counters, &map.counters, sizeof map.counters);
-    TEST_ASSERT_TRUE(map.counters.updates == 2u && map.used > 0u);
+    /* Radial beams cross no other return of this ring: every return's cell
+     * as the write at once left it, and the same tiles on every level. */
+    for (k = 0; k < n; ++k) {
+        TEST_ASSERT_EQUAL_UINT8(rsm_tmap_value(&whole, 0u, cell(pts[k].x), cell(pts[k].y)),
+                                rsm_tmap_value(&map, 0u, cell(pts[k].x), cell(pts[k].y)));
+    }
+    for (level = 0; level < cfg.levels; ++level) {
+        TEST_ASSERT_EQUAL_UINT16(whole.level_used[level], map.level_used[level]);
+    }
+    TEST_ASSERT_EQUAL_UINT32(whole.counters.updates, map.counters.updates);
 }
 
 int main(void)
@@ -636,6 +653,6 @@ int main(void)
     RUN_TEST(test_tmap_pool_should_keep_coarse_tiles_longer_with_age_shift);
     RUN_TEST(test_tmap_sample_should_interpolate_and_give_the_gradient);
     RUN_TEST(test_tmap_bounds_should_cover_the_held_tiles);
-    RUN_TEST(test_tmap_write_should_run_over_several_calls_finest_level_first_and_end_as_one_write);
+    RUN_TEST(test_tmap_write_should_run_over_several_calls_sector_by_sector_finest_level_first);
     return UNITY_END();
 }
