@@ -100,8 +100,8 @@ typedef struct rsm_tmap_way {
 #define RSM_TMAP_NO_KEY 0x80008000u
 
 /* last, bx, by: the tile of the last sample whose four cells lay in one
- * tile (NULL if none is held there) and that tile's first cell; a sample in
- * the same tile's interior needs no lookup at all. */
+ * tile (NULL if none is held there) and that tile's first cell; the next
+ * such sample in the same tile needs no lookup at all. */
 typedef struct rsm_tmap_cursor {
     uint32_t level;
     rsm_tmap_way_t way[4];

@@ -31,9 +31,9 @@ static inline void rsm_tmap_cursor_forget(rsm_tmap_cursor_t *c)
     c->way[1].key = RSM_TMAP_NO_KEY;
     c->way[2].key = RSM_TMAP_NO_KEY;
     c->way[3].key = RSM_TMAP_NO_KEY;
-    /* A first cell no sample is ever TILE_SIDE - 1 cells from. */
-    c->bx = INT32_MIN;
-    c->by = INT32_MIN;
+    /* No tile's first cell (those are multiples of the tile side). */
+    c->bx = INT32_MIN + 1;
+    c->by = INT32_MIN + 1;
     c->last = NULL;
 }
 
@@ -132,10 +132,16 @@ static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_
     }
     du = u - fu;
     dv = v - fv;
-    if ((uint32_t)i - (uint32_t)c->bx < (uint32_t)RSM_TMAP_TILE_MASK &&
-        (uint32_t)j - (uint32_t)c->by < (uint32_t)RSM_TMAP_TILE_MASK) {
-        /* In the interior of the last sample's tile: no lookup. */
+    if ((i & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (j & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK) {
+        /* All four cells in one tile: looked up only when it is not the
+         * last such sample's tile. */
         const uint32_t k = rsm_tmap_cell_index(i, j);
+        if ((i & ~RSM_TMAP_TILE_MASK) != c->bx || (j & ~RSM_TMAP_TILE_MASK) != c->by) {
+            const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
+            c->bx = i & ~RSM_TMAP_TILE_MASK;
+            c->by = j & ~RSM_TMAP_TILE_MASK;
+            c->last = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
+        }
         if (c->last == NULL) {
             *dx = 0.0f;
             *dy = 0.0f;
@@ -143,20 +149,6 @@ static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_
         }
         rsm_tmap_occ_pair(map, c->last, k, &m00, &m10);
         rsm_tmap_occ_pair(map, c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE, &m01, &m11);
-    } else if ((i & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (j & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK) {
-        /* All four cells in one tile: one lookup. */
-        const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
-        const uint32_t k = rsm_tmap_cell_index(i, j);
-        c->bx = i & ~RSM_TMAP_TILE_MASK;
-        c->by = j & ~RSM_TMAP_TILE_MASK;
-        c->last = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
-        if (s == RSM_TMAP_NONE) {
-            *dx = 0.0f;
-            *dy = 0.0f;
-            return 0.0f;
-        }
-        rsm_tmap_occ_pair(map, &map->tile[s], k, &m00, &m10);
-        rsm_tmap_occ_pair(map, &map->tile[s], k + (uint32_t)RSM_TMAP_TILE_SIDE, &m01, &m11);
     } else {
         m00 = map->occ[rsm_tmap_cell_value(map, c, i, j)];
         m10 = map->occ[rsm_tmap_cell_value(map, c, i + 1, j)];
