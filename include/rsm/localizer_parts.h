@@ -213,14 +213,15 @@ typedef struct rsm_tmap_counters {
     uint32_t outside;       /* returns beyond the tile coordinate range */
 } rsm_tmap_counters_t;
 
-/* The write in progress: the pass (two per level, beams then returns,
- * wall_level first) and the next return of it; the returns themselves stay
- * with the caller until the write ends. */
+/* The write in progress: the level it is on (in write order: the finest
+ * first, or wall_level with the wall rule) and the first beam of that
+ * level's next sector; the returns themselves stay with the caller until
+ * the write ends. */
 typedef struct rsm_tmap_job {
     rsm_point_t origin;                /* the laser's position for the write */
     uint32_t n;                        /* returns of the write; 0: none in progress */
-    uint32_t next;                     /* next return of the pass */
-    uint32_t pass;                     /* 2 * level index + (0 beams, 1 returns) */
+    uint32_t next;                     /* first beam of the next sector */
+    uint32_t pass;                     /* index of the level in write order */
     uint8_t behind[(RSM_MAX_BEAMS + 7) / 8];  /* returns not written (wall_value) */
     uint8_t lone[(RSM_MAX_BEAMS + 7) / 8];    /* returns no echo confirmed (wall_echo) */
 } rsm_tmap_job_t;
