@@ -163,6 +163,7 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
     }
     memset(loc, 0, sizeof *loc);
     loc->cfg = cfg;
+    rsm_scan_trig_init(&loc->trig);
     if ((rc = rsm_ekf_init(&loc->ekf, x0, p0)) != RSM_OK || (rc = rsm_odometry_init(&loc->odo, &cfg->odometry)) != RSM_OK) {
         return rc;
     }
@@ -775,7 +776,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         (void)rsm_localizer_motion(loc, &still);
     }
     loc->motions_at_scan = loc->counters.motions;
-    n = rsm_scan_to_points(scan, &loc->cfg->limits, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
+    n = rsm_scan_to_points_cached(scan, &loc->cfg->limits, &loc->trig, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
     npts = n > 0 ? (size_t)n : 0u;
     apply_mount(loc, npts);
     rep->points = (uint32_t)npts;

@@ -316,6 +316,15 @@ typedef struct prior {
     float reach; /* points_reach of the scan */
 } prior_t;
 
+/* Whether a step is too small to matter on a level: coarser levels only
+ * place the next one, so their thresholds grow with their cells. */
+static int small_step(const rsm_mapmatch_config_t *cfg, const float step[3], int level)
+{
+    const float scale = (float)(1u << (uint32_t)level);
+    return fabsf(step[0]) < cfg->min_step_m * scale && fabsf(step[1]) < cfg->min_step_m * scale &&
+           fabsf(step[2]) < cfg->min_step_rad * scale;
+}
+
 /* Gauss-Newton from x on every level, coarse to fine. On return x is the
  * estimate, s the finest level's sums there and the result the objective
  * (residuals plus prior) on the finest level. */
@@ -355,6 +364,13 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
                 step[k] = ai[k * 3] * g[0] + ai[k * 3 + 1] * g[1] + ai[k * 3 + 2] * g[2];
             }
             ++*iterations;
+            /* A coarse level whose next step is below its threshold has
+             * placed the next level: trying the step would cost a pass over
+             * every point to move a few millimetres that the next level
+             * sets anyway. The finest level tries every step it computes. */
+            if (level > 0 && small_step(cfg, step, level)) {
+                break;
+            }
             /* The interpolated occupancy has kinks at cell borders where a full
              * step can overshoot: take it only where it lowers the cost. A
              * coarse level that cannot lower it has placed the next level
@@ -384,11 +400,7 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
                     step[2] *= 0.5f;
                 }
             }
-            /* Coarser levels only place the next one: their thresholds grow
-             * with their cells. */
-            if (!accepted || (fabsf(step[0]) < cfg->min_step_m * (float)(1u << level) &&
-                              fabsf(step[1]) < cfg->min_step_m * (float)(1u << level) &&
-                              fabsf(step[2]) < cfg->min_step_rad * (float)(1u << level))) {
+            if (!accepted || small_step(cfg, step, level)) {
                 break;
             }
         }

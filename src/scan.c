@@ -62,8 +62,8 @@ int rsm_scan_reading_ok(const rsm_scan_t *scan, size_t i, const rsm_scan_limits_
     return 1;
 }
 
-int rsm_scan_to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_point_t *out,
-                       size_t cap, rsm_scan_drops_t *drops)
+static int to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_scan_trig_t *trig, rsm_point_t *out,
+                     size_t cap, rsm_scan_drops_t *drops)
 {
     size_t i;
     size_t n = 0;
@@ -72,12 +72,60 @@ int rsm_scan_to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm
     }
     for (i = 0; i < scan->count && n < cap; ++i) {
         if (rsm_scan_reading_ok(scan, i, lim, drops)) {
-            out[n].x = scan->range_m[i] * rsm_cosf(scan->angle_rad[i]);
-            out[n].y = scan->range_m[i] * rsm_sinf(scan->angle_rad[i]);
+            const float a = scan->angle_rad[i];
+            float c;
+            float s;
+            if (trig == NULL) {
+                c = rsm_cosf(a);
+                s = rsm_sinf(a);
+            } else {
+                /* Compared as bits: -0 and 0 have sines of opposite sign. */
+                uint32_t now;
+                uint32_t was;
+                memcpy(&now, &a, sizeof now);
+                memcpy(&was, &trig->angle[i], sizeof was);
+                if (now != was) {
+                    trig->angle[i] = a;
+                    trig->cos[i] = rsm_cosf(a);
+                    trig->sin[i] = rsm_sinf(a);
+                }
+                c = trig->cos[i];
+                s = trig->sin[i];
+            }
+            out[n].x = scan->range_m[i] * c;
+            out[n].y = scan->range_m[i] * s;
             ++n;
         }
     }
     return (int)n;
+}
+
+int rsm_scan_to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_point_t *out,
+                       size_t cap, rsm_scan_drops_t *drops)
+{
+    return to_points(scan, lim, NULL, out, cap, drops);
+}
+
+void rsm_scan_trig_init(rsm_scan_trig_t *trig)
+{
+    size_t i;
+    if (trig == NULL) {
+        return;
+    }
+    for (i = 0; i < (size_t)RSM_MAX_BEAMS; ++i) {
+        trig->angle[i] = NAN; /* no finite angle has its bits */
+        trig->cos[i] = 1.0f;
+        trig->sin[i] = 0.0f;
+    }
+}
+
+int rsm_scan_to_points_cached(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_scan_trig_t *trig,
+                              rsm_point_t *out, size_t cap, rsm_scan_drops_t *drops)
+{
+    if (trig == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    return to_points(scan, lim, trig, out, cap, drops);
 }
 
 /* Whether q continues p's surface (see rsm_points_isolated). */

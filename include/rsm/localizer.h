@@ -184,6 +184,7 @@ typedef struct rsm_localizer {
     } state;
     rsm_point_t pts[RSM_MAX_BEAMS];      /* usable readings, robot frame */
     rsm_point_t world[RSM_MAX_BEAMS];    /* the same in the world frame */
+    rsm_scan_trig_t trig;                /* the beam angles' cosines and sines */
     uint64_t last_stamp_us;
     uint32_t motions_at_scan;            /* counters.motions when the last scan came */
     uint8_t have_scan;

@@ -167,6 +167,59 @@ void test_scan_to_points_should_stop_at_cap(void)
     TEST_ASSERT_EQUAL_INT(0, n);
 }
 
+/* Points of the cached conversion equal the direct one's bit for bit,
+ * whether the angles repeat, change, or are zeros of either sign. */
+static void check_cached_equals_direct(rsm_scan_trig_t *trig)
+{
+    static rsm_point_t direct[RSM_MAX_BEAMS];
+    static rsm_point_t cached[RSM_MAX_BEAMS];
+    int n;
+    int m;
+    memset(direct, 0xAB, sizeof direct);
+    memset(cached, 0xCD, sizeof cached);
+    n = rsm_scan_to_points(&scan, &lim, direct, RSM_MAX_BEAMS, NULL);
+    m = rsm_scan_to_points_cached(&scan, &lim, trig, cached, RSM_MAX_BEAMS, NULL);
+    TEST_ASSERT_EQUAL_INT(n, m);
+    TEST_ASSERT_GREATER_THAN_INT(0, n);
+    TEST_ASSERT_EQUAL_MEMORY(direct, cached, (size_t)n * sizeof direct[0]);
+}
+
+void test_scan_to_points_cached_should_equal_the_direct_conversion(void)
+{
+    static rsm_scan_trig_t trig;
+    rsm_point_t one[1];
+    size_t i;
+    rsm_scan_trig_init(&trig);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_scan_set_uniform(&scan, RSM_MAX_BEAMS, -1.5f, 3.0f / (float)RSM_MAX_BEAMS));
+    for (i = 0; i < RSM_MAX_BEAMS; ++i) {
+        scan.range_m[i] = 1.0f + 0.01f * (float)i;
+    }
+    check_cached_equals_direct(&trig); /* fills the cache */
+    check_cached_equals_direct(&trig); /* reads it */
+    /* Other angles (another sensor, or a head turning): recomputed. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_scan_set_uniform(&scan, RSM_MAX_BEAMS, 0.25f, 0.01f));
+    check_cached_equals_direct(&trig);
+    /* One beam's angle moved by one ulp: that beam only is recomputed, and
+     * still right. */
+    scan.angle_rad[7] = nextafterf(scan.angle_rad[7], 10.0f);
+    check_cached_equals_direct(&trig);
+    /* Zero, then minus zero: the sines differ in sign, and so do the points. */
+    scan.angle_rad[0] = 0.0f;
+    check_cached_equals_direct(&trig);
+    scan.angle_rad[0] = -0.0f;
+    check_cached_equals_direct(&trig);
+    /* A fresh cache does not take +0 for an angle it holds (its slots are
+     * NaN, not the zeros of a cleared struct). */
+    rsm_scan_trig_init(&trig);
+    scan.angle_rad[0] = 0.0f;
+    check_cached_equals_direct(&trig);
+    /* Unusable readings are skipped as by the direct conversion. */
+    scan.range_m[3] = NAN;
+    scan.range_m[4] = 0.0f;
+    check_cached_equals_direct(&trig);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_scan_to_points_cached(&scan, &lim, NULL, one, 1, NULL));
+}
+
 void test_scan_to_points_should_handle_a_full_scan(void)
 {
     static rsm_point_t pts[RSM_MAX_BEAMS];
@@ -324,6 +377,7 @@ int main(void)
     RUN_TEST(test_scan_to_points_should_convert_usable_readings);
     RUN_TEST(test_scan_to_points_should_stop_at_cap);
     RUN_TEST(test_scan_to_points_should_handle_a_full_scan);
+    RUN_TEST(test_scan_to_points_cached_should_equal_the_direct_conversion);
     RUN_TEST(test_scan_to_points_should_reject_bad_arguments);
     RUN_TEST(test_points_isolated_should_mark_a_phantom_and_not_the_wall);
     RUN_TEST(test_points_isolated_should_judge_from_the_given_origin);
