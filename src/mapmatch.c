@@ -25,6 +25,7 @@ rsm_mapmatch_config_t rsm_mapmatch_config_default(void)
     c.search_step_rad = 0.02f;
     c.fan = 0u;
     c.gate_d2 = 0.0f;
+    c.basin = 3.0f;
     return c;
 }
 
@@ -32,7 +33,7 @@ int rsm_mapmatch_check(const rsm_mapmatch_config_t *cfg)
 {
     if (cfg == NULL || cfg->iterations < 1u || !(cfg->sigma > 0.0f) || !(cfg->min_step_m >= 0.0f) ||
         !(cfg->min_step_rad >= 0.0f) || !(cfg->search_rad >= 0.0f) || !(cfg->search_rad <= 1.0f) ||
-        !(cfg->gate_d2 >= 0.0f) ||
+        !(cfg->gate_d2 >= 0.0f) || !(cfg->basin >= 0.0f) ||
         (cfg->search_rad > 0.0f && !(cfg->search_step_rad > 0.0f && cfg->search_rad <= 64.0f * cfg->search_step_rad))) {
         return RSM_ERR_INVAL;
     }
@@ -52,17 +53,21 @@ typedef struct sums {
 } sums_t;
 
 /* The largest |x| + |y| of the points (a bound on how far from the pose
- * any of them lands, whatever the heading); NaN if one is not finite. */
-static float points_reach(const rsm_point_t *pts, size_t n)
+ * any of them lands, whatever the heading); NaN if one is not finite. Their
+ * mean in *mean (0 for none). */
+static float points_reach(const rsm_point_t *pts, size_t n, float *mean)
 {
     float reach = 0.0f;
+    float sum = 0.0f;
     size_t k;
     for (k = 0; k < n; ++k) {
         const float a = fabsf(pts[k].x) + fabsf(pts[k].y);
+        sum += a;
         if (!(a <= reach)) {
             reach = a;
         }
     }
+    *mean = n > 0u ? sum / (float)n : 0.0f;
     return reach;
 }
 
@@ -314,7 +319,26 @@ typedef struct prior {
     float lam[9];
     float w;
     float reach; /* points_reach of the scan */
+    int top;     /* the level the descent starts on */
 } prior_t;
+
+/* The coarsest level the descent needs: the one whose cell is at least
+ * cfg->basin times how far the prior's one-sigma error moves a point at
+ * the scan's mean range (every level when basin is 0). */
+static int start_level(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const float p0[9], float mean)
+{
+    const int coarsest = (int)map->cfg.levels - 1;
+    const float sp = sqrtf(p0[0] > p0[4] ? p0[0] : p0[4]);
+    const float need = cfg->basin * (sp + sqrtf(p0[8]) * mean);
+    int level = 0;
+    if (!(cfg->basin > 0.0f) || !(need < rsm_tmap_cell(map, (uint32_t)coarsest))) {
+        return coarsest;
+    }
+    while (level < coarsest && rsm_tmap_cell(map, (uint32_t)level) < need) {
+        ++level;
+    }
+    return level;
+}
 
 /* Whether a step is too small to matter on a level: coarser levels only
  * place the next one, so their thresholds grow with their cells. */
@@ -334,7 +358,7 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
     float f = 0.0f;
     int level;
     int k;
-    for (level = (int)map->cfg.levels - 1; level >= 0; --level) {
+    for (level = pr->top; level >= 0; --level) {
         float e[3];
         uint32_t it;
         level_sums(map, (uint32_t)level, pts, n, pr->reach, x, s);
@@ -434,7 +458,11 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
     }
     pr.x0 = x0;
     pr.w = 1.0f / (cfg->sigma * cfg->sigma);
-    pr.reach = points_reach(pts, n);
+    {
+        float mean;
+        pr.reach = points_reach(pts, n, &mean);
+        pr.top = start_level(map, cfg, pf, mean);
+    }
     x = start != NULL ? *start : *x0;
     {
         const float f = descend(map, cfg, pts, n, &pr, &x, &s, &res->iterations);
@@ -472,6 +500,7 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
         res->d2 = quad(pr.lam, e);
     }
     res->pose = x;
+    res->top = (uint32_t)pr.top;
     res->used = s.used;
     res->cost = s.cost_used / (float)s.used;
     res->hit = n > 0u ? s.hit / (float)n : 0.0f;

@@ -47,6 +47,7 @@ typedef struct rsm_mapmatch_result {
     float hit;              /* mean M over all points at the finest level, in [0, 1] */
     uint32_t used;          /* points with a gradient at the finest level */
     uint32_t iterations;    /* steps taken, all levels */
+    uint32_t top;           /* the level the descent started on (cfg->basin) */
     float d2;               /* (x - x0)^T P0^-1 (x - x0): how far the scan moved the estimate */
 } rsm_mapmatch_result_t;
 

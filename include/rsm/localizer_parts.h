@@ -264,6 +264,11 @@ typedef struct rsm_mapmatch_config {
                              * ((x - x0)^T P0^-1 (x - x0)); 0 = off, the default: the prior
                              * is already part of the cost, and refusing scans lets the map
                              * and the estimate part ways (measured in docs/map.md) */
+    float basin;            /* the descent starts on the coarsest level whose cell is at
+                             * least basin times the prior's reach (its position std plus
+                             * heading std times the scan's mean range): coarser cells
+                             * only widen a basin the prediction does not need; 0 = always
+                             * the coarsest */
 } rsm_mapmatch_config_t;
 #ifdef __cplusplus
 }

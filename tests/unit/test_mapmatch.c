@@ -154,6 +154,39 @@ void test_mapmatch_should_converge_from_a_wrong_prediction(void)
     assert_converges(&truth, &pred, 0.02f, 0.5f * DEG);
 }
 
+/* The descent starts on the coarsest level only when the prior needs its
+ * basin (cfg.basin): a tight prior starts finer and ends where the full
+ * descent does; a wide one, or basin 0, starts on the coarsest. */
+void test_mapmatch_should_start_on_the_level_the_prior_needs(void)
+{
+    /* 5 mm and 0.2 degrees (std). */
+    static const float p_tight[9] = {2.5e-5f, 0.0f, 0.0f, 0.0f, 2.5e-5f, 0.0f, 0.0f, 0.0f, 1.2e-5f};
+    const rsm_pose_t truth_w = {-0.3f, 0.1f, 0.4f};
+    const rsm_pose_t truth = in_map(&truth_w);
+    const uint32_t coarsest = (uint32_t)mcfg.levels - 1u;
+    rsm_mapmatch_result_t tight;
+    rsm_mapmatch_result_t all;
+    rsm_mapmatch_result_t wide;
+    size_t n;
+    build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
+    n = points_at(&truth_w);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &truth, p_tight, NULL, &tight));
+    TEST_ASSERT_LESS_THAN_UINT32(coarsest, tight.top);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &truth, p_wide, NULL, &wide));
+    TEST_ASSERT_EQUAL_UINT32(coarsest, wide.top);
+    cfg.basin = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &truth, p_tight, NULL, &all));
+    TEST_ASSERT_EQUAL_UINT32(coarsest, all.top);
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&tight.pose, &all.pose) < 0.005f);
+    TEST_ASSERT_TRUE(rsm_synth_angle_error(&tight.pose, &all.pose) < 0.1f * DEG);
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&tight.pose, &truth) < 0.02f);
+    /* Fewer levels, fewer steps. */
+    TEST_ASSERT_LESS_THAN_UINT32(all.iterations, tight.iterations);
+    /* A negative basin is refused. */
+    cfg.basin = -1.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(&cfg));
+}
+
 /* A 16 m x 10 m hall with four boxes: far walls, where a heading error of
  * a few degrees moves the points by more than the coarsest cell; the boxes
  * nearby still lead the coarse levels there. */
@@ -364,6 +397,7 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_mapmatch_should_converge_from_a_wrong_prediction);
+    RUN_TEST(test_mapmatch_should_start_on_the_level_the_prior_needs);
     RUN_TEST(test_mapmatch_should_recover_large_heading_errors_in_a_hall);
     RUN_TEST(test_mapmatch_should_move_only_across_a_corridor);
     RUN_TEST(test_mapmatch_search_should_find_a_pose_a_metre_off);

@@ -83,6 +83,7 @@
     F("mm_search", mapmatch.search_rad) \
     U("mm_fan", mapmatch.fan, uint8_t) \
     F("mm_gate", mapmatch.gate_d2) \
+    F("mm_basin", mapmatch.basin) \
     F("recover_ratio", recover_ratio) \
     F("recover_m", recover_m) \
     F("recover_rad", recover_rad) \
