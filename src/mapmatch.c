@@ -360,6 +360,7 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
     int k;
     for (level = pr->top; level >= 0; --level) {
         float e[3];
+        float scale = 1.0f; /* halved for good once a step overshoots */
         uint32_t it;
         level_sums(map, (uint32_t)level, pts, n, pr->reach, x, s);
         diff(x, pr->x0, e);
@@ -398,9 +399,14 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
             /* The interpolated occupancy has kinks at cell borders where a full
              * step can overshoot: take it only where it lowers the cost. A
              * coarse level that cannot lower it has placed the next level
-             * well enough; the finest tries half the step too. (Five
+             * well enough; the finest tries half the step too, and keeps
+             * halving its steps from then on: past a kink the heading
+             * otherwise zigzags for the rest of the iterations. (Five
              * halvings everywhere cost a tenth more per scan for the same
              * accuracy: docs/map.md.) */
+            for (k = 0; k < 3; ++k) {
+                step[k] *= scale;
+            }
             for (halvings = 0; halvings < (level > 0 ? 1 : 2) && !accepted; ++halvings) {
                 rsm_pose_t cand;
                 sums_t cs;
@@ -422,6 +428,7 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
                     step[0] *= 0.5f;
                     step[1] *= 0.5f;
                     step[2] *= 0.5f;
+                    scale *= 0.5f;
                 }
             }
             if (!accepted || small_step(cfg, step, level)) {
