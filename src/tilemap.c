@@ -133,6 +133,57 @@ static void hash_remove(rsm_tmap_t *map, uint32_t s)
     map->hash[i] = (uint16_t)RSM_TMAP_NONE;
 }
 
+/* How far a tile is from being kept: its age in writes, divided by
+ * 2^(age_shift * level), times 2^unconfirmed_shift when no cell of it
+ * reached saturation. 0 for a tile written by the update in progress. */
+static uint32_t scaled_age(const rsm_tmap_t *map, const rsm_tile_t *t)
+{
+    const uint32_t age = (map->stamp - (t->stamp & STAMP_MASK)) & STAMP_MASK;
+    uint32_t scaled = age >> (map->cfg.age_shift * tile_level(t));
+    if ((t->stamp & CONFIRMED) == 0u) {
+        scaled = scaled < (STAMP_MASK >> map->cfg.unconfirmed_shift) ? scaled << map->cfg.unconfirmed_shift
+                                                                      : STAMP_MASK;
+    }
+    return age > 0u ? scaled : 0u;
+}
+
+/* Searches the whole pool for the RSM_TMAP_VICTIMS tiles oldest_slot
+ * would evict first: largest scaled age first, the lower slot first
+ * among equals; none written by the update in progress. */
+static void find_victims(rsm_tmap_t *map)
+{
+    uint32_t best[RSM_TMAP_VICTIMS];
+    uint32_t n = 0;
+    uint32_t k;
+    for (k = 0; k < map->used; ++k) {
+        const rsm_tile_t *t = &map->tile[k];
+        const uint32_t age = (map->stamp - (t->stamp & STAMP_MASK)) & STAMP_MASK;
+        const uint32_t scaled = scaled_age(map, t);
+        uint32_t at;
+        if (age == 0u || (n == (uint32_t)RSM_TMAP_VICTIMS && !(scaled > best[n - 1u]))) {
+            continue;
+        }
+        /* After every entry at least as old: equals stay in slot order. */
+        at = n < (uint32_t)RSM_TMAP_VICTIMS ? n : n - 1u;
+        while (at > 0u && best[at - 1u] < scaled) {
+            best[at] = best[at - 1u];
+            map->victim_slot[at] = map->victim_slot[at - 1u];
+            map->victim_stamp[at] = map->victim_stamp[at - 1u];
+            --at;
+        }
+        best[at] = scaled;
+        map->victim_slot[at] = (uint16_t)k;
+        map->victim_stamp[at] = t->stamp;
+        if (n < (uint32_t)RSM_TMAP_VICTIMS) {
+            ++n;
+        }
+    }
+    map->victims = n;
+    map->victim_next = 0;
+    map->victims_at = map->stamp;
+    map->victims_valid = 1u;
+}
+
 /* The slot to reuse: the one written longest ago, where a tile's age counts
  * 4^-level (a coarse tile holds 4^level times the area of a fine one for the
  * same bytes, so the building's outline outlives the fine detail around
@@ -141,24 +192,26 @@ static void hash_remove(rsm_tmap_t *map, uint32_t s)
  * it; phantoms in free space would otherwise push out the places seen
  * minutes ago). Never a slot written by the update in progress;
  * RSM_TMAP_NONE if every slot was. */
-static uint32_t oldest_slot(const rsm_tmap_t *map)
+static uint32_t oldest_slot(rsm_tmap_t *map)
 {
-    uint32_t best_age = 0;
-    uint32_t s = RSM_TMAP_NONE;
-    uint32_t k;
-    for (k = 0; k < map->used; ++k) {
-        const uint32_t age = (map->stamp - (map->tile[k].stamp & STAMP_MASK)) & STAMP_MASK;
-        uint32_t scaled = age >> (map->cfg.age_shift * tile_level(&map->tile[k]));
-        if ((map->tile[k].stamp & CONFIRMED) == 0u) {
-            scaled = scaled < (STAMP_MASK >> map->cfg.unconfirmed_shift) ? scaled << map->cfg.unconfirmed_shift
-                                                                          : STAMP_MASK;
+    int searched = 0;
+    for (;;) {
+        if (!map->victims_valid || map->victims_at != map->stamp || map->victim_next >= map->victims) {
+            if (searched) {
+                return RSM_TMAP_NONE; /* every slot was written by this update */
+            }
+            find_victims(map);
+            searched = 1;
         }
-        if (age > 0u && (s == RSM_TMAP_NONE || scaled > best_age)) {
-            best_age = scaled;
-            s = k;
+        while (map->victim_next < map->victims) {
+            const uint32_t s = map->victim_slot[map->victim_next];
+            const uint32_t st = map->victim_stamp[map->victim_next];
+            map->victim_next++;
+            if (s < map->used && map->tile[s].stamp == st) {
+                return s;
+            }
         }
     }
-    return s;
 }
 
 /* Slot for a tile that is not held: a free one, else oldest_slot's.
@@ -213,6 +266,7 @@ static void free_slot(rsm_tmap_t *map, uint32_t s)
     }
     map->used--;
     map->counters.freed++;
+    map->victims_valid = 0; /* a slot moved */
 }
 
 static int tile_empty(const rsm_tile_t *t)

@@ -81,6 +81,13 @@
 #define RSM_TMAP_ECHO_LOG2 14
 #endif
 
+/* Oldest tiles one search of the full pool remembers for the evictions
+ * that follow in the same map write (6 bytes each): a search reads every
+ * tile, and a write into new ground evicts tens of them. */
+#ifndef RSM_TMAP_VICTIMS
+#define RSM_TMAP_VICTIMS 16
+#endif
+
 /* ---- key points and matches ------------------------------------------- */
 
 /* Harris key points kept per image (strongest first). 8 bytes each. */
@@ -181,6 +188,7 @@ RSM_STATIC_ASSERT(tmap_tile_range, RSM_TMAP_TILE_LOG2 >= 2 && RSM_TMAP_TILE_LOG2
 RSM_STATIC_ASSERT(tmap_levels_range, RSM_TMAP_LEVELS >= 1 && RSM_TMAP_LEVELS <= 4);
 RSM_STATIC_ASSERT(tmap_tiles_range, RSM_TMAP_TILES >= 4 && RSM_TMAP_TILES < 65535);
 RSM_STATIC_ASSERT(tmap_echo_range, RSM_TMAP_ECHO_LOG2 >= 6 && RSM_TMAP_ECHO_LOG2 <= 20);
+RSM_STATIC_ASSERT(tmap_victims_range, RSM_TMAP_VICTIMS >= 1 && RSM_TMAP_VICTIMS <= 1024);
 RSM_STATIC_ASSERT(tmap_hash_room, RSM_TMAP_HASH_LOG2 <= 16 && (1L << RSM_TMAP_HASH_LOG2) * 3L >= 4L * RSM_TMAP_TILES);
 RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
 RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONAR <= 255);
@@ -197,12 +205,12 @@ RSM_STATIC_ASSERT(rev_odom_depth_range, RSM_REV_ODOM_DEPTH >= 2 && RSM_REV_ODOM_
  * of the wrong size. */
 #define RSM_CONFIG_MIX_(h, v) ((((unsigned long)(h) ^ (unsigned long)(v)) * 16777619ul) & 0xFFFFFFFFul)
 #define RSM_CONFIG_FINGERPRINT                                                                                      \
-    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
+    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(2166136261ul, RSM_MAX_BEAMS), RSM_MAP_SIZE_LOG2),                  \
     RSM_IMAGE_MAX_CELLS), RSM_TMAP_TILE_LOG2), RSM_TMAP_LEVELS), RSM_TMAP_TILES), RSM_TMAP_HASH_LOG2), RSM_TMAP_ECHO_LOG2), \
     RSM_MAX_KEYPOINTS), RSM_MAX_CANDIDATES), RSM_MAX_MATCHES), RSM_ICP_MAX_POINTS), RSM_ARIA_MAX_PACKET),             \
     RSM_ARIA_MAX_SONAR), RSM_ARIA_STR_SIZE), RSM_LMS_MAX_TELEGRAM), RSM_LINK_RX_CHUNK), RSM_SYNC_DEPTH),          \
-    RSM_REV_ODOM_DEPTH)
+    RSM_REV_ODOM_DEPTH), RSM_TMAP_VICTIMS)
 
 #endif /* RSM_CONFIG_H */

@@ -237,6 +237,16 @@ typedef struct rsm_tmap {
     rsm_tile_t tile[RSM_TMAP_TILES];
     uint8_t echo[RSM_TMAP_ECHO_BYTES];  /* hashed wall_level cells of the last write's returns */
     rsm_tmap_job_t job;
+    /* The oldest tiles the last search of the full pool found (slot, and
+     * its stamp then: a tile written or replaced since no longer matches),
+     * best first, for the evictions of the same write: within a write no
+     * age changes, so the next valid one is what a new search would find. */
+    uint16_t victim_slot[RSM_TMAP_VICTIMS];
+    uint32_t victim_stamp[RSM_TMAP_VICTIMS];
+    uint32_t victims;                  /* entries found */
+    uint32_t victim_next;              /* the next one to try */
+    uint32_t victims_at;               /* stamp of the write they were found in */
+    uint32_t victims_valid;            /* 0: search again (new map, or a slot moved) */
     rsm_tmap_counters_t counters;
 } rsm_tmap_t;
 

@@ -238,15 +238,25 @@ static void model_check(uint32_t step, float tile_m)
     }
 }
 
-void test_tmap_pool_should_match_a_model_through_eviction(void)
+/* Fills the pool one key per update, then writes batch random keys per
+ * update (repeats allowed): each new one must take the slot of the least
+ * recently written tile not written by the same update, where a tile
+ * written once (below saturation) ages 2^unconfirmed_shift times faster.
+ * A batch above RSM_TMAP_VICTIMS evicts more tiles in one write than one
+ * search of the pool remembers. */
+static uint32_t run_model(size_t batch, uint32_t updates)
 {
+    static rsm_point_t p[2u * RSM_TMAP_VICTIMS + 8u];
     rsm_synth_rng_t rng;
     uint32_t held = 0;
     uint32_t evictions = 0;
+    uint32_t most = 0; /* evictions of one update at most */
+    size_t next = 0;   /* keys in turn, as a robot reaches new ground */
     uint32_t step;
     const float tile_m = cfg.cell_m * (float)RSM_TMAP_TILE_SIDE;
     const rsm_point_t o = {0.0f, 0.0f};
     size_t k;
+    TEST_ASSERT_TRUE(batch <= sizeof p / sizeof p[0]);
     cfg.miss_dec = 0u; /* only the index is under test */
     init();
     rsm_synth_rng_seed(&rng, 77u);
@@ -256,51 +266,70 @@ void test_tmap_pool_should_match_a_model_through_eviction(void)
         model[k].ty = (int32_t)(k / 128u) - 40;
         model[k].held = 0;
     }
-    /* Fill the pool one key per update, then write random keys: each new
-     * one must take the slot of the least recently written, where a tile
-     * written once (below saturation) ages 2^unconfirmed_shift times faster. */
-    for (step = 1; step <= (uint32_t)RSM_TMAP_TILES + 3000u; ++step) {
-        const size_t i = step <= (uint32_t)RSM_TMAP_TILES ? (size_t)(step - 1u)
-                                                           : (size_t)(rsm_synth_rng_next(&rng) % MODEL_KEYS);
-        rsm_point_t p;
-        p.x = ((float)model[i].tx + 0.5f) * tile_m;
-        p.y = ((float)model[i].ty + 0.5f) * tile_m;
-        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, &p, 1u));
-        if (!model[i].held) {
-            if (held == (uint32_t)RSM_TMAP_TILES) {
-                size_t j;
-                size_t oldest = MODEL_KEYS;
-                for (j = 0; j < (size_t)MODEL_KEYS; ++j) {
-                    if (model[j].held &&
-                        (oldest == MODEL_KEYS || model_score(&model[j], step) > model_score(&model[oldest], step) ||
-                         (model_score(&model[j], step) == model_score(&model[oldest], step) &&
-                          model[j].slot < model[oldest].slot))) {
-                        oldest = j;
+    for (step = 1; step <= (uint32_t)RSM_TMAP_TILES + updates; ++step) {
+        const size_t n = step <= (uint32_t)RSM_TMAP_TILES ? 1u : batch;
+        const uint32_t before = map.counters.evicted;
+        size_t b;
+        for (b = 0; b < n; ++b) {
+            /* With batches, every other key is the next in turn (long
+             * evicted when it comes round again), the rest at random. */
+            const size_t i = step <= (uint32_t)RSM_TMAP_TILES ? (size_t)(step - 1u)
+                             : batch > 1u && b % 2u == 0u ? (next++) % (size_t)MODEL_KEYS
+                                                          : (size_t)(rsm_synth_rng_next(&rng) % MODEL_KEYS);
+            p[b].x = ((float)model[i].tx + 0.5f) * tile_m;
+            p[b].y = ((float)model[i].ty + 0.5f) * tile_m;
+            if (!model[i].held) {
+                if (held == (uint32_t)RSM_TMAP_TILES) {
+                    size_t j;
+                    size_t oldest = MODEL_KEYS;
+                    for (j = 0; j < (size_t)MODEL_KEYS; ++j) {
+                        if (model[j].held && model[j].written < step &&
+                            (oldest == MODEL_KEYS ||
+                             model_score(&model[j], step) > model_score(&model[oldest], step) ||
+                             (model_score(&model[j], step) == model_score(&model[oldest], step) &&
+                              model[j].slot < model[oldest].slot))) {
+                            oldest = j;
+                        }
                     }
+                    TEST_ASSERT_TRUE(oldest < (size_t)MODEL_KEYS);
+                    model[oldest].held = 0;
+                    model[i].slot = model[oldest].slot;
+                    --held;
+                    ++evictions;
+                } else {
+                    model[i].slot = held;
                 }
-                model[oldest].held = 0;
-                model[i].slot = model[oldest].slot;
-                --held;
-                ++evictions;
-            } else {
-                model[i].slot = held;
+                model[i].held = 1;
+                model[i].value = 0u;
+                ++held;
             }
-            model[i].held = 1;
-            model[i].value = 0u;
-            ++held;
+            model[i].value = model[i].value + cfg.hit_inc > 15u ? 15u : model[i].value + cfg.hit_inc;
+            model[i].written = step;
         }
-        model[i].value = model[i].value + cfg.hit_inc > 15u ? 15u : model[i].value + cfg.hit_inc;
-        model[i].written = step;
-        if (step == (uint32_t)RSM_TMAP_TILES || (step > (uint32_t)RSM_TMAP_TILES && step % 500u == 0u)) {
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, p, n));
+        most = map.counters.evicted - before > most ? map.counters.evicted - before : most;
+        if (step == (uint32_t)RSM_TMAP_TILES || (step > (uint32_t)RSM_TMAP_TILES && step % 100u == 0u)) {
             model_check(step, tile_m);
         }
     }
+    model_check(step, tile_m);
     TEST_ASSERT_EQUAL_UINT32(held, map.used);
     TEST_ASSERT_EQUAL_UINT32((uint32_t)RSM_TMAP_TILES, map.used);
     TEST_ASSERT_EQUAL_UINT32(0u, map.counters.dropped);
     TEST_ASSERT_EQUAL_UINT32(evictions, map.counters.evicted);
     TEST_ASSERT_GREATER_THAN_UINT32(0u, map.counters.evicted);
     TEST_ASSERT_EQUAL_UINT32(map.counters.allocated, map.used);
+    return most;
+}
+
+void test_tmap_pool_should_match_a_model_through_eviction(void)
+{
+    TEST_ASSERT_EQUAL_UINT32(1u, run_model(1u, 3000u));
+}
+
+void test_tmap_pool_should_match_the_model_with_many_evictions_per_write(void)
+{
+    TEST_ASSERT_GREATER_THAN_UINT32((uint32_t)RSM_TMAP_VICTIMS, run_model(2u * RSM_TMAP_VICTIMS + 8u, 600u));
 }
 
 void test_tmap_update_should_drop_returns_when_every_tile_is_written_by_it(void)
@@ -645,6 +674,7 @@ int main(void)
     RUN_TEST(test_tmap_update_should_share_a_return_among_four_cells_on_coarse_levels);
     RUN_TEST(test_tmap_update_should_skip_non_finite_points_and_refuse_bad_arguments);
     RUN_TEST(test_tmap_pool_should_match_a_model_through_eviction);
+    RUN_TEST(test_tmap_pool_should_match_the_model_with_many_evictions_per_write);
     RUN_TEST(test_tmap_update_should_drop_returns_when_every_tile_is_written_by_it);
     RUN_TEST(test_tmap_update_should_free_a_tile_that_beams_have_cleared);
     RUN_TEST(test_tmap_update_should_not_write_returns_behind_a_wall);
