@@ -79,7 +79,8 @@ static int to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_s
                 c = rsm_cosf(a);
                 s = rsm_sinf(a);
             } else {
-                /* Compared as bits: -0 and 0 have sines of opposite sign. */
+                /* Compared as bits: -0 and 0 have sines of opposite sign
+                 * (copies, not memcmp, which is a call per beam on the M4). */
                 uint32_t now;
                 uint32_t was;
                 memcpy(&now, &a, sizeof now);
@@ -114,8 +115,6 @@ void rsm_scan_trig_init(rsm_scan_trig_t *trig)
     }
     for (i = 0; i < (size_t)RSM_MAX_BEAMS; ++i) {
         trig->angle[i] = NAN; /* no finite angle has its bits */
-        trig->cos[i] = 1.0f;
-        trig->sin[i] = 0.0f;
     }
 }
 

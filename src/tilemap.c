@@ -133,18 +133,16 @@ static void hash_remove(rsm_tmap_t *map, uint32_t s)
     map->hash[i] = (uint16_t)RSM_TMAP_NONE;
 }
 
-/* How far a tile is from being kept: its age in writes, divided by
- * 2^(age_shift * level), times 2^unconfirmed_shift when no cell of it
- * reached saturation. 0 for a tile written by the update in progress. */
-static uint32_t scaled_age(const rsm_tmap_t *map, const rsm_tile_t *t)
+/* How far a tile of the given age (in writes) is from being kept: the age
+ * divided by 2^(age_shift * level), times 2^unconfirmed_shift when no cell
+ * of it reached saturation. */
+static uint32_t scaled_age(const rsm_tmap_t *map, const rsm_tile_t *t, uint32_t age)
 {
-    const uint32_t age = (map->stamp - (t->stamp & STAMP_MASK)) & STAMP_MASK;
-    uint32_t scaled = age >> (map->cfg.age_shift * tile_level(t));
-    if ((t->stamp & CONFIRMED) == 0u) {
-        scaled = scaled < (STAMP_MASK >> map->cfg.unconfirmed_shift) ? scaled << map->cfg.unconfirmed_shift
-                                                                      : STAMP_MASK;
+    const uint32_t scaled = age >> (map->cfg.age_shift * tile_level(t));
+    if ((t->stamp & CONFIRMED) != 0u) {
+        return scaled;
     }
-    return age > 0u ? scaled : 0u;
+    return scaled < (STAMP_MASK >> map->cfg.unconfirmed_shift) ? scaled << map->cfg.unconfirmed_shift : STAMP_MASK;
 }
 
 /* Searches the whole pool for the RSM_TMAP_VICTIMS tiles oldest_slot
@@ -158,9 +156,13 @@ static void find_victims(rsm_tmap_t *map)
     for (k = 0; k < map->used; ++k) {
         const rsm_tile_t *t = &map->tile[k];
         const uint32_t age = (map->stamp - (t->stamp & STAMP_MASK)) & STAMP_MASK;
-        const uint32_t scaled = scaled_age(map, t);
+        uint32_t scaled;
         uint32_t at;
-        if (age == 0u || (n == (uint32_t)RSM_TMAP_VICTIMS && !(scaled > best[n - 1u]))) {
+        if (age == 0u) {
+            continue; /* written by the update in progress */
+        }
+        scaled = scaled_age(map, t, age);
+        if (n == (uint32_t)RSM_TMAP_VICTIMS && !(scaled > best[n - 1u])) {
             continue;
         }
         /* After every entry at least as old: equals stay in slot order. */
@@ -181,7 +183,6 @@ static void find_victims(rsm_tmap_t *map)
     map->victims = n;
     map->victim_next = 0;
     map->victims_at = map->stamp;
-    map->victims_valid = 1u;
 }
 
 /* The slot to reuse: the one written longest ago, where a tile's age counts
@@ -194,24 +195,23 @@ static void find_victims(rsm_tmap_t *map)
  * RSM_TMAP_NONE if every slot was. */
 static uint32_t oldest_slot(rsm_tmap_t *map)
 {
-    int searched = 0;
-    for (;;) {
-        if (!map->victims_valid || map->victims_at != map->stamp || map->victim_next >= map->victims) {
-            if (searched) {
-                return RSM_TMAP_NONE; /* every slot was written by this update */
-            }
-            find_victims(map);
-            searched = 1;
-        }
+    int search;
+    if (map->victims_at != map->stamp) {
+        map->victims = 0; /* found in an earlier write: ages have moved */
+    }
+    /* The list first, then, if none of it is left, one new search. */
+    for (search = 0; search < 2; ++search) {
         while (map->victim_next < map->victims) {
-            const uint32_t s = map->victim_slot[map->victim_next];
-            const uint32_t st = map->victim_stamp[map->victim_next];
-            map->victim_next++;
-            if (s < map->used && map->tile[s].stamp == st) {
+            const uint32_t s = map->victim_slot[map->victim_next++];
+            if (s < map->used && map->tile[s].stamp == map->victim_stamp[map->victim_next - 1u]) {
                 return s;
             }
         }
+        if (search == 0) {
+            find_victims(map);
+        }
     }
+    return RSM_TMAP_NONE; /* every slot was written by this update */
 }
 
 /* Slot for a tile that is not held: a free one, else oldest_slot's.
@@ -266,7 +266,7 @@ static void free_slot(rsm_tmap_t *map, uint32_t s)
     }
     map->used--;
     map->counters.freed++;
-    map->victims_valid = 0; /* a slot moved */
+    map->victims = 0; /* a slot moved: search again */
 }
 
 static int tile_empty(const rsm_tile_t *t)
@@ -617,7 +617,6 @@ int rsm_tmap_write_run(rsm_tmap_t *map, const rsm_point_t *points, uint32_t budg
             spent += clear_one(map, &c, idx, ox, oy, &points[end], end);
             ++end;
         }
-        rsm_tmap_cursor_init(&c, level);
         for (k = job->next; k < end; ++k) {
             hit_one(map, &c, &points[k], k);
             spent += 1u;
