@@ -79,7 +79,7 @@ def test_noise_is_seeded_and_present(tmp_path):
 
 
 def test_command_line_worlds(tmp_path):
-    for w in ("corridor", "pillars", "rooms"):
+    for w in ("corridor", "pillars", "rooms", "hall", "building"):
         res = subprocess.run([sys.executable, "-m", "rsm_tools.sim", str(tmp_path / f"{w}.cap"),
                               "--truth", str(tmp_path / f"{w}.txt"), "--world", w, "--seconds", "2"],
                              capture_output=True, text=True, env=subprocess_env())
@@ -88,6 +88,22 @@ def test_command_line_worlds(tmp_path):
         h, recs, _ = cap.read_capture(tmp_path / f"{w}.cap")
         assert h.metadata["ground_truth"] == f"{w}.txt"
         assert sum(r.channel == 0 for r in recs) == 21
+
+
+def test_building_world_has_doors_only_in_its_outer_walls():
+    """The building: a ring of 2 m corridors; door recesses 0.3 m deep open
+    into the outer walls (the wall is cut there), the block's walls are bare;
+    the hall is a bare 40 m corridor with its ends 39 m apart seen from the start."""
+    segs, circles, path = sim.world("building")
+    assert circles == [] and path[0] == (1, 1)
+    down, up = -math.pi / 2, math.pi / 2
+    assert sim.raycast(4.75, 1.0, down, segs, circles) == pytest.approx(1.3)   # in front of a door
+    assert sim.raycast(3.0, 1.0, down, segs, circles) == pytest.approx(1.0)    # a bare stretch
+    assert sim.raycast(4.75, 1.0, up, segs, circles) == pytest.approx(1.0)     # the block: no doors
+    assert sim.raycast(39.0, 4.85, 0.0, segs, circles) == pytest.approx(1.3)   # a door in the east wall
+    segs, circles, path = sim.world("hall")
+    assert sim.raycast(1.0, 1.0, 0.0, segs, circles) == pytest.approx(39.0)
+    assert sim.raycast(20.0, 1.0, down, segs, circles) == pytest.approx(1.0)
 
 
 def test_carmen_log_with_a_mounted_laser(tmp_path):

@@ -1,6 +1,6 @@
 """rsm-sim: a small 2-D world, a scripted drive, and the serial bytes a P3-DX and an LMS would send.
 
-    rsm-sim OUT.cap --truth OUT.txt [--world rooms|corridor|pillars] [--seconds N]
+    rsm-sim OUT.cap --truth OUT.txt [--world rooms|corridor|pillars|hall|building] [--seconds N]
             [--slip X] [--range-noise M] [--outliers P] [--seed S]
             [--carmen] [--laser-pose X Y THETA] [--upside-down]
             [--lidar ld06|rplidar] [--drive loop|curves]
@@ -103,6 +103,34 @@ def world(name: str) -> Tuple[List[Segment], List[Circle], List[Tuple[float, flo
         segs = _box(0, 0, 12, 12)
         circles = [(3 + 3 * i, 3 + 3 * j, 0.3) for i in range(3) for j in range(3)]
         path = [(1.5, 1.5), (10.5, 1.5), (10.5, 10.5), (1.5, 10.5)]
+    elif name == "hall":
+        # A bare 40 m corridor, 2 m wide: nothing in sight fixes the
+        # position along it, which is then odometry's to keep.
+        segs = _box(0, 0, 40, 2)
+        circles = []
+        path = [(1, 1), (39, 1)]
+    elif name == "building":
+        # A ring of 2 m corridors round a 36 x 16 m block (a 112 m lap).
+        # The block's walls are bare; the outer walls have door recesses
+        # (0.9 m wide, 0.3 m deep) at irregular places, the only thing
+        # that fixes the position along a corridor.
+        doors_x = {0: (4.3, 9.1, 15.7, 21.2, 26.6, 33.9), 20: (6.2, 11.8, 18.4, 24.9, 30.3, 35.5)}
+        doors_y = {0: (3.1, 7.4, 12.9, 16.2), 40: (4.4, 9.8, 15.1)}
+        segs = _box(2, 2, 38, 18)
+        for y, xs in doors_x.items():
+            d = -0.3 if y == 0 else 0.3
+            ends = [0.0] + [v for x in xs for v in (x, x + 0.9)] + [40.0]
+            segs += [(ends[i], y, ends[i + 1], y) for i in range(0, len(ends), 2)]
+            for x in xs:
+                segs += [(x, y, x, y + d), (x, y + d, x + 0.9, y + d), (x + 0.9, y + d, x + 0.9, y)]
+        for x, ys in doors_y.items():
+            d = -0.3 if x == 0 else 0.3
+            ends = [0.0] + [v for y in ys for v in (y, y + 0.9)] + [20.0]
+            segs += [(x, ends[i], x, ends[i + 1]) for i in range(0, len(ends), 2)]
+            for y in ys:
+                segs += [(x, y, x + d, y), (x + d, y, x + d, y + 0.9), (x + d, y + 0.9, x, y + 0.9)]
+        circles = []
+        path = [(1, 1), (39, 1), (39, 19), (1, 19)]
     else:
         raise ValueError(f"unknown world {name!r}")
     return segs, circles, path
@@ -386,7 +414,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-sim", description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="capture file to write")
     ap.add_argument("--truth", required=True, help="ground-truth trajectory to write")
-    ap.add_argument("--world", choices=("rooms", "corridor", "pillars"), default="rooms",
+    ap.add_argument("--world", choices=("rooms", "corridor", "pillars", "hall", "building"), default="rooms",
                     help="the world driven through (default rooms)")
     ap.add_argument("--seconds", type=float, default=60.0, help="length of the drive (default 60)")
     ap.add_argument("--slip", type=float, default=0.0,
