@@ -26,7 +26,7 @@ from pathlib import Path
 import pytest
 
 from conftest import REPO_ROOT, build_dir, rsm_nav_binary, subprocess_env
-from rsm_tools import bench, lidarbench
+from rsm_tools import bench, corridors, lidarbench
 from rsm_tools import evaluate as ev
 from rsm_tools import outliers
 
@@ -1034,6 +1034,21 @@ def test_full_log_checks_are_reported_with_the_floors(run):
         assert same["status"] == ("PASS" if same["value"] >= same["limit"] else "MISS")
         for f in ratios:
             assert f["status"] == ("PASS" if f["value"] <= 1.02 else "MISS") and "readings past" in f["line"]
+
+
+def test_simulated_corridors_are_reported_with_the_floors(run):
+    """rsm_tools.corridors: each world of rsm-sim at each range noise, rsm
+    against odometry alone on pose pairs up to 30 s apart, a PASS when rsm is
+    below, in the report's floors."""
+    man = run["manifest"]
+    lines = floor_lines(run["report"])
+    mine = [f for f in man["floors"] if f["kind"] == "corridors"]
+    assert len(mine) == len(corridors.WORLDS) * len(corridors.NOISES_M)
+    assert sorted({f["log"] for f in mine}) == sorted(w for w, _ in corridors.WORLDS)
+    for f in mine:
+        assert f["line"] in lines
+        assert f["status"] == ("PASS" if f["value"] < f["limit"] else "MISS")
+        assert f"{corridors.QUICK_SECONDS:g} s" in f["line"] and "odometry alone" in f["line"]
 
 
 def test_logs_as_lidar_streams_are_reported_with_the_floors(run):

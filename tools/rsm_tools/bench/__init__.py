@@ -32,7 +32,9 @@ report (``docs/RESULTS.md`` by default) has these sections:
    paper's window, the persistent map's tile pool and the shipped presets.
 7. The issue's floors, each a PASS or MISS line (a report, not an assertion),
    with the checks that need the full logs (:mod:`rsm_tools.fullchecks`; the
-   logs as LD06 and RPLIDAR streams, :mod:`rsm_tools.lidarbench`).
+   logs as LD06 and RPLIDAR streams, :mod:`rsm_tools.lidarbench`; rsm
+   against odometry alone in simulated bare corridors,
+   :mod:`rsm_tools.corridors`).
 8. Where rsm loses: generated from the numbers above.
 
 Trajectories, summaries and a manifest (``bench.json``) are kept in the work
@@ -52,7 +54,7 @@ import time
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence
 
-from .. import fullchecks, lidarbench
+from .. import corridors, fullchecks, lidarbench
 from ..fullchecks import check
 from .common import (ARM_CONFIGS, BenchError, CALLGRIND_SCANS, DEFAULT_MAP_LOG2, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
     FIRST_SEED, HOST_PARTS, LEVELS, LOCAL_SPAN, MEMORY_TILES, METHODS, OTHER_LEVELS, PEER_COLUMNS, QUANTITIES,
@@ -242,6 +244,7 @@ def run(args: argparse.Namespace) -> Path:
                           else stage("full-log checks", fullchecks.run_all, shared, nav, logs, work / "full-checks",
                                      root, ctx["accuracy"], not args.quick))
     ctx["lidar_streams"] = stage("lidar streams", lidarbench.run, nav, logs, work / "lidar-streams", ctx["accuracy"])
+    ctx["corridors"] = stage("corridors", corridors.run, nav, work / "corridors", args.quick)
     ctx["speed"] = stage("speed", run_speed, nav, main_log, repeats, work)
     lv_by_log = {label: (levels if label == main_label else other_levels) for label, _, _ in logs}
     ctx["robustness"] = stage("robustness", run_robustness, nav, logs, ctx["accuracy"], lv_by_log, seeds, work,
@@ -305,7 +308,8 @@ def run(args: argparse.Namespace) -> Path:
         ctx["sources_changed"] = ("the library's or the tools' sources changed while this run was measuring, so "
                                   "its figures may come from different code: run it again")
         print(f"rsm-bench: WARNING: {ctx['sources_changed']}", flush=True)
-    ctx["floors"] = check_floors(**floor_inputs(ctx)) + ctx["full_checks"] + ctx["lidar_streams"]
+    ctx["floors"] = (check_floors(**floor_inputs(ctx)) + ctx["full_checks"] + ctx["lidar_streams"] +
+                     ctx["corridors"])
     ctx["losses"] = losses(ctx)
     ctx["elapsed"] = time.monotonic() - t_start
     ctx["stage_seconds"] = stage_seconds
