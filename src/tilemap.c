@@ -182,7 +182,6 @@ static void find_victims(rsm_tmap_t *map)
     }
     map->victims = n;
     map->victim_next = 0;
-    map->victims_at = map->stamp;
 }
 
 /* The slot to reuse: the one written longest ago, where a tile's age counts
@@ -196,9 +195,6 @@ static void find_victims(rsm_tmap_t *map)
 static uint32_t oldest_slot(rsm_tmap_t *map)
 {
     int search;
-    if (map->victims_at != map->stamp) {
-        map->victims = 0; /* found in an earlier write: ages have moved */
-    }
     /* The list first, then, if none of it is left, one new search. */
     for (search = 0; search < 2; ++search) {
         while (map->victim_next < map->victims) {
@@ -505,6 +501,7 @@ int rsm_tmap_write_begin(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_p
     job = &map->job;
     memset(job, 0, sizeof *job);
     map->stamp = (map->stamp + 1u) & STAMP_MASK;
+    map->victims = 0; /* found in an earlier write: ages have moved */
     map->counters.updates++;
     if (map->cfg.wall_echo != 0u && map->cfg.wall_value > 0u) {
         mark_lone(map, pass_level(map, 0u), points, n, job->lone);

@@ -243,9 +243,9 @@ typedef struct rsm_tmap {
      * age changes, so the next valid one is what a new search would find. */
     uint16_t victim_slot[RSM_TMAP_VICTIMS];
     uint32_t victim_stamp[RSM_TMAP_VICTIMS];
-    uint32_t victims;                  /* entries found; 0: search again (a slot moved) */
+    uint32_t victims;                  /* entries found; 0: search again (a new write, a slot
+                                        * moved) */
     uint32_t victim_next;              /* the next one to try */
-    uint32_t victims_at;               /* stamp of the write they were found in */
     rsm_tmap_counters_t counters;
 } rsm_tmap_t;
 

@@ -24,13 +24,13 @@ Run alone::
 """
 
 import argparse
-import subprocess
 import sys
 from pathlib import Path
 from typing import List, Optional, Sequence, Tuple
 
 from . import evaluate as ev
 from . import sim
+from .bench.measure import run_nav
 from .fullchecks import check
 
 #: (world, seconds) of the full bench; --quick drives each for QUICK_SECONDS
@@ -57,13 +57,6 @@ def span_error(traj: Path, truth: Path) -> float:
     return ev.evaluate(ev.load_trajectory(traj), rels)["translation"]["mean"]
 
 
-def run_nav(nav: Path, log: Path, traj: Path, method: str) -> None:
-    res = subprocess.run([str(nav), "--carmen", str(log), "--method", method, "--trajectory", str(traj), "--quiet"],
-                         capture_output=True, text=True)
-    if res.returncode != 0:
-        raise RuntimeError(f"rsm-nav failed on {log}: {res.stderr.strip()}")
-
-
 def run(nav: Path, work: Path, quick: bool = False) -> List[dict]:
     """One PASS/MISS line per world and noise level."""
     work.mkdir(parents=True, exist_ok=True)
@@ -75,7 +68,7 @@ def run(nav: Path, work: Path, quick: bool = False) -> List[dict]:
             errs = {}
             for method in ("rsm", "odometry"):
                 traj = work / f"{log.name[:-len('.clf.gz')]}.{method}.txt"
-                run_nav(nav, log, traj, method)
+                run_nav(nav, log, method, traj)
                 errs[method] = span_error(traj, truth)
             mine, odo = errs["rsm"], errs["odometry"]
             out.append(check(mine < odo, "corridors", world,
