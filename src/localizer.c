@@ -620,8 +620,10 @@ static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, fl
                                 cfg->recover_rad, start, RECOVER_STARTS);
     /* The coarse score only ranks basins: descend from each. */
     for (k = 0; k < found; ++k) {
-        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[k], &alt) ==
-                RSM_OK &&
+        /* Not unpinned: each descent starts where the search put it and
+         * only the fit decides, measured against the plain match. */
+        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[k], NULL,
+                         &alt) == RSM_OK &&
             alt.hit >= cfg->recover_ratio * fit && alt.hit >= need && alt.hit > res->hit) {
             *res = alt;
             took = 1;
@@ -635,12 +637,19 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t pred = loc->ekf.x;
     rsm_mapmatch_result_t res;
+    rsm_mapmatch_unpin_t unpin;
     int rc;
     if (!loc->have_scan) {
         return RSM_SCAN_FIRST;
     }
     stage_switch(clk, RSM_STAGE_MAPMATCH);
-    rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &res);
+    rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, pred.theta, &unpin);
+    rep->unpinned = unpin.frac;
+    if (unpin.frac > 0.0f) {
+        loc->counters.unpinned++;
+    }
+    rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
+                      &res);
     if (rc == RSM_OK && cfg->recover_m > 0.0f && res.hit < cfg->recover_ratio * loc->state.persistent.fit) {
         /* Far worse than recent scans: odometry may be off by more than any
          * basin. The smallest correction that explains the scan first: a

@@ -26,6 +26,8 @@ rsm_mapmatch_config_t rsm_mapmatch_config_default(void)
     c.fan = 0u;
     c.gate_d2 = 0.0f;
     c.basin = 3.0f;
+    c.unpin_lo = 0.02f;
+    c.unpin_hi = 0.06f;
     return c;
 }
 
@@ -33,7 +35,8 @@ int rsm_mapmatch_check(const rsm_mapmatch_config_t *cfg)
 {
     if (cfg == NULL || cfg->iterations < 1u || !(cfg->sigma > 0.0f) || !(cfg->min_step_m >= 0.0f) ||
         !(cfg->min_step_rad >= 0.0f) || !(cfg->search_rad >= 0.0f) || !(cfg->search_rad <= 1.0f) ||
-        !(cfg->gate_d2 >= 0.0f) || !(cfg->basin >= 0.0f) ||
+        !(cfg->gate_d2 >= 0.0f) || !(cfg->basin >= 0.0f) || !(cfg->unpin_lo >= 0.0f) ||
+        !(cfg->unpin_hi <= 1.0f) || !(cfg->unpin_hi == 0.0f || cfg->unpin_hi > cfg->unpin_lo) ||
         (cfg->search_rad > 0.0f && !(cfg->search_step_rad > 0.0f && cfg->search_rad <= 64.0f * cfg->search_step_rad))) {
         return RSM_ERR_INVAL;
     }
@@ -320,15 +323,32 @@ typedef struct prior {
     float w;
     float reach; /* points_reach of the scan */
     int top;     /* the level the descent starts on */
+    const rsm_mapmatch_unpin_t *unpin; /* or NULL */
 } prior_t;
 
 /* The coarsest level the descent needs: the one whose cell is at least
  * cfg->basin times how far the prior's one-sigma error moves a point at
  * the scan's mean range (every level when basin is 0). */
-static int start_level(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const float p0[9], float mean)
+static int start_level(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const float p0[9], float mean,
+                       const rsm_mapmatch_unpin_t *un)
 {
     const int coarsest = (int)map->cfg.levels - 1;
-    const float sp = sqrtf(p0[0] > p0[4] ? p0[0] : p0[4]);
+    float pxx = p0[0];
+    float pyy = p0[4];
+    float sp;
+    if (un != NULL && un->frac > 0.0f) {
+        /* The descent does not look along an unpinned direction, however
+         * uncertain the prediction is there: its basin needs the rest of
+         * the prior's spread, Q P Q with Q = I - frac d d^T. */
+        const float f = un->frac;
+        const float q[4] = {1.0f - f * un->dir[0] * un->dir[0], -f * un->dir[0] * un->dir[1],
+                            -f * un->dir[0] * un->dir[1], 1.0f - f * un->dir[1] * un->dir[1]};
+        const float qp[4] = {q[0] * p0[0] + q[1] * p0[3], q[0] * p0[1] + q[1] * p0[4], q[2] * p0[0] + q[3] * p0[3],
+                             q[2] * p0[1] + q[3] * p0[4]};
+        pxx = qp[0] * q[0] + qp[1] * q[1];
+        pyy = qp[2] * q[2] + qp[3] * q[3];
+    }
+    sp = sqrtf(pxx > pyy ? pxx : pyy);
     const float need = cfg->basin * (sp + sqrtf(p0[8]) * mean);
     int level = 0;
     if (!(cfg->basin > 0.0f) || !(need < rsm_tmap_cell(map, (uint32_t)coarsest))) {
@@ -352,6 +372,48 @@ static int small_step(const rsm_mapmatch_config_t *cfg, const float step[3], int
 /* Gauss-Newton from x on every level, coarse to fine. On return x is the
  * estimate, s the finest level's sums there and the result the objective
  * (residuals plus prior) on the finest level. */
+/* Takes the fraction un->frac of the sums' pull along the world direction
+ * d = (un->dir, 0) out: H <- P H P and b <- P b with P = I - frac d d^T.
+ * The heading keeps what the points' moves along d tell of it. */
+static void unpin_sums(sums_t *s, const rsm_mapmatch_unpin_t *un)
+{
+    float d[3];
+    float u[3]; /* H d */
+    float hf[9];
+    float a;
+    float sd;
+    float bd;
+    int i;
+    int j;
+    if (un == NULL || !(un->frac > 0.0f)) {
+        return;
+    }
+    a = un->frac;
+    d[0] = un->dir[0];
+    d[1] = un->dir[1];
+    d[2] = 0.0f;
+    full(s->h, 1.0f, hf);
+    for (i = 0; i < 3; ++i) {
+        u[i] = hf[i * 3] * d[0] + hf[i * 3 + 1] * d[1];
+    }
+    sd = u[0] * d[0] + u[1] * d[1];
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) {
+            hf[i * 3 + j] += a * (a * sd * d[i] * d[j] - d[i] * u[j] - u[i] * d[j]);
+        }
+    }
+    bd = s->b[0] * d[0] + s->b[1] * d[1];
+    for (i = 0; i < 3; ++i) {
+        s->b[i] -= a * d[i] * bd;
+    }
+    s->h[0] = hf[0];
+    s->h[1] = hf[1];
+    s->h[2] = hf[2];
+    s->h[3] = hf[4];
+    s->h[4] = hf[5];
+    s->h[5] = hf[8];
+}
+
 static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
                      const prior_t *pr, rsm_pose_t *x, sums_t *s, uint32_t *iterations)
 {
@@ -363,6 +425,7 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
         float scale = 1.0f; /* halved for good once a step overshoots */
         uint32_t it;
         level_sums(map, (uint32_t)level, pts, n, pr->reach, x, s);
+        unpin_sums(s, pr->unpin);
         diff(x, pr->x0, e);
         f = s->cost * pr->w + quad(pr->lam, e);
         for (it = 0; it < cfg->iterations; ++it) {
@@ -416,6 +479,7 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
                 cand.y = x->y + step[1];
                 cand.theta = rsm_wrap_angle(x->theta + step[2]);
                 level_sums(map, (uint32_t)level, pts, n, pr->reach, &cand, &cs);
+                unpin_sums(&cs, pr->unpin);
                 diff(&cand, pr->x0, ce);
                 cf = cs.cost * pr->w + quad(pr->lam, ce);
                 if (cf < f) {
@@ -440,7 +504,8 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
 }
 
 int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                 const rsm_pose_t *x0, const float p0[9], const rsm_pose_t *start, rsm_mapmatch_result_t *res)
+                 const rsm_pose_t *x0, const float p0[9], const rsm_pose_t *start,
+                 const rsm_mapmatch_unpin_t *unpin, rsm_mapmatch_result_t *res)
 {
     float pf[9];
     prior_t pr;
@@ -464,11 +529,12 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
         return RSM_ERR_DEGENERATE;
     }
     pr.x0 = x0;
+    pr.unpin = unpin;
     pr.w = 1.0f / (cfg->sigma * cfg->sigma);
     {
         float mean;
         pr.reach = points_reach(pts, n, &mean);
-        pr.top = start_level(map, cfg, pf, mean);
+        pr.top = start_level(map, cfg, pf, mean, unpin);
     }
     x = start != NULL ? *start : *x0;
     {
@@ -512,4 +578,109 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
     res->cost = s.cost_used / (float)s.used;
     res->hit = n > 0u ? s.hit / (float)n : 0.0f;
     return RSM_OK;
+}
+
+/* Chords shorter than this are left out of the spread: over a few
+ * centimetres the range noise turns a wall's chord by tens of degrees. */
+#define SPREAD_CHORD_M 0.3f
+/* Consecutive returns closer than this share a surface: a fraction of their
+ * range (a wall seen at a grazing angle has its returns far apart), at
+ * least SPREAD_GAP_M. */
+#define SPREAD_GAP_REL 0.15f
+#define SPREAD_GAP_M 0.1f
+
+float rsm_mapmatch_spread(const rsm_point_t *pts, size_t n, float dir[2])
+{
+    float a = 0.0f; /* sum of t t^T over the unit chords t: (a b; b c) */
+    float b = 0.0f;
+    float c = 0.0f;
+    size_t j = 1;
+    size_t k;
+    dir[0] = 1.0f;
+    dir[1] = 0.0f;
+    /* Each point's chord runs to the first point at least SPREAD_CHORD_M
+     * away on its surface; j only moves forward, so this is one pass. */
+    for (k = 0; k + 1u < n; ++k) {
+        float dx = 0.0f;
+        float dy = 0.0f;
+        float d2 = 0.0f;
+        if (j <= k) {
+            j = k + 1u;
+        }
+        for (; j < n; ++j) {
+            const float gx = pts[j].x - pts[j - 1u].x;
+            const float gy = pts[j].y - pts[j - 1u].y;
+            const float r = fabsf(pts[j].x) + fabsf(pts[j].y);
+            const float g = SPREAD_GAP_REL * r > SPREAD_GAP_M ? SPREAD_GAP_REL * r : SPREAD_GAP_M;
+            if (!(gx * gx + gy * gy <= g * g)) {
+                break;
+            }
+            dx = pts[j].x - pts[k].x;
+            dy = pts[j].y - pts[k].y;
+            d2 = dx * dx + dy * dy;
+            if (d2 >= SPREAD_CHORD_M * SPREAD_CHORD_M) {
+                break;
+            }
+        }
+        if (j >= n) {
+            break;
+        }
+        if (d2 >= SPREAD_CHORD_M * SPREAD_CHORD_M) {
+            const float inv = 1.0f / d2;
+            a += dx * dx * inv;
+            b += dx * dy * inv;
+            c += dy * dy * inv;
+        } else {
+            /* k's surface ends before j, short of a chord from k or from
+             * any point after k: the next surface starts at j. */
+            k = j - 1u;
+        }
+    }
+    {
+        /* Eigenvalues of (a b; b c): m +- dd; the larger one's vector. */
+        const float h = 0.5f * (a - c);
+        const float dd = sqrtf(h * h + b * b);
+        const float m = 0.5f * (a + c);
+        float vx;
+        float vy;
+        float len;
+        if (!(m + dd > 0.0f)) {
+            return 1.0f; /* no chord: nothing says the scan is one-sided */
+        }
+        if (h >= 0.0f) {
+            vx = h + dd;
+            vy = b;
+        } else {
+            vx = b;
+            vy = dd - h;
+        }
+        len = sqrtf(vx * vx + vy * vy);
+        if (len > 0.0f) {
+            dir[0] = vx / len;
+            dir[1] = vy / len;
+        }
+        return (m - dd) / (m + dd);
+    }
+}
+
+void rsm_mapmatch_unpin_for(const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n, float theta,
+                            rsm_mapmatch_unpin_t *un)
+{
+    float dir[2];
+    float spread;
+    un->dir[0] = 1.0f;
+    un->dir[1] = 0.0f;
+    un->frac = 0.0f;
+    if (!(cfg->unpin_hi > cfg->unpin_lo)) {
+        return;
+    }
+    spread = rsm_mapmatch_spread(pts, n, dir);
+    if (spread < cfg->unpin_hi) {
+        const float c = rsm_cosf(theta);
+        const float s = rsm_sinf(theta);
+        const float f = (cfg->unpin_hi - spread) / (cfg->unpin_hi - cfg->unpin_lo);
+        un->dir[0] = c * dir[0] - s * dir[1];
+        un->dir[1] = s * dir[0] + c * dir[1];
+        un->frac = f < 1.0f ? f : 1.0f;
+    }
 }

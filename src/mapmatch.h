@@ -14,6 +14,13 @@
  * the map as the measurement. Points far from any wall have no gradient and
  * no pull, so outliers and things not yet in the map are ignored.
  *
+ * That holds for the map's walls as lines, not as written: how a wall's band
+ * of cells looks along it depends on the poses it was written from, and in a
+ * bare corridor those gradients pull the scan back towards them, scan after
+ * scan. So a scan whose surfaces all run one way (rsm_mapmatch_spread) is
+ * unpinned along them: that share of its pull and of its steps is left out,
+ * and the prediction keeps that direction (docs/map.md, "Bare corridors").
+ *
  * Optionally (fan) the descent also starts from the best of a fan of
  * headings around the prediction, scored on the coarsest level with the
  * prior's heading term, for odometry whose heading is far off after a fast
@@ -39,6 +46,13 @@ rsm_mapmatch_config_t rsm_mapmatch_config_default(void);
  * RSM_ERR_INVAL. */
 int rsm_mapmatch_check(const rsm_mapmatch_config_t *cfg);
 
+/* What rsm_mapmatch leaves to the prediction: the fraction frac (0 to 1) of
+ * the scan's pull along the world direction dir. */
+typedef struct rsm_mapmatch_unpin {
+    float dir[2];
+    float frac;
+} rsm_mapmatch_unpin_t;
+
 typedef struct rsm_mapmatch_result {
     rsm_pose_t pose;        /* the estimate */
     float cov[9];           /* its covariance (posterior), row-major */
@@ -53,12 +67,15 @@ typedef struct rsm_mapmatch_result {
 
 /* Aligns the robot-frame points to the map with the prediction (x0, p0) as
  * prior. The descent starts at *start when it is given, else at the best
- * heading of the fan around x0. Returns RSM_OK (res filled),
+ * heading of the fan around x0. With unpin (may be NULL) that share of the
+ * scan's pull along its direction is left out of every step and of the
+ * information (rsm_mapmatch_unpin_for). Returns RSM_OK (res filled),
  * RSM_ERR_DEGENERATE when the prior covariance cannot be inverted or fewer
  * than 3 points touch the map (res->pose = x0), RSM_ERR_INVAL for bad
  * arguments. Reentrant; the map is not changed. */
 int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                 const rsm_pose_t *x0, const float p0[9], const rsm_pose_t *start, rsm_mapmatch_result_t *res);
+                 const rsm_pose_t *x0, const float p0[9], const rsm_pose_t *start,
+                 const rsm_mapmatch_unpin_t *unpin, rsm_mapmatch_result_t *res);
 
 /* Most candidates rsm_mapmatch_search returns. */
 #define RSM_MAPMATCH_MAX_CANDIDATES 8u
@@ -74,6 +91,19 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
  * above 1 or 64 steps, k out of range). */
 int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
                         const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k);
+
+/* How well the scan's surfaces pin the position: the ratio (0 to 1) of the
+ * smaller to the larger eigenvalue of the sum of t t^T over the unit chords
+ * t of the points (pts in beam order; a chord runs from a point to the
+ * first at least 0.3 m away on the same surface), 1 when there is no chord;
+ * the chords' main direction in dir (robot frame). A bare corridor reads
+ * about 0.01, a room or clutter 0.1 to 1. */
+float rsm_mapmatch_spread(const rsm_point_t *pts, size_t n, float dir[2]);
+
+/* The unpinning cfg->unpin_lo/unpin_hi asks for the points (robot frame,
+ * beam order) at heading theta. */
+void rsm_mapmatch_unpin_for(const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n, float theta,
+                            rsm_mapmatch_unpin_t *un);
 
 #ifdef __cplusplus
 }

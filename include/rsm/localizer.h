@@ -137,6 +137,9 @@ typedef struct rsm_localizer_report {
     uint32_t iterations;      /* RANSAC hypotheses or ICP iterations */
     float residual_m;         /* RMS residual of the accepted fit */
     float mahalanobis_d2;     /* of the measurement against the prediction */
+    float unpinned;           /* RSM_METHOD_MAP: the share (0 to 1) of the match's pull along
+                               * the scan's surfaces left out because they all run one way
+                               * (a bare corridor): the prediction kept that direction */
     /* With a clock_fn: time per stage and of the whole call (first to last
      * clock reading), in clock_fn's unit; the stages tile the call, so their
      * sum is step_time (modulo 2^32). All 0 without a clock_fn. */
@@ -154,6 +157,9 @@ typedef struct rsm_localizer_counters {
     uint32_t recovered;                      /* ... whose pose was taken */
     uint32_t unconfirmed;                    /* returns kept out of the persistent map: no
                                               * neighbour confirmed them (isolation) */
+    uint32_t unpinned;                       /* matches that left the position along the
+                                              * scan's surfaces to the prediction, wholly
+                                              * or in part (report.unpinned > 0) */
 } rsm_localizer_counters_t;
 
 typedef struct rsm_localizer {

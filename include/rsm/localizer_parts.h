@@ -278,6 +278,14 @@ typedef struct rsm_mapmatch_config {
                              * heading std times the scan's mean range): coarser cells
                              * only widen a basin the prediction does not need; 0 = always
                              * the coarsest */
+    float unpin_lo;         /* a scan whose surfaces run nearly one way (a bare corridor)
+                             * does not pin the position along them, yet the map's wall
+                             * bands, shaped by the poses they were written from, pull
+                             * it back there: below a spread (rsm_mapmatch_spread) of
+                             * unpin_hi that pull is taken out in proportion, wholly
+                             * below unpin_lo, and the prediction keeps that direction;
+                             * defaults 0.02 and 0.06 (docs/map.md, "Bare corridors") */
+    float unpin_hi;         /* 0 = off */
 } rsm_mapmatch_config_t;
 #ifdef __cplusplus
 }

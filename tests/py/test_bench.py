@@ -508,6 +508,9 @@ def test_bench_reads_the_summary_rsm_nav_writes_as_json(tmp_path, head_log):
             t = s["tmap"]
             assert f"{t['writes']} writes, tiles {'/'.join(map(str, t['tiles']))} per level" in r["summary"]
             assert s["recovery"]["searches"] >= s["recovery"]["taken"] >= 0
+            # The excerpt starts in a corridor: some matches are unpinned, not all.
+            assert 0 < s["unpinned"] < s["outcomes"]["accepted"]
+            assert f"{s['unpinned']} matches left the position" in r["summary"]
         else:
             assert s["tmap"] is None and s["recovery"] is None
     bad = tmp_path / "bad.json"

@@ -1,7 +1,8 @@
 /* Matching a scan to the persistent map: convergence from a wrong
  * prediction, the heading fan, the corridor (only the constrained
  * directions move, and the covariance says so), large heading errors
- * with and without the heading fan, the wide recovery search,
+ * with and without the heading fan, the spread of a scan's surfaces and
+ * the drag along a bare corridor it stops, the wide recovery search,
  * an empty map, configuration checks and determinism. */
 #include <math.h>
 #include <stdint.h>
@@ -98,7 +99,7 @@ static void tiny_pool_outcome(const rsm_pose_t *truth_w, const rsm_pose_t *pred,
     const size_t n = points_at(truth_w);
     TEST_ASSERT_GREATER_THAN_UINT32(0u, map.counters.evicted);
     TEST_ASSERT_EQUAL_UINT32((uint32_t)RSM_TMAP_TILES, map.used);
-    (void)rsm_mapmatch(&map, &cfg, pts, n, pred, prior, NULL, &res);
+    (void)rsm_mapmatch(&map, &cfg, pts, n, pred, prior, NULL, NULL, &res);
     TEST_ASSERT_TRUE(rsm_synth_pose_finite(&res.pose));
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&res.pose, pred) < 3.0f * sqrtf(prior[0] + prior[4]));
     TEST_ASSERT_TRUE(rsm_synth_angle_error(&res.pose, pred) < 3.0f * sqrtf(prior[8]));
@@ -117,7 +118,7 @@ static void assert_converges(const rsm_pose_t *truth_w, const rsm_pose_t *pred_w
     const rsm_pose_t pr = in_map(pred_w);
     const rsm_pose_t *truth = &t;
     const rsm_pose_t *pred = &pr;
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, pred, p_wide, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, pred, p_wide, NULL, NULL, &res));
     snprintf(msg, sizeof msg, "from %.3f %.3f %.2f deg: got %.4f %.4f %.3f deg, truth %.3f %.3f %.2f deg",
              (double)pred->x, (double)pred->y, (double)(pred->theta / DEG), (double)res.pose.x, (double)res.pose.y,
              (double)(res.pose.theta / DEG), (double)truth->x, (double)truth->y, (double)(truth->theta / DEG));
@@ -170,12 +171,12 @@ void test_mapmatch_should_start_on_the_level_the_prior_needs(void)
     size_t n;
     build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
     n = points_at(&truth_w);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &truth, p_tight, NULL, &tight));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &truth, p_tight, NULL, NULL, &tight));
     TEST_ASSERT_LESS_THAN_UINT32(coarsest, tight.top);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &truth, p_wide, NULL, &wide));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &truth, p_wide, NULL, NULL, &wide));
     TEST_ASSERT_EQUAL_UINT32(coarsest, wide.top);
     cfg.basin = 0.0f;
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &truth, p_tight, NULL, &all));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &truth, p_tight, NULL, NULL, &all));
     TEST_ASSERT_EQUAL_UINT32(coarsest, all.top);
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&tight.pose, &all.pose) < 0.005f);
     TEST_ASSERT_TRUE(rsm_synth_angle_error(&tight.pose, &all.pose) < 0.1f * DEG);
@@ -258,7 +259,7 @@ void test_mapmatch_should_move_only_across_a_corridor(void)
     tiny_pool_outcome(&truth_w, &pred, p_corr);
     return;
 #endif
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_corr, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_corr, NULL, NULL, &res));
     TEST_ASSERT_FLOAT_WITHIN(0.01f, truth.y, res.pose.y);
     TEST_ASSERT_FLOAT_WITHIN(0.3f * DEG, truth.theta, res.pose.theta);
     TEST_ASSERT_FLOAT_WITHIN(0.1f, pred.x, res.pose.x);
@@ -266,6 +267,140 @@ void test_mapmatch_should_move_only_across_a_corridor(void)
     TEST_ASSERT_TRUE(res.cov[4] < 0.01f * p_corr[4]);
     TEST_ASSERT_TRUE(res.cov[0] > 20.0f * res.cov[4]);
     TEST_ASSERT_TRUE(res.info[0] < 0.05f * res.info[4]);
+    /* Unpinned along the corridor, the scan still places the sideways
+     * position and the heading; along it the estimate and its variance are
+     * the prediction's. */
+    {
+        const rsm_mapmatch_unpin_t un = {{1.0f, 0.0f}, 1.0f};
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_corr, NULL, &un, &res));
+    }
+    TEST_ASSERT_FLOAT_WITHIN(0.01f, truth.y, res.pose.y);
+    TEST_ASSERT_FLOAT_WITHIN(0.3f * DEG, truth.theta, res.pose.theta);
+    TEST_ASSERT_FLOAT_WITHIN(0.005f, pred.x, res.pose.x);
+    TEST_ASSERT_TRUE(res.info[0] < 1e-3f * res.info[4]);
+    TEST_ASSERT_TRUE(res.cov[0] > 0.9f * p_corr[0]);
+}
+
+/* Robot-frame points of a noisy scan (range noise sigma_m) from pose in
+ * a world; beams that see nothing within 7.9 m are dropped. */
+static size_t noisy_points_at(const rsm_pose_t *pose, rsm_synth_rng_t *rng)
+{
+    const rsm_scan_limits_t lim = {0.05f, 7.9f};
+    int n;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, pose, &scfg, rng, 0u, &scan));
+    n = rsm_scan_to_points(&scan, &lim, pts, RSM_MAX_BEAMS, NULL);
+    TEST_ASSERT_GREATER_THAN_INT(20, n);
+    return (size_t)n;
+}
+
+void test_mapmatch_spread_should_tell_a_corridor_from_a_room(void)
+{
+    static const rsm_synth_segment_t walls[] = {{-20.0f, -1.0f, 40.0f, -1.0f}, {-20.0f, 1.0f, 40.0f, 1.0f}};
+    const rsm_synth_world_t corridor = {walls, 2u};
+    const rsm_pose_t along = {0.0f, 0.2f, 0.0f};
+    const rsm_pose_t turned = {0.0f, 0.0f, 0.5f};
+    const rsm_pose_t in_room = {0.3f, -0.2f, 0.4f};
+    rsm_synth_rng_t rng;
+    rsm_mapmatch_unpin_t un;
+    float dir[2];
+    float spread;
+    size_t n;
+    rsm_synth_rng_seed(&rng, 3u);
+    scfg.max_range_m = 8.0f;
+    scfg.sigma_m = 0.03f;
+    world = corridor;
+    /* Every chord runs along the corridor, up to the range noise. */
+    n = noisy_points_at(&along, &rng);
+    spread = rsm_mapmatch_spread(pts, n, dir);
+    TEST_ASSERT_TRUE(spread < 0.02f);
+    TEST_ASSERT_FLOAT_WITHIN(0.01f, 1.0f, fabsf(dir[0]));
+    /* Turned by 0.5 rad, the robot sees the corridor at -0.5 rad; the
+     * unpinning is whole, along the world's x. */
+    n = noisy_points_at(&turned, &rng);
+    TEST_ASSERT_TRUE(rsm_mapmatch_spread(pts, n, dir) < 0.02f);
+    TEST_ASSERT_FLOAT_WITHIN(0.02f, 0.5f, fabsf(atan2f(dir[1], dir[0]) - (dir[0] < 0.0f ? -RSM_PI : 0.0f)));
+    rsm_mapmatch_unpin_for(&cfg, pts, n, turned.theta, &un);
+    TEST_ASSERT_EQUAL_FLOAT(1.0f, un.frac);
+    TEST_ASSERT_FLOAT_WITHIN(0.01f, 1.0f, fabsf(un.dir[0]));
+    /* Switched off, nothing is unpinned. */
+    cfg.unpin_hi = 0.0f;
+    rsm_mapmatch_unpin_for(&cfg, pts, n, turned.theta, &un);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, un.frac);
+    cfg = rsm_mapmatch_config_default();
+    /* A room's walls run both ways: pinned. */
+    world = rsm_synth_world_room();
+    n = noisy_points_at(&in_room, &rng);
+    TEST_ASSERT_TRUE(rsm_mapmatch_spread(pts, n, dir) > 0.2f);
+    rsm_mapmatch_unpin_for(&cfg, pts, n, in_room.theta, &un);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, un.frac);
+    /* No chord at all (one point; points too far apart to be a surface):
+     * nothing says the scan is one-sided. */
+    TEST_ASSERT_EQUAL_FLOAT(1.0f, rsm_mapmatch_spread(pts, 1u, dir));
+    TEST_ASSERT_EQUAL_FLOAT(1.0f, rsm_mapmatch_spread(pts, 0u, dir));
+    {
+        const rsm_point_t apart[3] = {{1.0f, 0.0f}, {1.0f, 1.0f}, {1.0f, 2.0f}};
+        TEST_ASSERT_EQUAL_FLOAT(1.0f, rsm_mapmatch_spread(apart, 3u, dir));
+    }
+}
+
+/* Drives 8 m of a bare corridor with exact odometry, matching each noisy
+ * scan against the map written so far (every fifth scan, as the localizer
+ * writes every 0.4 m) with the prediction from the last estimate; returns
+ * how far the estimate ends behind the truth along the corridor. */
+static float corridor_drive(int unpinned)
+{
+    static const rsm_synth_segment_t walls[] = {{-20.0f, -1.0f, 40.0f, -1.0f}, {-20.0f, 1.0f, 40.0f, 1.0f}};
+    const rsm_synth_world_t corridor = {walls, 2u};
+    /* 2 cm and 1 degree a scan. */
+    const float p_step[9] = {0.0004f, 0.0f, 0.0f, 0.0f, 0.0004f, 0.0f, 0.0f, 0.0f, 0.0003f};
+    rsm_synth_rng_t rng;
+    rsm_pose_t est = {0.0f, 0.0f, 0.0f};
+    int i;
+    world = corridor;
+    scfg.max_range_m = 8.0f;
+    scfg.sigma_m = 0.02f;
+    rsm_synth_rng_seed(&rng, 7u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &mcfg));
+    for (i = 0; i <= 100; ++i) {
+        const rsm_pose_t truth = {0.08f * (float)i, 0.0f, 0.0f};
+        const size_t n = noisy_points_at(&truth, &rng);
+        if (i > 0) {
+            rsm_mapmatch_result_t res;
+            rsm_mapmatch_unpin_t un;
+            est.x += 0.08f; /* exact odometry */
+            rsm_mapmatch_unpin_for(&cfg, pts, n, est.theta, &un);
+            TEST_ASSERT_EQUAL_INT(RSM_OK,
+                                  rsm_mapmatch(&map, &cfg, pts, n, &est, p_step, NULL, unpinned ? &un : NULL, &res));
+            est = res.pose;
+        }
+        if (i % 5 == 0) {
+            const rsm_point_t o = {est.x, est.y};
+            size_t k;
+            for (k = 0; k < n; ++k) {
+                world_pts[k] = rsm_pose_apply(&est, &pts[k]);
+            }
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, world_pts, n));
+        }
+    }
+    return 8.0f - est.x;
+}
+
+void test_mapmatch_should_not_drag_a_scan_back_along_a_bare_corridor(void)
+{
+    /* How a wall looks in the map depends on the poses it was written
+     * from, and a later scan reads gradients along it that pull it back
+     * towards them: plain scan-to-map matching lags behind the robot in a
+     * featureless corridor even with exact odometry. Unpinned, the
+     * position along the corridor is the prediction's, and the estimate
+     * keeps odometry's progress (up to the heading's random walk: the
+     * prior allows 1 degree a scan). */
+    const float plain = corridor_drive(0);
+    const float unpinned = corridor_drive(1);
+    char msg[96];
+    snprintf(msg, sizeof msg, "behind after 8 m: %.4f m plain, %.4f m unpinned", (double)plain, (double)unpinned);
+    printf("%s\n", msg);
+    TEST_ASSERT_TRUE_MESSAGE(fabsf(unpinned) < 0.05f, msg);
+    TEST_ASSERT_TRUE_MESSAGE(plain > 0.5f && plain > 10.0f * fabsf(unpinned), msg);
 }
 
 void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
@@ -293,7 +428,7 @@ void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
         memcpy(wide, p_wide, sizeof wide);
         wide[0] += 1.0f;
         wide[4] += 1.0f;
-        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, wide, &best, &res));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, wide, &best, NULL, &res));
     }
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&res.pose, &truth) < 0.02f);
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, -1.0f, 0.1f, &best, 1u));
@@ -339,14 +474,14 @@ void test_mapmatch_should_report_an_empty_map_as_degenerate(void)
     size_t n;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &mcfg));
     n = points_at(&pred);
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_DEGENERATE, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_wide, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_DEGENERATE, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_wide, NULL, NULL, &res));
     TEST_ASSERT_EQUAL_MEMORY(&pred, &res.pose, sizeof pred);
     TEST_ASSERT_EQUAL_MEMORY(p_wide, res.cov, sizeof res.cov);
     /* A zero prior covariance is floored, not inverted as it is. */
     {
         const float zero[9] = {0};
         build_map(room_poses, 2u);
-        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, zero, NULL, &res));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, zero, NULL, NULL, &res));
         TEST_ASSERT_TRUE(rsm_synth_pos_error(&res.pose, &pred) < 1e-3f);
     }
 }
@@ -362,7 +497,7 @@ void test_mapmatch_should_check_its_arguments_and_config(void)
     c = cfg;
     c.sigma = 0.0f;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(&c));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &c, pts, 1u, &pred, p_wide, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &c, pts, 1u, &pred, p_wide, NULL, NULL, &res));
     c = cfg;
     c.iterations = 0u;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(&c));
@@ -372,11 +507,20 @@ void test_mapmatch_should_check_its_arguments_and_config(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(&c));
     c.search_rad = 0.0f;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch_check(&c));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(NULL, &cfg, pts, 1u, &pred, p_wide, NULL, &res));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, NULL, 1u, &pred, p_wide, NULL, &res));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, pts, 1u, NULL, p_wide, NULL, &res));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, pts, 1u, &pred, NULL, NULL, &res));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, pts, 1u, &pred, p_wide, NULL, NULL));
+    c = cfg;
+    c.unpin_hi = c.unpin_lo;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(&c));
+    c.unpin_hi = 1.5f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(&c));
+    c.unpin_hi = 0.0f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch_check(&c));
+    c.unpin_lo = -0.1f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_check(&c));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(NULL, &cfg, pts, 1u, &pred, p_wide, NULL, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, NULL, 1u, &pred, p_wide, NULL, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, pts, 1u, NULL, p_wide, NULL, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, pts, 1u, &pred, NULL, NULL, NULL, &res));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch(&map, &cfg, pts, 1u, &pred, p_wide, NULL, NULL, NULL));
 }
 
 void test_mapmatch_should_be_deterministic(void)
@@ -388,8 +532,8 @@ void test_mapmatch_should_be_deterministic(void)
     size_t n;
     build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
     n = points_at(&truth);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_wide, NULL, &a));
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_wide, NULL, &b));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_wide, NULL, NULL, &a));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_wide, NULL, NULL, &b));
     TEST_ASSERT_EQUAL_MEMORY(&a, &b, sizeof a);
 }
 
@@ -400,6 +544,8 @@ int main(void)
     RUN_TEST(test_mapmatch_should_start_on_the_level_the_prior_needs);
     RUN_TEST(test_mapmatch_should_recover_large_heading_errors_in_a_hall);
     RUN_TEST(test_mapmatch_should_move_only_across_a_corridor);
+    RUN_TEST(test_mapmatch_spread_should_tell_a_corridor_from_a_room);
+    RUN_TEST(test_mapmatch_should_not_drag_a_scan_back_along_a_bare_corridor);
     RUN_TEST(test_mapmatch_search_should_find_a_pose_a_metre_off);
     RUN_TEST(test_mapmatch_should_report_an_empty_map_as_degenerate);
     RUN_TEST(test_mapmatch_should_check_its_arguments_and_config);

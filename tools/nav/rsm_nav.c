@@ -84,6 +84,8 @@
     U("mm_fan", mapmatch.fan, uint8_t) \
     F("mm_gate", mapmatch.gate_d2) \
     F("mm_basin", mapmatch.basin) \
+    F("mm_unpin_lo", mapmatch.unpin_lo) \
+    F("mm_unpin_hi", mapmatch.unpin_hi) \
     F("recover_ratio", recover_ratio) \
     F("recover_m", recover_m) \
     F("recover_rad", recover_rad) \
@@ -903,7 +905,8 @@ static void time_stats(nav_t *nav, double *median, double *p95)
  * timestamps {clamped, odd, jumps}, drops {nan, too_short, too_long},
  * alignment {...} (capture and live modes), odometry_calibrations, and for
  * the persistent map tmap {writes, tiles [per level], taken, evicted,
- * dropped, freed, behind, unconfirmed} and recovery {searches, taken}.
+ * dropped, freed, behind, unconfirmed}, recovery {searches, taken} and
+ * unpinned (matches that left the position along a corridor to odometry).
  * Returns 0, or -1 if the file cannot be written. */
 static int write_summary_json(nav_t *nav, const char *path)
 {
@@ -952,10 +955,11 @@ static int write_summary_json(nav_t *nav, const char *path)
             fprintf(f, "%s%u", level > 0u ? ", " : "", (unsigned)rsm_tmap_tiles(m, level));
         }
         fprintf(f, "], \"taken\": %u, \"evicted\": %u, \"dropped\": %u, \"freed\": %u, \"behind\": %u, "
-                   "\"unconfirmed\": %u},\n  \"recovery\": {\"searches\": %u, \"taken\": %u}",
+                   "\"unconfirmed\": %u},\n  \"recovery\": {\"searches\": %u, \"taken\": %u},\n"
+                   "  \"unpinned\": %u",
                 (unsigned)m->counters.allocated, (unsigned)m->counters.evicted, (unsigned)m->counters.dropped,
                 (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed,
-                (unsigned)c->searches, (unsigned)c->recovered);
+                (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->unpinned);
     }
     fprintf(f, "\n}\n");
     return fclose(f) == 0 ? 0 : -1;
@@ -982,6 +986,8 @@ static void print_summary(nav_t *nav)
         printf("  map writes      %u tiles cleared and freed, %u returns behind walls, %u unconfirmed\n",
                (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed);
         printf("  recovery        %u searches, %u taken\n", (unsigned)c->searches, (unsigned)c->recovered);
+        printf("  unpinned        %u matches left the position along the scan's surfaces to odometry\n",
+               (unsigned)c->unpinned);
     }
     printf("  timestamps      %llu clamped (went backwards), %llu odd (far from both neighbours: replaced),"
            " %llu jumps of the clock\n",

@@ -12,7 +12,8 @@ from .common import BenchError, INDIRECT_TARGETS, PEER_COLUMNS, STACK_ROOTS
 def load_summary(path: Path) -> dict:
     """rsm-nav's --summary-json: scans, outcome counts, per-scan wall times
     (median_us, p95_us); for the persistent-map method also its tiles
-    (tmap) and recovery searches (recovery)."""
+    (tmap), recovery searches (recovery) and the matches unpinned along a
+    corridor (unpinned)."""
     try:
         out = json.loads(Path(path).read_text())
     except (OSError, ValueError) as e:

@@ -947,7 +947,8 @@ def report_accuracy(ctx: dict, root: Path) -> List[str]:
                 t, rc = s["tmap"], s.get("recovery") or {}
                 tm.append(f"{run}: {fmt_int(t['writes'])} writes, tiles {'/'.join(map(str, t['tiles']))} per level, "
                           f"{fmt_int(t['taken'])} taken, {fmt_int(t['evicted'])} evicted, {fmt_int(t['dropped'])} "
-                          f"returns dropped; {rc.get('searches', 0)} recovery searches, {rc.get('taken', 0)} taken")
+                          f"returns dropped; {rc.get('searches', 0)} recovery searches, {rc.get('taken', 0)} taken; "
+                          f"{fmt_int(s.get('unpinned', 0))} matches unpinned along a corridor")
         if tm:
             L += ["Persistent map at the end of the log (rsm-nav summary): " + "; ".join(tm) + ".", ""]
     return L
