@@ -6,6 +6,7 @@ accurate than ICP and odometry, outliers, bit-identical reruns, the capture
 path beside the direct run) are checked by ./tools/bench (rsm_tools.fullchecks).
 """
 
+import json
 import math
 import re
 import subprocess
@@ -389,3 +390,34 @@ def test_capture_path_keeps_every_reading_and_tracks_as_the_direct_run(tmp_path,
         got = capture_errors(capf, traj, head_relations, max_span=span)["translation"]["mean"]
         print(f"max span {span}: capture {got:.4f} m, direct {want:.4f} m, ratio {got / want:.3f}")
         assert got <= 1.10 * want
+
+
+def test_a_bare_corridor_keeps_odometrys_progress(tmp_path):
+    """rsm-sim's bare hall, 40 s (16 m) with 3 cm of range noise and
+    slipping wheels (odometry that keeps the distance): the matcher leaves
+    the position along the corridor to odometry (unpinning, docs/map.md
+    "Bare corridors") and ends within 0.15 m of the truth along it; with
+    unpinning off the map's walls drag it back by more than 0.4 m, and over
+    pose pairs up to 30 s apart rsm is then no better than odometry alone."""
+    log, truth = tmp_path / "hall.clf.gz", tmp_path / "hall.txt"
+    sim.simulate(log, truth, "hall", seconds=40, slip=0.08, range_noise=0.03, seed=5, carmen=True)
+    true_traj = ev.load_trajectory(truth)
+    true_end = true_traj.points()[-1]
+    rel = ev.relations_from_poses(true_traj, max_span=30.0)
+    odo = ev.evaluate(ev.odometry_trajectory(log), rel, max_span=30.0)
+    got = {}
+    for label, extra in (("unpinned", []), ("off", ["--set", "mm_unpin_hi=0"])):
+        traj, summ = tmp_path / f"{label}.txt", tmp_path / f"{label}.json"
+        res = subprocess.run([str(nav_binary()), "--carmen", str(log), "--trajectory", str(traj), "--summary-json",
+                              str(summ), "--quiet", *extra], capture_output=True, text=True, timeout=300)
+        assert res.returncode == 0, res.stderr
+        end = ev.load_trajectory(traj).points()[-1]
+        assert end.t == pytest.approx(true_end.t)
+        err = ev.evaluate(ev.load_trajectory(traj), rel, max_span=30.0)
+        got[label] = (true_end.x - end.x, err["translation"]["mean"], json.loads(summ.read_text())["unpinned"])
+    print(f"\nhall, 16 m: behind {got['unpinned'][0]:.3f} m unpinned, {got['off'][0]:.3f} m off; over 30 s "
+          f"{got['unpinned'][1]:.4f} and {got['off'][1]:.4f} m, odometry {odo['translation']['mean']:.4f} m; "
+          f"{got['unpinned'][2]} matches unpinned")
+    assert abs(got["unpinned"][0]) < 0.15 and got["off"][0] > 0.4
+    assert got["unpinned"][1] < odo["translation"]["mean"] / 3 <= got["off"][1]
+    assert got["unpinned"][2] > 100 and got["off"][2] == 0
