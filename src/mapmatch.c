@@ -326,20 +326,14 @@ typedef struct prior {
     const rsm_mapmatch_unpin_t *unpin; /* or NULL */
 } prior_t;
 
-/* The coarsest level the descent needs: the one whose cell is at least
- * cfg->basin times how far the prior's one-sigma error moves a point at
- * the scan's mean range (every level when basin is 0). */
-static int start_level(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const float p0[9], float mean,
-                       const rsm_mapmatch_unpin_t *un)
+/* The larger of the prior's x and y variances. The descent does not look
+ * along an unpinned direction, however uncertain the prediction is there:
+ * with un, those of Q P Q with Q = I - frac d d^T. */
+static float position_variance(const float p0[9], const rsm_mapmatch_unpin_t *un)
 {
-    const int coarsest = (int)map->cfg.levels - 1;
     float pxx = p0[0];
     float pyy = p0[4];
-    float sp;
     if (un != NULL && un->frac > 0.0f) {
-        /* The descent does not look along an unpinned direction, however
-         * uncertain the prediction is there: its basin needs the rest of
-         * the prior's spread, Q P Q with Q = I - frac d d^T. */
         const float f = un->frac;
         const float q[4] = {1.0f - f * un->dir[0] * un->dir[0], -f * un->dir[0] * un->dir[1],
                             -f * un->dir[0] * un->dir[1], 1.0f - f * un->dir[1] * un->dir[1]};
@@ -348,7 +342,17 @@ static int start_level(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, 
         pxx = qp[0] * q[0] + qp[1] * q[1];
         pyy = qp[2] * q[2] + qp[3] * q[3];
     }
-    sp = sqrtf(pxx > pyy ? pxx : pyy);
+    return pxx > pyy ? pxx : pyy;
+}
+
+/* The coarsest level the descent needs: the one whose cell is at least
+ * cfg->basin times how far the prior's one-sigma error moves a point at
+ * the scan's mean range (every level when basin is 0). */
+static int start_level(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const float p0[9], float mean,
+                       const rsm_mapmatch_unpin_t *un)
+{
+    const int coarsest = (int)map->cfg.levels - 1;
+    const float sp = sqrtf(position_variance(p0, un));
     const float need = cfg->basin * (sp + sqrtf(p0[8]) * mean);
     int level = 0;
     if (!(cfg->basin > 0.0f) || !(need < rsm_tmap_cell(map, (uint32_t)coarsest))) {
@@ -369,9 +373,6 @@ static int small_step(const rsm_mapmatch_config_t *cfg, const float step[3], int
            fabsf(step[2]) < cfg->min_step_rad * scale;
 }
 
-/* Gauss-Newton from x on every level, coarse to fine. On return x is the
- * estimate, s the finest level's sums there and the result the objective
- * (residuals plus prior) on the finest level. */
 /* Takes the fraction un->frac of the sums' pull along the world direction
  * d = (un->dir, 0) out: H <- P H P and b <- P b with P = I - frac d d^T.
  * The heading keeps what the points' moves along d tell of it. */
@@ -414,6 +415,9 @@ static void unpin_sums(sums_t *s, const rsm_mapmatch_unpin_t *un)
     s->h[5] = hf[8];
 }
 
+/* Gauss-Newton from x on every level, coarse to fine. On return x is the
+ * estimate, s the finest level's sums there and the result the objective
+ * (residuals plus prior) on the finest level. */
 static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
                      const prior_t *pr, rsm_pose_t *x, sums_t *s, uint32_t *iterations)
 {

@@ -18,8 +18,8 @@
  * of cells looks along it depends on the poses it was written from, and in a
  * bare corridor those gradients pull the scan back towards them, scan after
  * scan. So a scan whose surfaces all run one way (rsm_mapmatch_spread) is
- * unpinned along them: that share of its pull and of its steps is left out,
- * and the prediction keeps that direction (docs/map.md, "Bare corridors").
+ * unpinned along them: that share of its pull is left out of every pass's
+ * sums, and the prediction keeps that direction (docs/map.md, "Bare corridors").
  *
  * Optionally (fan) the descent also starts from the best of a fan of
  * headings around the prediction, scored on the coarsest level with the
@@ -68,8 +68,8 @@ typedef struct rsm_mapmatch_result {
 /* Aligns the robot-frame points to the map with the prediction (x0, p0) as
  * prior. The descent starts at *start when it is given, else at the best
  * heading of the fan around x0. With unpin (may be NULL) that share of the
- * scan's pull along its direction is left out of every step and of the
- * information (rsm_mapmatch_unpin_for). Returns RSM_OK (res filled),
+ * scan's pull along its direction is left out of every pass's sums and so
+ * of the information (rsm_mapmatch_unpin_for). Returns RSM_OK (res filled),
  * RSM_ERR_DEGENERATE when the prior covariance cannot be inverted or fewer
  * than 3 points touch the map (res->pose = x0), RSM_ERR_INVAL for bad
  * arguments. Reentrant; the map is not changed. */

@@ -57,15 +57,22 @@ void tearDown(void)
 {
 }
 
+/* Robot-frame points of a scan from pose within lim, with range noise
+ * (scfg.sigma_m) drawn from rng, exact without one. */
+static size_t scan_points(const rsm_pose_t *pose, rsm_synth_rng_t *rng, const rsm_scan_limits_t *lim)
+{
+    int n;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, pose, &scfg, rng, 0u, &scan));
+    n = rsm_scan_to_points(&scan, lim, pts, RSM_MAX_BEAMS, NULL);
+    TEST_ASSERT_GREATER_THAN_INT(20, n);
+    return (size_t)n;
+}
+
 /* Robot-frame points of an exact scan from pose. */
 static size_t points_at(const rsm_pose_t *pose)
 {
     const rsm_scan_limits_t lim = rsm_scan_limits_default();
-    int n;
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, pose, &scfg, NULL, 0u, &scan));
-    n = rsm_scan_to_points(&scan, &lim, pts, RSM_MAX_BEAMS, NULL);
-    TEST_ASSERT_GREATER_THAN_INT(20, n);
-    return (size_t)n;
+    return scan_points(pose, NULL, &lim);
 }
 
 /* Writes exact scans from each pose into the map, twice. */
@@ -286,11 +293,7 @@ void test_mapmatch_should_move_only_across_a_corridor(void)
 static size_t noisy_points_at(const rsm_pose_t *pose, rsm_synth_rng_t *rng)
 {
     const rsm_scan_limits_t lim = {0.05f, 7.9f};
-    int n;
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, pose, &scfg, rng, 0u, &scan));
-    n = rsm_scan_to_points(&scan, &lim, pts, RSM_MAX_BEAMS, NULL);
-    TEST_ASSERT_GREATER_THAN_INT(20, n);
-    return (size_t)n;
+    return scan_points(pose, rng, &lim);
 }
 
 void test_mapmatch_spread_should_tell_a_corridor_from_a_room(void)
