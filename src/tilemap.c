@@ -9,6 +9,7 @@
 #include "rsm/status.h"
 #include "bits.h"
 #include "check.h"
+#include "compiler.h"
 #include "fmath.h"
 #include "tmap_read.h"
 
@@ -348,58 +349,106 @@ static int32_t cell_of(float v, float inv_a)
 }
 
 /* Lowers the cells from (x0, y0) towards (x1, y1), stopping margin + 1
- * cells short of the end (Bresenham). Returns the highest value the beam
- * met (before lowering it). */
-static uint32_t clear_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t dec,
-                       uint32_t margin)
+ * cells short of the end, and returns the highest value the beam met
+ * (before lowering it). The cells are Bresenham's, one per step along the
+ * major axis (the one with the larger extent, which steps every time) and
+ * a step along the minor one when the error term says so. Most cells are
+ * in tiles the pool does not hold, or hold 0, so the walk goes tile by
+ * tile: one lookup per tile, then a loop over its cells that only steps
+ * where no tile is held, and inside a held one moves the cell's index
+ * with the step instead of recomputing it. Not inlined: inside the write
+ * loop the compiler spilled the walk's state on a Cortex-M4, a third of
+ * each step. */
+static inline uint32_t walk_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0, int32_t x1,
+                                 int32_t y1, uint32_t dec, uint32_t margin, const int xmajor)
 {
-    const int32_t dx = x1 > x0 ? x1 - x0 : x0 - x1;
-    const int32_t dy = y1 > y0 ? y1 - y0 : y0 - y1;
-    const int32_t sx = x1 > x0 ? 1 : -1;
-    const int32_t sy = y1 > y0 ? 1 : -1;
-    const int32_t steps = dx > dy ? dx : dy;
-    int32_t err = dx - dy;
-    int32_t k;
+    const int32_t adx = x1 > x0 ? x1 - x0 : x0 - x1;
+    const int32_t ady = y1 > y0 ? y1 - y0 : y0 - y1;
+    const int32_t big = xmajor ? adx : ady;   /* extent along the major axis */
+    const int32_t small = xmajor ? ady : adx; /* and along the minor one */
+    const int32_t su = (xmajor ? x1 > x0 : y1 > y0) ? 1 : -1;
+    const int32_t sv = (xmajor ? y1 > y0 : x1 > x0) ? 1 : -1;
+    /* The minor coordinate's offset in its tile right after it entered the
+     * next tile. */
+    const int32_t v_in = sv > 0 ? 0 : RSM_TMAP_TILE_MASK;
+    /* Index steps within a tile for a major and a minor step. */
+    const int32_t di_u = xmajor ? su : su * (int32_t)RSM_TMAP_TILE_SIDE;
+    const int32_t di_v = xmajor ? sv * (int32_t)RSM_TMAP_TILE_SIDE : sv;
+    int32_t u = xmajor ? x0 : y0;
+    int32_t v = xmajor ? y0 : x0;
+    int32_t err = big - small;
+    int32_t left = big - (int32_t)margin;
     uint32_t top = 0;
-    /* The tile under the beam: looked up only when the beam enters another. */
-    int32_t tx = x0 >> RSM_TMAP_TILE_LOG2;
-    int32_t ty = y0 >> RSM_TMAP_TILE_LOG2;
-    uint32_t s = rsm_tmap_cursor_slot(map, c, x0, y0);
-    for (k = 0; k < steps - (int32_t)margin; ++k) {
-        int32_t e2;
-        if ((x0 >> RSM_TMAP_TILE_LOG2) != tx || (y0 >> RSM_TMAP_TILE_LOG2) != ty) {
-            tx = x0 >> RSM_TMAP_TILE_LOG2;
-            ty = y0 >> RSM_TMAP_TILE_LOG2;
-            s = rsm_tmap_cursor_slot(map, c, x0, y0);
-        }
-        if (s != RSM_TMAP_NONE) {
+    while (left > 0) {
+        const int32_t x = xmajor ? u : v;
+        const int32_t y = xmajor ? v : u;
+        const int32_t ru = su > 0 ? RSM_TMAP_TILE_MASK - (u & RSM_TMAP_TILE_MASK) : (u & RSM_TMAP_TILE_MASK);
+        const int32_t run = ru + 1 < left ? ru + 1 : left;
+        const uint32_t s = rsm_tmap_cursor_slot(map, c, x, y);
+        int32_t n = run;
+        if (s == RSM_TMAP_NONE) {
+            while (n > 0) {
+                const int32_t e2 = 2 * err;
+                --n;
+                err -= small;
+                if (e2 < big) {
+                    err += big;
+                    v += sv;
+                    if ((v & RSM_TMAP_TILE_MASK) == v_in) {
+                        break;
+                    }
+                }
+            }
+        } else {
             rsm_tile_t *t = &map->tile[s];
-            const uint32_t i = rsm_tmap_cell_index(x0, y0);
-            const uint32_t v = rsm_tmap_get_cell(t, i);
-            top = v > top ? v : top;
-            if (v > dec) {
-                set_cell(t, i, v - dec);
-            } else if (v != 0u) {
-                set_cell(t, i, 0u);
-                if (tile_empty(t)) {
-                    free_slot(map, s);
-                    rsm_tmap_cursor_forget(c);
-                    s = RSM_TMAP_NONE;
+            int32_t i = (int32_t)rsm_tmap_cell_index(x, y);
+            while (n > 0) {
+                const uint32_t sh = ((uint32_t)i & 1u) << 2;
+                const uint32_t b = t->cell[(uint32_t)i >> 1];
+                const uint32_t val = (b >> sh) & 15u;
+                const int32_t e2 = 2 * err;
+                int freed = 0;
+                top = val > top ? val : top;
+                if (val > dec) {
+                    t->cell[(uint32_t)i >> 1] = (uint8_t)(b - (dec << sh)); /* no borrow: val > dec */
+                } else if (val != 0u) {
+                    t->cell[(uint32_t)i >> 1] = (uint8_t)(b & ~(15u << sh));
+                    if (tile_empty(t)) {
+                        free_slot(map, s);
+                        rsm_tmap_cursor_forget(c);
+                        freed = 1;
+                    }
+                }
+                --n;
+                err -= small;
+                i += di_u;
+                if (e2 < big) {
+                    err += big;
+                    v += sv;
+                    i += di_v;
+                    if ((v & RSM_TMAP_TILE_MASK) == v_in) {
+                        break;
+                    }
+                }
+                if (freed) {
+                    break; /* the rest of the tile reads as none */
                 }
             }
         }
-        /* One step along the major axis, and along the minor when due. */
-        e2 = 2 * err;
-        if (e2 > -dy) {
-            err -= dy;
-            x0 += sx;
-        }
-        if (e2 < dx) {
-            err += dx;
-            y0 += sy;
-        }
+        u += su * (run - n);
+        left -= run - n;
     }
     return top;
+}
+
+static RSM_NOINLINE uint32_t clear_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0, int32_t x1,
+                                        int32_t y1, uint32_t dec, uint32_t margin)
+{
+    /* One copy of the walk per major axis, each with its axes fixed. */
+    const int32_t adx = x1 > x0 ? x1 - x0 : x0 - x1;
+    const int32_t ady = y1 > y0 ? y1 - y0 : y0 - y1;
+    return adx >= ady ? walk_beam(map, c, x0, y0, x1, y1, dec, margin, 1)
+                      : walk_beam(map, c, x0, y0, x1, y1, dec, margin, 0);
 }
 
 /* Adds inc to a cell, taking a tile for it if needed. */

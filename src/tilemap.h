@@ -88,9 +88,10 @@ float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y
 
 /* A read position on one level of one map: remembers the last tiles found,
  * so that reads of nearby points (a scan's, in beam order) skip the index.
- * Four ways, one per parity of the tile's column and row, so that the 2 x 2
- * tiles around a read near a tile's edge are all held at once. Valid until
- * the map is next written. */
+ * RSM_TMAP_CURSOR_WAYS^2 ways, one per tile column and row modulo that, so
+ * that the 2 x 2 tiles around a read near a tile's edge are all held at
+ * once, and a beam's walk finds the tiles the beam before it crossed.
+ * Valid until the map is next written. */
 typedef struct rsm_tmap_way {
     uint32_t key;    /* tile column (low half) and row (high half); RSM_TMAP_NO_KEY: empty */
     uint32_t slot;   /* RSM_TMAP_NONE: the tile is not held */
@@ -104,7 +105,7 @@ typedef struct rsm_tmap_way {
  * such sample in the same tile needs no lookup at all. */
 typedef struct rsm_tmap_cursor {
     uint32_t level;
-    rsm_tmap_way_t way[4];
+    rsm_tmap_way_t way[RSM_TMAP_CURSOR_WAYS * RSM_TMAP_CURSOR_WAYS];
     const rsm_tile_t *last;
     int32_t bx;
     int32_t by;

@@ -27,10 +27,10 @@ uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, i
 /* Forgets every tile the cursor holds (after a write moved or freed one). */
 static inline void rsm_tmap_cursor_forget(rsm_tmap_cursor_t *c)
 {
-    c->way[0].key = RSM_TMAP_NO_KEY;
-    c->way[1].key = RSM_TMAP_NO_KEY;
-    c->way[2].key = RSM_TMAP_NO_KEY;
-    c->way[3].key = RSM_TMAP_NO_KEY;
+    uint32_t k;
+    for (k = 0; k < RSM_TMAP_CURSOR_WAYS * RSM_TMAP_CURSOR_WAYS; ++k) {
+        c->way[k].key = RSM_TMAP_NO_KEY;
+    }
     /* No tile's first cell (those are multiples of the tile side). */
     c->bx = INT32_MIN + 1;
     c->by = INT32_MIN + 1;
@@ -43,7 +43,8 @@ static inline uint32_t rsm_tmap_cursor_slot(const rsm_tmap_t *map, rsm_tmap_curs
     const int32_t tx = gx >> RSM_TMAP_TILE_LOG2;
     const int32_t ty = gy >> RSM_TMAP_TILE_LOG2;
     const uint32_t key = rsm_tmap_pack(tx, ty);
-    rsm_tmap_way_t *w = &c->way[(uint32_t)(tx & 1) | ((uint32_t)(ty & 1) << 1)];
+    const uint32_t m = (uint32_t)RSM_TMAP_CURSOR_WAYS - 1u;
+    rsm_tmap_way_t *w = &c->way[((uint32_t)tx & m) | (((uint32_t)ty & m) * (uint32_t)RSM_TMAP_CURSOR_WAYS)];
     if (w->key != key) {
         w->key = key;
         w->slot = rsm_tmap_find_slot(map, c->level, tx, ty);

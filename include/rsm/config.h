@@ -88,6 +88,13 @@
 #define RSM_TMAP_VICTIMS 16
 #endif
 
+/* Tiles a read cursor holds per axis (a power of two; the cursor, on the
+ * stack, holds its square at 8 bytes each): with 4, the tiles the last
+ * beams crossed near the laser are found again without the index. */
+#ifndef RSM_TMAP_CURSOR_WAYS
+#define RSM_TMAP_CURSOR_WAYS 4
+#endif
+
 /* ---- key points and matches ------------------------------------------- */
 
 /* Harris key points kept per image (strongest first). 8 bytes each. */
@@ -189,6 +196,8 @@ RSM_STATIC_ASSERT(tmap_levels_range, RSM_TMAP_LEVELS >= 1 && RSM_TMAP_LEVELS <= 
 RSM_STATIC_ASSERT(tmap_tiles_range, RSM_TMAP_TILES >= 4 && RSM_TMAP_TILES < 65535);
 RSM_STATIC_ASSERT(tmap_echo_range, RSM_TMAP_ECHO_LOG2 >= 6 && RSM_TMAP_ECHO_LOG2 <= 20);
 RSM_STATIC_ASSERT(tmap_victims_range, RSM_TMAP_VICTIMS >= 1 && RSM_TMAP_VICTIMS <= 1024);
+RSM_STATIC_ASSERT(tmap_cursor_ways_pow2, RSM_TMAP_CURSOR_WAYS >= 2 && RSM_TMAP_CURSOR_WAYS <= 16 &&
+                                             (RSM_TMAP_CURSOR_WAYS & (RSM_TMAP_CURSOR_WAYS - 1)) == 0);
 RSM_STATIC_ASSERT(tmap_hash_room, RSM_TMAP_HASH_LOG2 <= 16 && (1L << RSM_TMAP_HASH_LOG2) * 3L >= 4L * RSM_TMAP_TILES);
 RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
 RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONAR <= 255);

@@ -123,6 +123,102 @@ void test_tmap_update_should_clear_along_the_beam_but_not_near_the_return(void)
     }
 }
 
+/* The cells a beam from cell (x0, y0) to (x1, y1) lowers, in the plainest
+ * form of Bresenham's walk (one step at a time over every octant), to
+ * check the library's walk, which goes tile by tile, against. */
+#define BEAM_SPAN 48
+static void reference_beam(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t margin,
+                           uint8_t lowered[BEAM_SPAN][BEAM_SPAN])
+{
+    const int32_t dx = x1 > x0 ? x1 - x0 : x0 - x1;
+    const int32_t dy = y1 > y0 ? y1 - y0 : y0 - y1;
+    const int32_t sx = x1 > x0 ? 1 : -1;
+    const int32_t sy = y1 > y0 ? 1 : -1;
+    const int32_t steps = dx > dy ? dx : dy;
+    int32_t err = dx - dy;
+    int32_t k;
+    for (k = 0; k < steps - (int32_t)margin; ++k) {
+        const int32_t e2 = 2 * err;
+        lowered[y0 + BEAM_SPAN / 2][x0 + BEAM_SPAN / 2]++;
+        if (e2 > -dy) {
+            err -= dy;
+            x0 += sx;
+        }
+        if (e2 < dx) {
+            err += dx;
+            y0 += sy;
+        }
+    }
+}
+
+void test_tmap_update_should_lower_exactly_the_cells_of_bresenhams_line(void)
+{
+    /* A block of 48 x 48 cells (6 x 6 tiles, within the smallest pool the
+     * tests build; half of them at negative coordinates) every one of
+     * which holds 8; then beams in every
+     * octant, from inside tiles and from their corners, along the axes
+     * and the diagonals, each checked cell by cell. */
+    static const int32_t from[][2] = {{0, 0}, {-1, -1}, {3, -5}, {-8, 7}, {7, 8}, {-20, 13}};
+    static uint8_t lowered[BEAM_SPAN][BEAM_SPAN];
+    const float a = 0.1f;
+    int32_t gx;
+    int32_t gy;
+    size_t f;
+    int32_t e;
+    cfg.miss_dec = 0u; /* filling: no beam lowers anything */
+    init();
+    for (gy = -BEAM_SPAN / 2; gy < BEAM_SPAN / 2; ++gy) {
+        for (gx = -BEAM_SPAN / 2; gx < BEAM_SPAN / 2; ++gx) {
+            const float x = ((float)gx + 0.5f) * a;
+            const float y = ((float)gy + 0.5f) * a;
+            update_one(x, y, x, y);
+            update_one(x, y, x, y);
+        }
+    }
+    for (gy = -BEAM_SPAN / 2; gy < BEAM_SPAN / 2; ++gy) {
+        for (gx = -BEAM_SPAN / 2; gx < BEAM_SPAN / 2; ++gx) {
+            TEST_ASSERT_EQUAL_UINT8(2u * cfg.hit_inc, rsm_tmap_value(&map, 0u, gx, gy));
+        }
+    }
+    map.cfg.miss_dec = 1u;
+    for (f = 0; f < sizeof from / sizeof from[0]; ++f) {
+        /* Ends all round the edge of the block, one cell in from it. */
+        for (e = 0; e < 4 * (BEAM_SPAN - 2); e += 3) {
+            const int32_t side = e / (BEAM_SPAN - 2);
+            const int32_t along = e % (BEAM_SPAN - 2) - (BEAM_SPAN / 2 - 1);
+            const int32_t lim = BEAM_SPAN / 2 - 1;
+            const int32_t ex = side == 0 ? along : side == 1 ? lim - 1 : side == 2 ? -along : -lim;
+            const int32_t ey = side == 0 ? -lim : side == 1 ? along : side == 2 ? lim - 1 : -along;
+            const rsm_point_t o = {((float)from[f][0] + 0.5f) * a, ((float)from[f][1] + 0.5f) * a};
+            const rsm_point_t p = {((float)ex + 0.5f) * a, ((float)ey + 0.5f) * a};
+            static uint8_t before[BEAM_SPAN][BEAM_SPAN];
+            for (gy = 0; gy < BEAM_SPAN; ++gy) {
+                for (gx = 0; gx < BEAM_SPAN; ++gx) {
+                    before[gy][gx] = rsm_tmap_value(&map, 0u, gx - BEAM_SPAN / 2, gy - BEAM_SPAN / 2);
+                }
+            }
+            memset(lowered, 0, sizeof lowered);
+            reference_beam(from[f][0], from[f][1], ex, ey, cfg.clear_margin, lowered);
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_update(&map, &o, &p, 1u));
+            for (gy = 0; gy < BEAM_SPAN; ++gy) {
+                for (gx = 0; gx < BEAM_SPAN; ++gx) {
+                    const int hit = gx - BEAM_SPAN / 2 == ex && gy - BEAM_SPAN / 2 == ey;
+                    int want = (int)before[gy][gx] - (int)lowered[gy][gx];
+                    want = want < 0 ? 0 : want;
+                    want = hit ? (want + (int)cfg.hit_inc > 15 ? 15 : want + (int)cfg.hit_inc) : want;
+                    if ((int)rsm_tmap_value(&map, 0u, gx - BEAM_SPAN / 2, gy - BEAM_SPAN / 2) != want) {
+                        char msg[96];
+                        snprintf(msg, sizeof msg, "beam (%d, %d) -> (%d, %d), cell (%d, %d) got %d want %d", (int)from[f][0],
+                                 (int)from[f][1], (int)ex, (int)ey, (int)(gx - BEAM_SPAN / 2),
+                                 (int)(gy - BEAM_SPAN / 2), (int)rsm_tmap_value(&map, 0u, gx - BEAM_SPAN / 2, gy - BEAM_SPAN / 2), want);
+                        TEST_FAIL_MESSAGE(msg);
+                    }
+                }
+            }
+        }
+    }
+}
+
 void test_tmap_update_should_take_tiles_only_for_returns(void)
 {
     init();
@@ -669,6 +765,7 @@ int main(void)
     RUN_TEST(test_tmap_init_should_reject_bad_configs);
     RUN_TEST(test_tmap_update_should_add_hits_and_saturate);
     RUN_TEST(test_tmap_update_should_clear_along_the_beam_but_not_near_the_return);
+    RUN_TEST(test_tmap_update_should_lower_exactly_the_cells_of_bresenhams_line);
     RUN_TEST(test_tmap_update_should_take_tiles_only_for_returns);
     RUN_TEST(test_tmap_update_should_write_every_level);
     RUN_TEST(test_tmap_update_should_share_a_return_among_four_cells_on_coarse_levels);

@@ -1,0 +1,14 @@
+/* Compiler-specific hints, each with a plain C99 fallback. Internal to the
+ * library. */
+#ifndef RSM_COMPILER_H
+#define RSM_COMPILER_H
+
+/* Keeps a hot loop out of a large caller, where the compiler would spill
+ * its state (GCC and Clang); elsewhere the compiler decides. */
+#if defined(__GNUC__) || defined(__clang__)
+#define RSM_NOINLINE __attribute__((noinline))
+#else
+#define RSM_NOINLINE
+#endif
+
+#endif /* RSM_COMPILER_H */
