@@ -68,3 +68,32 @@ def test_generated_excerpt_has_every_scan_after_its_pose(tmp_path):
     rows = re.findall(r"^    \{(\d+)u, \{([0-9, ]+)\}\},$", text, re.M)
     assert len(rows) == 5 and all(len(r[1].split(",")) == 180 for r in rows)
     assert int(rows[0][0]) == 0 and int(rows[1][0]) > 0  # stamps from the first scan
+
+
+def test_profile_counts_each_block_by_its_size_times_its_runs():
+    log = """----------------
+IN: alpha
+0x00000100:  b508       push     {r3, lr}
+0x00000102:  4813       ldr      r0, [pc, #0x4c]
+0x00000104:  d207       bhs      #0x110
+
+Trace 0: 0x7f0000000100 [00800408/00000100/00000110/ff020200] alpha
+----------------
+IN: beta
+0x00000200:  3a01       subs     r2, #1
+0x00000202:  d1fd       bne      #0x200
+
+Trace 0: 0x7f0000000200 [00800408/00000200/00000110/ff020200] beta
+Trace 0: 0x7f0000000200 [00800408/00000200/00000110/ff020200] beta
+Trace 0: 0x7f0000000200 [00800408/00000200/00000110/ff020200] beta
+Trace 0: 0x7f0000000100 [00800408/00000100/00000110/ff020200] alpha
+----------------
+IN: alpha
+0x00000106:  4770       bx       lr
+
+Trace 0: 0x7f0000000300 [00800408/00000106/00000110/ff020200] alpha
+"""
+    per = m4.profile_log(log.splitlines(keepends=True))
+    assert per == {"alpha": 3 * 2 + 1, "beta": 2 * 3}
+    text = m4.format_profile(per, top=1)
+    assert text.splitlines()[0].endswith("alpha") and text.splitlines()[-1].strip() == "13 in all"

@@ -5,6 +5,7 @@
     python3 tools/rsm_tools/m4.py example-rplidar ELF WORKDIR
     python3 tools/rsm_tools/m4.py example-rplidar-answered ELF WORKDIR
     python3 tools/rsm_tools/m4.py replay ELF HOST_EXE WORKDIR
+    python3 tools/rsm_tools/m4.py profile ELF [--top N]
 
 ``example`` boots the example firmware with its two device ports on files and
 checks the banner, the end-of-run summary and that the P3-DX handshake went
@@ -37,6 +38,9 @@ replay firmware, checks its start-up, the instruction-count calibration (the
 known loop) and that its trajectory equals the host's (``HOST_EXE``, the same
 source built for the host) bit for bit.  Both fail on a fault report, a
 non-zero exit status or a time-out: a locked-up image never hangs the test.
+``profile`` runs an image once with QEMU's log of every block it executes
+and prints the instructions spent in each function (a minute for the
+replay; for finding where a scan's instructions go).
 
 QEMU runs with ``-icount shift=ICOUNT_SHIFT,sleep=off``: the virtual clock
 advances exactly 2^shift ns per executed instruction, so the board's 25 MHz
@@ -57,7 +61,7 @@ import subprocess
 import sys
 import threading
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 ICOUNT_SHIFT = 3
 TIMER_HZ = 25_000_000  # mps2-an386 SYSCLK, which clocks its APB timers
@@ -349,6 +353,68 @@ def costs(out: str) -> dict:
             "stack_used": stack, "stack_size": stack_size, "calibration": calibration(out)}
 
 
+def profile_log(lines: Iterable[str]) -> Dict[str, int]:
+    """Instructions executed per function, from QEMU's log of translated
+    blocks and their executions (``-d in_asm,exec,nochain``): each block's
+    instruction count (its ``IN:`` listing) times the times it ran (its
+    ``Trace`` lines), summed by the function the block starts in. Inlined
+    code counts in its caller. A block translated again at the same address
+    (after an I/O access, under ``-icount``) counts at its last size."""
+    size: Dict[int, int] = {}
+    name: Dict[int, str] = {}
+    runs: Dict[int, int] = {}
+    block: Optional[int] = None
+    func: Optional[str] = None
+    for line in lines:
+        if line.startswith("IN:"):
+            func, block = line[3:].strip() or "?", None
+        elif line.startswith("0x") and func is not None:
+            pc = int(line.split(":", 1)[0], 16)
+            if block is None:
+                block, size[pc], name[pc] = pc, 0, func
+            size[block] += 1
+        elif line.startswith("Trace"):
+            func = block = None
+            fields = line.split("[", 1)[1].split("/") if "[" in line else []
+            if len(fields) > 1:
+                pc = int(fields[1], 16)
+                runs[pc] = runs.get(pc, 0) + 1
+        elif not line.strip():
+            func = block = None
+    per: Dict[str, int] = {}
+    for pc, n in runs.items():
+        key = name.get(pc, f"{pc:#x}")
+        per[key] = per.get(key, 0) + n * size.get(pc, 0)
+    return per
+
+
+def profile(elf: Path, timeout: float = 20 * TIMEOUT_S) -> Dict[str, int]:
+    """profile_log of one run of a firmware image (its console discarded):
+    slow (the log has a line per block executed), for finding where the
+    instructions go, not for the figures the bench prints."""
+    cmd = ["null" if c == "stdio" else c for c in qemu_command(elf)]
+    cmd += ["-d", "in_asm,exec,nochain", "-D", "/dev/stdout"]
+    with subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                          text=True, errors="replace") as proc:
+        assert proc.stdout is not None
+        try:
+            per = profile_log(proc.stdout)
+            proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            raise M4Error(f"{elf.name}: no exit within {timeout:.0f} s under the profile")
+    if proc.returncode != 0:
+        raise M4Error(f"{elf.name}: exit status {proc.returncode} under the profile")
+    return per
+
+
+def format_profile(per: Dict[str, int], top: int = 25) -> str:
+    total = sum(per.values())
+    rows = sorted(per.items(), key=lambda kv: -kv[1])[:top]
+    out = [f"{n:>12,} {100.0 * n / total:5.1f} %  {f}" for f, n in rows] if total else []
+    return "\n".join(out + [f"{total:>12,} in all"])
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="rsm-m4", description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -369,6 +435,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     r.add_argument("elf", type=Path, help="the replay firmware image (rsm_replay_m4.elf)")
     r.add_argument("host_exe", type=Path, help="rsm-replay-host, whose trajectory the target's must equal")
     r.add_argument("work", type=Path, help="folder for the outputs")
+    pr = sub.add_parser("profile", help="instructions per function of one run (QEMU's block log; slow)")
+    pr.add_argument("elf", type=Path, help="a firmware image, e.g. rsm_replay_m4.elf")
+    pr.add_argument("--top", type=int, default=25, help="functions to print (default 25)")
     a = ap.parse_args(argv)
     try:
         if a.cmd == "example":
@@ -379,6 +448,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(check_example_rplidar(a.elf, a.work))
         elif a.cmd == "example-rplidar-answered":
             print(check_example_rplidar_answered(a.elf, a.work))
+        elif a.cmd == "profile":
+            print(format_profile(profile(a.elf), a.top))
         else:
             print(check_replay(a.elf, a.host_exe, a.work))
     except M4Error as err:
