@@ -326,23 +326,39 @@ typedef struct prior {
     const rsm_mapmatch_unpin_t *unpin; /* or NULL */
 } prior_t;
 
+/* m <- P m P for a symmetric 3 x 3 m (row-major), P = I - frac d d^T with
+ * d = (un->dir, 0): what is left of m once frac of it along the world
+ * direction d is taken out. */
+static void unpin_matrix(float m[9], const rsm_mapmatch_unpin_t *un)
+{
+    const float a = un->frac;
+    const float d[3] = {un->dir[0], un->dir[1], 0.0f};
+    float u[3]; /* m d */
+    float sd;
+    int i;
+    int j;
+    for (i = 0; i < 3; ++i) {
+        u[i] = m[i * 3] * d[0] + m[i * 3 + 1] * d[1];
+    }
+    sd = u[0] * d[0] + u[1] * d[1];
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) {
+            m[i * 3 + j] += a * (a * sd * d[i] * d[j] - d[i] * u[j] - u[i] * d[j]);
+        }
+    }
+}
+
 /* The larger of the prior's x and y variances. The descent does not look
  * along an unpinned direction, however uncertain the prediction is there:
- * with un, those of Q P Q with Q = I - frac d d^T. */
+ * with un, those of P p0 P (unpin_matrix). */
 static float position_variance(const float p0[9], const rsm_mapmatch_unpin_t *un)
 {
-    float pxx = p0[0];
-    float pyy = p0[4];
+    float p[9];
+    memcpy(p, p0, sizeof p);
     if (un != NULL && un->frac > 0.0f) {
-        const float f = un->frac;
-        const float q[4] = {1.0f - f * un->dir[0] * un->dir[0], -f * un->dir[0] * un->dir[1],
-                            -f * un->dir[0] * un->dir[1], 1.0f - f * un->dir[1] * un->dir[1]};
-        const float qp[4] = {q[0] * p0[0] + q[1] * p0[3], q[0] * p0[1] + q[1] * p0[4], q[2] * p0[0] + q[3] * p0[3],
-                             q[2] * p0[1] + q[3] * p0[4]};
-        pxx = qp[0] * q[0] + qp[1] * q[1];
-        pyy = qp[2] * q[2] + qp[3] * q[3];
+        unpin_matrix(p, un);
     }
-    return pxx > pyy ? pxx : pyy;
+    return p[0] > p[4] ? p[0] : p[4];
 }
 
 /* The coarsest level the descent needs: the one whose cell is at least
@@ -378,34 +394,17 @@ static int small_step(const rsm_mapmatch_config_t *cfg, const float step[3], int
  * The heading keeps what the points' moves along d tell of it. */
 static void unpin_sums(sums_t *s, const rsm_mapmatch_unpin_t *un)
 {
-    float d[3];
-    float u[3]; /* H d */
     float hf[9];
-    float a;
-    float sd;
     float bd;
     int i;
-    int j;
     if (un == NULL || !(un->frac > 0.0f)) {
         return;
     }
-    a = un->frac;
-    d[0] = un->dir[0];
-    d[1] = un->dir[1];
-    d[2] = 0.0f;
     full(s->h, 1.0f, hf);
-    for (i = 0; i < 3; ++i) {
-        u[i] = hf[i * 3] * d[0] + hf[i * 3 + 1] * d[1];
-    }
-    sd = u[0] * d[0] + u[1] * d[1];
-    for (i = 0; i < 3; ++i) {
-        for (j = 0; j < 3; ++j) {
-            hf[i * 3 + j] += a * (a * sd * d[i] * d[j] - d[i] * u[j] - u[i] * d[j]);
-        }
-    }
-    bd = s->b[0] * d[0] + s->b[1] * d[1];
-    for (i = 0; i < 3; ++i) {
-        s->b[i] -= a * d[i] * bd;
+    unpin_matrix(hf, un);
+    bd = s->b[0] * un->dir[0] + s->b[1] * un->dir[1];
+    for (i = 0; i < 2; ++i) {
+        s->b[i] -= un->frac * un->dir[i] * bd;
     }
     s->h[0] = hf[0];
     s->h[1] = hf[1];

@@ -356,14 +356,11 @@ static int32_t cell_of(float v, float inv_a)
  * in tiles the pool does not hold, or hold 0, so the walk goes tile by
  * tile: one lookup per tile, then a loop over its cells that only steps
  * where no tile is held, and inside a held one moves the cell's index
- * with the step instead of recomputing it. Not inlined: inside the write
- * loop the compiler spilled the walk's state on a Cortex-M4, a third of
- * each step. */
+ * with the step instead of recomputing it. adx and ady are the beam's
+ * extents; xmajor (a constant in each caller) says adx >= ady. */
 static inline uint32_t walk_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0, int32_t x1,
-                                 int32_t y1, uint32_t dec, uint32_t margin, const int xmajor)
+                                 int32_t y1, int32_t adx, int32_t ady, uint32_t dec, uint32_t margin, const int xmajor)
 {
-    const int32_t adx = x1 > x0 ? x1 - x0 : x0 - x1;
-    const int32_t ady = y1 > y0 ? y1 - y0 : y0 - y1;
     const int32_t big = xmajor ? adx : ady;   /* extent along the major axis */
     const int32_t small = xmajor ? ady : adx; /* and along the minor one */
     const int32_t su = (xmajor ? x1 > x0 : y1 > y0) ? 1 : -1;
@@ -403,16 +400,14 @@ static inline uint32_t walk_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t 
             rsm_tile_t *t = &map->tile[s];
             int32_t i = (int32_t)rsm_tmap_cell_index(x, y);
             while (n > 0) {
-                const uint32_t sh = ((uint32_t)i & 1u) << 2;
-                const uint32_t b = t->cell[(uint32_t)i >> 1];
-                const uint32_t val = (b >> sh) & 15u;
+                const uint32_t val = rsm_tmap_get_cell(t, (uint32_t)i);
                 const int32_t e2 = 2 * err;
                 int freed = 0;
                 top = val > top ? val : top;
                 if (val > dec) {
-                    t->cell[(uint32_t)i >> 1] = (uint8_t)(b - (dec << sh)); /* no borrow: val > dec */
+                    set_cell(t, (uint32_t)i, val - dec);
                 } else if (val != 0u) {
-                    t->cell[(uint32_t)i >> 1] = (uint8_t)(b & ~(15u << sh));
+                    set_cell(t, (uint32_t)i, 0u);
                     if (tile_empty(t)) {
                         free_slot(map, s);
                         rsm_tmap_cursor_forget(c);
@@ -441,14 +436,16 @@ static inline uint32_t walk_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t 
     return top;
 }
 
+/* walk_beam with one copy per major axis, each with its axes fixed. Not
+ * inlined: inside the write loop the compiler spilled the walk's state on
+ * a Cortex-M4, a third of each step. */
 static RSM_NOINLINE uint32_t clear_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0, int32_t x1,
                                         int32_t y1, uint32_t dec, uint32_t margin)
 {
-    /* One copy of the walk per major axis, each with its axes fixed. */
     const int32_t adx = x1 > x0 ? x1 - x0 : x0 - x1;
     const int32_t ady = y1 > y0 ? y1 - y0 : y0 - y1;
-    return adx >= ady ? walk_beam(map, c, x0, y0, x1, y1, dec, margin, 1)
-                      : walk_beam(map, c, x0, y0, x1, y1, dec, margin, 0);
+    return adx >= ady ? walk_beam(map, c, x0, y0, x1, y1, adx, ady, dec, margin, 1)
+                      : walk_beam(map, c, x0, y0, x1, y1, adx, ady, dec, margin, 0);
 }
 
 /* Adds inc to a cell, taking a tile for it if needed. */
