@@ -74,17 +74,21 @@ static float points_reach(const rsm_point_t *pts, size_t n, float *mean)
     return reach;
 }
 
-/* reach: points_reach of pts. */
+/* reach: points_reach of pts. The points are placed and read in the
+ * level's cells (gradients per cell, scaled to metres once at the end):
+ * that is four multiplications and two subtractions a point fewer than in
+ * metres. */
 static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, float reach,
                        const rsm_pose_t *x, sums_t *s)
 {
-    const float c = rsm_cosf(x->theta);
-    const float sn = rsm_sinf(x->theta);
-    const float tx = x->x;
-    const float ty = x->y;
+    const float inv_a = map->inv_cell[level];
+    const float c = rsm_cosf(x->theta) * inv_a;
+    const float sn = rsm_sinf(x->theta) * inv_a;
+    const float tu = x->x * inv_a - 0.5f;
+    const float tv = x->y * inv_a - 0.5f;
     const float most = rsm_tmap_read_reach(map);
     /* Every point within the map's range: no range test per point. */
-    const int inside = fabsf(tx) + reach < most && fabsf(ty) + reach < most;
+    const int inside = fabsf(x->x) + reach < most && fabsf(x->y) + reach < most;
     /* Sums in locals: through s the compiler would store each one per
      * point, not knowing that s does not alias the points. */
     float h0 = 0.0f;
@@ -104,42 +108,42 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
     size_t k;
     rsm_tmap_cursor_init(&cur, level);
     for (k = 0; k < n; ++k) {
-        const float px = pts[k].x;
-        const float py = pts[k].y;
-        const float wx = tx + c * px - sn * py;
-        const float wy = ty + sn * px + c * py;
-        float gx;
-        float gy;
-        const float m = rsm_tmap_read_sample(map, &cur, wx, wy, inside, &gx, &gy);
+        const float cx = c * pts[k].x;
+        const float sy = sn * pts[k].y;
+        const float sx = sn * pts[k].x;
+        const float cy = c * pts[k].y;
+        float gu;
+        float gv;
+        const float m = rsm_tmap_read_cells(map, &cur, tu + cx - sy, tv + sx + cy, inside, &gu, &gv);
         const float r = 1.0f - m;
         float gt;
         cost += r * r;
         hit += m;
-        if (gx == 0.0f && gy == 0.0f) {
+        if (gu == 0.0f && gv == 0.0f) {
             continue;
         }
-        /* d(world)/d(theta) = (-s px - c py, c px - s py). */
-        gt = gx * (-sn * px - c * py) + gy * (c * px - sn * py);
-        h0 += gx * gx;
-        h1 += gx * gy;
-        h2 += gx * gt;
-        h3 += gy * gy;
-        h4 += gy * gt;
+        /* d(cell)/d(theta) = (-s px - c py, c px - s py) / cell. */
+        gt = gu * (-sx - cy) + gv * (cx - sy);
+        h0 += gu * gu;
+        h1 += gu * gv;
+        h2 += gu * gt;
+        h3 += gv * gv;
+        h4 += gv * gt;
         h5 += gt * gt;
-        b0 += gx * r;
-        b1 += gy * r;
+        b0 += gu * r;
+        b1 += gv * r;
         b2 += gt * r;
         cost_used += r * r;
         used++;
     }
-    s->h[0] = h0;
-    s->h[1] = h1;
-    s->h[2] = h2;
-    s->h[3] = h3;
-    s->h[4] = h4;
+    s->h[0] = h0 * (inv_a * inv_a);
+    s->h[1] = h1 * (inv_a * inv_a);
+    s->h[2] = h2 * inv_a;
+    s->h[3] = h3 * (inv_a * inv_a);
+    s->h[4] = h4 * inv_a;
     s->h[5] = h5;
-    s->b[0] = b0;
-    s->b[1] = b1;
+    s->b[0] = b0 * inv_a;
+    s->b[1] = b1 * inv_a;
     s->b[2] = b2;
     s->cost = cost;
     s->cost_used = cost_used;

@@ -91,19 +91,25 @@ static inline float rsm_tmap_read_reach(const rsm_tmap_t *map)
     return (float)(RSM_TMAP_CELL_LIMIT - 3) / map->inv_cell[0];
 }
 
-/* rsm_tmap_sample_at (see tilemap.h); inside: the caller knows (x, y) to be
- * within rsm_tmap_read_reach of the origin on both axes, so the range test
- * can go (the map matcher checks that once per pass, not once per point). */
-static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, int inside,
-                                         float *dx, float *dy)
+/* Occupancy of a cell of a held tile (slot s), 0 where none is held. */
+static inline float rsm_tmap_slot_occ(const rsm_tmap_t *map, uint32_t s, int32_t gx, int32_t gy)
 {
-    /* As rsm_bilinear_at, with the floor by conversion: the range test comes
-     * first, so the conversion cannot overflow. u in [1 - L, L - 1) is
-     * exactly floor(u) > -L and floor(u) + 1 < L, the cells' range. */
+    return map->occ[s == RSM_TMAP_NONE ? 0u : rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(gx, gy))];
+}
+
+/* The occupancy at (u, v) in cells of the cursor's level, cell centres at
+ * whole numbers: bilinear between the four centres around it. Its
+ * gradient per cell goes to *du_out and *dv_out. inside: the caller knows
+ * (u, v) to be within rsm_tmap_read_reach of the origin on both axes, so
+ * the range test can go (the map matcher checks that once per pass, not
+ * once per point). */
+static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float u, float v, int inside,
+                                        float *du_out, float *dv_out)
+{
+    /* The floor by conversion: the range test comes first, so the
+     * conversion cannot overflow. u in [1 - L, L - 1) is exactly
+     * floor(u) > -L and floor(u) + 1 < L, the cells' range. */
     const float lim = (float)(RSM_TMAP_CELL_LIMIT - 1);
-    const float inv_a = map->inv_cell[c->level];
-    const float u = x * inv_a - 0.5f;
-    const float v = y * inv_a - 0.5f;
     int32_t i;
     int32_t j;
     float fu;
@@ -114,9 +120,12 @@ static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_
     float m10;
     float m01;
     float m11;
+    float a;
+    float top;
+    float bottom;
     if (!inside && !(u >= -lim && u < lim && v >= -lim && v < lim)) {
-        *dx = 0.0f;
-        *dy = 0.0f;
+        *du_out = 0.0f;
+        *dv_out = 0.0f;
         return 0.0f;
     }
     i = (int32_t)u;
@@ -144,21 +153,43 @@ static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_
             c->last = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
         }
         if (c->last == NULL) {
-            *dx = 0.0f;
-            *dy = 0.0f;
+            *du_out = 0.0f;
+            *dv_out = 0.0f;
             return 0.0f;
         }
         rsm_tmap_occ_pair(map, c->last, k, &m00, &m10);
         rsm_tmap_occ_pair(map, c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE, &m01, &m11);
     } else {
-        m00 = map->occ[rsm_tmap_cell_value(map, c, i, j)];
-        m10 = map->occ[rsm_tmap_cell_value(map, c, i + 1, j)];
-        m01 = map->occ[rsm_tmap_cell_value(map, c, i, j + 1)];
-        m11 = map->occ[rsm_tmap_cell_value(map, c, i + 1, j + 1)];
+        /* The cells straddle a tile's last column or row: each tile they
+         * lie in is looked up once. */
+        const int edge_i = (i & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
+        const int edge_j = (j & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
+        const uint32_t s00 = rsm_tmap_cursor_slot(map, c, i, j);
+        const uint32_t s10 = edge_i ? rsm_tmap_cursor_slot(map, c, i + 1, j) : s00;
+        const uint32_t s01 = edge_j ? rsm_tmap_cursor_slot(map, c, i, j + 1) : s00;
+        const uint32_t s11 = !edge_j ? s10 : !edge_i ? s01 : rsm_tmap_cursor_slot(map, c, i + 1, j + 1);
+        m00 = rsm_tmap_slot_occ(map, s00, i, j);
+        m10 = rsm_tmap_slot_occ(map, s10, i + 1, j);
+        m01 = rsm_tmap_slot_occ(map, s01, i, j + 1);
+        m11 = rsm_tmap_slot_occ(map, s11, i + 1, j + 1);
     }
-    *dx = ((m10 - m00) * (1.0f - dv) + (m11 - m01) * dv) * inv_a;
-    *dy = ((m01 - m00) * (1.0f - du) + (m11 - m10) * du) * inv_a;
-    return (m00 * (1.0f - du) + m10 * du) * (1.0f - dv) + (m01 * (1.0f - du) + m11 * du) * dv;
+    a = m10 - m00;
+    top = m00 + a * du;
+    bottom = m01 + (m11 - m01) * du;
+    *du_out = a + ((m11 - m01) - a) * dv;
+    *dv_out = bottom - top;
+    return top + (bottom - top) * dv;
+}
+
+/* rsm_tmap_sample_at (see tilemap.h); inside as for rsm_tmap_read_cells. */
+static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, int inside,
+                                         float *dx, float *dy)
+{
+    const float inv_a = map->inv_cell[c->level];
+    const float m = rsm_tmap_read_cells(map, c, x * inv_a - 0.5f, y * inv_a - 0.5f, inside, dx, dy);
+    *dx *= inv_a;
+    *dy *= inv_a;
+    return m;
 }
 
 #endif /* RSM_TMAP_READ_H */
