@@ -595,6 +595,52 @@ def test_floor_checks_on_made_up_numbers():
     assert f[-1]["status"] == "PASS"
 
 
+def test_outlier_floors_are_judged_again_by_the_means_of_many_runs():
+    stats = bench.measure.sample_stats
+    s = stats([1.0, 2.0, 3.0, 4.0, float("nan")])  # the NaN is left out
+    assert (s["n"], s["mean"], s["median"], s["min"], s["max"]) == (4, 2.5, 2.5, 1.0, 4.0)
+    assert math.isclose(s["se"], math.sqrt(5.0 / 3.0) / 2.0)
+    clean = stats([0.020, 0.030, 0.025, 0.025])
+    near = stats([0.0252, 0.0264, 0.0258, 0.0276])  # x1.05
+    far = stats([0.030, 0.040, 0.035, 0.035])       # x1.40
+    sp = {"level": 43, "seeds": [7, 8], "updates": [0.3, 0.305],
+          "logs": {"head": {"clean": {"local": clean, "all": clean}, "noisy": {"local": near, "all": far}},
+                   "none": {"clean": {"local": clean, "all": clean},
+                            "noisy": {"local": stats([]), "all": stats([])}}}}
+    f = bench.spread_floors(sp)
+    assert [(x["kind"], x["log"], x["status"]) for x in f] == [
+        ("robustness-runs", "head", "PASS"), ("robustness-runs", "head", "MISS"),
+        ("robustness-runs", "none", "SKIP"), ("robustness-runs", "none", "SKIP")]
+    assert math.isclose(f[0]["value"], 1.05) and math.isclose(f[1]["value"], 1.4)
+    x, se = bench.report.spread_ratio(far, clean)
+    assert math.isclose(se, 1.4 * math.hypot(far["se"] / far["mean"], clean["se"] / clean["mean"]))
+    assert f[1]["line"] == ("MISS head: 43 % outliers over 4 runs (seeds 7 8, map_update_m 0.3 to 0.305), "
+                            f"all-relations translation, mean 0.0350 m = x1.400 (+-{se:.3f}) of the clean runs' "
+                            "mean 0.0250 m (4 runs) > x1.25")
+    assert bench.spread_floors(None) == [] and bench.spread_floors({"skipped": "--spread 0"}) == []
+
+
+def test_spread_runs_vary_the_update_distance_and_are_evaluated(run):
+    sp = run["manifest"]["spread"]
+    assert sp["updates"] == [0.3, 0.305, 0.31, 0.315] and sp["level"] == 43
+    for label in ("head", "head10"):
+        work = run["dir"] / "work" / "spread" / label
+        clean = sorted(work.glob("clean-*.txt"))
+        noisy = sorted(work.glob("s*-*.txt"))
+        assert len(clean) == 4 and len(noisy) == 4 * len(sp["seeds"])
+        # each run had its own map_update_m: not all of them the same path
+        assert len({f.read_bytes() for f in clean}) > 1
+        for kind, files in (("clean", clean), ("noisy", noisy)):
+            vals = [ev.evaluate(ev.load_trajectory(f), run["relations"], tolerance=0.0)["translation"]["mean"]
+                    for f in files]
+            got = sp["logs"][label][kind]["all"]
+            assert got["n"] == len(vals) and math.isclose(got["mean"], sum(vals) / len(vals))
+    lines = [f for f in run["manifest"]["floors"] if f["kind"] == "robustness-runs"]
+    assert [f["log"] for f in lines] == ["head", "head", "head10", "head10"]
+    assert all(f["status"] in ("PASS", "MISS") and f"over {4 * len(sp['seeds'])} runs" in f["line"] for f in lines)
+    assert "### Over many runs" in run["report"] and "<!-- table: robustness spread -->" in run["report"]
+
+
 def test_issue_floors_are_checked_beside_the_best_peers():
     # For the logs the issue names, its own figures are checked too: here the
     # local rotation misses the best peer of the table but meets the issue's.

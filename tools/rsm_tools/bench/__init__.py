@@ -15,7 +15,9 @@ report (``docs/RESULTS.md`` by default) has these sections:
    peers' figures and the ratio of rsm's to the best peer's.
 2. Robustness, the paper's experiment: a share of every scan's readings is
    replaced by random ranges (:mod:`rsm_tools.outliers`); the whole curve on
-   the main log, 43 % and 60 % on every log.
+   the main log, 43 % and 60 % on every log; and rsm over many runs (the map
+   update distance varied) clean and at 43 %, whose means the floors compare
+   too.
 3. Sharp turns, the paper's Fig. 8: residuals at the local relations with the
    fastest true turn, and over all local relations binned by true rotation.
 4. Speed: wall time per scan (rsm-nav), per stage (``rsm-stages``, the
@@ -58,8 +60,9 @@ from .. import corridors, fullchecks, lidarbench
 from ..fullchecks import check
 from .common import (ARM_CONFIGS, BenchError, CALLGRIND_SCANS, DEFAULT_MAP_LOG2, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
     FIRST_SEED, HOST_PARTS, LEVELS, LOCAL_SPAN, MEMORY_TILES, METHODS, OTHER_LEVELS, PEER_COLUMNS, QUANTITIES,
-    QUICK_LEVELS, QUICK_OTHER_LEVELS, ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS, SCALING_MAP_LOG2,
-    SCALING_PRESETS, SCALING_TILES, SCOPES, SECTION_TITLES, SEEDS, SMALL, SMALL_HEADER, SPEED_REPEATS, STAGES, TURNS,
+    QUICK_LEVELS, QUICK_OTHER_LEVELS, QUICK_SPREAD_UPDATES, ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS, SCALING_MAP_LOG2,
+    SCALING_PRESETS, SCALING_TILES, SCOPES, SECTION_TITLES, SEEDS, SMALL, SMALL_HEADER, SPEED_REPEATS,
+    SPREAD_UPDATES, STAGES, TURNS,
     find_root, fmt_int, shown_path)
 from .parse import (_peer_table, base_name, best_peers, callee_costs, callgrind_stages, fused_percent, load_peers,
     load_summary, localizer_breakdown, parse_callgraph_info, parse_callgrind, parse_cross_check, parse_nm_sizes,
@@ -67,10 +70,10 @@ from .parse import (_peer_table, base_name, best_peers, callee_costs, callgrind_
 from .plots import plot_robustness, plot_scaling, plot_stages, plot_turns
 from .measure import (build_small, cmake_cache, cpu_info, discover_logs, hash_log2_for, memory_growth, provenance,
     run_accuracy, run_arm_memory, run_callgrind, run_cross_check, run_host_stack, run_m4, run_memory, run_nav,
-    run_robustness, run_scaling, run_speed, run_stage_speed, run_stages, run_turns, scaling_variants, shared_dir,
-    source_digest, stages_exe, variant_header, write_head)
-from .report import (FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors, context_from_manifest,
-    floor_inputs, losses, m4_lines, write_report)
+    run_robustness, run_scaling, run_speed, run_spread, run_stage_speed, run_stages, run_turns, scaling_variants,
+    shared_dir, source_digest, spread_updates, stages_exe, variant_header, write_head)
+from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors,
+    context_from_manifest, floor_inputs, losses, m4_lines, spread_floors, write_report)
 
 
 def _levels(text: str) -> List[int]:
@@ -122,6 +125,9 @@ def build_parser() -> argparse.ArgumentParser:
                    + ")")
     p.add_argument("--seeds", type=int, help=f"seeds per outlier level, counting from {FIRST_SEED} "
                    f"(default {SEEDS}; quick 1)")
+    p.add_argument("--spread", type=int, help=f"map update distances of the runs over which the outlier floors are "
+                   f"also judged, each clean and at every seed's outliers (default {SPREAD_UPDATES}; quick "
+                   f"{QUICK_SPREAD_UPDATES}; 0: skip)")
     p.add_argument("--speed-repeats", type=int, help=f"timed runs per method (default {SPEED_REPEATS}; quick 1)")
     p.add_argument("--callgrind-scans", type=int, default=CALLGRIND_SCANS,
                    help=f"scans from the start of every log counted by callgrind (default {CALLGRIND_SCANS})")
@@ -249,6 +255,10 @@ def run(args: argparse.Namespace) -> Path:
     lv_by_log = {label: (levels if label == main_label else other_levels) for label, _, _ in logs}
     ctx["robustness"] = stage("robustness", run_robustness, nav, logs, ctx["accuracy"], lv_by_log, seeds, work,
                               cache, args.jobs)
+    nspread = args.spread if args.spread is not None else (QUICK_SPREAD_UPDATES if args.quick else SPREAD_UPDATES)
+    ctx["spread"] = ({"skipped": "--spread 0"} if nspread <= 0 else
+                     stage("spread", run_spread, nav, logs, FLOOR_LEVEL, seeds, spread_updates(nspread), work, cache,
+                           args.jobs))
     sanitized = cmake_cache(build).get("RSM_SANITIZE", "OFF").upper() in ("ON", "TRUE", "1", "YES")
     painted = not (args.no_stack or sanitized)
     if not painted:
@@ -308,8 +318,8 @@ def run(args: argparse.Namespace) -> Path:
         ctx["sources_changed"] = ("the library's or the tools' sources changed while this run was measuring, so "
                                   "its figures may come from different code: run it again")
         print(f"rsm-bench: WARNING: {ctx['sources_changed']}", flush=True)
-    ctx["floors"] = (check_floors(**floor_inputs(ctx)) + ctx["full_checks"] + ctx["lidar_streams"] +
-                     ctx["corridors"])
+    ctx["floors"] = (check_floors(**floor_inputs(ctx)) + spread_floors(ctx.get("spread")) + ctx["full_checks"] +
+                     ctx["lidar_streams"] + ctx["corridors"])
     ctx["losses"] = losses(ctx)
     ctx["elapsed"] = time.monotonic() - t_start
     ctx["stage_seconds"] = stage_seconds

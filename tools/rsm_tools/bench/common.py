@@ -40,6 +40,10 @@ FIRST_SEED = 7  # the seed of the peers' outlier runs; further seeds count up fr
 
 
 SEEDS = 2
+# The spread section: rsm once per map_update_m of 0.300, 0.305, ... (this
+# many values, around the default 0.4 m), clean and at each seed's outliers.
+SPREAD_UPDATES = 40
+QUICK_SPREAD_UPDATES = 4
 
 
 SPEED_REPEATS = 3

@@ -125,14 +125,16 @@ def provenance(root: Path, build_dir: Path) -> dict:
     }
 
 
-def run_nav(nav: Path, log: Path, method: str, traj: Path, prefix: Sequence[str] = ()) -> dict:
-    """Runs rsm-nav (optionally under a wrapper such as valgrind); returns its
-    summary text, the summary it wrote as JSON (``parsed``, see
-    load_summary) and the wall time of the whole process."""
+def run_nav(nav: Path, log: Path, method: str, traj: Path, prefix: Sequence[str] = (),
+            extra: Sequence[str] = ()) -> dict:
+    """Runs rsm-nav (optionally under a wrapper such as valgrind, with extra
+    arguments such as --set); returns its summary text, the summary it wrote
+    as JSON (``parsed``, see load_summary) and the wall time of the whole
+    process."""
     traj.parent.mkdir(parents=True, exist_ok=True)
     summary = traj.with_suffix(".summary.json")
     cmd = [*prefix, str(nav), "--carmen", str(log), "--method", method,
-           "--trajectory", str(traj), "--summary-json", str(summary), "--quiet"]
+           "--trajectory", str(traj), "--summary-json", str(summary), "--quiet", *extra]
     t0 = time.monotonic()
     res = subprocess.run(cmd, capture_output=True, text=True)
     elapsed = time.monotonic() - t0
@@ -336,6 +338,57 @@ def run_robustness(nav: Path, logs: List[Tuple[str, Path, Path]], acc: dict, lev
                     row[key]["ratio_max"] = ratio(row[key]["max"], clean[key]["mean"])
         out["logs"][label] = {"log": str(log), "relations": str(rel), "levels": lvls, "seeds": list(seeds),
                               "runs": runs, "table": table}
+    return out
+
+
+def sample_stats(values: Sequence[float]) -> dict:
+    """Mean, its standard error, median, min, max and count of the finite values."""
+    vals = sorted(v for v in values if v is not None and math.isfinite(v))
+    n = len(vals)
+    if n == 0:
+        return {"n": 0, "mean": float("nan"), "se": float("nan"), "median": float("nan"),
+                "min": float("nan"), "max": float("nan")}
+    mean = math.fsum(vals) / n
+    se = math.sqrt(math.fsum((v - mean) ** 2 for v in vals) / (n - 1) / n) if n > 1 else float("nan")
+    mid = vals[n // 2] if n % 2 else 0.5 * (vals[n // 2 - 1] + vals[n // 2])
+    return {"n": n, "mean": mean, "se": se, "median": mid, "min": vals[0], "max": vals[-1]}
+
+
+def spread_updates(count: int) -> List[float]:
+    """map_update_m values of the spread section: 0.300, 0.305, ... (count of them)."""
+    return [round(0.300 + 0.005 * k, 3) for k in range(count)]
+
+
+def run_spread(nav: Path, logs: List[Tuple[str, Path, Path]], level: int, seeds: Sequence[int],
+               updates: Sequence[float], work: Path, cache: Path, jobs: int) -> dict:
+    """Per log: rsm once per map_update_m of ``updates``, on the clean log and
+    on its copy at ``level`` % outliers for each seed. A run's all-relations
+    error is one draw of a chaotic process (rounding alone moves it by a
+    tenth, docs/map.md), so the floors' ratios are also taken between the
+    means of many runs."""
+    paths, made = outlier_logs([(log, level, sd) for _, log, _ in logs for sd in seeds], cache, jobs)
+    tasks = []
+    for label, log, _ in logs:
+        sources = [("clean", log)] + [(f"s{sd}", paths[(str(log), level, sd)]) for sd in seeds]
+        tasks += [(label, variant, path, u) for variant, path in sources for u in updates]
+
+    def one(task):
+        label, variant, path, u = task
+        traj = work / "spread" / label / f"{variant}-{u:.3f}.txt"
+        run_nav(nav, path, "rsm", traj, extra=("--set", f"map_update_m={u:g}"))
+        return task, traj
+
+    done = parallel(one, tasks, jobs)
+    out = {"level": level, "seeds": list(seeds), "updates": list(updates), "outlier_logs_made": made, "logs": {}}
+    for label, _, rel in logs:
+        relations = ev.load_relations(rel)
+        vals: Dict[str, Dict[str, List[float]]] = {k: {sc: [] for sc in SCOPES} for k in ("clean", "noisy")}
+        for (lab, variant, _, _), traj in done:
+            if lab == label:
+                e = scoped_errors(traj, relations)
+                for sc in SCOPES:
+                    vals["clean" if variant == "clean" else "noisy"][sc].append(e[sc]["translation"]["mean"])
+        out["logs"][label] = {k: {sc: sample_stats(v) for sc, v in d.items()} for k, d in vals.items()}
     return out
 
 

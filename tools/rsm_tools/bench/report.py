@@ -180,6 +180,39 @@ def check_floors(rsm: Dict[str, dict], peers: Optional[Dict[str, List[dict]]], r
     return out
 
 
+def spread_ratio(noisy: dict, clean: dict) -> Tuple[float, float]:
+    """The ratio of two sample means (sample_stats) and its standard error."""
+    r = ratio(noisy["mean"], clean["mean"])
+    rel = [x["se"] / x["mean"] for x in (noisy, clean) if x["n"] > 1 and x["mean"] > 0]
+    se = r * math.sqrt(sum(v * v for v in rel)) if len(rel) == 2 and math.isfinite(r) else float("nan")
+    return r, se
+
+
+def spread_floors(sp: Optional[dict]) -> List[dict]:
+    """The outlier floors again, between the means of the spread section's
+    runs (run_spread) instead of between single runs."""
+    out: List[dict] = []
+    if not sp or "skipped" in sp:
+        return out
+    for log, r in sp["logs"].items():
+        for scope in SCOPES:
+            lim = FLOOR_ROBUST[scope]
+            c, nz = r["clean"][scope], r["noisy"][scope]
+            what = (f"{log}: {sp['level']} % outliers over {nz['n']} runs (seeds "
+                    f"{' '.join(str(s) for s in sp['seeds'])}, map_update_m {sp['updates'][0]:g} to "
+                    f"{sp['updates'][-1]:g}), {_scope_name(scope)} translation")
+            if nz["n"] == 0 or c["n"] == 0:
+                out.append(_floor("SKIP", "robustness-runs", log, None, lim, f"{what}: not measured"))
+                continue
+            x, se = spread_ratio(nz, c)
+            ok = math.isfinite(x) and x <= lim
+            out.append(_floor("PASS" if ok else "MISS", "robustness-runs", log, x, lim,
+                              f"{what}, mean {fmt_q('translation', nz['mean'])} m = x{x:.3f} (+-{se:.3f}) of the "
+                              f"clean runs' mean {fmt_q('translation', c['mean'])} m ({c['n']} runs) "
+                              f"{'<=' if ok else '>'} x{lim:.2f}"))
+    return out
+
+
 def floor_inputs(ctx: dict) -> dict:
     """The arguments of check_floors from a bench run's results."""
     acc, rob, am, cg = ctx["accuracy"], ctx.get("robustness"), ctx.get("arm_memory"), ctx.get("callgrind")
@@ -990,6 +1023,28 @@ def report_robustness(ctx: dict, root: Path) -> List[str]:
               f"and icp, odometry as a reference line]({ctx['plot']})", ""]
     elif ctx.get("plot_note"):
         L += [f"No plot: {ctx['plot_note']}.", ""]
+    sp = ctx.get("spread")
+    if sp and "skipped" not in sp:
+        L += ["### Over many runs", "",
+              "One run's all-relations error is one draw of a chaotic process: rounding alone moves it by about a "
+              "tenth (docs/map.md), so the tables above, one run per seed, can pass or miss a floor by chance. "
+              f"Here rsm ran once per `map_update_m` of {sp['updates'][0]:g}, {sp['updates'][1]:g}, ... "
+              f"{sp['updates'][-1]:g} m ({len(sp['updates'])} values around the default 0.4) on every clean log and "
+              f"on its copies at {sp['level']} % outliers (seeds {', '.join(str(s) for s in sp['seeds'])}): the "
+              "mean error over the runs with its standard error, the median, and the ratio of the means with its "
+              "standard error.", ""]
+        rows = []
+        for label, r in sp["logs"].items():
+            for sc in SCOPES:
+                c, nz = r["clean"][sc], r["noisy"][sc]
+                x, se = spread_ratio(nz, c)
+                rows.append([label, _scope_name(sc), str(c["n"]),
+                             f"{fmt_q('translation', c['mean'])} +- {fmt_q('translation', c['se'])}",
+                             fmt_q("translation", c["median"]), str(nz["n"]),
+                             f"{fmt_q('translation', nz['mean'])} +- {fmt_q('translation', nz['se'])}",
+                             fmt_q("translation", nz["median"]), f"{x:.2f} +- {se:.2f}"])
+        L += md_table(["log", "relations", "clean runs", "clean mean [m]", "median", "outlier runs",
+                       "outliers mean [m]", "median", "x clean (means)"], rows, "robustness spread")
     pt = ctx.get("peer_robustness")
     if pt:
         L += ["peers.md's robustness table, as it is there (local translation error at 43 % / 60 % outliers, "
