@@ -709,7 +709,8 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
     origin.x = cfg->laser_mount.x;
     origin.y = cfg->laser_mount.y;
     origin = rsm_pose_apply(est, &origin);
-    /* Returns no neighbour confirms stay out of the map (they still count
+    /* With the isolation rule on (off by default: it costs ACES, docs/map.md)
+     * returns no neighbour confirms stay out of the map (they still count
      * in matching, where a map that holds only confirmed walls outvotes
      * them): a map keeps what it is given for minutes, and phantom returns
      * would take its memory and blur its walls. */
