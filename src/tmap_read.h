@@ -62,11 +62,16 @@ static inline uint32_t rsm_tmap_get_cell(const rsm_tile_t *t, uint32_t i)
     return ((uint32_t)t->cell[i >> 1] >> ((i & 1u) << 2)) & 15u;
 }
 
+/* Value of cell (gx, gy) in the tile of slot s; 0 where no tile is held. */
+static inline uint32_t rsm_tmap_slot_value(const rsm_tmap_t *map, uint32_t s, int32_t gx, int32_t gy)
+{
+    return s == RSM_TMAP_NONE ? 0u : rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(gx, gy));
+}
+
 /* Value of a cell through a cursor; 0 where no tile is held. */
 static inline uint32_t rsm_tmap_cell_value(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy)
 {
-    const uint32_t s = rsm_tmap_cursor_slot(map, c, gx, gy);
-    return s == RSM_TMAP_NONE ? 0u : rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(gx, gy));
+    return rsm_tmap_slot_value(map, rsm_tmap_cursor_slot(map, c, gx, gy), gx, gy);
 }
 
 /* The occupancy of two horizontal neighbours, cells k and k + 1 of a tile's
@@ -89,12 +94,6 @@ static inline void rsm_tmap_occ_pair(const rsm_tmap_t *map, const rsm_tile_t *t,
 static inline float rsm_tmap_read_reach(const rsm_tmap_t *map)
 {
     return (float)(RSM_TMAP_CELL_LIMIT - 3) / map->inv_cell[0];
-}
-
-/* Occupancy of a cell of a held tile (slot s), 0 where none is held. */
-static inline float rsm_tmap_slot_occ(const rsm_tmap_t *map, uint32_t s, int32_t gx, int32_t gy)
-{
-    return map->occ[s == RSM_TMAP_NONE ? 0u : rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(gx, gy))];
 }
 
 /* The occupancy at (u, v) in cells of the cursor's level, cell centres at
@@ -121,6 +120,7 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
     float m01;
     float m11;
     float a;
+    float b;
     float top;
     float bottom;
     if (!inside && !(u >= -lim && u < lim && v >= -lim && v < lim)) {
@@ -168,15 +168,16 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
         const uint32_t s10 = edge_i ? rsm_tmap_cursor_slot(map, c, i + 1, j) : s00;
         const uint32_t s01 = edge_j ? rsm_tmap_cursor_slot(map, c, i, j + 1) : s00;
         const uint32_t s11 = !edge_j ? s10 : !edge_i ? s01 : rsm_tmap_cursor_slot(map, c, i + 1, j + 1);
-        m00 = rsm_tmap_slot_occ(map, s00, i, j);
-        m10 = rsm_tmap_slot_occ(map, s10, i + 1, j);
-        m01 = rsm_tmap_slot_occ(map, s01, i, j + 1);
-        m11 = rsm_tmap_slot_occ(map, s11, i + 1, j + 1);
+        m00 = map->occ[rsm_tmap_slot_value(map, s00, i, j)];
+        m10 = map->occ[rsm_tmap_slot_value(map, s10, i + 1, j)];
+        m01 = map->occ[rsm_tmap_slot_value(map, s01, i, j + 1)];
+        m11 = map->occ[rsm_tmap_slot_value(map, s11, i + 1, j + 1)];
     }
     a = m10 - m00;
+    b = m11 - m01;
     top = m00 + a * du;
-    bottom = m01 + (m11 - m01) * du;
-    *du_out = a + ((m11 - m01) - a) * dv;
+    bottom = m01 + b * du;
+    *du_out = a + (b - a) * dv;
     *dv_out = bottom - top;
     return top + (bottom - top) * dv;
 }

@@ -596,7 +596,7 @@ def test_floor_checks_on_made_up_numbers():
 
 
 def test_outlier_floors_are_judged_again_by_the_means_of_many_runs():
-    stats = bench.measure.sample_stats
+    stats = bench.measure.spread
     s = stats([1.0, 2.0, 3.0, 4.0, float("nan")])  # the NaN is left out
     assert (s["n"], s["mean"], s["median"], s["min"], s["max"]) == (4, 2.5, 2.5, 1.0, 4.0)
     assert math.isclose(s["se"], math.sqrt(5.0 / 3.0) / 2.0)

@@ -60,10 +60,9 @@ from .. import corridors, fullchecks, lidarbench
 from ..fullchecks import check
 from .common import (ARM_CONFIGS, BenchError, CALLGRIND_SCANS, DEFAULT_MAP_LOG2, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
     FIRST_SEED, HOST_PARTS, LEVELS, LOCAL_SPAN, MEMORY_TILES, METHODS, OTHER_LEVELS, PEER_COLUMNS, QUANTITIES,
-    QUICK_LEVELS, QUICK_OTHER_LEVELS, QUICK_SPREAD_UPDATES, ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS, SCALING_MAP_LOG2,
-    SCALING_PRESETS, SCALING_TILES, SCOPES, SECTION_TITLES, SEEDS, SMALL, SMALL_HEADER, SPEED_REPEATS,
-    SPREAD_UPDATES, STAGES, TURNS,
-    find_root, fmt_int, shown_path)
+    QUICK_LEVELS, QUICK_OTHER_LEVELS, QUICK_SPREAD_UPDATES, ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS,
+    SCALING_MAP_LOG2, SCALING_PRESETS, SCALING_TILES, SCOPES, SECTION_TITLES, SEEDS, SMALL, SMALL_HEADER,
+    SPEED_REPEATS, SPREAD_UPDATES, STAGES, TURNS, find_root, fmt_int, shown_path)
 from .parse import (_peer_table, base_name, best_peers, callee_costs, callgrind_stages, fused_percent, load_peers,
     load_summary, localizer_breakdown, parse_callgraph_info, parse_callgrind, parse_cross_check, parse_nm_sizes,
     parse_peers, parse_size_archive, peer_speed, static_functions, worst_stack_path)

@@ -11,6 +11,7 @@ import os
 import platform
 import re
 import shutil
+import statistics
 import subprocess
 import time
 from pathlib import Path
@@ -279,10 +280,16 @@ def outlier_logs(wanted: Sequence[Tuple[Path, int, int]], cache: Path,
 
 
 def spread(values: Sequence[float]) -> dict:
-    vals = [v for v in values if v is not None and math.isfinite(v)]
-    if not vals:
-        return {"mean": float("nan"), "min": float("nan"), "max": float("nan"), "n": 0}
-    return {"mean": math.fsum(vals) / len(vals), "min": min(vals), "max": max(vals), "n": len(vals)}
+    """Mean, min, max and count of the finite values, with the mean's
+    standard error and the median."""
+    vals = sorted(v for v in values if v is not None and math.isfinite(v))
+    n = len(vals)
+    if n == 0:
+        return {"mean": float("nan"), "min": float("nan"), "max": float("nan"), "n": 0, "se": float("nan"),
+                "median": float("nan")}
+    mean = math.fsum(vals) / n
+    se = math.sqrt(math.fsum((v - mean) ** 2 for v in vals) / (n - 1) / n) if n > 1 else float("nan")
+    return {"mean": mean, "min": vals[0], "max": vals[-1], "n": n, "se": se, "median": statistics.median(vals)}
 
 
 def run_robustness(nav: Path, logs: List[Tuple[str, Path, Path]], acc: dict, levels: Dict[str, Sequence[int]],
@@ -341,19 +348,6 @@ def run_robustness(nav: Path, logs: List[Tuple[str, Path, Path]], acc: dict, lev
     return out
 
 
-def sample_stats(values: Sequence[float]) -> dict:
-    """Mean, its standard error, median, min, max and count of the finite values."""
-    vals = sorted(v for v in values if v is not None and math.isfinite(v))
-    n = len(vals)
-    if n == 0:
-        return {"n": 0, "mean": float("nan"), "se": float("nan"), "median": float("nan"),
-                "min": float("nan"), "max": float("nan")}
-    mean = math.fsum(vals) / n
-    se = math.sqrt(math.fsum((v - mean) ** 2 for v in vals) / (n - 1) / n) if n > 1 else float("nan")
-    mid = vals[n // 2] if n % 2 else 0.5 * (vals[n // 2 - 1] + vals[n // 2])
-    return {"n": n, "mean": mean, "se": se, "median": mid, "min": vals[0], "max": vals[-1]}
-
-
 def spread_updates(count: int) -> List[float]:
     """map_update_m values of the spread section: 0.300, 0.305, ... (count of them)."""
     return [round(0.300 + 0.005 * k, 3) for k in range(count)]
@@ -388,7 +382,7 @@ def run_spread(nav: Path, logs: List[Tuple[str, Path, Path]], level: int, seeds:
                 e = scoped_errors(traj, relations)
                 for sc in SCOPES:
                     vals["clean" if variant == "clean" else "noisy"][sc].append(e[sc]["translation"]["mean"])
-        out["logs"][label] = {k: {sc: sample_stats(v) for sc, v in d.items()} for k, d in vals.items()}
+        out["logs"][label] = {k: {sc: spread(v) for sc, v in d.items()} for k, d in vals.items()}
     return out
 
 

@@ -181,7 +181,7 @@ def check_floors(rsm: Dict[str, dict], peers: Optional[Dict[str, List[dict]]], r
 
 
 def spread_ratio(noisy: dict, clean: dict) -> Tuple[float, float]:
-    """The ratio of two sample means (sample_stats) and its standard error."""
+    """The ratio of two sample means (measure.spread) and its standard error."""
     r = ratio(noisy["mean"], clean["mean"])
     rel = [x["se"] / x["mean"] for x in (noisy, clean) if x["n"] > 1 and x["mean"] > 0]
     se = r * math.sqrt(sum(v * v for v in rel)) if len(rel) == 2 and math.isfinite(r) else float("nan")
