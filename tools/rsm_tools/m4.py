@@ -327,6 +327,11 @@ def check_replay(elf: Path, host_exe: Path, work: Path) -> str:
             raise M4Error(f"host and target differ first at line {i + 1}:\n  host   {a}\n  target {b}")
     if len(host_p) != len(target_p):
         raise M4Error(f"host wrote {len(host_p)} pose and summary lines, target {len(target_p)}")
+    refused = re.search(r"^E .* out_of_order (\d+)", out, re.M)
+    if refused is None or int(refused.group(1)) != 0:
+        # A refused scan costs next to nothing: the cost figures would time
+        # refusals, not steps (the excerpt's stamps are made monotonic).
+        raise M4Error(f"the replay refused scans as out of order: {refused.group(0) if refused else 'no E line'}")
     return (f"replay: {len(host_p) - 1} poses equal bit for bit on host and M4; calibration "
             f"{cal['insns']} instructions measured as {cal['measured']:.0f}")
 

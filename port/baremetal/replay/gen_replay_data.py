@@ -9,7 +9,11 @@ kinematics (rsm_tools.convert.TickEncoder: the P3-DX defaults, 128 ticks per
 mm and a 0.357 m wheel base, as rsm_odometry_config_default), one to three
 steps per pose; every FLASER scan becomes its ranges in centimetres (the
 log's own resolution, so nothing is lost) and its time stamp, taken after
-the step of its pose. Python standard library only.
+the step of its pose. A stamp that goes backwards (the Intel log's do, by up
+to 0.6 s, while its records are in their true order) is clamped to the one
+before, as rsm-nav's stamp repair does: the localizer would refuse the scan
+as out of order, and the replay would then time a refusal instead of a step.
+Python standard library only.
 """
 
 import argparse
@@ -37,6 +41,7 @@ def main(argv=None) -> int:
     enc = TickEncoder(first, DEFAULT_TICKS_PER_M, DEFAULT_WHEEL_BASE)
     steps, scans = [], []
     t0 = None
+    last = 0
     for r in recs:
         pose = r.odom_pose if isinstance(r, FLaser) else (r.x, r.y, r.theta)
         for left, right in enc.step(pose):
@@ -47,7 +52,8 @@ def main(argv=None) -> int:
             t0 = r.timestamp if t0 is None else t0
             stamp = int(round((r.timestamp - t0) * 1e6))
             cm = [min(65535, max(0, int(round(v * 100.0)))) for v in r.ranges]
-            scans.append((max(0, stamp), cm))
+            last = max(last, stamp)
+            scans.append((last, cm))
             steps[-1][2] = len(scans)  # this step's pose is the scan's
             if a.scans and len(scans) >= a.scans:
                 break

@@ -93,6 +93,8 @@ int rsm_replay_run(rsm_replay_t *r, const rsm_replay_io_t *io)
     rsm_replay_put_dec(io, r->loc.counters.scans);
     rsm_replay_put_str(io, " accepted ");
     rsm_replay_put_dec(io, r->loc.counters.outcome[RSM_SCAN_ACCEPTED]);
+    rsm_replay_put_str(io, " out_of_order ");
+    rsm_replay_put_dec(io, r->loc.counters.outcome[RSM_SCAN_OUT_OF_ORDER]);
     rsm_replay_put_str(io, " motions ");
     rsm_replay_put_dec(io, r->loc.counters.motions);
     rsm_replay_put_str(io, "\n");
