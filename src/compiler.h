@@ -11,4 +11,13 @@
 #define RSM_NOINLINE
 #endif
 
+/* Makes the compiler copy a function into each caller, so that arguments
+ * that are constants there (a loop's direction) fold away; GCC and Clang
+ * otherwise keep one copy and test them at run time. */
+#if defined(__GNUC__) || defined(__clang__)
+#define RSM_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define RSM_ALWAYS_INLINE inline
+#endif
+
 #endif /* RSM_COMPILER_H */

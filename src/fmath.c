@@ -221,31 +221,3 @@ float rsm_logf(float x)
     lm = 2.0f * s + 2.0f * s * z * (1.0f / 3.0f + z * (1.0f / 5.0f + z * (1.0f / 7.0f + z * (1.0f / 9.0f))));
     return (float)e * LN2_HI + (lm + (float)e * LN2_LO);
 }
-
-float rsm_floorf(float x)
-{
-    float t;
-    if (!(fabsf(x) < 0x1p+23f)) {
-        return x; /* already an integer, or not finite */
-    }
-    t = (float)(int32_t)x; /* truncation toward zero, exact here */
-    if (t > x) {
-        t -= 1.0f;
-    }
-    /* x * 0 keeps floorf(-0.0) == -0.0; any other x gives t != 0 or +0. */
-    return t == 0.0f ? x * 0.0f : t;
-}
-
-float rsm_ceilf(float x)
-{
-    float t;
-    if (!(fabsf(x) < 0x1p+23f)) {
-        return x;
-    }
-    t = (float)(int32_t)x;
-    if (t < x) {
-        t += 1.0f;
-    }
-    /* ceilf(-0.3) is -0.0, as x * 0 gives. */
-    return t == 0.0f ? x * 0.0f : t;
-}

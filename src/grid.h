@@ -13,6 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "fmath.h"
 #include "rsm/config.h"
 #include "rsm/geom.h"
 #include "rsm/localizer_parts.h"
@@ -44,8 +45,8 @@ static inline rsm_bilinear_t rsm_bilinear_at(float x, float y, float inv_a)
      * reads call it for every point of every descent step. */
     const float u = x * inv_a - 0.5f;
     const float v = y * inv_a - 0.5f;
-    const float fu = floorf(u);
-    const float fv = floorf(v);
+    const float fu = rsm_floorf(u);
+    const float fv = rsm_floorf(v);
     rsm_bilinear_t b;
     if (!(fu > -1.0e9f && fu < 1.0e9f && fv > -1.0e9f && fv < 1.0e9f)) {
         /* Beyond any grid (or NaN): a far cell, and no overflowing cast. */

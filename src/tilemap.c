@@ -358,7 +358,7 @@ static int32_t cell_of(float v, float inv_a)
  * where no tile is held, and inside a held one moves the cell's index
  * with the step instead of recomputing it. adx and ady are the beam's
  * extents; xmajor (a constant in each caller) says adx >= ady. */
-static inline uint32_t walk_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0, int32_t x1,
+static RSM_ALWAYS_INLINE uint32_t walk_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0, int32_t x1,
                                  int32_t y1, int32_t adx, int32_t ady, uint32_t dec, uint32_t margin, const int xmajor)
 {
     const int32_t big = xmajor ? adx : ady;   /* extent along the major axis */
