@@ -103,7 +103,7 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
     float cost = 0.0f;
     float cost_used = 0.0f;
     float hit = 0.0f;
-    uint32_t used = 0;
+    size_t unused = 0; /* counted where it is rare: a register fewer in the loop */
     rsm_tmap_cursor_t cur;
     size_t k;
     rsm_tmap_cursor_init(&cur, level);
@@ -120,6 +120,7 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
         cost += r * r;
         hit += m;
         if (gu == 0.0f && gv == 0.0f) {
+            ++unused;
             continue;
         }
         /* d(cell)/d(theta) = (-s px - c py, c px - s py) / cell. */
@@ -134,7 +135,6 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
         b1 += gv * r;
         b2 += gt * r;
         cost_used += r * r;
-        used++;
     }
     s->h[0] = h0 * (inv_a * inv_a);
     s->h[1] = h1 * (inv_a * inv_a);
@@ -148,7 +148,7 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
     s->cost = cost;
     s->cost_used = cost_used;
     s->hit = hit;
-    s->used = used;
+    s->used = (uint32_t)(n - unused);
 }
 
 /* Sum of (1 - M)^2 over every stride-th point at pose x on a level, each
@@ -602,11 +602,14 @@ float rsm_mapmatch_spread(const rsm_point_t *pts, size_t n, float dir[2])
     float b = 0.0f;
     float c = 0.0f;
     size_t j = 1;
+    size_t joined = 0; /* points 1..joined are known to join the point before */
     size_t k;
     dir[0] = 1.0f;
     dir[1] = 0.0f;
     /* Each point's chord runs to the first point at least SPREAD_CHORD_M
-     * away on its surface; j only moves forward, so this is one pass. */
+     * away on its surface; j only moves forward, so this is one pass (and
+     * each gap is tested once, though the chords of several points may
+     * reach it). */
     for (k = 0; k + 1u < n; ++k) {
         float dx = 0.0f;
         float dy = 0.0f;
@@ -615,12 +618,15 @@ float rsm_mapmatch_spread(const rsm_point_t *pts, size_t n, float dir[2])
             j = k + 1u;
         }
         for (; j < n; ++j) {
-            const float gx = pts[j].x - pts[j - 1u].x;
-            const float gy = pts[j].y - pts[j - 1u].y;
-            const float r = fabsf(pts[j].x) + fabsf(pts[j].y);
-            const float g = SPREAD_GAP_REL * r > SPREAD_GAP_M ? SPREAD_GAP_REL * r : SPREAD_GAP_M;
-            if (!(gx * gx + gy * gy <= g * g)) {
-                break;
+            if (j > joined) {
+                const float gx = pts[j].x - pts[j - 1u].x;
+                const float gy = pts[j].y - pts[j - 1u].y;
+                const float r = fabsf(pts[j].x) + fabsf(pts[j].y);
+                const float g = SPREAD_GAP_REL * r > SPREAD_GAP_M ? SPREAD_GAP_REL * r : SPREAD_GAP_M;
+                if (!(gx * gx + gy * gy <= g * g)) {
+                    break;
+                }
+                joined = j;
             }
             dx = pts[j].x - pts[k].x;
             dy = pts[j].y - pts[k].y;
