@@ -595,6 +595,16 @@ def test_floor_checks_on_made_up_numbers():
     assert f[-1]["status"] == "PASS"
 
 
+def test_m4_floors_judge_the_mean_and_p99_of_the_replay():
+    f = bench.m4_floors({"cost": {"scans": 600, "mean": 300000.0, "p99": 600005.0}})
+    assert [(x["kind"], x["status"]) for x in f] == [("m4", "PASS"), ("m4", "MISS")]
+    assert "mean instructions per scan" in f[0]["line"] and "300 000 <= 300 000 (over 600 scans)" in f[0]["line"]
+    assert "600 005 > 600 000" in f[1]["line"] and f[1]["value"] == 600005.0 and f[1]["limit"] == 600000
+    f = bench.m4_floors({"skipped": "qemu-system-arm is not installed"})
+    assert [x["status"] for x in f] == ["SKIP", "SKIP"] and "qemu-system-arm" in f[0]["line"]
+    assert [x["status"] for x in bench.m4_floors(None)] == ["SKIP", "SKIP"]
+
+
 def test_outlier_floors_are_judged_again_by_the_means_of_many_runs():
     stats = bench.measure.spread
     s = stats([1.0, 2.0, 3.0, 4.0, float("nan")])  # the NaN is left out

@@ -72,7 +72,7 @@ from .measure import (build_small, cmake_cache, cpu_info, discover_logs, hash_lo
     run_robustness, run_scaling, run_speed, run_spread, run_stage_speed, run_stages, run_turns, scaling_variants,
     shared_dir, source_digest, spread_updates, stages_exe, variant_header, write_head)
 from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors,
-    context_from_manifest, floor_inputs, losses, m4_lines, spread_floors, write_report)
+    context_from_manifest, floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_report)
 
 
 def _levels(text: str) -> List[int]:
@@ -317,8 +317,9 @@ def run(args: argparse.Namespace) -> Path:
         ctx["sources_changed"] = ("the library's or the tools' sources changed while this run was measuring, so "
                                   "its figures may come from different code: run it again")
         print(f"rsm-bench: WARNING: {ctx['sources_changed']}", flush=True)
-    ctx["floors"] = (check_floors(**floor_inputs(ctx)) + spread_floors(ctx.get("spread")) + ctx["full_checks"] +
-                     ctx["lidar_streams"] + ctx["corridors"])
+    ctx["floors"] = (check_floors(**floor_inputs(ctx)) + m4_floors(ctx.get("m4")) +
+                     spread_floors(ctx.get("spread")) + ctx["full_checks"] + ctx["lidar_streams"] +
+                     ctx["corridors"])
     ctx["losses"] = losses(ctx)
     ctx["elapsed"] = time.monotonic() - t_start
     ctx["stage_seconds"] = stage_seconds

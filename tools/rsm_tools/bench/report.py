@@ -85,6 +85,11 @@ FLOOR_ARM_BYTES = {"default": 128 * 1024, "small": 64 * 1024}
 FLOOR_IR_PER_SCAN = 1.2e6
 
 
+# Issue 11's cost on the target: instructions per scan of the replay
+# firmware (the excerpt, -O2, default configuration).
+FLOOR_M4 = (("mean", 300000), ("p99", 600000))
+
+
 PEER_FLOORS = (("all", "translation"), ("local", "translation"), ("local", "rotation"))
 
 
@@ -177,6 +182,25 @@ def check_floors(rsm: Dict[str, dict], peers: Optional[Dict[str, List[dict]]], r
                           f"{ir['log']}: {fmt_int(round(v))} instructions per scan (callgrind, first "
                           f"{ir['scans']} scans, default config.h) {'<=' if ok else '>'} "
                           f"{fmt_int(round(FLOOR_IR_PER_SCAN))}"))
+    return out
+
+
+def m4_floors(m4: Optional[dict]) -> List[dict]:
+    """Issue 11's floors on the replay firmware's instructions per scan
+    (run_m4), each PASS, MISS or SKIP."""
+    out: List[dict] = []
+    for stat, lim in FLOOR_M4:
+        what = f"Cortex-M4F: {stat} instructions per scan of the replay firmware (the excerpt, -O2, QEMU)"
+        cost = (m4 or {}).get("cost")
+        if not cost:
+            why = (m4 or {}).get("skipped", "not run")
+            out.append(_floor("SKIP", "m4", None, None, lim, f"{what}: not measured ({why})"))
+            continue
+        v = cost[stat]
+        ok = v <= lim
+        out.append(_floor("PASS" if ok else "MISS", "m4", None, v, lim,
+                          f"{what} {fmt_int(round(v))} {'<=' if ok else '>'} {fmt_int(lim)} "
+                          f"(over {cost['scans']} scans)"))
     return out
 
 
@@ -1110,12 +1134,13 @@ def report_memory(ctx: dict, root: Path) -> List[str]:
 def report_floors(ctx: dict) -> List[str]:
     floors = ctx.get("floors") or []
     n = {k: sum(1 for f in floors if f["status"] == k) for k in ("PASS", "MISS", "SKIP")}
-    L = ["The floors of issue 10, each checked on this run's figures and printed as PASS or MISS (SKIP: not "
+    L = ["The floors of issues 10 and 11, each checked on this run's figures and printed as PASS or MISS (SKIP: not "
          "measured in this run). They are a report, not an assertion: the bench does not fail on a MISS. Peers: "
          "the lowest figure among the peers of peers.md for that log. Robustness: rsm with "
          f"{FLOOR_LEVEL} % outliers against its own clean run, translation, local <= x{FLOOR_ROBUST['local']:.2f} "
          f"and all relations <= x{FLOOR_ROBUST['all']:.2f}, at every seed. Memory: `sizeof(rsm_localizer_t)` "
-         f"from the Cortex-M4F probe of section 5. Instructions: callgrind, section 4. Then the checks that need "
+         f"from the Cortex-M4F probe of section 5. Instructions: callgrind, section 4; on the target, issue 11's mean and "
+         f"p99 of the replay firmware, section 4. Then the checks that need "
          f"the full logs (`rsm_tools.fullchecks`): the logs against their description in docs/reference, rsm "
          f"against ICP and odometry, a bit-identical rerun, and the capture path (`rsm-convert`, then "
          f"`rsm-nav --capture`) within x{fullchecks.CAPTURE_TOLERANCE:.2f} of the direct run.", "",
