@@ -70,11 +70,12 @@ def test_generated_excerpt_has_every_scan_after_its_pose(tmp_path):
     assert int(rows[0][0]) == 0 and int(rows[1][0]) > 0  # stamps from the first scan
 
 
-def test_generated_excerpt_clamps_stamps_that_go_backwards(tmp_path):
+def test_generated_excerpt_makes_stamps_that_go_backwards_monotonic_as_rsm_convert_does(tmp_path):
     import subprocess
     import sys
     from pathlib import Path
     from rsm_tools.carmen import FLaser, read_log
+    from rsm_tools.convert import monotonic_stamps
     gen = Path(__file__).resolve().parents[2] / "port" / "baremetal" / "replay" / "gen_replay_data.py"
     out = tmp_path / "d.c"
     subprocess.run([sys.executable, str(gen), str(TEST_DATA / "intel_head.clf.gz"), str(out), "--scans", "40"],
@@ -82,13 +83,14 @@ def test_generated_excerpt_clamps_stamps_that_go_backwards(tmp_path):
     stamps = [int(v) for v in re.findall(r"^    \{(\d+)u, \{[0-9, ]+\}\},$", out.read_text(), re.M)]
     log = [r.timestamp for r in read_log(TEST_DATA / "intel_head.clf.gz", types=("FLASER",))
            if isinstance(r, FLaser)][:40]
+    raw = [round((t - log[0]) * 1e6) for t in log]
     back = [i for i in range(1, 40) if log[i] < log[i - 1]]
     assert back, "the excerpt's first 40 scans have a stamp going backwards (the case under test)"
     assert all(b >= a for a, b in zip(stamps, stamps[1:]))
-    for i in back:
-        assert stamps[i] == stamps[i - 1]  # clamped to the one before
-    ahead = [i for i in range(1, 40) if i not in back and log[i] >= max(log[:i])]
-    assert all(stamps[i] == round((log[i] - log[0]) * 1e6) for i in ahead)
+    assert stamps == monotonic_stamps(raw)  # as rsm-convert re-places them
+    assert all(stamps[i] != raw[i] or stamps[i - 1] != raw[i - 1] for i in back)  # each backward step moved
+    # one stamp moved per step backwards (here the one that had jumped ahead), the rest the log's own
+    assert sum(a != b for a, b in zip(stamps, raw)) == len(back)
 
 
 def test_profile_counts_each_block_by_its_size_times_its_runs():

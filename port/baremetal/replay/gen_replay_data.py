@@ -9,11 +9,11 @@ kinematics (rsm_tools.convert.TickEncoder: the P3-DX defaults, 128 ticks per
 mm and a 0.357 m wheel base, as rsm_odometry_config_default), one to three
 steps per pose; every FLASER scan becomes its ranges in centimetres (the
 log's own resolution, so nothing is lost) and its time stamp, taken after
-the step of its pose. A stamp that goes backwards (the Intel log's do, by up
-to 0.6 s, while its records are in their true order) is clamped to the one
-before, as rsm-nav's stamp repair does: the localizer would refuse the scan
-as out of order, and the replay would then time a refusal instead of a step.
-Python standard library only.
+the step of its pose. The stamps are made non-decreasing as rsm-convert
+makes them (rsm_tools.convert.monotonic_stamps): the Intel log's go
+backwards at times (by up to 0.6 s, its records in their true order), and
+the localizer would refuse such a scan as out of order, so that the replay
+would time a refusal instead of a step. Python standard library only.
 """
 
 import argparse
@@ -23,7 +23,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "tools"))
 
 from rsm_tools.carmen import FLaser, Odom, read_log  # noqa: E402
-from rsm_tools.convert import DEFAULT_TICKS_PER_M, DEFAULT_WHEEL_BASE, TickEncoder  # noqa: E402
+from rsm_tools.convert import DEFAULT_TICKS_PER_M, DEFAULT_WHEEL_BASE, TickEncoder, monotonic_stamps  # noqa: E402
 
 BEAMS = 180
 
@@ -41,7 +41,6 @@ def main(argv=None) -> int:
     enc = TickEncoder(first, DEFAULT_TICKS_PER_M, DEFAULT_WHEEL_BASE)
     steps, scans = [], []
     t0 = None
-    last = 0
     for r in recs:
         pose = r.odom_pose if isinstance(r, FLaser) else (r.x, r.y, r.theta)
         for left, right in enc.step(pose):
@@ -52,8 +51,7 @@ def main(argv=None) -> int:
             t0 = r.timestamp if t0 is None else t0
             stamp = int(round((r.timestamp - t0) * 1e6))
             cm = [min(65535, max(0, int(round(v * 100.0)))) for v in r.ranges]
-            last = max(last, stamp)
-            scans.append((last, cm))
+            scans.append((stamp, cm))
             steps[-1][2] = len(scans)  # this step's pose is the scan's
             if a.scans and len(scans) >= a.scans:
                 break
@@ -65,7 +63,7 @@ def main(argv=None) -> int:
              "const rsm_replay_step_t rsm_replay_steps[] = {"]
     lines += [f"    {{{s[0]}u, {s[1]}u, {s[2]}u}}," for s in steps]
     lines += ["};", "", "const rsm_replay_scan_t rsm_replay_scans[] = {"]
-    for stamp, cm in scans:
+    for stamp, (_, cm) in zip(monotonic_stamps([s for s, _ in scans]), scans):
         body = ", ".join(str(v) for v in cm)
         lines.append(f"    {{{stamp}u, {{{body}}}}},")
     lines += ["};", ""]
