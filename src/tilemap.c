@@ -358,8 +358,9 @@ static int32_t cell_of(float v, float inv_a)
  * where no tile is held, and inside a held one moves the cell's index
  * with the step instead of recomputing it. adx and ady are the beam's
  * extents; xmajor (a constant in each caller) says adx >= ady. */
-static RSM_ALWAYS_INLINE uint32_t walk_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0, int32_t x1,
-                                 int32_t y1, int32_t adx, int32_t ady, uint32_t dec, uint32_t margin, const int xmajor)
+static RSM_ALWAYS_INLINE uint32_t walk_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0,
+                                            int32_t x1, int32_t y1, int32_t adx, int32_t ady, uint32_t dec,
+                                            uint32_t margin, const int xmajor)
 {
     const int32_t big = xmajor ? adx : ady;   /* extent along the major axis */
     const int32_t small = xmajor ? ady : adx; /* and along the minor one */

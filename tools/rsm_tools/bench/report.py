@@ -188,13 +188,13 @@ def check_floors(rsm: Dict[str, dict], peers: Optional[Dict[str, List[dict]]], r
 def m4_floors(m4: Optional[dict]) -> List[dict]:
     """Issue 11's floors on the replay firmware's instructions per scan
     (run_m4), each PASS, MISS or SKIP."""
+    m4 = m4 or {}
+    cost = m4.get("cost")
     out: List[dict] = []
     for stat, lim in FLOOR_M4:
         what = f"Cortex-M4F: {stat} instructions per scan of the replay firmware (the excerpt, -O2, QEMU)"
-        cost = (m4 or {}).get("cost")
         if not cost:
-            why = (m4 or {}).get("skipped", "not run")
-            out.append(_floor("SKIP", "m4", None, None, lim, f"{what}: not measured ({why})"))
+            out.append(_floor("SKIP", "m4", None, None, lim, f"{what}: not measured ({m4.get('skipped', 'not run')})"))
             continue
         v = cost[stat]
         ok = v <= lim
