@@ -62,6 +62,15 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.isolation.slope = 3.0f;
     c.isolation.window = 2u;
     c.isolation.agree = 1u;
+    /* A laser cannot see through a wall: a return behind two neighbours
+     * that span its beam is a phantom (docs/map.md, "Outliers"). */
+    c.occlusion.window = 2u;
+    c.occlusion.span_m = 0.3f;
+    c.occlusion.tol_m = 0.1f;
+    c.occlusion.slope = 3.0f;
+    c.occlusion.margin_m = 0.2f;
+    c.occlusion.margin_rel = 0.05f;
+    c.odometry_cal = rsm_odometry_cal_config_default();
     c.clock_fn = NULL;
     c.clock_ctx = NULL;
     return c;
@@ -164,6 +173,7 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
     memset(loc, 0, sizeof *loc);
     loc->cfg = cfg;
     rsm_scan_trig_init(&loc->trig);
+    rsm_odometry_cal_init(&loc->odo_cal);
     if ((rc = rsm_ekf_init(&loc->ekf, x0, p0)) != RSM_OK || (rc = rsm_odometry_init(&loc->odo, &cfg->odometry)) != RSM_OK) {
         return rc;
     }
@@ -192,12 +202,18 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
 int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
 {
     float q[9];
+    rsm_motion_t v;
     if (loc == NULL || u == NULL) {
         return RSM_ERR_INVAL;
     }
     if (!isfinite(u->dx) || !isfinite(u->dy) || !isfinite(u->dtheta)) {
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
+    }
+    if (loc->cfg->method == RSM_METHOD_MAP && loc->cfg->odometry_cal.memory > 0.0f) {
+        /* Odometry's systematic heading error, as matching has found it. */
+        v = rsm_odometry_cal_apply(&loc->odo_cal, u);
+        u = &v;
     }
     rsm_odometry_noise(&loc->odo.cfg, u, q);
     /* No process noise before the first scan (see localizer.h). */
@@ -572,6 +588,41 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
 
 /* Robot-frame points from laser-frame ones: the mounting pose (and a
  * mirror for an upside-down laser). */
+/* Drops the returns behind a surface their neighbours span (in the laser's
+ * frame, before the mount moves them); returns how many are left. */
+static size_t drop_occluded(rsm_localizer_t *loc, size_t n)
+{
+    uint8_t hidden[(RSM_MAX_BEAMS + 7) / 8];
+    size_t kept = 0;
+    size_t k;
+    if (rsm_points_occluded(loc->pts, n, &loc->cfg->occlusion, hidden) == 0u) {
+        return n;
+    }
+    for (k = 0; k < n; ++k) {
+        if (rsm_bit_get(hidden, k)) {
+            loc->counters.occluded++;
+        } else {
+            loc->pts[kept++] = loc->pts[k];
+        }
+    }
+    return kept;
+}
+
+/* One more equation for the odometry calibration from a scan matched on its
+ * own: the weight is the share of the heading's variance the match removed
+ * (a scan that pins the heading tells the most). A recovery's jump is
+ * odometry off by more than its systematic error: a new reference only. */
+static void calibrate(rsm_localizer_t *loc, rsm_outcome_t outcome, float prior_var, uint32_t recovered)
+{
+    const rsm_pose_t est = loc->ekf.x;
+    if (outcome == RSM_SCAN_FIRST || (outcome == RSM_SCAN_ACCEPTED && loc->counters.recovered != recovered)) {
+        rsm_odometry_cal_reference(&loc->odo_cal, &est);
+    } else if (outcome == RSM_SCAN_ACCEPTED) {
+        const float w = prior_var > 0.0f ? 1.0f - loc->ekf.p[8] / prior_var : 0.0f;
+        rsm_odometry_cal_update(&loc->odo_cal, &loc->cfg->odometry_cal, &est, w > 1.0f ? 1.0f : w);
+    }
+}
+
 static void apply_mount(rsm_localizer_t *loc, size_t n)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
@@ -762,6 +813,8 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     rsm_outcome_t outcome;
     rsm_pose_t est;
     size_t npts;
+    float prior_var;
+    uint32_t recovered;
     int n;
     if (rep == NULL) {
         rep = &local;
@@ -786,8 +839,13 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         (void)rsm_localizer_motion(loc, &still);
     }
     loc->motions_at_scan = loc->counters.motions;
+    prior_var = loc->ekf.p[8];
+    recovered = loc->counters.recovered;
     n = rsm_scan_to_points_cached(scan, &loc->cfg->limits, &loc->trig, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
     npts = n > 0 ? (size_t)n : 0u;
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        npts = drop_occluded(loc, npts);
+    }
     apply_mount(loc, npts);
     rep->points = (uint32_t)npts;
     if (npts < loc->cfg->min_points) {
@@ -800,6 +858,9 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         outcome = step_map(loc, npts, rep, &clk);
     } else {
         outcome = step_rsm(loc, npts, rep, &clk);
+    }
+    if (loc->cfg->method == RSM_METHOD_MAP && loc->cfg->odometry_cal.memory > 0.0f) {
+        calibrate(loc, outcome, prior_var, recovered);
     }
     stage_switch(&clk, RSM_STAGE_MAP);
     est = loc->ekf.x;

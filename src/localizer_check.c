@@ -33,7 +33,16 @@ static int check_method_part(const rsm_localizer_config_t *cfg, const char **fie
         RSM_CHECK_FIELD(cfg->recover_rad >= 0.0f && cfg->recover_rad <= 1.0f &&
                             (cfg->recover_rad == 0.0f || cfg->recover_rad <= 64.0f * cfg->mapmatch.search_step_rad),
                         "recover_rad");
-        return RSM_OK;
+        RSM_CHECK_FIELD(cfg->occlusion.window <= RSM_OCCLUSION_MAX_WINDOW, "occlusion.window");
+        if (cfg->occlusion.window > 0u) {
+            RSM_CHECK_FIELD(cfg->occlusion.span_m > 0.0f && cfg->occlusion.span_m < 100.0f, "occlusion.span_m");
+            RSM_CHECK_FIELD(cfg->occlusion.tol_m >= 0.0f && cfg->occlusion.tol_m < 100.0f, "occlusion.tol_m");
+            RSM_CHECK_FIELD(cfg->occlusion.slope >= 0.0f && cfg->occlusion.slope < 1000.0f, "occlusion.slope");
+            RSM_CHECK_FIELD(cfg->occlusion.margin_m >= 0.0f && cfg->occlusion.margin_m < 100.0f, "occlusion.margin_m");
+            RSM_CHECK_FIELD(cfg->occlusion.margin_rel >= 0.0f && cfg->occlusion.margin_rel < 1.0f,
+                            "occlusion.margin_rel");
+        }
+        return rsm_odometry_cal_config_check(&cfg->odometry_cal, field);
     default:
         return RSM_OK;
     }

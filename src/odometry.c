@@ -359,3 +359,97 @@ void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u,
     q[4] = var_t;
     q[8] = var_r;
 }
+
+rsm_odometry_cal_config_t rsm_odometry_cal_config_default(void)
+{
+    rsm_odometry_cal_config_t c;
+    c.memory = 1024.0f;
+    c.prior = 0.01f;
+    c.max_turn = 0.25f;
+    c.max_drift = 0.1f;
+    c.gate_rad = 0.1f;
+    return c;
+}
+
+int rsm_odometry_cal_config_check(const rsm_odometry_cal_config_t *cfg, const char **field)
+{
+    RSM_CHECK_FIELD(cfg != NULL, "odometry_cal");
+    RSM_CHECK_FIELD(cfg->memory == 0.0f || (cfg->memory >= 2.0f && cfg->memory <= 1e9f), "odometry_cal.memory");
+    RSM_CHECK_FIELD(positive_finite(cfg->prior), "odometry_cal.prior");
+    RSM_CHECK_FIELD(cfg->max_turn > 0.0f && cfg->max_turn < 1.0f, "odometry_cal.max_turn");
+    RSM_CHECK_FIELD(positive_finite(cfg->max_drift), "odometry_cal.max_drift");
+    RSM_CHECK_FIELD(positive_finite(cfg->gate_rad), "odometry_cal.gate_rad");
+    return RSM_OK;
+}
+
+void rsm_odometry_cal_init(rsm_odometry_cal_t *cal)
+{
+    if (cal != NULL) {
+        memset(cal, 0, sizeof *cal);
+    }
+}
+
+rsm_motion_t rsm_odometry_cal_apply(rsm_odometry_cal_t *cal, const rsm_motion_t *u)
+{
+    rsm_motion_t v = *u;
+    if (cal != NULL) {
+        cal->turn += u->dtheta;
+        cal->travel += u->dx;
+        v.dtheta = rsm_wrap_angle(u->dtheta * (1.0f + cal->k_turn) + cal->k_drift * u->dx);
+    }
+    return v;
+}
+
+void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
+{
+    if (cal == NULL || est == NULL) {
+        return;
+    }
+    cal->ref = *est;
+    cal->have_ref = 1u;
+    cal->turn = 0.0f;
+    cal->travel = 0.0f;
+}
+
+static float clamp_abs(float v, float most)
+{
+    return v < -most ? -most : (v > most ? most : v);
+}
+
+void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
+                             float weight)
+{
+    if (cal == NULL || cfg == NULL || est == NULL) {
+        return;
+    }
+    if (cal->have_ref && cfg->memory > 0.0f && weight > 0.0f && weight <= 1.0f) {
+        const float t = cal->turn;
+        const float d = cal->travel;
+        const float e = rsm_wrap_angle(est->theta - cal->ref.theta) - t;
+        if (fabsf(e - (cal->k_turn * t + cal->k_drift * d)) <= cfg->gate_rad) {
+            const float keep = 1.0f - 1.0f / cfg->memory;
+            float a;
+            float b;
+            float c;
+            float det;
+            cal->info[0] = keep * cal->info[0] + weight * t * t;
+            cal->info[1] = keep * cal->info[1] + weight * t * d;
+            cal->info[2] = keep * cal->info[2] + weight * d * d;
+            cal->moment[0] = keep * cal->moment[0] + weight * t * e;
+            cal->moment[1] = keep * cal->moment[1] + weight * d * e;
+            /* The prior keeps the 2 x 2 system solvable (a robot that has
+             * only driven straight says nothing about its turns) and the
+             * first scans' correction small. */
+            a = cal->info[0] + cfg->prior;
+            b = cal->info[1];
+            c = cal->info[2] + cfg->prior;
+            det = a * c - b * b;
+            if (det > 0.0f) {
+                cal->k_turn = clamp_abs((c * cal->moment[0] - b * cal->moment[1]) / det, cfg->max_turn);
+                cal->k_drift = clamp_abs((a * cal->moment[1] - b * cal->moment[0]) / det, cfg->max_drift);
+                cal->used++;
+            }
+        }
+    }
+    rsm_odometry_cal_reference(cal, est);
+}

@@ -170,3 +170,88 @@ size_t rsm_points_isolated(const rsm_point_t *pts, size_t n, const rsm_point_t *
     }
     return marked;
 }
+
+/* Whether point i lies behind the chord of p and q (ranges rp, rq; ri is
+ * i's, already past the quick test), all seen from (0, 0). */
+static int behind_chord(const rsm_point_t *p, float rp, const rsm_point_t *i, float ri, const rsm_point_t *q, float rq,
+                        const rsm_occlusion_t *occ)
+{
+    const float dx = q->x - p->x;
+    const float dy = q->y - p->y;
+    const float d2 = dx * dx + dy * dy;
+    const float cross_pq = p->x * q->y - p->y * q->x;
+    const float far = rp > rq ? rp : rq;
+    const float lim = occ->tol_m + occ->slope * fabsf(cross_pq) / far;
+    float side_p;
+    float side_q;
+    float den;
+    float num;
+    if (d2 > occ->span_m * occ->span_m || d2 > lim * lim) {
+        return 0; /* not one surface across the beam */
+    }
+    /* i's beam must run between p's and q's (on the same side of each as
+     * the other): a point beside both is not hidden by them. */
+    side_p = p->x * i->y - p->y * i->x;
+    side_q = i->x * q->y - i->y * q->x;
+    if (!(side_p * cross_pq > 0.0f && side_q * cross_pq > 0.0f)) {
+        return 0;
+    }
+    /* The beam meets the chord at t * i / ri with t = ri (p x d) / (i x d). */
+    den = i->x * dy - i->y * dx;
+    num = p->x * dy - p->y * dx;
+    if (den == 0.0f) {
+        return 0;
+    }
+    return ri - occ->margin_m - occ->margin_rel * ri > ri * (num / den);
+}
+
+size_t rsm_points_occluded(const rsm_point_t *pts, size_t n, const rsm_occlusion_t *occ, uint8_t *mask)
+{
+    /* Ranges of the points i - w .. i + w, by index modulo the ring's size. */
+    float ring[2u * RSM_OCCLUSION_MAX_WINDOW + 1u];
+    const size_t size = 2u * RSM_OCCLUSION_MAX_WINDOW + 1u;
+    size_t marked = 0;
+    size_t w;
+    size_t i;
+    size_t k;
+    if (pts == NULL || occ == NULL || mask == NULL) {
+        return 0u;
+    }
+    memset(mask, 0, (n + 7u) / 8u);
+    if (occ->window == 0u || !(occ->span_m > 0.0f)) {
+        return 0u;
+    }
+    w = occ->window < RSM_OCCLUSION_MAX_WINDOW ? occ->window : RSM_OCCLUSION_MAX_WINDOW;
+    for (k = 0; k < w && k < n; ++k) {
+        ring[k % size] = sqrtf(pts[k].x * pts[k].x + pts[k].y * pts[k].y);
+    }
+    for (i = 0; i < n; ++i) {
+        float ri;
+        float need;
+        size_t a;
+        int hidden = 0;
+        if (i + w < n) {
+            ring[(i + w) % size] = sqrtf(pts[i + w].x * pts[i + w].x + pts[i + w].y * pts[i + w].y);
+        }
+        ri = ring[i % size];
+        /* Along i's beam the chord lies no nearer than its nearer end less
+         * its length (at most span_m): a point not that far behind either
+         * end is not hidden by the pair. */
+        need = ri - occ->margin_m - occ->margin_rel * ri + occ->span_m;
+        for (a = 1; a <= w && a <= i && !hidden; ++a) {
+            const float rp = ring[(i - a) % size];
+            size_t b;
+            for (b = 1; b <= w && i + b < n && !hidden; ++b) {
+                const float rq = ring[(i + b) % size];
+                if (need > rp || need > rq) {
+                    hidden = behind_chord(&pts[i - a], rp, &pts[i], ri, &pts[i + b], rq, occ);
+                }
+            }
+        }
+        if (hidden) {
+            rsm_bit_set(mask, i);
+            ++marked;
+        }
+    }
+    return marked;
+}

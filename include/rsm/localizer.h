@@ -75,11 +75,17 @@ typedef struct rsm_localizer_config {
                                      * persistent map (RSM_METHOD_MAP); tol_m 0 = off. Default
                                      * off (slope 3, window 2, agree 1; 0.1 m turns it on): see
                                      * docs/map.md for what it costs on clean logs */
+    rsm_occlusion_t occlusion;      /* returns behind a surface their neighbours span are dropped
+                                     * before matching and writing (RSM_METHOD_MAP); window 0 =
+                                     * off. Default window 2, span 0.3 m, tol 0.1 m, slope 3,
+                                     * margin 0.2 m + 5 % of the range: docs/map.md */
     rsm_grid_config_t grid;         /* cell size and marking rule */
     rsm_harris_config_t harris;
     rsm_ransac_config_t ransac;
     rsm_icp_config_t icp;
     rsm_odometry_config_t odometry; /* geometry for ticks, and process noise */
+    rsm_odometry_cal_config_t odometry_cal; /* online calibration of odometry's heading error from
+                                     * the matches (RSM_METHOD_MAP); memory 0 = off; default on */
     rsm_pose_t laser_mount;         /* the laser's pose in the robot frame; default zero */
     uint8_t laser_upside_down;      /* 1: the laser is mounted upside down (beam angles mirrored) */
     rsm_tmap_config_t tmap;         /* persistent map (RSM_METHOD_MAP) */
@@ -157,6 +163,8 @@ typedef struct rsm_localizer_counters {
     uint32_t recovered;                      /* ... whose pose was taken */
     uint32_t unconfirmed;                    /* returns kept out of the persistent map: no
                                               * neighbour confirmed them (isolation) */
+    uint32_t occluded;                       /* returns dropped: behind a surface their
+                                              * neighbours span (occlusion) */
     uint32_t unpinned;                       /* matches that left the position along the
                                               * scan's surfaces to the prediction, wholly
                                               * or in part (report.unpinned > 0) */
@@ -166,6 +174,7 @@ typedef struct rsm_localizer {
     const rsm_localizer_config_t *cfg;   /* kept by pointer */
     rsm_ekf_t ekf;
     rsm_odometry_t odo;
+    rsm_odometry_cal_t odo_cal;          /* the correction in force (RSM_METHOD_MAP) */
     /* Only one method runs per localizer, so their states share memory. */
     union {
         struct {

@@ -157,6 +157,69 @@ void rsm_odometry_jacobians(const rsm_pose_t *pose, const rsm_motion_t *u, float
  * argument is NULL. */
 void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float q[9]);
 
+/* ---- calibration of odometry's systematic heading error ----------------
+ *
+ * Wheel odometry turns by a share too much or too little (a wheel base off
+ * its nominal, tyres that slip in turns) and drifts to one side as it
+ * drives (wheels of slightly different sizes). Both are the same from one
+ * minute to the next, unlike the noise, and a scan matcher that leans on
+ * odometry's prediction leans that way every scan: wherever the scans pin
+ * the heading less (new ground, a scan full of outliers) the error adds up.
+ * The calibration fits the heading change that matching found between two
+ * scans to odometry's turn and forward travel over the same steps,
+ *     found - turn = k_turn * turn + k_drift * travel,
+ * by least squares with old scans fading, and corrects each later increment:
+ *     dtheta' = dtheta * (1 + k_turn) + k_drift * dx. */
+typedef struct rsm_odometry_cal_config {
+    float memory;    /* scans over which the evidence fades (each weighs 1 - 1/memory of the
+                      * last); 0 = off, else >= 2; default 1024 */
+    float prior;     /* evidence for no correction before any scan, in rad^2 of turn and m^2
+                      * of travel (a turn of 0.1 rad is 0.01); > 0; default 0.01 */
+    float max_turn;  /* |k_turn| at most (a share); in (0, 1); default 0.25 */
+    float max_drift; /* |k_drift| at most, rad per metre; > 0; default 0.1 */
+    float gate_rad;  /* a scan whose heading change the correction misses by more than this
+                      * (a slip, a wrong match) is left out; > 0; default 0.1 */
+} rsm_odometry_cal_config_t;
+
+typedef struct rsm_odometry_cal {
+    float info[3];    /* fading sums of w (turn, travel)^T (turn, travel): tt, td, dd */
+    float moment[2];  /* ... and of w (turn, travel) * (found - turn) */
+    float k_turn;     /* the correction in force */
+    float k_drift;
+    float turn;       /* odometry's raw turn and forward travel since the reference */
+    float travel;
+    rsm_pose_t ref;   /* the estimate at the reference scan */
+    uint8_t have_ref;
+    uint32_t used;    /* scans that updated the correction */
+} rsm_odometry_cal_t;
+
+rsm_odometry_cal_config_t rsm_odometry_cal_config_default(void);
+
+/* RSM_OK if cfg is usable (see the fields), else RSM_ERR_INVAL with the
+ * first bad field's name ("odometry_cal.memory", a static string) in
+ * *field when field is not NULL. Reads only. */
+int rsm_odometry_cal_config_check(const rsm_odometry_cal_config_t *cfg, const char **field);
+
+/* No correction, no evidence, no reference. Nothing if cal is NULL. */
+void rsm_odometry_cal_init(rsm_odometry_cal_t *cal);
+
+/* Counts the raw increment u towards the next update and returns it
+ * corrected (only dtheta changes). u returned as it is if cal is NULL. */
+rsm_motion_t rsm_odometry_cal_apply(rsm_odometry_cal_t *cal, const rsm_motion_t *u);
+
+/* Makes est the reference the next update measures from (the first scan,
+ * or one whose estimate jumped: a recovery) and restarts the sums. */
+void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est);
+
+/* A scan matched at est: the heading change since the reference, less
+ * odometry's raw turn, is one more equation, weighted by weight (the
+ * share of the heading's variance the scan removed, 0..1; 0 adds
+ * nothing), unless it misses the correction in force by more than
+ * gate_rad. Then est becomes the reference. Without a reference it only
+ * takes est as one. */
+void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
+                             float weight);
+
 #ifdef __cplusplus
 }
 #endif

@@ -93,6 +93,34 @@ typedef struct rsm_isolation {
 size_t rsm_points_isolated(const rsm_point_t *pts, size_t n, const rsm_point_t *origin, const rsm_isolation_t *iso,
                            uint8_t *mask);
 
+/* Parameters of rsm_points_occluded. */
+#define RSM_OCCLUSION_MAX_WINDOW 4u
+
+typedef struct rsm_occlusion {
+    uint8_t window;   /* neighbours looked at on each side, 0 = mark nothing, 1..RSM_OCCLUSION_MAX_WINDOW */
+    float span_m;     /* two neighbours at most this far apart can hide what lies behind them */
+    float tol_m;      /* ... and at most tol_m + slope * (the gap between their beams at the */
+    float slope;      /*     nearer one's range): one surface, seen at up to acos(1/slope) */
+    float margin_m;   /* a point this far behind their chord, plus margin_rel of its range, */
+    float margin_rel; /* is marked */
+} rsm_occlusion_t;
+
+/* Marks the points (in beam order, as rsm_scan_to_points gives them, in the
+ * laser's frame: seen from (0, 0)) that lie behind a surface two of their
+ * neighbours span across their beam: for neighbours p (up to `window`
+ * before) and q (up to `window` after) no farther apart than span_m and
+ * tol_m + slope * gap, a point whose beam runs between theirs and whose
+ * range exceeds the distance along that beam to the chord p-q by more
+ * than margin_m + margin_rel * range. A laser cannot see through a wall,
+ * so such a return is a phantom (a spurious echo, an outlier) or was seen
+ * through a gap narrower than span_m: matched or written into a map it
+ * would pull the pose towards whatever lies behind the wall and wear the
+ * wall down with its beam. A doorway or a gap between furniture wider than
+ * span_m is seen through and kept. Sets bit k of mask (n bits, all
+ * written) for each marked point and returns how many. Uses no more
+ * than window ranges on either side of a point (no scratch memory). */
+size_t rsm_points_occluded(const rsm_point_t *pts, size_t n, const rsm_occlusion_t *occ, uint8_t *mask);
+
 #ifdef __cplusplus
 }
 #endif

@@ -388,6 +388,11 @@ void test_localizer_init_should_reject_bad_configs(void)
     BAD(map_update_rad, NAN);
     BAD(recover_ratio, 1.5f);
     BAD(recover_m, 100.0f);
+    BAD(occlusion.window, (uint8_t)(RSM_OCCLUSION_MAX_WINDOW + 1u));
+    BAD(occlusion.span_m, 0.0f);
+    BAD(occlusion.margin_rel, 1.0f);
+    BAD(odometry_cal.memory, 1.0f);
+    BAD(odometry_cal.max_turn, 0.0f);
     /* The paper's RANSAC part only for the paper's method. */
     c = cfg;
     c.ransac.confidence = 1.0f;
@@ -469,6 +474,31 @@ static void check_loop(rsm_method_t method)
 void test_localizer_scan_should_beat_odometry_on_a_synthetic_loop(void)
 {
     check_loop(RSM_METHOD_MAP);
+    /* Exact ranges: no return lies behind a surface its neighbours span. */
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.occluded);
+}
+
+void test_localizer_scan_should_learn_odometrys_heading_drift(void)
+{
+    /* odo_err drifts 0.05 rad per metre to the left and turns exactly: the
+     * calibration learns to turn each step back by that much. */
+    char msg[160];
+    run_result_t with;
+    run_result_t without;
+    with = run(&loc, RSM_METHOD_MAP, NULL);
+    snprintf(msg, sizeof msg, "turn %+.4f, drift %+.4f rad/m from %u scans; final %.3f m, %.2f deg",
+             (double)loc.odo_cal.k_turn, (double)loc.odo_cal.k_drift, (unsigned)loc.odo_cal.used,
+             (double)with.final_err_m, (double)(with.final_err_rad / DEG));
+    TEST_MESSAGE(msg);
+    TEST_ASSERT_FLOAT_WITHIN_MESSAGE(0.01f, -odo_err.drift_rad_per_m, loc.odo_cal.k_drift, msg);
+    TEST_ASSERT_FLOAT_WITHIN_MESSAGE(0.02f, 0.0f, loc.odo_cal.k_turn, msg);
+    TEST_ASSERT_TRUE_MESSAGE(loc.odo_cal.used > (uint32_t)(path_len / 2u), msg);
+    /* Off: nothing learnt, nothing corrected. */
+    cfg.odometry_cal.memory = 0.0f;
+    without = run(&loc, RSM_METHOD_MAP, NULL);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, loc.odo_cal.k_drift);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.odo_cal.used);
+    (void)without;
 }
 
 void test_localizer_scan_should_beat_odometry_on_a_synthetic_loop_with_the_papers_method(void)
@@ -580,6 +610,8 @@ void test_localizer_scan_should_track_with_30_percent_outliers(void)
 void test_localizer_scan_should_track_with_43_percent_outliers(void)
 {
     check_outliers(RSM_METHOD_MAP, 0.43f);
+    /* Outliers beyond the room's walls are dropped before matching. */
+    TEST_ASSERT_GREATER_THAN_UINT32(path_len, loc.counters.occluded);
 }
 
 void test_localizer_scan_should_keep_unconfirmed_and_hidden_returns_out_of_the_map(void)
@@ -1316,6 +1348,7 @@ int main(void)
     RUN_TEST(test_localizer_init_should_refuse_a_caller_built_with_other_capacities);
     RUN_TEST(test_localizer_init_should_reject_bad_configs);
     RUN_TEST(test_localizer_scan_should_beat_odometry_on_a_synthetic_loop);
+    RUN_TEST(test_localizer_scan_should_learn_odometrys_heading_drift);
     RUN_TEST(test_localizer_scan_should_beat_odometry_on_a_synthetic_loop_with_the_papers_method);
     RUN_TEST(test_localizer_scan_should_run_the_icp_baseline);
     RUN_TEST(test_localizer_scan_should_track_with_30_percent_outliers);

@@ -552,6 +552,145 @@ void test_noise_should_grow_with_travel_and_turn(void)
     TEST_ASSERT_EQUAL_FLOAT(42.0f, q[0]);
 }
 
+/* ---- calibration of the heading error ------------------------------------ */
+
+/* A robot whose odometry turns (1 + over) times the truth and drifts
+ * drift rad per metre forward: the raw increment for a true step. */
+static rsm_motion_t biased(float dx, float true_turn, float over, float drift)
+{
+    rsm_motion_t u;
+    u.dx = dx;
+    u.dy = 0.0f;
+    u.dtheta = true_turn * (1.0f + over) + drift * dx;
+    return u;
+}
+
+/* Drives n steps of a wavy path (turns of up to 0.06 rad, 4 cm forward,
+ * now and then backwards) through the calibration, each step matched at the
+ * true heading with weight w; returns the largest error of a corrected turn
+ * over the last quarter. */
+static float drive(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *c, uint32_t n, float over, float drift,
+                   float w)
+{
+    rsm_pose_t est = {0.0f, 0.0f, 0.0f};
+    float worst = 0.0f;
+    uint32_t k;
+    rsm_odometry_cal_update(cal, c, &est, w); /* the first scan: a reference only */
+    for (k = 0; k < n; ++k) {
+        const float turn = 0.06f * sinf(0.05f * (float)k);
+        const float dx = (k / 200u) % 5u == 4u ? -0.02f : 0.04f;
+        const rsm_motion_t u = biased(dx, turn, over, drift);
+        const rsm_motion_t v = rsm_odometry_cal_apply(cal, &u);
+        TEST_ASSERT_EQUAL_FLOAT(u.dx, v.dx);
+        TEST_ASSERT_EQUAL_FLOAT(u.dy, v.dy);
+        if (k >= 3u * n / 4u && fabsf(v.dtheta - turn) > worst) {
+            worst = fabsf(v.dtheta - turn);
+        }
+        est.theta = rsm_wrap_angle(est.theta + turn);
+        rsm_odometry_cal_update(cal, c, &est, w);
+    }
+    return worst;
+}
+
+void test_odometry_cal_should_learn_a_turn_scale_and_a_drift(void)
+{
+    const rsm_odometry_cal_config_t c = rsm_odometry_cal_config_default();
+    rsm_odometry_cal_t cal;
+    float worst;
+    rsm_odometry_cal_init(&cal);
+    /* Turns 6 % too far, drifts 0.03 rad (1.7 deg) per metre to the left. */
+    worst = drive(&cal, &c, 3000u, 0.06f, 0.03f, 1.0f);
+    TEST_ASSERT_FLOAT_WITHIN(0.002f, 1.0f / 1.06f - 1.0f, cal.k_turn);
+    TEST_ASSERT_FLOAT_WITHIN(0.002f, -0.03f, cal.k_drift);
+    TEST_ASSERT_EQUAL_UINT32(3000u, cal.used);
+    /* Uncorrected a step would be off by up to 4.8 mrad. */
+    TEST_ASSERT_TRUE(worst < 2.0e-4f);
+}
+
+void test_odometry_cal_should_stay_near_zero_for_true_odometry_and_weigh_scans(void)
+{
+    const rsm_odometry_cal_config_t c = rsm_odometry_cal_config_default();
+    rsm_odometry_cal_t cal;
+    rsm_odometry_cal_t light;
+    rsm_odometry_cal_init(&cal);
+    (void)drive(&cal, &c, 2000u, 0.0f, 0.0f, 1.0f);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, cal.k_turn);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, cal.k_drift);
+    /* Scans that pin the heading less move it more slowly: after 50 steps
+     * at weight 0.05 the correction is further from the truth than after 50
+     * at weight 1, and weight 0 adds nothing at all. */
+    rsm_odometry_cal_init(&cal);
+    rsm_odometry_cal_init(&light);
+    (void)drive(&cal, &c, 50u, 0.06f, 0.0f, 1.0f);
+    (void)drive(&light, &c, 50u, 0.06f, 0.0f, 0.05f);
+    TEST_ASSERT_TRUE(cal.k_turn < light.k_turn && light.k_turn < 0.0f);
+    rsm_odometry_cal_init(&light);
+    (void)drive(&light, &c, 50u, 0.06f, 0.0f, 0.0f);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, light.k_turn);
+    TEST_ASSERT_EQUAL_UINT32(0u, light.used);
+}
+
+void test_odometry_cal_should_gate_jumps_and_bound_the_correction(void)
+{
+    const rsm_odometry_cal_config_t c = rsm_odometry_cal_config_default();
+    rsm_odometry_cal_t cal;
+    rsm_pose_t est = {0.0f, 0.0f, 0.0f};
+    rsm_motion_t u = {0.04f, 0.0f, 0.05f};
+    float before;
+    rsm_odometry_cal_init(&cal);
+    (void)drive(&cal, &c, 500u, 0.06f, 0.0f, 1.0f);
+    before = cal.k_turn;
+    /* A step that matching placed 0.3 rad from where odometry and the
+     * correction say (a slip, a wrong match) is not learnt from... */
+    est.theta = 1.0f;
+    rsm_odometry_cal_reference(&cal, &est);
+    (void)rsm_odometry_cal_apply(&cal, &u);
+    est.theta = 1.0f + 0.05f + 0.3f;
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f);
+    TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
+    TEST_ASSERT_EQUAL_UINT32(500u, cal.used);
+    /* ...but it becomes the reference for the next. */
+    TEST_ASSERT_EQUAL_FLOAT(est.theta, cal.ref.theta);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, cal.turn);
+    /* Odometry that turns half as far again as the truth is corrected by
+     * no more than max_turn, and a drift of 0.3 rad/m by max_drift. */
+    rsm_odometry_cal_init(&cal);
+    (void)drive(&cal, &c, 3000u, 0.5f, 0.3f, 1.0f);
+    TEST_ASSERT_EQUAL_FLOAT(-c.max_turn, cal.k_turn);
+    TEST_ASSERT_EQUAL_FLOAT(-c.max_drift, cal.k_drift);
+}
+
+void test_odometry_cal_config_check_should_name_the_bad_field(void)
+{
+    rsm_odometry_cal_config_t c = rsm_odometry_cal_config_default();
+    const char *field = NULL;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_cal_config_check(&c, &field));
+    c.memory = 0.0f; /* off */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_cal_config_check(&c, &field));
+#define BAD(member, value, name)                                                          \
+    do {                                                                                  \
+        c = rsm_odometry_cal_config_default();                                            \
+        c.member = (value);                                                               \
+        field = NULL;                                                                     \
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_cal_config_check(&c, &field)); \
+        TEST_ASSERT_EQUAL_STRING(name, field);                                            \
+    } while (0)
+    BAD(memory, 1.5f, "odometry_cal.memory");
+    BAD(memory, -3.0f, "odometry_cal.memory");
+    BAD(memory, NAN, "odometry_cal.memory");
+    BAD(prior, 0.0f, "odometry_cal.prior");
+    BAD(max_turn, 1.0f, "odometry_cal.max_turn");
+    BAD(max_drift, INFINITY, "odometry_cal.max_drift");
+    BAD(gate_rad, -0.1f, "odometry_cal.gate_rad");
+#undef BAD
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_cal_config_check(NULL, &field));
+    TEST_ASSERT_EQUAL_STRING("odometry_cal", field);
+    /* NULL arguments are ignored. */
+    rsm_odometry_cal_init(NULL);
+    rsm_odometry_cal_reference(NULL, NULL);
+    rsm_odometry_cal_update(NULL, &c, NULL, 1.0f);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -575,5 +714,9 @@ int main(void)
     RUN_TEST(test_apply_should_chain_with_ticks);
     RUN_TEST(test_jacobians_should_match_finite_differences);
     RUN_TEST(test_noise_should_grow_with_travel_and_turn);
+    RUN_TEST(test_odometry_cal_should_learn_a_turn_scale_and_a_drift);
+    RUN_TEST(test_odometry_cal_should_stay_near_zero_for_true_odometry_and_weigh_scans);
+    RUN_TEST(test_odometry_cal_should_gate_jumps_and_bound_the_correction);
+    RUN_TEST(test_odometry_cal_config_check_should_name_the_bad_field);
     return UNITY_END();
 }

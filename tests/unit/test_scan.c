@@ -322,6 +322,19 @@ void test_points_isolated_should_let_a_pair_confirm_itself_and_honour_agree(void
     TEST_ASSERT_TRUE(marked(mask, 10u) && marked(mask, 11u));
 }
 
+/* Nine beams, a degree apart, on the wall through (3, 0) along direction 25
+ * degrees: 65 degrees incidence. */
+static void steep_wall(rsm_point_t p[9])
+{
+    size_t k;
+    for (k = 0; k < 9u; ++k) {
+        const float a = ((float)k - 4.0f) * 0.0174533f;
+        const float t = 3.0f * sinf(a) / sinf(0.436332f - a);
+        p[k].x = 3.0f + t * cosf(0.436332f);
+        p[k].y = t * sinf(0.436332f);
+    }
+}
+
 void test_points_isolated_should_accept_steep_walls_up_to_the_slope(void)
 {
     /* A wall at 25 degrees to the beams (65 degrees incidence): consecutive
@@ -329,16 +342,9 @@ void test_points_isolated_should_accept_steep_walls_up_to_the_slope(void)
     rsm_point_t p[9];
     uint8_t mask[2];
     rsm_isolation_t iso = isolation();
-    size_t k;
     iso.tol_m = 0.01f;
     iso.window = 1u;
-    for (k = 0; k < 9u; ++k) {
-        /* Wall through (3, 0) along direction 25 degrees. */
-        const float a = ((float)k - 4.0f) * 0.0174533f;
-        const float t = 3.0f * sinf(a) / sinf(0.436332f - a);
-        p[k].x = 3.0f + t * cosf(0.436332f);
-        p[k].y = t * sinf(0.436332f);
-    }
+    steep_wall(p);
     TEST_ASSERT_EQUAL_size_t(0u, rsm_points_isolated(p, 9u, NULL, &iso, mask));
     iso.slope = 1.5f;
     TEST_ASSERT_EQUAL_size_t(9u, rsm_points_isolated(p, 9u, NULL, &iso, mask));
@@ -366,6 +372,148 @@ void test_points_isolated_should_mark_nothing_when_off(void)
     TEST_ASSERT_EQUAL_size_t(1u, rsm_points_isolated(p, 1u, NULL, &iso, mask));
 }
 
+/* ---- rsm_points_occluded ------------------------------------------------- */
+
+static rsm_occlusion_t occlusion(void)
+{
+    rsm_occlusion_t occ;
+    occ.window = 2u;
+    occ.span_m = 0.3f;
+    occ.tol_m = 0.1f;
+    occ.slope = 3.0f;
+    occ.margin_m = 0.2f;
+    occ.margin_rel = 0.05f;
+    return occ;
+}
+
+/* Beam k at (k - n/2) degrees, at range r[k], seen from (0, 0). */
+static void polar_points(rsm_point_t *p, const float *r, size_t n)
+{
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        const float a = ((float)k - (float)(n / 2u)) * 0.0174533f;
+        p[k].x = r[k] * cosf(a);
+        p[k].y = r[k] * sinf(a);
+    }
+}
+
+/* Ranges of the wall x = 2 (as wall_points). */
+static void wall_ranges(float *r, size_t n)
+{
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        r[k] = 2.0f / cosf(((float)k - (float)(n / 2u)) * 0.0174533f);
+    }
+}
+
+void test_points_occluded_should_mark_returns_behind_a_wall_and_nothing_else(void)
+{
+    /* Beams 5 and 12, 13 (two in a row: each has a wall return within two
+     * beams on either side) see 1.5 to 4 m beyond the wall: phantoms. Beam
+     * 17 sees 1.2 m short of it (a thin object in front is possible) and
+     * beam 8 only 0.15 m beyond it (range noise): neither is marked. */
+    rsm_point_t p[21];
+    float r[21];
+    uint8_t mask[3];
+    const rsm_occlusion_t occ = occlusion();
+    size_t k;
+    wall_ranges(r, 21u);
+    r[5] += 4.0f;
+    r[12] += 1.5f;
+    r[13] += 2.5f;
+    r[17] -= 1.2f;
+    r[8] += 0.15f;
+    polar_points(p, r, 21u);
+    memset(mask, 0xFF, sizeof mask); /* every bit of the n is written */
+    TEST_ASSERT_EQUAL_size_t(3u, rsm_points_occluded(p, 21u, &occ, mask));
+    for (k = 0; k < 21u; ++k) {
+        TEST_ASSERT_EQUAL_INT(k == 5u || k == 12u || k == 13u, marked(mask, k));
+    }
+    /* With one neighbour a side, a phantom beside another is not seen. */
+    {
+        rsm_occlusion_t one = occ;
+        one.window = 1u;
+        TEST_ASSERT_EQUAL_size_t(1u, rsm_points_occluded(p, 21u, &one, mask));
+        TEST_ASSERT_TRUE(marked(mask, 5u));
+    }
+}
+
+void test_points_occluded_should_keep_what_is_seen_through_a_doorway_or_past_an_edge(void)
+{
+    /* A wall 2 m ahead with a doorway 0.8 m wide (beams 28 to 50 see a
+     * wall 5 m away through it), and on the right an edge: the wall ends at
+     * beam 70 and beams 71 on see a wall 6 m away. Nothing is marked. */
+    rsm_point_t p[81];
+    float r[81];
+    uint8_t mask[11];
+    const rsm_occlusion_t occ = occlusion();
+    size_t k;
+    wall_ranges(r, 81u);
+    for (k = 0; k < 81u; ++k) {
+        const float c = cosf(((float)k - 40.0f) * 0.0174533f);
+        if (k >= 28u && k <= 50u) {
+            r[k] = 5.0f / c;
+        } else if (k >= 71u) {
+            r[k] = 6.0f / c;
+        }
+    }
+    polar_points(p, r, 81u);
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 81u, &occ, mask));
+    /* A gap of two beams (7 cm) is not a doorway: what it sees is marked,
+     * as the price of catching phantoms two in a row. */
+    r[60] = 5.0f;
+    r[61] = 5.0f;
+    polar_points(p, r, 81u);
+    TEST_ASSERT_EQUAL_size_t(2u, rsm_points_occluded(p, 81u, &occ, mask));
+    TEST_ASSERT_TRUE(marked(mask, 60u) && marked(mask, 61u));
+}
+
+void test_points_occluded_should_follow_a_steep_wall_up_to_the_slope(void)
+{
+    /* The wall at 65 degrees incidence of the isolation test, with a
+     * phantom 2 m behind beam 4: its neighbours lie 1.9 to 2.6 beam gaps
+     * apart, one surface for slope 3, not for slope 1. */
+    rsm_point_t p[9];
+    uint8_t mask[2];
+    rsm_occlusion_t occ = occlusion();
+    steep_wall(p);
+    p[4].x += 2.0f;
+    occ.tol_m = 0.01f;
+    occ.window = 1u;
+    TEST_ASSERT_EQUAL_size_t(1u, rsm_points_occluded(p, 9u, &occ, mask));
+    TEST_ASSERT_TRUE(marked(mask, 4u));
+    occ.slope = 1.0f;
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 9u, &occ, mask));
+}
+
+void test_points_occluded_should_mark_nothing_when_off_or_without_neighbours(void)
+{
+    rsm_point_t p[5];
+    float r[5];
+    uint8_t mask[1];
+    rsm_occlusion_t occ = occlusion();
+    wall_ranges(r, 5u);
+    r[2] += 3.0f;
+    polar_points(p, r, 5u);
+    TEST_ASSERT_EQUAL_size_t(1u, rsm_points_occluded(p, 5u, &occ, mask));
+    occ.window = 0u;
+    mask[0] = 0xFF;
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 5u, &occ, mask));
+    TEST_ASSERT_EQUAL_HEX8(0u, mask[0]);
+    occ.window = 2u;
+    occ.span_m = 0.0f;
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 5u, &occ, mask));
+    occ.span_m = 0.3f;
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(NULL, 5u, &occ, mask));
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 5u, NULL, mask));
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 5u, &occ, NULL));
+    /* The first and last points have no neighbour on one side; a window
+     * wider than the most allowed is taken as the most. */
+    TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 2u, &occ, mask));
+    occ.window = 200u;
+    TEST_ASSERT_EQUAL_size_t(1u, rsm_points_occluded(p, 5u, &occ, mask));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -384,5 +532,9 @@ int main(void)
     RUN_TEST(test_points_isolated_should_let_a_pair_confirm_itself_and_honour_agree);
     RUN_TEST(test_points_isolated_should_accept_steep_walls_up_to_the_slope);
     RUN_TEST(test_points_isolated_should_mark_nothing_when_off);
+    RUN_TEST(test_points_occluded_should_mark_returns_behind_a_wall_and_nothing_else);
+    RUN_TEST(test_points_occluded_should_keep_what_is_seen_through_a_doorway_or_past_an_edge);
+    RUN_TEST(test_points_occluded_should_follow_a_steep_wall_up_to_the_slope);
+    RUN_TEST(test_points_occluded_should_mark_nothing_when_off_or_without_neighbours);
     return UNITY_END();
 }

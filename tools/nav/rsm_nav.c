@@ -97,7 +97,18 @@
     F("iso_tol", isolation.tol_m) \
     F("iso_slope", isolation.slope) \
     U("iso_window", isolation.window, uint8_t) \
-    U("iso_agree", isolation.agree, uint8_t)
+    U("iso_agree", isolation.agree, uint8_t) \
+    U("occl_window", occlusion.window, uint8_t) \
+    F("occl_span", occlusion.span_m) \
+    F("occl_tol", occlusion.tol_m) \
+    F("occl_slope", occlusion.slope) \
+    F("occl_margin", occlusion.margin_m) \
+    F("occl_margin_rel", occlusion.margin_rel) \
+    F("odo_cal_memory", odometry_cal.memory) \
+    F("odo_cal_prior", odometry_cal.prior) \
+    F("odo_cal_max_turn", odometry_cal.max_turn) \
+    F("odo_cal_max_drift", odometry_cal.max_drift) \
+    F("odo_cal_gate", odometry_cal.gate_rad)
 
 /* Prints the --set keys, comma separated, wrapped before 80 columns. */
 static void print_set_keys(FILE *f)
@@ -932,8 +943,8 @@ static int write_summary_json(nav_t *nav, const char *path)
     fprintf(f, "  \"timestamps\": {\"clamped\": %llu, \"odd\": %llu, \"jumps\": %llu},\n",
             (unsigned long long)nav->repair.clamped, (unsigned long long)nav->repair.odd_stamps,
             (unsigned long long)nav->repair.time_jumps);
-    fprintf(f, "  \"drops\": {\"nan\": %u, \"too_short\": %u, \"too_long\": %u},\n", (unsigned)c->drops.nan,
-            (unsigned)c->drops.too_short, (unsigned)c->drops.too_long);
+    fprintf(f, "  \"drops\": {\"nan\": %u, \"too_short\": %u, \"too_long\": %u, \"occluded\": %u},\n",
+            (unsigned)c->drops.nan, (unsigned)c->drops.too_short, (unsigned)c->drops.too_long, (unsigned)c->occluded);
     fprintf(f, "  \"odometry_calibrations\": %u,\n", nav->calibrations);
     {
         const rsm_sync_counters_t *a = &nav->sync.counters;
@@ -960,6 +971,8 @@ static int write_summary_json(nav_t *nav, const char *path)
                 (unsigned)m->counters.allocated, (unsigned)m->counters.evicted, (unsigned)m->counters.dropped,
                 (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed,
                 (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->unpinned);
+        fprintf(f, ",\n  \"heading_correction\": {\"turn\": %.5f, \"drift_rad_per_m\": %.5f, \"scans\": %u}",
+                (double)nav->loc.odo_cal.k_turn, (double)nav->loc.odo_cal.k_drift, (unsigned)nav->loc.odo_cal.used);
     }
     fprintf(f, "\n}\n");
     return fclose(f) == 0 ? 0 : -1;
@@ -988,6 +1001,13 @@ static void print_summary(nav_t *nav)
         printf("  recovery        %u searches, %u taken\n", (unsigned)c->searches, (unsigned)c->recovered);
         printf("  unpinned        %u matches left the position along the scan's surfaces to odometry\n",
                (unsigned)c->unpinned);
+        printf("  occluded        %u returns behind a surface their neighbours span, dropped\n",
+               (unsigned)c->occluded);
+        if (nav->cfg.odometry_cal.memory > 0.0f) {
+            printf("  odometry turns  corrected by %+.2f %%, heading drift %+.3f deg/m (from %u scans)\n",
+                   (double)(nav->loc.odo_cal.k_turn * 100.0f), (double)(nav->loc.odo_cal.k_drift * 57.29578f),
+                   (unsigned)nav->loc.odo_cal.used);
+        }
     }
     printf("  timestamps      %llu clamped (went backwards), %llu odd (far from both neighbours: replaced),"
            " %llu jumps of the clock\n",
