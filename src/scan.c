@@ -171,23 +171,24 @@ size_t rsm_points_isolated(const rsm_point_t *pts, size_t n, const rsm_point_t *
     return marked;
 }
 
-/* Whether point i lies behind the chord of p and q (ranges rp, rq; ri is
- * i's, already past the quick test), all seen from (0, 0). */
-static int behind_chord(const rsm_point_t *p, float rp, const rsm_point_t *i, float ri, const rsm_point_t *q, float rq,
-                        const rsm_occlusion_t *occ)
+/* Whether point i (range ri; need = ri less the margins) lies behind the
+ * chord of p and q (ranges rp, rq, far the larger), all seen from (0, 0).
+ * No divisions: each would cost more than the rest of the test on an M4. */
+static int behind_chord(const rsm_point_t *p, const rsm_point_t *i, float ri, float need, const rsm_point_t *q,
+                        float far, const rsm_occlusion_t *occ)
 {
     const float dx = q->x - p->x;
     const float dy = q->y - p->y;
     const float d2 = dx * dx + dy * dy;
     const float cross_pq = p->x * q->y - p->y * q->x;
-    const float far = rp > rq ? rp : rq;
-    const float lim = occ->tol_m + occ->slope * fabsf(cross_pq) / far;
+    /* One surface: |pq| <= tol_m + slope * |p x q| / far, times far. */
+    const float lim = occ->tol_m * far + occ->slope * fabsf(cross_pq);
     float side_p;
     float side_q;
     float den;
     float num;
-    if (d2 > occ->span_m * occ->span_m || d2 > lim * lim) {
-        return 0; /* not one surface across the beam */
+    if (d2 > occ->span_m * occ->span_m || d2 * far * far > lim * lim) {
+        return 0;
     }
     /* i's beam must run between p's and q's (on the same side of each as
      * the other): a point beside both is not hidden by them. */
@@ -196,20 +197,24 @@ static int behind_chord(const rsm_point_t *p, float rp, const rsm_point_t *i, fl
     if (!(side_p * cross_pq > 0.0f && side_q * cross_pq > 0.0f)) {
         return 0;
     }
-    /* The beam meets the chord at t * i / ri with t = ri (p x d) / (i x d). */
+    /* The beam meets the chord at range t = ri (p x d) / (i x d). */
     den = i->x * dy - i->y * dx;
     num = p->x * dy - p->y * dx;
-    if (den == 0.0f) {
-        return 0;
-    }
-    return ri - occ->margin_m - occ->margin_rel * ri > ri * (num / den);
+    return den > 0.0f ? need * den > ri * num : (den < 0.0f && need * den < ri * num);
 }
+
+/* A pair of neighbours whose beams are farther apart than 10 degrees is
+ * not taken as a surface across a beam between them. */
+#define OCCLUSION_COS_MAX_ANGLE 0.9848f
+/* The ring of ranges: a power of two above 2 * RSM_OCCLUSION_MAX_WINDOW. */
+#define OCCLUSION_RING 16u
+RSM_STATIC_ASSERT(occlusion_ring_holds_a_window, OCCLUSION_RING > 2u * RSM_OCCLUSION_MAX_WINDOW);
 
 size_t rsm_points_occluded(const rsm_point_t *pts, size_t n, const rsm_occlusion_t *occ, uint8_t *mask)
 {
     /* Ranges of the points i - w .. i + w, by index modulo the ring's size. */
-    float ring[2u * RSM_OCCLUSION_MAX_WINDOW + 1u];
-    const size_t size = 2u * RSM_OCCLUSION_MAX_WINDOW + 1u;
+    float ring[OCCLUSION_RING];
+    const size_t last = OCCLUSION_RING - 1u;
     size_t marked = 0;
     size_t w;
     size_t i;
@@ -223,28 +228,56 @@ size_t rsm_points_occluded(const rsm_point_t *pts, size_t n, const rsm_occlusion
     }
     w = occ->window < RSM_OCCLUSION_MAX_WINDOW ? occ->window : RSM_OCCLUSION_MAX_WINDOW;
     for (k = 0; k < w && k < n; ++k) {
-        ring[k % size] = sqrtf(pts[k].x * pts[k].x + pts[k].y * pts[k].y);
+        ring[k & last] = sqrtf(pts[k].x * pts[k].x + pts[k].y * pts[k].y);
     }
     for (i = 0; i < n; ++i) {
+        const size_t lo = i < w ? 0u : i - w;
+        const size_t hi = i + w < n ? i + w : n - 1u;
         float ri;
         float need;
+        float nearest;
         size_t a;
         int hidden = 0;
         if (i + w < n) {
-            ring[(i + w) % size] = sqrtf(pts[i + w].x * pts[i + w].x + pts[i + w].y * pts[i + w].y);
+            ring[(i + w) & last] = sqrtf(pts[i + w].x * pts[i + w].x + pts[i + w].y * pts[i + w].y);
         }
-        ri = ring[i % size];
-        /* Along i's beam the chord lies no nearer than its nearer end less
-         * its length (at most span_m): a point not that far behind either
-         * end is not hidden by the pair. */
-        need = ri - occ->margin_m - occ->margin_rel * ri + occ->span_m;
+        if (i == 0u || i + 1u >= n) {
+            continue; /* no neighbour on one side */
+        }
+        ri = ring[i & last];
+        need = ri - occ->margin_m - occ->margin_rel * ri;
+        /* Along a beam between two neighbours' the chord lies at least
+         * min(rp, rq) cos(angle p q) away: a point not that far behind the
+         * nearest neighbour (most are not) is hidden by no pair. */
+        nearest = ring[(i - 1u) & last];
+        for (k = lo; k + 1u < i; ++k) {
+            nearest = ring[k & last] < nearest ? ring[k & last] : nearest;
+        }
+        for (k = i + 1u; k <= hi; ++k) {
+            nearest = ring[k & last] < nearest ? ring[k & last] : nearest;
+        }
+        if (!(need > OCCLUSION_COS_MAX_ANGLE * nearest)) {
+            continue;
+        }
         for (a = 1; a <= w && a <= i && !hidden; ++a) {
-            const float rp = ring[(i - a) % size];
+            const rsm_point_t *p = &pts[i - a];
+            const float rp = ring[(i - a) & last];
             size_t b;
             for (b = 1; b <= w && i + b < n && !hidden; ++b) {
-                const float rq = ring[(i + b) % size];
-                if (need > rp || need > rq) {
-                    hidden = behind_chord(&pts[i - a], rp, &pts[i], ri, &pts[i + b], rq, occ);
+                const rsm_point_t *q = &pts[i + b];
+                const float rq = ring[(i + b) & last];
+                const float far = rp > rq ? rp : rq;
+                float dot;
+                /* Ranges further apart than span_m: not one surface (an
+                 * edge, the commonest case here), known without p and q. */
+                if (fabsf(rp - rq) > occ->span_m) {
+                    continue;
+                }
+                dot = p->x * q->x + p->y * q->y;
+                /* The same bound for this pair ((p . q) / far), and the
+                 * pair's angle within the most allowed. */
+                if (need * far > dot && dot >= OCCLUSION_COS_MAX_ANGLE * rp * rq) {
+                    hidden = behind_chord(p, &pts[i], ri, need, q, far, occ);
                 }
             }
         }

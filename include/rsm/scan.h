@@ -109,7 +109,8 @@ typedef struct rsm_occlusion {
  * laser's frame: seen from (0, 0)) that lie behind a surface two of their
  * neighbours span across their beam: for neighbours p (up to `window`
  * before) and q (up to `window` after) no farther apart than span_m and
- * tol_m + slope * gap, a point whose beam runs between theirs and whose
+ * tol_m + slope * gap, whose beams are at most 10 degrees apart, a point
+ * whose beam runs between theirs and whose
  * range exceeds the distance along that beam to the chord p-q by more
  * than margin_m + margin_rel * range. A laser cannot see through a wall,
  * so such a return is a phantom (a spurious echo, an outlier) or was seen
