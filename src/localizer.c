@@ -203,6 +203,7 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
 {
     float q[9];
     rsm_motion_t v;
+    int calibrated;
     if (loc == NULL || u == NULL) {
         return RSM_ERR_INVAL;
     }
@@ -210,16 +211,17 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
     }
-    if (loc->cfg->method == RSM_METHOD_MAP && loc->cfg->odometry_cal.memory > 0.0f) {
-        /* Odometry's systematic heading error, as matching has found it. */
-        v = rsm_odometry_cal_apply(&loc->odo_cal, u);
-        u = &v;
-    }
-    rsm_odometry_noise(&loc->odo.cfg, u, q);
+    calibrated = loc->cfg->method == RSM_METHOD_MAP && loc->cfg->odometry_cal.memory > 0.0f;
+    /* Odometry's systematic heading error, as matching has found it. */
+    v = calibrated ? rsm_odometry_cal_apply(&loc->odo_cal, u) : *u;
+    rsm_odometry_noise(&loc->odo.cfg, &v, q);
     /* No process noise before the first scan (see localizer.h). */
-    if (rsm_ekf_predict(&loc->ekf, u, loc->have_scan ? q : NULL) != RSM_OK) {
+    if (rsm_ekf_predict(&loc->ekf, &v, loc->have_scan ? q : NULL) != RSM_OK) {
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
+    }
+    if (calibrated) {
+        rsm_odometry_cal_count(&loc->odo_cal, u);
     }
     loc->counters.motions++;
     return RSM_OK;
@@ -241,10 +243,16 @@ int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right)
 
 int rsm_localizer_set_odometry(rsm_localizer_t *loc, const rsm_odometry_config_t *odo_cfg)
 {
+    int rc;
     if (loc == NULL) {
         return RSM_ERR_INVAL;
     }
-    return rsm_odometry_set_config(&loc->odo, odo_cfg);
+    rc = rsm_odometry_set_config(&loc->odo, odo_cfg);
+    if (rc == RSM_OK) {
+        /* A new geometry: what was learnt under the old one is void. */
+        rsm_odometry_cal_init(&loc->odo_cal);
+    }
+    return rc;
 }
 
 size_t rsm_localizer_scan_points(const rsm_localizer_t *loc, rsm_point_t *out, size_t cap)
@@ -586,8 +594,6 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     }
 }
 
-/* Robot-frame points from laser-frame ones: the mounting pose (and a
- * mirror for an upside-down laser). */
 /* Drops the returns behind a surface their neighbours span (in the laser's
  * frame, before the mount moves them); returns how many are left. */
 static size_t drop_occluded(rsm_localizer_t *loc, size_t n)
@@ -623,6 +629,8 @@ static void calibrate(rsm_localizer_t *loc, rsm_outcome_t outcome, float prior_v
     }
 }
 
+/* Robot-frame points from laser-frame ones: the mounting pose (and a
+ * mirror for an upside-down laser). */
 static void apply_mount(rsm_localizer_t *loc, size_t n)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;

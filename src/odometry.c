@@ -375,6 +375,9 @@ int rsm_odometry_cal_config_check(const rsm_odometry_cal_config_t *cfg, const ch
 {
     RSM_CHECK_FIELD(cfg != NULL, "odometry_cal");
     RSM_CHECK_FIELD(cfg->memory == 0.0f || (cfg->memory >= 2.0f && cfg->memory <= 1e9f), "odometry_cal.memory");
+    if (cfg->memory == 0.0f) {
+        return RSM_OK; /* off: nothing else is read */
+    }
     RSM_CHECK_FIELD(positive_finite(cfg->prior), "odometry_cal.prior");
     RSM_CHECK_FIELD(cfg->max_turn > 0.0f && cfg->max_turn < 1.0f, "odometry_cal.max_turn");
     RSM_CHECK_FIELD(positive_finite(cfg->max_drift), "odometry_cal.max_drift");
@@ -389,15 +392,21 @@ void rsm_odometry_cal_init(rsm_odometry_cal_t *cal)
     }
 }
 
-rsm_motion_t rsm_odometry_cal_apply(rsm_odometry_cal_t *cal, const rsm_motion_t *u)
+rsm_motion_t rsm_odometry_cal_apply(const rsm_odometry_cal_t *cal, const rsm_motion_t *u)
 {
     rsm_motion_t v = *u;
     if (cal != NULL) {
-        cal->turn += u->dtheta;
-        cal->travel += u->dx;
         v.dtheta = rsm_wrap_angle(u->dtheta * (1.0f + cal->k_turn) + cal->k_drift * u->dx);
     }
     return v;
+}
+
+void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_motion_t *u)
+{
+    if (cal != NULL && u != NULL) {
+        cal->turn += u->dtheta;
+        cal->travel += u->dx;
+    }
 }
 
 void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
@@ -411,10 +420,18 @@ void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
     cal->travel = 0.0f;
 }
 
+/* v within [-most, most]; NaN is no correction. */
 static float clamp_abs(float v, float most)
 {
+    if (!(v == v)) {
+        return 0.0f;
+    }
     return v < -most ? -most : (v > most ? most : v);
 }
+
+/* Odometry's sums between two scans no robot makes: a turn over pi (the
+ * heading change would wrap) or 10 m of travel. */
+#define CAL_MAX_TRAVEL_M 10.0f
 
 void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
                              float weight)
@@ -422,9 +439,12 @@ void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_con
     if (cal == NULL || cfg == NULL || est == NULL) {
         return;
     }
-    if (cal->have_ref && cfg->memory > 0.0f && weight > 0.0f && weight <= 1.0f) {
+    if (cal->have_ref && cfg->memory > 0.0f && weight > 0.0f && weight <= 1.0f && fabsf(cal->turn) <= RSM_PI &&
+        fabsf(cal->travel) <= CAL_MAX_TRAVEL_M) {
         const float t = cal->turn;
         const float d = cal->travel;
+        /* With |t| <= pi the change wraps as the turn does, but for a turn
+         * near pi (gated out then). */
         const float e = rsm_wrap_angle(est->theta - cal->ref.theta) - t;
         if (fabsf(e - (cal->k_turn * t + cal->k_drift * d)) <= cfg->gate_rad) {
             const float keep = 1.0f - 1.0f / cfg->memory;
@@ -444,10 +464,15 @@ void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_con
             b = cal->info[1];
             c = cal->info[2] + cfg->prior;
             det = a * c - b * b;
-            if (det > 0.0f) {
+            if (det > 0.0f && det <= 3.0e38f) {
                 cal->k_turn = clamp_abs((c * cal->moment[0] - b * cal->moment[1]) / det, cfg->max_turn);
                 cal->k_drift = clamp_abs((a * cal->moment[1] - b * cal->moment[0]) / det, cfg->max_drift);
                 cal->used++;
+            } else {
+                /* Only an overflow (an absurd step) gets here: start the
+                 * sums afresh and keep the correction in force. */
+                memset(cal->info, 0, sizeof cal->info);
+                memset(cal->moment, 0, sizeof cal->moment);
             }
         }
     }

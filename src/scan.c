@@ -209,6 +209,7 @@ static int behind_chord(const rsm_point_t *p, const rsm_point_t *i, float ri, fl
 /* The ring of ranges: a power of two above 2 * RSM_OCCLUSION_MAX_WINDOW. */
 #define OCCLUSION_RING 16u
 RSM_STATIC_ASSERT(occlusion_ring_holds_a_window, OCCLUSION_RING > 2u * RSM_OCCLUSION_MAX_WINDOW);
+RSM_STATIC_ASSERT(occlusion_ring_is_a_power_of_two, (OCCLUSION_RING & (OCCLUSION_RING - 1u)) == 0u);
 
 size_t rsm_points_occluded(const rsm_point_t *pts, size_t n, const rsm_occlusion_t *occ, uint8_t *mask)
 {

@@ -268,7 +268,9 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
  * copied into loc (loc->odo.cfg; the caller's struct is free on return,
  * and loc->cfg->odometry, read only by init, is not touched). Increments
  * from the next encoder sample on use it; the latched counts are kept
- * unless counter_bits changes (the next sample then only latches).
+ * unless counter_bits changes (the next sample then only latches). The
+ * heading correction learnt so far (loc->odo_cal) starts over: it was
+ * learnt for the old geometry.
  * Returns RSM_OK, or RSM_ERR_INVAL (loc or odo_cfg NULL, a non-positive or
  * non-finite ticks_per_m_left/right or wheel_base_m, counter_bits outside
  * 16..32, a negative or non-finite noise or plausibility figure) with loc

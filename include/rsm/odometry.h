@@ -195,17 +195,22 @@ typedef struct rsm_odometry_cal {
 
 rsm_odometry_cal_config_t rsm_odometry_cal_config_default(void);
 
-/* RSM_OK if cfg is usable (see the fields), else RSM_ERR_INVAL with the
- * first bad field's name ("odometry_cal.memory", a static string) in
- * *field when field is not NULL. Reads only. */
+/* RSM_OK if cfg is usable (see the fields; with memory 0 the others are
+ * not looked at), else RSM_ERR_INVAL with the first bad field's name
+ * ("odometry_cal.memory", a static string) in *field when field is not
+ * NULL. Reads only. */
 int rsm_odometry_cal_config_check(const rsm_odometry_cal_config_t *cfg, const char **field);
 
 /* No correction, no evidence, no reference. Nothing if cal is NULL. */
 void rsm_odometry_cal_init(rsm_odometry_cal_t *cal);
 
-/* Counts the raw increment u towards the next update and returns it
- * corrected (only dtheta changes). u returned as it is if cal is NULL. */
-rsm_motion_t rsm_odometry_cal_apply(rsm_odometry_cal_t *cal, const rsm_motion_t *u);
+/* u corrected by the correction in force (only dtheta changes); u as it
+ * is if cal is NULL. Pure: rsm_odometry_cal_count counts u once it is used. */
+rsm_motion_t rsm_odometry_cal_apply(const rsm_odometry_cal_t *cal, const rsm_motion_t *u);
+
+/* Counts the raw increment u towards the next update (call it for each
+ * increment the prediction took, and only then). Nothing if cal is NULL. */
+void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_motion_t *u);
 
 /* Makes est the reference the next update measures from (the first scan,
  * or one whose estimate jumped: a recovery) and restarts the sums. */
@@ -215,8 +220,10 @@ void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est);
  * odometry's raw turn, is one more equation, weighted by weight (the
  * share of the heading's variance the scan removed, 0..1; 0 adds
  * nothing), unless it misses the correction in force by more than
- * gate_rad. Then est becomes the reference. Without a reference it only
- * takes est as one. */
+ * gate_rad or odometry's sums are beyond any step between two scans (a
+ * turn over pi, travel over 10 m). Sums that stop being finite are
+ * dropped, keeping the correction. Then est becomes the reference.
+ * Without a reference it only takes est as one. */
 void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
                              float weight);
 

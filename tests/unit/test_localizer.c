@@ -478,6 +478,17 @@ void test_localizer_scan_should_beat_odometry_on_a_synthetic_loop(void)
     TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.occluded);
 }
 
+/* One more odometry increment: the filter's heading must move by it as
+ * corrected with k_turn and k_drift. */
+static void check_turn(rsm_localizer_t *l, float k_turn, float k_drift)
+{
+    const rsm_motion_t u = {0.1f, 0.0f, 0.2f};
+    const float before = l->ekf.x.theta;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(l, &u));
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, u.dtheta * (1.0f + k_turn) + k_drift * u.dx,
+                             rsm_wrap_angle(l->ekf.x.theta - before));
+}
+
 void test_localizer_scan_should_learn_odometrys_heading_drift(void)
 {
     /* odo_err drifts 0.05 rad per metre to the left and turns exactly: the
@@ -493,12 +504,18 @@ void test_localizer_scan_should_learn_odometrys_heading_drift(void)
     TEST_ASSERT_FLOAT_WITHIN_MESSAGE(0.01f, -odo_err.drift_rad_per_m, loc.odo_cal.k_drift, msg);
     TEST_ASSERT_FLOAT_WITHIN_MESSAGE(0.02f, 0.0f, loc.odo_cal.k_turn, msg);
     TEST_ASSERT_TRUE_MESSAGE(loc.odo_cal.used > (uint32_t)(path_len / 2u), msg);
+    /* The next prediction turns by the corrected increment. */
+    check_turn(&loc, loc.odo_cal.k_turn, loc.odo_cal.k_drift);
     /* Off: nothing learnt, nothing corrected. */
     cfg.odometry_cal.memory = 0.0f;
     without = run(&loc, RSM_METHOD_MAP, NULL);
     TEST_ASSERT_EQUAL_FLOAT(0.0f, loc.odo_cal.k_drift);
     TEST_ASSERT_EQUAL_UINT32(0u, loc.odo_cal.used);
-    (void)without;
+    check_turn(&loc, 0.0f, 0.0f);
+    /* Uncorrected, the same loop ends further off in heading. */
+    snprintf(msg, sizeof msg, "heading at the end: %.3f deg calibrated, %.3f deg not", (double)(with.final_err_rad / DEG),
+             (double)(without.final_err_rad / DEG));
+    TEST_ASSERT_TRUE_MESSAGE(with.final_err_rad < without.final_err_rad, msg);
 }
 
 void test_localizer_scan_should_beat_odometry_on_a_synthetic_loop_with_the_papers_method(void)

@@ -581,6 +581,7 @@ static float drive(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *c, 
         const float dx = (k / 200u) % 5u == 4u ? -0.02f : 0.04f;
         const rsm_motion_t u = biased(dx, turn, over, drift);
         const rsm_motion_t v = rsm_odometry_cal_apply(cal, &u);
+        rsm_odometry_cal_count(cal, &u);
         TEST_ASSERT_EQUAL_FLOAT(u.dx, v.dx);
         TEST_ASSERT_EQUAL_FLOAT(u.dy, v.dy);
         if (k >= 3u * n / 4u && fabsf(v.dtheta - turn) > worst) {
@@ -644,7 +645,7 @@ void test_odometry_cal_should_gate_jumps_and_bound_the_correction(void)
      * correction say (a slip, a wrong match) is not learnt from... */
     est.theta = 1.0f;
     rsm_odometry_cal_reference(&cal, &est);
-    (void)rsm_odometry_cal_apply(&cal, &u);
+    rsm_odometry_cal_count(&cal, &u);
     est.theta = 1.0f + 0.05f + 0.3f;
     rsm_odometry_cal_update(&cal, &c, &est, 1.0f);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
@@ -660,12 +661,46 @@ void test_odometry_cal_should_gate_jumps_and_bound_the_correction(void)
     TEST_ASSERT_EQUAL_FLOAT(-c.max_drift, cal.k_drift);
 }
 
+void test_odometry_cal_should_survive_an_absurd_step(void)
+{
+    /* A step of 1e20 m (a corrupt increment that got through) would
+     * overflow the sums, and a turn over pi between two scans would wrap:
+     * neither is used, the correction in force is kept, nothing turns
+     * NaN, and learning goes on (towards the new drift; the first 500
+     * steps' evidence for none fades). */
+    const rsm_odometry_cal_config_t c = rsm_odometry_cal_config_default();
+    rsm_odometry_cal_t cal;
+    rsm_pose_t est = {0.0f, 0.0f, 0.0f};
+    const rsm_motion_t huge = {1e20f, 0.0f, 0.0f};
+    const rsm_motion_t spin = {0.0f, 0.0f, 3.0f};
+    rsm_motion_t v;
+    float before;
+    rsm_odometry_cal_init(&cal);
+    (void)drive(&cal, &c, 500u, 0.06f, 0.0f, 1.0f);
+    before = cal.k_turn;
+    rsm_odometry_cal_reference(&cal, &est);
+    rsm_odometry_cal_count(&cal, &huge);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f);
+    TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
+    rsm_odometry_cal_count(&cal, &spin);
+    rsm_odometry_cal_count(&cal, &spin);
+    est.theta = rsm_wrap_angle(6.0f);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f);
+    TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
+    TEST_ASSERT_EQUAL_UINT32(500u, cal.used);
+    v = rsm_odometry_cal_apply(&cal, &spin);
+    TEST_ASSERT_TRUE(isfinite(v.dtheta) && isfinite(cal.k_drift));
+    (void)drive(&cal, &c, 3000u, 0.06f, 0.03f, 1.0f);
+    TEST_ASSERT_TRUE(cal.k_drift < -0.025f && cal.k_drift > -0.031f);
+}
+
 void test_odometry_cal_config_check_should_name_the_bad_field(void)
 {
     rsm_odometry_cal_config_t c = rsm_odometry_cal_config_default();
     const char *field = NULL;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_cal_config_check(&c, &field));
-    c.memory = 0.0f; /* off */
+    c.memory = 0.0f; /* off: the other fields are not read */
+    c.prior = 0.0f;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_odometry_cal_config_check(&c, &field));
 #define BAD(member, value, name)                                                          \
     do {                                                                                  \
@@ -717,6 +752,7 @@ int main(void)
     RUN_TEST(test_odometry_cal_should_learn_a_turn_scale_and_a_drift);
     RUN_TEST(test_odometry_cal_should_stay_near_zero_for_true_odometry_and_weigh_scans);
     RUN_TEST(test_odometry_cal_should_gate_jumps_and_bound_the_correction);
+    RUN_TEST(test_odometry_cal_should_survive_an_absurd_step);
     RUN_TEST(test_odometry_cal_config_check_should_name_the_bad_field);
     return UNITY_END();
 }

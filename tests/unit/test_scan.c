@@ -507,11 +507,31 @@ void test_points_occluded_should_mark_nothing_when_off_or_without_neighbours(voi
     TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(NULL, 5u, &occ, mask));
     TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 5u, NULL, mask));
     TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 5u, &occ, NULL));
-    /* The first and last points have no neighbour on one side; a window
-     * wider than the most allowed is taken as the most. */
+    /* The first and last points have no neighbour on one side. */
     TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 2u, &occ, mask));
+}
+
+void test_points_occluded_should_take_a_wider_window_as_the_widest(void)
+{
+    /* Three phantoms in a row behind the wall: two neighbours a side see
+     * only the middle one hidden, four see all three; a window wider than
+     * RSM_OCCLUSION_MAX_WINDOW (4) is taken as 4. */
+    rsm_point_t p[21];
+    float r[21];
+    uint8_t mask[3];
+    rsm_occlusion_t occ = occlusion();
+    wall_ranges(r, 21u);
+    r[9] += 2.0f;
+    r[10] += 3.0f;
+    r[11] += 2.5f;
+    polar_points(p, r, 21u);
+    TEST_ASSERT_EQUAL_size_t(1u, rsm_points_occluded(p, 21u, &occ, mask));
+    TEST_ASSERT_TRUE(marked(mask, 10u));
+    occ.window = 4u;
+    TEST_ASSERT_EQUAL_size_t(3u, rsm_points_occluded(p, 21u, &occ, mask));
     occ.window = 200u;
-    TEST_ASSERT_EQUAL_size_t(1u, rsm_points_occluded(p, 5u, &occ, mask));
+    TEST_ASSERT_EQUAL_size_t(3u, rsm_points_occluded(p, 21u, &occ, mask));
+    TEST_ASSERT_TRUE(marked(mask, 9u) && marked(mask, 10u) && marked(mask, 11u));
 }
 
 int main(void)
@@ -536,5 +556,6 @@ int main(void)
     RUN_TEST(test_points_occluded_should_keep_what_is_seen_through_a_doorway_or_past_an_edge);
     RUN_TEST(test_points_occluded_should_follow_a_steep_wall_up_to_the_slope);
     RUN_TEST(test_points_occluded_should_mark_nothing_when_off_or_without_neighbours);
+    RUN_TEST(test_points_occluded_should_take_a_wider_window_as_the_widest);
     return UNITY_END();
 }
