@@ -913,11 +913,13 @@ static void time_stats(nav_t *nav, double *median, double *p95)
 
 /* --summary-json: what the printed summary says, for programs (the bench).
  * Keys: method, scans, outcomes {name: count}, median_us, p95_us,
- * timestamps {clamped, odd, jumps}, drops {nan, too_short, too_long},
+ * timestamps {clamped, odd, jumps}, drops {nan, too_short, too_long, occluded},
  * alignment {...} (capture and live modes), odometry_calibrations, and for
  * the persistent map tmap {writes, tiles [per level], taken, evicted,
- * dropped, freed, behind, unconfirmed}, recovery {searches, taken} and
- * unpinned (matches that left the position along a corridor to odometry).
+ * dropped, freed, behind, unconfirmed}, recovery {searches, taken},
+ * unpinned (matches that left the position along a corridor to odometry)
+ * and heading_correction {turn, drift_rad_per_m, scans} (what the odometry
+ * calibration learnt).
  * Returns 0, or -1 if the file cannot be written. */
 static int write_summary_json(nav_t *nav, const char *path)
 {
