@@ -199,11 +199,16 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
     return rc;
 }
 
+/* Whether odometry's heading is calibrated from the matches. */
+static int calibrating(const rsm_localizer_t *loc)
+{
+    return loc->cfg->method == RSM_METHOD_MAP && loc->cfg->odometry_cal.memory > 0.0f;
+}
+
 int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
 {
     float q[9];
     rsm_motion_t v;
-    int calibrated;
     if (loc == NULL || u == NULL) {
         return RSM_ERR_INVAL;
     }
@@ -211,16 +216,15 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
     }
-    calibrated = loc->cfg->method == RSM_METHOD_MAP && loc->cfg->odometry_cal.memory > 0.0f;
     /* Odometry's systematic heading error, as matching has found it. */
-    v = calibrated ? rsm_odometry_cal_apply(&loc->odo_cal, u) : *u;
+    v = calibrating(loc) ? rsm_odometry_cal_apply(&loc->odo_cal, u) : *u;
     rsm_odometry_noise(&loc->odo.cfg, &v, q);
     /* No process noise before the first scan (see localizer.h). */
     if (rsm_ekf_predict(&loc->ekf, &v, loc->have_scan ? q : NULL) != RSM_OK) {
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
     }
-    if (calibrated) {
+    if (calibrating(loc)) {
         rsm_odometry_cal_count(&loc->odo_cal, u);
     }
     loc->counters.motions++;
@@ -867,7 +871,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     } else {
         outcome = step_rsm(loc, npts, rep, &clk);
     }
-    if (loc->cfg->method == RSM_METHOD_MAP && loc->cfg->odometry_cal.memory > 0.0f) {
+    if (calibrating(loc)) {
         calibrate(loc, outcome, prior_var, recovered);
     }
     stage_switch(&clk, RSM_STAGE_MAP);

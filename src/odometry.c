@@ -420,17 +420,14 @@ void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
     cal->travel = 0.0f;
 }
 
-/* v within [-most, most]; NaN is no correction. */
 static float clamp_abs(float v, float most)
 {
-    if (!(v == v)) {
-        return 0.0f;
-    }
     return v < -most ? -most : (v > most ? most : v);
 }
 
 /* Odometry's sums between two scans no robot makes: a turn over pi (the
- * heading change would wrap) or 10 m of travel. */
+ * heading change would wrap) or 10 m of travel. Within them (and the gate,
+ * which a NaN fails) every sum stays finite and the system solvable. */
 #define CAL_MAX_TRAVEL_M 10.0f
 
 void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
@@ -464,15 +461,10 @@ void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_con
             b = cal->info[1];
             c = cal->info[2] + cfg->prior;
             det = a * c - b * b;
-            if (det > 0.0f && det <= 3.0e38f) {
+            if (det > 0.0f) {
                 cal->k_turn = clamp_abs((c * cal->moment[0] - b * cal->moment[1]) / det, cfg->max_turn);
                 cal->k_drift = clamp_abs((a * cal->moment[1] - b * cal->moment[0]) / det, cfg->max_drift);
                 cal->used++;
-            } else {
-                /* Only an overflow (an absurd step) gets here: start the
-                 * sums afresh and keep the correction in force. */
-                memset(cal->info, 0, sizeof cal->info);
-                memset(cal->moment, 0, sizeof cal->moment);
             }
         }
     }

@@ -220,9 +220,10 @@ void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est);
  * odometry's raw turn, is one more equation, weighted by weight (the
  * share of the heading's variance the scan removed, 0..1; 0 adds
  * nothing), unless it misses the correction in force by more than
- * gate_rad or odometry's sums are beyond any step between two scans (a
- * turn over pi, travel over 10 m). Sums that stop being finite are
- * dropped, keeping the correction. Then est becomes the reference.
+ * gate_rad (a NaN heading always does) or odometry's sums are beyond any
+ * step between two scans (a turn over pi, travel over 10 m; a corrupt
+ * increment): the correction in force then stays. Then est becomes the
+ * reference.
  * Without a reference it only takes est as one. */
 void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
                              float weight);

@@ -449,13 +449,11 @@ void test_points_occluded_should_keep_what_is_seen_through_a_doorway_or_past_an_
     const rsm_occlusion_t occ = occlusion();
     size_t k;
     wall_ranges(r, 81u);
-    for (k = 0; k < 81u; ++k) {
-        const float c = cosf(((float)k - 40.0f) * 0.0174533f);
-        if (k >= 28u && k <= 50u) {
-            r[k] = 5.0f / c;
-        } else if (k >= 71u) {
-            r[k] = 6.0f / c;
-        }
+    for (k = 28u; k <= 50u; ++k) {
+        r[k] *= 2.5f; /* the wall 5 m ahead */
+    }
+    for (k = 71u; k < 81u; ++k) {
+        r[k] *= 3.0f; /* 6 m */
     }
     polar_points(p, r, 81u);
     TEST_ASSERT_EQUAL_size_t(0u, rsm_points_occluded(p, 81u, &occ, mask));
