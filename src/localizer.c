@@ -622,14 +622,26 @@ static size_t drop_occluded(rsm_localizer_t *loc, size_t n)
  * own: the weight is the share of the heading's variance the match removed
  * (a scan that pins the heading tells the most). A recovery's jump is
  * odometry off by more than its systematic error: a new reference only. */
-static void calibrate(rsm_localizer_t *loc, rsm_outcome_t outcome, float prior_var, uint32_t recovered)
+static void calibrate(rsm_localizer_t *loc, rsm_outcome_t outcome, const float prior[9], uint32_t recovered)
 {
     const rsm_pose_t est = loc->ekf.x;
     if (outcome == RSM_SCAN_FIRST || (outcome == RSM_SCAN_ACCEPTED && loc->counters.recovered != recovered)) {
         rsm_odometry_cal_reference(&loc->odo_cal, &est);
     } else if (outcome == RSM_SCAN_ACCEPTED) {
-        const float w = prior_var > 0.0f ? 1.0f - loc->ekf.p[8] / prior_var : 0.0f;
-        rsm_odometry_cal_update(&loc->odo_cal, &loc->cfg->odometry_cal, &est, w > 1.0f ? 1.0f : w);
+        const float *p = loc->ekf.p;
+        float w = prior[8] > 0.0f ? 1.0f - p[8] / prior[8] : 0.0f;
+        float w_along = 0.0f;
+        float d[2];
+        /* Along odometry's way the same share, of the position's variance:
+         * an unpinned match (a bare corridor) removes none and says nothing
+         * of the distance. */
+        if (rsm_odometry_cal_direction(&loc->odo_cal, d)) {
+            const float before = d[0] * d[0] * prior[0] + 2.0f * d[0] * d[1] * prior[1] + d[1] * d[1] * prior[4];
+            const float after = d[0] * d[0] * p[0] + 2.0f * d[0] * d[1] * p[1] + d[1] * d[1] * p[4];
+            w_along = before > 0.0f ? 1.0f - after / before : 0.0f;
+        }
+        rsm_odometry_cal_update(&loc->odo_cal, &loc->cfg->odometry_cal, &est, w > 1.0f ? 1.0f : w,
+                                w_along > 1.0f ? 1.0f : w_along);
     }
 }
 
@@ -825,7 +837,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     rsm_outcome_t outcome;
     rsm_pose_t est;
     size_t npts;
-    float prior_var;
+    float prior[9];
     uint32_t recovered;
     int n;
     if (rep == NULL) {
@@ -851,7 +863,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         (void)rsm_localizer_motion(loc, &still);
     }
     loc->motions_at_scan = loc->counters.motions;
-    prior_var = loc->ekf.p[8];
+    memcpy(prior, loc->ekf.p, sizeof prior);
     recovered = loc->counters.recovered;
     n = rsm_scan_to_points_cached(scan, &loc->cfg->limits, &loc->trig, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
     npts = n > 0 ? (size_t)n : 0u;
@@ -872,7 +884,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         outcome = step_rsm(loc, npts, rep, &clk);
     }
     if (calibrating(loc)) {
-        calibrate(loc, outcome, prior_var, recovered);
+        calibrate(loc, outcome, prior, recovered);
     }
     stage_switch(&clk, RSM_STAGE_MAP);
     est = loc->ekf.x;

@@ -368,6 +368,9 @@ rsm_odometry_cal_config_t rsm_odometry_cal_config_default(void)
     c.max_turn = 0.25f;
     c.max_drift = 0.1f;
     c.gate_rad = 0.1f;
+    c.max_scale = 0.0f;
+    c.gate_m = 0.05f;
+    c.scale_prior_m = 1.0f;
     return c;
 }
 
@@ -382,6 +385,9 @@ int rsm_odometry_cal_config_check(const rsm_odometry_cal_config_t *cfg, const ch
     RSM_CHECK_FIELD(cfg->max_turn > 0.0f && cfg->max_turn < 1.0f, "odometry_cal.max_turn");
     RSM_CHECK_FIELD(positive_finite(cfg->max_drift), "odometry_cal.max_drift");
     RSM_CHECK_FIELD(positive_finite(cfg->gate_rad), "odometry_cal.gate_rad");
+    RSM_CHECK_FIELD(cfg->max_scale >= 0.0f && cfg->max_scale < 1.0f, "odometry_cal.max_scale");
+    RSM_CHECK_FIELD(positive_finite(cfg->gate_m), "odometry_cal.gate_m");
+    RSM_CHECK_FIELD(positive_finite(cfg->scale_prior_m), "odometry_cal.scale_prior_m");
     return RSM_OK;
 }
 
@@ -397,6 +403,8 @@ rsm_motion_t rsm_odometry_cal_apply(const rsm_odometry_cal_t *cal, const rsm_mot
     rsm_motion_t v = *u;
     if (cal != NULL) {
         v.dtheta = rsm_wrap_angle(u->dtheta * (1.0f + cal->k_turn) + cal->k_drift * u->dx);
+        v.dx = u->dx * (1.0f + cal->k_scale);
+        v.dy = u->dy * (1.0f + cal->k_scale);
     }
     return v;
 }
@@ -404,9 +412,32 @@ rsm_motion_t rsm_odometry_cal_apply(const rsm_odometry_cal_t *cal, const rsm_mot
 void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_motion_t *u)
 {
     if (cal != NULL && u != NULL) {
+        /* The step in the reference's frame, at odometry's own heading
+         * since then (its error over a few scans is small). */
+        const float c = cosf(cal->disp_turn);
+        const float s = sinf(cal->disp_turn);
+        cal->disp[0] += c * u->dx - s * u->dy;
+        cal->disp[1] += s * u->dx + c * u->dy;
+        cal->disp_turn = rsm_wrap_angle(cal->disp_turn + u->dtheta);
         cal->turn += u->dtheta;
         cal->travel += u->dx;
     }
+}
+
+static void scale_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
+{
+    cal->sref = *est;
+    cal->disp[0] = 0.0f;
+    cal->disp[1] = 0.0f;
+    cal->disp_turn = 0.0f;
+}
+
+static void heading_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
+{
+    cal->ref = *est;
+    cal->have_ref = 1u;
+    cal->turn = 0.0f;
+    cal->travel = 0.0f;
 }
 
 void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
@@ -414,10 +445,30 @@ void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
     if (cal == NULL || est == NULL) {
         return;
     }
-    cal->ref = *est;
-    cal->have_ref = 1u;
-    cal->turn = 0.0f;
-    cal->travel = 0.0f;
+    heading_reference(cal, est);
+    scale_reference(cal, est);
+}
+
+/* Below this odometry's displacement gives no direction to fit along. */
+#define CAL_MIN_DISP_M 0.001f
+
+int rsm_odometry_cal_direction(const rsm_odometry_cal_t *cal, float dir[2])
+{
+    float s;
+    float c;
+    float sn;
+    if (cal == NULL || dir == NULL || !cal->have_ref) {
+        return 0;
+    }
+    s = sqrtf(cal->disp[0] * cal->disp[0] + cal->disp[1] * cal->disp[1]);
+    if (!(s >= CAL_MIN_DISP_M)) {
+        return 0;
+    }
+    c = cosf(cal->sref.theta);
+    sn = sinf(cal->sref.theta);
+    dir[0] = (c * cal->disp[0] - sn * cal->disp[1]) / s;
+    dir[1] = (sn * cal->disp[0] + c * cal->disp[1]) / s;
+    return 1;
 }
 
 static float clamp_abs(float v, float most)
@@ -430,13 +481,53 @@ static float clamp_abs(float v, float most)
  * which a NaN fails) every sum stays finite and the system solvable. */
 #define CAL_MAX_TRAVEL_M 10.0f
 
+/* A scan that removes at least this share of the position's variance
+ * along odometry's way pins the position there. */
+#define CAL_PIN_SHARE 0.5f
+
+/* The distance's equation: what matching found along odometry's
+ * displacement s since the last pinned scan, less s, is k_scale * s. */
+static void update_scale(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
+                         float weight)
+{
+    float dir[2];
+    float s;
+    float e;
+    float keep;
+    if (!(weight >= CAL_PIN_SHARE)) {
+        return; /* unpinned: odometry's way goes on to the next pinned scan */
+    }
+    if (cfg->max_scale > 0.0f && rsm_odometry_cal_direction(cal, dir)) {
+        s = sqrtf(cal->disp[0] * cal->disp[0] + cal->disp[1] * cal->disp[1]);
+        e = dir[0] * (est->x - cal->sref.x) + dir[1] * (est->y - cal->sref.y) - s;
+        if (s <= CAL_MAX_TRAVEL_M && fabsf(e - cal->k_scale * s) <= cfg->gate_m + cfg->max_scale * s) {
+            keep = 1.0f - 1.0f / cfg->memory;
+            /* The span's error grows with its length as odometry's does
+             * (weight 1/s): k is the distance found over the distance
+             * driven, less one, and one long span weighs as its metres. */
+            cal->scale_info = keep * cal->scale_info + s;
+            cal->scale_moment = keep * cal->scale_moment + e;
+            cal->k_scale = clamp_abs(cal->scale_moment / (cal->scale_info + cfg->scale_prior_m), cfg->max_scale);
+            cal->scale_used++;
+        }
+    }
+    scale_reference(cal, est);
+}
+
 void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
-                             float weight)
+                             float weight, float along_weight)
 {
     if (cal == NULL || cfg == NULL || est == NULL) {
         return;
     }
-    if (cal->have_ref && cfg->memory > 0.0f && weight > 0.0f && weight <= 1.0f && fabsf(cal->turn) <= RSM_PI &&
+    if (!cal->have_ref) {
+        rsm_odometry_cal_reference(cal, est);
+        return;
+    }
+    if (cfg->memory > 0.0f) {
+        update_scale(cal, cfg, est, along_weight);
+    }
+    if (cfg->memory > 0.0f && weight > 0.0f && weight <= 1.0f && fabsf(cal->turn) <= RSM_PI &&
         fabsf(cal->travel) <= CAL_MAX_TRAVEL_M) {
         const float t = cal->turn;
         const float d = cal->travel;
@@ -468,5 +559,5 @@ void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_con
             }
         }
     }
-    rsm_odometry_cal_reference(cal, est);
+    heading_reference(cal, est);
 }

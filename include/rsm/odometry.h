@@ -168,8 +168,18 @@ void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u,
  * The calibration fits the heading change that matching found between two
  * scans to odometry's turn and forward travel over the same steps,
  *     found - turn = k_turn * turn + k_drift * travel,
- * by least squares with old scans fading, and corrects each later increment:
- *     dtheta' = dtheta * (1 + k_turn) + k_drift * dx. */
+ * by least squares with old scans fading. Wheels of a size off their
+ * nominal also measure every distance a share too long or too short; where
+ * the scans pin nothing along the robot's way (a bare corridor) the
+ * estimate there is odometry's, so that share is the drift. The distance
+ * matching found along odometry's displacement s is fitted the same way,
+ *     found - s = k_scale * s,
+ * between scans that pin the position along the way (the scans between
+ * them, unpinned, carry odometry's error, which the next pinned one takes
+ * back: an equation per scan would count that as the error). Each later
+ * increment is corrected:
+ *     dtheta' = dtheta * (1 + k_turn) + k_drift * dx,
+ *     (dx', dy') = (dx, dy) * (1 + k_scale). */
 typedef struct rsm_odometry_cal_config {
     float memory;    /* scans over which the evidence fades (each weighs 1 - 1/memory of the
                       * last); 0 = off, else >= 2; default 1024 */
@@ -179,18 +189,33 @@ typedef struct rsm_odometry_cal_config {
     float max_drift; /* |k_drift| at most, rad per metre; > 0; default 0.1 */
     float gate_rad;  /* a scan whose heading change the correction misses by more than this
                       * (a slip, a wrong match) is left out; > 0; default 0.1 */
+    float max_scale; /* |k_scale| at most (a share of the distance); 0 = distance not
+                      * calibrated, else in (0, 1); default 0 (off: with many outliers
+                      * it costs more than it gains, docs/map.md); 0.1 turns it on */
+    float gate_m;    /* a scan whose distance along odometry's travel the correction misses
+                      * by more than this is left out of the distance's fit; > 0; default 0.05 */
+    float scale_prior_m; /* evidence for no distance correction before any scan, in metres
+                      * driven between pinned scans; > 0; default 1 */
 } rsm_odometry_cal_config_t;
 
 typedef struct rsm_odometry_cal {
     float info[3];    /* fading sums of w (turn, travel)^T (turn, travel): tt, td, dd */
     float moment[2];  /* ... and of w (turn, travel) * (found - turn) */
+    float scale_info; /* fading sums of s and (found - s), s odometry's distance */
+    float scale_moment;
     float k_turn;     /* the correction in force */
     float k_drift;
+    float k_scale;
     float turn;       /* odometry's raw turn and forward travel since the reference */
     float travel;
+    float disp[2];    /* odometry's raw displacement since the distance's reference, in its
+                       * frame, and its turn since then */
+    float disp_turn;
+    rsm_pose_t sref;  /* the estimate at the last scan that pinned the position along the way */
     rsm_pose_t ref;   /* the estimate at the reference scan */
     uint8_t have_ref;
-    uint32_t used;    /* scans that updated the correction */
+    uint32_t used;    /* scans that updated the heading's correction */
+    uint32_t scale_used; /* ... and the distance's */
 } rsm_odometry_cal_t;
 
 rsm_odometry_cal_config_t rsm_odometry_cal_config_default(void);
@@ -223,10 +248,20 @@ void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est);
  * gate_rad (a NaN heading always does) or odometry's sums are beyond any
  * step between two scans (a turn over pi, travel over 10 m; a corrupt
  * increment): the correction in force then stays. Then est becomes the
- * reference.
+ * reference. along_weight is the share of the position's variance along
+ * odometry's displacement since the distance's reference that the scan
+ * removed: when it is half or more, the distance found along that
+ * displacement since then is one more equation for k_scale (gated by
+ * gate_m plus max_scale of the distance) and est that reference.
  * Without a reference it only takes est as one. */
 void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
-                             float weight);
+                             float weight, float along_weight);
+
+/* The unit direction, in the world frame, of odometry's displacement since
+ * the distance's reference (what along_weight is measured along), in dir;
+ * 0 and dir untouched without a reference or a displacement of 1 mm at
+ * least. */
+int rsm_odometry_cal_direction(const rsm_odometry_cal_t *cal, float dir[2]);
 
 #ifdef __cplusplus
 }

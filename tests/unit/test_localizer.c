@@ -479,39 +479,47 @@ void test_localizer_scan_should_beat_odometry_on_a_synthetic_loop(void)
 }
 
 /* One more odometry increment: the filter's heading must move by it as
- * corrected with k_turn and k_drift. */
-static void check_turn(rsm_localizer_t *l, float k_turn, float k_drift)
+ * corrected with k_turn and k_drift, its position by the distance as
+ * corrected with k_scale. */
+static void check_step(rsm_localizer_t *l, float k_turn, float k_drift, float k_scale)
 {
     const rsm_motion_t u = {0.1f, 0.0f, 0.2f};
-    const float before = l->ekf.x.theta;
+    const rsm_pose_t before = l->ekf.x;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(l, &u));
     TEST_ASSERT_FLOAT_WITHIN(1e-5f, u.dtheta * (1.0f + k_turn) + k_drift * u.dx,
-                             rsm_wrap_angle(l->ekf.x.theta - before));
+                             rsm_wrap_angle(l->ekf.x.theta - before.theta));
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, u.dx * (1.0f + k_scale), hypotf(l->ekf.x.x - before.x, l->ekf.x.y - before.y));
 }
 
-void test_localizer_scan_should_learn_odometrys_heading_drift(void)
+void test_localizer_scan_should_learn_odometrys_heading_drift_and_distance(void)
 {
-    /* odo_err drifts 0.05 rad per metre to the left and turns exactly: the
-     * calibration learns to turn each step back by that much. */
-    char msg[160];
+    /* odo_err drifts 0.05 rad per metre to the left, turns exactly and
+     * reads every distance 3 % long: the calibration learns to turn each
+     * step back by that much and to shorten it. */
+    char msg[200];
     run_result_t with;
     run_result_t without;
+    cfg.odometry_cal.max_scale = 0.1f; /* the distance's calibration is off by default */
     with = run(&loc, RSM_METHOD_MAP, NULL);
-    snprintf(msg, sizeof msg, "turn %+.4f, drift %+.4f rad/m from %u scans; final %.3f m, %.2f deg",
+    snprintf(msg, sizeof msg, "turn %+.4f, drift %+.4f rad/m from %u scans, distance %+.4f from %u; final %.3f m, %.2f deg",
              (double)loc.odo_cal.k_turn, (double)loc.odo_cal.k_drift, (unsigned)loc.odo_cal.used,
-             (double)with.final_err_m, (double)(with.final_err_rad / DEG));
+             (double)loc.odo_cal.k_scale, (unsigned)loc.odo_cal.scale_used, (double)with.final_err_m,
+             (double)(with.final_err_rad / DEG));
     TEST_MESSAGE(msg);
     TEST_ASSERT_FLOAT_WITHIN_MESSAGE(0.01f, -odo_err.drift_rad_per_m, loc.odo_cal.k_drift, msg);
     TEST_ASSERT_FLOAT_WITHIN_MESSAGE(0.02f, 0.0f, loc.odo_cal.k_turn, msg);
+    TEST_ASSERT_FLOAT_WITHIN_MESSAGE(0.01f, 1.0f / (1.0f + odo_err.scale) - 1.0f, loc.odo_cal.k_scale, msg);
     TEST_ASSERT_TRUE_MESSAGE(loc.odo_cal.used > (uint32_t)(path_len / 2u), msg);
-    /* The next prediction turns by the corrected increment. */
-    check_turn(&loc, loc.odo_cal.k_turn, loc.odo_cal.k_drift);
+    TEST_ASSERT_TRUE_MESSAGE(loc.odo_cal.scale_used > (uint32_t)(path_len / 4u), msg);
+    /* The next prediction moves by the corrected increment. */
+    check_step(&loc, loc.odo_cal.k_turn, loc.odo_cal.k_drift, loc.odo_cal.k_scale);
     /* Off: nothing learnt, nothing corrected. */
     cfg.odometry_cal.memory = 0.0f;
     without = run(&loc, RSM_METHOD_MAP, NULL);
     TEST_ASSERT_EQUAL_FLOAT(0.0f, loc.odo_cal.k_drift);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, loc.odo_cal.k_scale);
     TEST_ASSERT_EQUAL_UINT32(0u, loc.odo_cal.used);
-    check_turn(&loc, 0.0f, 0.0f);
+    check_step(&loc, 0.0f, 0.0f, 0.0f);
     /* Uncorrected, the same loop ends further off in heading. */
     snprintf(msg, sizeof msg, "heading at the end: %.3f deg calibrated, %.3f deg not", (double)(with.final_err_rad / DEG),
              (double)(without.final_err_rad / DEG));
@@ -1365,7 +1373,7 @@ int main(void)
     RUN_TEST(test_localizer_init_should_refuse_a_caller_built_with_other_capacities);
     RUN_TEST(test_localizer_init_should_reject_bad_configs);
     RUN_TEST(test_localizer_scan_should_beat_odometry_on_a_synthetic_loop);
-    RUN_TEST(test_localizer_scan_should_learn_odometrys_heading_drift);
+    RUN_TEST(test_localizer_scan_should_learn_odometrys_heading_drift_and_distance);
     RUN_TEST(test_localizer_scan_should_beat_odometry_on_a_synthetic_loop_with_the_papers_method);
     RUN_TEST(test_localizer_scan_should_run_the_icp_baseline);
     RUN_TEST(test_localizer_scan_should_track_with_30_percent_outliers);

@@ -575,7 +575,7 @@ static float drive(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *c, 
     rsm_pose_t est = {0.0f, 0.0f, 0.0f};
     float worst = 0.0f;
     uint32_t k;
-    rsm_odometry_cal_update(cal, c, &est, w); /* the first scan: a reference only */
+    rsm_odometry_cal_update(cal, c, &est, w, 0.0f); /* the first scan: a reference only */
     for (k = 0; k < n; ++k) {
         const float turn = 0.06f * sinf(0.05f * (float)k);
         const float dx = (k / 200u) % 5u == 4u ? -0.02f : 0.04f;
@@ -588,7 +588,7 @@ static float drive(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *c, 
             worst = fabsf(v.dtheta - turn);
         }
         est.theta = rsm_wrap_angle(est.theta + turn);
-        rsm_odometry_cal_update(cal, c, &est, w);
+        rsm_odometry_cal_update(cal, c, &est, w, 0.0f);
     }
     return worst;
 }
@@ -647,7 +647,7 @@ void test_odometry_cal_should_gate_jumps_and_bound_the_correction(void)
     rsm_odometry_cal_reference(&cal, &est);
     rsm_odometry_cal_count(&cal, &u);
     est.theta = 1.0f + 0.05f + 0.3f;
-    rsm_odometry_cal_update(&cal, &c, &est, 1.0f);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, 0.0f);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
     TEST_ASSERT_EQUAL_UINT32(500u, cal.used);
     /* ...but it becomes the reference for the next. */
@@ -680,18 +680,141 @@ void test_odometry_cal_should_survive_an_absurd_step(void)
     before = cal.k_turn;
     rsm_odometry_cal_reference(&cal, &est);
     rsm_odometry_cal_count(&cal, &huge);
-    rsm_odometry_cal_update(&cal, &c, &est, 1.0f);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, 0.0f);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
     rsm_odometry_cal_count(&cal, &spin);
     rsm_odometry_cal_count(&cal, &spin);
     est.theta = rsm_wrap_angle(6.0f);
-    rsm_odometry_cal_update(&cal, &c, &est, 1.0f);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, 0.0f);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
     TEST_ASSERT_EQUAL_UINT32(500u, cal.used);
     v = rsm_odometry_cal_apply(&cal, &spin);
     TEST_ASSERT_TRUE(isfinite(v.dtheta) && isfinite(cal.k_drift));
     (void)drive(&cal, &c, 3000u, 0.06f, 0.03f, 1.0f);
     TEST_ASSERT_TRUE(cal.k_drift < -0.025f && cal.k_drift > -0.031f);
+}
+
+/* Drives n steps of a wavy path (4 cm forward, now and then backwards)
+ * with odometry that measures every distance 1 + over times too long, and
+ * matches one scan in every `pinned` at the true pose with along_weight 1;
+ * the scans between keep the prediction from the corrected odometry and
+ * remove none of the variance along the way (a bare corridor). Returns the
+ * distance the estimate ends off. */
+static float drive_distance(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *c, uint32_t n, float over,
+                            uint32_t pinned)
+{
+    rsm_pose_t truth = {0.0f, 0.0f, 0.0f};
+    rsm_pose_t est = truth;
+    uint32_t k;
+    rsm_odometry_cal_update(cal, c, &est, 1.0f, 1.0f);
+    for (k = 0; k < n; ++k) {
+        const float turn = 0.03f * sinf(0.05f * (float)k);
+        const float dx = (k / 200u) % 5u == 4u ? -0.02f : 0.04f;
+        const rsm_motion_t u = {dx * (1.0f + over), 0.0f, turn};
+        const rsm_motion_t v = rsm_odometry_cal_apply(cal, &u);
+        rsm_odometry_cal_count(cal, &u);
+        truth.x += dx * cosf(truth.theta);
+        truth.y += dx * sinf(truth.theta);
+        truth.theta = rsm_wrap_angle(truth.theta + turn);
+        est.x += v.dx * cosf(est.theta);
+        est.y += v.dx * sinf(est.theta);
+        est.theta = truth.theta;
+        if ((k + 1u) % pinned == 0u) {
+            est = truth;
+            rsm_odometry_cal_update(cal, c, &est, 1.0f, 1.0f);
+        } else {
+            rsm_odometry_cal_update(cal, c, &est, 1.0f, 0.0f);
+        }
+    }
+    return hypotf(est.x - truth.x, est.y - truth.y);
+}
+
+/* The calibration with the distance's on. */
+static rsm_odometry_cal_config_t with_distance(void)
+{
+    rsm_odometry_cal_config_t c = rsm_odometry_cal_config_default();
+    c.max_scale = 0.1f;
+    return c;
+}
+
+void test_odometry_cal_should_learn_the_distance_between_pinned_scans(void)
+{
+    const rsm_odometry_cal_config_t c = with_distance();
+    const float truth = 1.0f / 1.04f - 1.0f;
+    rsm_odometry_cal_t cal;
+    rsm_motion_t u = {0.04f * 1.04f, 0.0f, 0.0f};
+    rsm_motion_t v;
+    /* Odometry 4 % long, every scan pinned (the prior's metre against the
+     * 40 m the memory holds pulls 2.5 % of the way to none). */
+    rsm_odometry_cal_init(&cal);
+    (void)drive_distance(&cal, &c, 3000u, 0.04f, 1u);
+    TEST_ASSERT_FLOAT_WITHIN(0.0015f, truth, cal.k_scale);
+    TEST_ASSERT_EQUAL_UINT32(3000u, cal.scale_used);
+    v = rsm_odometry_cal_apply(&cal, &u);
+    TEST_ASSERT_FLOAT_WITHIN(5e-5f, 0.04f, v.dx);
+    /* One scan in ten pinned: the nine between follow the odometry and the
+     * tenth takes their error back. Its equation spans the ten steps
+     * (s = 0.416 m, found 0.4 m); one over its own step only would count
+     * the whole jump against 4 cm (k -0.0154 from the first). */
+    rsm_odometry_cal_init(&cal);
+    (void)drive_distance(&cal, &c, 10u, 0.04f, 10u);
+    TEST_ASSERT_FLOAT_WITHIN(0.0005f, -0.016f / (0.416f + c.scale_prior_m), cal.k_scale);
+    rsm_odometry_cal_init(&cal);
+    (void)drive_distance(&cal, &c, 3000u, 0.04f, 10u);
+    TEST_ASSERT_FLOAT_WITHIN(0.0015f, truth, cal.k_scale);
+    TEST_ASSERT_EQUAL_UINT32(300u, cal.scale_used);
+    /* After that the unpinned stretches end within a millimetre of the
+     * truth; uncorrected they end 1.6 cm off (ten steps of 4 cm, 4 %). */
+    TEST_ASSERT_TRUE(drive_distance(&cal, &c, 9u, 0.04f, 10u) < 0.001f);
+    /* True odometry stays uncorrected, and the heading's fit is left alone
+     * by the distance's. */
+    rsm_odometry_cal_init(&cal);
+    (void)drive_distance(&cal, &c, 2000u, 0.0f, 3u);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, cal.k_scale);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, cal.k_turn);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, cal.k_drift);
+}
+
+void test_odometry_cal_should_gate_and_bound_the_distance(void)
+{
+    rsm_odometry_cal_config_t c = with_distance();
+    rsm_odometry_cal_t cal;
+    rsm_pose_t est = {0.0f, 0.0f, 0.0f};
+    const rsm_motion_t u = {0.04f, 0.0f, 0.0f};
+    rsm_motion_t v;
+    float before;
+    float dir[2];
+    rsm_odometry_cal_init(&cal);
+    TEST_ASSERT_EQUAL_INT(0, rsm_odometry_cal_direction(&cal, dir)); /* no reference */
+    (void)drive_distance(&cal, &c, 500u, 0.04f, 1u);
+    before = cal.k_scale;
+    /* A scan that matching placed 0.3 m further on than 4 cm of odometry
+     * says (a slip, a wrong match) is not learnt from, but it is the next
+     * reference. */
+    rsm_odometry_cal_reference(&cal, &est);
+    rsm_odometry_cal_count(&cal, &u);
+    TEST_ASSERT_EQUAL_INT(1, rsm_odometry_cal_direction(&cal, dir));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 1.0f, dir[0]);
+    est.x = 0.34f;
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, 1.0f);
+    TEST_ASSERT_EQUAL_FLOAT(before, cal.k_scale);
+    TEST_ASSERT_EQUAL_UINT32(500u, cal.scale_used);
+    TEST_ASSERT_EQUAL_FLOAT(0.34f, cal.sref.x);
+    /* Odometry half as long again as the truth is corrected by no more
+     * than max_scale. */
+    rsm_odometry_cal_init(&cal);
+    (void)drive_distance(&cal, &c, 3000u, 0.5f, 1u);
+    TEST_ASSERT_EQUAL_FLOAT(-c.max_scale, cal.k_scale);
+    /* max_scale 0 (the default): the distance is not calibrated, the
+     * heading still is. */
+    c = rsm_odometry_cal_config_default();
+    rsm_odometry_cal_init(&cal);
+    (void)drive_distance(&cal, &c, 500u, 0.04f, 1u);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, cal.k_scale);
+    TEST_ASSERT_EQUAL_UINT32(0u, cal.scale_used);
+    TEST_ASSERT_EQUAL_UINT32(500u, cal.used);
+    v = rsm_odometry_cal_apply(&cal, &u);
+    TEST_ASSERT_EQUAL_FLOAT(u.dx, v.dx);
 }
 
 void test_odometry_cal_config_check_should_name_the_bad_field(void)
@@ -717,13 +840,19 @@ void test_odometry_cal_config_check_should_name_the_bad_field(void)
     BAD(max_turn, 1.0f, "odometry_cal.max_turn");
     BAD(max_drift, INFINITY, "odometry_cal.max_drift");
     BAD(gate_rad, -0.1f, "odometry_cal.gate_rad");
+    BAD(max_scale, 1.0f, "odometry_cal.max_scale");
+    BAD(max_scale, -0.01f, "odometry_cal.max_scale");
+    BAD(max_scale, NAN, "odometry_cal.max_scale");
+    BAD(gate_m, 0.0f, "odometry_cal.gate_m");
+    BAD(scale_prior_m, -1.0f, "odometry_cal.scale_prior_m");
 #undef BAD
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_odometry_cal_config_check(NULL, &field));
     TEST_ASSERT_EQUAL_STRING("odometry_cal", field);
     /* NULL arguments are ignored. */
     rsm_odometry_cal_init(NULL);
     rsm_odometry_cal_reference(NULL, NULL);
-    rsm_odometry_cal_update(NULL, &c, NULL, 1.0f);
+    rsm_odometry_cal_update(NULL, &c, NULL, 1.0f, 1.0f);
+    TEST_ASSERT_EQUAL_INT(0, rsm_odometry_cal_direction(NULL, NULL));
 }
 
 int main(void)
@@ -753,6 +882,8 @@ int main(void)
     RUN_TEST(test_odometry_cal_should_stay_near_zero_for_true_odometry_and_weigh_scans);
     RUN_TEST(test_odometry_cal_should_gate_jumps_and_bound_the_correction);
     RUN_TEST(test_odometry_cal_should_survive_an_absurd_step);
+    RUN_TEST(test_odometry_cal_should_learn_the_distance_between_pinned_scans);
+    RUN_TEST(test_odometry_cal_should_gate_and_bound_the_distance);
     RUN_TEST(test_odometry_cal_config_check_should_name_the_bad_field);
     return UNITY_END();
 }

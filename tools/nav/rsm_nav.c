@@ -108,7 +108,10 @@
     F("odo_cal_prior", odometry_cal.prior) \
     F("odo_cal_max_turn", odometry_cal.max_turn) \
     F("odo_cal_max_drift", odometry_cal.max_drift) \
-    F("odo_cal_gate", odometry_cal.gate_rad)
+    F("odo_cal_gate", odometry_cal.gate_rad) \
+    F("odo_cal_max_scale", odometry_cal.max_scale) \
+    F("odo_cal_gate_m", odometry_cal.gate_m) \
+    F("odo_cal_scale_prior", odometry_cal.scale_prior_m)
 
 /* Prints the --set keys, comma separated, wrapped before 80 columns. */
 static void print_set_keys(FILE *f)
@@ -917,9 +920,10 @@ static void time_stats(nav_t *nav, double *median, double *p95)
  * alignment {...} (capture and live modes), odometry_calibrations, and for
  * the persistent map tmap {writes, tiles [per level], taken, evicted,
  * dropped, freed, behind, unconfirmed}, recovery {searches, taken},
- * unpinned (matches that left the position along a corridor to odometry)
- * and heading_correction {turn, drift_rad_per_m, scans} (what the odometry
- * calibration learnt).
+ * unpinned (matches that left the position along a corridor to odometry),
+ * heading_correction {turn, drift_rad_per_m, scans} and distance_correction
+ * {scale, scans} (what the odometry calibration learnt; the distance's is
+ * 0 from 0 scans while it is off).
  * Returns 0, or -1 if the file cannot be written. */
 static int write_summary_json(nav_t *nav, const char *path)
 {
@@ -975,6 +979,8 @@ static int write_summary_json(nav_t *nav, const char *path)
                 (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->unpinned);
         fprintf(f, ",\n  \"heading_correction\": {\"turn\": %.5f, \"drift_rad_per_m\": %.5f, \"scans\": %u}",
                 (double)nav->loc.odo_cal.k_turn, (double)nav->loc.odo_cal.k_drift, (unsigned)nav->loc.odo_cal.used);
+        fprintf(f, ",\n  \"distance_correction\": {\"scale\": %.5f, \"scans\": %u}",
+                (double)nav->loc.odo_cal.k_scale, (unsigned)nav->loc.odo_cal.scale_used);
     }
     fprintf(f, "\n}\n");
     return fclose(f) == 0 ? 0 : -1;
@@ -1009,6 +1015,10 @@ static void print_summary(nav_t *nav)
             printf("  odometry turns  corrected by %+.2f %%, heading drift %+.3f deg/m (from %u scans)\n",
                    (double)(nav->loc.odo_cal.k_turn * 100.0f), (double)(nav->loc.odo_cal.k_drift * 57.29578f),
                    (unsigned)nav->loc.odo_cal.used);
+        }
+        if (nav->cfg.odometry_cal.memory > 0.0f && nav->cfg.odometry_cal.max_scale > 0.0f) {
+            printf("  odometry travel corrected by %+.2f %% (from %u scans)\n",
+                   (double)(nav->loc.odo_cal.k_scale * 100.0f), (unsigned)nav->loc.odo_cal.scale_used);
         }
     }
     printf("  timestamps      %llu clamped (went backwards), %llu odd (far from both neighbours: replaced),"
