@@ -62,7 +62,7 @@ from .common import (ARM_CONFIGS, BenchError, CALLGRIND_SCANS, DEFAULT_MAP_LOG2,
     FIRST_SEED, HOST_PARTS, LEVELS, LOCAL_SPAN, MEMORY_TILES, METHODS, OTHER_LEVELS, PEER_COLUMNS, QUANTITIES,
     QUICK_LEVELS, QUICK_OTHER_LEVELS, QUICK_SPREAD_UPDATES, ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS,
     SCALING_MAP_LOG2, SCALING_PRESETS, SCALING_TILES, SCOPES, SECTION_TITLES, SEEDS, SMALL, SMALL_HEADER,
-    SPEED_REPEATS, SPREAD_UPDATES, STAGES, TURNS, find_root, fmt_int, shown_path)
+    SPEED_REPEATS, SPREAD_SEEDS, SPREAD_UPDATES, STAGES, TURNS, find_root, fmt_int, shown_path)
 from .parse import (_peer_table, base_name, best_peers, callee_costs, callgrind_stages, fused_percent, load_peers,
     load_summary, localizer_breakdown, parse_callgraph_info, parse_callgrind, parse_cross_check, parse_nm_sizes,
     parse_peers, parse_size_archive, peer_speed, static_functions, worst_stack_path)
@@ -125,8 +125,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", type=int, help=f"seeds per outlier level, counting from {FIRST_SEED} "
                    f"(default {SEEDS}; quick 1)")
     p.add_argument("--spread", type=int, help=f"map update distances of the runs over which the outlier floors are "
-                   f"also judged, each clean and at every seed's outliers (default {SPREAD_UPDATES}; quick "
-                   f"{QUICK_SPREAD_UPDATES}; 0: skip)")
+                   f"also judged, each clean, every other one at each spread seed's outliers (default "
+                   f"{SPREAD_UPDATES}; quick {QUICK_SPREAD_UPDATES}; 0: skip)")
+    p.add_argument("--spread-seeds", type=int, help=f"outlier seeds of those runs, counting from {FIRST_SEED} "
+                   f"(default {SPREAD_SEEDS}; quick: as --seeds)")
     p.add_argument("--speed-repeats", type=int, help=f"timed runs per method (default {SPEED_REPEATS}; quick 1)")
     p.add_argument("--callgrind-scans", type=int, default=CALLGRIND_SCANS,
                    help=f"scans from the start of every log counted by callgrind (default {CALLGRIND_SCANS})")
@@ -255,8 +257,12 @@ def run(args: argparse.Namespace) -> Path:
     ctx["robustness"] = stage("robustness", run_robustness, nav, logs, ctx["accuracy"], lv_by_log, seeds, work,
                               cache, args.jobs)
     nspread = args.spread if args.spread is not None else (QUICK_SPREAD_UPDATES if args.quick else SPREAD_UPDATES)
+    nsseeds = args.spread_seeds if args.spread_seeds is not None else (nseeds if args.quick else SPREAD_SEEDS)
+    if nsseeds < 1:
+        raise BenchError("--spread-seeds must be at least 1")
     ctx["spread"] = ({"skipped": "--spread 0"} if nspread <= 0 else
-                     stage("spread", run_spread, nav, logs, FLOOR_LEVEL, seeds, spread_updates(nspread), work, cache,
+                     stage("spread", run_spread, nav, logs, FLOOR_LEVEL,
+                           list(range(FIRST_SEED, FIRST_SEED + nsseeds)), spread_updates(nspread), work, cache,
                            args.jobs))
     sanitized = cmake_cache(build).get("RSM_SANITIZE", "OFF").upper() in ("ON", "TRUE", "1", "YES")
     painted = not (args.no_stack or sanitized)

@@ -41,9 +41,13 @@ FIRST_SEED = 7  # the seed of the peers' outlier runs; further seeds count up fr
 
 SEEDS = 2
 # The spread section: rsm once per map_update_m of 0.300, 0.305, ... (this
-# many values, around the default 0.4 m), clean and at each seed's outliers.
+# many values, around the default 0.4 m) on the clean logs, and at every
+# other of them on the outlier copies of each of SPREAD_SEEDS seeds: which
+# phantoms a seed draws moves the mean of its runs by more than a tenth,
+# so the ratio is taken over many seeds, not many runs of two.
 SPREAD_UPDATES = 40
 QUICK_SPREAD_UPDATES = 4
+SPREAD_SEEDS = 7
 
 
 SPEED_REPEATS = 3

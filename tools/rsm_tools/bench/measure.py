@@ -355,16 +355,18 @@ def spread_updates(count: int) -> List[float]:
 
 def run_spread(nav: Path, logs: List[Tuple[str, Path, Path]], level: int, seeds: Sequence[int],
                updates: Sequence[float], work: Path, cache: Path, jobs: int) -> dict:
-    """Per log: rsm once per map_update_m of ``updates``, on the clean log and
-    on its copy at ``level`` % outliers for each seed. A run's all-relations
-    error is one draw of a chaotic process (rounding alone moves it by a
-    tenth, docs/map.md), so the floors' ratios are also taken between the
-    means of many runs."""
+    """Per log: rsm once per map_update_m of ``updates`` on the clean log,
+    and at every other one of them on its copy at ``level`` % outliers for
+    each seed. A run's all-relations error is one draw of a chaotic process
+    (rounding alone moves it by a tenth, docs/map.md), and so is a seed's
+    draw of phantoms, so the floors' ratios are also taken between the means
+    of many runs over many seeds."""
     paths, made = outlier_logs([(log, level, sd) for _, log, _ in logs for sd in seeds], cache, jobs)
+    noisy_updates = list(updates[::2])
     tasks = []
     for label, log, _ in logs:
-        sources = [("clean", log)] + [(f"s{sd}", paths[(str(log), level, sd)]) for sd in seeds]
-        tasks += [(label, variant, path, u) for variant, path in sources for u in updates]
+        tasks += [(label, "clean", log, u) for u in updates]
+        tasks += [(label, f"s{sd}", paths[(str(log), level, sd)], u) for sd in seeds for u in noisy_updates]
 
     def one(task):
         label, variant, path, u = task
@@ -373,7 +375,8 @@ def run_spread(nav: Path, logs: List[Tuple[str, Path, Path]], level: int, seeds:
         return task, traj
 
     done = parallel(one, tasks, jobs)
-    out = {"level": level, "seeds": list(seeds), "updates": list(updates), "outlier_logs_made": made, "logs": {}}
+    out = {"level": level, "seeds": list(seeds), "updates": list(updates), "noisy_updates": noisy_updates,
+           "outlier_logs_made": made, "logs": {}}
     for label, _, rel in logs:
         relations = ev.load_relations(rel)
         vals: Dict[str, Dict[str, List[float]]] = {k: {sc: [] for sc in SCOPES} for k in ("clean", "noisy")}

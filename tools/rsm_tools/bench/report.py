@@ -1053,10 +1053,11 @@ def report_robustness(ctx: dict, root: Path) -> List[str]:
               "One run's all-relations error is one draw of a chaotic process: rounding alone moves it by about a "
               "tenth (docs/map.md), so the tables above, one run per seed, can pass or miss a floor by chance. "
               f"Here rsm ran once per `map_update_m` of {sp['updates'][0]:g}, {sp['updates'][1]:g}, ... "
-              f"{sp['updates'][-1]:g} m ({len(sp['updates'])} values around the default 0.4) on every clean log and "
-              f"on its copies at {sp['level']} % outliers (seeds {', '.join(str(s) for s in sp['seeds'])}): the "
-              "mean error over the runs with its standard error, the median, and the ratio of the means with its "
-              "standard error.", ""]
+              f"{sp['updates'][-1]:g} m ({len(sp['updates'])} values around the default 0.4) on every clean log, and "
+              f"at every other one of them on its copies at {sp['level']} % outliers (seeds "
+              f"{', '.join(str(s) for s in sp['seeds'])}; which phantoms a seed draws moves its runs' mean by more "
+              "than a tenth): the mean error over the runs with its standard error, the median, and the ratio of "
+              "the means with its standard error.", ""]
         rows = []
         for label, r in sp["logs"].items():
             for sc in SCOPES:
