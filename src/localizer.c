@@ -199,7 +199,7 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
     return rc;
 }
 
-/* Whether odometry's heading is calibrated from the matches. */
+/* Whether odometry's heading (and distance) is calibrated from the matches. */
 static int calibrating(const rsm_localizer_t *loc)
 {
     return loc->cfg->method == RSM_METHOD_MAP && loc->cfg->odometry_cal.memory > 0.0f;
@@ -216,7 +216,7 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
         loc->counters.bad_motions++;
         return RSM_ERR_RANGE;
     }
-    /* Odometry's systematic heading error, as matching has found it. */
+    /* Odometry's systematic errors, as matching has found them. */
     v = calibrating(loc) ? rsm_odometry_cal_apply(&loc->odo_cal, u) : *u;
     rsm_odometry_noise(&loc->odo.cfg, &v, q);
     /* No process noise before the first scan (see localizer.h). */
@@ -225,7 +225,7 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
         return RSM_ERR_RANGE;
     }
     if (calibrating(loc)) {
-        rsm_odometry_cal_count(&loc->odo_cal, u);
+        rsm_odometry_cal_count(&loc->odo_cal, u, loc->have_scan ? q[0] : 0.0f);
     }
     loc->counters.motions++;
     return RSM_OK;
@@ -619,29 +619,20 @@ static size_t drop_occluded(rsm_localizer_t *loc, size_t n)
 }
 
 /* One more equation for the odometry calibration from a scan matched on its
- * own: the weight is the share of the heading's variance the match removed
- * (a scan that pins the heading tells the most). A recovery's jump is
- * odometry off by more than its systematic error: a new reference only. */
-static void calibrate(rsm_localizer_t *loc, rsm_outcome_t outcome, const float prior[9], uint32_t recovered)
+ * own: the heading's weight is the share of the heading's variance the
+ * match removed (a scan that pins the heading tells the most); the
+ * position's covariance tells whether it pinned the distance. A
+ * recovery's jump is odometry off by more than its systematic error: a
+ * new reference only. */
+static void calibrate(rsm_localizer_t *loc, rsm_outcome_t outcome, float prior_var, uint32_t recovered)
 {
     const rsm_pose_t est = loc->ekf.x;
     if (outcome == RSM_SCAN_FIRST || (outcome == RSM_SCAN_ACCEPTED && loc->counters.recovered != recovered)) {
         rsm_odometry_cal_reference(&loc->odo_cal, &est);
     } else if (outcome == RSM_SCAN_ACCEPTED) {
-        const float *p = loc->ekf.p;
-        float w = prior[8] > 0.0f ? 1.0f - p[8] / prior[8] : 0.0f;
-        float w_along = 0.0f;
-        float d[2];
-        /* Along odometry's way the same share, of the position's variance:
-         * an unpinned match (a bare corridor) removes none and says nothing
-         * of the distance. */
-        if (rsm_odometry_cal_direction(&loc->odo_cal, d)) {
-            const float before = d[0] * d[0] * prior[0] + 2.0f * d[0] * d[1] * prior[1] + d[1] * d[1] * prior[4];
-            const float after = d[0] * d[0] * p[0] + 2.0f * d[0] * d[1] * p[1] + d[1] * d[1] * p[4];
-            w_along = before > 0.0f ? 1.0f - after / before : 0.0f;
-        }
-        rsm_odometry_cal_update(&loc->odo_cal, &loc->cfg->odometry_cal, &est, w > 1.0f ? 1.0f : w,
-                                w_along > 1.0f ? 1.0f : w_along);
+        const float pos_cov[3] = {loc->ekf.p[0], loc->ekf.p[1], loc->ekf.p[4]};
+        const float w = prior_var > 0.0f ? 1.0f - loc->ekf.p[8] / prior_var : 0.0f;
+        rsm_odometry_cal_update(&loc->odo_cal, &loc->cfg->odometry_cal, &est, w > 1.0f ? 1.0f : w, pos_cov);
     }
 }
 
@@ -837,7 +828,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     rsm_outcome_t outcome;
     rsm_pose_t est;
     size_t npts;
-    float prior[9];
+    float prior_var;
     uint32_t recovered;
     int n;
     if (rep == NULL) {
@@ -863,7 +854,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         (void)rsm_localizer_motion(loc, &still);
     }
     loc->motions_at_scan = loc->counters.motions;
-    memcpy(prior, loc->ekf.p, sizeof prior);
+    prior_var = loc->ekf.p[8];
     recovered = loc->counters.recovered;
     n = rsm_scan_to_points_cached(scan, &loc->cfg->limits, &loc->trig, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
     npts = n > 0 ? (size_t)n : 0u;
@@ -884,7 +875,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         outcome = step_rsm(loc, npts, rep, &clk);
     }
     if (calibrating(loc)) {
-        calibrate(loc, outcome, prior, recovered);
+        calibrate(loc, outcome, prior_var, recovered);
     }
     stage_switch(&clk, RSM_STAGE_MAP);
     est = loc->ekf.x;

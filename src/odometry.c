@@ -409,27 +409,37 @@ rsm_motion_t rsm_odometry_cal_apply(const rsm_odometry_cal_t *cal, const rsm_mot
     return v;
 }
 
-void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_motion_t *u)
+void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_motion_t *u, float var_t)
 {
     if (cal != NULL && u != NULL) {
-        /* The step in the reference's frame, at odometry's own heading
-         * since then (its error over a few scans is small). */
+        /* The step in the distance's reference frame, at odometry's
+         * heading since then as corrected: over a corridor's span the raw
+         * heading's drift would shorten the chord and turn it aside. */
         const float c = cosf(cal->disp_turn);
         const float s = sinf(cal->disp_turn);
         cal->disp[0] += c * u->dx - s * u->dy;
         cal->disp[1] += s * u->dx + c * u->dy;
-        cal->disp_turn = rsm_wrap_angle(cal->disp_turn + u->dtheta);
+        cal->disp_turn = rsm_wrap_angle(cal->disp_turn + u->dtheta * (1.0f + cal->k_turn) + cal->k_drift * u->dx);
+        if (var_t > 0.0f) {
+            cal->disp_var += var_t;
+        }
         cal->turn += u->dtheta;
         cal->travel += u->dx;
     }
 }
 
-static void scale_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
+static void scale_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est, const float pos_cov[3])
 {
     cal->sref = *est;
     cal->disp[0] = 0.0f;
     cal->disp[1] = 0.0f;
     cal->disp_turn = 0.0f;
+    cal->disp_var = 0.0f;
+    if (pos_cov != NULL) {
+        memcpy(cal->sref_cov, pos_cov, sizeof cal->sref_cov);
+    } else {
+        memset(cal->sref_cov, 0, sizeof cal->sref_cov);
+    }
 }
 
 static void heading_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
@@ -446,7 +456,7 @@ void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
         return;
     }
     heading_reference(cal, est);
-    scale_reference(cal, est);
+    scale_reference(cal, est, NULL);
 }
 
 /* Below this odometry's displacement gives no direction to fit along. */
@@ -457,6 +467,8 @@ int rsm_odometry_cal_direction(const rsm_odometry_cal_t *cal, float dir[2])
     float s;
     float c;
     float sn;
+    float x;
+    float y;
     if (cal == NULL || dir == NULL || !cal->have_ref) {
         return 0;
     }
@@ -466,8 +478,13 @@ int rsm_odometry_cal_direction(const rsm_odometry_cal_t *cal, float dir[2])
     }
     c = cosf(cal->sref.theta);
     sn = sinf(cal->sref.theta);
-    dir[0] = (c * cal->disp[0] - sn * cal->disp[1]) / s;
-    dir[1] = (sn * cal->disp[0] + c * cal->disp[1]) / s;
+    x = (c * cal->disp[0] - sn * cal->disp[1]) / s;
+    y = (sn * cal->disp[0] + c * cal->disp[1]) / s;
+    if (!isfinite(x) || !isfinite(y)) {
+        return 0; /* an infinite span or a NaN reference: no direction */
+    }
+    dir[0] = x;
+    dir[1] = y;
     return 1;
 }
 
@@ -481,51 +498,65 @@ static float clamp_abs(float v, float most)
  * which a NaN fails) every sum stays finite and the system solvable. */
 #define CAL_MAX_TRAVEL_M 10.0f
 
-/* A scan that removes at least this share of the position's variance
- * along odometry's way pins the position there. */
+/* A scan whose position along odometry's way is known to at least this
+ * share of the variance that way had without one (the last pinned scan's,
+ * plus what odometry added since) pins the position there. */
 #define CAL_PIN_SHARE 0.5f
 
 /* The distance's equation: what matching found along odometry's
  * displacement s since the last pinned scan, less s, is k_scale * s. */
 static void update_scale(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
-                         float weight)
+                         const float pos_cov[3])
 {
     float dir[2];
     float s;
     float e;
     float keep;
-    if (!(weight >= CAL_PIN_SHARE)) {
-        return; /* unpinned: odometry's way goes on to the next pinned scan */
+    s = sqrtf(cal->disp[0] * cal->disp[0] + cal->disp[1] * cal->disp[1]);
+    if (s < CAL_MIN_DISP_M) {
+        return; /* no way to measure along yet */
     }
-    if (cfg->max_scale > 0.0f && rsm_odometry_cal_direction(cal, dir)) {
-        s = sqrtf(cal->disp[0] * cal->disp[0] + cal->disp[1] * cal->disp[1]);
-        e = dir[0] * (est->x - cal->sref.x) + dir[1] * (est->y - cal->sref.y) - s;
-        if (s <= CAL_MAX_TRAVEL_M && fabsf(e - cal->k_scale * s) <= cfg->gate_m + cfg->max_scale * s) {
-            keep = 1.0f - 1.0f / cfg->memory;
-            /* The span's error grows with its length as odometry's does
-             * (weight 1/s): k is the distance found over the distance
-             * driven, less one, and one long span weighs as its metres. */
-            cal->scale_info = keep * cal->scale_info + s;
-            cal->scale_moment = keep * cal->scale_moment + e;
-            cal->k_scale = clamp_abs(cal->scale_moment / (cal->scale_info + cfg->scale_prior_m), cfg->max_scale);
-            cal->scale_used++;
+    if (!(s <= CAL_MAX_TRAVEL_M) || !rsm_odometry_cal_direction(cal, dir)) {
+        scale_reference(cal, est, pos_cov); /* a span no scan can measure (too long, inf, NaN) */
+        return;
+    }
+    {
+        const float d0 = dir[0] * dir[0];
+        const float d01 = 2.0f * dir[0] * dir[1];
+        const float d1 = dir[1] * dir[1];
+        const float before = d0 * cal->sref_cov[0] + d01 * cal->sref_cov[1] + d1 * cal->sref_cov[2] + cal->disp_var;
+        const float after = pos_cov != NULL ? d0 * pos_cov[0] + d01 * pos_cov[1] + d1 * pos_cov[2] : before;
+        if (!(after <= CAL_PIN_SHARE * before)) {
+            return; /* unpinned: odometry's way goes on to the next pinned scan */
         }
     }
-    scale_reference(cal, est);
+    e = dir[0] * (est->x - cal->sref.x) + dir[1] * (est->y - cal->sref.y) - s;
+    if (cfg->max_scale > 0.0f && fabsf(e - cal->k_scale * s) <= cfg->gate_m + cfg->max_scale * s) {
+        keep = 1.0f - 1.0f / cfg->memory;
+        /* The span's error grows with its length as odometry's does
+         * (weight 1/s): k is the distance found over the distance
+         * driven, less one, and one long span weighs as its metres. */
+        cal->scale_info = keep * cal->scale_info + s;
+        cal->scale_moment = keep * cal->scale_moment + e;
+        cal->k_scale = clamp_abs(cal->scale_moment / (cal->scale_info + cfg->scale_prior_m), cfg->max_scale);
+        cal->scale_used++;
+    }
+    scale_reference(cal, est, pos_cov);
 }
 
 void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
-                             float weight, float along_weight)
+                             float weight, const float pos_cov[3])
 {
     if (cal == NULL || cfg == NULL || est == NULL) {
         return;
     }
     if (!cal->have_ref) {
-        rsm_odometry_cal_reference(cal, est);
+        heading_reference(cal, est);
+        scale_reference(cal, est, pos_cov);
         return;
     }
     if (cfg->memory > 0.0f) {
-        update_scale(cal, cfg, est, along_weight);
+        update_scale(cal, cfg, est, pos_cov);
     }
     if (cfg->memory > 0.0f && weight > 0.0f && weight <= 1.0f && fabsf(cal->turn) <= RSM_PI &&
         fabsf(cal->travel) <= CAL_MAX_TRAVEL_M) {

@@ -84,8 +84,9 @@ typedef struct rsm_localizer_config {
     rsm_ransac_config_t ransac;
     rsm_icp_config_t icp;
     rsm_odometry_config_t odometry; /* geometry for ticks, and process noise */
-    rsm_odometry_cal_config_t odometry_cal; /* online calibration of odometry's heading error from
-                                     * the matches (RSM_METHOD_MAP); memory 0 = off; default on */
+    rsm_odometry_cal_config_t odometry_cal; /* online calibration of odometry's heading error (and,
+                                     * with max_scale > 0, distance error) from the matches
+                                     * (RSM_METHOD_MAP); memory 0 = off; default on */
     rsm_pose_t laser_mount;         /* the laser's pose in the robot frame; default zero */
     uint8_t laser_upside_down;      /* 1: the laser is mounted upside down (beam angles mirrored) */
     rsm_tmap_config_t tmap;         /* persistent map (RSM_METHOD_MAP) */
@@ -269,7 +270,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
  * and loc->cfg->odometry, read only by init, is not touched). Increments
  * from the next encoder sample on use it; the latched counts are kept
  * unless counter_bits changes (the next sample then only latches). The
- * heading correction learnt so far (loc->odo_cal) starts over: it was
+ * corrections learnt so far (loc->odo_cal) start over: they were
  * learnt for the old geometry.
  * Returns RSM_OK, or RSM_ERR_INVAL (loc or odo_cfg NULL, a non-positive or
  * non-finite ticks_per_m_left/right or wheel_base_m, counter_bits outside

@@ -157,7 +157,7 @@ void rsm_odometry_jacobians(const rsm_pose_t *pose, const rsm_motion_t *u, float
  * argument is NULL. */
 void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float q[9]);
 
-/* ---- calibration of odometry's systematic heading error ----------------
+/* ---- calibration of odometry's systematic heading and distance errors ---
  *
  * Wheel odometry turns by a share too much or too little (a wheel base off
  * its nominal, tyres that slip in turns) and drifts to one side as it
@@ -208,10 +208,12 @@ typedef struct rsm_odometry_cal {
     float k_scale;
     float turn;       /* odometry's raw turn and forward travel since the reference */
     float travel;
-    float disp[2];    /* odometry's raw displacement since the distance's reference, in its
-                       * frame, and its turn since then */
+    float disp[2];    /* odometry's displacement since the distance's reference, in its frame,
+                       * its corrected turn and the variance it added since then (m^2) */
     float disp_turn;
+    float disp_var;
     rsm_pose_t sref;  /* the estimate at the last scan that pinned the position along the way */
+    float sref_cov[3]; /* ... and its position's covariance there: xx, xy, yy */
     rsm_pose_t ref;   /* the estimate at the reference scan */
     uint8_t have_ref;
     uint32_t used;    /* scans that updated the heading's correction */
@@ -229,16 +231,19 @@ int rsm_odometry_cal_config_check(const rsm_odometry_cal_config_t *cfg, const ch
 /* No correction, no evidence, no reference. Nothing if cal is NULL. */
 void rsm_odometry_cal_init(rsm_odometry_cal_t *cal);
 
-/* u corrected by the correction in force (only dtheta changes); u as it
- * is if cal is NULL. Pure: rsm_odometry_cal_count counts u once it is used. */
+/* u corrected by the correction in force; u as it is if cal is NULL.
+ * Pure: rsm_odometry_cal_count counts u once it is used. */
 rsm_motion_t rsm_odometry_cal_apply(const rsm_odometry_cal_t *cal, const rsm_motion_t *u);
 
 /* Counts the raw increment u towards the next update (call it for each
- * increment the prediction took, and only then). Nothing if cal is NULL. */
-void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_motion_t *u);
+ * increment the prediction took, and only then), with the variance var_t
+ * (m^2) the prediction added to the position for it. Nothing if cal is
+ * NULL. */
+void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_motion_t *u, float var_t);
 
-/* Makes est the reference the next update measures from (the first scan,
- * or one whose estimate jumped: a recovery) and restarts the sums. */
+/* Makes est the reference the next update measures from, the heading's
+ * and the distance's (the first scan, or one whose estimate jumped: a
+ * recovery), and restarts the sums since the reference. */
 void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est);
 
 /* A scan matched at est: the heading change since the reference, less
@@ -248,19 +253,22 @@ void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est);
  * gate_rad (a NaN heading always does) or odometry's sums are beyond any
  * step between two scans (a turn over pi, travel over 10 m; a corrupt
  * increment): the correction in force then stays. Then est becomes the
- * reference. along_weight is the share of the position's variance along
- * odometry's displacement since the distance's reference that the scan
- * removed: when it is half or more, the distance found along that
- * displacement since then is one more equation for k_scale (gated by
- * gate_m plus max_scale of the distance) and est that reference.
+ * reference. pos_cov is the covariance of est's position (xx, xy, yy;
+ * NULL: unknown). When the variance along odometry's displacement since
+ * the distance's reference is at most half of what it was there plus what
+ * odometry added since, the scan pins the position along the way: the
+ * distance found along that displacement is one more equation for k_scale
+ * (gated by gate_m plus max_scale of the distance; none when max_scale is
+ * 0) and est the distance's reference. A span over 10 m, or one no
+ * direction can be taken of, only restarts it.
  * Without a reference it only takes est as one. */
 void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
-                             float weight, float along_weight);
+                             float weight, const float pos_cov[3]);
 
 /* The unit direction, in the world frame, of odometry's displacement since
- * the distance's reference (what along_weight is measured along), in dir;
- * 0 and dir untouched without a reference or a displacement of 1 mm at
- * least. */
+ * the distance's reference (what pinning is judged along), in dir; 0 and
+ * dir untouched without a reference, a displacement of 1 mm at least or a
+ * finite direction. */
 int rsm_odometry_cal_direction(const rsm_odometry_cal_t *cal, float dir[2]);
 
 #ifdef __cplusplus

@@ -575,20 +575,20 @@ static float drive(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *c, 
     rsm_pose_t est = {0.0f, 0.0f, 0.0f};
     float worst = 0.0f;
     uint32_t k;
-    rsm_odometry_cal_update(cal, c, &est, w, 0.0f); /* the first scan: a reference only */
+    rsm_odometry_cal_update(cal, c, &est, w, NULL); /* the first scan: a reference only */
     for (k = 0; k < n; ++k) {
         const float turn = 0.06f * sinf(0.05f * (float)k);
         const float dx = (k / 200u) % 5u == 4u ? -0.02f : 0.04f;
         const rsm_motion_t u = biased(dx, turn, over, drift);
         const rsm_motion_t v = rsm_odometry_cal_apply(cal, &u);
-        rsm_odometry_cal_count(cal, &u);
+        rsm_odometry_cal_count(cal, &u, 0.0f);
         TEST_ASSERT_EQUAL_FLOAT(u.dx, v.dx);
         TEST_ASSERT_EQUAL_FLOAT(u.dy, v.dy);
         if (k >= 3u * n / 4u && fabsf(v.dtheta - turn) > worst) {
             worst = fabsf(v.dtheta - turn);
         }
         est.theta = rsm_wrap_angle(est.theta + turn);
-        rsm_odometry_cal_update(cal, c, &est, w, 0.0f);
+        rsm_odometry_cal_update(cal, c, &est, w, NULL);
     }
     return worst;
 }
@@ -645,9 +645,9 @@ void test_odometry_cal_should_gate_jumps_and_bound_the_correction(void)
      * correction say (a slip, a wrong match) is not learnt from... */
     est.theta = 1.0f;
     rsm_odometry_cal_reference(&cal, &est);
-    rsm_odometry_cal_count(&cal, &u);
+    rsm_odometry_cal_count(&cal, &u, 0.0f);
     est.theta = 1.0f + 0.05f + 0.3f;
-    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, 0.0f);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, NULL);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
     TEST_ASSERT_EQUAL_UINT32(500u, cal.used);
     /* ...but it becomes the reference for the next. */
@@ -679,13 +679,13 @@ void test_odometry_cal_should_survive_an_absurd_step(void)
     (void)drive(&cal, &c, 500u, 0.06f, 0.0f, 1.0f);
     before = cal.k_turn;
     rsm_odometry_cal_reference(&cal, &est);
-    rsm_odometry_cal_count(&cal, &huge);
-    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, 0.0f);
+    rsm_odometry_cal_count(&cal, &huge, 0.0f);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, NULL);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
-    rsm_odometry_cal_count(&cal, &spin);
-    rsm_odometry_cal_count(&cal, &spin);
+    rsm_odometry_cal_count(&cal, &spin, 0.0f);
+    rsm_odometry_cal_count(&cal, &spin, 0.0f);
     est.theta = rsm_wrap_angle(6.0f);
-    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, 0.0f);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, NULL);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
     TEST_ASSERT_EQUAL_UINT32(500u, cal.used);
     v = rsm_odometry_cal_apply(&cal, &spin);
@@ -694,25 +694,35 @@ void test_odometry_cal_should_survive_an_absurd_step(void)
     TEST_ASSERT_TRUE(cal.k_drift < -0.025f && cal.k_drift > -0.031f);
 }
 
+/* The variance a step adds to the position in drive_distance, and a
+ * match's: a pinned scan knows its position far better than the steps
+ * since the last one did. */
+#define STEP_VAR 1e-4f
+#define MATCH_VAR 1e-6f
+
 /* Drives n steps of a wavy path (4 cm forward, now and then backwards)
- * with odometry that measures every distance 1 + over times too long, and
- * matches one scan in every `pinned` at the true pose with along_weight 1;
- * the scans between keep the prediction from the corrected odometry and
- * remove none of the variance along the way (a bare corridor). Returns the
- * distance the estimate ends off. */
+ * with odometry that measures every distance 1 + over times too long and
+ * drifts `drift` rad per metre, and matches one scan in every `pinned` at
+ * the true pose with a match's covariance; the scans between keep the
+ * prediction from the corrected odometry, the heading from the walls, and
+ * the variance odometry added (a bare corridor). Returns the distance the
+ * estimate ends off. */
 static float drive_distance(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *c, uint32_t n, float over,
-                            uint32_t pinned)
+                            float drift, uint32_t pinned, float step_var)
 {
+    const float matched[3] = {MATCH_VAR, 0.0f, MATCH_VAR};
     rsm_pose_t truth = {0.0f, 0.0f, 0.0f};
     rsm_pose_t est = truth;
+    float var = MATCH_VAR;
     uint32_t k;
-    rsm_odometry_cal_update(cal, c, &est, 1.0f, 1.0f);
+    rsm_odometry_cal_update(cal, c, &est, 1.0f, matched);
     for (k = 0; k < n; ++k) {
         const float turn = 0.03f * sinf(0.05f * (float)k);
         const float dx = (k / 200u) % 5u == 4u ? -0.02f : 0.04f;
-        const rsm_motion_t u = {dx * (1.0f + over), 0.0f, turn};
+        const rsm_motion_t u = {dx * (1.0f + over), 0.0f, turn + drift * dx * (1.0f + over)};
         const rsm_motion_t v = rsm_odometry_cal_apply(cal, &u);
-        rsm_odometry_cal_count(cal, &u);
+        rsm_odometry_cal_count(cal, &u, step_var);
+        var += step_var;
         truth.x += dx * cosf(truth.theta);
         truth.y += dx * sinf(truth.theta);
         truth.theta = rsm_wrap_angle(truth.theta + turn);
@@ -721,9 +731,11 @@ static float drive_distance(rsm_odometry_cal_t *cal, const rsm_odometry_cal_conf
         est.theta = truth.theta;
         if ((k + 1u) % pinned == 0u) {
             est = truth;
-            rsm_odometry_cal_update(cal, c, &est, 1.0f, 1.0f);
+            var = MATCH_VAR;
+            rsm_odometry_cal_update(cal, c, &est, 1.0f, matched);
         } else {
-            rsm_odometry_cal_update(cal, c, &est, 1.0f, 0.0f);
+            const float grown[3] = {var, 0.0f, var};
+            rsm_odometry_cal_update(cal, c, &est, 1.0f, grown);
         }
     }
     return hypotf(est.x - truth.x, est.y - truth.y);
@@ -747,7 +759,7 @@ void test_odometry_cal_should_learn_the_distance_between_pinned_scans(void)
     /* Odometry 4 % long, every scan pinned (the prior's metre against the
      * 40 m the memory holds pulls 2.5 % of the way to none). */
     rsm_odometry_cal_init(&cal);
-    (void)drive_distance(&cal, &c, 3000u, 0.04f, 1u);
+    (void)drive_distance(&cal, &c, 3000u, 0.04f, 0.0f, 1u, STEP_VAR);
     TEST_ASSERT_FLOAT_WITHIN(0.0015f, truth, cal.k_scale);
     TEST_ASSERT_EQUAL_UINT32(3000u, cal.scale_used);
     v = rsm_odometry_cal_apply(&cal, &u);
@@ -757,19 +769,19 @@ void test_odometry_cal_should_learn_the_distance_between_pinned_scans(void)
      * (s = 0.416 m, found 0.4 m); one over its own step only would count
      * the whole jump against 4 cm (k -0.0154 from the first). */
     rsm_odometry_cal_init(&cal);
-    (void)drive_distance(&cal, &c, 10u, 0.04f, 10u);
+    (void)drive_distance(&cal, &c, 10u, 0.04f, 0.0f, 10u, STEP_VAR);
     TEST_ASSERT_FLOAT_WITHIN(0.0005f, -0.016f / (0.416f + c.scale_prior_m), cal.k_scale);
     rsm_odometry_cal_init(&cal);
-    (void)drive_distance(&cal, &c, 3000u, 0.04f, 10u);
+    (void)drive_distance(&cal, &c, 3000u, 0.04f, 0.0f, 10u, STEP_VAR);
     TEST_ASSERT_FLOAT_WITHIN(0.0015f, truth, cal.k_scale);
     TEST_ASSERT_EQUAL_UINT32(300u, cal.scale_used);
     /* After that the unpinned stretches end within a millimetre of the
      * truth; uncorrected they end 1.6 cm off (ten steps of 4 cm, 4 %). */
-    TEST_ASSERT_TRUE(drive_distance(&cal, &c, 9u, 0.04f, 10u) < 0.001f);
+    TEST_ASSERT_TRUE(drive_distance(&cal, &c, 9u, 0.04f, 0.0f, 10u, STEP_VAR) < 0.001f);
     /* True odometry stays uncorrected, and the heading's fit is left alone
      * by the distance's. */
     rsm_odometry_cal_init(&cal);
-    (void)drive_distance(&cal, &c, 2000u, 0.0f, 3u);
+    (void)drive_distance(&cal, &c, 2000u, 0.0f, 0.0f, 3u, STEP_VAR);
     TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, cal.k_scale);
     TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, cal.k_turn);
     TEST_ASSERT_FLOAT_WITHIN(1e-4f, 0.0f, cal.k_drift);
@@ -777,6 +789,7 @@ void test_odometry_cal_should_learn_the_distance_between_pinned_scans(void)
 
 void test_odometry_cal_should_gate_and_bound_the_distance(void)
 {
+    const float matched[3] = {MATCH_VAR, 0.0f, MATCH_VAR};
     rsm_odometry_cal_config_t c = with_distance();
     rsm_odometry_cal_t cal;
     rsm_pose_t est = {0.0f, 0.0f, 0.0f};
@@ -786,35 +799,141 @@ void test_odometry_cal_should_gate_and_bound_the_distance(void)
     float dir[2];
     rsm_odometry_cal_init(&cal);
     TEST_ASSERT_EQUAL_INT(0, rsm_odometry_cal_direction(&cal, dir)); /* no reference */
-    (void)drive_distance(&cal, &c, 500u, 0.04f, 1u);
+    (void)drive_distance(&cal, &c, 500u, 0.04f, 0.0f, 1u, STEP_VAR);
     before = cal.k_scale;
     /* A scan that matching placed 0.3 m further on than 4 cm of odometry
      * says (a slip, a wrong match) is not learnt from, but it is the next
      * reference. */
     rsm_odometry_cal_reference(&cal, &est);
-    rsm_odometry_cal_count(&cal, &u);
+    rsm_odometry_cal_count(&cal, &u, STEP_VAR);
     TEST_ASSERT_EQUAL_INT(1, rsm_odometry_cal_direction(&cal, dir));
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, 1.0f, dir[0]);
     est.x = 0.34f;
-    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, 1.0f);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, matched);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_scale);
     TEST_ASSERT_EQUAL_UINT32(500u, cal.scale_used);
     TEST_ASSERT_EQUAL_FLOAT(0.34f, cal.sref.x);
     /* Odometry half as long again as the truth is corrected by no more
      * than max_scale. */
     rsm_odometry_cal_init(&cal);
-    (void)drive_distance(&cal, &c, 3000u, 0.5f, 1u);
+    (void)drive_distance(&cal, &c, 3000u, 0.5f, 0.0f, 1u, STEP_VAR);
     TEST_ASSERT_EQUAL_FLOAT(-c.max_scale, cal.k_scale);
+    /* The gate is on the miss of the correction in force: with k_scale at
+     * -0.1, a 1 m span found 0.24 m short misses it by 0.14 m, within 5 cm
+     * plus 0.1 of the metre, and is learnt from. */
+    before = (float)cal.scale_used;
+    est.x = 0.0f;
+    est.y = 0.0f;
+    est.theta = 0.0f;
+    rsm_odometry_cal_reference(&cal, &est);
+    {
+        const rsm_motion_t metre = {1.0f, 0.0f, 0.0f};
+        rsm_odometry_cal_count(&cal, &metre, STEP_VAR);
+    }
+    est.x = 0.76f;
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, matched);
+    TEST_ASSERT_EQUAL_FLOAT(before + 1.0f, (float)cal.scale_used);
     /* max_scale 0 (the default): the distance is not calibrated, the
      * heading still is. */
     c = rsm_odometry_cal_config_default();
     rsm_odometry_cal_init(&cal);
-    (void)drive_distance(&cal, &c, 500u, 0.04f, 1u);
+    (void)drive_distance(&cal, &c, 500u, 0.04f, 0.0f, 1u, STEP_VAR);
     TEST_ASSERT_EQUAL_FLOAT(0.0f, cal.k_scale);
     TEST_ASSERT_EQUAL_UINT32(0u, cal.scale_used);
     TEST_ASSERT_EQUAL_UINT32(500u, cal.used);
     v = rsm_odometry_cal_apply(&cal, &u);
     TEST_ASSERT_EQUAL_FLOAT(u.dx, v.dx);
+}
+
+void test_odometry_cal_should_learn_the_distance_over_long_spans_of_a_drifting_heading(void)
+{
+    /* Odometry drifting 0.05 rad/m (Intel's is 0.056) with a scan pinned
+     * every 8 m: the raw heading would curve each span by 0.4 rad, shorten
+     * its chord and turn it aside (k -0.013 for exact distances). The
+     * span is taken at the corrected heading. */
+    const rsm_odometry_cal_config_t c = with_distance();
+    rsm_odometry_cal_t cal;
+    rsm_odometry_cal_init(&cal);
+    (void)drive_distance(&cal, &c, 8000u, 0.0f, 0.05f, 200u, STEP_VAR);
+    TEST_ASSERT_FLOAT_WITHIN(0.002f, -0.05f, cal.k_drift);
+    TEST_ASSERT_FLOAT_WITHIN(0.002f, 0.0f, cal.k_scale);
+    rsm_odometry_cal_init(&cal);
+    (void)drive_distance(&cal, &c, 8000u, 0.04f, 0.05f, 200u, STEP_VAR);
+    TEST_ASSERT_FLOAT_WITHIN(0.003f, 1.0f / 1.04f - 1.0f, cal.k_scale);
+}
+
+void test_odometry_cal_should_judge_pinning_against_odometrys_own_variance(void)
+{
+    /* Odometry a hundred times as precise as the match per step: one
+     * scan's match says less than a step of odometry, so it does not pin;
+     * a match pins once the steps since the last pinned scan add up to
+     * twice its variance (about 20 steps here), and the distance is still
+     * learnt from those spans. */
+    const rsm_odometry_cal_config_t c = with_distance();
+    rsm_odometry_cal_t cal;
+    rsm_odometry_cal_init(&cal);
+    (void)drive_distance(&cal, &c, 4000u, 0.04f, 0.0f, 1u, MATCH_VAR / 10.0f);
+    TEST_ASSERT_TRUE(cal.scale_used > 4000u / 40u && cal.scale_used < 4000u / 10u);
+    TEST_ASSERT_FLOAT_WITHIN(0.002f, 1.0f / 1.04f - 1.0f, cal.k_scale);
+}
+
+void test_odometry_cal_direction_should_follow_the_reference_and_the_turns(void)
+{
+    const rsm_pose_t facing_y = {1.0f, 2.0f, 0.5f * RSM_PI};
+    const rsm_motion_t side = {0.03f, 0.04f, 0.0f};
+    const rsm_motion_t quarter = {0.0f, 0.0f, 0.5f * RSM_PI};
+    const rsm_motion_t ahead = {0.05f, 0.02f, 0.0f};
+    rsm_odometry_cal_t cal;
+    float dir[2];
+    rsm_odometry_cal_init(&cal);
+    rsm_odometry_cal_reference(&cal, &facing_y);
+    /* 3 cm ahead and 4 cm left, facing +y: 3 cm up and 4 cm to -x. */
+    rsm_odometry_cal_count(&cal, &side, 0.0f);
+    TEST_ASSERT_EQUAL_INT(1, rsm_odometry_cal_direction(&cal, dir));
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, -0.8f, dir[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.6f, dir[1]);
+    /* A quarter turn left, then 5 cm ahead and 2 cm left, facing -x:
+     * 5 cm to -x and 2 cm down; (-0.09, 0.01) in all. */
+    rsm_odometry_cal_count(&cal, &quarter, 0.0f);
+    rsm_odometry_cal_count(&cal, &ahead, 0.0f);
+    TEST_ASSERT_EQUAL_INT(1, rsm_odometry_cal_direction(&cal, dir));
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, -0.09f / hypotf(0.09f, 0.01f), dir[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.01f / hypotf(0.09f, 0.01f), dir[1]);
+}
+
+void test_odometry_cal_should_survive_a_nan_reference_and_an_infinite_span(void)
+{
+    /* A NaN estimate at a pinned scan becomes no reference that sticks,
+     * an infinite step no equation; the next spans are learnt again. */
+    const rsm_odometry_cal_config_t c = with_distance();
+    const float matched[3] = {MATCH_VAR, 0.0f, MATCH_VAR};
+    const rsm_motion_t inf_step = {INFINITY, 0.0f, 0.0f};
+    const rsm_motion_t step = {0.04f, 0.0f, 0.0f};
+    rsm_pose_t est = {0.0f, 0.0f, 0.0f};
+    rsm_odometry_cal_t cal;
+    float dir[2];
+    uint32_t used;
+    rsm_odometry_cal_init(&cal);
+    (void)drive_distance(&cal, &c, 500u, 0.04f, 0.0f, 1u, STEP_VAR);
+    used = cal.scale_used;
+    est.x = NAN;
+    est.theta = NAN;
+    rsm_odometry_cal_count(&cal, &step, STEP_VAR);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, matched);
+    rsm_odometry_cal_count(&cal, &step, STEP_VAR);
+    TEST_ASSERT_EQUAL_INT(0, rsm_odometry_cal_direction(&cal, dir));
+    est.x = 0.0f;
+    est.theta = 0.0f;
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, matched); /* no direction: a new reference */
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, cal.sref.theta);
+    rsm_odometry_cal_count(&cal, &inf_step, STEP_VAR);
+    rsm_odometry_cal_update(&cal, &c, &est, 1.0f, matched);
+    TEST_ASSERT_TRUE(isfinite(cal.k_scale) && isfinite(cal.scale_info) && isfinite(cal.scale_moment));
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, cal.disp[0]);
+    TEST_ASSERT_EQUAL_UINT32(used, cal.scale_used);
+    (void)drive_distance(&cal, &c, 500u, 0.04f, 0.0f, 1u, STEP_VAR);
+    TEST_ASSERT_TRUE(cal.scale_used > used + 400u);
+    TEST_ASSERT_FLOAT_WITHIN(0.003f, 1.0f / 1.04f - 1.0f, cal.k_scale);
 }
 
 void test_odometry_cal_config_check_should_name_the_bad_field(void)
@@ -851,7 +970,7 @@ void test_odometry_cal_config_check_should_name_the_bad_field(void)
     /* NULL arguments are ignored. */
     rsm_odometry_cal_init(NULL);
     rsm_odometry_cal_reference(NULL, NULL);
-    rsm_odometry_cal_update(NULL, &c, NULL, 1.0f, 1.0f);
+    rsm_odometry_cal_update(NULL, &c, NULL, 1.0f, NULL);
     TEST_ASSERT_EQUAL_INT(0, rsm_odometry_cal_direction(NULL, NULL));
 }
 
@@ -884,6 +1003,10 @@ int main(void)
     RUN_TEST(test_odometry_cal_should_survive_an_absurd_step);
     RUN_TEST(test_odometry_cal_should_learn_the_distance_between_pinned_scans);
     RUN_TEST(test_odometry_cal_should_gate_and_bound_the_distance);
+    RUN_TEST(test_odometry_cal_should_learn_the_distance_over_long_spans_of_a_drifting_heading);
+    RUN_TEST(test_odometry_cal_should_judge_pinning_against_odometrys_own_variance);
+    RUN_TEST(test_odometry_cal_direction_should_follow_the_reference_and_the_turns);
+    RUN_TEST(test_odometry_cal_should_survive_a_nan_reference_and_an_infinite_span);
     RUN_TEST(test_odometry_cal_config_check_should_name_the_bad_field);
     return UNITY_END();
 }
