@@ -225,7 +225,7 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
         return RSM_ERR_RANGE;
     }
     if (calibrating(loc)) {
-        rsm_odometry_cal_count(&loc->odo_cal, u, loc->have_scan ? q[0] : 0.0f);
+        rsm_odometry_cal_count(&loc->odo_cal, &loc->cfg->odometry_cal, u, loc->have_scan ? q[0] : 0.0f);
     }
     loc->counters.motions++;
     return RSM_OK;

@@ -409,23 +409,33 @@ rsm_motion_t rsm_odometry_cal_apply(const rsm_odometry_cal_t *cal, const rsm_mot
     return v;
 }
 
-void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_motion_t *u, float var_t)
+/* Whether the distance is calibrated: else its bookkeeping is skipped. */
+static int scaling(const rsm_odometry_cal_config_t *cfg)
 {
-    if (cal != NULL && u != NULL) {
+    return cfg->max_scale > 0.0f;
+}
+
+void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_motion_t *u,
+                            float var_t)
+{
+    if (cal == NULL || cfg == NULL || u == NULL) {
+        return;
+    }
+    if (scaling(cfg)) {
         /* The step in the distance's reference frame, at odometry's
          * heading since then as corrected: over a corridor's span the raw
          * heading's drift would shorten the chord and turn it aside. */
-        const float c = cosf(cal->disp_turn);
-        const float s = sinf(cal->disp_turn);
+        const float c = rsm_cosf(cal->disp_turn);
+        const float s = rsm_sinf(cal->disp_turn);
         cal->disp[0] += c * u->dx - s * u->dy;
         cal->disp[1] += s * u->dx + c * u->dy;
         cal->disp_turn = rsm_wrap_angle(cal->disp_turn + u->dtheta * (1.0f + cal->k_turn) + cal->k_drift * u->dx);
         if (var_t > 0.0f) {
             cal->disp_var += var_t;
         }
-        cal->turn += u->dtheta;
-        cal->travel += u->dx;
     }
+    cal->turn += u->dtheta;
+    cal->travel += u->dx;
 }
 
 static void scale_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est, const float pos_cov[3])
@@ -462,29 +472,39 @@ void rsm_odometry_cal_reference(rsm_odometry_cal_t *cal, const rsm_pose_t *est)
 /* Below this odometry's displacement gives no direction to fit along. */
 #define CAL_MIN_DISP_M 0.001f
 
+/* The length of odometry's displacement since the distance's reference (NaN
+ * or infinite if it is), and its unit direction in the world frame in dir
+ * when that is finite and the length at least CAL_MIN_DISP_M (else dir[0]
+ * is NaN). */
+static float span(const rsm_odometry_cal_t *cal, float dir[2])
+{
+    const float s = sqrtf(cal->disp[0] * cal->disp[0] + cal->disp[1] * cal->disp[1]);
+    dir[0] = NAN;
+    if (s >= CAL_MIN_DISP_M) {
+        const float c = rsm_cosf(cal->sref.theta);
+        const float sn = rsm_sinf(cal->sref.theta);
+        const float x = (c * cal->disp[0] - sn * cal->disp[1]) / s;
+        const float y = (sn * cal->disp[0] + c * cal->disp[1]) / s;
+        if (isfinite(x) && isfinite(y)) {
+            dir[0] = x;
+            dir[1] = y;
+        }
+    }
+    return s;
+}
+
 int rsm_odometry_cal_direction(const rsm_odometry_cal_t *cal, float dir[2])
 {
-    float s;
-    float c;
-    float sn;
-    float x;
-    float y;
+    float d[2];
     if (cal == NULL || dir == NULL || !cal->have_ref) {
         return 0;
     }
-    s = sqrtf(cal->disp[0] * cal->disp[0] + cal->disp[1] * cal->disp[1]);
-    if (!(s >= CAL_MIN_DISP_M)) {
-        return 0;
+    (void)span(cal, d);
+    if (!isfinite(d[0])) {
+        return 0; /* too short, an infinite span or a NaN reference */
     }
-    c = cosf(cal->sref.theta);
-    sn = sinf(cal->sref.theta);
-    x = (c * cal->disp[0] - sn * cal->disp[1]) / s;
-    y = (sn * cal->disp[0] + c * cal->disp[1]) / s;
-    if (!isfinite(x) || !isfinite(y)) {
-        return 0; /* an infinite span or a NaN reference: no direction */
-    }
-    dir[0] = x;
-    dir[1] = y;
+    dir[0] = d[0];
+    dir[1] = d[1];
     return 1;
 }
 
@@ -509,30 +529,28 @@ static void update_scale(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_
                          const float pos_cov[3])
 {
     float dir[2];
-    float s;
+    const float s = span(cal, dir);
+    float before;
+    float after;
     float e;
-    float keep;
-    s = sqrtf(cal->disp[0] * cal->disp[0] + cal->disp[1] * cal->disp[1]);
     if (s < CAL_MIN_DISP_M) {
         return; /* no way to measure along yet */
     }
-    if (!(s <= CAL_MAX_TRAVEL_M) || !rsm_odometry_cal_direction(cal, dir)) {
+    if (!(s <= CAL_MAX_TRAVEL_M) || !isfinite(dir[0])) {
         scale_reference(cal, est, pos_cov); /* a span no scan can measure (too long, inf, NaN) */
         return;
     }
-    {
-        const float d0 = dir[0] * dir[0];
-        const float d01 = 2.0f * dir[0] * dir[1];
-        const float d1 = dir[1] * dir[1];
-        const float before = d0 * cal->sref_cov[0] + d01 * cal->sref_cov[1] + d1 * cal->sref_cov[2] + cal->disp_var;
-        const float after = pos_cov != NULL ? d0 * pos_cov[0] + d01 * pos_cov[1] + d1 * pos_cov[2] : before;
-        if (!(after <= CAL_PIN_SHARE * before)) {
-            return; /* unpinned: odometry's way goes on to the next pinned scan */
-        }
+    before = dir[0] * dir[0] * cal->sref_cov[0] + 2.0f * dir[0] * dir[1] * cal->sref_cov[1] +
+             dir[1] * dir[1] * cal->sref_cov[2] + cal->disp_var;
+    after = pos_cov != NULL ? dir[0] * dir[0] * pos_cov[0] + 2.0f * dir[0] * dir[1] * pos_cov[1] +
+                                  dir[1] * dir[1] * pos_cov[2]
+                            : before;
+    if (!(after <= CAL_PIN_SHARE * before)) {
+        return; /* unpinned: odometry's way goes on to the next pinned scan */
     }
     e = dir[0] * (est->x - cal->sref.x) + dir[1] * (est->y - cal->sref.y) - s;
-    if (cfg->max_scale > 0.0f && fabsf(e - cal->k_scale * s) <= cfg->gate_m + cfg->max_scale * s) {
-        keep = 1.0f - 1.0f / cfg->memory;
+    if (fabsf(e - cal->k_scale * s) <= cfg->gate_m + cfg->max_scale * s) {
+        const float keep = 1.0f - 1.0f / cfg->memory;
         /* The span's error grows with its length as odometry's does
          * (weight 1/s): k is the distance found over the distance
          * driven, less one, and one long span weighs as its metres. */
@@ -544,6 +562,48 @@ static void update_scale(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_
     scale_reference(cal, est, pos_cov);
 }
 
+/* The heading's equation: the change found since the reference, less
+ * odometry's turn t, is k_turn * t + k_drift * travel. */
+static void update_heading(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
+                           float weight)
+{
+    const float t = cal->turn;
+    const float d = cal->travel;
+    float keep;
+    float e;
+    float a;
+    float b;
+    float c;
+    float det;
+    if (!(weight > 0.0f && weight <= 1.0f) || !(fabsf(t) <= RSM_PI) || !(fabsf(d) <= CAL_MAX_TRAVEL_M)) {
+        return;
+    }
+    /* With |t| <= pi the change wraps as the turn does, but for a turn
+     * near pi (gated out then). */
+    e = rsm_wrap_angle(est->theta - cal->ref.theta) - t;
+    if (!(fabsf(e - (cal->k_turn * t + cal->k_drift * d)) <= cfg->gate_rad)) {
+        return;
+    }
+    keep = 1.0f - 1.0f / cfg->memory;
+    cal->info[0] = keep * cal->info[0] + weight * t * t;
+    cal->info[1] = keep * cal->info[1] + weight * t * d;
+    cal->info[2] = keep * cal->info[2] + weight * d * d;
+    cal->moment[0] = keep * cal->moment[0] + weight * t * e;
+    cal->moment[1] = keep * cal->moment[1] + weight * d * e;
+    /* The prior keeps the 2 x 2 system solvable (a robot that has only
+     * driven straight says nothing about its turns) and the first scans'
+     * correction small. */
+    a = cal->info[0] + cfg->prior;
+    b = cal->info[1];
+    c = cal->info[2] + cfg->prior;
+    det = a * c - b * b;
+    if (det > 0.0f) {
+        cal->k_turn = clamp_abs((c * cal->moment[0] - b * cal->moment[1]) / det, cfg->max_turn);
+        cal->k_drift = clamp_abs((a * cal->moment[1] - b * cal->moment[0]) / det, cfg->max_drift);
+        cal->used++;
+    }
+}
+
 void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_pose_t *est,
                              float weight, const float pos_cov[3])
 {
@@ -551,44 +611,12 @@ void rsm_odometry_cal_update(rsm_odometry_cal_t *cal, const rsm_odometry_cal_con
         return;
     }
     if (!cal->have_ref) {
-        heading_reference(cal, est);
         scale_reference(cal, est, pos_cov);
-        return;
-    }
-    if (cfg->memory > 0.0f) {
-        update_scale(cal, cfg, est, pos_cov);
-    }
-    if (cfg->memory > 0.0f && weight > 0.0f && weight <= 1.0f && fabsf(cal->turn) <= RSM_PI &&
-        fabsf(cal->travel) <= CAL_MAX_TRAVEL_M) {
-        const float t = cal->turn;
-        const float d = cal->travel;
-        /* With |t| <= pi the change wraps as the turn does, but for a turn
-         * near pi (gated out then). */
-        const float e = rsm_wrap_angle(est->theta - cal->ref.theta) - t;
-        if (fabsf(e - (cal->k_turn * t + cal->k_drift * d)) <= cfg->gate_rad) {
-            const float keep = 1.0f - 1.0f / cfg->memory;
-            float a;
-            float b;
-            float c;
-            float det;
-            cal->info[0] = keep * cal->info[0] + weight * t * t;
-            cal->info[1] = keep * cal->info[1] + weight * t * d;
-            cal->info[2] = keep * cal->info[2] + weight * d * d;
-            cal->moment[0] = keep * cal->moment[0] + weight * t * e;
-            cal->moment[1] = keep * cal->moment[1] + weight * d * e;
-            /* The prior keeps the 2 x 2 system solvable (a robot that has
-             * only driven straight says nothing about its turns) and the
-             * first scans' correction small. */
-            a = cal->info[0] + cfg->prior;
-            b = cal->info[1];
-            c = cal->info[2] + cfg->prior;
-            det = a * c - b * b;
-            if (det > 0.0f) {
-                cal->k_turn = clamp_abs((c * cal->moment[0] - b * cal->moment[1]) / det, cfg->max_turn);
-                cal->k_drift = clamp_abs((a * cal->moment[1] - b * cal->moment[0]) / det, cfg->max_drift);
-                cal->used++;
-            }
+    } else if (cfg->memory > 0.0f) {
+        if (scaling(cfg)) {
+            update_scale(cal, cfg, est, pos_cov);
         }
+        update_heading(cal, cfg, est, weight);
     }
     heading_reference(cal, est);
 }

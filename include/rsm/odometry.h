@@ -237,9 +237,11 @@ rsm_motion_t rsm_odometry_cal_apply(const rsm_odometry_cal_t *cal, const rsm_mot
 
 /* Counts the raw increment u towards the next update (call it for each
  * increment the prediction took, and only then), with the variance var_t
- * (m^2) the prediction added to the position for it. Nothing if cal is
- * NULL. */
-void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_motion_t *u, float var_t);
+ * (m^2) the prediction added to the position for it; the distance's part
+ * only when cfg calibrates the distance (max_scale > 0). Nothing if an
+ * argument is NULL. */
+void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *cfg, const rsm_motion_t *u,
+                            float var_t);
 
 /* Makes est the reference the next update measures from, the heading's
  * and the distance's (the first scan, or one whose estimate jumped: a

@@ -581,7 +581,7 @@ static float drive(rsm_odometry_cal_t *cal, const rsm_odometry_cal_config_t *c, 
         const float dx = (k / 200u) % 5u == 4u ? -0.02f : 0.04f;
         const rsm_motion_t u = biased(dx, turn, over, drift);
         const rsm_motion_t v = rsm_odometry_cal_apply(cal, &u);
-        rsm_odometry_cal_count(cal, &u, 0.0f);
+        rsm_odometry_cal_count(cal, c, &u, 0.0f);
         TEST_ASSERT_EQUAL_FLOAT(u.dx, v.dx);
         TEST_ASSERT_EQUAL_FLOAT(u.dy, v.dy);
         if (k >= 3u * n / 4u && fabsf(v.dtheta - turn) > worst) {
@@ -645,7 +645,7 @@ void test_odometry_cal_should_gate_jumps_and_bound_the_correction(void)
      * correction say (a slip, a wrong match) is not learnt from... */
     est.theta = 1.0f;
     rsm_odometry_cal_reference(&cal, &est);
-    rsm_odometry_cal_count(&cal, &u, 0.0f);
+    rsm_odometry_cal_count(&cal, &c, &u, 0.0f);
     est.theta = 1.0f + 0.05f + 0.3f;
     rsm_odometry_cal_update(&cal, &c, &est, 1.0f, NULL);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
@@ -679,11 +679,11 @@ void test_odometry_cal_should_survive_an_absurd_step(void)
     (void)drive(&cal, &c, 500u, 0.06f, 0.0f, 1.0f);
     before = cal.k_turn;
     rsm_odometry_cal_reference(&cal, &est);
-    rsm_odometry_cal_count(&cal, &huge, 0.0f);
+    rsm_odometry_cal_count(&cal, &c, &huge, 0.0f);
     rsm_odometry_cal_update(&cal, &c, &est, 1.0f, NULL);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
-    rsm_odometry_cal_count(&cal, &spin, 0.0f);
-    rsm_odometry_cal_count(&cal, &spin, 0.0f);
+    rsm_odometry_cal_count(&cal, &c, &spin, 0.0f);
+    rsm_odometry_cal_count(&cal, &c, &spin, 0.0f);
     est.theta = rsm_wrap_angle(6.0f);
     rsm_odometry_cal_update(&cal, &c, &est, 1.0f, NULL);
     TEST_ASSERT_EQUAL_FLOAT(before, cal.k_turn);
@@ -721,7 +721,7 @@ static float drive_distance(rsm_odometry_cal_t *cal, const rsm_odometry_cal_conf
         const float dx = (k / 200u) % 5u == 4u ? -0.02f : 0.04f;
         const rsm_motion_t u = {dx * (1.0f + over), 0.0f, turn + drift * dx * (1.0f + over)};
         const rsm_motion_t v = rsm_odometry_cal_apply(cal, &u);
-        rsm_odometry_cal_count(cal, &u, step_var);
+        rsm_odometry_cal_count(cal, c, &u, step_var);
         var += step_var;
         truth.x += dx * cosf(truth.theta);
         truth.y += dx * sinf(truth.theta);
@@ -805,7 +805,7 @@ void test_odometry_cal_should_gate_and_bound_the_distance(void)
      * says (a slip, a wrong match) is not learnt from, but it is the next
      * reference. */
     rsm_odometry_cal_reference(&cal, &est);
-    rsm_odometry_cal_count(&cal, &u, STEP_VAR);
+    rsm_odometry_cal_count(&cal, &c, &u, STEP_VAR);
     TEST_ASSERT_EQUAL_INT(1, rsm_odometry_cal_direction(&cal, dir));
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, 1.0f, dir[0]);
     est.x = 0.34f;
@@ -828,7 +828,7 @@ void test_odometry_cal_should_gate_and_bound_the_distance(void)
     rsm_odometry_cal_reference(&cal, &est);
     {
         const rsm_motion_t metre = {1.0f, 0.0f, 0.0f};
-        rsm_odometry_cal_count(&cal, &metre, STEP_VAR);
+        rsm_odometry_cal_count(&cal, &c, &metre, STEP_VAR);
     }
     est.x = 0.76f;
     rsm_odometry_cal_update(&cal, &c, &est, 1.0f, matched);
@@ -879,6 +879,7 @@ void test_odometry_cal_should_judge_pinning_against_odometrys_own_variance(void)
 
 void test_odometry_cal_direction_should_follow_the_reference_and_the_turns(void)
 {
+    const rsm_odometry_cal_config_t c = with_distance();
     const rsm_pose_t facing_y = {1.0f, 2.0f, 0.5f * RSM_PI};
     const rsm_motion_t side = {0.03f, 0.04f, 0.0f};
     const rsm_motion_t quarter = {0.0f, 0.0f, 0.5f * RSM_PI};
@@ -888,14 +889,14 @@ void test_odometry_cal_direction_should_follow_the_reference_and_the_turns(void)
     rsm_odometry_cal_init(&cal);
     rsm_odometry_cal_reference(&cal, &facing_y);
     /* 3 cm ahead and 4 cm left, facing +y: 3 cm up and 4 cm to -x. */
-    rsm_odometry_cal_count(&cal, &side, 0.0f);
+    rsm_odometry_cal_count(&cal, &c, &side, 0.0f);
     TEST_ASSERT_EQUAL_INT(1, rsm_odometry_cal_direction(&cal, dir));
     TEST_ASSERT_FLOAT_WITHIN(1e-5f, -0.8f, dir[0]);
     TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.6f, dir[1]);
     /* A quarter turn left, then 5 cm ahead and 2 cm left, facing -x:
      * 5 cm to -x and 2 cm down; (-0.09, 0.01) in all. */
-    rsm_odometry_cal_count(&cal, &quarter, 0.0f);
-    rsm_odometry_cal_count(&cal, &ahead, 0.0f);
+    rsm_odometry_cal_count(&cal, &c, &quarter, 0.0f);
+    rsm_odometry_cal_count(&cal, &c, &ahead, 0.0f);
     TEST_ASSERT_EQUAL_INT(1, rsm_odometry_cal_direction(&cal, dir));
     TEST_ASSERT_FLOAT_WITHIN(1e-5f, -0.09f / hypotf(0.09f, 0.01f), dir[0]);
     TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.01f / hypotf(0.09f, 0.01f), dir[1]);
@@ -918,15 +919,15 @@ void test_odometry_cal_should_survive_a_nan_reference_and_an_infinite_span(void)
     used = cal.scale_used;
     est.x = NAN;
     est.theta = NAN;
-    rsm_odometry_cal_count(&cal, &step, STEP_VAR);
+    rsm_odometry_cal_count(&cal, &c, &step, STEP_VAR);
     rsm_odometry_cal_update(&cal, &c, &est, 1.0f, matched);
-    rsm_odometry_cal_count(&cal, &step, STEP_VAR);
+    rsm_odometry_cal_count(&cal, &c, &step, STEP_VAR);
     TEST_ASSERT_EQUAL_INT(0, rsm_odometry_cal_direction(&cal, dir));
     est.x = 0.0f;
     est.theta = 0.0f;
     rsm_odometry_cal_update(&cal, &c, &est, 1.0f, matched); /* no direction: a new reference */
     TEST_ASSERT_EQUAL_FLOAT(0.0f, cal.sref.theta);
-    rsm_odometry_cal_count(&cal, &inf_step, STEP_VAR);
+    rsm_odometry_cal_count(&cal, &c, &inf_step, STEP_VAR);
     rsm_odometry_cal_update(&cal, &c, &est, 1.0f, matched);
     TEST_ASSERT_TRUE(isfinite(cal.k_scale) && isfinite(cal.scale_info) && isfinite(cal.scale_moment));
     TEST_ASSERT_EQUAL_FLOAT(0.0f, cal.disp[0]);
