@@ -6,7 +6,7 @@
 RSM_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 RSM_JOBS=$(nproc 2>/dev/null || getconf _NPROCESSORS_ONLN 2>/dev/null || echo 2)
 RSM_WERROR=${RSM_WERROR:-OFF}
-RSM_VENV="$RSM_ROOT/.venv"
+RSM_VENV=${RSM_VENV:-"$RSM_ROOT/.venv"}
 RSM_VENV_PY="$RSM_VENV/bin/python"
 
 # Debian packages the build and the tests need (tools/test installs them).
