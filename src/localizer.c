@@ -58,6 +58,9 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.recover_ratio = 0.4f;
     c.recover_m = 1.0f;
     c.recover_rad = 0.3f;
+    c.refute_margin = 0.1f;
+    c.doubt_m = 0.1f;
+    c.doubt_rad = 0.1f;
     c.isolation.tol_m = 0.0f;
     c.isolation.slope = 3.0f;
     c.isolation.window = 2u;
@@ -192,6 +195,8 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
     case RSM_METHOD_MAP:
         rc = rsm_tmap_init(&loc->state.persistent.map, &cfg->tmap);
         loc->state.persistent.written = *x0;
+        loc->state.persistent.anchor = *x0;
+        loc->state.persistent.trusted = *x0;
         break;
     default:
         break;
@@ -226,6 +231,10 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
     }
     if (calibrating(loc)) {
         rsm_odometry_cal_count(&loc->odo_cal, &loc->cfg->odometry_cal, u, loc->have_scan ? q[0] : 0.0f);
+    }
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        const rsm_pose_t step = {v.dx, v.dy, v.dtheta};
+        loc->state.persistent.since = rsm_pose_compose(&loc->state.persistent.since, &step);
     }
     loc->counters.motions++;
     return RSM_OK;
@@ -622,12 +631,12 @@ static size_t drop_occluded(rsm_localizer_t *loc, size_t n)
  * own: the heading's weight is the share of the heading's variance the
  * match removed (a scan that pins the heading tells the most); the
  * position's covariance tells whether it pinned the distance. A
- * recovery's jump is odometry off by more than its systematic error: a
- * new reference only. */
-static void calibrate(rsm_localizer_t *loc, rsm_outcome_t outcome, float prior_var, uint32_t recovered)
+ * recovery's jump, or a step of odometry's the scan refuted, is odometry
+ * off by more than its systematic error: a new reference only. */
+static void calibrate(rsm_localizer_t *loc, rsm_outcome_t outcome, float prior_var, int jumped)
 {
     const rsm_pose_t est = loc->ekf.x;
-    if (outcome == RSM_SCAN_FIRST || (outcome == RSM_SCAN_ACCEPTED && loc->counters.recovered != recovered)) {
+    if (outcome == RSM_SCAN_FIRST || (outcome == RSM_SCAN_ACCEPTED && jumped)) {
         rsm_odometry_cal_reference(&loc->odo_cal, &est);
     } else if (outcome == RSM_SCAN_ACCEPTED) {
         const float pos_cov[3] = {loc->ekf.p[0], loc->ekf.p[1], loc->ekf.p[4]};
@@ -698,6 +707,76 @@ static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, fl
     return took;
 }
 
+/* Whether odometry reported any motion: a stalled odometry repeats its
+ * pose exactly, and so predicts exactly the last estimate. */
+static int moved(const rsm_pose_t *u)
+{
+    return fabsf(u->x) > 1e-6f || fabsf(u->y) > 1e-6f || fabsf(u->theta) > 1e-6f;
+}
+
+/* Whether b is at least doubt_m or doubt_rad from a. */
+static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, const rsm_pose_t *b)
+{
+    const rsm_pose_t d = rsm_pose_between(a, b);
+    return sqrtf(d.x * d.x + d.y * d.y) >= cfg->doubt_m || fabsf(d.theta) >= cfg->doubt_rad;
+}
+
+/* Odometry's step from the last scan's estimate to pred, checked against the
+ * scan (res: the match from pred, rc its status). Two other predictions are
+ * matched when there is cause:
+ * - odometry counted from the last scan that trusted it, when that differs
+ *   from the step by doubt_m or doubt_rad: after a stall (odometry stood
+ *   still while matching found the robot move) the step reports that motion
+ *   again, and after a refuted spike the step takes the spike back;
+ * - the last estimate without the step, when the match from pred fits
+ *   poorly or moved pred by more than a doubt: the step may be false (a
+ *   spike, a counter reset, wheels that slipped).
+ * One replaces the match from pred only when its fit beats it by
+ * refute_margin (or pred found no match at all): the scan, not the order
+ * of the tries, decides. After a stall either one winning says the step
+ * repeated what matching had found (odometry and matching need not agree
+ * on how far the robot went meanwhile, so the last estimate may fit better
+ * than odometry counted from the stall's start). Returns what was made of
+ * the step. */
+static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, int *rc,
+                                         rsm_mapmatch_result_t *res)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_pose_t *anchor = &loc->state.persistent.anchor;
+    const rsm_pose_t u = rsm_pose_between(anchor, pred);
+    const rsm_pose_t counted = rsm_pose_compose(&loc->state.persistent.trusted, &loc->state.persistent.since);
+    rsm_pose_t alt_pred[2];
+    rsm_odometry_verdict_t kind[2];
+    rsm_odometry_verdict_t verdict = RSM_ODOMETRY_TRUSTED;
+    size_t n = 0;
+    size_t k;
+    if (cfg->refute_margin <= 0.0f || !moved(&u)) {
+        return verdict;
+    }
+    if (beyond_doubt(cfg, pred, &counted)) {
+        alt_pred[n] = counted;
+        kind[n++] = loc->state.persistent.held;
+    }
+    if (*rc != RSM_OK || res->hit < cfg->recover_ratio * loc->state.persistent.fit || beyond_doubt(cfg, pred, &res->pose)) {
+        alt_pred[n] = *anchor;
+        kind[n] = n > 0 ? kind[0] : RSM_ODOMETRY_REFUTED;
+        ++n;
+    }
+    for (k = 0; k < n; ++k) {
+        rsm_mapmatch_unpin_t unpin;
+        rsm_mapmatch_result_t alt;
+        rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, alt_pred[k].theta, &unpin);
+        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &alt_pred[k], loc->ekf.p, NULL,
+                         &unpin, &alt) == RSM_OK &&
+            alt.used >= cfg->min_points / 2u && (*rc != RSM_OK || alt.hit > res->hit * (1.0f + cfg->refute_margin))) {
+            *res = alt;
+            *rc = RSM_OK;
+            verdict = kind[k];
+        }
+    }
+    return verdict;
+}
+
 static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
@@ -716,6 +795,14 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     }
     rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
                       &res);
+    rep->odometry = doubt_step(loc, npts, &pred, &rc, &res);
+    if (rep->odometry == RSM_ODOMETRY_CAUGHT_UP) {
+        loc->counters.caught_up++;
+    } else if (rep->odometry == RSM_ODOMETRY_REFUTED) {
+        loc->counters.refuted++;
+    } else if (rep->odometry == RSM_ODOMETRY_RECOUNTED) {
+        loc->counters.recounted++;
+    }
     if (rc == RSM_OK && cfg->recover_m > 0.0f && res.hit < cfg->recover_ratio * loc->state.persistent.fit) {
         /* Far worse than recent scans: odometry may be off by more than any
          * basin. The smallest correction that explains the scan first: a
@@ -830,6 +917,8 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     size_t npts;
     float prior_var;
     uint32_t recovered;
+    int odometry_moved;
+    rsm_pose_t pred;
     int n;
     if (rep == NULL) {
         rep = &local;
@@ -854,6 +943,12 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         (void)rsm_localizer_motion(loc, &still);
     }
     loc->motions_at_scan = loc->counters.motions;
+    odometry_moved = 0;
+    pred = loc->ekf.x;
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        const rsm_pose_t u = rsm_pose_between(&loc->state.persistent.anchor, &loc->ekf.x);
+        odometry_moved = moved(&u);
+    }
     prior_var = loc->ekf.p[8];
     recovered = loc->counters.recovered;
     n = rsm_scan_to_points_cached(scan, &loc->cfg->limits, &loc->trig, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
@@ -875,10 +970,28 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         outcome = step_rsm(loc, npts, rep, &clk);
     }
     if (calibrating(loc)) {
-        calibrate(loc, outcome, prior_var, recovered);
+        calibrate(loc, outcome, prior_var, loc->counters.recovered != recovered || rep->odometry != RSM_ODOMETRY_TRUSTED);
     }
     stage_switch(&clk, RSM_STAGE_MAP);
     est = loc->ekf.x;
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        /* Odometry is counted from the last scan that trusted it: through
+         * a stall (it stands still), past a step the scan refuted, and past
+         * one the match had to correct by more than a doubt. */
+        const int agreed = rep->odometry == RSM_ODOMETRY_TRUSTED && odometry_moved &&
+                           !beyond_doubt(loc->cfg, &pred, &est);
+        if (outcome == RSM_SCAN_FIRST || agreed || rep->odometry == RSM_ODOMETRY_CAUGHT_UP ||
+            rep->odometry == RSM_ODOMETRY_RECOUNTED) {
+            static const rsm_pose_t none = {0.0f, 0.0f, 0.0f};
+            loc->state.persistent.trusted = est;
+            loc->state.persistent.since = none;
+        } else {
+            loc->state.persistent.held = !odometry_moved ? RSM_ODOMETRY_CAUGHT_UP
+                                         : rep->odometry == RSM_ODOMETRY_REFUTED ? RSM_ODOMETRY_REFUTED
+                                                                                 : RSM_ODOMETRY_RECOUNTED;
+        }
+        loc->state.persistent.anchor = est;
+    }
     if (npts >= loc->cfg->min_points) {
         const int fused = outcome == RSM_SCAN_ACCEPTED || outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_ODOMETRY;
         switch (loc->cfg->method) {

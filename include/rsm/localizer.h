@@ -100,6 +100,18 @@ typedef struct rsm_localizer_config {
     float recover_m;                /* 0 = never search; default 1.0 */
     float recover_rad;              /* ... and of +-recover_rad in heading (a turn the odometry
                                      * misjudged); default 0.3 */
+    /* Odometry is evidence, not truth (RSM_METHOD_MAP): its step since the
+     * last scan is matched against a second prediction when the scans give
+     * cause to doubt it, and the prediction the scan fits better is kept
+     * (docs/robustness.md, "Odometry that lies"). */
+    float refute_margin;            /* a second prediction replaces odometry's when its fit beats
+                                     * it by this share; 0 = never doubt odometry; default 0.1 */
+    float doubt_m;                  /* odometry counted from the last scan that trusted it (not
+                                     * from the last scan) predicts a pose this far ... */
+    float doubt_rad;                /* ... or turned this far from the step's: both are matched
+                                     * (after a stall, motion reported again; after a refuted
+                                     * spike, the step that takes it back); defaults 0.1 m and
+                                     * 0.1 rad */
     uint8_t map_min_hits;           /* map cells with this many hits are occupied; default 1 */
     uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
     uint16_t min_points;            /* usable readings needed; default 20 */
@@ -130,9 +142,23 @@ typedef struct rsm_localizer_config {
 
 rsm_localizer_config_t rsm_localizer_config_default(void);
 
+/* What a scan made of odometry's step since the previous scan (RSM_METHOD_MAP). */
+typedef enum rsm_odometry_verdict {
+    RSM_ODOMETRY_TRUSTED = 0,   /* the step was the prediction (the usual case) */
+    RSM_ODOMETRY_CAUGHT_UP = 1, /* odometry stood still while matching found the robot move,
+                                 * then reported that motion too: it was counted once */
+    RSM_ODOMETRY_REFUTED = 2,   /* the scan fits far better without the step (a spike, a
+                                 * counter reset, wheels that slipped, or the step that takes
+                                 * a refuted spike back): the step was dropped */
+    RSM_ODOMETRY_RECOUNTED = 3  /* a match corrected odometry by more than a doubt before,
+                                 * and odometry counted from before it fits far better: that
+                                 * match was wrong, not odometry */
+} rsm_odometry_verdict_t;
+
 /* Diagnostics of the last scan. */
 typedef struct rsm_localizer_report {
     rsm_outcome_t outcome;
+    rsm_odometry_verdict_t odometry; /* what the scan made of odometry's step */
     rsm_pose_t pose;          /* estimate after this scan */
     float cov[9];             /* its covariance, row-major */
     rsm_pose_t measured;      /* scan-matching measurement (if one was made) */
@@ -162,6 +188,12 @@ typedef struct rsm_localizer_counters {
     uint32_t bad_motions;                    /* non-finite increments refused */
     uint32_t searches;                       /* recovery searches run (RSM_METHOD_MAP) */
     uint32_t recovered;                      /* ... whose pose was taken */
+    uint32_t caught_up;                      /* odometry steps that reported motion matching had
+                                              * already found (RSM_ODOMETRY_CAUGHT_UP) */
+    uint32_t refuted;                        /* odometry steps the scans refuted and that were
+                                              * dropped (RSM_ODOMETRY_REFUTED) */
+    uint32_t recounted;                      /* matches taken back: odometry counted from before
+                                              * them fitted far better (RSM_ODOMETRY_RECOUNTED) */
     uint32_t unconfirmed;                    /* returns kept out of the persistent map: no
                                               * neighbour confirmed them (isolation) */
     uint32_t occluded;                       /* returns dropped: behind a surface their
@@ -196,6 +228,14 @@ typedef struct rsm_localizer {
             rsm_tmap_t map;                       /* the persistent map */
             rsm_pose_t written;                   /* pose of the last write into it */
             float fit;                            /* recent mean occupancy under a scan's points */
+            rsm_pose_t anchor;                    /* the estimate after the last scan */
+            rsm_pose_t trusted;                   /* ... after the last scan that trusted
+                                                   * odometry's step (before a stall or a
+                                                   * refuted step) */
+            rsm_pose_t since;                     /* odometry's steps since then, composed */
+            rsm_odometry_verdict_t held;          /* why it is held there: a stall (CAUGHT_UP),
+                                                   * a refuted step, a large correction
+                                                   * (RECOUNTED) */
         } persistent;                             /* RSM_METHOD_MAP */
     } state;
     rsm_point_t pts[RSM_MAX_BEAMS];      /* usable readings, robot frame */

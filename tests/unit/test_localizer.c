@@ -388,6 +388,10 @@ void test_localizer_init_should_reject_bad_configs(void)
     BAD(map_update_rad, NAN);
     BAD(recover_ratio, 1.5f);
     BAD(recover_m, 100.0f);
+    BAD(refute_margin, -0.1f);
+    BAD(refute_margin, NAN);
+    BAD(doubt_m, 0.0f);
+    BAD(doubt_rad, NAN);
     BAD(occlusion.window, (uint8_t)(RSM_OCCLUSION_MAX_WINDOW + 1u));
     BAD(occlusion.span_m, 0.0f);
     BAD(occlusion.margin_rel, 1.0f);
@@ -985,6 +989,158 @@ void test_localizer_scan_should_recover_from_being_carried_by_searching(void)
     TEST_ASSERT_TRUE(rad < 1.0f * RSM_PI / 180.0f);
 }
 
+/* ---- odometry that lies ---------------------------------------------------------- */
+
+/* The first scan of the loop's second corner (a quarter turn in place). */
+#define CORNER2 66u
+#define STALL 16u
+
+/* From K0 up to the second corner, then the odometry stands still for
+ * `stall` scans while the robot turns, then reports the whole turn in one
+ * step (a stall, then a catch-up), then ten steps more; returns the
+ * largest position error after the catch-up and writes the heading's. */
+static float run_stall(size_t stall, float *rad)
+{
+    rsm_localizer_report_t rep;
+    rsm_motion_t u;
+    float worst = 0.0f;
+    size_t k;
+    start_at_k0(&loc, CORNER2 - K0, &odo_err);
+    for (k = CORNER2; k < CORNER2 + stall; ++k) {
+        static const rsm_motion_t still = {0.0f, 0.0f, 0.0f};
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &still));
+        make_scan(&path[k], NULL, (uint64_t)k * STEP_US);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    }
+    u = rsm_synth_motion(&path[CORNER2 - 1u], &path[k], &odo_err);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+    make_scan(&path[k], NULL, (uint64_t)k * STEP_US);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    *rad = 0.0f;
+    for (++k; k < CORNER2 + stall + 10u; ++k) {
+        rsm_pose_t est;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, step(&loc, k, &odo_err, NULL, &rep));
+        est = rsm_localizer_pose(&loc);
+        if (rsm_synth_pos_error(&est, &path[k]) > worst) {
+            worst = rsm_synth_pos_error(&est, &path[k]);
+        }
+        if (rsm_synth_angle_error(&est, &path[k]) > *rad) {
+            *rad = rsm_synth_angle_error(&est, &path[k]);
+        }
+    }
+    return worst;
+}
+
+void test_localizer_scan_should_count_a_stalled_odometrys_catch_up_once(void)
+{
+    /* Eight scans of a quarter turn with odometry standing still: matching
+     * follows the turn (the recovery search), then odometry reports it all
+     * at once. Added on top, the turn would count twice (0.8 rad off, and
+     * beyond the search's reach); counted from where the stall began, it
+     * counts once. */
+    char msg[160];
+    float rad;
+    float err;
+    cfg.refute_margin = 0.0f;
+    err = run_stall(STALL, &rad);
+    snprintf(msg, sizeof msg, "odometry trusted: %.3f m, %.1f deg after the catch-up", (double)err,
+             (double)(rad / DEG));
+    TEST_MESSAGE(msg);
+    TEST_ASSERT_TRUE_MESSAGE(rad > 20.0f * DEG, msg);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.caught_up);
+
+    cfg = rsm_localizer_config_default();
+    err = run_stall(STALL, &rad);
+    snprintf(msg, sizeof msg, "odometry doubted: %.3f m, %.2f deg after the catch-up", (double)err,
+             (double)(rad / DEG));
+    TEST_MESSAGE(msg);
+    if (rsm_tmap_config_default().cell_m <= 0.05f) {
+        TEST_ASSERT_TRUE_MESSAGE(err < QUANT + 0.01f, msg);
+        TEST_ASSERT_TRUE_MESSAGE(rad < 1.0f * DEG, msg);
+    } else {
+        /* 10 cm cells follow a turn with odometry standing still a step
+         * behind (up to 17 degrees, then a search catches up) and write
+         * the walls smeared meanwhile: the catch-up is counted once, but
+         * the track keeps what the stall cost (measured: 0.14 m, 6.5 deg). */
+        TEST_ASSERT_TRUE_MESSAGE(err < 0.2f, msg);
+        TEST_ASSERT_TRUE_MESSAGE(rad < 10.0f * DEG, msg);
+    }
+    TEST_ASSERT_EQUAL_UINT32(1u, loc.counters.caught_up);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.refuted);
+}
+
+/* Ten good steps from K0, then odometry's step into one scan carries a
+ * false `bad` on top (a spike: then `back` is the inverse, taken back at
+ * the next step; a counter reset: `back` is 0, it stays), then twenty
+ * steps more; returns the largest position error from the false step on. */
+static float run_false_step(const rsm_pose_t *bad, int back)
+{
+    rsm_localizer_report_t rep;
+    float worst = 0.0f;
+    size_t k;
+    start_at_k0(&loc, 10u, &odo_err);
+    for (k = K0 + 10u; k < K0 + 30u; ++k) {
+        rsm_motion_t u = rsm_synth_motion(&path[k - 1u], &path[k], &odo_err);
+        rsm_pose_t est;
+        if (k == K0 + 10u || (back && k == K0 + 11u)) {
+            const rsm_pose_t inv = rsm_pose_inverse(bad);
+            const rsm_pose_t good = {u.dx, u.dy, u.dtheta};
+            const rsm_pose_t lie = k == K0 + 10u ? rsm_pose_compose(&good, bad) : rsm_pose_compose(&inv, &good);
+            u.dx = lie.x;
+            u.dy = lie.y;
+            u.dtheta = rsm_wrap_angle(lie.theta);
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+        make_scan(&path[k], NULL, (uint64_t)k * STEP_US);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+        est = rsm_localizer_pose(&loc);
+        if (rsm_synth_pos_error(&est, &path[k]) > worst) {
+            worst = rsm_synth_pos_error(&est, &path[k]);
+        }
+    }
+    return worst;
+}
+
+void test_localizer_scan_should_refute_a_spike_and_a_counter_reset(void)
+{
+    /* A spike (half a metre and 0.6 rad for one scan) and a counter reset
+     * (odometry's pose starts over at its origin: one step of metres) are
+     * each refuted by the scan, counted, and leave no error behind. */
+    static const rsm_pose_t spike = {0.6f, 0.4f, 1.2f};
+    static const rsm_pose_t reset = {-2.2f, 1.6f, -1.3f};
+    char msg[160];
+    float err = run_false_step(&spike, 1);
+    snprintf(msg, sizeof msg, "spike: %.3f m worst, %u refuted", (double)err, (unsigned)loc.counters.refuted);
+    TEST_ASSERT_TRUE_MESSAGE(err < QUANT + 0.01f, msg);
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(2u, loc.counters.refuted, msg);
+    err = run_false_step(&reset, 0);
+    snprintf(msg, sizeof msg, "reset: %.3f m worst, %u refuted", (double)err, (unsigned)loc.counters.refuted);
+    TEST_ASSERT_TRUE_MESSAGE(err < QUANT + 0.01f, msg);
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(1u, loc.counters.refuted, msg);
+    /* Trusted, the spike puts the estimate where it is not (and writes the
+     * map there), and the reset's step is never taken back. */
+    cfg.refute_margin = 0.0f;
+    err = run_false_step(&spike, 1);
+    snprintf(msg, sizeof msg, "spike trusted: %.3f m worst", (double)err);
+    TEST_MESSAGE(msg);
+    TEST_ASSERT_TRUE_MESSAGE(err > 0.3f, msg);
+    err = run_false_step(&reset, 0);
+    snprintf(msg, sizeof msg, "reset trusted: %.3f m worst", (double)err);
+    TEST_MESSAGE(msg);
+    TEST_ASSERT_TRUE_MESSAGE(err > 0.5f, msg);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.refuted);
+}
+
+void test_localizer_scan_should_doubt_no_step_of_honest_odometry(void)
+{
+    /* The whole loop with odometry's systematic errors (3 % long, drifting)
+     * but no fault: no step is judged faulty, no match taken back. */
+    (void)run(&loc, RSM_METHOD_MAP, NULL);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.caught_up);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.refuted);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.recounted);
+}
+
 void test_localizer_map_should_survive_poses_far_beyond_its_range(void)
 {
     /* A start (or an odometry stream) far beyond what the map's cells can
@@ -1387,6 +1543,9 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_refuse_scans_after_a_one_metre_odometry_jump);
     RUN_TEST(test_localizer_scan_should_stay_finite_after_a_one_metre_jump_with_map_on_reject);
     RUN_TEST(test_localizer_scan_should_recover_from_being_carried_by_searching);
+    RUN_TEST(test_localizer_scan_should_count_a_stalled_odometrys_catch_up_once);
+    RUN_TEST(test_localizer_scan_should_refute_a_spike_and_a_counter_reset);
+    RUN_TEST(test_localizer_scan_should_doubt_no_step_of_honest_odometry);
     RUN_TEST(test_localizer_map_should_survive_poses_far_beyond_its_range);
     RUN_TEST(test_localizer_motion_should_refuse_non_finite_increments);
     RUN_TEST(test_localizer_motion_before_the_first_scan_should_move_the_start_without_noise);

@@ -89,6 +89,9 @@
     F("recover_ratio", recover_ratio) \
     F("recover_m", recover_m) \
     F("recover_rad", recover_rad) \
+    F("refute_margin", refute_margin) \
+    F("doubt_m", doubt_m) \
+    F("doubt_rad", doubt_rad) \
     F("mm_search_step", mapmatch.search_step_rad) \
     F("mm_min_step", mapmatch.min_step_m) \
     F("mm_min_rad", mapmatch.min_step_rad) \
@@ -920,6 +923,11 @@ static void time_stats(nav_t *nav, double *median, double *p95)
  * alignment {...} (capture and live modes), odometry_calibrations, and for
  * the persistent map tmap {writes, tiles [per level], taken, evicted,
  * dropped, freed, behind, unconfirmed}, recovery {searches, taken},
+ * odometry_faults {caught_up, refuted, recounted} (odometry steps the
+ * scans judged faulty: motion matching had already found, reported again
+ * after a stall; steps the scan fitted far better without; and apart,
+ * matches taken back because odometry counted from before them fitted far
+ * better),
  * unpinned (matches that left the position along a corridor to odometry),
  * heading_correction {turn, drift_rad_per_m, scans} and distance_correction
  * {scale, scans} (what the odometry calibration learnt; the distance's is
@@ -977,6 +985,8 @@ static int write_summary_json(nav_t *nav, const char *path)
                 (unsigned)m->counters.allocated, (unsigned)m->counters.evicted, (unsigned)m->counters.dropped,
                 (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed,
                 (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->unpinned);
+        fprintf(f, ",\n  \"odometry_faults\": {\"caught_up\": %u, \"refuted\": %u, \"recounted\": %u}",
+                (unsigned)c->caught_up, (unsigned)c->refuted, (unsigned)c->recounted);
         fprintf(f, ",\n  \"heading_correction\": {\"turn\": %.5f, \"drift_rad_per_m\": %.5f, \"scans\": %u}",
                 (double)nav->loc.odo_cal.k_turn, (double)nav->loc.odo_cal.k_drift, (unsigned)nav->loc.odo_cal.used);
         fprintf(f, ",\n  \"distance_correction\": {\"scale\": %.5f, \"scans\": %u}",
@@ -1007,6 +1017,9 @@ static void print_summary(nav_t *nav)
         printf("  map writes      %u tiles cleared and freed, %u returns behind walls, %u unconfirmed\n",
                (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed);
         printf("  recovery        %u searches, %u taken\n", (unsigned)c->searches, (unsigned)c->recovered);
+        printf("  odometry faults %u steps after a stall counted once (caught up), %u refuted by the scans;"
+               " %u matches taken back (odometry was right)\n",
+               (unsigned)c->caught_up, (unsigned)c->refuted, (unsigned)c->recounted);
         printf("  unpinned        %u matches left the position along the scan's surfaces to odometry\n",
                (unsigned)c->unpinned);
         printf("  occluded        %u returns behind a surface their neighbours span, dropped\n",
