@@ -733,11 +733,11 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  *   spike, a counter reset, wheels that slipped).
  * One replaces the match from pred only when its fit beats it by
  * refute_margin (or pred found no match at all): the scan, not the order
- * of the tries, decides. After a stall either one winning says the step
- * repeated what matching had found (odometry and matching need not agree
- * on how far the robot went meanwhile, so the last estimate may fit better
- * than odometry counted from the stall's start). Returns what was made of
- * the step. */
+ * of the tries, decides. After a stall in which matching found the robot
+ * move, either one winning says the step repeated that motion (odometry
+ * and matching need not agree on how far the robot went meanwhile, so the
+ * last estimate may fit better than odometry counted from the stall's
+ * start). Returns what was made of the step. */
 static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, int *rc,
                                          rsm_mapmatch_result_t *res)
 {
@@ -758,8 +758,12 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
         kind[n++] = loc->state.persistent.held;
     }
     if (*rc != RSM_OK || res->hit < cfg->recover_ratio * loc->state.persistent.fit || beyond_doubt(cfg, pred, &res->pose)) {
+        /* After a stall in which matching found the robot move, the step
+         * repeated that motion; else it was false. */
         alt_pred[n] = *anchor;
-        kind[n] = n > 0 ? kind[0] : RSM_ODOMETRY_REFUTED;
+        kind[n] = n > 0 && kind[0] == RSM_ODOMETRY_CAUGHT_UP && beyond_doubt(cfg, &loc->state.persistent.trusted, anchor)
+                      ? RSM_ODOMETRY_CAUGHT_UP
+                      : RSM_ODOMETRY_REFUTED;
         ++n;
     }
     for (k = 0; k < n; ++k) {

@@ -52,13 +52,13 @@ def number(pattern: str, text: str) -> int:
     return int(m.group(1))
 
 
-def nav_with_map(tmp_path: Path, lines, name: str):
+def nav_with_map(tmp_path: Path, lines, name: str, *extra: str):
     """Writes lines as the log NAME.clf and runs rsm-nav on it with --map
-    m.pgm; returns the run and the picture's path."""
+    m.pgm (and extra arguments); returns the run and the picture's path."""
     log = tmp_path / f"{name}.clf"
     log.write_text("\n".join(lines) + "\n")
     pgm = tmp_path / "m.pgm"
-    return run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--map", pgm, "--quiet"), pgm
+    return run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--map", pgm, "--quiet", *extra), pgm
 
 
 def rows(path: Path):
@@ -329,7 +329,11 @@ def test_map_picture_too_large_says_so(tmp_path, head_log):
     lines = flaser_lines(head_log, 30)
     for k in range(15, 30):
         lines[k] = with_fields(lines[k], o6=str(1500.0 + float(lines[k].split()[-6])))
+    # The scans refute a 1.5 km step of odometry's (the map then stays
+    # small); trusted, it spreads the map over 1.5 km.
     res, _ = nav_with_map(tmp_path, lines, "wide")
+    assert res.returncode == 0 and "1 refuted by the scans" in res.stdout, res.stdout + res.stderr
+    res, _ = nav_with_map(tmp_path, lines, "wide", "--set", "refute_margin=0")
     assert res.returncode == 1, res.stderr
     assert "would span" in res.stderr and "1000 m" in res.stderr, res.stderr
 
