@@ -58,6 +58,7 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.recover_ratio = 0.4f;
     c.recover_m = 1.0f;
     c.recover_rad = 0.3f;
+    c.recover_margin = 0.1f;
     c.refute_margin = 0.1f;
     c.doubt_m = 0.1f;
     c.doubt_rad = 0.1f;
@@ -670,48 +671,14 @@ static void apply_mount(rsm_localizer_t *loc, size_t n)
 /* Basins a recovery search descends from. */
 #define RECOVER_STARTS 3
 
-/* One recovery search within +-radius_m and +-recover_rad of pred: descends
- * from the best few candidates under a prior widened as far and replaces
- * *res with the best fit if it fits well again (at least half of what was
- * lost regained; need is above the first *res, so each replacement fits
- * better than the last). Returns whether it did. */
-static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
-                   rsm_mapmatch_result_t *res)
-{
-    const rsm_localizer_config_t *cfg = loc->cfg;
-    const float fit = loc->state.persistent.fit;
-    const float need = res->hit + 0.5f * (fit - res->hit);
-    rsm_pose_t start[RECOVER_STARTS];
-    rsm_mapmatch_result_t alt;
-    float wide[9];
-    int found;
-    int k;
-    int took = 0;
-    memcpy(wide, loc->ekf.p, sizeof wide);
-    wide[0] += radius_m * radius_m;
-    wide[4] += radius_m * radius_m;
-    wide[8] += cfg->recover_rad * cfg->recover_rad;
-    found = rsm_mapmatch_search(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, radius_m,
-                                cfg->recover_rad, start, RECOVER_STARTS);
-    /* The coarse score only ranks basins: descend from each. */
-    for (k = 0; k < found; ++k) {
-        /* Not unpinned: each descent starts where the search put it and
-         * only the fit decides, measured against the plain match. */
-        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[k], NULL,
-                         &alt) == RSM_OK &&
-            alt.hit >= cfg->recover_ratio * fit && alt.hit >= need && alt.hit > res->hit) {
-            *res = alt;
-            took = 1;
-        }
-    }
-    return took;
-}
 
-/* Whether odometry reported any motion: a stalled odometry repeats its
- * pose exactly, and so predicts exactly the last estimate. */
-static int moved(const rsm_pose_t *u)
+/* Whether odometry reported any motion since the last scan's estimate: a
+ * stalled odometry repeats its pose exactly, and so predicts exactly that
+ * estimate (compared as is: the step between them, computed, is not 0 but
+ * rounding far from the origin). */
+static int moved(const rsm_pose_t *anchor, const rsm_pose_t *pred)
 {
-    return fabsf(u->x) > 1e-6f || fabsf(u->y) > 1e-6f || fabsf(u->theta) > 1e-6f;
+    return anchor->x != pred->x || anchor->y != pred->y || anchor->theta != pred->theta;
 }
 
 /* Whether b is at least doubt_m or doubt_rad from a. */
@@ -732,8 +699,10 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  *   poorly or moved pred by more than a doubt: the step may be false (a
  *   spike, a counter reset, wheels that slipped).
  * One replaces the match from pred only when its fit beats it by
- * refute_margin (or pred found no match at all): the scan, not the order
- * of the tries, decides. After a stall in which matching found the robot
+ * refute_margin (or pred found no match at all), except where odometry
+ * counted from the last trusted scan is the better-founded prediction:
+ * then pred's match must beat it so. The scan, not the order of the tries,
+ * decides. After a stall in which matching found the robot
  * move, either one winning says the step repeated that motion (odometry
  * and matching need not agree on how far the robot went meanwhile, so the
  * last estimate may fit better than odometry counted from the stall's
@@ -743,19 +712,28 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t *anchor = &loc->state.persistent.anchor;
-    const rsm_pose_t u = rsm_pose_between(anchor, pred);
     const rsm_pose_t counted = rsm_pose_compose(&loc->state.persistent.trusted, &loc->state.persistent.since);
     rsm_pose_t alt_pred[2];
     rsm_odometry_verdict_t kind[2];
     rsm_odometry_verdict_t verdict = RSM_ODOMETRY_TRUSTED;
+    int counted_first = 0;
     size_t n = 0;
     size_t k;
-    if (cfg->refute_margin <= 0.0f || !moved(&u)) {
+    if (cfg->refute_margin <= 0.0f || !moved(anchor, pred)) {
         return verdict;
     }
     if (beyond_doubt(cfg, pred, &counted)) {
+        const rsm_odometry_verdict_t held = loc->state.persistent.held;
         alt_pred[n] = counted;
-        kind[n++] = loc->state.persistent.held;
+        kind[n++] = held;
+        /* Past a refuted step, or after a stall in which matching found the
+         * robot move, odometry counted from the last trusted scan is the
+         * better-founded prediction (the step alone counts the stall's
+         * motion twice): there the step's prediction is the one that must
+         * fit better, which matters where the building looks alike turned
+         * (a corridor crossing). */
+        counted_first = held == RSM_ODOMETRY_REFUTED ||
+                        (held == RSM_ODOMETRY_CAUGHT_UP && beyond_doubt(cfg, &loc->state.persistent.trusted, anchor));
     }
     if (*rc != RSM_OK || res->hit < cfg->recover_ratio * loc->state.persistent.fit || beyond_doubt(cfg, pred, &res->pose)) {
         /* After a stall in which matching found the robot move, the step
@@ -772,13 +750,76 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
         rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, alt_pred[k].theta, &unpin);
         if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &alt_pred[k], loc->ekf.p, NULL,
                          &unpin, &alt) == RSM_OK &&
-            alt.used >= cfg->min_points / 2u && (*rc != RSM_OK || alt.hit > res->hit * (1.0f + cfg->refute_margin))) {
+            alt.used >= cfg->min_points / 2u &&
+            (*rc != RSM_OK || (k == 0 && counted_first ? res->hit <= alt.hit * (1.0f + cfg->refute_margin)
+                                                       : alt.hit > res->hit * (1.0f + cfg->refute_margin)))) {
             *res = alt;
             *rc = RSM_OK;
             verdict = kind[k];
         }
     }
     return verdict;
+}
+
+/* One recovery search within +-radius_m and +-recover_rad of pred: descends
+ * from the best few candidates under a prior widened as far and replaces
+ * *res with the best fit if it fits well again (at least half of what was
+ * lost regained; need is above the first *res, so each replacement fits
+ * better than the last) and is proven: it beats every pose a doubt away
+ * from it (another basin's descent, or the plain match) by recover_margin.
+ * Returns whether it did; counts a search refused as ambiguous. */
+static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
+                   rsm_mapmatch_result_t *res)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const float fit = loc->state.persistent.fit;
+    const float need = res->hit + 0.5f * (fit - res->hit);
+    rsm_pose_t start[RECOVER_STARTS];
+    rsm_pose_t found_pose[RECOVER_STARTS];
+    float found_hit[RECOVER_STARTS];
+    rsm_mapmatch_result_t best;
+    rsm_mapmatch_result_t alt;
+    float rival;
+    float wide[9];
+    int found;
+    int k;
+    int best_k = -1;
+    memcpy(wide, loc->ekf.p, sizeof wide);
+    wide[0] += radius_m * radius_m;
+    wide[4] += radius_m * radius_m;
+    wide[8] += cfg->recover_rad * cfg->recover_rad;
+    found = rsm_mapmatch_search(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, radius_m,
+                                cfg->recover_rad, start, RECOVER_STARTS);
+    /* The coarse score only ranks basins: descend from each. */
+    for (k = 0; k < found; ++k) {
+        /* Not unpinned: each descent starts where the search put it and
+         * only the fit decides, measured against the plain match. */
+        found_hit[k] = -1.0f;
+        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[k], NULL,
+                         &alt) == RSM_OK) {
+            found_hit[k] = alt.hit;
+            found_pose[k] = alt.pose;
+            if (best_k < 0 || alt.hit > best.hit) {
+                best = alt;
+                best_k = k;
+            }
+        }
+    }
+    if (best_k < 0 || !(best.hit >= cfg->recover_ratio * fit && best.hit >= need && best.hit > res->hit)) {
+        return 0;
+    }
+    rival = beyond_doubt(cfg, &res->pose, &best.pose) ? res->hit : 0.0f;
+    for (k = 0; k < found; ++k) {
+        if (k != best_k && found_hit[k] > rival && beyond_doubt(cfg, &found_pose[k], &best.pose)) {
+            rival = found_hit[k];
+        }
+    }
+    if (best.hit <= rival * (1.0f + cfg->recover_margin)) {
+        loc->counters.ambiguous++;
+        return 0;
+    }
+    *res = best;
+    return 1;
 }
 
 static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
@@ -950,8 +991,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     odometry_moved = 0;
     pred = loc->ekf.x;
     if (loc->cfg->method == RSM_METHOD_MAP) {
-        const rsm_pose_t u = rsm_pose_between(&loc->state.persistent.anchor, &loc->ekf.x);
-        odometry_moved = moved(&u);
+        odometry_moved = moved(&loc->state.persistent.anchor, &loc->ekf.x);
     }
     prior_var = loc->ekf.p[8];
     recovered = loc->counters.recovered;

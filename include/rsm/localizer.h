@@ -100,6 +100,9 @@ typedef struct rsm_localizer_config {
     float recover_m;                /* 0 = never search; default 1.0 */
     float recover_rad;              /* ... and of +-recover_rad in heading (a turn the odometry
                                      * misjudged); default 0.3 */
+    float recover_margin;           /* a search's winner is taken only when its fit beats every
+                                     * pose a doubt (doubt_m, doubt_rad) away from it by this
+                                     * share, else the scan is left ambiguous; default 0.1 */
     /* Odometry is evidence, not truth (RSM_METHOD_MAP): its step since the
      * last scan is matched against a second prediction when the scans give
      * cause to doubt it, and the prediction the scan fits better is kept
@@ -188,6 +191,8 @@ typedef struct rsm_localizer_counters {
     uint32_t bad_motions;                    /* non-finite increments refused */
     uint32_t searches;                       /* recovery searches run (RSM_METHOD_MAP) */
     uint32_t recovered;                      /* ... whose pose was taken */
+    uint32_t ambiguous;                      /* ... whose winner a distinct pose fitted nearly
+                                              * as well: not taken (recover_margin) */
     uint32_t caught_up;                      /* odometry steps that reported motion matching had
                                               * already found (RSM_ODOMETRY_CAUGHT_UP) */
     uint32_t refuted;                        /* odometry steps the scans refuted and that were

@@ -388,6 +388,7 @@ void test_localizer_init_should_reject_bad_configs(void)
     BAD(map_update_rad, NAN);
     BAD(recover_ratio, 1.5f);
     BAD(recover_m, 100.0f);
+    BAD(recover_margin, -0.1f);
     BAD(refute_margin, -0.1f);
     BAD(refute_margin, NAN);
     BAD(doubt_m, 0.0f);
@@ -1141,6 +1142,95 @@ void test_localizer_scan_should_doubt_no_step_of_honest_odometry(void)
     TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.recounted);
 }
 
+/* Rows of square posts 1.2 m apart along x, at y = +-1 and +-2, as far as
+ * the laser (4 m) sees: twenty steps along them, then a bump shoves the
+ * robot 0.6 m along, half a period, where odometry says 0.1 (beyond the
+ * match's basin and the search's first ring, so the scan searches up to
+ * recover_m, and finds the posts a period apart fit alike). Returns the
+ * position error along x after that scan. */
+#define POSTS 34u
+#define PERIOD 1.2f
+static float run_posts_bump(void)
+{
+    static rsm_synth_segment_t walls[4u * 4u * POSTS];
+    static const float rows[4] = {-2.0f, -1.0f, 1.0f, 2.0f};
+    rsm_synth_world_t posts;
+    rsm_localizer_report_t rep;
+    rsm_pose_t truth = {0.0f, 0.0f, 0.0f};
+    rsm_pose_t est;
+    size_t k;
+    size_t r;
+    size_t n = 0;
+    for (k = 0; k < POSTS; ++k) {
+        const float x = -12.0f + PERIOD * (float)k;
+        for (r = 0; r < 4u; ++r) {
+            const float y = rows[r];
+            const rsm_synth_segment_t sq[4] = {{x, y, x + 0.2f, y}, {x + 0.2f, y, x + 0.2f, y + 0.2f},
+                                               {x + 0.2f, y + 0.2f, x, y + 0.2f}, {x, y + 0.2f, x, y}};
+            size_t e;
+            for (e = 0; e < 4u; ++e) {
+                walls[n++] = sq[e];
+            }
+        }
+    }
+    posts.seg = walls;
+    posts.count = n;
+    world = posts;
+    scan_cfg.max_range_m = 4.0f; /* no return beyond: the rows' ends are out of sight */
+    scan_cfg.start_rad = -RSM_PI; /* 270 degrees: posts behind too */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &truth, p0_start));
+    for (k = 0; k <= 20u; ++k) {
+        if (k > 0u) {
+            const rsm_motion_t u = {0.1f, 0.0f, 0.0f};
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+            truth.x += 0.1f;
+        }
+        make_scan(&truth, NULL, (uint64_t)k * STEP_US);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    }
+    {
+        const rsm_motion_t u = {0.1f, 0.0f, 0.0f};
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+    }
+    truth.x += 0.5f * PERIOD;
+    make_scan(&truth, NULL, (uint64_t)k * STEP_US);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    est = rsm_localizer_pose(&loc);
+    return fabsf(est.x - truth.x);
+}
+
+void test_localizer_scan_should_not_take_an_ambiguous_recovery(void)
+{
+    /* Among posts a period apart, poses a period apart fit alike: a search
+     * there has no proven winner, and one taken anyway puts the robot a
+     * period off (a false recovery). Refused, it is counted as ambiguous
+     * and the estimate stays near odometry's. */
+    char msg[160];
+    float err;
+    cfg.refute_margin = 0.0f; /* the search alone: odometry's step is not doubted */
+    err = run_posts_bump();
+    snprintf(msg, sizeof msg, "%u searches, %u taken, %u ambiguous, %.2f m off along", (unsigned)loc.counters.searches,
+             (unsigned)loc.counters.recovered, (unsigned)loc.counters.ambiguous, (double)err);
+    TEST_MESSAGE(msg);
+    TEST_ASSERT_TRUE_MESSAGE(err < 0.5f * PERIOD, msg);
+    if (rsm_tmap_config_default().cell_m > 0.05f) {
+        /* 10 cm cells: the search here tells the posts apart and takes the
+         * right pose (measured: 0.05 m off); no false one, either way. */
+        return;
+    }
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, loc.counters.recovered, msg);
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT32_MESSAGE(1u, loc.counters.ambiguous, msg);
+    /* Without the margin the best basin is taken: here the wrong one. */
+    cfg.recover_margin = 0.0f;
+    scan_cfg = rsm_synth_scan_config_default();
+    err = run_posts_bump();
+    snprintf(msg, sizeof msg, "margin 0: %u searches, %u taken, %.2f m off along", (unsigned)loc.counters.searches,
+             (unsigned)loc.counters.recovered, (double)err);
+    TEST_MESSAGE(msg);
+    TEST_ASSERT_GREATER_OR_EQUAL_UINT32_MESSAGE(1u, loc.counters.recovered, msg);
+    TEST_ASSERT_TRUE_MESSAGE(err > 0.5f * PERIOD, msg);
+}
+
 void test_localizer_map_should_survive_poses_far_beyond_its_range(void)
 {
     /* A start (or an odometry stream) far beyond what the map's cells can
@@ -1546,6 +1636,7 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_count_a_stalled_odometrys_catch_up_once);
     RUN_TEST(test_localizer_scan_should_refute_a_spike_and_a_counter_reset);
     RUN_TEST(test_localizer_scan_should_doubt_no_step_of_honest_odometry);
+    RUN_TEST(test_localizer_scan_should_not_take_an_ambiguous_recovery);
     RUN_TEST(test_localizer_map_should_survive_poses_far_beyond_its_range);
     RUN_TEST(test_localizer_motion_should_refuse_non_finite_increments);
     RUN_TEST(test_localizer_motion_before_the_first_scan_should_move_the_start_without_noise);

@@ -89,6 +89,7 @@
     F("recover_ratio", recover_ratio) \
     F("recover_m", recover_m) \
     F("recover_rad", recover_rad) \
+    F("recover_margin", recover_margin) \
     F("refute_margin", refute_margin) \
     F("doubt_m", doubt_m) \
     F("doubt_rad", doubt_rad) \
@@ -922,7 +923,7 @@ static void time_stats(nav_t *nav, double *median, double *p95)
  * timestamps {clamped, odd, jumps}, drops {nan, too_short, too_long, occluded},
  * alignment {...} (capture and live modes), odometry_calibrations, and for
  * the persistent map tmap {writes, tiles [per level], taken, evicted,
- * dropped, freed, behind, unconfirmed}, recovery {searches, taken},
+ * dropped, freed, behind, unconfirmed}, recovery {searches, taken, ambiguous},
  * odometry_faults {caught_up, refuted, recounted} (odometry steps the
  * scans judged faulty: motion matching had already found, reported again
  * after a stall; steps the scan fitted far better without; and apart,
@@ -980,11 +981,11 @@ static int write_summary_json(nav_t *nav, const char *path)
             fprintf(f, "%s%u", level > 0u ? ", " : "", (unsigned)rsm_tmap_tiles(m, level));
         }
         fprintf(f, "], \"taken\": %u, \"evicted\": %u, \"dropped\": %u, \"freed\": %u, \"behind\": %u, "
-                   "\"unconfirmed\": %u},\n  \"recovery\": {\"searches\": %u, \"taken\": %u},\n"
+                   "\"unconfirmed\": %u},\n  \"recovery\": {\"searches\": %u, \"taken\": %u, \"ambiguous\": %u},\n"
                    "  \"unpinned\": %u",
                 (unsigned)m->counters.allocated, (unsigned)m->counters.evicted, (unsigned)m->counters.dropped,
                 (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed,
-                (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->unpinned);
+                (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->ambiguous, (unsigned)c->unpinned);
         fprintf(f, ",\n  \"odometry_faults\": {\"caught_up\": %u, \"refuted\": %u, \"recounted\": %u}",
                 (unsigned)c->caught_up, (unsigned)c->refuted, (unsigned)c->recounted);
         fprintf(f, ",\n  \"heading_correction\": {\"turn\": %.5f, \"drift_rad_per_m\": %.5f, \"scans\": %u}",
@@ -1016,7 +1017,8 @@ static void print_summary(nav_t *nav)
                (unsigned)m->counters.evicted, (unsigned)m->counters.dropped);
         printf("  map writes      %u tiles cleared and freed, %u returns behind walls, %u unconfirmed\n",
                (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed);
-        printf("  recovery        %u searches, %u taken\n", (unsigned)c->searches, (unsigned)c->recovered);
+        printf("  recovery        %u searches, %u taken, %u refused as ambiguous\n", (unsigned)c->searches,
+               (unsigned)c->recovered, (unsigned)c->ambiguous);
         printf("  odometry faults %u steps after a stall counted once (caught up), %u refuted by the scans;"
                " %u matches taken back (odometry was right)\n",
                (unsigned)c->caught_up, (unsigned)c->refuted, (unsigned)c->recounted);
