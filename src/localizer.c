@@ -35,6 +35,8 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.map_min_hits = 1u;
     c.map_on_reject = 1u;
     c.min_points = 20u;
+    c.lost_scans = 10u;
+    c.refuse_poor = 1u;
     c.min_keypoints = 4u;
     c.match_window_m = 0.05f;
     c.search_sigmas = 3.0f;
@@ -93,8 +95,24 @@ const char *rsm_outcome_name(rsm_outcome_t o)
     case RSM_SCAN_JUMP: return "jump";
     case RSM_SCAN_FILTER: return "filter";
     case RSM_SCAN_OUT_OF_ORDER: return "out_of_order";
+    case RSM_SCAN_POOR_FIT: return "poor_fit";
     default: return "unknown";
     }
+}
+
+const char *rsm_track_name(rsm_track_t t)
+{
+    switch (t) {
+    case RSM_TRACK_TRACKING: return "tracking";
+    case RSM_TRACK_UNCERTAIN: return "uncertain";
+    case RSM_TRACK_LOST: return "lost";
+    default: return "unknown";
+    }
+}
+
+rsm_track_t rsm_localizer_track(const rsm_localizer_t *loc)
+{
+    return loc == NULL ? RSM_TRACK_LOST : loc->last.track;
 }
 
 const char *rsm_stage_name(rsm_stage_t s)
@@ -681,6 +699,12 @@ static int moved(const rsm_pose_t *anchor, const rsm_pose_t *pred)
     return anchor->x != pred->x || anchor->y != pred->y || anchor->theta != pred->theta;
 }
 
+/* Whether odometry's steps are checked against the scans. */
+static int refuting(const rsm_localizer_config_t *cfg)
+{
+    return cfg->method == RSM_METHOD_MAP && cfg->refute_margin > 0.0f;
+}
+
 /* Whether b is at least doubt_m or doubt_rad from a. */
 static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, const rsm_pose_t *b)
 {
@@ -828,6 +852,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     const rsm_pose_t pred = loc->ekf.x;
     rsm_mapmatch_result_t res;
     rsm_mapmatch_unpin_t unpin;
+    int poor;
     int rc;
     if (!loc->have_scan) {
         return RSM_SCAN_FIRST;
@@ -848,7 +873,8 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     } else if (rep->odometry == RSM_ODOMETRY_RECOUNTED) {
         loc->counters.recounted++;
     }
-    if (rc == RSM_OK && cfg->recover_m > 0.0f && res.hit < cfg->recover_ratio * loc->state.persistent.fit) {
+    poor = rc == RSM_OK && res.hit < cfg->recover_ratio * loc->state.persistent.fit;
+    if (poor && cfg->recover_m > 0.0f) {
         /* Far worse than recent scans: odometry may be off by more than any
          * basin. The smallest correction that explains the scan first: a
          * turn misjudged (every heading within recover_rad, the position
@@ -860,14 +886,24 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         if (recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res) ||
             (near_m < cfg->recover_m && recover(loc, npts, &pred, cfg->recover_m, &res))) {
             loc->counters.recovered++;
+            poor = 0;
         }
     }
     rep->inliers = res.used;
     rep->iterations = res.iterations;
     rep->measured = res.pose;
     rep->mahalanobis_d2 = res.d2;
+    if (rc == RSM_OK) {
+        /* Against the recent scans' fit: 1 for the first match. */
+        rep->fit_ratio = loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 1.0f;
+    }
     if (rc != RSM_OK || res.used < cfg->min_points / 2u) {
         return RSM_SCAN_LOW_SUPPORT;
+    }
+    if (poor && cfg->refuse_poor) {
+        /* Fitted far worse than recent scans and no search proved a pose:
+         * the prediction is kept, and the scan is not written. */
+        return RSM_SCAN_POOR_FIT;
     }
     rep->residual_m = sqrtf(res.cost);
     stage_switch(clk, RSM_STAGE_EKF);
@@ -953,6 +989,28 @@ static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     return out;
 }
 
+/* The tracking state after a scan: a scan tracks when it was fused and,
+ * matched against the persistent map, fitted as well as recent scans
+ * (recover_ratio of their fit; a proven search's winner does) or it
+ * started the map; odometry alone is not checked. Counts the scans in a
+ * row that did not. */
+static rsm_track_t track_state(rsm_localizer_t *loc, rsm_outcome_t outcome, const rsm_localizer_report_t *rep)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    int tracks = outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_ODOMETRY || outcome == RSM_SCAN_ACCEPTED;
+    if (outcome == RSM_SCAN_ACCEPTED && cfg->method == RSM_METHOD_MAP) {
+        tracks = rep->fit_ratio >= cfg->recover_ratio;
+    }
+    if (tracks) {
+        loc->counters.poor_run = 0u;
+        return RSM_TRACK_TRACKING;
+    }
+    if (loc->counters.poor_run < UINT32_MAX) {
+        loc->counters.poor_run++;
+    }
+    return loc->counters.poor_run >= cfg->lost_scans ? RSM_TRACK_LOST : RSM_TRACK_UNCERTAIN;
+}
+
 int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep)
 {
     rsm_localizer_report_t local;
@@ -977,6 +1035,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     if (loc->have_scan && scan->stamp_us < loc->last_stamp_us) {
         loc->counters.outcome[RSM_SCAN_OUT_OF_ORDER]++;
         rep->outcome = RSM_SCAN_OUT_OF_ORDER;
+        rep->track = loc->last.track;
         rep->pose = loc->ekf.x;
         memcpy(rep->cov, loc->ekf.p, sizeof rep->cov);
         stage_end(&clk);
@@ -992,6 +1051,21 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     pred = loc->ekf.x;
     if (loc->cfg->method == RSM_METHOD_MAP) {
         odometry_moved = moved(&loc->state.persistent.anchor, &loc->ekf.x);
+        if (odometry_moved) {
+            loc->state.persistent.last_step = rsm_pose_between(&loc->state.persistent.anchor, &loc->ekf.x);
+        } else if (loc->have_scan && refuting(loc->cfg)) {
+            /* Odometry stands still: the robot may have stopped, or odometry
+             * stalled while it still moves (it will catch up: doubt_step),
+             * as fast as it last did (odometry's last step, or what the last
+             * scan found while odometry stood still). The prediction stays,
+             * but no surer than that step's size, so that the scan can show
+             * it; a robot that stopped soon shows no step. */
+            const rsm_pose_t *l = &loc->state.persistent.last_step;
+            const float d2 = l->x * l->x + l->y * l->y;
+            const float q[9] = {d2, 0.0f, 0.0f, 0.0f, d2, 0.0f, 0.0f, 0.0f, l->theta * l->theta};
+            static const rsm_motion_t none = {0.0f, 0.0f, 0.0f};
+            (void)rsm_ekf_predict(&loc->ekf, &none, q);
+        }
     }
     prior_var = loc->ekf.p[8];
     recovered = loc->counters.recovered;
@@ -1034,6 +1108,9 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
                                          : rep->odometry == RSM_ODOMETRY_REFUTED ? RSM_ODOMETRY_REFUTED
                                                                                  : RSM_ODOMETRY_RECOUNTED;
         }
+        if (!odometry_moved) {
+            loc->state.persistent.last_step = rsm_pose_between(&loc->state.persistent.anchor, &est);
+        }
         loc->state.persistent.anchor = est;
     }
     if (npts >= loc->cfg->min_points) {
@@ -1071,6 +1148,8 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->world,
                                  outcome == RSM_SCAN_FIRST ? 0u : loc->cfg->tmap.write_cells);
     }
+    rep->track = track_state(loc, outcome, rep);
+    loc->counters.track[rep->track]++;
     loc->last_stamp_us = scan->stamp_us;
     loc->counters.outcome[outcome]++;
     rep->outcome = outcome;

@@ -62,6 +62,8 @@ int rsm_localizer_config_check(const rsm_localizer_config_t *cfg, const char **f
     RSM_CHECK_FIELD(cfg->grid.sigma_m >= 0.0f && cfg->grid.sigma_m * 2.0f < cfg->grid.cell_m, "grid.sigma_m");
     RSM_CHECK_FIELD(cfg->map_min_hits >= 1u, "map_min_hits");
     RSM_CHECK_FIELD(cfg->min_points >= 2u && cfg->min_points <= RSM_MAX_BEAMS, "min_points");
+    RSM_CHECK_FIELD(cfg->lost_scans >= 1u, "lost_scans");
+    RSM_CHECK_FIELD(cfg->refuse_poor <= 1u, "refuse_poor");
     RSM_CHECK_FIELD(cfg->min_keypoints >= 2u && cfg->min_keypoints <= RSM_MAX_KEYPOINTS, "min_keypoints");
     RSM_CHECK_FIELD(cfg->match_window_m >= 0.0f, "match_window_m");
     RSM_CHECK_FIELD(cfg->search_min_m > 0.0f, "search_min_m");

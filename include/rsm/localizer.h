@@ -41,7 +41,9 @@ typedef enum rsm_outcome {
     RSM_SCAN_JUMP = 7,           /* measured pose too far for the covariance */
     RSM_SCAN_FILTER = 8,         /* EKF refused the update (singular) */
     RSM_SCAN_OUT_OF_ORDER = 9,   /* timestamp went backwards: scan ignored */
-    RSM_SCAN_OUTCOMES = 10
+    RSM_SCAN_POOR_FIT = 10,      /* RSM_METHOD_MAP: the match fitted far worse than recent scans
+                                  * and no search proved a pose: not fused, not written */
+    RSM_SCAN_OUTCOMES = 11
 } rsm_outcome_t;
 
 /* The stages of one rsm_localizer_scan call, as the optional timing hook
@@ -118,6 +120,12 @@ typedef struct rsm_localizer_config {
     uint8_t map_min_hits;           /* map cells with this many hits are occupied; default 1 */
     uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
     uint16_t min_points;            /* usable readings needed; default 20 */
+    uint8_t refuse_poor;            /* 1: a match that fits worse than recover_ratio of recent
+                                     * scans and that no search replaced is refused
+                                     * (RSM_SCAN_POOR_FIT); 0: fused as before; default 1 */
+    uint16_t lost_scans;            /* scans in a row that do not track (poor fit, refused,
+                                     * unusable) after which the estimate is reported lost;
+                                     * >= 1; default 10 */
     uint16_t min_keypoints;         /* key points needed in each image; default 4 */
     float match_window_m;           /* w of the +-w box; default 0.05 (one cell) */
     float search_sigmas;            /* nearest-neighbour radius in predicted std devs; default 3 */
@@ -158,9 +166,22 @@ typedef enum rsm_odometry_verdict {
                                  * match was wrong, not odometry */
 } rsm_odometry_verdict_t;
 
+/* How far the estimate can be trusted, as the scans tell it. */
+typedef enum rsm_track {
+    RSM_TRACK_TRACKING = 0,  /* the last scan was matched and fitted the map as well as recent
+                              * scans did (or a search proved where it is) */
+    RSM_TRACK_UNCERTAIN = 1, /* the last scan fitted poorly, was refused or unusable, or its
+                              * search was ambiguous: the estimate is the prediction's */
+    RSM_TRACK_LOST = 2,      /* lost_scans scans in a row so: treat the estimate as unknown */
+    RSM_TRACK_STATES = 3
+} rsm_track_t;
+
 /* Diagnostics of the last scan. */
 typedef struct rsm_localizer_report {
     rsm_outcome_t outcome;
+    rsm_track_t track;        /* how far the estimate after this scan can be trusted */
+    float fit_ratio;          /* RSM_METHOD_MAP: the match's fit over the recent scans' (0 when
+                               * no match was made) */
     rsm_odometry_verdict_t odometry; /* what the scan made of odometry's step */
     rsm_pose_t pose;          /* estimate after this scan */
     float cov[9];             /* its covariance, row-major */
@@ -199,6 +220,8 @@ typedef struct rsm_localizer_counters {
                                               * dropped (RSM_ODOMETRY_REFUTED) */
     uint32_t recounted;                      /* matches taken back: odometry counted from before
                                               * them fitted far better (RSM_ODOMETRY_RECOUNTED) */
+    uint32_t track[RSM_TRACK_STATES];        /* scans that left the estimate in each state */
+    uint32_t poor_run;                       /* scans in a row not tracking, up to now */
     uint32_t unconfirmed;                    /* returns kept out of the persistent map: no
                                               * neighbour confirmed them (isolation) */
     uint32_t occluded;                       /* returns dropped: behind a surface their
@@ -238,6 +261,9 @@ typedef struct rsm_localizer {
                                                    * odometry's step (before a stall or a
                                                    * refuted step) */
             rsm_pose_t since;                     /* odometry's steps since then, composed */
+            rsm_pose_t last_step;                 /* the robot's last step between two scans:
+                                                   * odometry's, or while odometry stood still,
+                                                   * the match's */
             rsm_odometry_verdict_t held;          /* why it is held there: a stall (CAUGHT_UP),
                                                    * a refuted step, a large correction
                                                    * (RECOUNTED) */
@@ -344,6 +370,15 @@ int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, f
 
 /* Current estimate. */
 rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc);
+
+/* How far the current estimate can be trusted (RSM_TRACK_TRACKING before
+ * the first scan: the start pose is the caller's). RSM_TRACK_LOST for loc
+ * NULL. Reads only. */
+rsm_track_t rsm_localizer_track(const rsm_localizer_t *loc);
+
+/* Short name of a tracking state ("tracking", "uncertain", "lost";
+ * "unknown" past the last). */
+const char *rsm_track_name(rsm_track_t t);
 
 /* Short name of an outcome, for logs ("accepted", "few_keypoints", ...). */
 const char *rsm_outcome_name(rsm_outcome_t o);

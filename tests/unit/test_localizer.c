@@ -389,6 +389,7 @@ void test_localizer_init_should_reject_bad_configs(void)
     BAD(recover_ratio, 1.5f);
     BAD(recover_m, 100.0f);
     BAD(recover_margin, -0.1f);
+    BAD(lost_scans, 0u);
     BAD(refute_margin, -0.1f);
     BAD(refute_margin, NAN);
     BAD(doubt_m, 0.0f);
@@ -980,6 +981,10 @@ void test_localizer_scan_should_recover_from_being_carried_by_searching(void)
     float rad;
     float err;
     cfg.recover_m = 0.0f;
+    /* Odometry not doubted either: with odometry silent the prediction's
+     * spread would grow to the last step's size (doubt_step), which here
+     * is sometimes reach enough without a search (the small preset). */
+    cfg.refute_margin = 0.0f;
     err = run_carried(CARRIED, &rad);
     TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.searches);
     TEST_ASSERT_TRUE(err > 0.3f);
@@ -1229,6 +1234,43 @@ void test_localizer_scan_should_not_take_an_ambiguous_recovery(void)
     TEST_MESSAGE(msg);
     TEST_ASSERT_GREATER_OR_EQUAL_UINT32_MESSAGE(1u, loc.counters.recovered, msg);
     TEST_ASSERT_TRUE_MESSAGE(err > 0.5f * PERIOD, msg);
+}
+
+void test_localizer_should_say_when_it_is_uncertain_and_when_lost(void)
+{
+    /* Ten good steps, then the scans come from far down the corridor
+     * (carried, odometry silent): every such scan fits poorly, is refused
+     * (not fused, not written) and no search reaches that far, so the
+     * estimate is uncertain, and after lost_scans of them lost; scans from
+     * where the robot was make it track again. Fused instead, the poor
+     * matches dragged the estimate until a search took a false pose. */
+    static const rsm_pose_t far_away = {4.4f, 2.0f, 0.5f * RSM_PI};
+    rsm_localizer_report_t rep;
+    uint32_t k;
+    cfg.lost_scans = 4u;
+    TEST_ASSERT_EQUAL_INT((int)RSM_TRACK_LOST, (int)rsm_localizer_track(NULL));
+    start_at_k0(&loc, 10u, &odo_err);
+    TEST_ASSERT_EQUAL_INT((int)RSM_TRACK_TRACKING, (int)rsm_localizer_track(&loc));
+    TEST_ASSERT_EQUAL_UINT32(10u, loc.counters.track[RSM_TRACK_TRACKING]);
+    for (k = 1u; k <= 6u; ++k) {
+        make_scan(&far_away, NULL, (uint64_t)(K0 + 9u + k) * STEP_US);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+        TEST_ASSERT_EQUAL_INT((int)RSM_SCAN_POOR_FIT, (int)rep.outcome);
+        TEST_ASSERT_EQUAL_INT((int)(k < 4u ? RSM_TRACK_UNCERTAIN : RSM_TRACK_LOST), (int)rep.track);
+        TEST_ASSERT_EQUAL_INT((int)rep.track, (int)rsm_localizer_track(&loc));
+        TEST_ASSERT_TRUE(rep.fit_ratio < cfg.recover_ratio);
+    }
+    TEST_ASSERT_EQUAL_UINT32(3u, loc.counters.track[RSM_TRACK_UNCERTAIN]);
+    TEST_ASSERT_EQUAL_UINT32(3u, loc.counters.track[RSM_TRACK_LOST]);
+    make_scan(&path[K0 + 9u], NULL, (uint64_t)(K0 + 16u) * STEP_US);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    TEST_ASSERT_EQUAL_INT((int)RSM_TRACK_TRACKING, (int)rep.track);
+    TEST_ASSERT_TRUE(rep.fit_ratio >= cfg.recover_ratio);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.poor_run);
+    TEST_ASSERT_EQUAL_STRING("tracking", rsm_track_name(RSM_TRACK_TRACKING));
+    TEST_ASSERT_EQUAL_STRING("uncertain", rsm_track_name(RSM_TRACK_UNCERTAIN));
+    TEST_ASSERT_EQUAL_STRING("lost", rsm_track_name(RSM_TRACK_LOST));
+    TEST_ASSERT_EQUAL_STRING("unknown", rsm_track_name(RSM_TRACK_STATES));
 }
 
 void test_localizer_map_should_survive_poses_far_beyond_its_range(void)
@@ -1637,6 +1679,7 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_refute_a_spike_and_a_counter_reset);
     RUN_TEST(test_localizer_scan_should_doubt_no_step_of_honest_odometry);
     RUN_TEST(test_localizer_scan_should_not_take_an_ambiguous_recovery);
+    RUN_TEST(test_localizer_should_say_when_it_is_uncertain_and_when_lost);
     RUN_TEST(test_localizer_map_should_survive_poses_far_beyond_its_range);
     RUN_TEST(test_localizer_motion_should_refuse_non_finite_increments);
     RUN_TEST(test_localizer_motion_before_the_first_scan_should_move_the_start_without_noise);

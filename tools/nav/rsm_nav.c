@@ -91,6 +91,8 @@
     F("recover_rad", recover_rad) \
     F("recover_margin", recover_margin) \
     F("refute_margin", refute_margin) \
+    U("lost_scans", lost_scans, uint16_t) \
+    U("refuse_poor", refuse_poor, uint8_t) \
     F("doubt_m", doubt_m) \
     F("doubt_rad", doubt_rad) \
     F("mm_search_step", mapmatch.search_step_rad) \
@@ -919,7 +921,9 @@ static void time_stats(nav_t *nav, double *median, double *p95)
 }
 
 /* --summary-json: what the printed summary says, for programs (the bench).
- * Keys: method, scans, outcomes {name: count}, median_us, p95_us,
+ * Keys: method, scans, outcomes {name: count}, tracking {tracking,
+ * uncertain, lost: scans that left the estimate so; final: the state at
+ * the end}, median_us, p95_us,
  * timestamps {clamped, odd, jumps}, drops {nan, too_short, too_long, occluded},
  * alignment {...} (capture and live modes), odometry_calibrations, and for
  * the persistent map tmap {writes, tiles [per level], taken, evicted,
@@ -954,7 +958,10 @@ static int write_summary_json(nav_t *nav, const char *path)
             first = 0;
         }
     }
-    fprintf(f, "},\n  \"median_us\": %.1f,\n  \"p95_us\": %.1f,\n", median * 1e6, p95 * 1e6);
+    fprintf(f, "},\n  \"tracking\": {\"tracking\": %u, \"uncertain\": %u, \"lost\": %u, \"final\": \"%s\"}",
+            (unsigned)c->track[RSM_TRACK_TRACKING], (unsigned)c->track[RSM_TRACK_UNCERTAIN],
+            (unsigned)c->track[RSM_TRACK_LOST], rsm_track_name(rsm_localizer_track(&nav->loc)));
+    fprintf(f, ",\n  \"median_us\": %.1f,\n  \"p95_us\": %.1f,\n", median * 1e6, p95 * 1e6);
     fprintf(f, "  \"timestamps\": {\"clamped\": %llu, \"odd\": %llu, \"jumps\": %llu},\n",
             (unsigned long long)nav->repair.clamped, (unsigned long long)nav->repair.odd_stamps,
             (unsigned long long)nav->repair.time_jumps);
@@ -1041,6 +1048,9 @@ static void print_summary(nav_t *nav)
            (unsigned long long)nav->repair.clamped, (unsigned long long)nav->repair.odd_stamps,
            (unsigned long long)nav->repair.time_jumps);
     printf("  scans           %u\n", (unsigned)c->scans);
+    printf("  tracking        %u scans tracking, %u uncertain, %u lost; %s at the end\n",
+           (unsigned)c->track[RSM_TRACK_TRACKING], (unsigned)c->track[RSM_TRACK_UNCERTAIN],
+           (unsigned)c->track[RSM_TRACK_LOST], rsm_track_name(rsm_localizer_track(&nav->loc)));
     for (o = 0; o < RSM_SCAN_OUTCOMES; ++o) {
         if (c->outcome[o] != 0) {
             printf("    %-14s %u\n", rsm_outcome_name((rsm_outcome_t)o), (unsigned)c->outcome[o]);
