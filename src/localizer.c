@@ -722,7 +722,9 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  * - the last estimate without the step, when the match from pred fits
  *   poorly or moved pred by more than a doubt: the step may be false (a
  *   spike, a counter reset, wheels that slipped).
- * One replaces the match from pred only when its fit beats it by
+ * One replaces the match from pred only when it fits as well as recent
+ * scans (recover_ratio of their fit: with many outliers in the scans a
+ * poor fit beating a poorer one drops true steps) and beats pred's fit by
  * refute_margin (or pred found no match at all), except where odometry
  * counted from the last trusted scan is the better-founded prediction:
  * then pred's match must beat it so. The scan, not the order of the tries,
@@ -774,7 +776,7 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
         rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, alt_pred[k].theta, &unpin);
         if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &alt_pred[k], loc->ekf.p, NULL,
                          &unpin, &alt) == RSM_OK &&
-            alt.used >= cfg->min_points / 2u &&
+            alt.used >= cfg->min_points / 2u && alt.hit >= cfg->recover_ratio * loc->state.persistent.fit &&
             (*rc != RSM_OK || (k == 0 && counted_first ? res->hit <= alt.hit * (1.0f + cfg->refute_margin)
                                                        : alt.hit > res->hit * (1.0f + cfg->refute_margin)))) {
             *res = alt;
