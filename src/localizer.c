@@ -100,6 +100,17 @@ const char *rsm_outcome_name(rsm_outcome_t o)
     }
 }
 
+const char *rsm_odometry_verdict_name(rsm_odometry_verdict_t v)
+{
+    switch (v) {
+    case RSM_ODOMETRY_TRUSTED: return "trusted";
+    case RSM_ODOMETRY_CAUGHT_UP: return "caught_up";
+    case RSM_ODOMETRY_REFUTED: return "refuted";
+    case RSM_ODOMETRY_RECOUNTED: return "recounted";
+    default: return "unknown";
+    }
+}
+
 const char *rsm_track_name(rsm_track_t t)
 {
     switch (t) {
@@ -888,6 +899,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
         if (recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res) ||
             (near_m < cfg->recover_m && recover(loc, npts, &pred, cfg->recover_m, &res))) {
             loc->counters.recovered++;
+            rep->recovered = 1u;
             poor = 0;
         }
     }

@@ -183,6 +183,7 @@ typedef struct rsm_localizer_report {
     float fit_ratio;          /* RSM_METHOD_MAP: the match's fit over the recent scans' (0 when
                                * no match was made) */
     rsm_odometry_verdict_t odometry; /* what the scan made of odometry's step */
+    uint8_t recovered;        /* 1: a recovery search placed this scan */
     rsm_pose_t pose;          /* estimate after this scan */
     float cov[9];             /* its covariance, row-major */
     rsm_pose_t measured;      /* scan-matching measurement (if one was made) */
@@ -379,6 +380,10 @@ rsm_track_t rsm_localizer_track(const rsm_localizer_t *loc);
 /* Short name of a tracking state ("tracking", "uncertain", "lost";
  * "unknown" past the last). */
 const char *rsm_track_name(rsm_track_t t);
+
+/* Short name of an odometry verdict ("trusted", "caught_up", "refuted",
+ * "recounted"; "unknown" past the last). */
+const char *rsm_odometry_verdict_name(rsm_odometry_verdict_t v);
 
 /* Short name of an outcome, for logs ("accepted", "few_keypoints", ...). */
 const char *rsm_outcome_name(rsm_outcome_t o);

@@ -421,3 +421,64 @@ def test_a_bare_corridor_keeps_odometrys_progress(tmp_path):
     assert abs(got["unpinned"][0]) < 0.15 and got["off"][0] > 0.4
     assert got["unpinned"][1] < odo["translation"]["mean"] / 3 <= got["off"][1]
     assert got["unpinned"][2] > 100 and got["off"][2] == 0
+
+
+# ---- odometry that lies, and the tracking state (issue 29) ---------------------------------
+
+
+def stalled_excerpt(head_log: Path, out: Path, start: int, length: int) -> Path:
+    """The excerpt with its odometry frozen for `length` scans from scan `start`,
+    then resumed (the whole motion reported at once): a stall, then a catch-up."""
+    from conftest import read_maybe_gz
+
+    lines = read_maybe_gz(head_log).decode().splitlines()
+    scan = -1
+    held = None
+    for i, line in enumerate(lines):
+        if not line.startswith("FLASER"):
+            continue
+        scan += 1
+        f = line.split()
+        n = int(f[1])
+        if start <= scan < start + length:
+            f[2 + n:2 + n + 6] = held
+            lines[i] = " ".join(f)
+        else:
+            held = f[2 + n:2 + n + 6]
+    out.write_text("\n".join(lines) + "\n")
+    return out
+
+
+def scan_log(path: Path):
+    return [l.split() for l in path.read_text().splitlines() if l and not l.startswith("#")]
+
+
+def test_a_stall_and_its_catch_up_are_counted_once_and_reported(tmp_path, head_log, head_relations):
+    """Odometry frozen for 10 scans while the robot turns (the excerpt's
+    scans 200-209, half a radian), then caught up: the scan log says which
+    step was judged so, the summary and its JSON count it, and the run stays
+    about as accurate as the clean one. (On this excerpt a run that trusts
+    odometry survives too, its search covering the turn: the unit tests'
+    quarter turn and the full logs, docs/robustness.md, show the damage.)"""
+    log = stalled_excerpt(head_log, tmp_path / "stall.clf", 200, 10)
+    run_nav(head_log, tmp_path / "clean.txt")
+    clean = errors(tmp_path / "clean.txt", head_relations)
+    traj, slog, js = tmp_path / "t.txt", tmp_path / "scans.txt", tmp_path / "s.json"
+    summary = run_nav(log, traj, "rsm", "--scan-log", str(slog), "--summary-json", str(js))
+    rows = scan_log(slog)
+    assert len(rows) == 600 and all(len(r) == 6 for r in rows)
+    assert {r[2] for r in rows} <= {"tracking", "uncertain", "lost"}
+    caught = [k for k, r in enumerate(rows) if r[3] == "caught_up"]
+    assert caught == [210], caught
+    s = json.loads(js.read_text())
+    assert s["odometry_faults"]["caught_up"] == 1
+    assert s["tracking"]["tracking"] + s["tracking"]["uncertain"] + s["tracking"]["lost"] == 600
+    assert s["recovery"]["ambiguous"] >= 0 and "refused as ambiguous" in summary
+    assert re.search(r"odometry faults 1 steps after a stall counted once", summary), summary
+    res = errors(traj, head_relations)
+    assert res["translation"]["mean"] <= 1.1 * clean["translation"]["mean"], (res, clean)
+    assert res["rotation"]["mean"] <= 1.3 * clean["rotation"]["mean"], (res, clean)
+
+    trusted = tmp_path / "trusted.txt"
+    run_nav(log, trusted, "rsm", "--set", "refute_margin=0", "--scan-log", str(slog))
+    assert not [r for r in scan_log(slog) if r[3] != "trusted"]

@@ -167,6 +167,9 @@ static void usage(FILE *f)
             "                            (default: the capture's, else the P3-DX defaults)\n"
             "  --events FILE             write every decoded input (E left right / S count hash)\n"
             "  --summary-json FILE       write the summary as JSON too (scans, outcomes, times, map)\n"
+            "  --scan-log FILE           one line per scan: stamp, outcome, tracking state,\n"
+            "                            what odometry's step was judged, 1 if a search placed it,\n"
+            "                            the fit over recent scans'\n"
             "  --tum FILE                write the trajectory in TUM format too\n"
             "                            (timestamp x y z qx qy qz qw; what evo reads)\n"
             "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
@@ -270,6 +273,7 @@ typedef struct nav {
     uint64_t encoders;
     FILE *events;          /* --events: decoded inputs, one line each, in processing order */
     FILE *tum;             /* --tum: the trajectory again, as TUM lines (what evo reads) */
+    FILE *scan_log;        /* --scan-log: what each scan did (the bench counts false recoveries) */
     int ticks_from_flag;   /* --ticks-per-m given: the robot's calibration is not taken */
     unsigned calibrations; /* robot calibrations taken (live mode) */
     int have_x0;           /* --initial-pose given: overrides any other start */
@@ -381,6 +385,11 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
         nav->times = nt;
     }
     nav->times[nav->ntimes++] = elapsed_s;
+    if (nav->scan_log != NULL) {
+        fprintf(nav->scan_log, "%.6f %s %s %s %u %.4f\n", file_stamp_s,
+                rc == RSM_OK ? rsm_outcome_name(rep->outcome) : "error", rsm_track_name(rep->track),
+                rsm_odometry_verdict_name(rep->odometry), (unsigned)rep->recovered, (double)rep->fit_ratio);
+    }
     if (rc != RSM_OK) {
         fprintf(stderr, "rsm-nav: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
         return;
@@ -1087,7 +1096,7 @@ static void print_summary(nav_t *nav)
 enum {
     OPT_CARMEN = 256, OPT_CAPTURE, OPT_ROBOT, OPT_LMS, OPT_LIDAR, OPT_LIDAR_KEEP, OPT_NO_DESKEW,
     OPT_ROBOT_BAUD, OPT_LMS_BAUD, OPT_LISTEN, OPT_SECONDS, OPT_IDLE_EXIT, OPT_TICKS_PER_M, OPT_WHEEL_BASE,
-    OPT_INITIAL_POSE, OPT_LASER_POSE, OPT_UPSIDE_DOWN, OPT_TRAJECTORY, OPT_SUMMARY_JSON, OPT_TUM, OPT_EVENTS,
+    OPT_INITIAL_POSE, OPT_LASER_POSE, OPT_UPSIDE_DOWN, OPT_TRAJECTORY, OPT_SUMMARY_JSON, OPT_TUM, OPT_SCAN_LOG, OPT_EVENTS,
     OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_QUIET
 };
 
@@ -1116,6 +1125,7 @@ static const struct option nav_options[] = {
     {"trajectory", required_argument, NULL, OPT_TRAJECTORY},
     {"summary-json", required_argument, NULL, OPT_SUMMARY_JSON},
     {"tum", required_argument, NULL, OPT_TUM},
+    {"scan-log", required_argument, NULL, OPT_SCAN_LOG},
     {"events", required_argument, NULL, OPT_EVENTS},
     {"map", required_argument, NULL, OPT_MAP},
     {"method", required_argument, NULL, OPT_METHOD},
@@ -1307,6 +1317,12 @@ int main(int argc, char **argv)
             }
             fprintf(nav.tum, "# timestamp x y z qx qy qz qw (TUM)\n");
             break;
+        case OPT_SCAN_LOG:
+            if ((nav.scan_log = open_output(optarg)) == NULL) {
+                return 1;
+            }
+            fprintf(nav.scan_log, "# rsm-nav scan log: timestamp[s] outcome tracking odometry recovered fit_ratio\n");
+            break;
         case OPT_EVENTS:
             if ((nav.events = open_output(optarg)) == NULL) {
                 return 1;
@@ -1439,6 +1455,10 @@ int main(int argc, char **argv)
     }
     if (nav.tum != NULL && fclose(nav.tum) != 0) {
         fprintf(stderr, "rsm-nav: error writing the TUM file\n");
+        rc = rc ? rc : 1;
+    }
+    if (nav.scan_log != NULL && fclose(nav.scan_log) != 0) {
+        fprintf(stderr, "rsm-nav: error writing the scan log\n");
         rc = rc ? rc : 1;
     }
     if (fclose(nav.traj) != 0) {
