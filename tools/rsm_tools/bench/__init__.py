@@ -17,7 +17,8 @@ report (``docs/RESULTS.md`` by default) has these sections:
    replaced by random ranges (:mod:`rsm_tools.outliers`); the whole curve on
    the main log, 43 % and 60 % on every log; and rsm over many runs (the map
    update distance varied) clean and at 43 %, whose means the floors compare
-   too.
+   too; and rsm on copies of every log with odometry and sampling faults
+   (:mod:`rsm_tools.faults`; the subsection "Faults", :mod:`.faults`).
 3. Sharp turns, the paper's Fig. 8: residuals at the local relations with the
    fastest true turn, and over all local relations binned by true rotation.
 4. Speed: wall time per scan (rsm-nav), per stage (``rsm-stages``, the
@@ -71,6 +72,7 @@ from .measure import (build_small, cmake_cache, cpu_info, discover_logs, hash_lo
     run_accuracy, run_arm_memory, run_callgrind, run_cross_check, run_host_stack, run_m4, run_memory, run_nav,
     run_robustness, run_scaling, run_speed, run_spread, run_stage_speed, run_stages, run_turns, scaling_variants,
     shared_dir, source_digest, spread_updates, stages_exe, variant_header, write_head)
+from .faults import FAULT_RUNS, QUICK_FAULT_RUNS, fault_floors, run_faults
 from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors,
     context_from_manifest, floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_report)
 
@@ -129,6 +131,8 @@ def build_parser() -> argparse.ArgumentParser:
                    f"{SPREAD_UPDATES}; quick {QUICK_SPREAD_UPDATES}; 0: skip)")
     p.add_argument("--spread-seeds", type=int, help=f"outlier seeds of those runs, counting from {FIRST_SEED} "
                    f"(default {SPREAD_SEEDS}; quick: as --seeds)")
+    p.add_argument("--faults", type=int, help=f"runs per fault of the section Faults (rsm-faults on every log, "
+                   f"twice as many clean runs; default {FAULT_RUNS}; quick {QUICK_FAULT_RUNS}; 0: skip)")
     p.add_argument("--speed-repeats", type=int, help=f"timed runs per method (default {SPEED_REPEATS}; quick 1)")
     p.add_argument("--callgrind-scans", type=int, default=CALLGRIND_SCANS,
                    help=f"scans from the start of every log counted by callgrind (default {CALLGRIND_SCANS})")
@@ -264,6 +268,10 @@ def run(args: argparse.Namespace) -> Path:
                      stage("spread", run_spread, nav, logs, FLOOR_LEVEL,
                            list(range(FIRST_SEED, FIRST_SEED + nsseeds)), spread_updates(nspread), work, cache,
                            args.jobs))
+    nfaults = args.faults if args.faults is not None else (QUICK_FAULT_RUNS if args.quick else FAULT_RUNS)
+    reuse = None if "skipped" in ctx["spread"] else (work / "spread", ctx["spread"]["updates"])
+    ctx["faults"] = ({"skipped": "--faults 0"} if nfaults <= 0 else
+                     stage("faults", run_faults, nav, logs, nfaults, work, args.jobs, reuse))
     sanitized = cmake_cache(build).get("RSM_SANITIZE", "OFF").upper() in ("ON", "TRUE", "1", "YES")
     painted = not (args.no_stack or sanitized)
     if not painted:
@@ -324,8 +332,8 @@ def run(args: argparse.Namespace) -> Path:
                                   "its figures may come from different code: run it again")
         print(f"rsm-bench: WARNING: {ctx['sources_changed']}", flush=True)
     ctx["floors"] = (check_floors(**floor_inputs(ctx)) + m4_floors(ctx.get("m4")) +
-                     spread_floors(ctx.get("spread")) + ctx["full_checks"] + ctx["lidar_streams"] +
-                     ctx["corridors"])
+                     spread_floors(ctx.get("spread")) + fault_floors(ctx.get("faults")) + ctx["full_checks"] +
+                     ctx["lidar_streams"] + ctx["corridors"])
     ctx["losses"] = losses(ctx)
     ctx["elapsed"] = time.monotonic() - t_start
     ctx["stage_seconds"] = stage_seconds

@@ -1,0 +1,177 @@
+"""The arithmetic of the bench's section "Faults" (rsm_tools.bench.faults) on
+made-up numbers, and how a run is judged (removed scans filled by odometry,
+a mount composed back, slip copies left out) on small made-up logs: no
+rsm-nav run, no full log."""
+
+import math
+
+import pytest
+
+from rsm_tools import evaluate as ev
+from rsm_tools import faults as flt
+from rsm_tools.bench import faults as bf
+from rsm_tools.carmen import pose_compose
+
+
+def run_entry(values, odometry=None, recoveries=None):
+    n = len(values)
+    return [{"k": k, "update": bf.fault_update(k), "all": v, "odometry_all": (odometry or [1.0] * n)[k],
+             "recoveries": (recoveries or [0] * n)[k]} for k, v in enumerate(values)]
+
+
+def section(clean, faults_, odometry_all=1.0, runs=None):
+    """A made-up result of run_faults for one log."""
+    cs = bf.stats(clean)
+    by_update = dict(zip(bf.clean_updates(len(clean)), clean))
+    entry = {"log": "x.clf.gz", "relations": 10, "odometry": {"all": odometry_all, "local": 0.1, "matched": 10},
+             "clean": cs, "clean_runs": [], "clean_reused": 0, "faults": {}}
+    for name, vals in faults_.items():
+        fr = run_entry(vals)
+        entry["faults"][name] = {"runs": fr, **bf.summarize(fr, cs["median"], by_update)}
+    n = runs or max(len(v) for v in faults_.values())
+    return {"runs": n, "clean_runs": len(clean), "updates": [bf.fault_update(k) for k in range(n)],
+            "clean_updates": bf.clean_updates(len(clean)), "faults": [{"name": k, "what": "made up"} for k in faults_],
+            "recovery_note": bf.RECOVERY_NOTE, "logs": {"log": entry}}
+
+
+def test_update_distances_of_the_runs():
+    assert bf.fault_update(0) == 0.3 and bf.fault_update(19) == 0.49
+    assert bf.clean_updates(4) == [0.3, 0.305, 0.31, 0.315]
+    # the fault runs' distances are among the clean runs' (every other one)
+    assert {bf.fault_update(k) for k in range(20)} <= set(bf.clean_updates(40))
+
+
+def test_stats_median_worst_and_missing_runs():
+    s = bf.stats([0.3, 0.1, 0.2, 0.4])
+    assert (s["n"], s["missing"], s["median"], s["max"], s["min"]) == (4, 0, 0.25, 0.4, 0.1)
+    s = bf.stats([0.3, float("nan"), 0.1, None])
+    assert (s["n"], s["missing"], s["median"], s["min"]) == (2, 2, 0.2, 0.1)
+    assert math.isnan(s["max"])  # a run without a figure: the worst is unknown
+    s = bf.stats([])
+    assert s["n"] == 0 and math.isnan(s["median"])
+
+
+def test_summary_ratios_to_the_clean_median():
+    fr = run_entry([0.02, 0.03, 0.05], odometry=[0.5, 0.7, 0.6], recoveries=[0, 2, 1])
+    s = bf.summarize(fr, 0.02)
+    assert s["median"] == 0.03 and s["max"] == 0.05
+    assert math.isclose(s["x_median"], 1.5) and math.isclose(s["x_worst"], 2.5)
+    assert s["odometry"]["median"] == 0.6 and (s["recoveries"]["median"], s["recoveries"]["max"]) == (1, 2)
+    assert s["worst_update"] == 0.32 and s["worst_clean"] is None  # no clean run given
+    s = bf.summarize(fr, 0.02, {0.3: 0.01, 0.31: 0.02, 0.32: 0.04})
+    assert s["worst_clean"] == 0.04  # the clean run at the worst run's update distance
+
+
+def test_floors_on_made_up_numbers():
+    clean = [0.010] * 20 + [0.012] * 19 + [0.031]  # median 0.011, worst 0.031 = x2.82
+    fa = section(clean, {
+        "good": [0.011] * 10 + [0.0135] * 9 + [0.022],   # median 0.0123 <= x1.25, worst exactly x2
+        "bad-median": [0.014] * 19 + [0.015],            # x1.27 median: MISS; worst x1.36: PASS
+        "bad-worst": [0.011] * 19 + [0.0221],            # worst x2.01: MISS; median PASS
+    }, odometry_all=0.030)
+    f = bf.fault_floors(fa)
+    got = [(x["kind"], x["status"]) for x in f]
+    assert got == [("faults-clean", "PASS"),
+                   ("faults", "PASS"), ("faults", "PASS"),
+                   ("faults", "PASS"), ("faults", "MISS"),
+                   ("faults", "MISS"), ("faults", "PASS"),
+                   ("faults-recovery", "SKIP")]
+    assert math.isclose(f[0]["value"], 0.031 / 0.011) and f[0]["limit"] == 3.0
+    assert f[0]["line"] == ("PASS log: clean, worst of 40 runs (map_update_m 0.3 to 0.495) 0.0310 m = x2.82 the "
+                            "clean median 0.0110 m <= x3, all-relations translation")
+    assert math.isclose(f[1]["value"], 2.0) and f[1]["limit"] == 2.0
+    # the worst "good" run is run 19, at map_update_m 0.49: the clean run there is the 39th (0.012)
+    assert f[1]["line"] == ("PASS log: good fault, worst of 20 runs 0.0220 m (the clean run at its map_update_m 0.49: "
+                            "0.0120 m) = x2.00 the clean median 0.0110 m <= x2, < odometry alone 0.0300 m, "
+                            "all-relations translation")
+    assert f[4]["line"] == "MISS log: bad-median fault, median of 20 runs 0.0140 m = x1.27 the clean median > x1.25"
+    assert "= x2.01 the clean median 0.0110 m > x2, < odometry alone" in f[5]["line"]
+    assert "false recoveries" in f[-1]["line"] and "not at which scan" in f[-1]["line"]
+    # within x2 of the clean median but not below odometry alone: a MISS
+    fa = section(clean, {"above-odometry": [0.011] * 19 + [0.0205]}, odometry_all=0.020)
+    f = bf.fault_floors(fa)
+    assert [x["status"] for x in f] == ["PASS", "MISS", "PASS", "SKIP"]
+    assert "x1.86 the clean median 0.0110 m <= x2, >= odometry alone 0.0200 m" in f[1]["line"]
+
+
+def test_clean_floor_misses_a_wild_clean_run_and_unmeasured_is_skipped():
+    fa = section([0.01] * 39 + [0.0301], {"x": [0.01, 0.01]})
+    f = bf.fault_floors(fa)
+    assert f[0]["status"] == "MISS" and "x3.01" in f[0]["line"] and "> x3" in f[0]["line"]
+    fa = section([], {"x": [0.01]})
+    assert [x["status"] for x in bf.fault_floors(fa)] == ["SKIP", "SKIP", "SKIP"]
+    # a fault run without a figure: the worst is unknown and cannot pass
+    fa = section([0.01] * 4, {"x": [0.01, float("nan")]})
+    f = bf.fault_floors(fa)
+    assert f[1]["status"] == "MISS" and "worst of 2 runs n/a" in f[1]["line"]
+    assert bf.fault_floors(None) == [] and bf.fault_floors({"skipped": "--faults 0"}) == []
+
+
+def test_report_table_shows_the_figures():
+    fa = section([0.010, 0.011, 0.012, 0.013], {"stall": [0.012, 0.020], "scale": [0.011, 0.0115]},
+                 odometry_all=0.5)
+    text = "\n".join(bf.report_faults(fa))
+    assert "### Faults" in text and "<!-- table: faults -->" in text
+    rows = [l for l in text.splitlines() if l.startswith("| log | fault |")]
+    assert len(rows) == 1
+    assert "| log | clean | 4 | 0.0115 | 0.0130 | 1.00 | 1.13 |  | 0.5000 |  |  |" in text
+    # the worst stall run is run 1 (map_update_m 0.31), where the clean run made 0.012
+    assert "| log | stall | 2 | 0.0160 | 0.0200 | 1.39 | 1.74 | 0.0120 (0.310) | 0.5000 | 1.0000 | 0 / 0 |" in text
+    assert "False recoveries: not counted" in text
+    assert "Not measured in this run (--faults 0)." in "\n".join(bf.report_faults({"skipped": "--faults 0"}))
+
+
+def _log(n=12, mount=False):
+    """A made-up log: the robot drives 0.1 m per scan along x, turning 0.05 rad per scan."""
+    lines = []
+    pose = (0.0, 0.0, 0.0)
+    for i in range(n):
+        p = " ".join(f"{v:.6f}" for v in pose)
+        rng = " ".join(f"{2 + 0.01 * j:.2f}" for j in range(8))
+        lines.append(f"FLASER 8 {rng} {p} {p} {100 + i:.6f} h {i:.6f}\n".encode())
+        pose = pose_compose(pose, (0.1, 0.0, 0.05))
+    return flt.load_lines(lines)
+
+
+def test_removed_scans_are_judged_at_the_last_estimate_moved_by_odometry():
+    log = _log()
+    res = flt.apply_faults(log, flt.FaultSpec(gaps=[(3.0, 4.0)]))  # scans 3..6 removed
+    assert [o.src for o in res.kept_scans] == [0, 1, 2, 7, 8, 9, 10, 11]
+    # a made-up run: the estimates of the kept scans are the odometry moved by 1 m in y
+    est = ev.Trajectory((log.scans[o.src].stamp, o.pose[0], o.pose[1] + 1.0, o.pose[2]) for o in res.kept_scans)
+    got = bf.judged_trajectory(est, res)
+    assert [t for t, *_ in got] == [s.stamp for s in log.scans]
+    for (t, x, y, th), sc in zip(got, log.scans):
+        assert math.isclose(x, sc.odom[0], abs_tol=1e-9) and math.isclose(y, sc.odom[1] + 1.0, abs_tol=1e-9)
+    # the faulty log's odometry alone is judged at every scan too
+    assert len(bf.odometry_alone(res)) == len(log.scans)
+
+
+def test_a_moved_mount_is_judged_at_the_laser_and_slip_copies_not_at_all():
+    log = _log()
+    m = (0.22, 0.0, 0.0)
+    res = flt.apply_faults(log, flt.FaultSpec(mount=m, slips=[(4, 3)]))
+    assert len(res.out) == len(log.scans) + 2
+    # the robot's estimate composed with the mount gives back the laser's (the original) pose
+    est = ev.Trajectory()
+    for o in res.out:
+        t = o.stamp_us / 1e6 if o.stamp_us is not None else log.scans[o.src].stamp
+        est.add(t, *res.poses[log.scan_event[o.src]] if not o.copy else o.pose)
+    got = bf.judged_trajectory(est, res)
+    assert [t for t, *_ in got] == [s.stamp for s in log.scans]
+    first = got[0]
+    assert math.isclose(first[1], log.scans[0].laser[0], abs_tol=1e-9)
+    odo = bf.odometry_alone(res)
+    assert all(math.isclose(a[3], b[3], abs_tol=1e-9) for a, b in zip(odo, got))
+
+
+@pytest.mark.parametrize("name", bf.FAULT_NAMES)
+def test_every_fault_plan_fits_a_short_log(name, head_log):
+    log = flt.load_log(head_log)
+    for k in range(3):
+        spec = bf.plan(name, log, k, "head")
+        res = flt.apply_faults(log, spec)
+        assert res.summaries
+        assert spec == bf.plan(name, log, k, "head")  # the same places for the same run
+    if name in ("spike", "reset", "slip", "gap"):
+        assert len({flt.describe(bf.plan(name, log, k, "head")) for k in range(6)}) > 1  # places vary by run
