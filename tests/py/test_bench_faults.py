@@ -13,20 +13,23 @@ from rsm_tools.bench import faults as bf
 from rsm_tools.carmen import pose_compose
 
 
-def run_entry(values, odometry=None, recoveries=None):
+def run_entry(values, odometry=None, recoveries=None, false=None):
     n = len(values)
+    rec = recoveries or [0] * n
     return [{"k": k, "update": bf.fault_update(k), "all": v, "odometry_all": (odometry or [1.0] * n)[k],
-             "recoveries": (recoveries or [0] * n)[k]} for k, v in enumerate(values)]
+             "recoveries": rec[k], "recoveries_judged": rec[k], "false_recoveries": (false or [0] * n)[k]}
+            for k, v in enumerate(values)]
 
 
-def section(clean, faults_, odometry_all=1.0, runs=None):
-    """A made-up result of run_faults for one log."""
+def section(clean, faults_, odometry_all=1.0, runs=None, false=None):
+    """A made-up result of run_faults for one log (false: per fault, false
+    recoveries per run)."""
     cs = bf.stats(clean)
     by_update = dict(zip(bf.clean_updates(len(clean)), clean))
     entry = {"log": "x.clf.gz", "relations": 10, "odometry": {"all": odometry_all, "local": 0.1, "matched": 10},
              "clean": cs, "clean_runs": [], "clean_reused": 0, "faults": {}}
     for name, vals in faults_.items():
-        fr = run_entry(vals)
+        fr = run_entry(vals, recoveries=[1] * len(vals), false=(false or {}).get(name))
         entry["faults"][name] = {"runs": fr, **bf.summarize(fr, cs["median"], by_update)}
     n = runs or max(len(v) for v in faults_.values())
     return {"runs": n, "clean_runs": len(clean), "updates": [bf.fault_update(k) for k in range(n)],
@@ -75,7 +78,7 @@ def test_floors_on_made_up_numbers():
                    ("faults", "PASS"), ("faults", "PASS"),
                    ("faults", "PASS"), ("faults", "MISS"),
                    ("faults", "MISS"), ("faults", "PASS"),
-                   ("faults-recovery", "SKIP")]
+                   ("faults-recovery", "PASS")]
     assert math.isclose(f[0]["value"], 0.031 / 0.011) and f[0]["limit"] == 3.0
     assert f[0]["line"] == ("PASS log: clean, worst of 40 runs (map_update_m 0.3 to 0.495) 0.0310 m = x2.82 the "
                             "clean median 0.0110 m <= x3, all-relations translation")
@@ -86,11 +89,15 @@ def test_floors_on_made_up_numbers():
                             "all-relations translation")
     assert f[4]["line"] == "MISS log: bad-median fault, median of 20 runs 0.0140 m = x1.27 the clean median > x1.25"
     assert "= x2.01 the clean median 0.0110 m > x2, < odometry alone" in f[5]["line"]
-    assert "false recoveries" in f[-1]["line"] and "not at which scan" in f[-1]["line"]
+    assert f[-1]["line"].startswith("PASS log: false recoveries 0 of 60 taken in 60 fault runs == 0")
+    # one false recovery anywhere is a MISS
+    fa = section(clean, {"good": [0.011] * 20}, odometry_all=0.030, false={"good": [0] * 19 + [1]})
+    f = bf.fault_floors(fa)
+    assert f[-1]["status"] == "MISS" and f[-1]["value"] == 1 and "false recoveries 1 of 20" in f[-1]["line"]
     # within x2 of the clean median but not below odometry alone: a MISS
     fa = section(clean, {"above-odometry": [0.011] * 19 + [0.0205]}, odometry_all=0.020)
     f = bf.fault_floors(fa)
-    assert [x["status"] for x in f] == ["PASS", "MISS", "PASS", "SKIP"]
+    assert [x["status"] for x in f] == ["PASS", "MISS", "PASS", "PASS"]
     assert "x1.86 the clean median 0.0110 m <= x2, >= odometry alone 0.0200 m" in f[1]["line"]
 
 
@@ -99,7 +106,7 @@ def test_clean_floor_misses_a_wild_clean_run_and_unmeasured_is_skipped():
     f = bf.fault_floors(fa)
     assert f[0]["status"] == "MISS" and "x3.01" in f[0]["line"] and "> x3" in f[0]["line"]
     fa = section([], {"x": [0.01]})
-    assert [x["status"] for x in bf.fault_floors(fa)] == ["SKIP", "SKIP", "SKIP"]
+    assert [x["status"] for x in bf.fault_floors(fa)] == ["SKIP", "SKIP", "PASS"]
     # a fault run without a figure: the worst is unknown and cannot pass
     fa = section([0.01] * 4, {"x": [0.01, float("nan")]})
     f = bf.fault_floors(fa)
@@ -114,10 +121,10 @@ def test_report_table_shows_the_figures():
     assert "### Faults" in text and "<!-- table: faults -->" in text
     rows = [l for l in text.splitlines() if l.startswith("| log | fault |")]
     assert len(rows) == 1
-    assert "| log | clean | 4 | 0.0115 | 0.0130 | 1.00 | 1.13 |  | 0.5000 |  |  |" in text
+    assert "| log | clean | 4 | 0.0115 | 0.0130 | 1.00 | 1.13 |  | 0.5000 |  |  |  |" in text
     # the worst stall run is run 1 (map_update_m 0.31), where the clean run made 0.012
-    assert "| log | stall | 2 | 0.0160 | 0.0200 | 1.39 | 1.74 | 0.0120 (0.310) | 0.5000 | 1.0000 | 0 / 0 |" in text
-    assert "False recoveries: not counted" in text
+    assert "| log | stall | 2 | 0.0160 | 0.0200 | 1.39 | 1.74 | 0.0120 (0.310) | 0.5000 | 1.0000 | 1 / 1 | 0 of 2 |" in text
+    assert "False recoveries: a recovery is false when" in text
     assert "Not measured in this run (--faults 0)." in "\n".join(bf.report_faults({"skipped": "--faults 0"}))
 
 
@@ -175,3 +182,27 @@ def test_every_fault_plan_fits_a_short_log(name, head_log):
         assert spec == bf.plan(name, log, k, "head")  # the same places for the same run
     if name in ("spike", "reset", "slip", "gap"):
         assert len({flt.describe(bf.plan(name, log, k, "head")) for k in range(6)}) > 1  # places vary by run
+
+
+def test_false_recoveries_are_told_by_the_clean_runs_pose(tmp_path):
+    """A recovery is judged at its scan against the clean run's pose there:
+    within 0.3 m and 5 deg it is right, beyond either it is false; a stamp
+    the clean run has not is not judged; with a mount the laser's pose is
+    compared. The stamps come from rsm-nav's --scan-log."""
+    slog = tmp_path / "s.scans"
+    slog.write_text("# rsm-nav scan log: timestamp[s] outcome tracking odometry recovered fit_ratio\n"
+                    "1.000000 accepted tracking trusted 1 0.9\n2.000000 accepted tracking trusted 0 0.9\n"
+                    "3.000000 accepted tracking refuted 1 0.8\n4.000000 accepted tracking trusted 1 0.7\n"
+                    "5.000000 poor_fit uncertain trusted 0 0.1\n6.000000 accepted tracking trusted 1 0.9\n")
+    stamps = bf.recovered_stamps(slog)
+    assert stamps == [1.0, 3.0, 4.0, 6.0]
+    clean = ev.Trajectory([(1.0, 0.0, 0.0, 0.0), (3.0, 1.0, 0.0, 0.0), (4.0, 2.0, 0.0, 0.0)])
+    # 0.25 m off: right; 0.35 m off: false; 6 deg off: false; stamp 6 not in the clean run
+    run = ev.Trajectory([(1.0, 0.25, 0.0, 0.0), (3.0, 1.0, 0.35, 0.0), (4.0, 2.0, 0.0, math.radians(6.0)),
+                         (6.0, 9.0, 9.0, 0.0)])
+    assert bf.false_recoveries(stamps, run, clean) == (3, 2)
+    # the robot 0.22 m behind the laser, turned half a turn: its laser lands where the clean pose is
+    mounted = ev.Trajectory([(1.0, 0.22, 0.0, math.pi)])
+    assert bf.false_recoveries([1.0], mounted, clean, (0.22, 0.0, 0.0)) == (1, 1)
+    behind = ev.Trajectory([(1.0, -0.22, 0.0, 0.0)])
+    assert bf.false_recoveries([1.0], behind, clean, (0.22, 0.0, 0.0)) == (1, 0)

@@ -18,10 +18,10 @@ et al.) of its trajectory, keyed by the original log's scans:
 odometry is in the table too. The floors (FLOOR_*): the worst run of each
 fault at most x2 the clean runs' median and below odometry alone, the median
 at most x1.25; the worst clean run at most x3 the clean median. rsm-nav
-says how many recoveries it took (--summary-json) but not where (its
---events lists only the decoded inputs of captures and live links), so
-recoveries that land far from the clean run's pose ("false recoveries")
-cannot be counted: the floor says so as a SKIP line.
+writes which scans a recovery search placed (--scan-log); a recovery that
+lands more than FALSE_RECOVERY_M or FALSE_RECOVERY_DEG from the clean run's
+pose at that scan (the clean run at the same map_update_m, laser poses
+compared) is a false one, and the floor on them is zero.
 """
 
 import hashlib
@@ -79,10 +79,9 @@ FAULTS = (
 )
 FAULT_NAMES = tuple(n for n, _ in FAULTS)
 
-RECOVERY_NOTE = ("rsm-nav reports how many recoveries it took (--summary-json: recovery.taken) but not at which "
-                 "scan: its --events file lists the decoded inputs of captures and live links only, so a recovery "
-                 f"that lands more than {FALSE_RECOVERY_M:g} m or {FALSE_RECOVERY_DEG:g} deg from the clean run's "
-                 "pose cannot be told")
+RECOVERY_NOTE = ("a recovery is false when the pose it gave lands more than "
+                 f"{FALSE_RECOVERY_M:g} m or {FALSE_RECOVERY_DEG:g} deg from the clean run's pose at that scan (the "
+                 "clean run at the same map_update_m; rsm-nav --scan-log says which scans a search placed)")
 
 
 def fault_update(k: int) -> float:
@@ -190,6 +189,36 @@ def errors(traj, relations) -> Dict[str, float]:
     return {"all": a["translation"]["mean"], "local": l_["translation"]["mean"], "matched": a["matched"]}
 
 
+def recovered_stamps(scan_log: Path) -> List[float]:
+    """Stamps of the scans a recovery search placed, from rsm-nav --scan-log
+    (stamp outcome tracking odometry recovered fit_ratio)."""
+    out = []
+    for line in Path(scan_log).read_text().splitlines():
+        f = line.split()
+        if f and not line.startswith("#") and len(f) >= 5 and f[4] == "1":
+            out.append(float(f[0]))
+    return out
+
+
+def false_recoveries(stamps: Sequence[float], traj: ev.Trajectory, clean: ev.Trajectory,
+                     mount: Optional[Pose] = None) -> Tuple[int, int]:
+    """(recoveries judged, false ones): each recovery's pose (the laser's with
+    a mount) against the clean run's at the same stamp; a stamp the clean
+    run has not (a slip's copies) is not judged."""
+    judged = false = 0
+    for t in stamps:
+        est = traj.lookup(t, tolerance=0.0)
+        ref = clean.lookup(t, tolerance=0.0)
+        if est is None or ref is None:
+            continue
+        shown = pose_compose(tuple(est), mount) if mount is not None else tuple(est)
+        d = ev.between(tuple(ref), shown)
+        judged += 1
+        if math.hypot(d[0], d[1]) > FALSE_RECOVERY_M or abs(math.degrees(d[2])) > FALSE_RECOVERY_DEG:
+            false += 1
+    return judged, false
+
+
 def stats(values: Sequence[float]) -> dict:
     """Median, worst, best and count of the finite values (worst: NaN when a
     run has no figure, so that a floor on it cannot pass)."""
@@ -211,6 +240,10 @@ def summarize(fault_runs: Sequence[dict], clean_median: float,
     s = stats([r["all"] for r in fault_runs])
     s["odometry"] = stats([r["odometry_all"] for r in fault_runs])
     s["recoveries"] = stats([r["recoveries"] for r in fault_runs])
+    judged = [r for r in fault_runs if r.get("false_recoveries") is not None]
+    s["false_recoveries"] = sum(r["false_recoveries"] for r in judged)
+    s["recoveries_judged"] = sum(r["recoveries_judged"] for r in judged)
+    s["runs_judged"] = len(judged)
     s["x_median"] = ratio(s["median"], clean_median)
     s["x_worst"] = ratio(s["max"], clean_median)
     finite = [r for r in fault_runs if r["all"] is not None and math.isfinite(r["all"])]
@@ -272,7 +305,8 @@ def run_faults(nav: Path, logs: Sequence[Tuple[str, Path, Path]], runs: int, wor
             written = flt.write_result(res, fh, "rsm-faults " + flt.describe(spec), odom_lines=False)
         os.replace(tmp, path)
         traj_path = d / f"{name}-{k}.txt"
-        extra = ["--set", f"map_update_m={u:g}"]
+        slog = d / f"{name}-{k}.scans"
+        extra = ["--set", f"map_update_m={u:g}", "--scan-log", str(slog)]
         if spec.mount is not None:
             extra += ["--laser-pose", *(f"{v:g}" for v in spec.mount)]
         try:
@@ -285,6 +319,7 @@ def run_faults(nav: Path, logs: Sequence[Tuple[str, Path, Path]], runs: int, wor
         rec = summary.get("recovery") or {}
         return task, {"k": k, "update": u, "spec": flt.describe(spec), "faults": res.summaries,
                       "scans_written": written, "trajectory": str(traj_path),
+                      "recovered_at": recovered_stamps(slog), "mount": spec.mount,
                       "recoveries": rec.get("taken"), "searches": rec.get("searches"),
                       "odometry_faults": summary.get("odometry_faults"),
                       "odometry_all": o["all"], "odometry_local": o["local"], **e}
@@ -303,8 +338,17 @@ def run_faults(nav: Path, logs: Sequence[Tuple[str, Path, Path]], runs: int, wor
         cs = stats([r["all"] for r in clean])
         entry = {"log": str(log), "relations": len(rels[label]), "odometry": odo, "clean": cs,
                  "clean_runs": clean, "clean_reused": sum(1 for r in clean if r["reused"]), "faults": {}}
+        clean_traj = {r["update"]: r["trajectory"] for r in clean}
         for name in names:
             fr = sorted((r for (lab, n, _), r in done if lab == label and n == name), key=lambda r: r["k"])
+            for r in fr:
+                ref = clean_traj.get(r["update"])
+                if ref is None:
+                    r["false_recoveries"] = r["recoveries_judged"] = None
+                    continue
+                r["recoveries_judged"], r["false_recoveries"] = false_recoveries(
+                    r["recovered_at"], ev.load_trajectory(Path(r["trajectory"])), ev.load_trajectory(Path(ref)),
+                    tuple(r["mount"]) if r["mount"] is not None else None)
             entry["faults"][name] = {"runs": fr, **summarize(fr, cs["median"], {r["update"]: r["all"] for r in clean})}
         out["logs"][label] = entry
     return out
@@ -360,9 +404,18 @@ def fault_floors(fa: Optional[dict]) -> List[dict]:
             out.append(_floor("PASS" if ok else "MISS", "faults", label, xm, FLOOR_MEDIAN_X,
                               f"{head}, median of {n_runs} runs {fmt_q('translation', f['median'])} m = x{xm:.2f} "
                               f"the clean median {'<=' if ok else '>'} x{FLOOR_MEDIAN_X:g}"))
-    out.append(_floor("SKIP", "faults-recovery", None, None, 0,
-                      f"false recoveries (more than {FALSE_RECOVERY_M:g} m or {FALSE_RECOVERY_DEG:g} deg from the "
-                      f"clean run): not counted, {RECOVERY_NOTE}"))
+    for label, e in fa["logs"].items():
+        fr = [f for f in e["faults"].values() if f.get("runs_judged")]
+        if not fr:
+            out.append(_floor("SKIP", "faults-recovery", label, None, 0,
+                              f"{label}: false recoveries: no fault run had a clean run at its map_update_m"))
+            continue
+        false = sum(f["false_recoveries"] for f in fr)
+        judged = sum(f["recoveries_judged"] for f in fr)
+        runs = sum(f["runs_judged"] for f in fr)
+        out.append(_floor("PASS" if false == 0 else "MISS", "faults-recovery", label, false, 0,
+                          f"{label}: false recoveries {false} of {judged} taken in {runs} fault runs "
+                          f"{'==' if false == 0 else '>'} 0 ({RECOVERY_NOTE})"))
     return out
 
 
@@ -396,7 +449,7 @@ def report_faults(fa: Optional[dict]) -> List[str]:
     for label, e in fa["logs"].items():
         c = e["clean"]
         rows.append([label, "clean", str(c["n"]), _m(c["median"]), _m(c["max"]), "1.00",
-                     f"{ratio(c['max'], c['median']):.2f}", "", _m(e["odometry"]["all"]), "", ""])
+                     f"{ratio(c['max'], c['median']):.2f}", "", _m(e["odometry"]["all"]), "", "", ""])
         for name, f in e["faults"].items():
             rc = f["recoveries"]
             rows.append([label, name, str(f["n"] + f["missing"]), _m(f["median"]), _m(f["max"]),
@@ -404,10 +457,11 @@ def report_faults(fa: Optional[dict]) -> List[str]:
                          "n/a" if f.get("worst_clean") is None else f"{_m(f['worst_clean'])} ({f['worst_update']:.3f})",
                          _m(e["odometry"]["all"]),
                          _m(f["odometry"]["median"]),
-                         "n/a" if rc["n"] == 0 else f"{rc['median']:g} / {rc['max']:g}"])
+                         "n/a" if rc["n"] == 0 else f"{rc['median']:g} / {rc['max']:g}",
+                         "n/a" if not f.get("runs_judged") else f"{f['false_recoveries']} of {f['recoveries_judged']}"])
     from .report import md_table
     L += md_table(["log", "fault", "runs", "median [m]", "worst [m]", "median x clean", "worst x clean",
                    "clean at the worst's distance [m] (map_update_m)", "odometry alone [m]", "faulty odometry [m]",
-                   "recoveries"], rows, "faults")
-    L += [f"False recoveries: not counted: {RECOVERY_NOTE}.", ""]
+                   "recoveries", "false recoveries"], rows, "faults")
+    L += [f"False recoveries: {RECOVERY_NOTE}.", ""]
     return L
