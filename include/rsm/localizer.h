@@ -1,11 +1,16 @@
-/* The pipeline: odometry prediction, then per scan grid image -> Harris key
- * points -> tentative matches -> RANSAC pose -> EKF update -> map. The
- * method switch also runs the ICP baseline or odometry alone through the
- * same filter and map, so all three are compared on equal terms.
+/* The localizer: odometry's prediction, then per scan a match against the
+ * persistent multi-resolution map (the default, RSM_METHOD_MAP: coarse to
+ * fine under the prediction as prior; odometry's steps checked against the
+ * scans; a search when a scan fits far worse than recent ones; a tracking
+ * state), then the map written. The method switch also runs the paper's
+ * pipeline (grid image -> Harris key points -> tentative matches -> RANSAC
+ * -> EKF), the ICP baseline or odometry alone through the same filter, so
+ * all are compared on equal terms.
  *
- * All state is caller-owned (rsm_localizer_t, about 48 KiB with the default
- * config.h; docs/RESULTS.md has the breakdown). Two localizers never interfere.
- * Not reentrant for one state; no function blocks or allocates. */
+ * All state is caller-owned (rsm_localizer_t: about 122 KiB with the
+ * default config.h and 64 KiB with rsm/config_small.h on a 32-bit target;
+ * docs/RESULTS.md has the breakdown). Two localizers never interfere. Not
+ * reentrant for one state; no function blocks or allocates. */
 #ifndef RSM_LOCALIZER_H
 #define RSM_LOCALIZER_H
 

@@ -185,24 +185,36 @@ def test_every_fault_plan_fits_a_short_log(name, head_log):
 
 
 def test_false_recoveries_are_told_by_the_clean_runs_pose(tmp_path):
-    """A recovery is judged at its scan against the clean run's pose there:
+    """A recovery is judged at its scan against the clean run's pose there,
+    both seen from their poses 10 s before (runs drift apart as a whole):
     within 0.3 m and 5 deg it is right, beyond either it is false; a stamp
-    the clean run has not is not judged; with a mount the laser's pose is
-    compared. The stamps come from rsm-nav's --scan-log."""
+    the clean run has not, or one with no scan 10 s before, is not judged;
+    with a mount the laser's pose is compared. The stamps come from
+    rsm-nav's --scan-log."""
     slog = tmp_path / "s.scans"
     slog.write_text("# rsm-nav scan log: timestamp[s] outcome tracking odometry recovered fit_ratio\n"
-                    "1.000000 accepted tracking trusted 1 0.9\n2.000000 accepted tracking trusted 0 0.9\n"
-                    "3.000000 accepted tracking refuted 1 0.8\n4.000000 accepted tracking trusted 1 0.7\n"
-                    "5.000000 poor_fit uncertain trusted 0 0.1\n6.000000 accepted tracking trusted 1 0.9\n")
+                    "11.000000 accepted tracking trusted 1 0.9\n12.000000 accepted tracking trusted 0 0.9\n"
+                    "13.000000 accepted tracking refuted 1 0.8\n14.000000 accepted tracking trusted 1 0.7\n"
+                    "15.000000 poor_fit uncertain trusted 0 0.1\n16.000000 accepted tracking trusted 1 0.9\n"
+                    "5.000000 accepted tracking trusted 1 0.9\n")
     stamps = bf.recovered_stamps(slog)
-    assert stamps == [1.0, 3.0, 4.0, 6.0]
-    clean = ev.Trajectory([(1.0, 0.0, 0.0, 0.0), (3.0, 1.0, 0.0, 0.0), (4.0, 2.0, 0.0, 0.0)])
-    # 0.25 m off: right; 0.35 m off: false; 6 deg off: false; stamp 6 not in the clean run
-    run = ev.Trajectory([(1.0, 0.25, 0.0, 0.0), (3.0, 1.0, 0.35, 0.0), (4.0, 2.0, 0.0, math.radians(6.0)),
-                         (6.0, 9.0, 9.0, 0.0)])
+    assert stamps == [11.0, 13.0, 14.0, 16.0, 5.0]
+    clean = ev.Trajectory([(1.0, 0.0, 0.0, 0.0), (5.0, 0.5, 0.0, 0.0), (11.0, 1.0, 0.0, 0.0), (13.0, 2.0, 0.0, 0.0),
+                           (14.0, 3.0, 0.0, 0.0)])
+    # The run drifted 2 m sideways and 0.1 rad before scan 1, which does not count. From there:
+    # 0.25 m off: right; 0.35 m off: false; 6 deg off: false; 16 not in the clean run; 5 has no scan 10 s before.
+    base = (0.0, 2.0, 0.1)
+
+    def at(x, y, th):
+        return pose_compose(base, (x, y, th))
+
+    run = ev.Trajectory([(1.0, *at(0.0, 0.0, 0.0)), (5.0, *at(0.5, 0.0, 0.0)), (11.0, *at(1.25, 0.0, 0.0)),
+                         (13.0, *at(2.0, 0.35, 0.0)), (14.0, *at(3.0, 0.0, math.radians(6.0))),
+                         (16.0, 9.0, 9.0, 0.0)])
     assert bf.false_recoveries(stamps, run, clean) == (3, 2)
-    # the robot 0.22 m behind the laser, turned half a turn: its laser lands where the clean pose is
-    mounted = ev.Trajectory([(1.0, 0.22, 0.0, math.pi)])
-    assert bf.false_recoveries([1.0], mounted, clean, (0.22, 0.0, 0.0)) == (1, 1)
-    behind = ev.Trajectory([(1.0, -0.22, 0.0, 0.0)])
-    assert bf.false_recoveries([1.0], behind, clean, (0.22, 0.0, 0.0)) == (1, 0)
+    # the robot 0.22 m behind the laser: its laser is compared, as the clean run's (no mount)
+    clean = ev.Trajectory([(0.0, 0.0, 0.0, 0.0), (11.0, 1.0, 0.0, 0.0)])
+    mounted = ev.Trajectory([(0.0, -0.22, 0.0, 0.0), (11.0, 0.78, 0.0, 0.0)])
+    assert bf.false_recoveries([11.0], mounted, clean, (0.22, 0.0, 0.0)) == (1, 0)
+    turned = ev.Trajectory([(0.0, -0.22, 0.0, 0.0), (11.0, 1.22, 0.0, math.pi)])
+    assert bf.false_recoveries([11.0], turned, clean, (0.22, 0.0, 0.0)) == (1, 1)

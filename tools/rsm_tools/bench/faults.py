@@ -20,10 +20,12 @@ fault at most x2 the clean runs' median and below odometry alone, the median
 at most x1.25; the worst clean run at most x3 the clean median. rsm-nav
 writes which scans a recovery search placed (--scan-log); a recovery that
 lands more than FALSE_RECOVERY_M or FALSE_RECOVERY_DEG from the clean run's
-pose at that scan (the clean run at the same map_update_m, laser poses
-compared) is a false one, and the floor on them is zero.
+pose at that scan, both seen from their poses FALSE_RECOVERY_REF_S before
+(the clean run at the same map_update_m, laser poses compared), is a false
+one, and the floor on them is zero.
 """
 
+import bisect
 import hashlib
 import math
 import os
@@ -47,6 +49,7 @@ FLOOR_CLEAN_WORST_X = 3.0  # the worst clean run over the clean median
 FLOOR_EPS = 1e-9  # a ratio this close to its limit meets it (0.022 / 0.011 is 2.0000000000000004)
 FALSE_RECOVERY_M = 0.3
 FALSE_RECOVERY_DEG = 5.0
+FALSE_RECOVERY_REF_S = 10.0  # the span over which a recovery's pose is compared with the clean run's
 
 STALL_TURNS = 6
 STALL_LEN = 10
@@ -80,8 +83,9 @@ FAULTS = (
 FAULT_NAMES = tuple(n for n, _ in FAULTS)
 
 RECOVERY_NOTE = ("a recovery is false when the pose it gave lands more than "
-                 f"{FALSE_RECOVERY_M:g} m or {FALSE_RECOVERY_DEG:g} deg from the clean run's pose at that scan (the "
-                 "clean run at the same map_update_m; rsm-nav --scan-log says which scans a search placed)")
+                 f"{FALSE_RECOVERY_M:g} m or {FALSE_RECOVERY_DEG:g} deg from the clean run's pose at that scan, both "
+                 f"seen from their poses {FALSE_RECOVERY_REF_S:g} s before (the clean run at the same map_update_m; "
+                 "rsm-nav --scan-log says which scans a search placed)")
 
 
 def fault_update(k: int) -> float:
@@ -203,16 +207,27 @@ def recovered_stamps(scan_log: Path) -> List[float]:
 def false_recoveries(stamps: Sequence[float], traj: ev.Trajectory, clean: ev.Trajectory,
                      mount: Optional[Pose] = None) -> Tuple[int, int]:
     """(recoveries judged, false ones): each recovery's pose (the laser's with
-    a mount) against the clean run's at the same stamp; a stamp the clean
-    run has not (a slip's copies) is not judged."""
+    a mount) against the clean run's, both seen from their poses at the last
+    scan both runs have at least FALSE_RECOVERY_REF_S earlier (two runs drift
+    apart over a building by more than a recovery's tolerance, so their
+    poses are compared over that span, not as they are); a recovery without
+    such a scan, or at a stamp the clean run has not (a slip's copies), is
+    not judged."""
+    def laser(p):
+        return pose_compose(tuple(p), mount) if mount is not None else tuple(p)
+
+    common = sorted({p.t for p in traj.points()} & {p.t for p in clean.points()})
     judged = false = 0
     for t in stamps:
         est = traj.lookup(t, tolerance=0.0)
         ref = clean.lookup(t, tolerance=0.0)
-        if est is None or ref is None:
+        i = bisect.bisect_right(common, t - FALSE_RECOVERY_REF_S) - 1
+        if est is None or ref is None or i < 0:
             continue
-        shown = pose_compose(tuple(est), mount) if mount is not None else tuple(est)
-        d = ev.between(tuple(ref), shown)
+        t0 = common[i]
+        moved_run = ev.between(laser(traj.lookup(t0, tolerance=0.0)), laser(est))
+        moved_clean = ev.between(tuple(clean.lookup(t0, tolerance=0.0)), tuple(ref))
+        d = ev.between(moved_clean, moved_run)
         judged += 1
         if math.hypot(d[0], d[1]) > FALSE_RECOVERY_M or abs(math.degrees(d[2])) > FALSE_RECOVERY_DEG:
             false += 1
