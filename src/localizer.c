@@ -798,15 +798,23 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
     return verdict;
 }
 
+/* What a recovery search made of the scan. */
+typedef enum recovery {
+    RECOVERY_NONE = 0,      /* nothing fitted well enough */
+    RECOVERY_TAKEN = 1,     /* *res replaced by a proven winner */
+    RECOVERY_AMBIGUOUS = 2  /* a winner, but a pose a doubt away fitted nearly as well */
+} recovery_t;
+
 /* One recovery search within +-radius_m and +-recover_rad of pred: descends
  * from the best few candidates under a prior widened as far and replaces
  * *res with the best fit if it fits well again (at least half of what was
  * lost regained; need is above the first *res, so each replacement fits
  * better than the last) and is proven: it beats every pose a doubt away
  * from it (another basin's descent, or the plain match) by recover_margin.
- * Returns whether it did; counts a search refused as ambiguous. */
-static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
-                   rsm_mapmatch_result_t *res)
+ * Only the winner's index, pose and fit are kept, and the winner is
+ * descended again when taken: a search is rare, the stack is not. */
+static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
+                          rsm_mapmatch_result_t *res)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const float fit = loc->state.persistent.fit;
@@ -814,13 +822,11 @@ static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, fl
     rsm_pose_t start[RECOVER_STARTS];
     rsm_pose_t found_pose[RECOVER_STARTS];
     float found_hit[RECOVER_STARTS];
-    rsm_mapmatch_result_t best;
-    rsm_mapmatch_result_t alt;
     float rival;
     float wide[9];
     int found;
     int k;
-    int best_k = -1;
+    int best = -1;
     memcpy(wide, loc->ekf.p, sizeof wide);
     wide[0] += radius_m * radius_m;
     wide[4] += radius_m * radius_m;
@@ -829,6 +835,7 @@ static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, fl
                                 cfg->recover_rad, start, RECOVER_STARTS);
     /* The coarse score only ranks basins: descend from each. */
     for (k = 0; k < found; ++k) {
+        rsm_mapmatch_result_t alt;
         /* Not unpinned: each descent starts where the search put it and
          * only the fit decides, measured against the plain match. */
         found_hit[k] = -1.0f;
@@ -836,27 +843,29 @@ static int recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, fl
                          &alt) == RSM_OK) {
             found_hit[k] = alt.hit;
             found_pose[k] = alt.pose;
-            if (best_k < 0 || alt.hit > best.hit) {
-                best = alt;
-                best_k = k;
+            if (best < 0 || alt.hit > found_hit[best]) {
+                best = k;
             }
         }
     }
-    if (best_k < 0 || !(best.hit >= cfg->recover_ratio * fit && best.hit >= need && best.hit > res->hit)) {
-        return 0;
+    if (best < 0 || !(found_hit[best] >= cfg->recover_ratio * fit && found_hit[best] >= need &&
+                      found_hit[best] > res->hit)) {
+        return RECOVERY_NONE;
     }
-    rival = beyond_doubt(cfg, &res->pose, &best.pose) ? res->hit : 0.0f;
+    rival = beyond_doubt(cfg, &res->pose, &found_pose[best]) ? res->hit : 0.0f;
     for (k = 0; k < found; ++k) {
-        if (k != best_k && found_hit[k] > rival && beyond_doubt(cfg, &found_pose[k], &best.pose)) {
+        if (k != best && found_hit[k] > rival && beyond_doubt(cfg, &found_pose[k], &found_pose[best])) {
             rival = found_hit[k];
         }
     }
-    if (best.hit <= rival * (1.0f + cfg->recover_margin)) {
-        loc->counters.ambiguous++;
-        return 0;
+    if (found_hit[best] <= rival * (1.0f + cfg->recover_margin)) {
+        return RECOVERY_AMBIGUOUS;
     }
-    *res = best;
-    return 1;
+    /* The same descent again: deterministic, so the same result. */
+    return rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[best], NULL,
+                        res) == RSM_OK
+               ? RECOVERY_TAKEN
+               : RECOVERY_NONE;
 }
 
 static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
@@ -865,6 +874,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     const rsm_pose_t pred = loc->ekf.x;
     rsm_mapmatch_result_t res;
     rsm_mapmatch_unpin_t unpin;
+    int ambiguous = 0;
     int poor;
     int rc;
     if (!loc->have_scan) {
@@ -896,11 +906,19 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
          * can fit about as well as the right one. */
         const float near_m = rsm_tmap_cell(&loc->state.persistent.map, (uint32_t)cfg->tmap.levels - 1u);
         loc->counters.searches++;
-        if (recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res) ||
-            (near_m < cfg->recover_m && recover(loc, npts, &pred, cfg->recover_m, &res))) {
+        /* An ambiguous near search is not widened: a farther pose would
+         * have that same rival, and the wider search might not see it. */
+        recovery_t r = recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res);
+        if (r == RECOVERY_NONE && near_m < cfg->recover_m) {
+            r = recover(loc, npts, &pred, cfg->recover_m, &res);
+        }
+        if (r == RECOVERY_TAKEN) {
             loc->counters.recovered++;
             rep->recovered = 1u;
             poor = 0;
+        } else if (r == RECOVERY_AMBIGUOUS) {
+            loc->counters.ambiguous++;
+            ambiguous = 1;
         }
     }
     rep->inliers = res.used;
@@ -914,9 +932,14 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     if (rc != RSM_OK || res.used < cfg->min_points / 2u) {
         return RSM_SCAN_LOW_SUPPORT;
     }
-    if (poor && cfg->refuse_poor) {
-        /* Fitted far worse than recent scans and no search proved a pose:
-         * the prediction is kept, and the scan is not written. */
+    if (poor && cfg->refuse_poor && (ambiguous || !moved(&loc->state.persistent.anchor, &pred))) {
+        /* Fitted far worse than recent scans and no search proved a pose,
+         * while odometry stood still (the robot carried, or turning faster
+         * than the scans can follow) or a search found rival poses: the
+         * prediction is kept, and the scan is not written. A robot that
+         * drives into new ground fits poorly too (its new points read 0),
+         * and its scans are fused and written as before, or the map could
+         * not grow into a hall. */
         return RSM_SCAN_POOR_FIT;
     }
     rep->residual_m = sqrtf(res.cost);
@@ -1016,13 +1039,13 @@ static rsm_track_t track_state(rsm_localizer_t *loc, rsm_outcome_t outcome, cons
         tracks = rep->fit_ratio >= cfg->recover_ratio;
     }
     if (tracks) {
-        loc->counters.poor_run = 0u;
+        loc->poor_run = 0u;
         return RSM_TRACK_TRACKING;
     }
-    if (loc->counters.poor_run < UINT32_MAX) {
-        loc->counters.poor_run++;
+    if (loc->poor_run < UINT32_MAX) {
+        loc->poor_run++;
     }
-    return loc->counters.poor_run >= cfg->lost_scans ? RSM_TRACK_LOST : RSM_TRACK_UNCERTAIN;
+    return loc->poor_run >= cfg->lost_scans ? RSM_TRACK_LOST : RSM_TRACK_UNCERTAIN;
 }
 
 int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep)
@@ -1065,9 +1088,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     pred = loc->ekf.x;
     if (loc->cfg->method == RSM_METHOD_MAP) {
         odometry_moved = moved(&loc->state.persistent.anchor, &loc->ekf.x);
-        if (odometry_moved) {
-            loc->state.persistent.last_step = rsm_pose_between(&loc->state.persistent.anchor, &loc->ekf.x);
-        } else if (loc->have_scan && refuting(loc->cfg)) {
+        if (!odometry_moved && loc->have_scan && refuting(loc->cfg)) {
             /* Odometry stands still: the robot may have stopped, or odometry
              * stalled while it still moves (it will catch up: doubt_step),
              * as fast as it last did (odometry's last step, or what the last
@@ -1108,10 +1129,11 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     est = loc->ekf.x;
     if (loc->cfg->method == RSM_METHOD_MAP) {
         /* Odometry is counted from the last scan that trusted it: through
-         * a stall (it stands still), past a step the scan refuted, and past
-         * one the match had to correct by more than a doubt. */
-        const int agreed = rep->odometry == RSM_ODOMETRY_TRUSTED && odometry_moved &&
-                           !beyond_doubt(loc->cfg, &pred, &est);
+         * a stall (it stands still), past a step the scan refuted, past one
+         * the match had to correct by more than a doubt, and past one no
+         * match checked (a scan refused or unusable). */
+        const int agreed = outcome == RSM_SCAN_ACCEPTED && rep->odometry == RSM_ODOMETRY_TRUSTED &&
+                           odometry_moved && !beyond_doubt(loc->cfg, &pred, &est);
         if (outcome == RSM_SCAN_FIRST || agreed || rep->odometry == RSM_ODOMETRY_CAUGHT_UP ||
             rep->odometry == RSM_ODOMETRY_RECOUNTED) {
             static const rsm_pose_t none = {0.0f, 0.0f, 0.0f};
@@ -1122,8 +1144,14 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
                                          : rep->odometry == RSM_ODOMETRY_REFUTED ? RSM_ODOMETRY_REFUTED
                                                                                  : RSM_ODOMETRY_RECOUNTED;
         }
-        if (!odometry_moved) {
-            loc->state.persistent.last_step = rsm_pose_between(&loc->state.persistent.anchor, &est);
+        /* The robot's step: the estimate's, but odometry's where a search
+         * jumped (a jump is no speed). */
+        if (outcome == RSM_SCAN_FIRST) {
+            static const rsm_pose_t none = {0.0f, 0.0f, 0.0f};
+            loc->state.persistent.last_step = none;
+        } else {
+            loc->state.persistent.last_step =
+                rsm_pose_between(&loc->state.persistent.anchor, rep->recovered ? &pred : &est);
         }
         loc->state.persistent.anchor = est;
     }

@@ -33,6 +33,7 @@ static int check_method_part(const rsm_localizer_config_t *cfg, const char **fie
         RSM_CHECK_FIELD(cfg->recover_rad >= 0.0f && cfg->recover_rad <= 1.0f &&
                             (cfg->recover_rad == 0.0f || cfg->recover_rad <= 64.0f * cfg->mapmatch.search_step_rad),
                         "recover_rad");
+        RSM_CHECK_FIELD(cfg->refuse_poor <= 1u, "refuse_poor");
         RSM_CHECK_FIELD(cfg->recover_margin >= 0.0f && cfg->recover_margin <= 10.0f, "recover_margin");
         RSM_CHECK_FIELD(cfg->refute_margin >= 0.0f && cfg->refute_margin <= 10.0f, "refute_margin");
         RSM_CHECK_FIELD(cfg->doubt_m > 0.0f && cfg->doubt_m <= 100.0f, "doubt_m");
@@ -63,7 +64,6 @@ int rsm_localizer_config_check(const rsm_localizer_config_t *cfg, const char **f
     RSM_CHECK_FIELD(cfg->map_min_hits >= 1u, "map_min_hits");
     RSM_CHECK_FIELD(cfg->min_points >= 2u && cfg->min_points <= RSM_MAX_BEAMS, "min_points");
     RSM_CHECK_FIELD(cfg->lost_scans >= 1u, "lost_scans");
-    RSM_CHECK_FIELD(cfg->refuse_poor <= 1u, "refuse_poor");
     RSM_CHECK_FIELD(cfg->min_keypoints >= 2u && cfg->min_keypoints <= RSM_MAX_KEYPOINTS, "min_keypoints");
     RSM_CHECK_FIELD(cfg->match_window_m >= 0.0f, "match_window_m");
     RSM_CHECK_FIELD(cfg->search_min_m > 0.0f, "search_min_m");

@@ -46,8 +46,9 @@ typedef enum rsm_outcome {
     RSM_SCAN_JUMP = 7,           /* measured pose too far for the covariance */
     RSM_SCAN_FILTER = 8,         /* EKF refused the update (singular) */
     RSM_SCAN_OUT_OF_ORDER = 9,   /* timestamp went backwards: scan ignored */
-    RSM_SCAN_POOR_FIT = 10,      /* RSM_METHOD_MAP: the match fitted far worse than recent scans
-                                  * and no search proved a pose: not fused, not written */
+    RSM_SCAN_POOR_FIT = 10,      /* RSM_METHOD_MAP: the match fitted far worse than recent scans,
+                                  * no search proved a pose, and odometry stood still or the
+                                  * search was ambiguous: not fused, not written */
     RSM_SCAN_OUTCOMES = 11
 } rsm_outcome_t;
 
@@ -126,8 +127,10 @@ typedef struct rsm_localizer_config {
     uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
     uint16_t min_points;            /* usable readings needed; default 20 */
     uint8_t refuse_poor;            /* 1: a match that fits worse than recover_ratio of recent
-                                     * scans and that no search replaced is refused
-                                     * (RSM_SCAN_POOR_FIT); 0: fused as before; default 1 */
+                                     * scans, that no search replaced, and that came while
+                                     * odometry stood still or after an ambiguous search, is
+                                     * refused (RSM_SCAN_POOR_FIT); 0: fused; default 1
+                                     * (RSM_METHOD_MAP) */
     uint16_t lost_scans;            /* scans in a row that do not track (poor fit, refused,
                                      * unusable) after which the estimate is reported lost;
                                      * >= 1; default 10 */
@@ -226,8 +229,8 @@ typedef struct rsm_localizer_counters {
                                               * dropped (RSM_ODOMETRY_REFUTED) */
     uint32_t recounted;                      /* matches taken back: odometry counted from before
                                               * them fitted far better (RSM_ODOMETRY_RECOUNTED) */
-    uint32_t track[RSM_TRACK_STATES];        /* scans that left the estimate in each state */
-    uint32_t poor_run;                       /* scans in a row not tracking, up to now */
+    uint32_t track[RSM_TRACK_STATES];        /* scans that left the estimate in each state (a
+                                              * scan refused as out of order leaves none) */
     uint32_t unconfirmed;                    /* returns kept out of the persistent map: no
                                               * neighbour confirmed them (isolation) */
     uint32_t occluded;                       /* returns dropped: behind a surface their
@@ -267,9 +270,9 @@ typedef struct rsm_localizer {
                                                    * odometry's step (before a stall or a
                                                    * refuted step) */
             rsm_pose_t since;                     /* odometry's steps since then, composed */
-            rsm_pose_t last_step;                 /* the robot's last step between two scans:
-                                                   * odometry's, or while odometry stood still,
-                                                   * the match's */
+            rsm_pose_t last_step;                 /* the robot's last step between two scans, as
+                                                   * estimated (odometry's where a search
+                                                   * jumped) */
             rsm_odometry_verdict_t held;          /* why it is held there: a stall (CAUGHT_UP),
                                                    * a refuted step, a large correction
                                                    * (RECOUNTED) */
@@ -281,6 +284,7 @@ typedef struct rsm_localizer {
     uint64_t last_stamp_us;
     uint32_t motions_at_scan;            /* counters.motions when the last scan came */
     uint8_t have_scan;
+    uint32_t poor_run;                   /* scans in a row that did not track */
     rsm_localizer_counters_t counters;
     rsm_localizer_report_t last;
 } rsm_localizer_t;
@@ -377,9 +381,9 @@ int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, f
 /* Current estimate. */
 rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc);
 
-/* How far the current estimate can be trusted (RSM_TRACK_TRACKING before
- * the first scan: the start pose is the caller's). RSM_TRACK_LOST for loc
- * NULL. Reads only. */
+/* How far the current estimate can be trusted, as the last scan left it
+ * (RSM_TRACK_TRACKING before any scan: the start pose is the caller's).
+ * RSM_TRACK_LOST for loc NULL. Reads only. */
 rsm_track_t rsm_localizer_track(const rsm_localizer_t *loc);
 
 /* Short name of a tracking state ("tracking", "uncertain", "lost";

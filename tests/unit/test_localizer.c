@@ -389,6 +389,9 @@ void test_localizer_init_should_reject_bad_configs(void)
     BAD(recover_ratio, 1.5f);
     BAD(recover_m, 100.0f);
     BAD(recover_margin, -0.1f);
+    BAD(recover_margin, 11.0f);
+    BAD(refuse_poor, 2u);
+    BAD(doubt_rad, 7.0f);
     BAD(lost_scans, 0u);
     BAD(refute_margin, -0.1f);
     BAD(refute_margin, NAN);
@@ -982,7 +985,7 @@ void test_localizer_scan_should_recover_from_being_carried_by_searching(void)
     float err;
     cfg.recover_m = 0.0f;
     /* Odometry not doubted either: with odometry silent the prediction's
-     * spread would grow to the last step's size (doubt_step), which here
+     * spread would grow to the last step's size (rsm_localizer_scan), which here
      * is sometimes reach enough without a search (the small preset). */
     cfg.refute_margin = 0.0f;
     err = run_carried(CARRIED, &rad);
@@ -1039,11 +1042,11 @@ static float run_stall(size_t stall, float *rad)
 
 void test_localizer_scan_should_count_a_stalled_odometrys_catch_up_once(void)
 {
-    /* Eight scans of a quarter turn with odometry standing still: matching
-     * follows the turn (the recovery search), then odometry reports it all
-     * at once. Added on top, the turn would count twice (0.8 rad off, and
-     * beyond the search's reach); counted from where the stall began, it
-     * counts once. */
+    /* Sixteen scans of a quarter turn with odometry standing still:
+     * matching follows the turn, then odometry reports it all at once.
+     * Added on top, the turn would count twice (a quarter turn off, beyond
+     * the search's reach); counted from where the stall began, it counts
+     * once. */
     char msg[160];
     float rad;
     float err;
@@ -1224,7 +1227,9 @@ void test_localizer_scan_should_not_take_an_ambiguous_recovery(void)
         return;
     }
     TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, loc.counters.recovered, msg);
-    TEST_ASSERT_GREATER_OR_EQUAL_UINT32_MESSAGE(1u, loc.counters.ambiguous, msg);
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(1u, loc.counters.ambiguous, msg);
+    TEST_ASSERT_EQUAL_INT_MESSAGE((int)RSM_SCAN_POOR_FIT, (int)loc.last.outcome, msg);
+    TEST_ASSERT_EQUAL_INT_MESSAGE((int)RSM_TRACK_UNCERTAIN, (int)rsm_localizer_track(&loc), msg);
     /* Without the margin the best basin is taken: here the wrong one. */
     cfg.recover_margin = 0.0f;
     scan_cfg = rsm_synth_scan_config_default();
@@ -1249,9 +1254,13 @@ void test_localizer_should_say_when_it_is_uncertain_and_when_lost(void)
     uint32_t k;
     cfg.lost_scans = 4u;
     TEST_ASSERT_EQUAL_INT((int)RSM_TRACK_LOST, (int)rsm_localizer_track(NULL));
+    rsm_pose_t before;
+    uint32_t writes;
     start_at_k0(&loc, 10u, &odo_err);
     TEST_ASSERT_EQUAL_INT((int)RSM_TRACK_TRACKING, (int)rsm_localizer_track(&loc));
     TEST_ASSERT_EQUAL_UINT32(10u, loc.counters.track[RSM_TRACK_TRACKING]);
+    before = rsm_localizer_pose(&loc);
+    writes = loc.state.persistent.map.counters.updates;
     for (k = 1u; k <= 6u; ++k) {
         make_scan(&far_away, NULL, (uint64_t)(K0 + 9u + k) * STEP_US);
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
@@ -1262,15 +1271,85 @@ void test_localizer_should_say_when_it_is_uncertain_and_when_lost(void)
     }
     TEST_ASSERT_EQUAL_UINT32(3u, loc.counters.track[RSM_TRACK_UNCERTAIN]);
     TEST_ASSERT_EQUAL_UINT32(3u, loc.counters.track[RSM_TRACK_LOST]);
+    /* Refused: the estimate stayed where it was, nothing was written. */
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, before.x, rsm_localizer_pose(&loc).x);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, before.y, rsm_localizer_pose(&loc).y);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, before.theta, rsm_localizer_pose(&loc).theta);
+    TEST_ASSERT_EQUAL_UINT32(writes, loc.state.persistent.map.counters.updates);
     make_scan(&path[K0 + 9u], NULL, (uint64_t)(K0 + 16u) * STEP_US);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
     TEST_ASSERT_EQUAL_INT((int)RSM_TRACK_TRACKING, (int)rep.track);
     TEST_ASSERT_TRUE(rep.fit_ratio >= cfg.recover_ratio);
-    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.poor_run);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.poor_run);
     TEST_ASSERT_EQUAL_STRING("tracking", rsm_track_name(RSM_TRACK_TRACKING));
     TEST_ASSERT_EQUAL_STRING("uncertain", rsm_track_name(RSM_TRACK_UNCERTAIN));
     TEST_ASSERT_EQUAL_STRING("lost", rsm_track_name(RSM_TRACK_LOST));
     TEST_ASSERT_EQUAL_STRING("unknown", rsm_track_name(RSM_TRACK_STATES));
+    TEST_ASSERT_EQUAL_STRING("poor_fit", rsm_outcome_name(RSM_SCAN_POOR_FIT));
+    TEST_ASSERT_EQUAL_STRING("trusted", rsm_odometry_verdict_name(RSM_ODOMETRY_TRUSTED));
+    TEST_ASSERT_EQUAL_STRING("caught_up", rsm_odometry_verdict_name(RSM_ODOMETRY_CAUGHT_UP));
+    TEST_ASSERT_EQUAL_STRING("refuted", rsm_odometry_verdict_name(RSM_ODOMETRY_REFUTED));
+    TEST_ASSERT_EQUAL_STRING("recounted", rsm_odometry_verdict_name(RSM_ODOMETRY_RECOUNTED));
+    TEST_ASSERT_EQUAL_STRING("unknown", rsm_odometry_verdict_name((rsm_odometry_verdict_t)4));
+    /* One scan that does not track is enough with lost_scans 1. */
+    cfg.lost_scans = 1u;
+    start_at_k0(&loc, 10u, &odo_err);
+    make_scan(&far_away, NULL, (uint64_t)(K0 + 10u) * STEP_US);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    TEST_ASSERT_EQUAL_INT((int)RSM_TRACK_LOST, (int)rep.track);
+}
+
+void test_localizer_scan_should_map_new_ground_it_drives_into(void)
+{
+    /* Along a narrow corridor into a hall 12 m across that no scan has
+     * seen (the corridor shows little of it): the first scans in the hall
+     * fit the map poorly (most of their points read nothing there), but
+     * odometry moves, so they are fused and written as the robot goes, not
+     * refused as a carried robot's are, and the robot tracks across it. */
+    static const rsm_synth_segment_t walls[] = {
+        {0.0f, -0.4f, 4.0f, -0.4f}, {0.0f, 0.4f, 4.0f, 0.4f}, {0.0f, -0.4f, 0.0f, 0.4f},  /* the corridor */
+        {4.0f, 0.4f, 4.0f, 6.0f}, {4.0f, -6.0f, 4.0f, -0.4f},                             /* the hall's west wall */
+        {4.0f, 6.0f, 16.0f, 6.0f}, {4.0f, -6.0f, 16.0f, -6.0f}, {16.0f, -6.0f, 16.0f, 6.0f},
+        {9.0f, 2.0f, 9.6f, 2.0f}, {9.6f, 2.0f, 9.6f, 2.6f}, {9.6f, 2.6f, 9.0f, 2.6f}, {9.0f, 2.6f, 9.0f, 2.0f},
+    };
+    static const rsm_synth_leg_t legs[] = {{5.5f, 0.0f}, {0.0f, 0.5f * RSM_PI}, {3.0f, 0.0f}};
+    static const rsm_pose_t start = {0.5f, 0.0f, 0.0f};
+    const rsm_synth_world_t hall = {walls, sizeof walls / sizeof walls[0]};
+    static rsm_pose_t route[120];
+    rsm_localizer_report_t rep;
+    rsm_pose_t est;
+    rsm_pose_t dead = start;
+    char msg[200];
+    size_t n = rsm_synth_path(&start, legs, 3u, 0.1f, 0.1f, route, 120u);
+    size_t k;
+    TEST_ASSERT_TRUE(n > 90u);
+    world = hall;
+    scan_cfg.start_rad = -0.5f * RSM_PI;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &route[0], p0_start));
+    for (k = 0; k < n; ++k) {
+        if (k > 0u) {
+            const rsm_motion_t u = rsm_synth_motion(&route[k - 1u], &route[k], &odo_err);
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+            dead = rsm_odometry_apply(&dead, &u);
+        }
+        make_scan(&route[k], NULL, (uint64_t)k * STEP_US);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    }
+    est = rsm_localizer_pose(&loc);
+    snprintf(msg, sizeof msg, "%u scans, %u searches, %u refused as poor, %u not tracking, final %.3f m, %.2f deg "
+             "(odometry alone %.3f m)",
+             (unsigned)n, (unsigned)loc.counters.searches, (unsigned)loc.counters.outcome[RSM_SCAN_POOR_FIT],
+             (unsigned)(loc.counters.track[RSM_TRACK_UNCERTAIN] + loc.counters.track[RSM_TRACK_LOST]),
+             (double)rsm_synth_pos_error(&est, &route[n - 1u]),
+             (double)(rsm_synth_angle_error(&est, &route[n - 1u]) / DEG),
+             (double)rsm_synth_pos_error(&dead, &route[n - 1u]));
+    TEST_MESSAGE(msg);
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, loc.counters.outcome[RSM_SCAN_POOR_FIT], msg);
+    /* Measured: 0.12 m at the end (10 cm cells: 0.26 m), odometry alone
+     * 1.16 m; refused, those scans left 0.18 m and 66 scans not tracking. */
+    TEST_ASSERT_TRUE_MESSAGE(rsm_synth_pos_error(&est, &route[n - 1u]) <
+                                 0.6f * rsm_synth_pos_error(&dead, &route[n - 1u]), msg);
+    TEST_ASSERT_EQUAL_INT_MESSAGE((int)RSM_TRACK_TRACKING, (int)rsm_localizer_track(&loc), msg);
 }
 
 void test_localizer_map_should_survive_poses_far_beyond_its_range(void)
@@ -1680,6 +1759,7 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_doubt_no_step_of_honest_odometry);
     RUN_TEST(test_localizer_scan_should_not_take_an_ambiguous_recovery);
     RUN_TEST(test_localizer_should_say_when_it_is_uncertain_and_when_lost);
+    RUN_TEST(test_localizer_scan_should_map_new_ground_it_drives_into);
     RUN_TEST(test_localizer_map_should_survive_poses_far_beyond_its_range);
     RUN_TEST(test_localizer_motion_should_refuse_non_finite_increments);
     RUN_TEST(test_localizer_motion_before_the_first_scan_should_move_the_start_without_noise);

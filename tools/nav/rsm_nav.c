@@ -387,7 +387,8 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
     nav->times[nav->ntimes++] = elapsed_s;
     if (nav->scan_log != NULL) {
         fprintf(nav->scan_log, "%.6f %s %s %s %u %.4f\n", file_stamp_s,
-                rc == RSM_OK ? rsm_outcome_name(rep->outcome) : "error", rsm_track_name(rep->track),
+                rc == RSM_OK || rc == RSM_ERR_ORDER ? rsm_outcome_name(rep->outcome) : "error",
+                rsm_track_name(rep->track),
                 rsm_odometry_verdict_name(rep->odometry), (unsigned)rep->recovered, (double)rep->fit_ratio);
     }
     if (rc != RSM_OK) {
@@ -1174,7 +1175,7 @@ static FILE *open_output(const char *path)
 
 int main(int argc, char **argv)
 {
-    static nav_t nav; /* the localizer is about 48 KiB: keep it off the stack */
+    static nav_t nav; /* the localizer is about 122 KiB: keep it off the stack */
     const char *carmen = NULL;
     const char *capture = NULL;
     const char *trajectory = NULL;
