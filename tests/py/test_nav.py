@@ -121,6 +121,26 @@ def test_every_set_key_the_help_lists_is_accepted_and_no_other(tmp_path, head_lo
         assert unknown == (key == "no_such_key"), (key, res.stderr)
 
 
+def test_set_refuses_a_value_no_float_holds_for_every_key(tmp_path, head_log):
+    """--set KEY=1e39 (a double, but infinite as a float) is refused for
+    every key with exit status 2 and a message saying why: float keys as
+    beyond a float, whole-number keys as out of their range (issue 30;
+    before, 29 float keys took infinity)."""
+    text = subprocess.run([str(nav_binary()), "--help"], capture_output=True, text=True,
+                          env=subprocess_env()).stdout
+    listed = text.split("--upside-down):\n", 1)[1]
+    keys = [k.strip() for k in listed.replace("\n", " ").rstrip(". ").split(",")]
+    floats = 0
+    for key in keys:
+        res = subprocess.run([str(nav_binary()), "--carmen", str(head_log), "--trajectory", str(tmp_path / "t.txt"),
+                              "--set", f"{key}=1e39", "--quiet"], capture_output=True, text=True,
+                             env=subprocess_env())
+        assert res.returncode == 2, (key, res.stderr)
+        assert "beyond what a float holds" in res.stderr or "a whole number" in res.stderr, (key, res.stderr)
+        floats += "beyond what a float holds" in res.stderr
+    assert floats >= 29
+
+
 def test_nav_names_the_configuration_field_the_localizer_refuses(tmp_path, head_log):
     """A --set value out of range stops rsm-nav with the localizer's own
     name for the field (rsm_localizer_config_check)."""

@@ -8,6 +8,7 @@
  *           [--set key=value ...] [--quiet]
  */
 #include <errno.h>
+#include <float.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -217,7 +218,15 @@ static int set_option(rsm_localizer_config_t *c, const char *kv, double *top_out
     }
 /* Integers must fit their field: a silent conversion would turn 257 into 1
  * and 1e12 into undefined behaviour. */
-#define F(name, field) if (strcmp(key, name) == 0) { c->field = (float)v; return 0; }
+/* A float field takes only what a float holds: 1e39 would become infinity. */
+#define F(name, field) \
+    if (strcmp(key, name) == 0) { \
+        if (!(fabs(v) <= (double)FLT_MAX)) { \
+            return -4; \
+        } \
+        c->field = (float)v; \
+        return 0; \
+    }
 #define U(name, field, type) E(name, field, type, set_option_max(sizeof(c->field), (type)-1 > 0))
 #define E(name, field, type, maxv) \
     if (strcmp(key, name) == 0) { \
@@ -1355,6 +1364,11 @@ int main(int argc, char **argv)
             }
             if (set == -3) {
                 fprintf(stderr, "rsm-nav: unknown key in --set '%s' (rsm-nav --help lists them)\n", optarg);
+                return 2;
+            }
+            if (set == -4) {
+                fprintf(stderr, "rsm-nav: bad --set '%s': beyond what a float holds (it would be infinite)\n",
+                        optarg);
                 return 2;
             }
             if (set != 0) {
