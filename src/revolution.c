@@ -81,6 +81,10 @@ static const rsm_pose_t *odom_pose(const rsm_rev_t *r, size_t k, uint64_t *stamp
     return &r->odom[slot];
 }
 
+/* The shortest time a speed is measured over when the pose is extrapolated
+ * past the newest odometry pose. */
+#define REV_MIN_SPAN_US 20000u
+
 /* The robot pose at time t (needs at least one odometry pose). */
 static rsm_pose_t pose_at(rsm_rev_t *r, uint64_t t)
 {
@@ -109,7 +113,21 @@ static rsm_pose_t pose_at(rsm_rev_t *r, uint64_t t)
         b = odom_pose(r, k, &tb);
     }
     if (t > tb) {
-        r->stats.extrapolated++; /* past the newest: the last motion goes on */
+        /* Past the newest: the last motion goes on, measured over at least
+         * REV_MIN_SPAN_US (samples read in a burst, microseconds apart,
+         * would make any tick a speed of metres a millisecond), and for no
+         * longer than it was measured over. */
+        size_t j = k - 1u; /* a's */
+        r->stats.extrapolated++;
+        while (j > 0u && us_between(tb, ta) < (float)REV_MIN_SPAN_US) {
+            a = odom_pose(r, --j, &ta);
+        }
+        if (us_between(tb, ta) < (float)REV_MIN_SPAN_US / 4.0f) {
+            return *b; /* no span to measure a speed over: held */
+        }
+        if (us_between(t, tb) > us_between(tb, ta)) {
+            t = tb + (tb - ta);
+        }
     }
     if (tb == ta) {
         return *b;

@@ -20,7 +20,9 @@
  * where the laser saw it from the robot's pose at that middle time: the
  * robot poses at the point's time and at the stamp are interpolated from the
  * odometry poses given with rsm_rev_odometry (linear in x, y and heading;
- * extrapolated from the last two past the newest, held before the oldest),
+ * past the newest, extrapolated with the motion over at least the last 20 ms
+ * of odometry and for no longer than that, held when the poses span under
+ * 5 ms; held before the oldest),
  * the point taken through the mounting pose into the robot frame at its own
  * time, moved by the relative motion, and taken back into the laser frame.
  * Off, the points keep their bearings and ranges: a robot turning at w rad/s
