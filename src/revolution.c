@@ -54,6 +54,21 @@ int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
         r->stats.odometry_bad++;
         return RSM_ERR_ORDER;
     }
+    if (r->odom_n >= 2u) {
+        /* A pose read right after the newest, far sooner than the newest
+         * came after the one before, is a burst (a host reading its
+         * backlog): the newest was measured earlier than its stamp says, by
+         * an unknown time, so the burst counts as one reading, its last. */
+        const size_t newest = (r->odom_head + r->odom_n - 1u) % RSM_REV_ODOM_DEPTH;
+        const size_t before = (r->odom_head + r->odom_n - 2u) % RSM_REV_ODOM_DEPTH;
+        if ((stamp_us - r->odom_us[newest]) * 8u < r->odom_us[newest] - r->odom_us[before]) {
+            r->odom_us[newest] = stamp_us;
+            r->odom[newest] = *pose;
+            r->stats.odometry++;
+            r->stats.odometry_bursts++;
+            return RSM_OK;
+        }
+    }
     if (r->odom_n == RSM_REV_ODOM_DEPTH) {
         r->odom_head = (r->odom_head + 1u) % RSM_REV_ODOM_DEPTH;
         r->odom_n--;

@@ -80,6 +80,9 @@ typedef struct rsm_rev_stats {
                                dropped */
     uint32_t gaps;          /* silences longer than max_gap_us */
     uint32_t odometry;      /* odometry poses taken */
+    uint32_t odometry_bursts; /* odometry poses that replaced the newest: read right after it,
+                               * far sooner than it came after the one before (a backlog read
+                               * in a burst; the burst's last pose is kept) */
     uint32_t odometry_bad;  /* odometry stamped before the newest, or not finite:
                                dropped */
     uint32_t not_deskewed;  /* turns delivered without de-skew although it was
