@@ -625,7 +625,38 @@ def test_both_capture_readers_take_utf8_beyond_ascii(tmp_path):
     header, _ = cap.read_header(io.BytesIO(path.read_bytes()))
     assert header.channels[0].name == "läser"
     res = run_nav("--capture", path, "--trajectory", tmp_path / "t.txt", "--quiet")
-    assert res.returncode == 0, res.stderr
+    # the header is read; the capture holds no record, so no pose (issue 30: said, exit 1)
+    assert res.returncode == 1 and res.stderr.startswith("rsm-nav: no pose: no scan came out of the capture"), \
+        res.stderr
+
+
+def test_a_run_that_makes_no_pose_says_so_and_fails(tmp_path, head_log):
+    """A log or capture that yields no pose exits 1 with a one-line reason
+    (issue 30: they exited 0 with nothing said): an empty or binary CARMEN
+    file, a capture whose laser channel is empty."""
+    empty = tmp_path / "empty.clf"
+    empty.write_text("")
+    binary = tmp_path / "binary.clf"
+    binary.write_bytes(bytes(range(256)) * 64)
+    for log in (empty, binary):
+        res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--quiet")
+        assert res.returncode == 1, res.stderr
+        assert res.stderr.strip().splitlines()[-1] == "rsm-nav: no pose: the log holds no usable laser scan", \
+            res.stderr
+    # the excerpt's robot channel alone: encoder packets, no scan
+    from rsm_tools import convert
+    full = tmp_path / "head.cap"
+    convert.convert(str(head_log), str(full))
+    h, recs, _ = cap.read_capture(full)
+    robot = h.channel("robot").id
+    only = tmp_path / "robot.cap"
+    w = cap.CaptureWriter(only, h.channels, h.metadata)
+    for r in recs:
+        if r.channel == robot:
+            w.write(r.timestamp, r.channel, r.data, r.direction)
+    w.close()
+    res = run_nav("--capture", only, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 1 and "rsm-nav: no pose: no scan came out of the capture" in res.stderr, res.stderr
 
 
 # ---- rsm-replay ---------------------------------------------------------------------------

@@ -289,6 +289,7 @@ typedef struct nav {
      * and more a scan, about 95 MB a day at 75 Hz). */
     uint64_t time_bins[NAV_TIME_BINS];
     size_t ntimes;
+    uint64_t poses;        /* trajectory lines written */
     stamp_repair_t repair; /* scan stamps as the localizer gets them */
     double t_start;
     /* Capture mode: original stamps of scans whose stamp the converter clamped. */
@@ -413,6 +414,7 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
         fprintf(stderr, "rsm-nav: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
         return;
     }
+    nav->poses++;
     fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, nav->off_x + (double)rep->pose.x,
             nav->off_y + (double)rep->pose.y, (double)rep->pose.theta);
     if (nav->tum != NULL) {
@@ -1533,6 +1535,16 @@ int main(int argc, char **argv)
             rc = 1;
         }
         print_summary(&nav);
+    }
+    if (rc == 0 && nav.poses == 0u && (carmen != NULL || capture != NULL || live.lms != NULL)) {
+        /* A run that was to make poses and made none is a failure the
+         * caller must see (a live run with the robot alone makes none). */
+        fprintf(stderr, "rsm-nav: no pose: %s\n",
+                carmen != NULL    ? "the log holds no usable laser scan"
+                : capture != NULL ? "no scan came out of the capture (its laser channel empty, or its protocol "
+                                    "tag not what the bytes are)"
+                                  : "no scan arrived on the laser link");
+        rc = 1;
     }
     hitmap_free(&nav.hits);
     free(nav.restore_idx);
