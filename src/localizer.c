@@ -231,7 +231,16 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
     default:
         break;
     }
+    if (rc == RSM_OK) {
+        loc->magic = (uint32_t)RSM_LOCALIZER_MAGIC;
+    }
     return rc;
+}
+
+/* Whether loc is a localizer rsm_localizer_init set up. */
+static int ready(const rsm_localizer_t *loc)
+{
+    return loc != NULL && loc->magic == (uint32_t)RSM_LOCALIZER_MAGIC && loc->cfg != NULL;
 }
 
 /* Whether odometry's heading (and distance) is calibrated from the matches. */
@@ -244,7 +253,7 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
 {
     float q[9];
     rsm_motion_t v;
-    if (loc == NULL || u == NULL) {
+    if (!ready(loc) || u == NULL) {
         return RSM_ERR_INVAL;
     }
     if (!isfinite(u->dx) || !isfinite(u->dy) || !isfinite(u->dtheta)) {
@@ -274,7 +283,7 @@ int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right)
 {
     rsm_motion_t u;
     int rc;
-    if (loc == NULL) {
+    if (!ready(loc)) {
         return RSM_ERR_INVAL;
     }
     rc = rsm_odometry_update_ticks(&loc->odo, left, right, &u);
@@ -287,7 +296,7 @@ int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right)
 int rsm_localizer_set_odometry(rsm_localizer_t *loc, const rsm_odometry_config_t *odo_cfg)
 {
     int rc;
-    if (loc == NULL) {
+    if (!ready(loc)) {
         return RSM_ERR_INVAL;
     }
     rc = rsm_odometry_set_config(&loc->odo, odo_cfg);
@@ -347,6 +356,10 @@ int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, f
 
 rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc)
 {
+    if (!ready(loc)) {
+        const rsm_pose_t none = {NAN, NAN, NAN};
+        return none;
+    }
     return loc->ekf.x;
 }
 
@@ -1064,7 +1077,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         rep = &local;
     }
     memset(rep, 0, sizeof *rep);
-    if (loc == NULL || scan == NULL || scan->count > RSM_MAX_BEAMS) {
+    if (!ready(loc) || scan == NULL || scan->count > RSM_MAX_BEAMS) {
         return RSM_ERR_INVAL;
     }
     stage_begin(&clk, loc->cfg, rep);

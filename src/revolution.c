@@ -234,8 +234,8 @@ int rsm_rev_push(rsm_rev_t *r, const rsm_lidar_point_t *pt)
 {
     const rsm_rev_config_t *cfg;
     int done = 0;
-    if (r == NULL || pt == NULL) {
-        return RSM_ERR_INVAL;
+    if (r == NULL || pt == NULL || r->cfg == NULL) {
+        return RSM_ERR_INVAL; /* r->cfg NULL: never initialised (rsm_rev_init) */
     }
     cfg = r->cfg;
     if (!(pt->angle_deg >= 0.0f && pt->angle_deg < 360.0f) ||

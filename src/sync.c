@@ -304,10 +304,18 @@ int rsm_sync_flush(rsm_sync_t *s)
 
 rsm_pose_t rsm_sync_pose(const rsm_sync_t *s)
 {
-    const rsm_pose_t est = rsm_localizer_pose(s->loc);
-    rsm_pose_t pose = rsm_pose_compose(&est, &s->pending);
-    const rsm_odometry_sample_t *from = s->have_base ? &s->base : front(s);
-    const rsm_odometry_sample_t *to = newest(s);
+    rsm_pose_t est;
+    rsm_pose_t pose;
+    const rsm_odometry_sample_t *from;
+    const rsm_odometry_sample_t *to;
+    if (s == NULL || s->loc == NULL) {
+        const rsm_pose_t none = {NAN, NAN, NAN};
+        return none;
+    }
+    est = rsm_localizer_pose(s->loc);
+    pose = rsm_pose_compose(&est, &s->pending);
+    from = s->have_base ? &s->base : front(s);
+    to = newest(s);
     if (from != NULL && to != NULL && from != to) {
         const uint8_t bits = s->loc->odo.cfg.counter_bits;
         const int32_t dl = rsm_odometry_count_delta(to->left, from->left, bits);

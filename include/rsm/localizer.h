@@ -240,7 +240,12 @@ typedef struct rsm_localizer_counters {
                                               * or in part (report.unpinned > 0) */
 } rsm_localizer_counters_t;
 
+/* What rsm_localizer_init writes into rsm_localizer_t.magic: the other
+ * functions refuse a localizer without it (never initialised, or zeroed). */
+#define RSM_LOCALIZER_MAGIC 0x52534d4cUL
+
 typedef struct rsm_localizer {
+    uint32_t magic;                      /* RSM_LOCALIZER_MAGIC once initialised */
     const rsm_localizer_config_t *cfg;   /* kept by pointer */
     rsm_ekf_t ekf;
     rsm_odometry_t odo;
@@ -378,7 +383,7 @@ size_t rsm_localizer_scan_points(const rsm_localizer_t *loc, rsm_point_t *out, s
 int rsm_localizer_map_occupancy(const rsm_localizer_t *loc, float x, float y, float *occupancy);
 int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, float *x1, float *y1);
 
-/* Current estimate. */
+/* Current estimate; NaN in every field for loc NULL or never initialised. */
 rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc);
 
 /* How far the current estimate can be trusted, as the last scan left it

@@ -126,7 +126,8 @@ int rsm_sync_poll(rsm_sync_t *s, uint64_t now_us);
 int rsm_sync_flush(rsm_sync_t *s);
 
 /* Best current pose: the localizer's estimate moved on by the odometry
- * composed but not yet predicted and the odometry still held back. */
+ * composed but not yet predicted and the odometry still held back. NaN in
+ * every field for s NULL, or a localizer never initialised. */
 rsm_pose_t rsm_sync_pose(const rsm_sync_t *s);
 
 #ifdef __cplusplus

@@ -1437,6 +1437,22 @@ void test_localizer_scan_should_reject_invalid_arguments(void)
     make_scan(&path[0], NULL, 0u);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, NULL));
     TEST_ASSERT_EQUAL_INT((int)RSM_SCAN_FIRST, (int)loc.last.outcome);
+    /* Never initialised (zeroed): refused, not crashed on (issue 30). */
+    {
+        static const rsm_motion_t u = {0.1f, 0.0f, 0.0f};
+        rsm_odometry_config_t odo = rsm_odometry_config_default();
+        rsm_pose_t p;
+        memset(&loc2, 0, sizeof loc2);
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_scan(&loc2, &scan, &rep));
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_motion(&loc2, &u));
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_ticks(&loc2, 1u, 2u));
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_odometry(&loc2, &odo));
+        p = rsm_localizer_pose(&loc2);
+        TEST_ASSERT_TRUE(isnan(p.x) && isnan(p.y) && isnan(p.theta));
+        p = rsm_localizer_pose(NULL);
+        TEST_ASSERT_TRUE(isnan(p.x) && isnan(p.y) && isnan(p.theta));
+        TEST_ASSERT_EQUAL_INT((int)RSM_TRACK_LOST, (int)rsm_localizer_track(NULL));
+    }
 }
 
 /* ---- determinism and independence ------------------------------------------------ */

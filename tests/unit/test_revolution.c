@@ -341,6 +341,13 @@ void test_init_rejects_bad_settings(void)
     cfg.mount.theta = INFINITY;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_init(&rev, &cfg));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_push(NULL, NULL));
+    {
+        /* never initialised (zeroed): refused, not crashed on (issue 30) */
+        rsm_lidar_point_t pt;
+        memset(&pt, 0, sizeof pt);
+        memset(&rev, 0, sizeof rev);
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_push(&rev, &pt));
+    }
     rsm_rev_reset(NULL);
 }
 

@@ -109,6 +109,10 @@ void test_init_should_reject_bad_arguments(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_scan(&sync, NULL));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_poll(NULL, 0u));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_flush(NULL));
+    {
+        const rsm_pose_t p = rsm_sync_pose(NULL); /* issue 30: it crashed */
+        TEST_ASSERT_TRUE(isnan(p.x) && isnan(p.y) && isnan(p.theta));
+    }
 }
 
 void test_scan_without_any_odometry_should_be_fused_at_once(void)
