@@ -201,3 +201,30 @@ def test_spread_stamps_keeps_a_least_gap_and_catches_up():
     assert cv.spread_stamps([0, 1, 2, 100, 200], 10) == [0, 10, 20, 100, 200]
     assert cv.spread_stamps([0, 0, 0, 25], 10) == [0, 10, 20, 30]
     assert cv.spread_stamps([3, 4, 5], 0) == [3, 4, 5]
+
+
+def test_readings_auto_keeps_the_logs_beams(tmp_path, head_log):
+    """--readings auto (the default) keeps what the log has (issue 30: a
+    361-beam log lost every other beam to the old default of 181): 181
+    readings for the excerpt's 180 beams, 361 for the same scans given as
+    361 beams at half a degree (each beam twice), every beam at its reading."""
+    from conftest import read_maybe_gz
+
+    st = cv.convert(head_log, tmp_path / "a.cap")
+    h, _, _ = cap.read_capture(tmp_path / "a.cap")
+    assert h.metadata["laser.readings"] == "181"
+    lines = []
+    for line in read_maybe_gz(head_log).decode().splitlines():
+        f = line.split()
+        if f and f[0] == "FLASER":
+            n = int(f[1])
+            r = f[2:2 + n]
+            half = [v for k in range(n) for v in (r[k], r[k])] + [r[-1]]
+            line = " ".join(["FLASER", str(len(half)), *half, *f[2 + n:]])
+        lines.append(line)
+    wide = tmp_path / "wide.clf"
+    wide.write_text("\n".join(lines) + "\n")
+    cv.convert(wide, tmp_path / "w.cap")
+    h, recs, _ = cap.read_capture(tmp_path / "w.cap")
+    assert h.metadata["laser.readings"] == "361"
+    assert st.scans > 0

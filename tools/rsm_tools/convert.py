@@ -1,6 +1,6 @@
 """rsm-convert: a CARMEN log to a capture of the serial bytes a P3-DX and an LMS would send.
 
-    rsm-convert LOG OUT.cap [--units auto|mm|cm] [--readings 180|181|361]
+    rsm-convert LOG OUT.cap [--units auto|mm|cm] [--readings auto|180|181|361]
                 [--ticks-per-m 128000] [--wheel-base 0.357] [--max-range M]
                 [--start-ticks N] [--min-gap-ms 10] [--ground-truth NAME]
 
@@ -51,7 +51,7 @@ import os
 import sys
 import zlib
 from dataclasses import dataclass
-from typing import Iterable, List, Optional, Sequence, Tuple
+from typing import Iterable, List, Optional, Sequence, Tuple, Union
 
 from . import capture as cap
 from . import lidarstream
@@ -331,7 +331,14 @@ class ConvertStats:
                 f"{self.longest_m:.3f} m")
 
 
-def convert(log, out, units: str = "auto", readings: int = 181,
+def pick_readings(beams: int) -> int:
+    """The telegram size that keeps every beam of a log whose scans have at
+    most ``beams`` beams: 361 (0.5 deg) past 181 beams, else 181 (1 deg, the
+    181st reading of a 180-beam CARMEN scan sent as no value)."""
+    return 361 if beams > 181 else 181
+
+
+def convert(log, out, units: str = "auto", readings: Union[int, str] = "auto",
             ticks_per_m: float = DEFAULT_TICKS_PER_M, wheel_base: float = DEFAULT_WHEEL_BASE,
             max_range: Optional[float] = None, start_ticks: int = 0,
             ground_truth: Optional[str] = None, min_gap_us: int = DEFAULT_MIN_GAP_US,
@@ -344,14 +351,18 @@ def convert(log, out, units: str = "auto", readings: int = 181,
     telegrams, one turn per scan lasting at most 1 / lidar_hz seconds."""
     if lidar is not None and (lidar not in lidarstream.BAUD or not lidar_hz > 0.0):
         raise ValueError("lidar must be ld06 or rplidar, with a positive lidar_hz")
-    if readings not in (180, 181, 361):
-        raise ValueError("readings must be 180, 181 or 361")
+    if readings not in (180, 181, 361, "auto"):
+        raise ValueError("readings must be 180, 181, 361 or auto")
     if units not in ("auto", "mm", "cm"):
         raise ValueError("units must be auto, mm or cm")
     st = ConvertStats(log=LogStats())
     recs = [r for r in read_log(log, types=("ODOM", "FLASER"), stats=st.log)]
     valid = [x for r in recs if isinstance(r, FLaser) for x in r.ranges if valid_reading(x)]
     st.longest_m = max(valid, default=0.0)
+    if readings == "auto":
+        # Keep what the log has, as units auto keeps its range (issue 30: a
+        # 361-beam log lost every other beam to the default of 181).
+        readings = pick_readings(max((len(r.ranges) for r in recs if isinstance(r, FLaser)), default=180))
     st.units = pick_units(st.longest_m) if units == "auto" else units
     units = st.units
     st.limit_m = UNIT_LIMIT_M[units] if max_range is None else min(max_range, UNIT_LIMIT_M[units])
@@ -510,8 +521,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--units", choices=("auto", "mm", "cm"), default="auto",
                     help="range unit of the 0xB0 telegrams; auto (default): mm when the log's longest valid "
                          "reading fits in 8.182 m, else cm (81.82 m)")
-    ap.add_argument("--readings", type=int, choices=(180, 181, 361), default=181,
-                    help="readings per LMS scan telegram (default 181: 180 deg at 1 deg)")
+    ap.add_argument("--readings", choices=("auto", "180", "181", "361"), default="auto",
+                    help="readings per LMS scan telegram; auto (default): 361 (180 deg at 0.5 deg) when the "
+                         "log's scans have more than 181 beams, else 181 (at 1 deg)")
     ap.add_argument("--ticks-per-m", type=float, default=DEFAULT_TICKS_PER_M,
                     help=f"encoder ticks per metre of the encoder packets (default {DEFAULT_TICKS_PER_M:g})")
     ap.add_argument("--wheel-base", type=float, default=DEFAULT_WHEEL_BASE,
@@ -538,7 +550,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if a.ticks_per_m <= 0 or a.wheel_base <= 0 or (a.max_range is not None and a.max_range <= 0):
         ap.error("--ticks-per-m, --wheel-base and --max-range must be positive")
     try:
-        st = convert(a.log, a.out, a.units, a.readings, a.ticks_per_m, a.wheel_base,
+        st = convert(a.log, a.out, a.units, a.readings if a.readings == "auto" else int(a.readings),
+                     a.ticks_per_m, a.wheel_base,
                      a.max_range, a.start_ticks, a.ground_truth, int(round(a.min_gap_ms * 1000.0)),
                      a.lidar, a.lidar_hz)
     except (OSError, EOFError, zlib.error) as exc:
