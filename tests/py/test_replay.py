@@ -361,3 +361,23 @@ def test_record_refuses_an_unknown_protocol_tag(tmp_path):
     assert res.returncode == 2 and "unknown protocol 'ld19'" in res.stderr
     assert "ld06" in res.stderr and "rplidar" in res.stderr
     assert not (tmp_path / "n.cap").exists()
+
+
+def test_lockstep_obeys_stall_when_the_reader_leaves_a_link_unread(tmp_path, head_cap):
+    """--lockstep with a reader that opens both links but reads only the
+    robot's: the laser's bytes wait for ever, so rsm-replay gives up after
+    --stall seconds, names the link, and fails (issue 30: it hung)."""
+    reader = tmp_path / "one_link.py"
+    reader.write_text(
+        "import os, select, sys\n"
+        "robot = os.open(sys.argv[1], os.O_RDONLY | os.O_NOCTTY)\n"
+        "laser = os.open(sys.argv[2], os.O_RDONLY | os.O_NOCTTY)\n"
+        "while True:\n"
+        "    r, _, _ = select.select([robot], [], [], 5.0)\n"
+        "    if r and not os.read(robot, 4096):\n"
+        "        break\n")
+    res = subprocess.run([sys.executable, "-m", "rsm_tools.replay", str(head_cap), "--pty", "--lockstep",
+                          "--stall", "1", "--linger", "0", "--run", sys.executable, str(reader), "{robot}", "{laser}"],
+                         capture_output=True, text=True, env=subprocess_env(), timeout=120)
+    assert res.returncode != 0, res.stderr
+    assert "read nothing from laser for 1 s" in res.stderr, res.stderr

@@ -24,7 +24,7 @@ import platform
 import struct
 import termios
 import time
-from typing import Iterable, List, Optional
+from typing import Iterable, List, Optional, Sequence
 
 PTRACE_PEEKDATA = 2
 PTRACE_CONT = 7
@@ -78,12 +78,15 @@ class Lockstep:
     feeder only to ask how much is unread).  Use :meth:`hold` before writing
     a group and :meth:`release` after it; :meth:`detach` at the end."""
 
-    def __init__(self, pid: int, slaves: Iterable[int], poll_s: float = 0.0002) -> None:
+    def __init__(self, pid: int, slaves: Iterable[int], poll_s: float = 0.0002, stall_s: Optional[float] = None,
+                 names: Optional[Sequence[str]] = None) -> None:
         if platform.system() != "Linux" or platform.machine() != "x86_64":
             raise LockstepError(f"lockstep needs x86-64 Linux, not {platform.system()} {platform.machine()}")
         self.pid = pid
         self.slaves: List[int] = list(slaves)
+        self.names: List[str] = list(names) if names is not None else [str(fd) for fd in self.slaves]
         self.poll_s = poll_s
+        self.stall_s = stall_s
         self.libc = _libc()
         self.status: Optional[int] = None
         self.holds = 0
@@ -137,8 +140,20 @@ class Lockstep:
     def hold(self) -> None:
         """Returns once every written byte has been read and the reader is
         stopped while waiting for more."""
+        last: Optional[List[int]] = None
+        since = 0.0
         while True:
-            if any(pending_input(fd) for fd in self.slaves):
+            pending = [pending_input(fd) for fd in self.slaves]
+            if any(pending):
+                # A reader that takes nothing from a link for stall_s while
+                # bytes wait there never will: waiting for it would be for ever.
+                now = time.monotonic()
+                if pending != last:
+                    last, since = pending, now
+                elif self.stall_s is not None and now - since >= self.stall_s:
+                    names = ", ".join(n for n, k in zip(self.names, pending) if k)
+                    raise LockstepError(f"the reader read nothing from {names} for {self.stall_s:g} s "
+                                        "while bytes waited there (--stall)")
                 time.sleep(self.poll_s)
                 continue
             self._stop()

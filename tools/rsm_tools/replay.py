@@ -32,7 +32,8 @@ the reader's result independent of the machine's speed and load (see
 :mod:`rsm_tools.lockstep`): before each group of records with one timestamp
 rsm-replay waits until the reader has read everything and is blocked waiting
 for more, then writes the whole group while it is held there; timing options
-are ignored.  The reader's clock can follow the capture's too: the
+are ignored, but not ``--stall``: a reader that reads nothing from a link
+for that long while bytes wait there fails the replay.  The reader's clock can follow the capture's too: the
 environment variable ``RSM_LOCKSTEP_CLOCK`` names a file that holds the
 timestamp of the group written last (8 bytes, little-endian microseconds; 0
 before the first), rewritten while the reader is held.  rsm-nav takes it as
@@ -377,7 +378,7 @@ def run_with(a, reader, outs, ptys, tally: Tally) -> int:
 
     try:
         if a.lockstep:
-            step = ls.Lockstep(child.pid, [o.slave for o in ptys])
+            step = ls.Lockstep(child.pid, [o.slave for o in ptys], stall_s=a.stall, names=[o.name for o in ptys])
         group: List[cap.Record] = []
 
         start = time.monotonic()
