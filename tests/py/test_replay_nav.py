@@ -228,3 +228,29 @@ def test_links_vanishing_mid_run_keep_what_was_written(tmp_path, excerpt_capture
     assert 10 < len(rows) == sent < 600
     assert all(len(r) == 4 for r in rows)
     assert "rsm-nav summary" in res.stdout and re.search(rf"^\s+scans\s+{len(rows)}$", res.stdout, re.M)
+
+
+def test_a_live_run_killed_keeps_the_poses_it_made(tmp_path, excerpt_capture):
+    """Live mode writes each pose as it comes (issue 30: kill -9 after 8 s
+    left an empty trajectory though 80 scans were fused): while rsm-nav
+    runs on the replayed links, its trajectory file grows to ten complete
+    pose lines, and after kill -9 they are all there."""
+    header, _, _ = cap.read_capture(excerpt_capture)
+    x0 = header.metadata.get("robot.initial_pose", "0 0 0").split()
+    replay, paths = start_replay(excerpt_capture, "4")
+    traj = tmp_path / "live.txt"
+    nav = subprocess.Popen([str(nav_binary()), "--robot", paths["robot"], "--lms", paths["laser"], "--listen",
+                            "--initial-pose", *x0, "--trajectory", str(traj), "--quiet"],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        end = time.monotonic() + 120.0
+        while time.monotonic() < end and len(poses(traj) if traj.exists() else []) < 10:
+            time.sleep(0.2)
+        nav.kill()
+        nav.wait(timeout=30)
+    finally:
+        replay.kill()
+        replay.wait(timeout=30)
+    rows = poses(traj)
+    assert len(rows) >= 10, traj.read_text() if traj.exists() else "no file"
+    assert all(len(r) == 3 for r in rows)

@@ -290,6 +290,7 @@ typedef struct nav {
     uint64_t time_bins[NAV_TIME_BINS];
     size_t ntimes;
     uint64_t poses;        /* trajectory lines written */
+    int live;              /* a live run: outputs flushed at every pose */
     stamp_repair_t repair; /* scan stamps as the localizer gets them */
     double t_start;
     /* Capture mode: original stamps of scans whose stamp the converter clamped. */
@@ -425,6 +426,17 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
     }
     if (nav->map_path != NULL) {
         nav_map_points(nav, rep);
+    }
+    if (nav->live) {
+        /* A live run may end by power loss or kill -9: each pose on disk
+         * (the kernel's, at least) as it comes. */
+        (void)fflush(nav->traj);
+        if (nav->tum != NULL) {
+            (void)fflush(nav->tum);
+        }
+        if (nav->scan_log != NULL) {
+            (void)fflush(nav->scan_log);
+        }
     }
     if (!nav->quiet && nav->ntimes % 1000 == 0) {
         fprintf(stderr, "rsm-nav: %zu scans, %.1f s\n", nav->ntimes, now_s() - nav->t_start);
@@ -1470,6 +1482,10 @@ int main(int argc, char **argv)
     live.upside_down = nav.cfg.laser_upside_down != 0u;
     live.odometry = &nav.cfg.odometry;
     live.deskew = !nav.no_deskew;
+    nav.live = carmen == NULL && capture == NULL;
+    if (nav.live) {
+        (void)fflush(nav.traj); /* its header too */
+    }
     if (carmen != NULL) {
         rc = run_carmen(&nav, carmen, fov179);
     } else if (capture != NULL) {
