@@ -88,6 +88,18 @@ def test_capture_read_error_at_a_record_boundary_stops_flushes_and_fails(tmp_pat
     assert rows(traj) == rows(tmp_path / "ref.txt")
 
 
+def test_capture_read_error_in_the_header_is_said_as_one(tmp_path, excerpt_capture):
+    """Reading the capture's header fails (EIO after 4 and after 20 bytes):
+    rsm-nav says it could not read it, not that the file is no capture
+    (issue 30: "bad magic"), and fails."""
+    for after in (4, 20):
+        res = run_nav("--capture", excerpt_capture, "--trajectory", tmp_path / "t.txt", "--quiet",
+                      fault_path=excerpt_capture, fault_after=after)
+        assert res.returncode == 1, res.stderr
+        assert "read error in the capture header" in res.stderr and "Input/output error" in res.stderr, res.stderr
+        assert "bad magic" not in res.stderr and "truncated" not in res.stderr, res.stderr
+
+
 def test_capture_run_closes_its_file(tmp_path, excerpt_capture):
     res = run_nav("--capture", excerpt_capture, "--trajectory", tmp_path / "t.txt", "--quiet",
                   fault_path=excerpt_capture, fault_after=1 << 40, report_open=True)

@@ -112,6 +112,15 @@ const char *cap_error_text(const cap_reader *r) { return r->error; }
 
 static size_t read_full(FILE *fp, uint8_t *p, size_t n) { return fread(p, 1, n, fp); }
 
+/* A read of the header failed: said as such, not as what the bytes read so
+ * far would make of it ("bad magic"). */
+static int io_fail(cap_reader *r)
+{
+    snprintf(r->error, sizeof r->error, "read error in the capture header: %s", strerror(errno));
+    r->io_error = 1;
+    return CAP_ERR_IO;
+}
+
 /* Whether p[0..n) is well-formed UTF-8 as Python decodes it (no overlong
  * forms, no surrogates, nothing past U+10FFFF): both readers must refuse
  * the same headers. */
@@ -167,6 +176,9 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
     r->fp = fp;
     r->lenient = lenient;
     got = read_full(fp, fixed, sizeof fixed);
+    if (got < sizeof fixed && ferror(fp)) {
+        return io_fail(r);
+    }
     if (got < 8 || memcmp(fixed, cap_magic, 8) != 0) {
         return fail(r, CAP_ERR_HEADER, "not an rsm capture file (bad magic)");
     }
@@ -187,7 +199,7 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
     }
     if (read_full(fp, body, hlen) < hlen || read_full(fp, crcb, 4) < 4) {
         free(body);
-        return fail(r, CAP_ERR_HEADER, "capture header truncated");
+        return ferror(fp) ? io_fail(r) : fail(r, CAP_ERR_HEADER, "capture header truncated");
     }
     crc = cap_crc32(cap_crc32(0, fixed, 16), body, hlen);
     if (crc != rd32(crcb)) {
