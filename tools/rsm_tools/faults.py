@@ -66,6 +66,7 @@ from typing import IO, Dict, List, Optional, Sequence, Tuple
 
 from .carmen import MalformedLine, Pose, parse_tokens, pose_compose, pose_in_frame
 from .fileio import PathLike, open_binary, open_binary_output
+from .outliers import percent_argument
 
 PROG = "rsm-faults"
 
@@ -843,16 +844,6 @@ def _positive(what: str):
     return parse
 
 
-def _percent(text: str) -> Fraction:
-    try:
-        p = Fraction(text)
-    except (ValueError, ZeroDivisionError):
-        raise argparse.ArgumentTypeError(f"--drop: not a number: {text!r}") from None
-    if p < 0 or p > 100:
-        raise argparse.ArgumentTypeError(f"--drop must be within 0..100: {text}")
-    return p
-
-
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog=PROG,
@@ -885,7 +876,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="keep a scan only after the odometry moved D m (or turned --every-rad) since the last kept")
     g.add_argument("--every-rad", type=_positive("--every-rad"), metavar="R",
                    help="keep a scan only after the odometry turned R rad (or moved --every-m)")
-    g.add_argument("--drop", type=_percent, metavar="P", help="drop P %% of the scans at random")
+    g.add_argument("--drop", type=percent_argument, metavar="P", help="drop P %% of the scans at random")
     g.add_argument("--gap", type=_gap, action="append", default=[], metavar="S:T",
                    help="remove every scan stamped S to S+T seconds after the first scan (repeatable)")
     g = p.add_argument_group("laser geometry")

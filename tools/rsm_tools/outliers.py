@@ -180,7 +180,9 @@ def inject_file(
         return inject_lines(fin, fout, percent, seed, min_range, max_range)
 
 
-def _percent(text: str) -> Fraction:
+def percent_argument(text: str) -> Fraction:
+    """An argparse type: a share in per cent, 0 to 100, exact (rsm-outliers,
+    rsm-faults --drop)."""
     try:
         p = Fraction(text)
     except (ValueError, ZeroDivisionError):
@@ -200,7 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("input", help="CARMEN log (plain or gzip)")
     p.add_argument("output", help="output log; gzip-compressed if the name ends in .gz")
-    p.add_argument("--percent", type=_percent, required=True,
+    p.add_argument("--percent", type=percent_argument, required=True,
                    help="share of readings to replace in each scan, 0..100; the count per "
                         "scan is round(P/100 * n), halves rounded up")
     p.add_argument("--seed", type=int, required=True, help="integer seed")
