@@ -757,8 +757,8 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  * and matching need not agree on how far the robot went meanwhile, so the
  * last estimate may fit better than odometry counted from the stall's
  * start). Returns what was made of the step. */
-static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, int *rc,
-                                         rsm_mapmatch_result_t *res)
+static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred,
+                                         int odometry_moved, int *rc, rsm_mapmatch_result_t *res)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t *anchor = &loc->state.persistent.anchor;
@@ -767,9 +767,10 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
     rsm_odometry_verdict_t kind[2];
     rsm_odometry_verdict_t verdict = RSM_ODOMETRY_TRUSTED;
     int counted_first = 0;
+    int stall_lead = 0; /* a stall in which matching found the robot move */
     size_t n = 0;
     size_t k;
-    if (cfg->refute_margin <= 0.0f || !moved(anchor, pred)) {
+    if (!refuting(cfg) || !odometry_moved) {
         return verdict;
     }
     if (beyond_doubt(cfg, pred, &counted)) {
@@ -782,16 +783,14 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
          * motion twice): there the step's prediction is the one that must
          * fit better, which matters where the building looks alike turned
          * (a corridor crossing). */
-        counted_first = held == RSM_ODOMETRY_REFUTED ||
-                        (held == RSM_ODOMETRY_CAUGHT_UP && beyond_doubt(cfg, &loc->state.persistent.trusted, anchor));
+        stall_lead = held == RSM_ODOMETRY_CAUGHT_UP && beyond_doubt(cfg, &loc->state.persistent.trusted, anchor);
+        counted_first = held == RSM_ODOMETRY_REFUTED || stall_lead;
     }
     if (*rc != RSM_OK || res->hit < cfg->recover_ratio * loc->state.persistent.fit || beyond_doubt(cfg, pred, &res->pose)) {
         /* After a stall in which matching found the robot move, the step
          * repeated that motion; else it was false. */
         alt_pred[n] = *anchor;
-        kind[n] = n > 0 && kind[0] == RSM_ODOMETRY_CAUGHT_UP && beyond_doubt(cfg, &loc->state.persistent.trusted, anchor)
-                      ? RSM_ODOMETRY_CAUGHT_UP
-                      : RSM_ODOMETRY_REFUTED;
+        kind[n] = stall_lead ? RSM_ODOMETRY_CAUGHT_UP : RSM_ODOMETRY_REFUTED;
         ++n;
     }
     for (k = 0; k < n; ++k) {
@@ -881,7 +880,8 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
                : RECOVERY_NONE;
 }
 
-static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
+static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_moved, rsm_localizer_report_t *rep,
+                              stage_clock_t *clk)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t pred = loc->ekf.x;
@@ -901,7 +901,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     }
     rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
                       &res);
-    rep->odometry = doubt_step(loc, npts, &pred, &rc, &res);
+    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, &rc, &res);
     if (rep->odometry == RSM_ODOMETRY_CAUGHT_UP) {
         loc->counters.caught_up++;
     } else if (rep->odometry == RSM_ODOMETRY_REFUTED) {
@@ -945,7 +945,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     if (rc != RSM_OK || res.used < cfg->min_points / 2u) {
         return RSM_SCAN_LOW_SUPPORT;
     }
-    if (poor && cfg->refuse_poor && (ambiguous || !moved(&loc->state.persistent.anchor, &pred))) {
+    if (poor && cfg->refuse_poor && (ambiguous || !odometry_moved)) {
         /* Fitted far worse than recent scans and no search proved a pose,
          * while odometry stood still (the robot carried, or turning faster
          * than the scans can follow) or a search found rival poses: the
@@ -1069,7 +1069,6 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     rsm_pose_t est;
     size_t npts;
     float prior_var;
-    uint32_t recovered;
     int odometry_moved;
     rsm_pose_t pred;
     int n;
@@ -1116,7 +1115,6 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         }
     }
     prior_var = loc->ekf.p[8];
-    recovered = loc->counters.recovered;
     n = rsm_scan_to_points_cached(scan, &loc->cfg->limits, &loc->trig, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
     npts = n > 0 ? (size_t)n : 0u;
     if (loc->cfg->method == RSM_METHOD_MAP) {
@@ -1131,12 +1129,12 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     } else if (loc->cfg->method == RSM_METHOD_ICP) {
         outcome = step_icp(loc, npts, rep, &clk);
     } else if (loc->cfg->method == RSM_METHOD_MAP) {
-        outcome = step_map(loc, npts, rep, &clk);
+        outcome = step_map(loc, npts, odometry_moved, rep, &clk);
     } else {
         outcome = step_rsm(loc, npts, rep, &clk);
     }
     if (calibrating(loc)) {
-        calibrate(loc, outcome, prior_var, loc->counters.recovered != recovered || rep->odometry != RSM_ODOMETRY_TRUSTED);
+        calibrate(loc, outcome, prior_var, rep->recovered || rep->odometry != RSM_ODOMETRY_TRUSTED);
     }
     stage_switch(&clk, RSM_STAGE_MAP);
     est = loc->ekf.x;
