@@ -10,13 +10,7 @@ set(prefix ${WORK_DIR}/prefix)
 
 separate_arguments(sanitize UNIX_COMMAND "${SANITIZE_FLAGS}")
 
-function(run)
-  execute_process(COMMAND ${ARGV} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "failed (${rc}): ${ARGV}\n${out}\n${err}")
-  endif()
-  message(STATUS "${out}")
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/consumer_common.cmake)
 
 # Runs a built consumer; under SANITIZE_FLAGS it must say it is instrumented.
 function(run_consumer exe)
@@ -38,17 +32,7 @@ run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run_consumer(${WORK_DIR}/build/consumer)
 run_consumer(${WORK_DIR}/build/consumer_mismatch)
 
-find_program(PKG_CONFIG pkg-config REQUIRED)
-file(GLOB_RECURSE pcs ${prefix}/*/rsm.pc)
-list(GET pcs 0 pc)
-get_filename_component(pcdir ${pc} DIRECTORY)
-set(ENV{PKG_CONFIG_PATH} ${pcdir})
-execute_process(COMMAND ${PKG_CONFIG} --cflags --libs --static rsm
-  OUTPUT_VARIABLE flags OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE rc)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "pkg-config cannot find rsm in ${pcdir}")
-endif()
-separate_arguments(flags UNIX_COMMAND "${flags}")
+rsm_pkg_flags(${prefix} flags)
 
 # Each installed header stands alone with only the installed include folder
 # (no internal header of src/ may leak into one), in C99.
