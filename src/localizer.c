@@ -32,6 +32,7 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
      * generic 5 % (fast turns). */
     c.odometry.sigma_rot_per_m = 0.2f;
     c.odometry.sigma_rot_per_rad = 0.1f;
+    c.map_frozen = 0u;
     c.map_min_hits = 1u;
     c.map_on_reject = 1u;
     c.min_points = 20u;
@@ -241,6 +242,28 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
 static int ready(const rsm_localizer_t *loc)
 {
     return loc != NULL && loc->magic == (uint32_t)RSM_LOCALIZER_MAGIC && loc->cfg != NULL;
+}
+
+int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const float p[9])
+{
+    static const rsm_pose_t none = {0.0f, 0.0f, 0.0f};
+    rsm_ekf_t ekf;
+    if (!ready(loc) || x == NULL || rsm_ekf_init(&ekf, x, p) != RSM_OK) {
+        return RSM_ERR_INVAL;
+    }
+    /* Only the estimate: the filter's counters stay. */
+    loc->ekf.x = ekf.x;
+    memcpy(loc->ekf.p, ekf.p, sizeof loc->ekf.p);
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        loc->state.persistent.anchor = ekf.x;
+        loc->state.persistent.trusted = ekf.x;
+        loc->state.persistent.since = none;
+        loc->state.persistent.last_step = none;
+    }
+    loc->poor_run = 0u;
+    loc->last.track = RSM_TRACK_TRACKING;
+    loc->last.pose = ekf.x;
+    return RSM_OK;
 }
 
 /* Whether odometry's heading (and distance) is calibrated from the matches. */
@@ -1173,7 +1196,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
             /* A scan that found too little map to match (new ground, or the
              * map there was evicted) is written at the prediction, or the
              * map could never grow back; one that was refused is not. */
-            if (fused || outcome == RSM_SCAN_LOW_SUPPORT) {
+            if ((fused || outcome == RSM_SCAN_LOW_SUPPORT) && !loc->cfg->map_frozen) {
                 write_tmap(loc, &est, npts, outcome == RSM_SCAN_FIRST);
             }
             break;

@@ -34,6 +34,7 @@ static int check_method_part(const rsm_localizer_config_t *cfg, const char **fie
                             (cfg->recover_rad == 0.0f || cfg->recover_rad <= 64.0f * cfg->mapmatch.search_step_rad),
                         "recover_rad");
         RSM_CHECK_FIELD(cfg->refuse_poor <= 1u, "refuse_poor");
+        RSM_CHECK_FIELD(cfg->map_frozen <= 1u, "map_frozen");
         RSM_CHECK_FIELD(cfg->recover_margin >= 0.0f && cfg->recover_margin <= 10.0f, "recover_margin");
         RSM_CHECK_FIELD(cfg->refute_margin >= 0.0f && cfg->refute_margin <= 10.0f, "refute_margin");
         RSM_CHECK_FIELD(cfg->doubt_m > 0.0f && cfg->doubt_m <= 100.0f, "doubt_m");

@@ -16,6 +16,7 @@ const char *rsm_strerror(int status)
     case RSM_ERR_PROTO: return "protocol error";
     case RSM_ERR_ORDER: return "timestamp out of order";
     case RSM_ERR_CONFIG: return "built with other capacities than the library";
+    case RSM_ERR_FORMAT: return "not a map of this format, version or build";
     default: return "unknown status";
     }
 }

@@ -13,7 +13,7 @@
 #include "fmath.h"
 #include "tmap_read.h"
 
-#define STAMP_MASK 0x1FFFFFFFu
+#define STAMP_MASK RSM_TMAP_STAMP_MASK
 /* Set in a tile's stamp once one of its cells has reached saturation. */
 #define CONFIRMED 0x20000000u
 
@@ -242,6 +242,30 @@ static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t t
     }
     map->hash[h] = (uint16_t)s;
     return s;
+}
+
+int rsm_tmap_restore(rsm_tmap_t *map, const rsm_tile_t *t)
+{
+    const uint32_t level = tile_level(t);
+    const int32_t lim = RSM_TMAP_CELL_LIMIT >> RSM_TMAP_TILE_LOG2;
+    uint32_t h;
+    if (level >= (uint32_t)map->cfg.levels || t->tx <= -lim || t->tx >= lim || t->ty <= -lim || t->ty >= lim ||
+        (t->stamp & RSM_TMAP_STAMP_MASK) > map->stamp ||
+        rsm_tmap_find_slot(map, level, t->tx, t->ty) != RSM_TMAP_NONE) {
+        return RSM_ERR_FORMAT;
+    }
+    if (map->used >= (uint32_t)RSM_TMAP_TILES) {
+        return RSM_ERR_NOMEM;
+    }
+    map->tile[map->used] = *t;
+    h = hash_key(level, t->tx, t->ty);
+    while (map->hash[h] != RSM_TMAP_NONE) {
+        h = (h + 1u) & (RSM_TMAP_HASH - 1u);
+    }
+    map->hash[h] = map->used;
+    map->level_used[level]++;
+    map->used++;
+    return RSM_OK;
 }
 
 /* Gives back the slot of a tile that holds nothing any more (every cell 0,

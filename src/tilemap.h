@@ -122,6 +122,16 @@ float rsm_tmap_sample_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, f
  * a level, and its gradient per metre. Reentrant. */
 float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy);
 
+/* Bits of rsm_tile_t.stamp that hold the write counter. */
+#define RSM_TMAP_STAMP_MASK 0x1FFFFFFFu
+
+/* Puts a tile read from storage (src/mapfile.c) into the next free slot,
+ * as it is (its level in the stamp's top bits). RSM_OK; RSM_ERR_FORMAT for
+ * a level beyond cfg.levels, coordinates out of range, a stamp newer than
+ * map->stamp (set it first), or a tile already held at that place;
+ * RSM_ERR_NOMEM with the pool full. Nothing is written on error. */
+int rsm_tmap_restore(rsm_tmap_t *map, const rsm_tile_t *t);
+
 #ifdef __cplusplus
 }
 #endif

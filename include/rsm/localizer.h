@@ -123,6 +123,10 @@ typedef struct rsm_localizer_config {
                                      * (after a stall, motion reported again; after a refuted
                                      * spike, the step that takes it back); defaults 0.1 m and
                                      * 0.1 rad */
+    uint8_t map_frozen;             /* 1: localization mode: the persistent map is read, never
+                                     * written (a map loaded with rsm_localizer_load_map stays as
+                                     * it was saved); 0: scans keep updating it (the building
+                                     * changes: doors, furniture); default 0 */
     uint8_t map_min_hits;           /* map cells with this many hits are occupied; default 1 */
     uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
     uint16_t min_points;            /* usable readings needed; default 20 */
@@ -348,6 +352,15 @@ int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right);
  * when its timestamp is older than the previous scan's, RSM_ERR_INVAL for
  * bad arguments or a count above RSM_MAX_BEAMS. */
 int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep);
+
+/* Puts the estimate at x with covariance p (NULL: zero), as a caller that
+ * knows where the robot is would (it was carried, or a map was loaded and
+ * the robot stands where it was saved): the next scan is matched from
+ * there; odometry counts from there; the tracking state is tracking again.
+ * The map, and how well recent scans fitted it, are kept. Returns RSM_OK, or
+ * RSM_ERR_INVAL (loc never initialised, x NULL or not finite, p not
+ * finite) with loc unchanged. */
+int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const float p[9]);
 
 /* Sets the odometry geometry and noise at run time, e.g. from the robot's
  * own calibration once its driver has read it (rsm_p3dx_odometry_config).

@@ -20,7 +20,8 @@ typedef enum rsm_status {
     RSM_ERR_NOSYS = -9,      /* optional operation not provided */
     RSM_ERR_PROTO = -10,     /* protocol violation: NAK, unexpected reply */
     RSM_ERR_ORDER = -11,     /* timestamp went backwards */
-    RSM_ERR_CONFIG = -12     /* caller compiled with other capacities than the library */
+    RSM_ERR_CONFIG = -12,    /* caller compiled with other capacities than the library */
+    RSM_ERR_FORMAT = -13     /* stored data of another kind, version or build (a saved map) */
 } rsm_status_t;
 
 /* Returns a constant, never-NULL description of a status code (ROM string).
