@@ -68,7 +68,8 @@ uint32_t rsm_localizer_map_bytes(const rsm_localizer_t *loc)
     return file_bytes(loc->state.persistent.map.used);
 }
 
-static void encode_header(uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tmap_t *map, const rsm_pose_t *pose)
+static void encode_header(uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tmap_t *map, const rsm_pose_t *pose,
+                          float fit)
 {
     memset(h, 0, RSM_MAPFILE_HEADER_BYTES);
     h[0] = (uint8_t)MAGIC0;
@@ -90,6 +91,7 @@ static void encode_header(uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tmap_t 
     put_f32(h + 32, pose->x);
     put_f32(h + 36, pose->y);
     put_f32(h + 40, pose->theta);
+    put_f32(h + 44, fit);
 }
 
 static void encode_tile(uint8_t b[RSM_MAPFILE_TILE_BYTES], const rsm_tile_t *t)
@@ -124,7 +126,7 @@ int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn writ
         return RSM_ERR_NOSYS;
     }
     map = &loc->state.persistent.map;
-    encode_header(buf, map, &loc->ekf.x);
+    encode_header(buf, map, &loc->ekf.x, loc->state.persistent.fit);
     if (write(ctx, 0u, buf, RSM_MAPFILE_HEADER_BYTES) != 0) {
         return RSM_ERR_IO;
     }
@@ -147,6 +149,7 @@ int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn writ
         info->tiles = map->used;
         info->stamp = map->stamp;
         info->pose = loc->ekf.x;
+        info->fit = loc->state.persistent.fit;
     }
     return RSM_OK;
 }
@@ -172,7 +175,9 @@ static int check_header(const uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tma
     info->pose.x = get_f32(h + 32);
     info->pose.y = get_f32(h + 36);
     info->pose.theta = get_f32(h + 40);
-    if (info->tiles > (uint32_t)RSM_TMAP_TILES || info->stamp > RSM_TMAP_STAMP_MASK) {
+    info->fit = get_f32(h + 44);
+    if (info->tiles > (uint32_t)RSM_TMAP_TILES || info->stamp > RSM_TMAP_STAMP_MASK ||
+        !(info->fit >= 0.0f && info->fit <= 1.0f)) {
         return RSM_ERR_FORMAT;
     }
     info->bytes = file_bytes(info->tiles);
@@ -246,7 +251,7 @@ int rsm_localizer_load_map(rsm_localizer_t *loc, rsm_mapfile_read_fn read, void 
     /* The next scan is matched against the map, not written as a first. */
     loc->have_scan = 1u;
     loc->state.persistent.written = loc->ekf.x;
-    loc->state.persistent.fit = 0.0f;
+    loc->state.persistent.fit = got.fit;
     if (info != NULL) {
         *info = got;
     }

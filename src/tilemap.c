@@ -473,6 +473,21 @@ static RSM_NOINLINE uint32_t clear_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, i
                       : walk_beam(map, c, x0, y0, x1, y1, adx, ady, dec, margin, 0);
 }
 
+/* The slot of the tile holding a cell, taking one for it if needed;
+ * RSM_TMAP_NONE (counted as dropped) when every slot is in use by the write. */
+static uint32_t slot_for(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t level, int32_t gx, int32_t gy)
+{
+    uint32_t s = rsm_tmap_cursor_slot(map, c, gx, gy);
+    if (s == RSM_TMAP_NONE) {
+        s = take_slot(map, level, gx >> RSM_TMAP_TILE_LOG2, gy >> RSM_TMAP_TILE_LOG2);
+        rsm_tmap_cursor_forget(c);
+        if (s == RSM_TMAP_NONE) {
+            map->counters.dropped++;
+        }
+    }
+    return s;
+}
+
 /* Adds inc to a cell, taking a tile for it if needed. */
 static void add_hit(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t level, int32_t gx, int32_t gy, uint32_t inc)
 {
@@ -480,17 +495,8 @@ static void add_hit(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t level, int32
     uint32_t i;
     uint32_t v;
     rsm_tile_t *t;
-    if (inc == 0u) {
+    if (inc == 0u || (s = slot_for(map, c, level, gx, gy)) == RSM_TMAP_NONE) {
         return;
-    }
-    s = rsm_tmap_cursor_slot(map, c, gx, gy);
-    if (s == RSM_TMAP_NONE) {
-        s = take_slot(map, level, gx >> RSM_TMAP_TILE_LOG2, gy >> RSM_TMAP_TILE_LOG2);
-        rsm_tmap_cursor_forget(c);
-        if (s == RSM_TMAP_NONE) {
-            map->counters.dropped++;
-            return;
-        }
     }
     t = &map->tile[s];
     i = rsm_tmap_cell_index(gx, gy);
@@ -748,4 +754,30 @@ float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, f
 float rsm_tmap_sample_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, float *dx, float *dy)
 {
     return rsm_tmap_read_sample(map, c, x, y, 0, dx, dy);
+}
+
+int rsm_tmap_raise(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy, uint32_t v)
+{
+    const uint32_t level = c->level;
+    uint32_t s;
+    uint32_t i;
+    uint32_t old;
+    rsm_tile_t *t;
+    if (level >= (uint32_t)map->cfg.levels || !in_range(gx, gy)) {
+        return RSM_ERR_RANGE;
+    }
+    if (v == 0u) {
+        return RSM_OK;
+    }
+    v = v > RSM_TMAP_MAX_VALUE ? RSM_TMAP_MAX_VALUE : v;
+    if ((s = slot_for(map, c, level, gx, gy)) == RSM_TMAP_NONE) {
+        return RSM_ERR_NOMEM;
+    }
+    t = &map->tile[s];
+    i = rsm_tmap_cell_index(gx, gy);
+    old = rsm_tmap_get_cell(t, i);
+    v = old > v ? old : v;
+    t->stamp = (level << 30) | (t->stamp & CONFIRMED) | (v >= map->cfg.saturation ? CONFIRMED : 0u) | map->stamp;
+    set_cell(t, i, v);
+    return RSM_OK;
 }

@@ -132,6 +132,17 @@ float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, f
  * RSM_ERR_NOMEM with the pool full. Nothing is written on error. */
 int rsm_tmap_restore(rsm_tmap_t *map, const rsm_tile_t *t);
 
+/* Raises cell (gx, gy) of the cursor's level to at least v (at most 15),
+ * taking a tile for it when none is held there (a free slot, else the one
+ * a return's hit would take: never one written at the map's current write
+ * counter) and stamping the tile with that counter, as a hit does (for
+ * src/mapimport.c). RSM_OK, also when the cell already held v or more or v
+ * is 0; RSM_ERR_NOMEM when no slot was left (counted in counters.dropped);
+ * RSM_ERR_RANGE for a cell beyond the map's coordinate range or a level
+ * the map lacks. Other cursors on the map may hold a slot this reused:
+ * forget them. */
+int rsm_tmap_raise(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy, uint32_t v);
+
 #ifdef __cplusplus
 }
 #endif

@@ -95,6 +95,28 @@
 #define RSM_TMAP_CURSOR_WAYS 4
 #endif
 
+/* ---- global search (rsm_localizer_global) ----------------------------- */
+
+/* Side of the coarsest bound grid of the global search: the max of the
+ * persistent map's coarsest level over blocks of 4 x 4 cells (1.6 m with 5 cm
+ * cells and 4 levels), and coarser grids above it; a map wider than this many
+ * blocks uses blocks of 8, 16, ... cells (slower bounds). About 1.34 bytes
+ * times the square. */
+#ifndef RSM_GLOBAL_SIDE
+#define RSM_GLOBAL_SIDE 40
+#endif
+
+/* Readings of the scan a global search scores poses with: fewer is faster
+ * and more easily fooled. 8 bytes each. */
+#ifndef RSM_GLOBAL_POINTS
+#define RSM_GLOBAL_POINTS 48
+#endif
+
+/* Distinct poses a global search keeps for its final test. 16 bytes each. */
+#ifndef RSM_GLOBAL_CANDIDATES
+#define RSM_GLOBAL_CANDIDATES 8
+#endif
+
 /* ---- key points and matches ------------------------------------------- */
 
 /* Harris key points kept per image (strongest first). 8 bytes each. */
@@ -199,6 +221,9 @@ RSM_STATIC_ASSERT(tmap_victims_range, RSM_TMAP_VICTIMS >= 1 && RSM_TMAP_VICTIMS 
 RSM_STATIC_ASSERT(tmap_cursor_ways_pow2, RSM_TMAP_CURSOR_WAYS >= 2 && RSM_TMAP_CURSOR_WAYS <= 16 &&
                                              (RSM_TMAP_CURSOR_WAYS & (RSM_TMAP_CURSOR_WAYS - 1)) == 0);
 RSM_STATIC_ASSERT(tmap_hash_room, RSM_TMAP_HASH_LOG2 <= 16 && (1L << RSM_TMAP_HASH_LOG2) * 3L >= 4L * RSM_TMAP_TILES);
+RSM_STATIC_ASSERT(global_side_range, RSM_GLOBAL_SIDE >= 4 && RSM_GLOBAL_SIDE <= 1024);
+RSM_STATIC_ASSERT(global_points_range, RSM_GLOBAL_POINTS >= 8 && RSM_GLOBAL_POINTS <= 1024);
+RSM_STATIC_ASSERT(global_candidates_range, RSM_GLOBAL_CANDIDATES >= 2 && RSM_GLOBAL_CANDIDATES <= 64);
 RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
 RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONAR <= 255);
 RSM_STATIC_ASSERT(aria_str_size, RSM_ARIA_STR_SIZE >= 8 && RSM_ARIA_STR_SIZE <= 256);
@@ -214,12 +239,12 @@ RSM_STATIC_ASSERT(rev_odom_depth_range, RSM_REV_ODOM_DEPTH >= 2 && RSM_REV_ODOM_
  * of the wrong size. */
 #define RSM_CONFIG_MIX_(h, v) ((((unsigned long)(h) ^ (unsigned long)(v)) * 16777619ul) & 0xFFFFFFFFul)
 #define RSM_CONFIG_FINGERPRINT                                                                                      \
-    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
+    RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(2166136261ul, RSM_MAX_BEAMS), RSM_MAP_SIZE_LOG2),                  \
     RSM_IMAGE_MAX_CELLS), RSM_TMAP_TILE_LOG2), RSM_TMAP_LEVELS), RSM_TMAP_TILES), RSM_TMAP_HASH_LOG2), RSM_TMAP_ECHO_LOG2), \
     RSM_MAX_KEYPOINTS), RSM_MAX_CANDIDATES), RSM_MAX_MATCHES), RSM_ICP_MAX_POINTS), RSM_ARIA_MAX_PACKET),             \
     RSM_ARIA_MAX_SONAR), RSM_ARIA_STR_SIZE), RSM_LMS_MAX_TELEGRAM), RSM_LINK_RX_CHUNK), RSM_SYNC_DEPTH),          \
-    RSM_REV_ODOM_DEPTH), RSM_TMAP_VICTIMS)
+    RSM_REV_ODOM_DEPTH), RSM_TMAP_VICTIMS), RSM_GLOBAL_SIDE), RSM_GLOBAL_POINTS), RSM_GLOBAL_CANDIDATES)
 
 #endif /* RSM_CONFIG_H */

@@ -49,7 +49,9 @@ typedef enum rsm_outcome {
     RSM_SCAN_POOR_FIT = 10,      /* RSM_METHOD_MAP: the match fitted far worse than recent scans,
                                   * no search proved a pose, and odometry stood still or the
                                   * search was ambiguous: not fused, not written */
-    RSM_SCAN_OUTCOMES = 11
+    RSM_SCAN_SEARCHING = 11,     /* RSM_METHOD_MAP: a global search (rsm_localizer_global) is under
+                                  * way and has proven no pose yet: the estimate is unknown */
+    RSM_SCAN_OUTCOMES = 12
 } rsm_outcome_t;
 
 /* The stages of one rsm_localizer_scan call, as the optional timing hook
@@ -123,6 +125,17 @@ typedef struct rsm_localizer_config {
                                      * (after a stall, motion reported again; after a refuted
                                      * spike, the step that takes it back); defaults 0.1 m and
                                      * 0.1 rad */
+    /* The global search (rsm_localizer_global; docs/globalsearch.md). */
+    uint32_t global_budget;         /* map cells and bound blocks a scan gives the search at most
+                                     * to read; 0 = the whole search in one scan; default 20000 */
+    float global_min_share;         /* a pose is kept only when the occupancy summed under the
+                                     * scan's points (cells of about 0.2 m) reaches this share of
+                                     * their count; default 0.8 */
+    float global_min_fit;           /* the winner's fit (mean occupancy under all its points at the
+                                     * finest level) must reach this share of the fit the map's own
+                                     * scans had (saved with the map; 1 when unknown); default 0.8 */
+    uint8_t global_when_lost;       /* 1: a localizer that reports lost starts a global search by
+                                     * itself; default 0 */
     uint8_t map_frozen;             /* 1: localization mode: the persistent map is read, never
                                      * written (a map loaded with rsm_localizer_load_map stays as
                                      * it was saved); 0: scans keep updating it (the building
@@ -195,7 +208,9 @@ typedef struct rsm_localizer_report {
     float fit_ratio;          /* RSM_METHOD_MAP: the match's fit over the recent scans' (0 when
                                * no match was made) */
     rsm_odometry_verdict_t odometry; /* what the scan made of odometry's step */
-    uint8_t recovered;        /* 1: a recovery search placed this scan */
+    uint8_t recovered;        /* 1: a recovery search placed this scan (or a global search
+                               * proved its pose) */
+    uint32_t search_work;     /* cells and blocks the global search read in this scan */
     rsm_pose_t pose;          /* estimate after this scan */
     float cov[9];             /* its covariance, row-major */
     rsm_pose_t measured;      /* scan-matching measurement (if one was made) */
@@ -227,6 +242,12 @@ typedef struct rsm_localizer_counters {
     uint32_t recovered;                      /* ... whose pose was taken */
     uint32_t ambiguous;                      /* ... whose winner a distinct pose fitted nearly
                                               * as well: not taken (recover_margin) */
+    uint32_t global_searches;                /* global searches begun (rsm_localizer_global,
+                                              * global_when_lost, or one that proved nothing) */
+    uint32_t global_found;                   /* ... that proved a pose, which was taken */
+    uint32_t global_ambiguous;               /* ... whose winner fitted too poorly or a rival
+                                              * nearly as well: begun again on a later scan */
+    uint32_t global_work;                    /* their cells and blocks read, all scans */
     uint32_t caught_up;                      /* odometry steps that reported motion matching had
                                               * already found (RSM_ODOMETRY_CAUGHT_UP) */
     uint32_t refuted;                        /* odometry steps the scans refuted and that were
@@ -285,6 +306,7 @@ typedef struct rsm_localizer {
             rsm_odometry_verdict_t held;          /* why it is held there: a stall (CAUGHT_UP),
                                                    * a refuted step, a large correction
                                                    * (RECOUNTED) */
+            rsm_global_t global;                  /* the global search, when one runs */
         } persistent;                             /* RSM_METHOD_MAP */
     } state;
     rsm_point_t pts[RSM_MAX_BEAMS];      /* usable readings, robot frame */
@@ -361,6 +383,25 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
  * RSM_ERR_INVAL (loc never initialised, x NULL or not finite, p not
  * finite) with loc unchanged. */
 int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const float p[9]);
+
+/* Forgets where the robot is and searches the whole persistent map for it
+ * (RSM_METHOD_MAP): the robot was switched on somewhere in a loaded map,
+ * or carried. From the next scan with enough readings on, the search runs
+ * over that scan, global_budget reads a scan, while odometry
+ * keeps counting; scans report RSM_SCAN_SEARCHING and RSM_TRACK_LOST, and
+ * nothing is written into the map. When it is done, the next scan descends
+ * from each pose it kept and takes the winner only when its fit reaches
+ * global_min_fit of the map's own and beats every distinct rival's (doubt_m,
+ * doubt_rad away) by recover_margin: that scan is RSM_SCAN_ACCEPTED with report.recovered
+ * set and the estimate tracking again. Otherwise the search begins again
+ * with that scan. Calling it during a search starts over. Returns RSM_OK;
+ * RSM_ERR_INVAL for loc NULL or never initialised; RSM_ERR_NOSYS for
+ * another method; RSM_ERR_DEGENERATE when the map is empty (loc unchanged). */
+int rsm_localizer_global(rsm_localizer_t *loc);
+
+/* 1 while a global search is under way (begun or to begin at the next
+ * scan), else 0 (also for loc NULL). */
+int rsm_localizer_searching(const rsm_localizer_t *loc);
 
 /* Sets the odometry geometry and noise at run time, e.g. from the robot's
  * own calibration once its driver has read it (rsm_p3dx_odometry_config).

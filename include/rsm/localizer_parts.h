@@ -249,6 +249,72 @@ typedef struct rsm_tmap {
     rsm_tmap_counters_t counters;
 } rsm_tmap_t;
 
+/* ---- globalsearch.h ---------------------------------------------------------- */
+
+/* Bytes of the bound grids: the base grid's square and the coarser ones
+ * above it (each a quarter, rounded up), with room to spare. */
+#define RSM_GLOBAL_GRID_BYTES ((RSM_GLOBAL_SIDE * RSM_GLOBAL_SIDE * 4) / 3 + 4 * RSM_GLOBAL_SIDE + 32)
+/* Grids at most (40 -> 20 -> 10 -> 5 -> 3 -> 2 -> 1: 7). */
+#define RSM_GLOBAL_GRIDS                                                                                           \
+    (RSM_GLOBAL_SIDE <= 4 ? 3 : RSM_GLOBAL_SIDE <= 8 ? 4 : RSM_GLOBAL_SIDE <= 16 ? 5 : RSM_GLOBAL_SIDE <= 32 ? 6  \
+     : RSM_GLOBAL_SIDE <= 64 ? 7 : RSM_GLOBAL_SIDE <= 128 ? 8 : RSM_GLOBAL_SIDE <= 256 ? 9                      \
+     : RSM_GLOBAL_SIDE <= 512 ? 10 : 11)
+/* The first grid's blocks are at most 2^RSM_GLOBAL_MAX_BASE_H cells a side. */
+#define RSM_GLOBAL_MAX_BASE_H 10
+/* Boxes the depth-first search holds: three siblings waiting per level of
+ * a descent from the root. */
+#define RSM_GLOBAL_STACK (3 * (RSM_GLOBAL_MAX_BASE_H + RSM_GLOBAL_GRIDS) + 4)
+/* Wall directions over half a turn, in bins of 4 degrees: the scan's and
+ * the map's, whose correlation tells which headings to search. */
+#define RSM_GLOBAL_BINS 45
+/* Headings at most. */
+#define RSM_GLOBAL_MAX_HEADINGS 1024
+
+typedef struct rsm_global_box {
+    int32_t i;       /* first position of the box on the lattice of coarse cells */
+    int32_t j;
+    float bound;     /* the most any pose in it can score */
+    uint32_t h;      /* the box is 2^h positions a side */
+} rsm_global_box_t;
+
+typedef struct rsm_global_candidate {
+    rsm_pose_t pose; /* in the map, at the scan searched */
+    float score;     /* coarse score: summed occupancy under its points */
+} rsm_global_candidate_t;
+
+typedef struct rsm_global {
+    uint32_t phase;                /* idle, pending (next scan starts it), running, proving */
+    uint32_t level;                /* the map level scored (cells of about 0.2 m) */
+    float dir_scan[RSM_GLOBAL_BINS];  /* wall directions of the scan, of the map */
+    float dir_map[RSM_GLOBAL_BINS];
+    uint32_t dir_next;             /* the next tile slot whose walls join dir_map */
+    float agree[RSM_GLOBAL_BINS];  /* how well the directions agree at each heading (mod half a
+                                    * turn, best 1), the best within a bin either side */
+    uint32_t pass;                 /* headings are searched in passes, best agreeing first */
+    rsm_point_t pts[RSM_GLOBAL_POINTS];  /* the searched scan's readings, robot frame */
+    uint32_t npts;
+    rsm_pose_t at;                 /* the estimate (odometry's) at the scan searched */
+    uint8_t grid[RSM_GLOBAL_GRID_BYTES];  /* max cell value per block, coarse level; grid g
+                                    * at grid_at[g], blocks of 2^(base_h + g) cells */
+    uint32_t grid_at[RSM_GLOBAL_GRIDS];
+    uint32_t grid_side[RSM_GLOBAL_GRIDS];
+    uint32_t grids;
+    uint32_t base_h;
+    int32_t ox;                    /* first cell of block 0 (coarse level) */
+    int32_t oy;
+    uint32_t top_h;                /* the root box: 2^top_h positions a side from (ox, oy) */
+    uint32_t heading;              /* the heading in progress, and how many there are */
+    uint32_t headings;
+    float step_rad;
+    rsm_global_box_t stack[RSM_GLOBAL_STACK];
+    uint32_t depth;
+    rsm_global_candidate_t cand[RSM_GLOBAL_CANDIDATES];
+    uint32_t found;
+    float floor_score;             /* a pose must score at least this to be kept */
+    uint32_t scans;                /* scans the search has run over so far */
+    uint32_t work;                 /* cells and blocks read so far */
+} rsm_global_t;
+
 /* ---- mapmatch.h -------------------------------------------------------------- */
 
 typedef struct rsm_mapmatch_config {

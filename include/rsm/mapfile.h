@@ -6,7 +6,8 @@
  * (memory-mapped reads, page writes). The format (docs/mapfile.md) is
  * little-endian and versioned: a 48-byte header (magic "RSMM", version,
  * the library's capacity fingerprint, the map's cell size, levels and
- * saturation, the tile count, the write counter, the pose at the save),
+ * saturation, the tile count, the write counter, the pose at the save and
+ * how well scans then fitted the map),
  * the tiles held (40 bytes each with 8 x 8 cells), and a CRC-32 over all
  * of it. A map is as large as the tiles it holds: at most
  * RSM_MAPFILE_MAX_BYTES.
@@ -52,6 +53,9 @@ typedef struct rsm_mapfile_info {
     uint32_t tiles;   /* tiles held, all levels */
     uint32_t stamp;   /* the map's write counter */
     rsm_pose_t pose;  /* the localizer's estimate when it was saved */
+    float fit;        /* how well its recent scans fitted the map then (mean occupancy under
+                       * their points, 0 to 1; 0: unknown): the bar a global search's
+                       * winner is held to (rsm_localizer_global) */
 } rsm_mapfile_info_t;
 
 /* Bytes rsm_localizer_save_map would write now; 0 for loc NULL, never
@@ -71,7 +75,7 @@ int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn writ
 
 /* Checks the map read through read and, if it is sound, makes it loc's
  * persistent map: the next scan is matched against it (none starts a new
- * map). loc's estimate is left as it is: set it with rsm_localizer_set_pose
+ * map), and how well recent scans fit is taken as saved. loc's estimate is left as it is: set it with rsm_localizer_set_pose
  * (for instance to info->pose, where the robot was when the map was
  * saved). Returns RSM_OK with *info (may be NULL) filled; else, with loc as
  * it was and *info untouched:

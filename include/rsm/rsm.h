@@ -13,6 +13,8 @@
 #include "rsm/link_poll.h"
 #include "rsm/lms.h"
 #include "rsm/localizer.h"
+#include "rsm/mapfile.h"
+#include "rsm/mapimport.h"
 #include "rsm/odometry.h"
 #include "rsm/p3dx.h"
 #include "rsm/revolution.h"

@@ -120,3 +120,51 @@ Trace 0: 0x7f0000000300 [00800408/00000106/00000110/ff020200] alpha
     assert per == {"alpha": 3 * 2 + 1, "beta": 2 * 3}
     text = m4.format_profile(per, top=1)
     assert text.splitlines()[0].endswith("alpha") and text.splitlines()[-1].strip() == "13 in all"
+
+
+def _mapflash_boots(saved="S saved bytes 92 tiles 1 stamp 3 pose 3f800000 00000000 00000000"):
+    first = (f"{m4.MAPFLASH_BANNER}, region at 0x00200000\nF region 106496 page 4096\n"
+             "L refused -13 not a map of this format, version or build\n"
+             "P 0 1 00000000 00000000 00000000\nP 1 0 3f800000 00000000 00000000\n"
+             f"{saved}\nrsm mapflash: saved, resetting\n")
+    second = (f"{m4.MAPFLASH_BANNER}, region at 0x00200000\nF region 106496 page 4096\n"
+              f"{saved.replace('S saved', 'L loaded')}\nP 2 0 3f800000 3dcccccd 00000000\n"
+              "E scans 1 accepted 1 map_bytes 92\nrsm mapflash: done\n")
+    return first, second
+
+
+def test_mapflash_output_splits_into_boots_and_reads_the_map_lines():
+    first, second = _mapflash_boots()
+    boots = m4.split_boots("qemu noise\n" + first + second, m4.MAPFLASH_BANNER)
+    assert boots == [first, second]
+    saved = m4.mapflash_info(first, "S saved")
+    assert saved == {"bytes": 92, "tiles": 1, "stamp": 3, "pose": ("3f800000", "00000000", "00000000")}
+    assert m4.mapflash_info(second, "L loaded") == saved
+    with pytest.raises(m4.M4Error, match="L loaded"):
+        m4.mapflash_info(first, "L loaded")
+    assert m4.pose_lines(second) == [(2, 0, 1.0, pytest.approx(0.1), 0.0)]
+
+
+def test_mapflash_pose_comparison_fails_beyond_its_tolerance():
+    got = [(5, 0, 1.0, 2.0, 3.1)]
+    ref = {5: (5, 0, 1.0, 2.05, -3.1)}  # headings either side of pi: 0.083 rad apart
+    worst = m4.compare_poses("t", got, ref, (0.1, 0.1), True)
+    assert worst[0] == pytest.approx(0.05) and worst[1] == pytest.approx(2 * m4.math.pi - 6.2)
+    with pytest.raises(m4.M4Error, match="scan 5"):
+        m4.compare_poses("t", got, ref, (0.01, 0.1), False)
+    with pytest.raises(m4.M4Error, match="outcome"):
+        m4.compare_poses("t", [(5, 3, 1.0, 2.0, 3.1)], ref, (0.1, 0.1), True)
+    with pytest.raises(m4.M4Error, match="no reference"):
+        m4.compare_poses("t", [(6, 0, 1.0, 2.0, 3.1)], ref, (0.1, 0.1), True)
+
+
+def test_mapflash_run_lets_qemu_reset_and_stops_a_reset_loop(tmp_path, monkeypatch):
+    """run_rebooting drops -no-reboot and kills a run that boots too often
+    (a fake qemu that prints the banner forever)."""
+    fake = tmp_path / "qemu-system-arm"
+    fake.write_text("#!/bin/sh\nfor a in \"$@\"; do [ \"$a\" = -no-reboot ] && exit 3; done\n"
+                    f"while :; do echo '{m4.MAPFLASH_BANNER}, region'; done\n")
+    fake.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{tmp_path}{m4.os.pathsep}{m4.os.environ.get('PATH', '')}")
+    with pytest.raises(m4.M4Error, match="more than 2 boots"):
+        m4.run_rebooting(tmp_path / "x.elf", m4.MAPFLASH_BANNER, 2, timeout=30)

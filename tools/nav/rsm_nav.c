@@ -21,8 +21,10 @@
 #include "live.h"
 #include "logrun.h"
 #include "pgm.h"
+#include "rosmap.h"
 #include "devices.h"
 #include "rsm/localizer.h"
+#include "rsm/mapfile.h"
 #include "rsm/status.h"
 #include "rsm/sync.h"
 #include "tilemap.h" /* internal (src/): tiles held per level, for the summary */
@@ -94,6 +96,10 @@
     F("refute_margin", refute_margin) \
     U("lost_scans", lost_scans, uint16_t) \
     U("refuse_poor", refuse_poor, uint8_t) \
+    U("global_budget", global_budget, uint32_t) \
+    F("global_min_share", global_min_share) \
+    F("global_min_fit", global_min_fit) \
+    U("global_when_lost", global_when_lost, uint8_t) \
     F("doubt_m", doubt_m) \
     F("doubt_rad", doubt_rad) \
     F("mm_search_step", mapmatch.search_step_rad) \
@@ -171,6 +177,13 @@ static void usage(FILE *f)
             "  --scan-log FILE           one line per scan: stamp, outcome, tracking state,\n"
             "                            what odometry's step was judged, 1 if a search placed it,\n"
             "                            the fit over recent scans'\n"
+            "  --save-map FILE           save the persistent map at the end (docs/mapfile.md)\n"
+            "  --load-map FILE|MAP.yaml  start in a saved map, or a ROS map_server map\n"
+            "  --freeze-map              localization mode: the map is read, never written\n"
+            "  --global                  no start pose: search the loaded map for the robot; no\n"
+            "                            trajectory line until a pose is proven\n"
+            "  --skip-seconds S          --carmen: start S seconds into the log, as if the robot\n"
+            "                            were switched on there\n"
             "  --tum FILE                write the trajectory in TUM format too\n"
             "                            (timestamp x y z qx qy qz qw; what evo reads)\n"
             "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
@@ -324,9 +337,97 @@ typedef struct nav {
     char mount_note[224];  /* the log's mount when a flag overrode it, or why it was not used */
     uint64_t mount_disagree;    /* later log laser poses off the first by more than the tolerance */
     int no_deskew;         /* --no-deskew: a lidar's turns are not de-skewed */
+    /* Known maps (docs/mapfile.md, docs/globalsearch.md). */
+    const char *save_map;  /* --save-map: the persistent map at the end */
+    const char *load_map;  /* --load-map: the map to start in */
+    int global;            /* --global: no start pose: search the loaded map */
+    double skip_s;         /* --skip-seconds: scans before the log's first stamp + this are left out */
+    int have_first_stamp;
+    double first_stamp_s;
+    uint64_t first_trusted;    /* scan (1-based) of the first pose written after --global; 0: none */
+    double first_trusted_s;
+    uint32_t max_search_work;  /* the most cells and blocks the global search read in one scan */
+    rsm_mapfile_info_t loaded; /* what --load-map read */
 } nav_t;
 
 static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep);
+
+/* The map file callbacks (rsm/mapfile.h) on a stdio stream. */
+static int file_write(void *ctx, uint32_t offset, const uint8_t *buf, size_t len)
+{
+    FILE *f = (FILE *)ctx;
+    return fseek(f, (long)offset, SEEK_SET) == 0 && fwrite(buf, 1, len, f) == len ? 0 : -1;
+}
+
+static int file_read(void *ctx, uint32_t offset, uint8_t *buf, size_t len)
+{
+    FILE *f = (FILE *)ctx;
+    return fseek(f, (long)offset, SEEK_SET) == 0 && fread(buf, 1, len, f) == len ? 0 : -1;
+}
+
+static int ends_with(const char *s, const char *tail)
+{
+    const size_t n = strlen(s);
+    const size_t t = strlen(tail);
+    return n >= t && strcmp(s + n - t, tail) == 0;
+}
+
+/* --load-map: an rsm map (rsm-nav --save-map), or a ROS map's YAML. */
+static int nav_load_map(nav_t *nav)
+{
+    FILE *f;
+    int rc;
+    if (ends_with(nav->load_map, ".yaml") || ends_with(nav->load_map, ".yml")) {
+        rsm_import_report_t rep;
+        char err[256];
+        const int r = rsm_rosmap_load(nav->load_map, &nav->loc, &rep, err, sizeof err);
+        if (r < 0) {
+            fprintf(stderr, "rsm-nav: cannot load the map %s: %s\n", nav->load_map, err);
+            return -1;
+        }
+        if (r > 0) {
+            fprintf(stderr, "rsm-nav: the map %s is loaded only in part: %s\n", nav->load_map, err);
+        }
+        nav->loaded.bytes = 0u;
+        nav->loaded.tiles = nav->loc.state.persistent.map.used;
+        return 0;
+    }
+    f = fopen(nav->load_map, "rb");
+    if (f == NULL) {
+        fprintf(stderr, "rsm-nav: cannot open the map %s: %s\n", nav->load_map, strerror(errno));
+        return -1;
+    }
+    rc = rsm_localizer_load_map(&nav->loc, file_read, f, &nav->loaded);
+    (void)fclose(f);
+    if (rc != RSM_OK) {
+        fprintf(stderr, "rsm-nav: the map %s is refused: %s\n", nav->load_map,
+                rc == RSM_ERR_IO ? "it ends early or cannot be read (truncated)" : rsm_strerror(rc));
+        return -1;
+    }
+    return 0;
+}
+
+/* --save-map at the end of a run. */
+static int nav_save_map(nav_t *nav)
+{
+    rsm_mapfile_info_t info;
+    int rc;
+    FILE *f = fopen(nav->save_map, "wb");
+    if (f == NULL) {
+        fprintf(stderr, "rsm-nav: cannot write the map %s: %s\n", nav->save_map, strerror(errno));
+        return -1;
+    }
+    rc = rsm_localizer_save_map(&nav->loc, file_write, f, &info);
+    if (fclose(f) != 0 && rc == RSM_OK) {
+        rc = RSM_ERR_IO;
+    }
+    if (rc != RSM_OK) {
+        fprintf(stderr, "rsm-nav: cannot save the map %s: %s\n", nav->save_map, rsm_strerror(rc));
+        return -1;
+    }
+    printf("  map saved       %s: %u bytes, %u tiles\n", nav->save_map, (unsigned)info.bytes, (unsigned)info.tiles);
+    return 0;
+}
 
 /* Beyond this distance of the start from the origin, the localizer works in
  * a frame centred on the start (see off_x). */
@@ -374,6 +475,16 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
         }
         return -1;
     }
+    if (nav->load_map != NULL && nav_load_map(nav) != 0) {
+        return -1;
+    }
+    if (nav->global) {
+        const int g = rsm_localizer_global(&nav->loc);
+        if (g != RSM_OK) {
+            fprintf(stderr, "rsm-nav: cannot start a global search: %s\n", rsm_strerror(g));
+            return -1;
+        }
+    }
     if (rsm_sync_init(&nav->sync, &nav->loc, &nav->sync_cfg, on_fused, nav) != RSM_OK) {
         fprintf(stderr, "rsm-nav: invalid alignment settings\n");
         return -1;
@@ -414,6 +525,16 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
     if (rc != RSM_OK) {
         fprintf(stderr, "rsm-nav: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
         return;
+    }
+    if (rep->search_work > nav->max_search_work) {
+        nav->max_search_work = rep->search_work;
+    }
+    if (rsm_localizer_searching(&nav->loc) || rep->outcome == RSM_SCAN_SEARCHING) {
+        return; /* no pose is trusted yet: no trajectory line */
+    }
+    if (nav->global && nav->first_trusted == 0u) {
+        nav->first_trusted = nav->ntimes;
+        nav->first_trusted_s = file_stamp_s;
     }
     nav->poses++;
     fprintf(nav->traj, "%.6f %.6f %.6f %.6f\n", file_stamp_s, nav->off_x + (double)rep->pose.x,
@@ -608,6 +729,19 @@ static int carmen_start_cb(void *ctx, const carmen_record_t *rec)
     return nav_start(cr->nav, rec->odom_d, "the log's first pose");
 }
 
+static int carmen_want_cb(void *ctx, const carmen_record_t *rec)
+{
+    nav_t *nav = ((carmen_run_t *)ctx)->nav;
+    if (!(nav->skip_s > 0.0)) {
+        return 1; /* every record, odd stamps too (the stamp repair judges those) */
+    }
+    if (!nav->have_first_stamp) {
+        nav->have_first_stamp = 1;
+        nav->first_stamp_s = rec->stamp_s;
+    }
+    return rec->stamp_s >= nav->first_stamp_s + nav->skip_s;
+}
+
 static void carmen_motion_cb(void *ctx, const rsm_motion_t *u)
 {
     (void)rsm_localizer_motion(&((carmen_run_t *)ctx)->nav->loc, u);
@@ -636,7 +770,7 @@ static void carmen_scan_cb(void *ctx, const carmen_record_t *rec, uint64_t stamp
 
 static int run_carmen(nav_t *nav, const char *path, int fov179)
 {
-    static const logrun_ops_t ops = {carmen_start_cb, NULL, carmen_motion_cb, carmen_scan_cb, NULL};
+    static const logrun_ops_t ops = {carmen_start_cb, carmen_want_cb, carmen_motion_cb, carmen_scan_cb, NULL};
     static carmen_reader_t reader;
     static carmen_record_t rec;
     carmen_run_t cr;
@@ -1052,6 +1186,16 @@ static int write_summary_json(nav_t *nav, const char *path)
                 (unsigned)m->counters.allocated, (unsigned)m->counters.evicted, (unsigned)m->counters.dropped,
                 (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed,
                 (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->ambiguous, (unsigned)c->unpinned);
+        fprintf(f, ",\n  \"fit\": %.4f", (double)nav->loc.state.persistent.fit);
+        fprintf(f, ",\n  \"global\": {\"searches\": %u, \"found\": %u, \"not_proven\": %u, \"work\": %u, "
+                   "\"max_work_per_scan\": %u, \"first_trusted_scan\": %llu, \"first_trusted_stamp\": %.6f}",
+                (unsigned)c->global_searches, (unsigned)c->global_found, (unsigned)c->global_ambiguous,
+                (unsigned)c->global_work, (unsigned)nav->max_search_work, (unsigned long long)nav->first_trusted,
+                nav->first_trusted_s);
+        if (nav->load_map != NULL) {
+            fprintf(f, ",\n  \"loaded_map\": {\"bytes\": %u, \"tiles\": %u}", (unsigned)nav->loaded.bytes,
+                    (unsigned)nav->loaded.tiles);
+        }
         fprintf(f, ",\n  \"odometry_faults\": {\"caught_up\": %u, \"refuted\": %u, \"recounted\": %u}",
                 (unsigned)c->caught_up, (unsigned)c->refuted, (unsigned)c->recounted);
         fprintf(f, ",\n  \"heading_correction\": {\"turn\": %.5f, \"drift_rad_per_m\": %.5f, \"scans\": %u}",
@@ -1085,6 +1229,27 @@ static void print_summary(nav_t *nav)
                (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed);
         printf("  recovery        %u searches, %u taken, %u refused as ambiguous\n", (unsigned)c->searches,
                (unsigned)c->recovered, (unsigned)c->ambiguous);
+        if (nav->load_map != NULL) {
+            if (nav->loaded.bytes > 0u) {
+                printf("  loaded map      %s: %u bytes, %u tiles%s\n", nav->load_map, (unsigned)nav->loaded.bytes,
+                       (unsigned)nav->loaded.tiles, nav->cfg.map_frozen ? ", frozen" : ", updated");
+            } else {
+                printf("  loaded map      %s: a ROS map, %u tiles%s\n", nav->load_map, (unsigned)nav->loaded.tiles,
+                       nav->cfg.map_frozen ? ", frozen" : ", updated");
+            }
+        }
+        if (c->global_searches > 0u || nav->global) {
+            printf("  global search   %u begun, %u proved a pose, %u did not; %u cells read, at most %u"
+                   " in a scan\n",
+                   (unsigned)c->global_searches, (unsigned)c->global_found, (unsigned)c->global_ambiguous,
+                   (unsigned)c->global_work, (unsigned)nav->max_search_work);
+            if (nav->first_trusted > 0u) {
+                printf("  first pose      scan %llu (%.3f s)\n", (unsigned long long)nav->first_trusted,
+                       nav->first_trusted_s);
+            } else {
+                printf("  first pose      none: no pose was proven\n");
+            }
+        }
         printf("  odometry faults %u steps after a stall counted once (caught up), %u refuted by the scans;"
                " %u matches taken back (odometry was right)\n",
                (unsigned)c->caught_up, (unsigned)c->refuted, (unsigned)c->recounted);
@@ -1147,7 +1312,8 @@ enum {
     OPT_CARMEN = 256, OPT_CAPTURE, OPT_ROBOT, OPT_LMS, OPT_LIDAR, OPT_LIDAR_KEEP, OPT_NO_DESKEW,
     OPT_ROBOT_BAUD, OPT_LMS_BAUD, OPT_LISTEN, OPT_SECONDS, OPT_IDLE_EXIT, OPT_TICKS_PER_M, OPT_WHEEL_BASE,
     OPT_INITIAL_POSE, OPT_LASER_POSE, OPT_UPSIDE_DOWN, OPT_TRAJECTORY, OPT_SUMMARY_JSON, OPT_TUM, OPT_SCAN_LOG, OPT_EVENTS,
-    OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_QUIET
+    OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_QUIET, OPT_SAVE_MAP, OPT_LOAD_MAP, OPT_GLOBAL, OPT_FREEZE_MAP,
+    OPT_SKIP_SECONDS
 };
 
 /* --lidar, --initial-pose and --laser-pose take more than one value: the
@@ -1182,6 +1348,11 @@ static const struct option nav_options[] = {
     {"set", required_argument, NULL, OPT_SET},
     {"fov179", no_argument, NULL, OPT_FOV179},
     {"quiet", no_argument, NULL, OPT_QUIET},
+    {"save-map", required_argument, NULL, OPT_SAVE_MAP},
+    {"load-map", required_argument, NULL, OPT_LOAD_MAP},
+    {"global", no_argument, NULL, OPT_GLOBAL},
+    {"freeze-map", no_argument, NULL, OPT_FREEZE_MAP},
+    {"skip-seconds", required_argument, NULL, OPT_SKIP_SECONDS},
     {"help", no_argument, NULL, 'h'},
     {NULL, 0, NULL, 0}
 };
@@ -1426,6 +1597,28 @@ int main(int argc, char **argv)
         case OPT_QUIET:
             nav.quiet = 1;
             break;
+        case OPT_SAVE_MAP:
+            nav.save_map = optarg;
+            break;
+        case OPT_LOAD_MAP:
+            nav.load_map = optarg;
+            break;
+        case OPT_GLOBAL:
+            nav.global = 1;
+            break;
+        case OPT_FREEZE_MAP:
+            nav.cfg.map_frozen = 1u;
+            break;
+        case OPT_SKIP_SECONDS: {
+            char *end = NULL;
+            const double v = strtod(optarg, &end);
+            if (end == optarg || *end != '\0' || !(v >= 0.0) || !isfinite(v)) {
+                fprintf(stderr, "rsm-nav: bad --skip-seconds '%s' (seconds, 0 or more)\n", optarg);
+                return 2;
+            }
+            nav.skip_s = v;
+            break;
+        }
         case 'h':
             usage(stdout);
             return 0;
@@ -1440,6 +1633,19 @@ int main(int argc, char **argv)
         fprintf(stderr, "rsm-nav: give exactly one source (--carmen, --capture, or --robot/--lms/--lidar) and"
                         " --trajectory\n");
         usage(stderr);
+        return 2;
+    }
+    if ((nav.global || nav.save_map != NULL || nav.load_map != NULL || nav.cfg.map_frozen) &&
+        nav.cfg.method != RSM_METHOD_MAP) {
+        fprintf(stderr, "rsm-nav: --save-map, --load-map, --global and --freeze-map need --method rsm\n");
+        return 2;
+    }
+    if (nav.global && nav.load_map == NULL) {
+        fprintf(stderr, "rsm-nav: --global searches a known map: give it with --load-map\n");
+        return 2;
+    }
+    if (nav.skip_s > 0.0 && carmen == NULL) {
+        fprintf(stderr, "rsm-nav: --skip-seconds works with --carmen\n");
         return 2;
     }
     live.quiet = nav.quiet;
@@ -1544,6 +1750,9 @@ int main(int argc, char **argv)
                     (unsigned long long)nav.hits.far, (double)PGM_MAX_COORD_M);
         }
     }
+    if (rc == 0 && nav.save_map != NULL && nav.initialised && nav_save_map(&nav) != 0) {
+        rc = 1;
+    }
     if (rc == 0) {
         /* Written before the printed summary, whose timing sort it shares. */
         if (summary_json != NULL && write_summary_json(&nav, summary_json) != 0) {
@@ -1556,7 +1765,9 @@ int main(int argc, char **argv)
         /* A run that was to make poses and made none is a failure the
          * caller must see (a live run with the robot alone makes none). */
         fprintf(stderr, "rsm-nav: no pose: %s\n",
-                carmen != NULL    ? "the log holds no usable laser scan"
+                nav.global && nav.initialised ? "the global search proved none (--global: no trajectory line"
+                                                " before a pose is proven)"
+                : carmen != NULL  ? "the log holds no usable laser scan"
                 : capture != NULL ? "no scan came out of the capture (its laser channel empty, or its protocol "
                                     "tag not what the bytes are)"
                                   : "no scan arrived on the laser link");

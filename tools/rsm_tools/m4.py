@@ -5,6 +5,7 @@
     python3 tools/rsm_tools/m4.py example-rplidar ELF WORKDIR
     python3 tools/rsm_tools/m4.py example-rplidar-answered ELF WORKDIR
     python3 tools/rsm_tools/m4.py replay ELF HOST_EXE WORKDIR
+    python3 tools/rsm_tools/m4.py mapflash ELF HOST_EXE REPLAY_HOST_EXE WORKDIR
     python3 tools/rsm_tools/m4.py profile ELF [--top N]
 
 ``example`` boots the example firmware with its two device ports on files and
@@ -42,6 +43,15 @@ non-zero exit status or a time-out: a locked-up image never hangs the test.
 and prints the instructions spent in each function (a minute for the
 replay; for finding where a scan's instructions go).
 
+``mapflash`` boots the map-in-flash firmware (port/baremetal/mapflash) with
+QEMU's resets allowed: its first boot must refuse the region (no map there),
+map, save a map of N > 0 bytes and reset the system; the second boot, in the
+same QEMU run, must load the same bytes, tiles and pose and localize, the map
+frozen; both boots' lines must match ``HOST_EXE`` (rsm-mapflash-host, both
+boots on the host) within MAPFLASH_HOST_TOL, and the localized poses must stay
+within MAPFLASH_MAPPER_TOL of the uninterrupted mapping run
+(``REPLAY_HOST_EXE``, rsm-replay-host) at the same scans.
+
 QEMU runs with ``-icount shift=ICOUNT_SHIFT,sleep=off``: the virtual clock
 advances exactly 2^shift ns per executed instruction, so the board's 25 MHz
 timer counts one tick per 40 / 2^shift instructions, the same on every
@@ -57,6 +67,7 @@ import os
 import re
 import shutil
 import statistics
+import struct
 import subprocess
 import sys
 import threading
@@ -336,6 +347,159 @@ def check_replay(elf: Path, host_exe: Path, work: Path) -> str:
             f"{cal['insns']} instructions measured as {cal['measured']:.0f}")
 
 
+MAPFLASH_BANNER = "rsm mapflash on mps2-an386"
+MAPFLASH_REFUSALS = (-13, -4, -7)  # RSM_ERR_FORMAT, _CHECKSUM, _IO: what a load of no map says
+# Target against host: the same source and float flags, expected bit for bit.
+MAPFLASH_HOST_TOL = (1e-3, 1e-3)   # m, rad
+# Localizing in the frozen saved map against the mapper carrying on (both on
+# the host): about 5 cm and 0.03 rad at worst on the excerpt's corridor.
+MAPFLASH_MAPPER_TOL = (0.15, 0.08)  # m, rad
+MAPFLASH_MAX_BOOTS = 2
+
+
+def run_rebooting(elf: Path, banner: str, max_boots: int, timeout: float = 60.0) -> str:
+    """Console output of one QEMU run in which the firmware may reset the
+    system (no ``-no-reboot``: QEMU then loads the image's segments again
+    and restarts it).  Killed at the boot after ``max_boots`` (a reset loop)
+    or after ``timeout`` s; M4Error unless it ended by itself with status 0."""
+    cmd = [c for c in qemu_command(elf) if c != "-no-reboot"]
+    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    timer = threading.Timer(timeout, proc.kill)  # our own child, by its handle
+    timer.start()
+    out: List[str] = []
+    boots = 0
+    try:
+        assert proc.stdout is not None
+        for raw in proc.stdout:
+            line = raw.decode(errors="replace")
+            out.append(line)
+            if line.startswith(banner):
+                boots += 1
+                if boots > max_boots:
+                    proc.kill()
+                    break
+        _, err = proc.communicate()
+    finally:
+        timer.cancel()
+    text = "".join(out)
+    if boots > max_boots:
+        raise M4Error(f"{elf.name}: more than {max_boots} boots (a reset loop?); output so far:\n{text[-2000:]}")
+    if proc.returncode != 0 or "FAULT" in text:
+        raise M4Error(f"{elf.name}: exit status {proc.returncode} (killed after {timeout:.0f} s if negative)\n"
+                      f"{text[-2000:]}\n{err.decode(errors='replace')[-2000:]}")
+    return text
+
+
+def split_boots(text: str, banner: str) -> List[str]:
+    """The console output of each boot, from its banner on."""
+    parts = [p for p in re.split(rf"^(?={re.escape(banner)})", text, flags=re.M) if p.startswith(banner)]
+    return parts
+
+
+def mapflash_info(boot: str, tag: str) -> Dict[str, object]:
+    """The S saved or L loaded line of a boot: bytes, tiles, stamp, pose bits."""
+    m = re.search(rf"^{tag} bytes (\d+) tiles (\d+) stamp (\d+) pose ([0-9a-f]{{8}}) ([0-9a-f]{{8}}) ([0-9a-f]{{8}})$",
+                  boot, re.M)
+    if m is None:
+        raise M4Error(f"no '{tag}' line in:\n{boot[-2000:]}")
+    return {"bytes": int(m.group(1)), "tiles": int(m.group(2)), "stamp": int(m.group(3)),
+            "pose": (m.group(4), m.group(5), m.group(6))}
+
+
+def pose_lines(text: str) -> List[Tuple[int, int, float, float, float]]:
+    """(scan, outcome, x, y, theta) of each P line."""
+    def f(h: str) -> float:
+        return struct.unpack("<f", struct.pack("<I", int(h, 16)))[0]
+    return [(int(p[0]), int(p[1]), f(p[2]), f(p[3]), f(p[4])) for p in lines_of(text, "P") if len(p) == 5]
+
+
+def compare_poses(what: str, got: Sequence[Tuple[int, int, float, float, float]],
+                  ref: Dict[int, Tuple[int, int, float, float, float]], tol: Tuple[float, float],
+                  outcomes: bool) -> Tuple[float, float]:
+    """Every pose of got within tol (metres, radians) of ref's at the same
+    scan (and the same outcome if asked); returns the largest differences."""
+    worst = (0.0, 0.0)
+    for p in got:
+        r = ref.get(p[0])
+        if r is None:
+            raise M4Error(f"{what}: scan {p[0]} has no reference pose")
+        d = math.hypot(p[2] - r[2], p[3] - r[3])
+        a = abs(math.remainder(p[4] - r[4], 2.0 * math.pi))
+        if not (d <= tol[0] and a <= tol[1]) or (outcomes and p[1] != r[1]):
+            raise M4Error(f"{what}: scan {p[0]} at ({p[2]:.4f}, {p[3]:.4f}, {p[4]:.4f}) outcome {p[1]}, the "
+                          f"reference at ({r[2]:.4f}, {r[3]:.4f}, {r[4]:.4f}) outcome {r[1]}: {d:.4f} m, "
+                          f"{a:.4f} rad apart (tolerance {tol[0]} m, {tol[1]} rad)")
+        worst = (max(worst[0], d), max(worst[1], a))
+    return worst
+
+
+def check_mapflash(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path) -> str:
+    work.mkdir(parents=True, exist_ok=True)
+    out = run_rebooting(elf, MAPFLASH_BANNER, MAPFLASH_MAX_BOOTS)
+    (work / "mapflash-m4.out").write_text(out)
+    host = subprocess.run([str(host_exe)], capture_output=True, text=True, timeout=TIMEOUT_S)
+    if host.returncode != 0:
+        raise M4Error(f"{host_exe.name}: exit status {host.returncode}: {host.stderr}")
+    (work / "mapflash-host.out").write_text(host.stdout)
+    ref = subprocess.run([str(replay_host_exe)], capture_output=True, text=True, timeout=TIMEOUT_S)
+    if ref.returncode != 0:
+        raise M4Error(f"{replay_host_exe.name}: exit status {ref.returncode}: {ref.stderr}")
+    boots = split_boots(out, MAPFLASH_BANNER)
+    if len(boots) != 2:
+        raise M4Error(f"expected two boots (a reset in between), got {len(boots)}:\n{out[-2000:]}")
+    first, second = boots
+    host_boots = split_boots(host.stdout, "rsm mapflash on host")
+    if len(host_boots) != 2:
+        raise M4Error(f"{host_exe.name}: expected two boots, got {len(host_boots)}")
+    # First boot: no map in the region, refused; a map saved; the reset asked.
+    refused = re.search(r"^L refused (-?\d+) ", first, re.M)
+    if refused is None or int(refused.group(1)) not in MAPFLASH_REFUSALS or "L loaded" in first:
+        raise M4Error(f"the first boot did not refuse the region (format, checksum or i/o):\n{first[-2000:]}")
+    saved = mapflash_info(first, "S saved")
+    if not (saved["bytes"] > 0 and saved["tiles"] > 0 and saved["bytes"] == 48 + 40 * saved["tiles"] + 4):
+        raise M4Error(f"the first boot saved {saved}: not a map of 48 + 40 n + 4 bytes with n > 0 tiles")
+    if not first.rstrip().endswith("rsm mapflash: saved, resetting"):
+        raise M4Error(f"the first boot did not end by resetting:\n{first[-2000:]}")
+    # Second boot: the same map loaded, localized, frozen, done.
+    if "L refused" in second:
+        raise M4Error(f"the second boot refused the region: it did not keep the map over the reset:\n"
+                      f"{second[-2000:]}")
+    loaded = mapflash_info(second, "L loaded")
+    if loaded != saved:
+        raise M4Error(f"saved {saved}, loaded {loaded} after the reset")
+    end = re.search(r"^E scans (\d+) accepted (\d+) map_bytes (\d+)$", second, re.M)
+    target_map, target_loc = pose_lines(first), pose_lines(second)
+    if end is None or not second.rstrip().endswith("rsm mapflash: done"):
+        raise M4Error(f"the second boot did not finish:\n{second[-2000:]}")
+    if not target_map or not target_loc or int(end.group(1)) != len(target_loc):
+        raise M4Error(f"{len(target_map)} poses mapping, {len(target_loc)} localizing, summary {end.group(0)}")
+    if int(end.group(3)) != saved["bytes"]:
+        raise M4Error(f"the frozen map grew from {saved['bytes']} to {end.group(3)} bytes")
+    if target_loc[0][0] != target_map[-1][0] + 1:
+        raise M4Error(f"localizing started at scan {target_loc[0][0]}, mapping ended at {target_map[-1][0]}")
+    # The host's two boots: the same sizes and pose, and the same poses.
+    for tag, tb, hb in (("S saved", first, host_boots[0]), ("L loaded", second, host_boots[1])):
+        if mapflash_info(hb, tag) != mapflash_info(tb, tag):
+            raise M4Error(f"'{tag}': host {mapflash_info(hb, tag)}, target {mapflash_info(tb, tag)}")
+    host_map, host_loc = pose_lines(host_boots[0]), pose_lines(host_boots[1])
+    if [p[0] for p in host_map] != [p[0] for p in target_map] or \
+            [p[0] for p in host_loc] != [p[0] for p in target_loc]:
+        raise M4Error("host and target posed other scans")
+    compare_poses("mapping, host", target_map, {p[0]: p for p in host_map}, MAPFLASH_HOST_TOL, True)
+    host_worst = compare_poses("localizing, host", target_loc, {p[0]: p for p in host_loc}, MAPFLASH_HOST_TOL, True)
+    bits = sum(a == b for a, b in zip(lines_of(out, "P"), lines_of(host.stdout, "P")))
+    # The uninterrupted run: mapping is its beginning; localizing in the
+    # saved map stays near where it carries on.
+    mapper = {p[0]: p for p in pose_lines(ref.stdout)}
+    compare_poses("mapping, rsm-replay-host", target_map, mapper, MAPFLASH_HOST_TOL, True)
+    worst = compare_poses("localizing, the uninterrupted run", target_loc, mapper, MAPFLASH_MAPPER_TOL, False)
+    return (f"mapflash: first boot refused the region ({refused.group(1)}), mapped {len(target_map)} scans, saved "
+            f"{saved['bytes']} bytes ({saved['tiles']} tiles), reset; second boot loaded the same and localized "
+            f"{len(target_loc)} scans in the frozen map: {bits} of {len(target_map) + len(target_loc)} poses equal "
+            f"the host's bit for bit (largest difference {host_worst[0]:.2g} m, {host_worst[1]:.2g} rad), within "
+            f"{worst[0]:.3f} m and {worst[1]:.3f} rad of the uninterrupted run")
+
+
 def percentile(values: Sequence[float], q: float) -> float:
     """Nearest-rank percentile (q in 0..100)."""
     s = sorted(values)
@@ -440,6 +604,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     r.add_argument("elf", type=Path, help="the replay firmware image (rsm_replay_m4.elf)")
     r.add_argument("host_exe", type=Path, help="rsm-replay-host, whose trajectory the target's must equal")
     r.add_argument("work", type=Path, help="folder for the outputs")
+    mf = sub.add_parser("mapflash", help="run the map-in-flash firmware over its reset and compare with the host")
+    mf.add_argument("elf", type=Path, help="the map-in-flash firmware image (rsm_mapflash_m4.elf)")
+    mf.add_argument("host_exe", type=Path, help="rsm-mapflash-host, both boots on the host")
+    mf.add_argument("replay_host_exe", type=Path, help="rsm-replay-host, the uninterrupted run")
+    mf.add_argument("work", type=Path, help="folder for the outputs")
     pr = sub.add_parser("profile", help="instructions per function of one run (QEMU's block log; slow)")
     pr.add_argument("elf", type=Path, help="a firmware image, e.g. rsm_replay_m4.elf")
     pr.add_argument("--top", type=int, default=25, help="functions to print (default 25)")
@@ -453,6 +622,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(check_example_rplidar(a.elf, a.work))
         elif a.cmd == "example-rplidar-answered":
             print(check_example_rplidar_answered(a.elf, a.work))
+        elif a.cmd == "mapflash":
+            print(check_mapflash(a.elf, a.host_exe, a.replay_host_exe, a.work))
         elif a.cmd == "profile":
             print(format_profile(profile(a.elf), a.top))
         else:

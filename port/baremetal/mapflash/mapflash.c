@@ -1,0 +1,230 @@
+#include "mapflash.h"
+
+#include <string.h>
+
+#include "replay_data.h"
+#include "rsm/geom.h"
+#include "rsm/status.h"
+
+typedef char rsm_mapflash_beams_fit[(RSM_REPLAY_BEAMS <= RSM_MAX_BEAMS) ? 1 : -1];
+typedef char rsm_mapflash_scans_fit[(RSM_MAPFLASH_MAP_SCANS >= 1u) ? 1 : -1];
+
+static int in_region(const rsm_mapflash_region_t *r, uint32_t offset, size_t len)
+{
+    return offset <= r->size && len <= (size_t)(r->size - offset);
+}
+
+int rsm_mapflash_write(void *ctx, uint32_t offset, const uint8_t *buf, size_t len)
+{
+    rsm_mapflash_region_t *r = (rsm_mapflash_region_t *)ctx;
+    uint8_t *dst;
+    size_t i;
+    if (!in_region(r, offset, len)) {
+        return -1;
+    }
+    dst = r->bytes + offset;
+    /* Check first, so that a refused write changes nothing. */
+    for (i = 0; i < len; ++i) {
+        if ((uint8_t)(dst[i] & buf[i]) != buf[i]) {
+            return -1;
+        }
+    }
+    for (i = 0; i < len; ++i) {
+        dst[i] = buf[i];
+    }
+    return 0;
+}
+
+int rsm_mapflash_read(void *ctx, uint32_t offset, uint8_t *buf, size_t len)
+{
+    const rsm_mapflash_region_t *r = (const rsm_mapflash_region_t *)ctx;
+    if (!in_region(r, offset, len)) {
+        return -1; /* past the region: a truncated map */
+    }
+    memcpy(buf, r->bytes + offset, len);
+    return 0;
+}
+
+int rsm_mapflash_erase(rsm_mapflash_region_t *r, uint32_t len)
+{
+    const uint32_t pages = (len + RSM_MAPFLASH_PAGE - 1u) / RSM_MAPFLASH_PAGE;
+    if (len > r->size || pages * RSM_MAPFLASH_PAGE > r->size) {
+        return RSM_ERR_RANGE;
+    }
+    memset(r->bytes, 0xFF, (size_t)pages * RSM_MAPFLASH_PAGE);
+    return RSM_OK;
+}
+
+static void put_bits(const rsm_replay_io_t *io, float f)
+{
+    uint32_t b;
+    memcpy(&b, &f, sizeof b);
+    rsm_replay_put_str(io, " ");
+    rsm_replay_put_hex(io, b);
+}
+
+static void put_pose(const rsm_replay_io_t *io, const rsm_pose_t *p)
+{
+    put_bits(io, p->x);
+    put_bits(io, p->y);
+    put_bits(io, p->theta);
+}
+
+static void put_info(const rsm_replay_io_t *io, const char *what, const rsm_mapfile_info_t *info)
+{
+    rsm_replay_put_str(io, what);
+    rsm_replay_put_str(io, " bytes ");
+    rsm_replay_put_dec(io, info->bytes);
+    rsm_replay_put_str(io, " tiles ");
+    rsm_replay_put_dec(io, info->tiles);
+    rsm_replay_put_str(io, " stamp ");
+    rsm_replay_put_dec(io, info->stamp);
+    rsm_replay_put_str(io, " pose");
+    put_pose(io, &info->pose);
+    rsm_replay_put_str(io, "\n");
+}
+
+static void put_status(const rsm_replay_io_t *io, int rc)
+{
+    rsm_replay_put_str(io, rc < 0 ? "-" : "");
+    rsm_replay_put_dec(io, rc < 0 ? (uint32_t)-rc : (uint32_t)rc);
+    rsm_replay_put_str(io, " ");
+    rsm_replay_put_str(io, rsm_strerror(rc));
+}
+
+static rsm_mapflash_result_t fail(const rsm_replay_io_t *io, const char *what, int rc)
+{
+    rsm_replay_put_str(io, "FAULT: ");
+    rsm_replay_put_str(io, what);
+    rsm_replay_put_str(io, ": ");
+    put_status(io, rc);
+    rsm_replay_put_str(io, "\n");
+    return RSM_MAPFLASH_FAILED;
+}
+
+/* The index of the step that brings scan `scan` (1-based); the step count
+ * if none does. */
+static uint32_t step_of_scan(uint32_t scan)
+{
+    uint32_t i;
+    for (i = 0; i < rsm_replay_step_count; ++i) {
+        if (rsm_replay_steps[i].scan == scan) {
+            break;
+        }
+    }
+    return i;
+}
+
+/* Feeds steps from `first` on, up to the one bringing scan `last` (1-based),
+ * as rsm_replay_run does; a P line after each scan. */
+static void run_steps(rsm_mapflash_t *m, const rsm_replay_io_t *io, uint32_t first, uint32_t last)
+{
+    uint32_t i;
+    for (i = first; i < rsm_replay_step_count; ++i) {
+        const rsm_replay_step_t *st = &rsm_replay_steps[i];
+        (void)rsm_localizer_ticks(&m->loc, st->left, st->right);
+        if (st->scan != 0u && st->scan <= rsm_replay_scan_count) {
+            const rsm_replay_scan_t *sc = &rsm_replay_scans[st->scan - 1u];
+            uint32_t b;
+            for (b = 0; b < RSM_REPLAY_BEAMS; ++b) {
+                m->scan.range_m[b] = (float)sc->range_cm[b] * 0.01f;
+            }
+            (void)rsm_scan_set_uniform(&m->scan, RSM_REPLAY_BEAMS, -RSM_PI / 2.0f, RSM_PI / (float)RSM_REPLAY_BEAMS);
+            m->scan.stamp_us = sc->stamp_us;
+            (void)rsm_localizer_scan(&m->loc, &m->scan, &m->rep);
+            rsm_replay_put_str(io, "P ");
+            rsm_replay_put_dec(io, (uint32_t)st->scan - 1u);
+            rsm_replay_put_str(io, " ");
+            rsm_replay_put_dec(io, (uint32_t)m->rep.outcome);
+            put_pose(io, &m->rep.pose);
+            rsm_replay_put_str(io, "\n");
+            if (st->scan >= last) {
+                return;
+            }
+        }
+    }
+}
+
+/* No valid map: map the first scans, save, and ask for the reboot. */
+static rsm_mapflash_result_t map_and_save(rsm_mapflash_t *m, rsm_mapflash_region_t *flash, const rsm_replay_io_t *io)
+{
+    int rc;
+    run_steps(m, io, 0u, RSM_MAPFLASH_MAP_SCANS);
+    /* Erase only what the map needs, as a flash driver would. */
+    rc = rsm_mapflash_erase(flash, rsm_localizer_map_bytes(&m->loc));
+    if (rc != RSM_OK) {
+        return fail(io, "erase", rc);
+    }
+    rc = rsm_localizer_save_map(&m->loc, rsm_mapflash_write, flash, &m->info);
+    if (rc != RSM_OK) {
+        return fail(io, "save", rc);
+    }
+    put_info(io, "S saved", &m->info);
+    rsm_replay_put_str(io, "rsm mapflash: saved, resetting\n");
+    return RSM_MAPFLASH_RESET;
+}
+
+/* A valid map: localize in it, frozen, from where it was saved. */
+static rsm_mapflash_result_t localize(rsm_mapflash_t *m, const rsm_replay_io_t *io)
+{
+    const uint32_t at = step_of_scan(RSM_MAPFLASH_MAP_SCANS);
+    int rc;
+    put_info(io, "L loaded", &m->info);
+    rc = rsm_localizer_set_pose(&m->loc, &m->info.pose, NULL);
+    if (rc != RSM_OK) {
+        return fail(io, "set_pose", rc);
+    }
+    if (at >= rsm_replay_step_count) {
+        return fail(io, "no such scan in the excerpt", RSM_ERR_RANGE);
+    }
+    /* The encoders kept their counts over the reboot: latch the mapping
+     * run's last reading, so that the next step moves from it. */
+    (void)rsm_localizer_ticks(&m->loc, rsm_replay_steps[at].left, rsm_replay_steps[at].right);
+    run_steps(m, io, at + 1u, RSM_MAPFLASH_MAP_SCANS + RSM_MAPFLASH_LOC_SCANS);
+    rsm_replay_put_str(io, "E scans ");
+    rsm_replay_put_dec(io, m->loc.counters.scans);
+    rsm_replay_put_str(io, " accepted ");
+    rsm_replay_put_dec(io, m->loc.counters.outcome[RSM_SCAN_ACCEPTED]);
+    /* Frozen: the map is as large as it was loaded. */
+    rsm_replay_put_str(io, " map_bytes ");
+    rsm_replay_put_dec(io, rsm_localizer_map_bytes(&m->loc));
+    rsm_replay_put_str(io, "\nrsm mapflash: done\n");
+    return RSM_MAPFLASH_DONE;
+}
+
+rsm_mapflash_result_t rsm_mapflash_boot(rsm_mapflash_t *m, rsm_mapflash_region_t *flash, const rsm_replay_io_t *io)
+{
+    const rsm_pose_t start = {0.0f, 0.0f, 0.0f};
+    int rc;
+    rsm_replay_put_str(io, "F region ");
+    rsm_replay_put_dec(io, flash->size);
+    rsm_replay_put_str(io, " page ");
+    rsm_replay_put_dec(io, RSM_MAPFLASH_PAGE);
+    rsm_replay_put_str(io, "\n");
+    if (flash->size < RSM_MAPFILE_MAX_BYTES) {
+        return fail(io, "the region holds no map of this build", RSM_ERR_NOMEM);
+    }
+    /* The default configuration (RSM_METHOD_MAP), frozen for localizing in
+     * a loaded map; load_map checks the map's cell size, levels and
+     * saturation against it. */
+    m->cfg = rsm_localizer_config_default();
+    m->cfg.map_frozen = 1u;
+    rc = rsm_localizer_init(&m->loc, &m->cfg, &start, NULL);
+    if (rc != RSM_OK) {
+        return fail(io, "init", rc);
+    }
+    rc = rsm_localizer_load_map(&m->loc, rsm_mapflash_read, flash, &m->info);
+    if (rc != RSM_OK) {
+        rsm_replay_put_str(io, "L refused ");
+        put_status(io, rc);
+        rsm_replay_put_str(io, "\n");
+        /* Refused, loc is as init left it: start over mapping. */
+        m->cfg.map_frozen = 0u;
+        rc = rsm_localizer_init(&m->loc, &m->cfg, &start, NULL);
+        if (rc != RSM_OK) {
+            return fail(io, "init", rc);
+        }
+        return map_and_save(m, flash, io);
+    }
+    return localize(m, io);
+}

@@ -1,0 +1,81 @@
+/* The map-in-flash example: a robot maps once, keeps its map in flash over
+ * a reboot and localizes in it afterwards (issue 31, item 6). One boot of
+ * it is rsm_mapflash_boot, the same source on the target (mapflash_target.c:
+ * a region of the emulated board kept over a system reset) and on the host
+ * (mapflash_host.c: an array, two boots in a row), so that the test can
+ * compare the two (tests: m4.mapflash_reboots).
+ *
+ * A boot first tries to load the region. Refused (an erased or blank
+ * region, or garbage): it maps the replay's scans 1 .. RSM_MAPFLASH_MAP_SCANS,
+ * saves the map into the region and asks for a reset. Loaded: it localizes,
+ * the map frozen, from the saved pose over the next RSM_MAPFLASH_LOC_SCANS
+ * scans, as if the robot had stood still while it rebooted.
+ *
+ * Output, one line each (floats as their IEEE bits in hexadecimal, as the
+ * replay's, so that host and target compare bit for bit):
+ *   F region <bytes> page <bytes>                 the flash region
+ *   L refused <status> <text>                     the load's refusal, first boot
+ *   L loaded bytes <n> tiles <n> stamp <n> pose <x> <y> <theta>
+ *   P <scan> <outcome> <x> <y> <theta>            pose after each scan
+ *   S saved bytes <n> tiles <n> stamp <n> pose <x> <y> <theta>
+ *   E scans <n> accepted <n> map_bytes <n>        after localizing
+ * then "rsm mapflash: saved, resetting" or "rsm mapflash: done". */
+#ifndef RSM_MAPFLASH_H
+#define RSM_MAPFLASH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "replay.h"
+#include "rsm/localizer.h"
+#include "rsm/mapfile.h"
+#include "rsm/scan.h"
+
+/* Scans mapped on the first boot, and localized on the second: short runs
+ * (each boot well under a second of host time under QEMU). The excerpt's
+ * robot goes down a corridor; the localized scans stay where the mapped
+ * ones saw. */
+#ifndef RSM_MAPFLASH_MAP_SCANS
+#define RSM_MAPFLASH_MAP_SCANS 350u
+#endif
+#ifndef RSM_MAPFLASH_LOC_SCANS
+#define RSM_MAPFLASH_LOC_SCANS 100u
+#endif
+
+/* Flash as a NOR part behaves: erased to 0xFF a page at a time; a write
+ * only clears bits (writing a 1 over a 0 fails, as programming an unerased
+ * word would). */
+#define RSM_MAPFLASH_PAGE 4096u
+#define RSM_MAPFLASH_REGION \
+    ((RSM_MAPFILE_MAX_BYTES + RSM_MAPFLASH_PAGE - 1u) / RSM_MAPFLASH_PAGE * RSM_MAPFLASH_PAGE)
+
+typedef struct rsm_mapflash_region {
+    uint8_t *bytes; /* RSM_MAPFLASH_REGION of them */
+    uint32_t size;
+} rsm_mapflash_region_t;
+
+/* The callbacks of rsm_localizer_save_map and _load_map, ctx a region. */
+int rsm_mapflash_write(void *ctx, uint32_t offset, const uint8_t *buf, size_t len);
+int rsm_mapflash_read(void *ctx, uint32_t offset, uint8_t *buf, size_t len);
+/* Erases the pages that hold [0, len); RSM_OK or RSM_ERR_RANGE. */
+int rsm_mapflash_erase(rsm_mapflash_region_t *r, uint32_t len);
+
+/* Caller-owned state (static in the images; the library keeps none). */
+typedef struct rsm_mapflash {
+    rsm_localizer_config_t cfg; /* the localizer keeps a pointer to it */
+    rsm_localizer_t loc;
+    rsm_scan_t scan;
+    rsm_localizer_report_t rep;
+    rsm_mapfile_info_t info;
+} rsm_mapflash_t;
+
+typedef enum rsm_mapflash_result {
+    RSM_MAPFLASH_DONE = 0,  /* localized in the loaded map: stop */
+    RSM_MAPFLASH_RESET = 1, /* mapped and saved: reboot now */
+    RSM_MAPFLASH_FAILED = 2 /* a call failed (said on a FAULT line) */
+} rsm_mapflash_result_t;
+
+/* One boot, as above. */
+rsm_mapflash_result_t rsm_mapflash_boot(rsm_mapflash_t *m, rsm_mapflash_region_t *flash, const rsm_replay_io_t *io);
+
+#endif /* RSM_MAPFLASH_H */

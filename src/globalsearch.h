@@ -1,0 +1,73 @@
+/* The global search: where in the whole persistent map does a scan fit,
+ * over every heading, with no prior (rsm_localizer_global; a robot
+ * switched on somewhere in a known building, or carried).
+ *
+ * Branch and bound (docs/globalsearch.md). A pose's score is the occupancy
+ * summed under the scan's points, each read at its cell of the second
+ * coarsest level (0.2 m by default: the coarsest is too full to tell places
+ * apart). The positions are that level's cells; the headings are spaced so
+ * that the scan's far points move about one cell from one to the next, and
+ * only those at which the scan's wall directions agree with the map's are
+ * searched, the best agreeing first. For one heading, a box of 2^h x 2^h
+ * cells of positions (a leaf, h = 0, is one cell: positions anywhere in it)
+ * scores at most the sum, over the points, of the largest cell value in the
+ * window of 2^h + 1 cells a side each point can reach: read from the map's
+ * coarser levels for small boxes and from grids of block maxima (built per
+ * search, at most RSM_GLOBAL_SIDE blocks a side) for large ones. Boxes are
+ * split depth first, the best child first, and a box whose bound cannot
+ * reach the kept scores is dropped; a point sum that can no longer reach
+ * them stops early. The search keeps the RSM_GLOBAL_CANDIDATES best
+ * distinct poses within a share of the best; the localizer then descends
+ * from each with the current scan and takes the winner only when it fits
+ * as well as the map's own scans did and beats every distinct rival by a
+ * margin.
+ *
+ * The work is spread over scans: rsm_global_run stops after a budget of
+ * map reads and resumes where it stopped. Everything lives in rsm_global_t
+ * (include/rsm/localizer_parts.h); no heap. */
+#ifndef RSM_GLOBALSEARCH_H
+#define RSM_GLOBALSEARCH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/geom.h"
+#include "rsm/localizer_parts.h"
+#include "tilemap.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* rsm_global_t.phase */
+#define RSM_GLOBAL_IDLE 0u
+#define RSM_GLOBAL_PENDING 1u  /* the next usable scan begins it */
+#define RSM_GLOBAL_RUNNING 2u
+#define RSM_GLOBAL_PROVING 3u  /* done: the next usable scan tests what it kept */
+
+/* Starts a search for the readings pts (robot frame, in beam order; up to
+ * RSM_GLOBAL_POINTS of them, taken evenly, are kept, and all give the
+ * scan's wall directions) over map, whose estimate from odometry at this
+ * scan is *at. A pose is kept only when it
+ * scores at least min_share of the kept points' count and within keep of
+ * the best so far. Returns RSM_OK, or RSM_ERR_DEGENERATE when the map's
+ * coarsest level is empty or fewer than 8 readings are given, or
+ * RSM_ERR_NOMEM when the map is so wide that its bound grids would need
+ * blocks of more than 2^RSM_GLOBAL_MAX_BASE_H cells. */
+int rsm_global_begin(rsm_global_t *g, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *at,
+                     float min_share);
+
+/* Goes on with the search for about budget reads of cells and blocks (0 =
+ * to the end): it stops before the next box once budget is reached, so a
+ * run reads at most one split beyond it (four boxes, at most 16 reads a
+ * kept point). Returns 1 while work remains, 0 once every
+ * heading is done (g->cand[0 .. g->found) then hold the kept poses, best
+ * first). Adds the cells and blocks read to g->work and to *used (may be
+ * NULL). */
+int rsm_global_run(rsm_global_t *g, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_GLOBALSEARCH_H */

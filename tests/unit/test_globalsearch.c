@@ -1,0 +1,228 @@
+/* The global search (rsm_localizer_global; issue 31 item 2, issue 29 item
+ * 2): a robot whose pose is forgotten is found again in the map it made,
+ * only once the pose is proven; a room that looks the same turned half
+ * round never gives a pose; the search spread over scans finds what it
+ * finds in one go; bad calls are refused. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "globalsearch.h"
+#include "rsm/config.h"
+#include "rsm/localizer.h"
+#include "rsm/status.h"
+#include "synth.h"
+#include "unity.h"
+
+#define STEP_US 100000u
+#define PATH_CAP 600u
+
+static rsm_localizer_t loc;
+static rsm_localizer_config_t cfg;
+static rsm_synth_scan_config_t scan_cfg;
+static rsm_scan_t scan;
+static rsm_pose_t path[PATH_CAP];
+static size_t path_len;
+static rsm_global_t g1;
+static rsm_global_t g2;
+
+void setUp(void)
+{
+    cfg = rsm_localizer_config_default();
+    scan_cfg = rsm_synth_scan_config_default();
+    scan_cfg.beams = RSM_MAX_BEAMS < 361 ? (size_t)RSM_MAX_BEAMS : 361u;
+    scan_cfg.start_rad = -RSM_PI;
+    scan_cfg.end_rad = RSM_PI - 2.0f * RSM_PI / (float)scan_cfg.beams;
+}
+
+void tearDown(void)
+{
+}
+
+/* A tour of the room world (it has a box, a pillar, an alcove and a
+ * doorway: no two places look alike). */
+static void make_path(void)
+{
+    static const rsm_synth_leg_t legs[] = {{1.0f, 0.0f},  {0.0f, 1.2f}, {0.6f, 0.0f}, {0.0f, -2.4f},
+                                           {1.2f, 0.3f},  {0.0f, 2.0f}, {1.0f, 0.0f}, {0.0f, 1.5f},
+                                           {0.8f, -0.4f}, {0.0f, 3.0f}, {1.5f, 0.2f}};
+    const rsm_pose_t start = {-1.2f, -0.8f, 0.0f};
+    path_len = rsm_synth_path(&start, legs, sizeof legs / sizeof legs[0], 0.05f, 0.05f, path, PATH_CAP);
+    TEST_ASSERT_TRUE(path_len > 150u);
+}
+
+/* Scan k of the path into l, with exact odometry from scan k - 1. */
+static void step(rsm_localizer_t *l, const rsm_synth_world_t *world, size_t k, rsm_localizer_report_t *rep)
+{
+    if (k > 0u) {
+        const rsm_motion_t u = rsm_synth_motion(&path[k - 1u], &path[k], NULL);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(l, &u));
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(world, &path[k], &scan_cfg, NULL, (uint64_t)k * STEP_US, &scan));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(l, &scan, rep));
+}
+
+static void map_path(const rsm_synth_world_t *world, size_t scans)
+{
+    size_t k;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &path[0], NULL));
+    for (k = 0; k < scans; ++k) {
+        step(&loc, world, k, NULL);
+    }
+}
+
+/* Forgotten at scan `at` (the robot carried: the estimate jumped 3 m and
+ * half a turn), found again; scans report searching and lost until the
+ * pose is proven, and that pose is the true one. */
+static void test_a_forgotten_robot_is_found(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_localizer_report_t rep;
+    rsm_pose_t wrong;
+    size_t at;
+    size_t k;
+    size_t found = 0;
+    make_path();
+    at = path_len - 80u;
+    wrong.x = path[at].x + 3.0f;
+    wrong.y = path[at].y - 1.0f;
+    wrong.theta = rsm_wrap_angle(path[at].theta + 3.0f);
+    map_path(&world, at);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_pose(&loc, &wrong, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    TEST_ASSERT_TRUE(rsm_localizer_searching(&loc));
+    TEST_ASSERT_EQUAL_INT(RSM_TRACK_LOST, rsm_localizer_track(&loc));
+    for (k = at; k < path_len && found == 0u; ++k) {
+        step(&loc, &world, k, &rep);
+        if (rep.outcome == RSM_SCAN_SEARCHING) {
+            TEST_ASSERT_EQUAL_INT(RSM_TRACK_LOST, rep.track);
+            TEST_ASSERT_TRUE(rep.search_work <= cfg.global_budget + 16u * RSM_GLOBAL_POINTS);
+        } else {
+            found = k;
+        }
+    }
+    TEST_ASSERT_TRUE_MESSAGE(found > 0u, "no pose proven before the path ended");
+    TEST_ASSERT_EQUAL_INT(RSM_SCAN_ACCEPTED, rep.outcome);
+    TEST_ASSERT_EQUAL_UINT8(1u, rep.recovered);
+    TEST_ASSERT_EQUAL_INT(RSM_TRACK_TRACKING, rep.track);
+    TEST_ASSERT_FALSE(rsm_localizer_searching(&loc));
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &path[found]) < 0.1f);
+    TEST_ASSERT_TRUE(rsm_synth_angle_error(&rep.pose, &path[found]) < 0.05f);
+    TEST_ASSERT_TRUE(loc.counters.global_searches >= 1u);
+    TEST_ASSERT_EQUAL_UINT32(1u, loc.counters.global_found);
+    TEST_ASSERT_TRUE(loc.counters.global_work > 0u);
+    /* And it tracks on from there. */
+    for (k = found + 1u; k < path_len; ++k) {
+        step(&loc, &world, k, &rep);
+        TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &path[k]) < 0.1f);
+    }
+}
+
+/* The same search spread over many scans' budgets keeps the same poses as
+ * one run to the end: the spreading changes when, not what. */
+static void test_spread_search_finds_the_same(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_tmap_t *map;
+    int more;
+    uint32_t runs = 0;
+    uint32_t used = 0;
+    make_path();
+    map_path(&world, path_len - 80u);
+    map = &loc.state.persistent.map;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g1, map, 0u, NULL));
+    TEST_ASSERT_TRUE(g1.found >= 1u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    do {
+        const uint32_t before = used;
+        more = rsm_global_run(&g2, map, 300u, &used);
+        /* A run stops within one split of its budget: four children, four
+         * reads a point each. */
+        TEST_ASSERT_TRUE(used - before <= 300u + 16u * RSM_GLOBAL_POINTS);
+        runs++;
+    } while (more);
+    TEST_ASSERT_TRUE(runs > 3u);
+    TEST_ASSERT_EQUAL_UINT32(g1.work, g2.work);
+    TEST_ASSERT_EQUAL_UINT32(g1.work, used);
+    TEST_ASSERT_EQUAL_UINT32(g1.found, g2.found);
+    TEST_ASSERT_EQUAL_MEMORY(g1.cand, g2.cand, g1.found * sizeof g1.cand[0]);
+    /* The best kept pose is the true one, to a cell. */
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&g1.cand[0].pose, &loc.ekf.x) < 0.45f);
+}
+
+/* A bare rectangular room looks the same from a pose and from that pose
+ * turned half round about the room's centre: no scan may give a pose. */
+static void test_a_symmetric_room_gives_no_pose(void)
+{
+    static const rsm_synth_segment_t box[4] = {
+        {-2.5f, -1.5f, 2.5f, -1.5f}, {2.5f, -1.5f, 2.5f, 1.5f}, {2.5f, 1.5f, -2.5f, 1.5f}, {-2.5f, 1.5f, -2.5f, -1.5f}};
+    const rsm_synth_world_t world = {box, 4u};
+    static const rsm_synth_leg_t legs[] = {{1.5f, 0.0f}, {0.0f, 1.5f}, {1.0f, 0.0f}, {0.0f, 1.5f}, {2.0f, 0.0f}};
+    const rsm_pose_t start = {-1.3f, -0.6f, 0.2f};
+    rsm_localizer_report_t rep;
+    size_t k;
+    path_len = rsm_synth_path(&start, legs, sizeof legs / sizeof legs[0], 0.05f, 0.05f, path, PATH_CAP);
+    map_path(&world, path_len / 2u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    for (k = path_len / 2u; k < path_len; ++k) {
+        step(&loc, &world, k, &rep);
+        TEST_ASSERT_EQUAL_INT(RSM_SCAN_SEARCHING, rep.outcome);
+        TEST_ASSERT_EQUAL_INT(RSM_TRACK_LOST, rep.track);
+    }
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.global_found);
+    TEST_ASSERT_TRUE(loc.counters.global_ambiguous > 0u);
+    TEST_ASSERT_TRUE(rsm_localizer_searching(&loc));
+}
+
+/* A scan with too few readings while searching is counted as such and the
+ * search waits for the next. */
+static void test_few_points_wait(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_localizer_report_t rep;
+    make_path();
+    map_path(&world, 40u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &path[40], &scan_cfg, NULL, 40u * STEP_US, &scan));
+    scan.count = 5u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    TEST_ASSERT_EQUAL_INT(RSM_SCAN_FEW_POINTS, rep.outcome);
+    TEST_ASSERT_EQUAL_INT(RSM_TRACK_LOST, rep.track);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.global_searches);
+    TEST_ASSERT_TRUE(rsm_localizer_searching(&loc));
+}
+
+static void test_bad_calls(void)
+{
+    rsm_localizer_config_t odo = rsm_localizer_config_default();
+    const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_global(NULL));
+    TEST_ASSERT_EQUAL_INT(0, rsm_localizer_searching(NULL));
+    memset(&loc, 0, sizeof loc);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_global(&loc));
+    /* An empty map has nothing to search. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &zero, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_DEGENERATE, rsm_localizer_global(&loc));
+    TEST_ASSERT_EQUAL_INT(0, rsm_localizer_searching(&loc));
+    odo.method = RSM_METHOD_ODOMETRY;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &odo, &zero, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_NOSYS, rsm_localizer_global(&loc));
+    TEST_ASSERT_EQUAL_STRING("searching", rsm_outcome_name(RSM_SCAN_SEARCHING));
+    cfg.global_min_share = 1.5f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(&loc, &cfg, &zero, NULL));
+    cfg.global_min_share = 0.8f;
+    cfg.global_min_fit = -0.1f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(&loc, &cfg, &zero, NULL));
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_a_forgotten_robot_is_found);
+    RUN_TEST(test_spread_search_finds_the_same);
+    RUN_TEST(test_a_symmetric_room_gives_no_pose);
+    RUN_TEST(test_few_points_wait);
+    RUN_TEST(test_bad_calls);
+    return UNITY_END();
+}
