@@ -140,3 +140,9 @@ def test_skip_seconds_starts_later_in_the_log(tmp_path, head_log):
     a = sorted(poses(full))
     b = sorted(poses(late))
     assert b[0] >= a[0] + 30.0 and b == [t for t in a if t >= a[0] + 30.0]
+    short = tmp_path / "short.txt"
+    nav(head_log, short, "--skip-seconds", "30", "--scans", "25")
+    assert sorted(poses(short)) == b[:25]
+    for bad in ("0", "-3", "x"):
+        res = nav(head_log, short, "--scans", bad, ok=False)
+        assert res.returncode == 2 and "--scans" in res.stderr, bad

@@ -184,6 +184,7 @@ static void usage(FILE *f)
             "                            trajectory line until a pose is proven\n"
             "  --skip-seconds S          --carmen: start S seconds into the log, as if the robot\n"
             "                            were switched on there\n"
+            "  --scans N                 --carmen: stop after N scans\n"
             "  --tum FILE                write the trajectory in TUM format too\n"
             "                            (timestamp x y z qx qy qz qw; what evo reads)\n"
             "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
@@ -342,6 +343,7 @@ typedef struct nav {
     const char *load_map;  /* --load-map: the map to start in */
     int global;            /* --global: no start pose: search the loaded map */
     double skip_s;         /* --skip-seconds: scans before the log's first stamp + this are left out */
+    uint64_t max_scans;    /* --scans: stop after this many scans (0: the whole log) */
     int have_first_stamp;
     double first_stamp_s;
     uint64_t first_trusted;    /* scan (1-based) of the first pose written after --global; 0: none */
@@ -742,6 +744,12 @@ static int carmen_want_cb(void *ctx, const carmen_record_t *rec)
     return rec->stamp_s >= nav->first_stamp_s + nav->skip_s;
 }
 
+static int carmen_done_cb(void *ctx)
+{
+    const nav_t *nav = ((carmen_run_t *)ctx)->nav;
+    return nav->max_scans > 0u && nav->ntimes >= nav->max_scans;
+}
+
 static void carmen_motion_cb(void *ctx, const rsm_motion_t *u)
 {
     (void)rsm_localizer_motion(&((carmen_run_t *)ctx)->nav->loc, u);
@@ -770,7 +778,8 @@ static void carmen_scan_cb(void *ctx, const carmen_record_t *rec, uint64_t stamp
 
 static int run_carmen(nav_t *nav, const char *path, int fov179)
 {
-    static const logrun_ops_t ops = {carmen_start_cb, carmen_want_cb, carmen_motion_cb, carmen_scan_cb, NULL};
+    static const logrun_ops_t ops = {carmen_start_cb, carmen_want_cb, carmen_motion_cb, carmen_scan_cb,
+                                     carmen_done_cb};
     static carmen_reader_t reader;
     static carmen_record_t rec;
     carmen_run_t cr;
@@ -1313,7 +1322,7 @@ enum {
     OPT_ROBOT_BAUD, OPT_LMS_BAUD, OPT_LISTEN, OPT_SECONDS, OPT_IDLE_EXIT, OPT_TICKS_PER_M, OPT_WHEEL_BASE,
     OPT_INITIAL_POSE, OPT_LASER_POSE, OPT_UPSIDE_DOWN, OPT_TRAJECTORY, OPT_SUMMARY_JSON, OPT_TUM, OPT_SCAN_LOG, OPT_EVENTS,
     OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_QUIET, OPT_SAVE_MAP, OPT_LOAD_MAP, OPT_GLOBAL, OPT_FREEZE_MAP,
-    OPT_SKIP_SECONDS
+    OPT_SKIP_SECONDS, OPT_SCANS
 };
 
 /* --lidar, --initial-pose and --laser-pose take more than one value: the
@@ -1353,6 +1362,7 @@ static const struct option nav_options[] = {
     {"global", no_argument, NULL, OPT_GLOBAL},
     {"freeze-map", no_argument, NULL, OPT_FREEZE_MAP},
     {"skip-seconds", required_argument, NULL, OPT_SKIP_SECONDS},
+    {"scans", required_argument, NULL, OPT_SCANS},
     {"help", no_argument, NULL, 'h'},
     {NULL, 0, NULL, 0}
 };
@@ -1619,6 +1629,16 @@ int main(int argc, char **argv)
             nav.skip_s = v;
             break;
         }
+        case OPT_SCANS: {
+            char *end = NULL;
+            const unsigned long long v = strtoull(optarg, &end, 10);
+            if (end == optarg || *end != '\0' || v == 0u || optarg[0] == '-') {
+                fprintf(stderr, "rsm-nav: bad --scans '%s' (a count, 1 or more)\n", optarg);
+                return 2;
+            }
+            nav.max_scans = (uint64_t)v;
+            break;
+        }
         case 'h':
             usage(stdout);
             return 0;
@@ -1644,8 +1664,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "rsm-nav: --global searches a known map: give it with --load-map\n");
         return 2;
     }
-    if (nav.skip_s > 0.0 && carmen == NULL) {
-        fprintf(stderr, "rsm-nav: --skip-seconds works with --carmen\n");
+    if ((nav.skip_s > 0.0 || nav.max_scans > 0u) && carmen == NULL) {
+        fprintf(stderr, "rsm-nav: --skip-seconds and --scans work with --carmen\n");
         return 2;
     }
     live.quiet = nav.quiet;
