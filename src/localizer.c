@@ -1111,7 +1111,10 @@ static int prove(rsm_localizer_t *loc, size_t npts)
     const rsm_tmap_t *map = &loc->state.persistent.map;
     const rsm_pose_t moved = rsm_pose_between(&g->at, &loc->ekf.x);
     const float cell = rsm_tmap_cell(map, g->level);
-    const float wide[9] = {cell * cell, 0.0f, 0.0f, 0.0f, cell * cell, 0.0f, 0.0f, 0.0f, g->step_rad * g->step_rad};
+    /* Two cells and two heading steps: a kept pose is a cell of positions
+     * and the motion since the scan searched adds odometry's error. */
+    const float wide[9] = {4.0f * cell * cell, 0.0f, 0.0f, 0.0f, 4.0f * cell * cell, 0.0f, 0.0f, 0.0f,
+                           4.0f * g->step_rad * g->step_rad};
     rsm_pose_t start[RSM_GLOBAL_CANDIDATES];
     rsm_pose_t end[RSM_GLOBAL_CANDIDATES];
     float hit[RSM_GLOBAL_CANDIDATES];
@@ -1150,6 +1153,19 @@ static int prove(rsm_localizer_t *loc, size_t npts)
     /* The same descent again for its covariance: deterministic. */
     if (rsm_mapmatch(map, &cfg->mapmatch, loc->pts, npts, &start[best], wide, &start[best], NULL, &res) != RSM_OK) {
         return 0;
+    }
+    {
+        /* A pose the scan does not pin (along a bare corridor, its
+         * position is the search lattice's, not the scan's: measured on
+         * ACES, 0.3 to 0.6 m off) is no proof: its position's largest
+         * standard deviation must be within half a cell. */
+        const float a = res.cov[0];
+        const float d = res.cov[4];
+        const float b = res.cov[1];
+        const float largest = 0.5f * (a + d) + sqrtf(0.25f * (a - d) * (a - d) + b * b);
+        if (!(largest <= 0.25f * cell * cell)) {
+            return 0;
+        }
     }
     loc->ekf.x = res.pose;
     memcpy(loc->ekf.p, res.cov, sizeof loc->ekf.p);
