@@ -127,10 +127,14 @@ typedef struct rsm_localizer_config {
                                      * 0.1 rad */
     /* The global search (rsm_localizer_global; docs/globalsearch.md). */
     uint32_t global_budget;         /* map cells and bound blocks a scan gives the search at most
-                                     * to read; 0 = the whole search in one scan; default 20000 */
+                                     * to read; 0 = the whole search in one scan; default 100000
+                                     * (a search of the Intel or ACES map reads 5 to 60 million:
+                                     * docs/globalsearch.md has the cost and the time it takes) */
     float global_min_share;         /* a pose is kept only when the occupancy summed under the
-                                     * scan's points (cells of about 0.2 m) reaches this share of
-                                     * their count; default 0.8 */
+                                     * scan's points (cells of about 0.2 m) reaches a share of
+                                     * their count: 0.95 in the first search, 0.05 less in each
+                                     * next one after a search that proved nothing, down to this;
+                                     * default 0.8 */
     float global_min_fit;           /* the winner's fit (mean occupancy under all its points at the
                                      * finest level) must reach this share of the fit the map's own
                                      * scans had (saved with the map; 1 when unknown); default 0.8 */

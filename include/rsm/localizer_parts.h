@@ -312,6 +312,8 @@ typedef struct rsm_global {
     uint32_t found;
     float floor_score;             /* a pose must score at least this to be kept */
     uint32_t scans;                /* scans the search has run over so far */
+    uint32_t unproven;             /* searches in a row that proved nothing (each next one
+                                    * keeps poses with a lower share of points on walls) */
     uint32_t work;                 /* cells and blocks read so far */
 } rsm_global_t;
 
