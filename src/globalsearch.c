@@ -38,21 +38,42 @@ static uint32_t direction_level(uint32_t level)
     return level > 0u ? level - 1u : 0u;
 }
 
+/* The smallest block exponent whose grid of a w-cell-wide map has at most
+ * RSM_GLOBAL_SIDE blocks a side; MAX_BASE_H + 1 when none has. */
+static uint32_t base_for(uint32_t w)
+{
+    uint32_t h = MIN_BASE_H;
+    while (h <= MAX_BASE_H && ((w + (1u << h) - 1u) >> h) > (uint32_t)RSM_GLOBAL_SIDE) {
+        ++h;
+    }
+    return h;
+}
+
+static uint32_t map_width(int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1)
+{
+    return (uint32_t)((gx1 - gx0 > gy1 - gy0 ? gx1 - gx0 : gy1 - gy0) + 1);
+}
+
+int rsm_global_fits(const rsm_tmap_t *map)
+{
+    int32_t b[4];
+    return rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3]) &&
+           base_for(map_width(b[0], b[1], b[2], b[3])) <= MAX_BASE_H;
+}
+
 /* The blocks' maxima of the coarsest level into grid 0, then each grid's
  * 2 x 2 maxima into the next, down to one block. */
-static int build_grids(rsm_global_t *g, const rsm_tmap_t *map, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1)
+static int build_grids(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1)
 {
     const uint32_t level = g->level;
-    const uint32_t w = (uint32_t)((gx1 - gx0 > gy1 - gy0 ? gx1 - gx0 : gy1 - gy0) + 1);
+    const uint32_t w = map_width(gx0, gy0, gx1, gy1);
     uint32_t at = 0;
     uint32_t side;
     uint32_t s;
     uint32_t k;
-    g->base_h = MIN_BASE_H;
-    while (((w + (1u << g->base_h) - 1u) >> g->base_h) > (uint32_t)RSM_GLOBAL_SIDE) {
-        if (++g->base_h > MAX_BASE_H) {
-            return RSM_ERR_NOMEM;
-        }
+    g->base_h = base_for(w);
+    if (g->base_h > MAX_BASE_H) {
+        return RSM_ERR_NOMEM;
     }
     g->ox = gx0;
     g->oy = gy0;
@@ -71,7 +92,7 @@ static int build_grids(rsm_global_t *g, const rsm_tmap_t *map, int32_t gx0, int3
         }
         side = (side + 1u) >> 1;
     }
-    memset(g->grid, 0, at);
+    memset(grid, 0, at);
     side = g->grid_side[0];
     for (s = 0; s < map->used; ++s) {
         const rsm_tile_t *t = &map->tile[s];
@@ -86,7 +107,7 @@ static int build_grids(rsm_global_t *g, const rsm_tmap_t *map, int32_t gx0, int3
                 const int32_t gy = (int32_t)t->ty * RSM_TMAP_TILE_SIDE + (int32_t)(c >> RSM_TMAP_TILE_LOG2);
                 const uint32_t u = (uint32_t)(gx - gx0) >> g->base_h;
                 const uint32_t vv = (uint32_t)(gy - gy0) >> g->base_h;
-                uint8_t *cell = &g->grid[vv * side + u];
+                uint8_t *cell = &grid[vv * side + u];
                 if (v > *cell) {
                     *cell = (uint8_t)v;
                 }
@@ -94,9 +115,9 @@ static int build_grids(rsm_global_t *g, const rsm_tmap_t *map, int32_t gx0, int3
         }
     }
     for (k = 1; k < g->grids; ++k) {
-        const uint8_t *src = g->grid + g->grid_at[k - 1u];
+        const uint8_t *src = grid + g->grid_at[k - 1u];
         const uint32_t ss = g->grid_side[k - 1u];
-        uint8_t *dst = g->grid + g->grid_at[k];
+        uint8_t *dst = grid + g->grid_at[k];
         const uint32_t ds = g->grid_side[k];
         uint32_t y;
         for (y = 0; y < ss; ++y) {
@@ -147,8 +168,8 @@ static void scan_directions(rsm_global_t *g, const rsm_point_t *pts, size_t n)
     }
 }
 
-int rsm_global_begin(rsm_global_t *g, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *at,
-                     float min_share)
+int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
+                     const rsm_pose_t *at, float min_share)
 {
     const uint32_t level = search_level(map);
     const float cell = rsm_tmap_cell(map, level);
@@ -169,6 +190,9 @@ int rsm_global_begin(rsm_global_t *g, const rsm_tmap_t *map, const rsm_point_t *
     }
     g->level = level;
     g->npts = n < (size_t)RSM_GLOBAL_POINTS ? (uint32_t)n : (uint32_t)RSM_GLOBAL_POINTS;
+    if (!rsm_global_fits(map)) {
+        return RSM_ERR_NOMEM;
+    }
     /* Taken evenly over the scan, stored in an order that jumps across it
      * (a stride coprime with their count), so that a pose's first points
      * already sample the whole scan and a poor pose is given up early. */
@@ -191,10 +215,20 @@ int rsm_global_begin(rsm_global_t *g, const rsm_tmap_t *map, const rsm_point_t *
     }
     for (k = 0; k < g->npts; ++k) {
         const uint32_t pick = (k * stride) % g->npts;
-        const rsm_point_t *p = &pts[(size_t)pick * n / g->npts];
+        rsm_point_t p = pts[(size_t)pick * n / g->npts];
         uint32_t m = k;
-        g->pts[k] = *p;
-        range[k] = sqrtf(p->x * p->x + p->y * p->y);
+        /* A reading far beyond any map (max_range_m is the caller's) is
+         * pulled in to the map's reach: it lands on nothing either way,
+         * and its cell offset stays a small integer. */
+        const float far = (float)(RSM_TMAP_TILE_LIMIT * RSM_TMAP_TILE_SIDE) * rsm_tmap_cell(map, 0u);
+        const float r = sqrtf(p.x * p.x + p.y * p.y);
+        if (!(r <= far)) {
+            const float shrink = r > 0.0f ? far / r : 0.0f;
+            p.x *= shrink;
+            p.y *= shrink;
+        }
+        g->pts[k] = p;
+        range[k] = sqrtf(p.x * p.x + p.y * p.y);
         /* Insertion sort of the ranges, for their upper decile. */
         while (m > 0u && range[m - 1u] > range[m]) {
             const float t = range[m - 1u];
@@ -209,15 +243,17 @@ int rsm_global_begin(rsm_global_t *g, const rsm_tmap_t *map, const rsm_point_t *
     if (reach < cell) {
         reach = cell;
     }
-    g->headings = (uint32_t)ceilf(2.0f * RSM_PI * reach / cell);
-    if (g->headings < 8u) {
-        g->headings = 8u;
-    }
-    if (g->headings > (uint32_t)RSM_GLOBAL_MAX_HEADINGS) {
-        g->headings = (uint32_t)RSM_GLOBAL_MAX_HEADINGS;
+    {
+        /* Capped as a float, before it becomes a count. */
+        float h = ceilf(2.0f * RSM_PI * reach / cell);
+        h = h < (float)RSM_GLOBAL_MAX_HEADINGS ? h : (float)RSM_GLOBAL_MAX_HEADINGS;
+        g->headings = h > 8.0f ? (uint32_t)h : 8u;
+        /* Even: a pose and the one turned half round are both searched
+         * (a place that looks alike from there must be seen as a rival). */
+        g->headings += g->headings & 1u;
     }
     g->step_rad = 2.0f * RSM_PI / (float)g->headings;
-    if ((rc = build_grids(g, map, gx0, gy0, gx1, gy1)) != RSM_OK) {
+    if ((rc = build_grids(g, grid, map, gx0, gy0, gx1, gy1)) != RSM_OK) {
         return rc;
     }
     scan_directions(g, pts, n);
@@ -331,10 +367,10 @@ static void offsets(const rsm_global_t *g, float cell, uint32_t a, int32_t *fx, 
 
 /* The largest value of grid gr over the blocks the window [u, u + 2^h] x
  * [v, v + 2^h] touches (two a side at most); 0 outside the grid. */
-static uint32_t grid_max(const rsm_global_t *g, uint32_t gr, uint32_t h, int32_t u, int32_t v)
+static uint32_t grid_max(const rsm_global_t *g, const uint8_t *grids, uint32_t gr, uint32_t h, int32_t u, int32_t v)
 {
     const uint32_t side = g->grid_side[gr];
-    const uint8_t *grid = g->grid + g->grid_at[gr];
+    const uint8_t *grid = grids + g->grid_at[gr];
     const int32_t u0 = floor_shift(u - g->ox, h);
     const int32_t u1 = floor_shift(u - g->ox + (int32_t)(1u << h), h);
     const int32_t v0 = floor_shift(v - g->oy, h);
@@ -361,7 +397,7 @@ static uint32_t grid_max(const rsm_global_t *g, uint32_t gr, uint32_t h, int32_t
  * lift the sum to thr (each adds 1 at most): what it returns is then below
  * thr, which is all the caller asks. Adds the cells and blocks read to
  * *work. */
-static float box_bound(const rsm_global_t *g, const rsm_tmap_t *map, const int32_t *fx, const int32_t *fy,
+static float box_bound(const rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, const int32_t *fx, const int32_t *fy,
                        int32_t i, int32_t j, uint32_t h, float thr, uint32_t *work)
 {
     float sum = 0.0f;
@@ -372,7 +408,7 @@ static float box_bound(const rsm_global_t *g, const rsm_tmap_t *map, const int32
         const int32_t v = fy[k] + j;
         uint32_t best = 0;
         if (h >= g->base_h) {
-            best = grid_max(g, h - g->base_h, h, u, v);
+            best = grid_max(g, grid, h - g->base_h, h, u, v);
             reads += 4u;
         } else {
             /* The window as a coarser level holds it (the level h up, or
@@ -456,7 +492,7 @@ static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score)
     g->found++;
 }
 
-int rsm_global_run(rsm_global_t *g, const rsm_tmap_t *map, uint32_t budget, uint32_t *used)
+int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used)
 {
     const float cell = rsm_tmap_cell(map, g->level);
     int32_t fx[RSM_GLOBAL_POINTS];
@@ -505,7 +541,7 @@ int rsm_global_run(rsm_global_t *g, const rsm_tmap_t *map, uint32_t budget, uint
             b.i = g->ox;
             b.j = g->oy;
             b.h = g->top_h;
-            b.bound = box_bound(g, map, fx, fy, b.i, b.j, b.h, threshold(g), &work);
+            b.bound = box_bound(g, grid, map, fx, fy, b.i, b.j, b.h, threshold(g), &work);
             if (b.bound >= threshold(g)) {
                 g->stack[g->depth++] = b;
             }
@@ -535,7 +571,7 @@ int rsm_global_run(rsm_global_t *g, const rsm_tmap_t *map, uint32_t budget, uint
                 ch.i = b.i + ((c & 1u) ? half : 0);
                 ch.j = b.j + ((c & 2u) ? half : 0);
                 ch.h = h;
-                ch.bound = box_bound(g, map, fx, fy, ch.i, ch.j, h, threshold(g), &work);
+                ch.bound = box_bound(g, grid, map, fx, fy, ch.i, ch.j, h, threshold(g), &work);
                 if (ch.bound < threshold(g)) {
                     continue;
                 }

@@ -24,7 +24,8 @@
  *
  * The work is spread over scans: rsm_global_run stops after a budget of
  * map reads and resumes where it stopped. Everything lives in rsm_global_t
- * (include/rsm/localizer_parts.h); no heap. */
+ * (include/rsm/localizer_parts.h) and the grid memory the caller lends;
+ * no heap. */
 #ifndef RSM_GLOBALSEARCH_H
 #define RSM_GLOBALSEARCH_H
 
@@ -45,17 +46,23 @@ extern "C" {
 #define RSM_GLOBAL_RUNNING 2u
 #define RSM_GLOBAL_PROVING 3u  /* done: the next usable scan tests what it kept */
 
+/* 1 when the map's level the search scores on holds something and is
+ * narrow enough for the bound grids (RSM_GLOBAL_SIDE blocks of at most
+ * 2^RSM_GLOBAL_MAX_BASE_H cells a side: 8 km with the defaults), else 0. */
+int rsm_global_fits(const rsm_tmap_t *map);
+
 /* Starts a search for the readings pts (robot frame, in beam order; up to
  * RSM_GLOBAL_POINTS of them, taken evenly, are kept, and all give the
  * scan's wall directions) over map, whose estimate from odometry at this
- * scan is *at. A pose is kept only when it
+ * scan is *at. grid (RSM_GLOBAL_GRID_BYTES) holds the bound grids until
+ * the search ends: the caller's, untouched by anything else meanwhile. A pose is kept only when it
  * scores at least min_share of the kept points' count and within keep of
  * the best so far. Returns RSM_OK, or RSM_ERR_DEGENERATE when the map's
  * coarsest level is empty or fewer than 8 readings are given, or
  * RSM_ERR_NOMEM when the map is so wide that its bound grids would need
  * blocks of more than 2^RSM_GLOBAL_MAX_BASE_H cells. */
-int rsm_global_begin(rsm_global_t *g, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *at,
-                     float min_share);
+int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
+                     const rsm_pose_t *at, float min_share);
 
 /* Goes on with the search for about budget reads of cells and blocks (0 =
  * to the end): it stops before the next box once budget is reached, so a
@@ -64,7 +71,7 @@ int rsm_global_begin(rsm_global_t *g, const rsm_tmap_t *map, const rsm_point_t *
  * heading is done (g->cand[0 .. g->found) then hold the kept poses, best
  * first). Adds the cells and blocks read to g->work and to *used (may be
  * NULL). */
-int rsm_global_run(rsm_global_t *g, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
+int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
 
 #ifdef __cplusplus
 }

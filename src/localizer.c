@@ -398,8 +398,8 @@ static void to_world(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t n)
     const float s = rsm_sinf(pose->theta);
     size_t k;
     for (k = 0; k < n; ++k) {
-        loc->world[k].x = pose->x + c * loc->pts[k].x - s * loc->pts[k].y;
-        loc->world[k].y = pose->y + s * loc->pts[k].x + c * loc->pts[k].y;
+        loc->frame.world[k].x = pose->x + c * loc->pts[k].x - s * loc->pts[k].y;
+        loc->frame.world[k].y = pose->y + s * loc->pts[k].x + c * loc->pts[k].y;
     }
 }
 
@@ -610,7 +610,7 @@ static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     (void)rsm_map_recenter(&loc->state.paper.map, pred.x, pred.y);
     to_world(loc, &pred, npts);
     rsm_image_clear(&loc->state.paper.image);
-    (void)rsm_image_mark_points(&loc->state.paper.image, &loc->state.paper.map.win, &cfg->grid, loc->world, npts);
+    (void)rsm_image_mark_points(&loc->state.paper.image, &loc->state.paper.map.win, &cfg->grid, loc->frame.world, npts);
     if (!loc->have_scan) {
         return RSM_SCAN_FIRST;
     }
@@ -1004,7 +1004,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
 
 /* Starts writing the scan into the persistent map at est once the robot has
  * moved far enough since the last write (or for the first scan); the write
- * then runs over this and the next scans (tmap.write_cells), from loc->world,
+ * then runs over this and the next scans (tmap.write_cells), from loc->frame.world,
  * which nothing else writes meanwhile. A write still running when the next
  * one is due is finished first. */
 static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, int first)
@@ -1017,7 +1017,7 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
     if (!first && sqrtf(d.x * d.x + d.y * d.y) < cfg->map_update_m && fabsf(d.theta) < cfg->map_update_rad) {
         return;
     }
-    (void)rsm_tmap_write_run(map, loc->world, 0u);
+    (void)rsm_tmap_write_run(map, loc->frame.world, 0u);
     to_world(loc, est, npts);
     origin.x = cfg->laser_mount.x;
     origin.y = cfg->laser_mount.y;
@@ -1027,19 +1027,19 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
      * in matching, where a map that holds only confirmed walls outvotes
      * them): a map keeps what it is given for minutes, and phantom returns
      * would take its memory and blur its walls. */
-    if (rsm_points_isolated(loc->world, npts, &origin, &cfg->isolation, isolated) > 0u) {
+    if (rsm_points_isolated(loc->frame.world, npts, &origin, &cfg->isolation, isolated) > 0u) {
         size_t k;
         size_t kept = 0;
         for (k = 0; k < npts; ++k) {
             if (rsm_bit_get(isolated, k)) {
                 loc->counters.unconfirmed++;
             } else {
-                loc->world[kept++] = loc->world[k];
+                loc->frame.world[kept++] = loc->frame.world[k];
             }
         }
         npts = kept;
     }
-    if (rsm_tmap_write_begin(map, &origin, loc->world, npts) == RSM_OK) {
+    if (rsm_tmap_write_begin(map, &origin, loc->frame.world, npts) == RSM_OK) {
         loc->state.persistent.written = *est;
     }
 }
@@ -1073,6 +1073,17 @@ static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
  * (recover_ratio of their fit; a proven search's winner does) or it
  * started the map; odometry alone is not checked. Counts the scans in a
  * row that did not. */
+/* A global search is to begin at the next usable scan. */
+static void begin_global(rsm_localizer_t *loc)
+{
+    loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
+    loc->state.persistent.global.unproven = 0u;
+    if (!(loc->state.persistent.map_fit > 0.0f)) {
+        /* A map made in this run: its scans' recent fit is the bar. */
+        loc->state.persistent.map_fit = loc->state.persistent.fit;
+    }
+}
+
 int rsm_localizer_global(rsm_localizer_t *loc)
 {
     const rsm_tmap_t *map;
@@ -1087,8 +1098,10 @@ int rsm_localizer_global(rsm_localizer_t *loc)
     if (!rsm_tmap_bounds(map, (uint32_t)map->cfg.levels - 1u, &b[0], &b[1], &b[2], &b[3])) {
         return RSM_ERR_DEGENERATE;
     }
-    loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
-    loc->state.persistent.global.unproven = 0u;
+    if (!rsm_global_fits(map)) {
+        return RSM_ERR_NOMEM;
+    }
+    begin_global(loc);
     loc->poor_run = loc->cfg->lost_scans;
     loc->last.track = RSM_TRACK_LOST;
     return RSM_OK;
@@ -1098,6 +1111,14 @@ int rsm_localizer_searching(const rsm_localizer_t *loc)
 {
     return ready(loc) && loc->cfg->method == RSM_METHOD_MAP &&
            loc->state.persistent.global.phase != RSM_GLOBAL_IDLE;
+}
+
+/* The fit a proven place must reach a share of: the map's own (saved with
+ * it), else the recent scans' as the search began, else 1. */
+static float bar_fit(const rsm_localizer_t *loc)
+{
+    const float f = loc->state.persistent.map_fit;
+    return f > 0.0f ? f : 1.0f;
 }
 
 /* The test of a finished global search, with this scan: each kept pose,
@@ -1163,7 +1184,7 @@ static int prove(rsm_localizer_t *loc, size_t npts)
     /* A place the map holds fits about as well as the map's own scans did
      * (saved with it): a wrong place in a building of look-alike rooms fits
      * half as well (measured on ACES: 0.41 to 0.44 against 0.86). */
-    if (!(hit[best] >= cfg->global_min_fit * (loc->state.persistent.fit > 0.0f ? loc->state.persistent.fit : 1.0f))) {
+    if (!(hit[best] >= cfg->global_min_fit * bar_fit(loc))) {
         return 0;
     }
     for (k = 0; k < g->found; ++k) {
@@ -1234,13 +1255,20 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         if (share < cfg->global_min_share) {
             share = cfg->global_min_share;
         }
-        if (rsm_global_begin(g, map, loc->pts, npts, &loc->ekf.x, share) != RSM_OK) {
+        /* The grids take the memory of the scan a map write reads: the
+         * write in progress, if any, ends first. */
+        (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world, 0u);
+        if (rsm_global_begin(g, loc->frame.global_grid, map, loc->pts, npts, &loc->ekf.x, share) != RSM_OK) {
+            /* The map no longer fits the search (written since it was
+             * asked for): the search is given up, counted as unproven. */
+            loc->counters.global_ambiguous++;
+            g->phase = RSM_GLOBAL_IDLE;
             return RSM_SCAN_SEARCHING;
         }
         loc->counters.global_searches++;
         g->phase = RSM_GLOBAL_RUNNING;
     }
-    if (rsm_global_run(g, map, cfg->global_budget, &used) == 0) {
+    if (rsm_global_run(g, loc->frame.global_grid, map, cfg->global_budget, &used) == 0) {
         g->phase = RSM_GLOBAL_PROVING;
     }
     rep->search_work = used;
@@ -1390,13 +1418,13 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
             if (fused || loc->cfg->map_on_reject) {
                 (void)rsm_map_recenter(&loc->state.paper.map, est.x, est.y);
                 to_world(loc, &est, npts);
-                (void)rsm_map_add_points(&loc->state.paper.map, loc->world, npts);
+                (void)rsm_map_add_points(&loc->state.paper.map, loc->frame.world, npts);
             }
             break;
         case RSM_METHOD_ICP:
             if (fused || loc->cfg->map_on_reject) {
                 to_world(loc, &est, npts);
-                (void)rsm_icp_set_reference(&loc->state.icp, loc->world, npts);
+                (void)rsm_icp_set_reference(&loc->state.icp, loc->frame.world, npts);
             }
             break;
         default:
@@ -1407,7 +1435,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     if (loc->cfg->method == RSM_METHOD_MAP) {
         /* The first scan matched nothing, so it has the time to write all
          * of itself, and the second has a whole map to match. */
-        (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->world,
+        (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world,
                                  outcome == RSM_SCAN_FIRST ? 0u : loc->cfg->tmap.write_cells);
     }
     rep->track = track_state(loc, outcome, rep);
@@ -1415,8 +1443,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         /* Searching, the estimate is unknown whatever the scans did. */
         rep->track = RSM_TRACK_LOST;
     } else if (rep->track == RSM_TRACK_LOST && loc->cfg->method == RSM_METHOD_MAP && loc->cfg->global_when_lost) {
-        loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
-        loc->state.persistent.global.unproven = 0u;
+        begin_global(loc);
     }
     loc->counters.track[rep->track]++;
     loc->last_stamp_us = scan->stamp_us;

@@ -2,10 +2,12 @@
  * contract, docs/mapfile.md the format. */
 #include "rsm/mapfile.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "bytes.h"
 #include "rsm/status.h"
+#include "globalsearch.h"
 #include "tilemap.h"
 
 #define MAGIC0 'R'
@@ -110,6 +112,15 @@ static void decode_tile(rsm_tile_t *t, const uint8_t b[RSM_MAPFILE_TILE_BYTES])
     memcpy(t->cell, b + 8, sizeof t->cell);
 }
 
+/* The fit a map is saved with: the recent scans', unless the map was
+ * loaded and has not changed since (frozen): then the one it came with, as
+ * a lost run over it says nothing of the map. */
+static float saved_fit(const rsm_localizer_t *loc)
+{
+    const float loaded = loc->state.persistent.map_fit;
+    return loc->cfg->map_frozen && loaded > 0.0f ? loaded : loc->state.persistent.fit;
+}
+
 int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn write, void *ctx,
                            rsm_mapfile_info_t *info)
 {
@@ -126,7 +137,7 @@ int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn writ
         return RSM_ERR_NOSYS;
     }
     map = &loc->state.persistent.map;
-    encode_header(buf, map, &loc->ekf.x, loc->state.persistent.fit);
+    encode_header(buf, map, &loc->ekf.x, saved_fit(loc));
     if (write(ctx, 0u, buf, RSM_MAPFILE_HEADER_BYTES) != 0) {
         return RSM_ERR_IO;
     }
@@ -149,7 +160,7 @@ int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn writ
         info->tiles = map->used;
         info->stamp = map->stamp;
         info->pose = loc->ekf.x;
-        info->fit = loc->state.persistent.fit;
+        info->fit = saved_fit(loc);
     }
     return RSM_OK;
 }
@@ -177,7 +188,8 @@ static int check_header(const uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tma
     info->pose.theta = get_f32(h + 40);
     info->fit = get_f32(h + 44);
     if (info->tiles > (uint32_t)RSM_TMAP_TILES || info->stamp > RSM_TMAP_STAMP_MASK ||
-        !(info->fit >= 0.0f && info->fit <= 1.0f)) {
+        !(info->fit >= 0.0f && info->fit <= 1.0f) || !isfinite(info->pose.x) || !isfinite(info->pose.y) ||
+        !isfinite(info->pose.theta)) {
         return RSM_ERR_FORMAT;
     }
     info->bytes = file_bytes(info->tiles);
@@ -214,7 +226,9 @@ static int read_pass(rsm_mapfile_read_fn read, void *ctx, const rsm_tmap_config_
         decode_tile(&t, buf);
         /* What can be checked of a tile alone is checked in both passes;
          * a place held twice only shows in the second. */
-        if ((t.stamp >> 30) >= (uint32_t)cfg->levels || (t.stamp & RSM_TMAP_STAMP_MASK) > info->stamp) {
+        if ((t.stamp >> 30) >= (uint32_t)cfg->levels || (t.stamp & RSM_TMAP_STAMP_MASK) > info->stamp ||
+            t.tx <= -RSM_TMAP_TILE_LIMIT || t.tx >= RSM_TMAP_TILE_LIMIT || t.ty <= -RSM_TMAP_TILE_LIMIT ||
+            t.ty >= RSM_TMAP_TILE_LIMIT) {
             return RSM_ERR_FORMAT;
         }
         if (into != NULL && (rc = rsm_tmap_restore(into, &t)) != RSM_OK) {
@@ -248,10 +262,15 @@ int rsm_localizer_load_map(rsm_localizer_t *loc, rsm_mapfile_read_fn read, void 
         (void)rsm_tmap_init(map, &loc->cfg->tmap);
         return rc;
     }
-    /* The next scan is matched against the map, not written as a first. */
+    /* The next scan is matched against the map, not written as a first;
+     * a global search under way starts over in it. */
     loc->have_scan = 1u;
+    if (loc->state.persistent.global.phase != RSM_GLOBAL_IDLE) {
+        loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
+    }
     loc->state.persistent.written = loc->ekf.x;
     loc->state.persistent.fit = got.fit;
+    loc->state.persistent.map_fit = got.fit;
     if (info != NULL) {
         *info = got;
     }

@@ -247,7 +247,7 @@ static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t t
 int rsm_tmap_restore(rsm_tmap_t *map, const rsm_tile_t *t)
 {
     const uint32_t level = tile_level(t);
-    const int32_t lim = RSM_TMAP_CELL_LIMIT >> RSM_TMAP_TILE_LOG2;
+    const int32_t lim = RSM_TMAP_TILE_LIMIT;
     uint32_t h;
     if (level >= (uint32_t)map->cfg.levels || t->tx <= -lim || t->tx >= lim || t->ty <= -lim || t->ty >= lim ||
         (t->stamp & RSM_TMAP_STAMP_MASK) > map->stamp ||

@@ -122,6 +122,9 @@ float rsm_tmap_sample_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, f
  * a level, and its gradient per metre. Reentrant. */
 float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy);
 
+/* Tile coordinates stay within +-this (exclusive). */
+#define RSM_TMAP_TILE_LIMIT 32000
+
 /* Bits of rsm_tile_t.stamp that hold the write counter. */
 #define RSM_TMAP_STAMP_MASK 0x1FFFFFFFu
 

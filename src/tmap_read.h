@@ -12,7 +12,7 @@
 #define RSM_TMAP_TILE_MASK ((int32_t)RSM_TMAP_TILE_SIDE - 1)
 /* Cells beyond this from the origin (at any level) are refused, so that tile
  * coordinates fit int16 and cell arithmetic never overflows. */
-#define RSM_TMAP_CELL_LIMIT (32000 * RSM_TMAP_TILE_SIDE)
+#define RSM_TMAP_CELL_LIMIT (RSM_TMAP_TILE_LIMIT * RSM_TMAP_TILE_SIDE)
 
 /* A pair of tile (or cell) coordinates as one word: the cursor's key, and
  * what the index and the echo set hash. */

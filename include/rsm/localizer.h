@@ -310,11 +310,20 @@ typedef struct rsm_localizer {
             rsm_odometry_verdict_t held;          /* why it is held there: a stall (CAUGHT_UP),
                                                    * a refuted step, a large correction
                                                    * (RECOUNTED) */
+            float map_fit;                        /* how well the map's own scans fitted it: the
+                                                   * fit saved with a loaded map (0: none loaded),
+                                                   * the bar of a global search's proof */
             rsm_global_t global;                  /* the global search, when one runs */
         } persistent;                             /* RSM_METHOD_MAP */
     } state;
     rsm_point_t pts[RSM_MAX_BEAMS];      /* usable readings, robot frame */
-    rsm_point_t world[RSM_MAX_BEAMS];    /* the same in the world frame */
+    /* The usable readings in the world frame, which a map write spread
+     * over the next scans reads; no write runs during a global search,
+     * whose bound grids take the same memory. */
+    union {
+        rsm_point_t world[RSM_MAX_BEAMS];
+        uint8_t global_grid[RSM_GLOBAL_GRID_BYTES];
+    } frame;
     rsm_scan_trig_t trig;                /* the beam angles' cosines and sines */
     uint64_t last_stamp_us;
     uint32_t motions_at_scan;            /* counters.motions when the last scan came */
@@ -400,7 +409,10 @@ int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const floa
  * set and the estimate tracking again. Otherwise the search begins again
  * with that scan. Calling it during a search starts over. Returns RSM_OK;
  * RSM_ERR_INVAL for loc NULL or never initialised; RSM_ERR_NOSYS for
- * another method; RSM_ERR_DEGENERATE when the map is empty (loc unchanged). */
+ * another method; RSM_ERR_DEGENERATE when the map is empty, RSM_ERR_NOMEM
+ * when it is too wide for the search's grids (RSM_GLOBAL_SIDE blocks of at
+ * most 2^RSM_GLOBAL_MAX_BASE_H cells a side: about 8 km by default); loc
+ * unchanged on error. */
 int rsm_localizer_global(rsm_localizer_t *loc);
 
 /* 1 while a global search is under way (begun or to begin at the next

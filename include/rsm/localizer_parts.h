@@ -294,8 +294,9 @@ typedef struct rsm_global {
     rsm_point_t pts[RSM_GLOBAL_POINTS];  /* the searched scan's readings, robot frame */
     uint32_t npts;
     rsm_pose_t at;                 /* the estimate (odometry's) at the scan searched */
-    uint8_t grid[RSM_GLOBAL_GRID_BYTES];  /* max cell value per block, coarse level; grid g
-                                    * at grid_at[g], blocks of 2^(base_h + g) cells */
+    /* The bound grids (the caller's memory, RSM_GLOBAL_GRID_BYTES): the
+     * largest cell value per block, grid g at grid_at[g], blocks of
+     * 2^(base_h + g) cells. */
     uint32_t grid_at[RSM_GLOBAL_GRIDS];
     uint32_t grid_side[RSM_GLOBAL_GRIDS];
     uint32_t grids;

@@ -145,6 +145,6 @@ def test_skip_seconds_starts_later_in_the_log(tmp_path, head_log):
     short = tmp_path / "short.txt"
     nav(head_log, short, "--skip-seconds", "30", "--scans", "25")
     assert sorted(poses(short)) == b[:25]
-    for bad in ("0", "-3", "x"):
+    for bad in ("0", "-3", " -1", "x"):
         res = nav(head_log, short, "--scans", bad, ok=False)
         assert res.returncode == 2 and "--scans" in res.stderr, bad

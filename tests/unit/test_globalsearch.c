@@ -18,6 +18,7 @@
 #define PATH_CAP 600u
 
 static rsm_localizer_t loc;
+static rsm_localizer_t before;
 static rsm_localizer_config_t cfg;
 static rsm_synth_scan_config_t scan_cfg;
 static rsm_scan_t scan;
@@ -25,6 +26,8 @@ static rsm_pose_t path[PATH_CAP];
 static size_t path_len;
 static rsm_global_t g1;
 static rsm_global_t g2;
+static uint8_t grid1[RSM_GLOBAL_GRID_BYTES];
+static uint8_t grid2[RSM_GLOBAL_GRID_BYTES];
 
 void setUp(void)
 {
@@ -130,16 +133,16 @@ static void test_spread_search_finds_the_same(void)
     make_path();
     map_path(&world, path_len - 80u);
     map = &loc.state.persistent.map;
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g1, map, 0u, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, grid1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g1, grid1, map, 0u, NULL));
     TEST_ASSERT_TRUE(g1.found >= 1u);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
     do {
-        const uint32_t before = used;
-        more = rsm_global_run(&g2, map, 300u, &used);
+        const uint32_t prev = used;
+        more = rsm_global_run(&g2, grid2, map, 300u, &used);
         /* A run stops within one split of its budget: four children, four
          * reads a point each. */
-        TEST_ASSERT_TRUE(used - before <= 300u + 16u * RSM_GLOBAL_POINTS);
+        TEST_ASSERT_TRUE(used - prev <= 300u + 16u * RSM_GLOBAL_POINTS);
         runs++;
     } while (more);
     TEST_ASSERT_TRUE(runs > 3u);
@@ -147,7 +150,8 @@ static void test_spread_search_finds_the_same(void)
     TEST_ASSERT_EQUAL_UINT32(g1.work, used);
     TEST_ASSERT_EQUAL_UINT32(g1.found, g2.found);
     TEST_ASSERT_EQUAL_MEMORY(g1.cand, g2.cand, g1.found * sizeof g1.cand[0]);
-    /* The best kept pose is the true one, to a cell. */
+    /* The best kept pose is the true one, within two cells of the lattice
+     * (a kept pose stands for a cell of positions). */
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&g1.cand[0].pose, &loc.ekf.x) < 0.45f);
 }
 
@@ -163,13 +167,35 @@ static void test_a_symmetric_room_gives_no_pose(void)
     rsm_localizer_report_t rep;
     size_t k;
     path_len = rsm_synth_path(&start, legs, sizeof legs / sizeof legs[0], 0.05f, 0.05f, path, PATH_CAP);
+    uint32_t twins_seen = 0;
     map_path(&world, path_len / 2u);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
     for (k = path_len / 2u; k < path_len; ++k) {
+        const rsm_global_t *g = &loc.state.persistent.global;
         step(&loc, &world, k, &rep);
         TEST_ASSERT_EQUAL_INT(RSM_SCAN_SEARCHING, rep.outcome);
         TEST_ASSERT_EQUAL_INT(RSM_TRACK_LOST, rep.track);
+        if (g->phase == RSM_GLOBAL_PROVING) {
+            /* What the proof will weigh holds both poses the room cannot
+             * tell apart: one and the other turned half round about the
+             * room's centre (the origin), each as its basin's best, within
+             * two cells and two heading steps. */
+            uint32_t a;
+            uint32_t b;
+            int twins = 0;
+            for (a = 0; a < g->found; ++a) {
+                for (b = 0; b < g->found; ++b) {
+                    const rsm_pose_t *p = &g->cand[a].pose;
+                    const rsm_pose_t *q = &g->cand[b].pose;
+                    twins |= fabsf(p->x + q->x) < 0.45f && fabsf(p->y + q->y) < 0.45f &&
+                             fabsf(rsm_wrap_angle(p->theta - q->theta - RSM_PI)) < 4.5f * g->step_rad;
+                }
+            }
+            TEST_ASSERT_TRUE_MESSAGE(twins, "a search kept one of two poses that look alike");
+            twins_seen++;
+        }
     }
+    TEST_ASSERT_TRUE(twins_seen > 0u);
     TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.global_found);
     TEST_ASSERT_TRUE(loc.counters.global_ambiguous > 0u);
     TEST_ASSERT_TRUE(rsm_localizer_searching(&loc));
@@ -191,6 +217,58 @@ static void test_few_points_wait(void)
     TEST_ASSERT_EQUAL_INT(RSM_TRACK_LOST, rep.track);
     TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.global_searches);
     TEST_ASSERT_TRUE(rsm_localizer_searching(&loc));
+}
+
+/* Readings far beyond any map (a caller's max_range_m of 3e38) do not
+ * break the search: it runs and finds the robot among the others. */
+static void test_far_readings(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_localizer_report_t rep;
+    size_t k;
+    size_t found = 0;
+    make_path();
+    cfg.limits.max_range_m = 3.0e38f;
+    map_path(&world, path_len - 80u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    for (k = path_len - 80u; k < path_len && found == 0u; ++k) {
+        const rsm_motion_t u = rsm_synth_motion(&path[k - 1u], &path[k], NULL);
+        size_t b;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &path[k], &scan_cfg, NULL, (uint64_t)k * STEP_US, &scan));
+        for (b = 0; b < scan.count; b += 7u) {
+            scan.range_m[b] = 1.0e30f;
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+        if (rep.outcome != RSM_SCAN_SEARCHING) {
+            found = k;
+        }
+    }
+    TEST_ASSERT_TRUE(found > 0u);
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &path[found]) < 0.1f);
+}
+
+/* A map wider than the search's grids can bound is refused up front, not
+ * searched for ever. */
+static void test_too_wide_a_map(void)
+{
+    const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+    rsm_tile_t t;
+    uint32_t level;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &zero, NULL));
+    memset(&t, 0, sizeof t);
+    memset(t.cell, 0x88, sizeof t.cell);
+    for (level = 0; level < (uint32_t)cfg.tmap.levels; ++level) {
+        t.stamp = level << 30;
+        t.tx = -30000;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(&loc.state.persistent.map, &t));
+        t.tx = 30000;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(&loc.state.persistent.map, &t));
+    }
+    before = loc;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_NOMEM, rsm_localizer_global(&loc));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &loc, sizeof loc);
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_fits(&loc.state.persistent.map));
 }
 
 static void test_bad_calls(void)
@@ -223,6 +301,8 @@ int main(void)
     RUN_TEST(test_spread_search_finds_the_same);
     RUN_TEST(test_a_symmetric_room_gives_no_pose);
     RUN_TEST(test_few_points_wait);
+    RUN_TEST(test_far_readings);
+    RUN_TEST(test_too_wide_a_map);
     RUN_TEST(test_bad_calls);
     return UNITY_END();
 }

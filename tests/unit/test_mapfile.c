@@ -204,7 +204,7 @@ static void test_run_after_load_is_the_same(void)
     map_room(at);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_save_map(&loc, store_write, &store, NULL));
     /* The mapper's map, its write finished as a load would find it. */
-    while (rsm_tmap_write_run(&loc.state.persistent.map, loc.world, 0u) != 0) {
+    while (rsm_tmap_write_run(&loc.state.persistent.map, loc.frame.world, 0u) != 0) {
     }
     memset(&store, 0, sizeof store);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_save_map(&loc, store_write, &store, NULL));
@@ -349,6 +349,23 @@ static void test_foreign_maps_are_refused(void)
     forge(RSM_MAPFILE_HEADER_BYTES + 7u, (uint8_t)(copy.bytes[RSM_MAPFILE_HEADER_BYTES + 7u] | 0xC0u));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT, rsm_localizer_load_map(&other, store_read, &store, NULL));
     forge(RSM_MAPFILE_HEADER_BYTES + 6u, 0x10u);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT, rsm_localizer_load_map(&other, store_read, &store, NULL));
+    /* A first tile beyond the coordinates a map holds: the first pass,
+     * which writes nothing, refuses it. */
+    forge(RSM_MAPFILE_HEADER_BYTES + 1u, 0x7Fu);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT, rsm_localizer_load_map(&other, store_read, &store, NULL));
+    forge(RSM_MAPFILE_HEADER_BYTES + 3u, 0x80u);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT, rsm_localizer_load_map(&other, store_read, &store, NULL));
+    /* A pose that is not one (NaN x). */
+    forge(35u, 0x7Fu);
+    store.bytes[34] = 0xC0u;
+    {
+        const uint32_t crc = rsm_crc32(0u, store.bytes, store.len - 4u);
+        store.bytes[store.len - 4u] = (uint8_t)(crc & 0xFFu);
+        store.bytes[store.len - 3u] = (uint8_t)((crc >> 8) & 0xFFu);
+        store.bytes[store.len - 2u] = (uint8_t)((crc >> 16) & 0xFFu);
+        store.bytes[store.len - 1u] = (uint8_t)(crc >> 24);
+    }
     TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT, rsm_localizer_load_map(&other, store_read, &store, NULL));
     assert_untouched();
     /* Another cell size in the loading configuration. */

@@ -439,7 +439,7 @@ static void print_json(run_t *r)
                                           sizeof loc->state.paper.pt_cur + sizeof loc->state.paper.pt_ref);
     LOC_PART("state.paper.matches", sizeof loc->state.paper.matches);
     LOC_PART("state.icp", sizeof loc->state.icp);
-    LOC_PART("points", sizeof loc->pts + sizeof loc->world);
+    LOC_PART("points", sizeof loc->pts + sizeof loc->frame.world);
     LOC_PART("counters", sizeof loc->counters);
     LOC_PART("last", sizeof loc->last);
     LOC_PART("rsm_scan_t", sizeof(rsm_scan_t));

@@ -357,7 +357,9 @@ typedef struct pgm_image {
 static int read_pgm(const char *path, pgm_image_t *img, char *err, size_t errcap)
 {
     size_t len = 0;
-    unsigned char *buf = read_all(path, "image", 0, &len, err, errcap);
+    /* No PGM this reader takes is larger: a device or a huge file is
+     * refused before it fills memory. */
+    unsigned char *buf = read_all(path, "image", (long)(PGM_MAX_PIXELS + 4096.0), &len, err, errcap);
     pgm_t p;
     long w;
     long h;
@@ -398,7 +400,12 @@ static int read_pgm(const char *path, pgm_image_t *img, char *err, size_t errcap
         free(buf);
         return -1;
     }
-    if (maxval > 255 && maxval <= 65535) {
+    if (maxval > 65535) {
+        say(err, errcap, "%s: PGM maxval %ld is beyond 65535: not a PGM", path, maxval);
+        free(buf);
+        return -1;
+    }
+    if (maxval > 255) {
         say(err, errcap, "%s: 16-bit PGM (maxval %ld) is not supported: save the map with 8 bits (maxval 255)",
             path, maxval);
         free(buf);
@@ -541,8 +548,9 @@ int rsm_rosmap_load(const char *yaml_path, rsm_localizer_t *loc, rsm_import_repo
     grid.yaw_rad = (float)y.origin[2];
     grid.coarse = RSM_IMPORT_SHARE;
     /* What the import would refuse, refused before loc's map is emptied. */
-    if (!isfinite(grid.res_m) || !isfinite(grid.origin_x) || !isfinite(grid.origin_y) || !isfinite(grid.yaw_rad)) {
-        say(err, errcap, "%s: resolution or origin out of range", yaml_path);
+    if (!(grid.res_m > 0.0f && grid.res_m <= 1.0e3f) || !isfinite(grid.origin_x) || !isfinite(grid.origin_y) ||
+        !isfinite(grid.yaw_rad)) {
+        say(err, errcap, "%s: resolution (above 0, at most 1000 m) or origin out of range", yaml_path);
         return -1;
     }
     if (loc->magic == (uint32_t)RSM_LOCALIZER_MAGIC && loc->cfg != NULL &&

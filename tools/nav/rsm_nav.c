@@ -412,18 +412,32 @@ static int nav_load_map(nav_t *nav)
 /* --save-map at the end of a run. */
 static int nav_save_map(nav_t *nav)
 {
+    char tmp[4096];
     rsm_mapfile_info_t info;
     int rc;
-    FILE *f = fopen(nav->save_map, "wb");
+    FILE *f;
+    /* Written beside and renamed over: a failed save leaves the old map,
+     * not half a new one. */
+    if (snprintf(tmp, sizeof tmp, "%s.part", nav->save_map) >= (int)sizeof tmp) {
+        fprintf(stderr, "rsm-nav: the map path %s is too long\n", nav->save_map);
+        return -1;
+    }
+    f = fopen(tmp, "wb");
     if (f == NULL) {
-        fprintf(stderr, "rsm-nav: cannot write the map %s: %s\n", nav->save_map, strerror(errno));
+        fprintf(stderr, "rsm-nav: cannot write the map %s: %s\n", tmp, strerror(errno));
         return -1;
     }
     rc = rsm_localizer_save_map(&nav->loc, file_write, f, &info);
     if (fclose(f) != 0 && rc == RSM_OK) {
         rc = RSM_ERR_IO;
     }
+    if (rc == RSM_OK && rename(tmp, nav->save_map) != 0) {
+        fprintf(stderr, "rsm-nav: cannot rename %s to %s: %s\n", tmp, nav->save_map, strerror(errno));
+        (void)remove(tmp);
+        return -1;
+    }
     if (rc != RSM_OK) {
+        (void)remove(tmp);
         fprintf(stderr, "rsm-nav: cannot save the map %s: %s\n", nav->save_map, rsm_strerror(rc));
         return -1;
     }
@@ -460,7 +474,8 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
         fprintf(stderr, "rsm-nav: the start pose from %s is not finite (%g %g %g)\n", where, x, y, th);
         return -1;
     }
-    if (fabs(x) > NAV_LOCAL_FRAME_M || fabs(y) > NAV_LOCAL_FRAME_M) {
+    /* A loaded map is in its own frame: poses are its, not shifted. */
+    if (nav->load_map == NULL && (fabs(x) > NAV_LOCAL_FRAME_M || fabs(y) > NAV_LOCAL_FRAME_M)) {
         nav->off_x = x;
         nav->off_y = y;
     }
@@ -1632,7 +1647,7 @@ int main(int argc, char **argv)
         case OPT_SCANS: {
             char *end = NULL;
             const unsigned long long v = strtoull(optarg, &end, 10);
-            if (end == optarg || *end != '\0' || v == 0u || optarg[0] == '-') {
+            if (end == optarg || *end != '\0' || v == 0u || strchr(optarg, '-') != NULL) {
                 fprintf(stderr, "rsm-nav: bad --scans '%s' (a count, 1 or more)\n", optarg);
                 return 2;
             }

@@ -18,7 +18,10 @@ report (``docs/RESULTS.md`` by default) has these sections:
    the main log, 43 % and 60 % on every log; and rsm over many runs (the map
    update distance varied) clean and at 43 %, whose means the floors compare
    too; and rsm on copies of every log with odometry and sampling faults
-   (:mod:`rsm_tools.faults`; the subsection "Faults", :mod:`.faults`).
+   (:mod:`rsm_tools.faults`; the subsection "Faults", :mod:`.faults`); and rsm
+   on a map it saved: the round trip, localization mode and the global
+   search from starts spread over every log (the subsection "Known map",
+   :mod:`.knownmap`; ``--only knownmap`` runs it alone).
 3. Sharp turns, the paper's Fig. 8: residuals at the local relations with the
    fastest true turn, and over all local relations binned by true rotation.
 4. Speed: wall time per scan (rsm-nav), per stage (``rsm-stages``, the
@@ -73,6 +76,8 @@ from .measure import (build_small, cmake_cache, cpu_info, discover_logs, hash_lo
     run_robustness, run_scaling, run_speed, run_spread, run_stage_speed, run_stages, run_turns, scaling_variants,
     shared_dir, source_digest, spread_updates, stages_exe, variant_header, write_head)
 from .faults import FAULT_RUNS, QUICK_FAULT_RUNS, fault_floors, run_faults
+from .knownmap import QUICK_STARTS, STARTS, START_SCANS, knownmap_floors, run_knownmap
+from . import knownmap as _knownmap
 from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors,
     context_from_manifest, floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_report)
 
@@ -133,6 +138,14 @@ def build_parser() -> argparse.ArgumentParser:
                    f"(default {SPREAD_SEEDS}; quick: as --seeds)")
     p.add_argument("--faults", type=int, help=f"runs per fault of the section Faults (rsm-faults on every log, "
                    f"twice as many clean runs; default {FAULT_RUNS}; quick {QUICK_FAULT_RUNS}; 0: skip)")
+    p.add_argument("--global-starts", type=int, help=f"starts per log of the section Known map's global "
+                   f"localization, spread evenly over the log (default {STARTS}; quick {QUICK_STARTS}; 0: skip the "
+                   "section)")
+    p.add_argument("--global-scans", type=int, default=START_SCANS, help=f"scans each of those starts runs at most "
+                   f"(default {START_SCANS})")
+    p.add_argument("--only", choices=("knownmap",), help="run one section alone and write it into the existing "
+                   "report and the work directory's manifest, the rest left as it is: knownmap (the section Known "
+                   "map; with --global-starts, --global-scans, --quick, --jobs, --shared, --output, --work-dir)")
     p.add_argument("--speed-repeats", type=int, help=f"timed runs per method (default {SPEED_REPEATS}; quick 1)")
     p.add_argument("--callgrind-scans", type=int, default=CALLGRIND_SCANS,
                    help=f"scans from the start of every log counted by callgrind (default {CALLGRIND_SCANS})")
@@ -189,7 +202,7 @@ def run(args: argparse.Namespace) -> Path:
     if not nav.is_file():
         raise BenchError(f"rsm-nav is not built: {nav} (run ./tools/bench, which builds it)")
     stages_bin = stages_exe(build)
-    if not stages_bin.is_file():
+    if not stages_bin.is_file() and args.only is None:
         raise BenchError(f"rsm-stages is not built: {stages_bin} (run ./tools/bench, which builds it)")
     shared = shared_dir(args.shared, root)
     data = shared / "data"
@@ -214,6 +227,24 @@ def run(args: argparse.Namespace) -> Path:
     work.mkdir(parents=True, exist_ok=True)
     main_label, main_log, main_rel = logs[0]
     stage_seconds: Dict[str, float] = {}
+    nstarts = args.global_starts if args.global_starts is not None else (QUICK_STARTS if args.quick else STARTS)
+    if args.global_scans < 1:
+        raise BenchError("--global-scans must be at least 1")
+    km_jobs = max(args.jobs, os.cpu_count() or 1)  # the section's many short runs: every core
+    if args.only == "knownmap":
+        if nstarts < 1:
+            raise BenchError("--only knownmap needs --global-starts of at least 1")
+        print("rsm-bench: logs " + ", ".join(f"{l} ({shown_path(g, root)})" for l, g, _ in logs) + "; known map only",
+              flush=True)
+        km, floors = _knownmap.run_only(nav, logs, work, km_jobs, nstarts, args.global_scans,
+                                        stages_bin if stages_bin.is_file() else None, provenance(root, build),
+                                        output, SECTION_TITLES[2])
+        print("rsm-bench: the section's floors:")
+        for f in floors:
+            print(f"  {f['line']}")
+        print(f"rsm-bench: known map in {km['seconds']:.0f} s; wrote its section into {output} and "
+              f"{work / 'bench.json'}")
+        return output
 
     def stage(name, fn, *a):
         print(f"rsm-bench: {name} ...", flush=True)
@@ -272,6 +303,11 @@ def run(args: argparse.Namespace) -> Path:
     reuse = None if "skipped" in ctx["spread"] else (work / "spread", ctx["spread"]["updates"])
     ctx["faults"] = ({"skipped": "--faults 0"} if nfaults <= 0 else
                      stage("faults", run_faults, nav, logs, nfaults, work, args.jobs, reuse))
+    ctx["knownmap"] = ({"skipped": "--global-starts 0"} if nstarts <= 0 else
+                       stage("known map", run_knownmap, nav, logs, work, km_jobs, nstarts, args.global_scans,
+                             stages_bin))
+    if "skipped" not in ctx["knownmap"]:
+        ctx["knownmap"]["provenance"] = prov
     sanitized = cmake_cache(build).get("RSM_SANITIZE", "OFF").upper() in ("ON", "TRUE", "1", "YES")
     painted = not (args.no_stack or sanitized)
     if not painted:
@@ -332,7 +368,8 @@ def run(args: argparse.Namespace) -> Path:
                                   "its figures may come from different code: run it again")
         print(f"rsm-bench: WARNING: {ctx['sources_changed']}", flush=True)
     ctx["floors"] = (check_floors(**floor_inputs(ctx)) + m4_floors(ctx.get("m4")) +
-                     spread_floors(ctx.get("spread")) + fault_floors(ctx.get("faults")) + ctx["full_checks"] +
+                     spread_floors(ctx.get("spread")) + fault_floors(ctx.get("faults")) +
+                     knownmap_floors(ctx.get("knownmap")) + ctx["full_checks"] +
                      ctx["lidar_streams"] + ctx["corridors"])
     ctx["losses"] = losses(ctx)
     ctx["elapsed"] = time.monotonic() - t_start

@@ -16,6 +16,7 @@ from .common import (CG_STAGE_ORDER, DRIVER_OBJECTS, HOST_PARTS, LOCAL_SPAN, MEM
     QUANTITIES, ROBUST_METHODS, SCOPES, SECTION_TITLES, SMALL, SMALL_HEADER, STAGES, STAGE_WHAT, UNITS, BenchError,
     cg_run, find_root, fmt_int, fmt_pct, fmt_q, fmt_ratio, provenance_line, ratio, run_labels, shown_path)
 from .faults import report_faults
+from .knownmap import report_knownmap
 from .parse import best_peers, fused_percent
 
 
@@ -1247,7 +1248,7 @@ def write_report(ctx: dict) -> str:
 
     sections = (
         report_accuracy(ctx, root),
-        report_robustness(ctx, root) + report_faults(ctx.get("faults")),
+        report_robustness(ctx, root) + report_faults(ctx.get("faults")) + report_knownmap(ctx.get("knownmap")),
         report_turns(ctx.get("turns"), main, root) + (
             [f"![Residuals at the sharpest turns and by true rotation]({ctx['turns_plot']})", ""]
             if ctx.get("turns") and ctx.get("turns_plot") else

@@ -1,0 +1,278 @@
+"""The bench's section "Known map" (rsm_tools.bench.knownmap) on made-up
+inputs: where the global starts go, how a first pose is judged against the
+mapping run's, which starts count as held, the figures and floors of a log,
+the report and how --only knownmap writes the section into an existing
+report and manifest: no rsm-nav run, no full log."""
+
+import json
+import math
+import struct
+import zlib
+
+import pytest
+
+from rsm_tools import bench
+from rsm_tools.bench import knownmap as km
+from rsm_tools.bench.common import SECTION_TITLES, BenchError
+
+
+def saved_map(tiles, fit=0.9, pose=(1.0, 2.0, 0.5), writes=7):
+    """A made-up saved map (docs/mapfile.md): header, 40-byte tiles, CRC."""
+    head = b"RSMM" + struct.pack("<HHIfBBBBBBHII", 1, 48, 0x1234, 0.05, 4, 3, 15, 3, 1, 1, 0, len(tiles), writes)
+    head += struct.pack("<ffff", *pose, fit)
+    assert len(head) == km.HEADER_BYTES
+    body = head + b"".join(tiles)
+    return body + struct.pack("<I", zlib.crc32(body))
+
+
+def start(v="right", held=True, scan=5, work=1000, most=100, searches=1, scans=400, cap=400, fit=None):
+    s = {"verdict": v, "held": held, "fit_ratio": fit, "first_trusted_scan": scan if v != "none" else None,
+         "work": work, "max_work_per_scan": most, "searches": searches, "scans": scans, "cap": cap}
+    return s
+
+
+def test_starts_are_spread_evenly_from_the_logs_start():
+    assert km.start_offsets(100.0, 4) == [0.0, 25.0, 50.0, 75.0]
+    s = km.start_offsets(2691.287, 100)
+    assert len(s) == 100 and s[0] == 0.0 and s[-1] < 2691.287
+    assert all(math.isclose(b - a, 26.91287, abs_tol=0.002) for a, b in zip(s, s[1:]))
+    assert km.start_offsets(100.0, 0) == [] and km.start_offsets(0.0, 5) == []
+
+
+def test_tiles_of_a_saved_map_are_between_header_and_crc():
+    tiles = [bytes([k]) * 40 for k in range(3)]
+    a = saved_map(tiles, fit=0.86)
+    b = saved_map(tiles, fit=0.03, pose=(5.0, 6.0, 1.0))  # the same map saved again by a frozen run
+    assert a != b and km.map_tiles(a) == km.map_tiles(b) == b"".join(tiles)
+    assert km.map_tile_count(a) == 3
+    assert math.isclose(km.map_fit(a), 0.86, rel_tol=1e-6) and math.isclose(km.map_fit(b), 0.03, rel_tol=1e-6)
+    assert km.map_tiles(saved_map([])) == b""
+    with pytest.raises(BenchError):
+        km.map_tiles(b"NOPE" + a[4:])
+    with pytest.raises(BenchError):
+        km.map_tiles(a[:40])
+
+
+def test_a_first_pose_is_right_wrong_or_in_between():
+    ref = (10.0, -5.0, 1.0)
+    assert km.verdict((10.05, -5.05, 1.0 + math.radians(1.9)), ref) == "right"  # 0.071 m, 1.9 deg
+    assert km.verdict((10.1, -5.0, 1.0), ref) == "right"  # on the limit
+    assert km.verdict((10.2, -5.0, 1.0), ref) == "between"
+    assert km.verdict((10.0, -5.0, 1.0 + math.radians(3.0)), ref) == "between"
+    assert km.verdict((10.0, -5.51, 1.0), ref) == "wrong"
+    assert km.verdict((10.0, -5.0, 1.0 - math.radians(5.1)), ref) == "wrong"
+    assert km.verdict((10.9, -5.0, 1.0), ref) == "wrong"  # ACES's 0.9 m off
+    assert km.verdict(None, ref) == "none"
+    assert km.verdict((10.0, -5.0, 1.0), None) == "no reference"
+    # headings compared across the wrap
+    m, deg = km.pose_error((0.0, 0.0, math.pi - 0.01), (0.0, 0.0, -math.pi + 0.01))
+    assert m == 0.0 and math.isclose(deg, math.degrees(0.02), rel_tol=1e-9)
+
+
+def test_held_rule_on_the_first_scans_fit_ratio():
+    assert km.held(0.8) is True and km.held(1.6) is True
+    assert km.held(0.7999) is False and km.held(0.0) is False
+    assert km.held(None) is None and km.held(float("nan")) is None
+
+
+def test_trajectory_and_scan_log_are_read_from_their_first_line(tmp_path):
+    t = tmp_path / "g.txt"
+    t.write_text("# rsm-nav trajectory\n# source: x\n")
+    assert km.first_pose(t) is None  # --global proved no pose: no line
+    t.write_text("# rsm-nav trajectory\n976053859.281192 10.171115 -5.205734 1.618027\n976053859.4 10.2 -5.2 1.6\n")
+    assert km.first_pose(t) == (976053859.281192, 10.171115, -5.205734, 1.618027)
+    s = tmp_path / "g.scans"
+    s.write_text("# rsm-nav scan log: timestamp[s] outcome tracking odometry recovered fit_ratio\n"
+                 "976053857.376673 accepted tracking trusted 1 0.9747\n976053857.4 accepted tracking trusted 0 0.9\n")
+    assert km.first_scan(s) == (976053857.376673, "accepted", 0.9747)
+    s.write_text("# nothing\n")
+    assert km.first_scan(s) is None
+
+
+def test_a_start_is_judged_from_its_summary_and_first_pose():
+    summary = {"scans": 400, "global": {"searches": 2, "found": 1, "not_proven": 1, "work": 123456,
+                                        "max_work_per_scan": 20001, "first_trusted_scan": 17,
+                                        "first_trusted_stamp": 100.5}}
+    e = km.judge_start((100.5, 1.02, 2.0, 0.0), (1.0, 2.0, 0.0), summary, 0.95)
+    assert e["verdict"] == "right" and e["held"] is True and e["first_trusted_scan"] == 17
+    assert (e["work"], e["max_work_per_scan"], e["searches"]) == (123456, 20001, 2)
+    assert math.isclose(e["error_m"], 0.02) and e["error_deg"] == 0.0 and e["stamp"] == 100.5
+    none = {"scans": 400, "global": {"searches": 1, "found": 0, "work": 8e6, "max_work_per_scan": 21000,
+                                     "first_trusted_scan": 0, "first_trusted_stamp": 0.0}}
+    e = km.judge_start(None, None, none, 0.5)
+    assert e["verdict"] == "none" and e["held"] is False and e["first_trusted_scan"] is None
+    assert e["error_m"] is None and e["pose"] is None
+
+
+def test_figures_of_a_log_count_unheld_starts_apart():
+    starts = ([start("right", scan=3)] * 89 + [start("right", scan=40)] * 2 + [start("between", scan=8)]
+              + [start("none", scans=120)] + [start("none")] * 2
+              + [start("wrong", held=False, scan=4)] + [start("none", held=False)] * 3
+              + [start("right", held=None, scan=6)])  # held check not judged: counted held
+    s = km.aggregate(starts)
+    assert (s["starts"], s["held"], s["not_held"], s["not_judged"]) == (100, 96, 4, 1)
+    assert s["counts"]["right"] == 92 and s["right_within"] == 90  # two after 40 scans
+    assert (s["counts"]["between"], s["counts"]["none"], s["counts"]["wrong"]) == (1, 3, 0)
+    assert s["none_log_ended"] == 1  # ran 120 of its 400 scans: the log ended
+    assert s["wrong_all"] == 1 and s["wrong_not_held"] == 1  # a wrong pose counts, held or not
+    assert s["found_not_held"] == 1
+    assert s["scans_to_pose"]["n"] == 93 and s["scans_to_pose"]["median"] == 3 and s["scans_to_pose"]["max"] == 40
+    assert s["searches"] == 100
+    assert km.right_needed(100) == 95 and km.right_needed(96) == 92 and km.right_needed(20) == 19
+    assert km.right_needed(0) == 0
+
+
+def section(per_log, cap=400, n=100):
+    """A made-up result of run_knownmap: per log (starts, mapping, frozen, updates, identical, same)."""
+    out = {"starts": n, "cap": cap, "jobs": 2, "within": km.WITHIN_SCANS, "held_note": km.HELD_NOTE,
+           "seconds": 12.3, "logs": {}}
+    for label, (starts, mp, fr, up, ident, same) in per_log.items():
+        runs = {name: {"all": v, "all_rotation": 0.2, "local": v / 2, "local_rotation": 0.1, "matched": 10,
+                       "writes": 5, "fit": 0.9, "seconds": 1.0}
+                for name, v in (("mapping", mp), ("frozen", fr), ("updates", up))}
+        out["logs"][label] = {
+            "log": f"{label}.clf.gz", "scans": 1000, "span_s": 500.0,
+            "round_trip": {"bytes": 104052, "tiles": 2600, "bytes_again": 104052, "tiles_again": 2600,
+                           "identical": ident, "header_identical": False, "trajectory_same": same,
+                           "fit": 0.8649, "fit_again": 0.0349},
+            "state": {"state.persistent": 119072, "state.persistent.map": 114600,
+                      "state.persistent.map.tile": 104000, "state.persistent.map.hash": 8192},
+            "runs": runs, "starts": starts, "summary": km.aggregate(starts)}
+    return out
+
+
+def test_floors_on_made_up_numbers():
+    good = [start("right", scan=4)] * 95 + [start("none")] * 5
+    bad = [start("right", scan=4)] * 80 + [start("wrong", scan=2)] + [start("none")] * 9 + \
+          [start("none", held=False)] * 10
+    fl = km.knownmap_floors(section({"a": (good, 0.015, 0.015, 0.014, True, True),
+                                     "b": (bad, 0.06, 5.75, 0.1069, True, False)}))
+    got = [(f["log"], f["kind"], f["status"]) for f in fl]
+    assert got == [("a", "knownmap-roundtrip", "PASS"), ("a", "knownmap-localization", "PASS"),
+                   ("a", "knownmap-localization", "PASS"), ("a", "knownmap-global", "PASS"),
+                   ("a", "knownmap-wrong", "PASS"), ("a", "knownmap-cost", "SKIP"),
+                   ("b", "knownmap-roundtrip", "MISS"), ("b", "knownmap-localization", "MISS"),
+                   ("b", "knownmap-localization", "MISS"), ("b", "knownmap-global", "MISS"),
+                   ("b", "knownmap-wrong", "MISS"), ("b", "knownmap-cost", "SKIP")]
+    assert all(": known map, " in f["line"] and f["line"].startswith(f["status"] + " ") for f in fl)
+    g = fl[9]
+    assert (g["value"], g["limit"]) == (80, 86)  # 95 % of the 90 held starts
+    assert "100 starts (10 not held by the map, counted apart): 80 of 90 held starts" in g["line"]
+    assert "9 gave none within 400 scans" in g["line"]
+    assert "1 gave a trusted pose more than 0.5 m or 5 deg off > 0" in fl[10]["line"]
+    assert "0.8649 and 0.0349" in fl[6]["line"]  # why the trajectory differs: the header's fit
+    assert "5.7500 m > the mapping run's 0.0600 m" in fl[7]["line"]
+    assert "not measured" in fl[5]["line"] and "M4" in fl[5]["line"]
+    assert "median 4, worst 4 scans" in fl[3]["line"]
+    # equal to the mapping run's error is at it: a PASS
+    eq = km.knownmap_floors(section({"a": (good, 0.015, 0.015, 0.015, True, True)}))
+    assert [f["status"] for f in eq if f["kind"] == "knownmap-localization"] == ["PASS", "PASS"]
+    # no held start at all cannot pass
+    none_held = km.knownmap_floors(section({"a": ([start("none", held=False)] * 3, 0.01, 0.01, 0.01, True, True)}))
+    assert next(f for f in none_held if f["kind"] == "knownmap-global")["status"] == "MISS"
+    assert km.knownmap_floors({"skipped": "--global-starts 0"}) == [] and km.knownmap_floors(None) == []
+
+
+def test_report_section_holds_the_tables_and_the_floors():
+    s = section({"intel": ([start("right", scan=4)] * 3 + [start("none", held=False)], 0.0152, 0.0215, 0.0153,
+                           True, True)}, n=4)
+    s["provenance"] = {"date": "2026-12-04 21:00 UTC", "cpu": "CPU", "cores": 2, "compiler": "cc", "build_type":
+                       "Release", "build_flags": "", "commit": "abc"}
+    text = "\n".join(km.report_knownmap(s))
+    assert text.startswith("### Known map\n\nMeasured 2026-12-04 21:00 UTC on CPU (2 cores)")
+    for anchor in ("knownmap round trip", "knownmap localization", "knownmap global"):
+        assert f"<!-- table: {anchor} -->" in text
+    assert "| intel | 104 052 | 2 600 | 114 600 | 104 000 | yes | yes |" in text
+    assert "| intel | localization, frozen | 0.0215 |" in text
+    assert "| intel | 4 | 1 | 3 | 3 | 0 | 0 | 0 | 4 / 4 |" in text
+    assert "fit_ratio" in text and "at least 0.8" in text  # the held rule is said
+    assert "not measured here" in text  # the M4's cost
+    for f in km.knownmap_floors(s):
+        assert f["line"] in text
+    assert km.report_knownmap(None)[-2] == "Not measured in this run."
+    assert "--global-starts 0" in km.report_knownmap({"skipped": "--global-starts 0"})[-2]
+
+
+REPORT = """# rsm benchmark results
+
+## Headline
+
+The issue's floors (section 7):
+
+```
+PASS intel: a
+{old_headline}MISS aces: b
+```
+
+## 2. Robustness to outliers
+
+### Faults
+
+faults text
+{old_section}
+## 3. Sharp turns (the paper's Fig. 8)
+
+text
+
+## 7. The issue's floors
+
+{count}
+
+```
+PASS intel: a
+{old_headline}MISS aces: b
+```
+
+## 8. Where rsm loses
+"""
+
+
+def test_only_knownmap_splices_its_section_and_floors_into_a_report():
+    first = REPORT.format(old_headline="", old_section="", count="1 PASS, 1 MISS:")
+    floors = ["PASS intel: known map, round trip", "MISS intel: known map, global", "SKIP intel: known map, cost"]
+    section_ = ["### Known map", "", "new text", ""]
+    once = km.splice_report(first, section_, floors, SECTION_TITLES[2])
+    assert once.count("### Known map") == 1
+    assert once.index("### Faults") < once.index("### Known map\n\nnew text") < once.index("## 3. Sharp")
+    assert "2 PASS, 2 MISS, 1 SKIP:" in once
+    for block in once.split("```")[1::2]:
+        assert block.splitlines()[1:] == ["PASS intel: a", "MISS aces: b"] + floors
+    # again with other figures: replaced where they were, nothing doubled
+    floors2 = ["PASS intel: known map, round trip", "PASS intel: known map, global"]
+    twice = km.splice_report(once, ["### Known map", "", "newer text", ""], floors2, SECTION_TITLES[2])
+    assert "new text" not in twice and twice.count("newer text") == 1
+    assert "3 PASS, 1 MISS:" in twice
+    for block in twice.split("```")[1::2]:
+        assert block.splitlines()[1:] == ["PASS intel: a", "MISS aces: b"] + floors2
+    assert twice.endswith("## 8. Where rsm loses\n")
+    # the old lines in the middle of a block: the new ones take their place
+    mid = REPORT.format(old_headline="MISS intel: known map, old\n", old_section="", count="1 PASS, 2 MISS:")
+    out = km.splice_report(mid, section_, floors2, SECTION_TITLES[2])
+    assert out.split("```")[1].splitlines()[1:] == ["PASS intel: a"] + floors2 + ["MISS aces: b"]
+    with pytest.raises(BenchError):
+        km.splice_report("# nothing\n", section_, floors, SECTION_TITLES[2])
+
+
+def test_only_knownmap_merges_into_the_manifest_after_the_faults_floors():
+    man = {"accuracy": {"x": 1}, "floors": [{"kind": "peers", "line": "a"}, {"kind": "faults", "line": "b"},
+                                            {"kind": "faults-recovery", "line": "c"}, {"kind": "data", "line": "d"}]}
+    new = [{"kind": "knownmap-global", "line": "k1"}, {"kind": "knownmap-cost", "line": "k2"}]
+    m = km.merge_manifest(man, {"starts": 3}, new)
+    assert [f["line"] for f in m["floors"]] == ["a", "b", "c", "k1", "k2", "d"]
+    assert m["knownmap"] == {"starts": 3} and m["accuracy"] == {"x": 1} and "knownmap" not in man
+    m2 = km.merge_manifest(m, {"starts": 4}, new[:1])
+    assert [f["line"] for f in m2["floors"]] == ["a", "b", "c", "k1", "d"]
+    assert [f["line"] for f in km.merge_manifest({}, {}, new)["floors"]] == ["k1", "k2"]
+    json.dumps(m2)
+
+
+def test_bench_options_of_the_section():
+    p = bench.build_parser()
+    a = p.parse_args(["--only", "knownmap", "--global-starts", "7", "--global-scans", "50"])
+    assert (a.only, a.global_starts, a.global_scans) == ("knownmap", 7, 50)
+    a = p.parse_args([])
+    assert a.only is None and a.global_starts is None and a.global_scans == km.START_SCANS
+    with pytest.raises(SystemExit):
+        p.parse_args(["--only", "accuracy"])
+    text = p.format_help()
+    assert "--only" in text and "knownmap" in text and "--global-starts" in text

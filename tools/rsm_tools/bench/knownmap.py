@@ -1,0 +1,575 @@
+"""The bench's section "Known map": rsm on a map it saved (issue 31), every log, the default configuration.
+
+For every log:
+
+1. *Round trip*: the whole log with ``rsm-nav --save-map`` (the mapping
+   run); then the whole log again with ``--load-map MAP --freeze-map
+   --save-map AGAIN``: the tiles of AGAIN (every byte between the 48-byte
+   header and the 4-byte CRC, docs/mapfile.md) must be those of MAP, and a
+   frozen run on AGAIN must write the same trajectory as the one on MAP
+   (the header differs: it holds the pose and the fit at the save). The
+   saved size and tiles are shown beside the map's part of the localizer
+   state (rsm-stages' ``sizeof``).
+2. *Localization mode*: the whole log on the saved map, frozen
+   (``--freeze-map``) and with updates (``--load-map`` alone), from the log's
+   first pose as the mapping run; the error of the bench
+   (:mod:`rsm_tools.evaluate`, all relations and local ones, exact stamps)
+   beside the mapping run's. Floor: at or below the mapping run's.
+3. *Global localization*: ``starts`` starts spread evenly over the log (start
+   k at k/starts of its span), each ``--load-map MAP --freeze-map --global
+   --skip-seconds S --scans CAP``: no start pose, the log resumed at S, at
+   most CAP scans. The first trusted pose (the trajectory's first line) is
+   compared with the mapping run's pose at the same stamp: *right* within
+   RIGHT_M and RIGHT_DEG, *wrong* beyond WRONG_M or WRONG_DEG, else *between*;
+   *none* when no pose came within the CAP scans. Scans to it
+   (``first_trusted_scan``), the map cells the search read in all
+   (``work``) and in one scan (``max_work_per_scan``) come from rsm-nav's
+   summary. A start whose surroundings the saved map does not hold (the pool
+   evicted them) is counted apart: see HELD_NOTE.
+
+The floors (issue 31): the round trip bit for bit; localization mode at or
+below the mapping run's all-relations error, frozen and with updates; at
+least FLOOR_RIGHT_SHARE of the held starts right within WITHIN_SCANS scans;
+no start wrong. The issue's cost floor (instructions per scan of the global
+search on the M4) is not measured here: the section prints the reads per
+scan, a SKIP line says so.
+"""
+
+import math
+import statistics
+import struct
+import subprocess
+import time
+from pathlib import Path
+from typing import List, Optional, Sequence, Tuple
+
+from .. import evaluate as ev
+from .common import BenchError, LOCAL_SPAN, fmt_int, fmt_q, provenance_line, ratio
+
+STARTS = 100          # global starts per log
+QUICK_STARTS = 10
+START_SCANS = 400     # scans a global start runs at most (CAP)
+RIGHT_M = 0.1
+RIGHT_DEG = 2.0
+WRONG_M = 0.5
+WRONG_DEG = 5.0
+WITHIN_SCANS = 20     # the first trusted pose within this many scans
+FLOOR_RIGHT_SHARE = 0.95  # of the held starts: 95 of 100
+HELD_FIT = 0.8        # a start's first scan's fit_ratio on the saved map from the right pose, at least
+REF_TOLERANCE = 0.1   # s: the mapping run's pose at a stamp it lacks exactly, the nearest within this
+HEADER_BYTES = 48
+CRC_BYTES = 4
+MARK = "known map"    # every floor line of the section holds ": known map, " (the report's splice finds them)
+
+HELD_NOTE = (f"a start's surroundings count as held by the saved map when rsm-nav, started in localization mode on "
+             f"it from the mapping run's pose at the start's first scan (`--load-map MAP --freeze-map --initial-pose "
+             f"POSE --skip-seconds S --scans 1 --scan-log`), gives that scan a fit_ratio (its fit over the fit saved "
+             f"with the map) of at least {HELD_FIT:g}; below, the pool evicted them and the start is counted apart")
+
+VERDICTS = ("right", "between", "wrong", "none", "no reference")
+
+
+# ---------------------------------------------------------------------------
+# pure parts (the tests' subject)
+
+
+def start_offsets(span_s: float, n: int) -> List[float]:
+    """--skip-seconds of n starts spread evenly over a log of span_s seconds:
+    k span/n for k = 0..n-1 (ms resolution)."""
+    return [round(k * span_s / n, 3) for k in range(n)] if n > 0 and span_s > 0 else []
+
+
+def map_tiles(data: bytes) -> bytes:
+    """The tiles of a saved map: everything between the header and the CRC."""
+    if len(data) < HEADER_BYTES + CRC_BYTES or data[:4] != b"RSMM":
+        raise BenchError(f"not a saved map ({len(data)} bytes)")
+    return data[HEADER_BYTES:len(data) - CRC_BYTES]
+
+
+def map_fit(data: bytes) -> float:
+    """The header's fit at the save (offset 44, little-endian single)."""
+    map_tiles(data)
+    return struct.unpack("<f", data[44:48])[0]
+
+
+def map_tile_count(data: bytes) -> int:
+    """The header's tile count (offset 24, little-endian)."""
+    map_tiles(data)
+    return int.from_bytes(data[24:28], "little")
+
+
+def pose_error(est: Sequence[float], ref: Sequence[float]) -> Tuple[float, float]:
+    """(distance in m, |heading difference| in deg) of two (x, y, theta) poses."""
+    return (math.hypot(est[0] - ref[0], est[1] - ref[1]),
+            abs(math.degrees(ev.wrap_angle(est[2] - ref[2]))))
+
+
+def verdict(est: Optional[Sequence[float]], ref: Optional[Sequence[float]]) -> str:
+    """right, wrong, between (see the module's docstring), none (no pose) or
+    no reference (the mapping run has no pose at that stamp)."""
+    if est is None:
+        return "none"
+    if ref is None:
+        return "no reference"
+    m, deg = pose_error(est, ref)
+    if m <= RIGHT_M and deg <= RIGHT_DEG:
+        return "right"
+    if m > WRONG_M or deg > WRONG_DEG:
+        return "wrong"
+    return "between"
+
+
+def first_pose(traj: Path) -> Optional[Tuple[float, float, float, float]]:
+    """The first line of a trajectory (stamp, x, y, theta), or None."""
+    rows, _ = ev.read_poses(traj)
+    return tuple(rows[0]) if rows else None
+
+
+def first_scan(scan_log: Path) -> Optional[Tuple[float, str, Optional[float]]]:
+    """(stamp, outcome, fit_ratio) of the first line of rsm-nav --scan-log
+    (stamp outcome tracking odometry recovered fit_ratio), or None."""
+    for line in Path(scan_log).read_text().splitlines():
+        f = line.split()
+        if not f or line.startswith("#"):
+            continue
+        return float(f[0]), f[1], (float(f[5]) if len(f) >= 6 else None)
+    return None
+
+
+def held(fit_ratio: Optional[float]) -> Optional[bool]:
+    """Whether the saved map holds a start's surroundings (HELD_NOTE); None: not judged."""
+    if fit_ratio is None or not math.isfinite(fit_ratio):
+        return None
+    return fit_ratio >= HELD_FIT
+
+
+def judge_start(found: Optional[Sequence[float]], ref: Optional[Sequence[float]], summary: dict,
+                fit_ratio: Optional[float]) -> dict:
+    """One start's entry: found is the first trajectory line (stamp, x, y,
+    theta) or None, ref the mapping run's (x, y, theta) at its stamp, summary
+    rsm-nav's JSON summary of the global run, fit_ratio the held check's."""
+    g = summary.get("global") or {}
+    v = verdict(found[1:] if found else None, ref)
+    out = {"verdict": v, "held": held(fit_ratio), "fit_ratio": fit_ratio,
+           "scans": summary.get("scans"), "searches": g.get("searches"), "work": g.get("work"),
+           "max_work_per_scan": g.get("max_work_per_scan"),
+           "first_trusted_scan": (g.get("first_trusted_scan") or None) if found else None,
+           "stamp": found[0] if found else None, "pose": list(found[1:]) if found else None,
+           "ref": list(ref) if ref is not None else None, "error_m": None, "error_deg": None}
+    if found and ref is not None:
+        out["error_m"], out["error_deg"] = pose_error(found[1:], ref)
+    return out
+
+
+def _stat(values: Sequence[Optional[float]]) -> dict:
+    vals = sorted(v for v in values if v is not None)
+    if not vals:
+        return {"n": 0, "median": None, "max": None}
+    return {"n": len(vals), "median": statistics.median(vals), "max": vals[-1]}
+
+
+def aggregate(starts: Sequence[dict], within: int = WITHIN_SCANS) -> dict:
+    """The figures of one log's starts: how many ran, were held (a start not
+    judged counts as held), right, right within ``within`` scans, between,
+    wrong, none; wrong among all starts, held or not; scans to the first
+    pose of the held starts that gave one; reads in all and in one scan."""
+    kept = [s for s in starts if s["held"] is not False]
+    count = {v: sum(1 for s in kept if s["verdict"] == v) for v in VERDICTS}
+    found = [s for s in kept if s["verdict"] not in ("none",)]
+    right_within = sum(1 for s in kept if s["verdict"] == "right" and s["first_trusted_scan"] is not None
+                       and s["first_trusted_scan"] <= within)
+    return {"starts": len(starts), "held": len(kept), "not_held": len(starts) - len(kept),
+            "not_judged": sum(1 for s in starts if s["held"] is None),
+            "counts": count, "right_within": right_within, "within": within,
+            "none_log_ended": sum(1 for s in kept if s["verdict"] == "none" and s["scans"] is not None
+                                  and s.get("cap") is not None and s["scans"] < s["cap"]),
+            "wrong_all": sum(1 for s in starts if s["verdict"] == "wrong"),
+            "wrong_not_held": sum(1 for s in starts if s["verdict"] == "wrong" and s["held"] is False),
+            "found_not_held": sum(1 for s in starts if s["verdict"] != "none" and s["held"] is False),
+            "scans_to_pose": _stat([s["first_trusted_scan"] for s in found]),
+            "work": _stat([s["work"] for s in starts]),
+            "work_to_pose": _stat([s["work"] for s in found]),
+            "max_work_per_scan": _stat([s["max_work_per_scan"] for s in starts]),
+            "searches": sum(s["searches"] or 0 for s in starts),
+            "scans_run": _stat([s["scans"] for s in starts])}
+
+
+def right_needed(held_starts: int) -> int:
+    """Right starts the floor asks of ``held_starts`` held ones (95 of 100)."""
+    return math.ceil(FLOOR_RIGHT_SHARE * held_starts - 1e-9)
+
+
+# ---------------------------------------------------------------------------
+# measuring
+
+
+def _nav(nav: Path, log: Path, traj: Path, extra: Sequence[str], no_pose_ok: bool = False) -> dict:
+    """rsm-nav --carmen LOG (the default method) with a JSON summary beside
+    the trajectory; a --global run that proved no pose exits 1 and is taken
+    when no_pose_ok. Returns the parsed summary, and the process' wall time."""
+    from .parse import load_summary
+
+    traj.parent.mkdir(parents=True, exist_ok=True)
+    summary = traj.with_suffix(".summary.json")
+    cmd = [str(nav), "--carmen", str(log), "--method", "rsm", "--trajectory", str(traj),
+           "--summary-json", str(summary), "--quiet", *extra]
+    t0 = time.monotonic()
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    seconds = time.monotonic() - t0
+    if res.returncode != 0 and not (no_pose_ok and res.returncode == 1 and "no pose" in res.stderr
+                                    and summary.is_file()):
+        raise BenchError(f"{' '.join(cmd)} failed ({res.returncode}):\n{res.stderr}")
+    out = load_summary(summary)
+    out["seconds"] = seconds
+    return out
+
+
+def _errors(traj: Path, relations) -> dict:
+    t = ev.load_trajectory(traj)
+    a = ev.evaluate(t, relations, tolerance=0.0)
+    l_ = ev.evaluate(t, relations, max_span=LOCAL_SPAN, tolerance=0.0)
+    return {"all": a["translation"]["mean"], "all_rotation": a["rotation"]["mean"],
+            "local": l_["translation"]["mean"], "local_rotation": l_["rotation"]["mean"], "matched": a["matched"]}
+
+
+def _data_lines(traj: Path) -> List[str]:
+    return [line for line in Path(traj).read_text().splitlines() if line.strip() and not line.startswith("#")]
+
+
+def map_state_bytes(stages: Optional[Path], log: Path) -> Optional[dict]:
+    """The map's part of the localizer state on this host (rsm-stages' sizes), or None without rsm-stages."""
+    if stages is None or not Path(stages).is_file():
+        return None
+    from .measure import run_stages
+    s = run_stages(stages, log, "rsm", ["--limit", "1", "--clock", "none"])["sizes"]
+    return {k: s.get(k) for k in ("state.persistent", "state.persistent.map", "state.persistent.map.tile",
+                                  "state.persistent.map.hash")}
+
+
+def run_knownmap(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, jobs: int,
+                 starts: int = STARTS, cap: int = START_SCANS, stages: Optional[Path] = None) -> dict:
+    """The section on every log (see the module's docstring); returns its
+    manifest entry. ``jobs`` rsm-nav processes at a time."""
+    from .measure import parallel
+
+    t_start = time.monotonic()
+    d = work / "knownmap"
+
+    def mapping(task):
+        label, log, rel = task
+        o = d / label
+        m, again = o / "map.rsmm", o / "map-again.rsmm"
+        for f in (m, again):
+            if f.exists():
+                f.unlink()
+        s_map = _nav(nav, log, o / "mapping.txt", ["--save-map", str(m)])
+        s_frozen = _nav(nav, log, o / "frozen.txt", ["--load-map", str(m), "--freeze-map", "--save-map", str(again)])
+        _nav(nav, log, o / "frozen-again.txt", ["--load-map", str(again), "--freeze-map"])
+        s_upd = _nav(nav, log, o / "updates.txt", ["--load-map", str(m)])
+        return task, s_map, s_frozen, s_upd
+
+    out = {"starts": starts, "cap": cap, "jobs": jobs, "within": WITHIN_SCANS, "right_m": RIGHT_M,
+           "right_deg": RIGHT_DEG, "wrong_m": WRONG_M, "wrong_deg": WRONG_DEG, "held_fit": HELD_FIT,
+           "held_note": HELD_NOTE, "share": FLOOR_RIGHT_SHARE, "logs": {}}
+    maps = parallel(mapping, list(logs), jobs)
+    tasks = []
+    for (label, log, rel), s_map, s_frozen, s_upd in maps:
+        o = d / label
+
+        def figures(name: str, summary: dict) -> dict:
+            return {**_errors(o / f"{name}.txt", relations), "writes": (summary["tmap"] or {}).get("writes"),
+                    "fit": summary.get("fit"), "seconds": summary["seconds"]}
+
+        relations = ev.load_relations(rel)
+        data, again = (o / "map.rsmm").read_bytes(), (o / "map-again.rsmm").read_bytes()
+        traj = ev.read_poses(o / "mapping.txt")[0]
+        span = traj[-1].t - traj[0].t if traj else 0.0
+        entry = {
+            "log": str(log), "scans": s_map["scans"], "span_s": span,
+            "round_trip": {"bytes": len(data), "tiles": map_tile_count(data), "bytes_again": len(again),
+                           "tiles_again": map_tile_count(again), "identical": map_tiles(data) == map_tiles(again),
+                           "header_identical": data[:HEADER_BYTES] == again[:HEADER_BYTES],
+                           "trajectory_same": _data_lines(o / "frozen.txt") == _data_lines(o / "frozen-again.txt"),
+                           "loaded": s_frozen.get("loaded_map"), "fit": map_fit(data), "fit_again": map_fit(again)},
+            "state": map_state_bytes(stages, log),
+            "runs": {"mapping": figures("mapping", s_map), "frozen": figures("frozen", s_frozen),
+                     "updates": figures("updates", s_upd)},
+            "offsets": start_offsets(span, starts)}
+        out["logs"][label] = entry
+        tasks += [(label, log, k, s) for k, s in enumerate(entry["offsets"])]
+    refs = {label: ev.load_trajectory(d / label / "mapping.txt") for label in out["logs"]}
+
+    def one(task):
+        label, log, k, s = task
+        o = d / label / "starts"
+        m = str(d / label / "map.rsmm")
+        g_traj, g_scans = o / f"global-{k}.txt", o / f"global-{k}.scans"
+        summ = _nav(nav, log, g_traj, ["--load-map", m, "--freeze-map", "--global", "--skip-seconds", f"{s:.3f}",
+                                       "--scans", str(cap), "--scan-log", str(g_scans)], no_pose_ok=True)
+        found = first_pose(g_traj)
+        ref = None
+        if found is not None:
+            ref = refs[label].lookup(found[0], tolerance=REF_TOLERANCE)
+        # the held check: the first scan from the mapping run's pose there
+        fit = None
+        first = first_scan(g_scans)
+        start_ref = refs[label].lookup(first[0], tolerance=REF_TOLERANCE) if first else None
+        if start_ref is not None:
+            h_traj, h_scans = o / f"held-{k}.txt", o / f"held-{k}.scans"
+            _nav(nav, log, h_traj, ["--load-map", m, "--freeze-map", "--initial-pose",
+                                    *(f"{v:.6f}" for v in start_ref), "--skip-seconds", f"{s:.3f}", "--scans", "1",
+                                    "--scan-log", str(h_scans)])
+            h = first_scan(h_scans)
+            if h is not None and abs(h[0] - first[0]) < 1e-6:
+                fit = h[2]
+        e = judge_start(found, ref, summ, fit)
+        e.update({"k": k, "skip_s": s, "cap": cap, "first_stamp": first[0] if first else None,
+                  "seconds": summ["seconds"]})
+        return task, e
+
+    done = parallel(one, tasks, jobs)
+    for label, entry in out["logs"].items():
+        entry["starts"] = sorted((e for (lab, _, _, _), e in done if lab == label), key=lambda e: e["k"])
+        entry["summary"] = aggregate(entry["starts"])
+    out["seconds"] = time.monotonic() - t_start
+    return out
+
+
+# ---------------------------------------------------------------------------
+# floors and report
+
+
+def _floor(status: str, kind: str, log: Optional[str], value, limit, text: str) -> dict:
+    return {"status": status, "kind": kind, "log": log, "value": value, "limit": limit, "line": f"{status} {text}"}
+
+
+def _n(v) -> str:
+    return "n/a" if v is None else fmt_int(round(v))
+
+
+def knownmap_floors(km: Optional[dict]) -> List[dict]:
+    """The section's floors, each PASS, MISS or SKIP, from run_knownmap's result."""
+    out: List[dict] = []
+    if not km or "skipped" in km:
+        return out
+    for label, e in km["logs"].items():
+        head = f"{label}: {MARK}, "
+        rt = e["round_trip"]
+        ok = rt["identical"] and rt["trajectory_same"] and rt["tiles"] == rt["tiles_again"]
+        out.append(_floor("PASS" if ok else "MISS", "knownmap-roundtrip", label, int(ok), 1,
+                          f"{head}round trip: saved ({fmt_int(rt['bytes'])} bytes, {fmt_int(rt['tiles'])} tiles), "
+                          f"loaded frozen and saved again: the tiles {'identical' if rt['identical'] else 'DIFFER'} "
+                          "bit for bit, a frozen run on the map saved again "
+                          + ("the same trajectory as on the saved map" if rt["trajectory_same"] else
+                             "ANOTHER trajectory than on the saved map (the headers differ: the fit at the save "
+                             f"{rt['fit']:.4f} and {rt['fit_again']:.4f}, the bar of a recovery)")))
+        mp = e["runs"]["mapping"]["all"]
+        for mode, what in (("frozen", "frozen"), ("updates", "with updates")):
+            v = e["runs"][mode]["all"]
+            ok = v is not None and mp is not None and math.isfinite(v) and v <= mp
+            out.append(_floor("PASS" if ok else "MISS", "knownmap-localization", label, v, mp,
+                              f"{head}localization mode {what}, whole log: all-relations translation "
+                              f"{fmt_q('translation', v)} m {'<=' if ok else '>'} the mapping run's "
+                              f"{fmt_q('translation', mp)} m (x{ratio(v, mp):.2f})"))
+        s = e["summary"]
+        need = right_needed(s["held"])
+        ok = s["held"] > 0 and s["right_within"] >= need
+        sp = s["scans_to_pose"]
+        timing = (f"first trusted pose after median {_n(sp['median'])}, worst {_n(sp['max'])} scans of the "
+                  f"{sp['n']} held starts that gave one" if sp["n"] else "no held start gave a trusted pose")
+        out.append(_floor("PASS" if ok else "MISS", "knownmap-global", label, s["right_within"], need,
+                          f"{head}global localization, {s['starts']} starts ({s['not_held']} not held by the map, "
+                          f"counted apart): {s['right_within']} of {s['held']} held starts right (within "
+                          f"{RIGHT_M:g} m and {RIGHT_DEG:g} deg of the mapping run) within {s['within']} scans "
+                          f"{'>=' if ok else '<'} {need} ({FLOOR_RIGHT_SHARE * 100:g} %); "
+                          f"{s['counts']['none']} gave none within {km['cap']} scans; {timing}"))
+        ok = s["wrong_all"] == 0
+        out.append(_floor("PASS" if ok else "MISS", "knownmap-wrong", label, s["wrong_all"], 0,
+                          f"{head}global localization, {s['starts']} starts: {s['wrong_all']} gave a trusted pose "
+                          f"more than {WRONG_M:g} m or {WRONG_DEG:g} deg off "
+                          + (f"({s['wrong_not_held']} of them not held) " if s["wrong_not_held"] else "")
+                          + f"{'==' if ok else '>'} 0"))
+        w = s["max_work_per_scan"]
+        out.append(_floor("SKIP", "knownmap-cost", label, None, 1000000,
+                          f"{head}global search, instructions per scan on the M4 <= 1 000 000: not measured (this "
+                          f"bench counts map reads: at most {_n(w['max'])} in one scan, median start "
+                          f"{_n(w['median'])}; {_n(s['work']['median'])} reads per start, median, "
+                          f"{_n(s['work']['max'])} worst)"))
+    return out
+
+
+def _f(v, fmt="{:.2f}") -> str:
+    return "n/a" if v is None or (isinstance(v, float) and not math.isfinite(v)) else fmt.format(v)
+
+
+def report_knownmap(km: Optional[dict]) -> List[str]:
+    """The report's subsection "Known map" (under section 2, after "Faults")."""
+    from .report import md_table
+
+    L = ["### Known map", ""]
+    if not km:
+        return L + ["Not measured in this run.", ""]
+    if "skipped" in km:
+        return L + [f"Not measured in this run ({km['skipped']}).", ""]
+    if km.get("provenance"):
+        L += [provenance_line(km["provenance"]), ""]
+    L += ["rsm on a map it saved (issue 31), every log, the default configuration; "
+          f"this section took {km['seconds']:.0f} s with {km['jobs']} rsm-nav process(es) at a time. "
+          "*Round trip*: the whole log with `rsm-nav --save-map` (the mapping run), then again with `--load-map "
+          "MAP --freeze-map --save-map AGAIN`; the tiles of the two files (every byte between the 48-byte header "
+          "and the CRC, docs/mapfile.md; the header holds the pose and the fit at the save) compared, and a frozen "
+          "run on AGAIN compared line by line with the one on MAP. The map's part of the localizer state is "
+          "rsm-stages' `sizeof(state.persistent.map)` on this host. "
+          "*Localization mode*: the whole log on the saved map, frozen (`--freeze-map`) and with updates "
+          "(`--load-map` alone), from the log's first pose as the mapping run; mean relative-pose error "
+          f"(all relations and local ones, span <= {LOCAL_SPAN:g} s) beside the mapping run's. "
+          f"*Global localization*: {km['starts']} starts per log spread evenly over it (start k at k/{km['starts']} "
+          f"of its span), each `--load-map MAP --freeze-map --global --skip-seconds S --scans {km['cap']}`: no start "
+          "pose, the log resumed at S, the global search at its default budget of reads per scan. The first trusted "
+          f"pose (the trajectory's first line) against the mapping run's pose at that stamp: right within "
+          f"{RIGHT_M:g} m and {RIGHT_DEG:g} deg, wrong beyond {WRONG_M:g} m or {WRONG_DEG:g} deg, else between; "
+          f"none: no pose within the {km['cap']} scans (or the scans the log had left). Scans to the first trusted "
+          "pose (rsm-nav's `first_trusted_scan`, counted from the start), map reads of the search in all "
+          f"(`work`) and in one scan (`max_work_per_scan`). Held: {km['held_note']}. "
+          "The issue's cost floor, instructions per scan on the M4, is not measured here: only the reads per scan "
+          "are.", ""]
+    rows = []
+    for label, e in km["logs"].items():
+        rt, st = e["round_trip"], e.get("state") or {}
+        rows.append([label, fmt_int(rt["bytes"]), fmt_int(rt["tiles"]),
+                     _n(st.get("state.persistent.map")), _n(st.get("state.persistent.map.tile")),
+                     "yes" if rt["identical"] else "NO", "yes" if rt["trajectory_same"] else "NO"])
+    L += md_table(["log", "saved [B]", "tiles", "map in the state [B]", "of which the tile pool [B]",
+                   "tiles identical after a frozen load and save", "same trajectory on the map saved again"],
+                  rows, "knownmap round trip")
+    rows = []
+    for label, e in km["logs"].items():
+        mp = e["runs"]["mapping"]["all"]
+        for name, what in (("mapping", "mapping run (--save-map)"), ("frozen", "localization, frozen"),
+                           ("updates", "localization, with updates")):
+            r = e["runs"][name]
+            rows.append([label, what, fmt_q("translation", r["all"]), fmt_q("rotation", r["all_rotation"]),
+                         fmt_q("translation", r["local"]), fmt_q("rotation", r["local_rotation"]),
+                         _f(ratio(r["all"], mp)), _n(r["writes"]), _f(r["fit"], "{:.4f}")])
+    L += md_table(["log", "run", "all translation [m]", "all rotation [deg]", "local translation [m]",
+                   "local rotation [deg]", "all x mapping", "map writes", "fit"], rows, "knownmap localization")
+    rows = []
+    for label, e in km["logs"].items():
+        s = e["summary"]
+        c = s["counts"]
+        sp, w, wp = s["scans_to_pose"], s["work"], s["max_work_per_scan"]
+        rows.append([label, str(s["starts"]), str(s["not_held"]), str(c["right"]), str(s["right_within"]),
+                     str(c["between"]), str(s["wrong_all"]),
+                     str(c["none"]) + (f" ({s['none_log_ended']} where the log ended first)" if s["none_log_ended"]
+                                       else "") + (f" (+{c['no reference']} no reference)" if c["no reference"]
+                                                   else ""),
+                     f"{_n(sp['median'])} / {_n(sp['max'])}", f"{_n(w['median'])} / {_n(w['max'])}",
+                     f"{_n(wp['median'])} / {_n(wp['max'])}"])
+    L += md_table(["log", "starts", "not held", "right", f"right within {km['within']} scans", "between",
+                   "wrong (all starts)", f"none within {km['cap']} scans",
+                   "scans to the first pose (starts that gave one), median / worst",
+                   "reads per start, median / worst", "most reads in one scan, median / worst"], rows,
+                  "knownmap global")
+    L += ["The section's floors (also in section 7):", "", "```"]
+    L += [f["line"] for f in knownmap_floors(km)]
+    L += ["```", ""]
+    return L
+
+
+# ---------------------------------------------------------------------------
+# --only knownmap: the section written into an existing report
+
+
+def _is_floor_block(lines: Sequence[str]) -> bool:
+    body = [l for l in lines if l.strip()]
+    return bool(body) and all(l.split()[0] in ("PASS", "MISS", "SKIP") for l in body)
+
+
+def splice_report(text: str, section: Sequence[str], floors: Sequence[str], next_title: str) -> str:
+    """The report ``text`` with its subsection "Known map" replaced by
+    ``section`` (or put before the section ``## next_title`` when it has
+    none), and in every block of floor lines the lines of this section
+    (``: known map, ``) replaced by ``floors``, the count of PASS and MISS
+    above section 7's block recounted."""
+    lines = text.split("\n")
+    out: List[str] = []
+    i = 0
+    while i < len(lines):
+        if lines[i] != "```":
+            out.append(lines[i])
+            i += 1
+            continue
+        j = i + 1
+        while j < len(lines) and lines[j] != "```":
+            j += 1
+        block = lines[i + 1:j]
+        if j < len(lines) and _is_floor_block(block):
+            block = splice_floor_lines(block, floors)
+            # the count line "N PASS, M MISS[, K SKIP]:" right above the block
+            if len(out) >= 2 and out[-1] == "" and out[-2].endswith(":") and " PASS, " in out[-2]:
+                n = {k: sum(1 for l in block if l.split() and l.split()[0] == k) for k in ("PASS", "MISS", "SKIP")}
+                out[-2] = f"{n['PASS']} PASS, {n['MISS']} MISS" + (f", {n['SKIP']} SKIP" if n["SKIP"] else "") + ":"
+        out += ["```"] + block + (["```"] if j < len(lines) else [])
+        i = j + 1
+    lines = out
+    start = next((k for k, l in enumerate(lines) if l == "### Known map"), None)
+    if start is not None:
+        end = next((k for k in range(start + 1, len(lines)) if lines[k].startswith(("## ", "### "))), len(lines))
+        return "\n".join(lines[:start] + list(section) + lines[end:])
+    at = next((k for k, l in enumerate(lines) if l == f"## {next_title}"), None)
+    if at is None:
+        raise BenchError(f"the report has no section \"{next_title}\" to put \"Known map\" before")
+    return "\n".join(lines[:at] + list(section) + lines[at:])
+
+
+def _place(old: Sequence, new: Sequence, mine, after=None) -> list:
+    """``old`` with the items ``mine`` picks replaced by ``new``: where the
+    first of them was, else after the last item ``after`` picks, else at the end."""
+    at = next((k for k, x in enumerate(old) if mine(x)), None)
+    kept = [x for x in old if not mine(x)]
+    if at is None:
+        last = [k for k, x in enumerate(kept) if after is not None and after(x)]
+        at = last[-1] + 1 if last else len(kept)
+    else:
+        at = sum(1 for x in old[:at] if not mine(x))
+    return kept[:at] + list(new) + kept[at:]
+
+
+def splice_floor_lines(block: Sequence[str], floors: Sequence[str]) -> List[str]:
+    """A block of floor lines with this section's replaced by ``floors`` (in place, else at the end)."""
+    return _place(list(block), floors, lambda l: f": {MARK}, " in l)
+
+
+def merge_manifest(manifest: dict, km: dict, floors: Sequence[dict]) -> dict:
+    """A manifest (bench.json) with this section's entry and floors replaced
+    (its floors where they were, else after the section Faults')."""
+    out = dict(manifest)
+    out["knownmap"] = km
+    out["floors"] = _place(list(manifest.get("floors") or []), floors,
+                           lambda f: str(f.get("kind", "")).startswith("knownmap"),
+                           lambda f: str(f.get("kind", "")).startswith("faults"))
+    return out
+
+
+def run_only(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, jobs: int, starts: int, cap: int,
+             stages: Optional[Path], prov: dict, output: Path, next_title: str) -> Tuple[dict, List[dict]]:
+    """rsm-bench --only knownmap: this section alone, written into the
+    manifest of the work directory (bench.json, made when there is none) and
+    spliced into the existing report ``output`` (its subsection and its floor
+    lines; the rest of the report is left as it is)."""
+    import json
+
+    if not output.is_file():
+        raise BenchError(f"--only knownmap writes its section into an existing report, and {output} is missing "
+                         "(run the whole bench once first)")
+    km = run_knownmap(nav, logs, work, jobs, starts, cap, stages)
+    km["provenance"] = prov
+    floors = knownmap_floors(km)
+    path = work / "bench.json"
+    manifest = json.loads(path.read_text()) if path.is_file() else {"provenance": prov, "report": str(output),
+                                                                    "only": "knownmap"}
+    path.write_text(json.dumps(merge_manifest(manifest, km, floors), indent=1, allow_nan=True))
+    text = output.read_text(encoding="utf-8")
+    output.write_text(splice_report(text, report_knownmap(km), [f["line"] for f in floors], next_title),
+                      encoding="utf-8")
+    return km, floors
