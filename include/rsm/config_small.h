@@ -3,7 +3,7 @@
  * RSM_USER_CONFIG). The persistent map holds 1140 tiles at 10, 20 and 40 cm
  * (about the whole Intel lab, most of the ACES building; the least recently
  * written tiles are reused beyond that): with so few tiles, 5 cm cells would
- * forget the building too soon. The global search keeps 32 readings, 4
+ * forget the building too soon. The global search keeps 24 readings, 4
  * candidates and bound grids of 16 blocks a side (60 tiles gave way for
  * it). Under 64 KiB of localizer state; tools/bench prints its accuracy
  * beside the default's. */
@@ -18,6 +18,6 @@
 #define RSM_MAX_CANDIDATES 384
 #define RSM_MAX_MATCHES 96
 #define RSM_GLOBAL_SIDE 16
-#define RSM_GLOBAL_POINTS 32
+#define RSM_GLOBAL_POINTS 24
 #define RSM_GLOBAL_CANDIDATES 4
 #endif

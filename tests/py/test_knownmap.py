@@ -79,7 +79,7 @@ def test_global_start_writes_nothing_until_a_pose_is_proven_and_that_pose_is_rig
               "--summary-json", str(js))
     g = json.loads(js.read_text())["global"]
     assert g["found"] == 1 and g["searches"] >= 1
-    assert g["max_work_per_scan"] <= 100000 + 16 * 48
+    assert g["max_work_per_scan"] <= 100000 + 16 * 32
     got = poses(found)
     first = next(iter(got))
     assert first == round(g["first_trusted_stamp"], 6)
