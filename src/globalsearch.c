@@ -131,6 +131,9 @@ static int build_grids(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, in
         }
     }
     g->top_h = g->base_h + g->grids - 1u;
+    g->root_i = g->ox;
+    g->root_j = g->oy;
+    g->root_h = g->top_h;
     return RSM_OK;
 }
 
@@ -538,9 +541,9 @@ int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, 
             }
             offsets(g, cell, g->heading, fx, fy);
             g->heading++;
-            b.i = g->ox;
-            b.j = g->oy;
-            b.h = g->top_h;
+            b.i = g->root_i;
+            b.j = g->root_j;
+            b.h = g->root_h;
             b.bound = box_bound(g, grid, map, fx, fy, b.i, b.j, b.h, threshold(g), &work);
             if (b.bound >= threshold(g)) {
                 g->stack[g->depth++] = b;
@@ -594,4 +597,29 @@ int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, 
         *used += work;
     }
     return more;
+}
+
+void rsm_global_window(rsm_global_t *g, const rsm_tmap_t *map, float x, float y, float radius_m)
+{
+    const float inv = 1.0f / rsm_tmap_cell(map, g->level);
+    const float lim = (float)(RSM_TMAP_TILE_LIMIT * RSM_TMAP_TILE_SIDE);
+    float fx0 = rsm_floorf((x - radius_m) * inv);
+    float fy0 = rsm_floorf((y - radius_m) * inv);
+    float w = rsm_floorf((x + radius_m) * inv) - fx0 + 1.0f;
+    const float hgt = rsm_floorf((y + radius_m) * inv) - fy0 + 1.0f;
+    uint32_t h = 0;
+    w = hgt > w ? hgt : w;
+    /* Far outside the map's range, or wider than the map: the whole map. */
+    if (!(fx0 > -lim && fx0 < lim && fy0 > -lim && fy0 < lim && w >= 1.0f && w < lim)) {
+        return;
+    }
+    while (h < g->top_h && (float)(1u << h) < w) {
+        ++h;
+    }
+    if (h >= g->top_h) {
+        return;
+    }
+    g->root_i = (int32_t)fx0;
+    g->root_j = (int32_t)fy0;
+    g->root_h = h;
 }

@@ -64,6 +64,12 @@ int rsm_global_fits(const rsm_tmap_t *map);
 int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
                      const rsm_pose_t *at, float min_share);
 
+/* Narrows a search begun (rsm_global_begin, before any rsm_global_run) to
+ * the positions within radius_m of (x, y), in a square of a power of two
+ * cells; every heading still. A window as wide as the map, or one out of
+ * the map's range, leaves the whole map. */
+void rsm_global_window(rsm_global_t *g, const rsm_tmap_t *map, float x, float y, float radius_m);
+
 /* Goes on with the search for about budget reads of cells and blocks (0 =
  * to the end): it stops before the next box once budget is reached, so a
  * run reads at most one split beyond it (four boxes, at most 16 reads a

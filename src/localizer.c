@@ -1073,11 +1073,13 @@ static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
  * (recover_ratio of their fit; a proven search's winner does) or it
  * started the map; odometry alone is not checked. Counts the scans in a
  * row that did not. */
-/* A global search is to begin at the next usable scan. */
-static void begin_global(rsm_localizer_t *loc)
+/* A global search is to begin at the next usable scan, over positions
+ * within radius_m of the estimate then (0: the whole map). */
+static void begin_global(rsm_localizer_t *loc, float radius_m)
 {
     loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
     loc->state.persistent.global.unproven = 0u;
+    loc->state.persistent.global.radius_m = radius_m;
     if (!(loc->state.persistent.map_fit > 0.0f)) {
         /* A map made in this run: its scans' recent fit is the bar. */
         loc->state.persistent.map_fit = loc->state.persistent.fit;
@@ -1086,9 +1088,14 @@ static void begin_global(rsm_localizer_t *loc)
 
 int rsm_localizer_global(rsm_localizer_t *loc)
 {
+    return rsm_localizer_global_near(loc, 0.0f);
+}
+
+int rsm_localizer_global_near(rsm_localizer_t *loc, float radius_m)
+{
     const rsm_tmap_t *map;
     int32_t b[4];
-    if (!ready(loc)) {
+    if (!ready(loc) || !(radius_m >= 0.0f && radius_m <= 1.0e6f)) {
         return RSM_ERR_INVAL;
     }
     if (loc->cfg->method != RSM_METHOD_MAP) {
@@ -1101,7 +1108,7 @@ int rsm_localizer_global(rsm_localizer_t *loc)
     if (!rsm_global_fits(map)) {
         return RSM_ERR_NOMEM;
     }
-    begin_global(loc);
+    begin_global(loc, radius_m);
     loc->poor_run = loc->cfg->lost_scans;
     loc->last.track = RSM_TRACK_LOST;
     return RSM_OK;
@@ -1264,6 +1271,12 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
             loc->counters.global_ambiguous++;
             g->phase = RSM_GLOBAL_IDLE;
             return RSM_SCAN_SEARCHING;
+        }
+        if (g->radius_m > 0.0f) {
+            /* Near the estimate, in a window that doubles with each search
+             * that proved nothing, to the whole map. */
+            const float grow = (float)(1u << (g->unproven < 16u ? g->unproven : 16u));
+            rsm_global_window(g, map, loc->ekf.x.x, loc->ekf.x.y, g->radius_m * grow);
         }
         loc->counters.global_searches++;
         g->phase = RSM_GLOBAL_RUNNING;
@@ -1443,7 +1456,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         /* Searching, the estimate is unknown whatever the scans did. */
         rep->track = RSM_TRACK_LOST;
     } else if (rep->track == RSM_TRACK_LOST && loc->cfg->method == RSM_METHOD_MAP && loc->cfg->global_when_lost) {
-        begin_global(loc);
+        begin_global(loc, 0.0f);
     }
     loc->counters.track[rep->track]++;
     loc->last_stamp_us = scan->stamp_us;

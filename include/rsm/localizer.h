@@ -415,6 +415,16 @@ int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const floa
  * unchanged on error. */
 int rsm_localizer_global(rsm_localizer_t *loc);
 
+/* rsm_localizer_global over the positions within radius_m of the estimate
+ * (as odometry carries it to the scan the search begins with; every
+ * heading still), a window that doubles with each search that proved
+ * nothing, until it holds the whole map: for a robot switched on where it
+ * was switched off (rsm_localizer_set_pose to the saved pose first), or
+ * one whose estimate is known to be near. radius_m 0 is the whole map.
+ * Returns as rsm_localizer_global, and RSM_ERR_INVAL for a negative or
+ * non-finite radius_m. */
+int rsm_localizer_global_near(rsm_localizer_t *loc, float radius_m);
+
 /* 1 while a global search is under way (begun or to begin at the next
  * scan), else 0 (also for loc NULL). */
 int rsm_localizer_searching(const rsm_localizer_t *loc);

@@ -303,7 +303,11 @@ typedef struct rsm_global {
     uint32_t base_h;
     int32_t ox;                    /* first cell of block 0 (coarse level) */
     int32_t oy;
-    uint32_t top_h;                /* the root box: 2^top_h positions a side from (ox, oy) */
+    uint32_t top_h;                /* the grids' top: 2^top_h cells a side from (ox, oy) */
+    int32_t root_i;                /* the root box: 2^root_h positions a side from here */
+    int32_t root_j;
+    uint32_t root_h;
+    float radius_m;                /* positions within this of the estimate; 0: the whole map */
     uint32_t heading;              /* the heading in progress, and how many there are */
     uint32_t headings;
     float step_rad;

@@ -96,6 +96,32 @@ def test_global_start_writes_nothing_until_a_pose_is_proven_and_that_pose_is_rig
     assert "first pose      scan" in res.stdout
 
 
+def test_global_near_a_rough_start_pose_proves_it_sooner(tmp_path, head_log):
+    traj, rsmm, _ = mapped(tmp_path, head_log)
+    ref = poses(traj)
+    order = list(ref)
+    start = next(t for t in order if t >= order[0] + 20.0)
+    x, y, th = ref[start]
+    runs = {}
+    for name, opts in (("near", ["--global-near", "1.0"]), ("all", ["--global"])):
+        js = tmp_path / f"{name}.json"
+        out = tmp_path / f"{name}.txt"
+        nav(head_log, out, "--load-map", str(rsmm), *opts, "--initial-pose", f"{x + 0.4:.4f}", f"{y - 0.3:.4f}",
+            f"{th + 0.3:.4f}", "--skip-seconds", "20", "--freeze-map", "--summary-json", str(js))
+        g = json.loads(js.read_text())["global"]
+        got = poses(out)
+        first = next(iter(got))
+        gx, gy, gth = got[first]
+        rx, ry, rth = ref[first]
+        assert math.hypot(gx - rx, gy - ry) < 0.1, name
+        assert abs(math.remainder(gth - rth, 2 * math.pi)) < math.radians(2), name
+        runs[name] = g
+    assert runs["near"]["work"] < runs["all"]["work"] / 4
+    assert runs["near"]["first_trusted_scan"] <= runs["all"]["first_trusted_scan"]
+    res = nav(head_log, tmp_path / "t.txt", "--load-map", str(rsmm), "--global-near", "-2", ok=False)
+    assert res.returncode == 2 and "--global-near" in res.stderr
+
+
 def test_ros_map_written_by_rsm_nav_loads_and_localizes(tmp_path, head_log, head_relations):
     traj, _, _ = mapped(tmp_path, head_log)
     ros = tmp_path / "ros.txt"

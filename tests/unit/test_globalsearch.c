@@ -201,6 +201,78 @@ static void test_a_symmetric_room_gives_no_pose(void)
     TEST_ASSERT_TRUE(rsm_localizer_searching(&loc));
 }
 
+/* Runs the search from scan `at` on (the state `before` holds) and
+ * returns the scan it proved a pose at (0: none), with its reads. */
+static size_t search_from(const rsm_synth_world_t *world, size_t at, uint32_t *work)
+{
+    rsm_localizer_report_t rep;
+    size_t k;
+    for (k = at; k < path_len; ++k) {
+        step(&loc, world, k, &rep);
+        if (rep.outcome != RSM_SCAN_SEARCHING) {
+            TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &path[k]) < 0.1f);
+            TEST_ASSERT_TRUE(rsm_synth_angle_error(&rep.pose, &path[k]) < 0.05f);
+            *work = loc.counters.global_work;
+            return k;
+        }
+    }
+    *work = loc.counters.global_work;
+    return 0;
+}
+
+/* Switched on near where it was switched off: a search of the positions
+ * within 0.6 m of a rough estimate finds the same pose as one of the whole
+ * map, for fewer reads; the radius is checked. */
+static void test_a_search_near_the_estimate(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_pose_t rough;
+    size_t at;
+    size_t near_at;
+    size_t all_at;
+    uint32_t near_work;
+    uint32_t all_work;
+    make_path();
+    at = path_len - 80u;
+    map_path(&world, at);
+    rough.x = path[at].x + 0.3f;
+    rough.y = path[at].y - 0.2f;
+    rough.theta = rsm_wrap_angle(path[at].theta + 1.0f);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_pose(&loc, &rough, NULL));
+    before = loc;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global_near(&loc, 0.6f));
+    near_at = search_from(&world, at, &near_work);
+    loc = before;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    all_at = search_from(&world, at, &all_work);
+    TEST_ASSERT_TRUE(near_at > 0u && all_at > 0u);
+    TEST_ASSERT_TRUE(near_work < all_work);
+    loc = before;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_global_near(&loc, -1.0f));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_global_near(&loc, NAN));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &loc, sizeof loc);
+}
+
+/* A window that does not hold the robot proves nothing there and grows
+ * until it does: the pose found is the true one. */
+static void test_a_window_that_misses_grows(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_pose_t far;
+    size_t at;
+    uint32_t work;
+    make_path();
+    at = path_len - 80u;
+    map_path(&world, at);
+    far.x = path[at].x + 2.5f;
+    far.y = path[at].y + 1.5f;
+    far.theta = path[at].theta;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_pose(&loc, &far, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global_near(&loc, 0.3f));
+    TEST_ASSERT_TRUE(search_from(&world, at, &work) > 0u);
+    TEST_ASSERT_TRUE(loc.counters.global_ambiguous >= 1u);
+}
+
 /* A scan with too few readings while searching is counted as such and the
  * search waits for the next. */
 static void test_few_points_wait(void)
@@ -300,6 +372,8 @@ int main(void)
     RUN_TEST(test_a_forgotten_robot_is_found);
     RUN_TEST(test_spread_search_finds_the_same);
     RUN_TEST(test_a_symmetric_room_gives_no_pose);
+    RUN_TEST(test_a_search_near_the_estimate);
+    RUN_TEST(test_a_window_that_misses_grows);
     RUN_TEST(test_few_points_wait);
     RUN_TEST(test_far_readings);
     RUN_TEST(test_too_wide_a_map);

@@ -182,6 +182,8 @@ static void usage(FILE *f)
             "  --freeze-map              localization mode: the map is read, never written\n"
             "  --global                  no start pose: search the loaded map for the robot; no\n"
             "                            trajectory line until a pose is proven\n"
+            "  --global-near R           the same within R m of the start pose (--initial-pose),\n"
+            "                            the window doubling after each search that proves nothing\n"
             "  --skip-seconds S          --carmen: start S seconds into the log, as if the robot\n"
             "                            were switched on there\n"
             "  --scans N                 --carmen: stop after N scans\n"
@@ -342,6 +344,7 @@ typedef struct nav {
     const char *save_map;  /* --save-map: the persistent map at the end */
     const char *load_map;  /* --load-map: the map to start in */
     int global;            /* --global: no start pose: search the loaded map */
+    float global_near_m;   /* --global-near: only within this of the start pose at first (0: all) */
     double skip_s;         /* --skip-seconds: scans before the log's first stamp + this are left out */
     uint64_t max_scans;    /* --scans: stop after this many scans (0: the whole log) */
     int have_first_stamp;
@@ -496,7 +499,7 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
         return -1;
     }
     if (nav->global) {
-        const int g = rsm_localizer_global(&nav->loc);
+        const int g = rsm_localizer_global_near(&nav->loc, nav->global_near_m);
         if (g != RSM_OK) {
             fprintf(stderr, "rsm-nav: cannot start a global search: %s\n", rsm_strerror(g));
             return -1;
@@ -1337,7 +1340,7 @@ enum {
     OPT_ROBOT_BAUD, OPT_LMS_BAUD, OPT_LISTEN, OPT_SECONDS, OPT_IDLE_EXIT, OPT_TICKS_PER_M, OPT_WHEEL_BASE,
     OPT_INITIAL_POSE, OPT_LASER_POSE, OPT_UPSIDE_DOWN, OPT_TRAJECTORY, OPT_SUMMARY_JSON, OPT_TUM, OPT_SCAN_LOG, OPT_EVENTS,
     OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_QUIET, OPT_SAVE_MAP, OPT_LOAD_MAP, OPT_GLOBAL, OPT_FREEZE_MAP,
-    OPT_SKIP_SECONDS, OPT_SCANS
+    OPT_SKIP_SECONDS, OPT_SCANS, OPT_GLOBAL_NEAR
 };
 
 /* --lidar, --initial-pose and --laser-pose take more than one value: the
@@ -1378,6 +1381,7 @@ static const struct option nav_options[] = {
     {"freeze-map", no_argument, NULL, OPT_FREEZE_MAP},
     {"skip-seconds", required_argument, NULL, OPT_SKIP_SECONDS},
     {"scans", required_argument, NULL, OPT_SCANS},
+    {"global-near", required_argument, NULL, OPT_GLOBAL_NEAR},
     {"help", no_argument, NULL, 'h'},
     {NULL, 0, NULL, 0}
 };
@@ -1644,6 +1648,17 @@ int main(int argc, char **argv)
             nav.skip_s = v;
             break;
         }
+        case OPT_GLOBAL_NEAR: {
+            char *end = NULL;
+            const double v = strtod(optarg, &end);
+            if (end == optarg || *end != '\0' || !(v > 0.0 && v <= 1.0e5)) {
+                fprintf(stderr, "rsm-nav: bad --global-near '%s' (metres, above 0)\n", optarg);
+                return 2;
+            }
+            nav.global = 1;
+            nav.global_near_m = (float)v;
+            break;
+        }
         case OPT_SCANS: {
             char *end = NULL;
             const unsigned long long v = strtoull(optarg, &end, 10);
@@ -1676,7 +1691,7 @@ int main(int argc, char **argv)
         return 2;
     }
     if (nav.global && nav.load_map == NULL) {
-        fprintf(stderr, "rsm-nav: --global searches a known map: give it with --load-map\n");
+        fprintf(stderr, "rsm-nav: --global and --global-near search a known map: give it with --load-map\n");
         return 2;
     }
     if ((nav.skip_s > 0.0 || nav.max_scans > 0u) && carmen == NULL) {
