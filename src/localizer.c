@@ -1455,8 +1455,11 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     if (loc->cfg->method == RSM_METHOD_MAP && loc->state.persistent.global.phase != RSM_GLOBAL_IDLE) {
         /* Searching, the estimate is unknown whatever the scans did. */
         rep->track = RSM_TRACK_LOST;
-    } else if (rep->track == RSM_TRACK_LOST && loc->cfg->method == RSM_METHOD_MAP && loc->cfg->global_when_lost) {
-        begin_global(loc, 0.0f);
+    } else if (rep->track == RSM_TRACK_LOST && loc->cfg->method == RSM_METHOD_MAP && loc->cfg->global_when_lost &&
+               rsm_global_fits(&loc->state.persistent.map)) {
+        /* Near where it was lost first (the recovery's reach), the window
+         * doubling with each search that proves nothing. */
+        begin_global(loc, loc->cfg->recover_m > 0.0f ? loc->cfg->recover_m : 0.0f);
     }
     loc->counters.track[rep->track]++;
     loc->last_stamp_us = scan->stamp_us;

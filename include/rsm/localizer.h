@@ -139,7 +139,9 @@ typedef struct rsm_localizer_config {
                                      * finest level) must reach this share of the fit the map's own
                                      * scans had (saved with the map; 1 when unknown); default 0.8 */
     uint8_t global_when_lost;       /* 1: a localizer that reports lost starts a global search by
-                                     * itself; default 0 */
+                                     * itself, within recover_m of the estimate first, the window
+                                     * doubling with each search that proves nothing
+                                     * (rsm_localizer_global_near); default 0 */
     uint8_t map_frozen;             /* 1: localization mode: the persistent map is read, never
                                      * written (a map loaded with rsm_localizer_load_map stays as
                                      * it was saved); 0: scans keep updating it (the building

@@ -273,6 +273,56 @@ static void test_a_window_that_misses_grows(void)
     TEST_ASSERT_TRUE(loc.counters.global_ambiguous >= 1u);
 }
 
+/* Carried, in localization mode (issue 31's kidnapping): the scans come
+ * from another place while odometry shows no jump. With global_when_lost
+ * the localizer reports lost after lost_scans poor scans, searches by
+ * itself and finds the new place; without it, it never searches. (With the
+ * map being written, the scans placed wrongly while uncertain go into the
+ * map and soon fit it: issue 29's "know when lost", not solved here.) */
+static void test_lost_then_found_by_itself(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_localizer_report_t rep;
+    size_t at;
+    size_t to;
+    size_t k;
+    int pass;
+    make_path();
+    at = path_len - 120u;
+    to = path_len - 40u;
+    for (pass = 0; pass < 2; ++pass) {
+        int lost = 0;
+        size_t found = 0;
+        cfg.global_when_lost = (uint8_t)(pass == 0);
+        cfg.map_frozen = 0u;
+        map_path(&world, at);
+        cfg.map_frozen = 1u; /* kept by pointer: from now on */
+        /* From here on the robot is at path[to + k]; odometry reports the
+         * path's steps there, not the jump. */
+        for (k = 0; to + k < path_len && found == 0u; ++k) {
+            if (k > 0u) {
+                const rsm_motion_t u = rsm_synth_motion(&path[to + k - 1u], &path[to + k], NULL);
+                TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+            }
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &path[to + k], &scan_cfg, NULL,
+                                                         (uint64_t)(at + k) * STEP_US, &scan));
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+            lost |= rep.track == RSM_TRACK_LOST;
+            if (lost && rep.recovered && rep.track == RSM_TRACK_TRACKING) {
+                found = to + k;
+            }
+        }
+        if (pass == 0) {
+            TEST_ASSERT_TRUE(lost);
+            TEST_ASSERT_TRUE_MESSAGE(found > 0u, "lost and never found again");
+            TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &path[found]) < 0.1f);
+            TEST_ASSERT_TRUE(loc.counters.global_searches >= 1u);
+        } else {
+            TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.global_searches);
+        }
+    }
+}
+
 /* A scan with too few readings while searching is counted as such and the
  * search waits for the next. */
 static void test_few_points_wait(void)
@@ -374,6 +424,7 @@ int main(void)
     RUN_TEST(test_a_symmetric_room_gives_no_pose);
     RUN_TEST(test_a_search_near_the_estimate);
     RUN_TEST(test_a_window_that_misses_grows);
+    RUN_TEST(test_lost_then_found_by_itself);
     RUN_TEST(test_few_points_wait);
     RUN_TEST(test_far_readings);
     RUN_TEST(test_too_wide_a_map);
