@@ -171,6 +171,8 @@ def test_skip_seconds_starts_later_in_the_log(tmp_path, head_log):
     short = tmp_path / "short.txt"
     nav(head_log, short, "--skip-seconds", "30", "--scans", "25")
     assert sorted(poses(short)) == b[:25]
+    res = nav(head_log, short, "--skip-seconds", "1e9", ok=False)
+    assert res.returncode == 1 and "no scan from --skip-seconds on" in res.stderr, res.stderr
     for bad in ("0", "-3", " -1", "x"):
         res = nav(head_log, short, "--scans", bad, ok=False)
         assert res.returncode == 2 and "--scans" in res.stderr, bad

@@ -264,6 +264,9 @@ static void test_malformed_pgm_refused(void)
     REFUSED_PGM("P2\n4 2\n255\n0 0 0 0\n0 0 256 0\n", "pixel 2 of row 1 is not a number");
     REFUSED_PGM("P2\n4 2\n255\n0 0 0 0\n0 0 -1 0\n", "pixel 2 of row 1 is not a number");
     REFUSED_PGM("P2\n4 2\n300\n0 0 0 0\n0 0 0 0\n", "16-bit PGM (maxval 300)");
+    REFUSED_PGM("P2\n4 2\n70000\n0 0 0 0\n0 0 0 0\n", "maxval 70000 is beyond 65535");
+    /* All free: no wall to localize against. */
+    REFUSED_PGM("P5\n4 2\n255\n\xFF\xFF\xFF\xFF\xFF\xFF\xFF\xFF", "no occupied pixel");
 }
 
 /* Other localizers: refused before anything is read into them. */

@@ -570,6 +570,21 @@ int rsm_rosmap_load(const char *yaml_path, rsm_localizer_t *loc, rsm_import_repo
         free(img.px);
         return -1;
     }
+    {
+        /* A map with no wall gives nothing to localize in: refused while
+         * loc is still as it was. */
+        size_t k;
+        const size_t n = (size_t)img.w * img.h;
+        for (k = 0; k < n && !occupied(&y, img.px[k], img.maxval); ++k) {
+        }
+        if (k == n) {
+            say(err, errcap, "%s: no occupied pixel in %s (occupied_thresh %g%s): nothing to localize in",
+                yaml_path, image_path, y.occupied_thresh, y.negate ? ", negate" : "");
+            free(row);
+            free(img.px);
+            return -1;
+        }
+    }
     /* Everything read and checked: only now is loc's map replaced. */
     rc = rsm_localizer_import_begin(loc, &rep);
     if (rc != RSM_OK) {

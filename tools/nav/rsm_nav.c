@@ -1817,6 +1817,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "rsm-nav: no pose: %s\n",
                 nav.global && nav.initialised ? "the global search proved none (--global: no trajectory line"
                                                 " before a pose is proven)"
+                : carmen != NULL && nav.skip_s > 0.0 && nav.ntimes == 0u
+                    ? "the log holds no scan from --skip-seconds on (it is shorter)"
                 : carmen != NULL  ? "the log holds no usable laser scan"
                 : capture != NULL ? "no scan came out of the capture (its laser channel empty, or its protocol "
                                     "tag not what the bytes are)"
