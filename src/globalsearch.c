@@ -54,11 +54,13 @@ static uint32_t map_width(int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1)
     return (uint32_t)((gx1 - gx0 > gy1 - gy0 ? gx1 - gx0 : gy1 - gy0) + 1);
 }
 
-int rsm_global_fits(const rsm_tmap_t *map)
+int rsm_global_check(const rsm_tmap_t *map)
 {
     int32_t b[4];
-    return rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3]) &&
-           base_for(map_width(b[0], b[1], b[2], b[3])) <= MAX_BASE_H;
+    if (!rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3])) {
+        return RSM_ERR_DEGENERATE;
+    }
+    return base_for(map_width(b[0], b[1], b[2], b[3])) <= MAX_BASE_H ? RSM_OK : RSM_ERR_NOMEM;
 }
 
 /* The blocks' maxima of the coarsest level into grid 0, then each grid's
@@ -188,14 +190,12 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
     if (n < 8u) {
         return RSM_ERR_DEGENERATE;
     }
-    if (!rsm_tmap_bounds(map, level, &gx0, &gy0, &gx1, &gy1)) {
-        return RSM_ERR_DEGENERATE;
+    if ((rc = rsm_global_check(map)) != RSM_OK) {
+        return rc;
     }
+    (void)rsm_tmap_bounds(map, level, &gx0, &gy0, &gx1, &gy1);
     g->level = level;
     g->npts = n < (size_t)RSM_GLOBAL_POINTS ? (uint32_t)n : (uint32_t)RSM_GLOBAL_POINTS;
-    if (!rsm_global_fits(map)) {
-        return RSM_ERR_NOMEM;
-    }
     /* Taken evenly over the scan, stored in an order that jumps across it
      * (a stride coprime with their count), so that a pose's first points
      * already sample the whole scan and a poor pose is given up early. */
@@ -268,7 +268,6 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
     g->depth = 0;
     g->found = 0;
     g->floor_score = min_share * (float)g->npts;
-    g->scans = 0;
     g->work = 0;
     return RSM_OK;
 }
@@ -505,7 +504,6 @@ int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, 
     if (g->depth > 0u) {
         offsets(g, cell, g->heading - 1u, fx, fy);
     }
-    g->scans++;
     /* First the map's wall directions, a tile at a time. */
     while (g->dir_next <= map->used) {
         if (budget > 0u && work >= budget) {

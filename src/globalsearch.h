@@ -46,10 +46,11 @@ extern "C" {
 #define RSM_GLOBAL_RUNNING 2u
 #define RSM_GLOBAL_PROVING 3u  /* done: the next usable scan tests what it kept */
 
-/* 1 when the map's level the search scores on holds something and is
- * narrow enough for the bound grids (RSM_GLOBAL_SIDE blocks of at most
- * 2^RSM_GLOBAL_MAX_BASE_H cells a side: 8 km with the defaults), else 0. */
-int rsm_global_fits(const rsm_tmap_t *map);
+/* Whether map can be searched: RSM_OK; RSM_ERR_DEGENERATE when the level
+ * the search scores on holds nothing; RSM_ERR_NOMEM when it is too wide for
+ * the bound grids (RSM_GLOBAL_SIDE blocks of at most 2^RSM_GLOBAL_MAX_BASE_H
+ * cells a side: 8 km with the defaults). */
+int rsm_global_check(const rsm_tmap_t *map);
 
 /* Starts a search for the readings pts (robot frame, in beam order; up to
  * RSM_GLOBAL_POINTS of them, taken evenly, are kept, and all give the
@@ -59,8 +60,7 @@ int rsm_global_fits(const rsm_tmap_t *map);
  * scores at least min_share of the kept points' count and within keep of
  * the best so far. Returns RSM_OK, or RSM_ERR_DEGENERATE when the map's
  * coarsest level is empty or fewer than 8 readings are given, or
- * RSM_ERR_NOMEM when the map is so wide that its bound grids would need
- * blocks of more than 2^RSM_GLOBAL_MAX_BASE_H cells. */
+ * RSM_ERR_NOMEM as rsm_global_check says. */
 int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
                      const rsm_pose_t *at, float min_share);
 

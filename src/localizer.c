@@ -11,6 +11,7 @@
 #include "harris.h"
 #include "icp.h"
 #include "map.h"
+#include "mapstate.h"
 #include "globalsearch.h"
 #include "mapmatch.h"
 #include "match.h"
@@ -244,10 +245,31 @@ int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned l
     return rc;
 }
 
-/* Whether loc is a localizer rsm_localizer_init set up. */
-static int ready(const rsm_localizer_t *loc)
+int rsm_localizer_ready(const rsm_localizer_t *loc)
 {
     return loc != NULL && loc->magic == (uint32_t)RSM_LOCALIZER_MAGIC && loc->cfg != NULL;
+}
+
+static int ready(const rsm_localizer_t *loc)
+{
+    return rsm_localizer_ready(loc);
+}
+
+/* A global search is under way (RSM_METHOD_MAP). */
+static int global_running(const rsm_localizer_t *loc)
+{
+    return loc->cfg->method == RSM_METHOD_MAP && loc->state.persistent.global.phase != RSM_GLOBAL_IDLE;
+}
+
+void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
+{
+    loc->have_scan = 1u;
+    loc->state.persistent.written = loc->ekf.x;
+    loc->state.persistent.fit = fit;
+    loc->state.persistent.map_fit = fit;
+    if (global_running(loc)) {
+        loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
+    }
 }
 
 int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const float p[9])
@@ -1094,7 +1116,7 @@ int rsm_localizer_global(rsm_localizer_t *loc)
 int rsm_localizer_global_near(rsm_localizer_t *loc, float radius_m)
 {
     const rsm_tmap_t *map;
-    int32_t b[4];
+    int rc;
     if (!ready(loc) || !(radius_m >= 0.0f && radius_m <= 1.0e6f)) {
         return RSM_ERR_INVAL;
     }
@@ -1102,11 +1124,8 @@ int rsm_localizer_global_near(rsm_localizer_t *loc, float radius_m)
         return RSM_ERR_NOSYS;
     }
     map = &loc->state.persistent.map;
-    if (!rsm_tmap_bounds(map, (uint32_t)map->cfg.levels - 1u, &b[0], &b[1], &b[2], &b[3])) {
-        return RSM_ERR_DEGENERATE;
-    }
-    if (!rsm_global_fits(map)) {
-        return RSM_ERR_NOMEM;
+    if ((rc = rsm_global_check(map)) != RSM_OK) {
+        return rc;
     }
     begin_global(loc, radius_m);
     loc->poor_run = loc->cfg->lost_scans;
@@ -1116,8 +1135,7 @@ int rsm_localizer_global_near(rsm_localizer_t *loc, float radius_m)
 
 int rsm_localizer_searching(const rsm_localizer_t *loc)
 {
-    return ready(loc) && loc->cfg->method == RSM_METHOD_MAP &&
-           loc->state.persistent.global.phase != RSM_GLOBAL_IDLE;
+    return ready(loc) && global_running(loc);
 }
 
 /* The fit a proven place must reach a share of: the map's own (saved with
@@ -1374,7 +1392,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         outcome = RSM_SCAN_ODOMETRY;
     } else if (loc->cfg->method == RSM_METHOD_ICP) {
         outcome = step_icp(loc, npts, rep, &clk);
-    } else if (loc->cfg->method == RSM_METHOD_MAP && loc->state.persistent.global.phase != RSM_GLOBAL_IDLE) {
+    } else if (global_running(loc)) {
         stage_switch(&clk, RSM_STAGE_MAPMATCH);
         outcome = step_global(loc, npts, rep);
         global_taken = outcome == RSM_SCAN_ACCEPTED;
@@ -1452,11 +1470,11 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
                                  outcome == RSM_SCAN_FIRST ? 0u : loc->cfg->tmap.write_cells);
     }
     rep->track = track_state(loc, outcome, rep);
-    if (loc->cfg->method == RSM_METHOD_MAP && loc->state.persistent.global.phase != RSM_GLOBAL_IDLE) {
+    if (global_running(loc)) {
         /* Searching, the estimate is unknown whatever the scans did. */
         rep->track = RSM_TRACK_LOST;
     } else if (rep->track == RSM_TRACK_LOST && loc->cfg->method == RSM_METHOD_MAP && loc->cfg->global_when_lost &&
-               rsm_global_fits(&loc->state.persistent.map)) {
+               rsm_global_check(&loc->state.persistent.map) == RSM_OK) {
         /* Near where it was lost first (the recovery's reach), the window
          * doubling with each search that proves nothing. */
         begin_global(loc, loc->cfg->recover_m > 0.0f ? loc->cfg->recover_m : 0.0f);

@@ -7,7 +7,7 @@
 
 #include "bytes.h"
 #include "rsm/status.h"
-#include "globalsearch.h"
+#include "mapstate.h"
 #include "tilemap.h"
 
 #define MAGIC0 'R'
@@ -52,11 +52,6 @@ static float get_f32(const uint8_t *p)
     return f;
 }
 
-static int is_map_localizer(const rsm_localizer_t *loc)
-{
-    return loc != NULL && loc->magic == (uint32_t)RSM_LOCALIZER_MAGIC && loc->cfg != NULL;
-}
-
 static uint32_t file_bytes(uint32_t tiles)
 {
     return RSM_MAPFILE_HEADER_BYTES + tiles * RSM_MAPFILE_TILE_BYTES + 4u;
@@ -64,7 +59,7 @@ static uint32_t file_bytes(uint32_t tiles)
 
 uint32_t rsm_localizer_map_bytes(const rsm_localizer_t *loc)
 {
-    if (!is_map_localizer(loc) || loc->cfg->method != RSM_METHOD_MAP) {
+    if (!rsm_localizer_ready(loc) || loc->cfg->method != RSM_METHOD_MAP) {
         return 0u;
     }
     return file_bytes(loc->state.persistent.map.used);
@@ -130,7 +125,7 @@ int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn writ
     uint32_t crc;
     uint32_t at;
     uint32_t s;
-    if (!is_map_localizer(loc) || write == NULL) {
+    if (!rsm_localizer_ready(loc) || write == NULL) {
         return RSM_ERR_INVAL;
     }
     if (loc->cfg->method != RSM_METHOD_MAP) {
@@ -246,7 +241,7 @@ int rsm_localizer_load_map(rsm_localizer_t *loc, rsm_mapfile_read_fn read, void 
     rsm_mapfile_info_t got;
     rsm_tmap_t *map;
     int rc;
-    if (!is_map_localizer(loc) || read == NULL) {
+    if (!rsm_localizer_ready(loc) || read == NULL) {
         return RSM_ERR_INVAL;
     }
     if (loc->cfg->method != RSM_METHOD_MAP) {
@@ -262,15 +257,7 @@ int rsm_localizer_load_map(rsm_localizer_t *loc, rsm_mapfile_read_fn read, void 
         (void)rsm_tmap_init(map, &loc->cfg->tmap);
         return rc;
     }
-    /* The next scan is matched against the map, not written as a first;
-     * a global search under way starts over in it. */
-    loc->have_scan = 1u;
-    if (loc->state.persistent.global.phase != RSM_GLOBAL_IDLE) {
-        loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
-    }
-    loc->state.persistent.written = loc->ekf.x;
-    loc->state.persistent.fit = got.fit;
-    loc->state.persistent.map_fit = got.fit;
+    rsm_localizer_map_replaced(loc, got.fit);
     if (info != NULL) {
         *info = got;
     }

@@ -8,6 +8,7 @@
 #include "fmath.h"
 #include "grid.h"
 #include "rsm/status.h"
+#include "mapstate.h"
 #include "tilemap.h"
 #include "tmap_read.h"
 
@@ -29,7 +30,7 @@ static int cell_coord(float u, int32_t *g)
 
 static int map_localizer(const rsm_localizer_t *loc, int *rc)
 {
-    if (loc == NULL || loc->magic != (uint32_t)RSM_LOCALIZER_MAGIC || loc->cfg == NULL) {
+    if (!rsm_localizer_ready(loc)) {
         *rc = RSM_ERR_INVAL;
         return 0;
     }
@@ -53,11 +54,17 @@ int rsm_localizer_import_begin(rsm_localizer_t *loc, rsm_import_report_t *report
     return RSM_OK;
 }
 
-static int grid_ok(const rsm_import_grid_t *g, float cell_m)
+int rsm_localizer_import_check(const rsm_localizer_t *loc, const rsm_import_grid_t *g)
 {
-    return g != NULL && g->res_m > 0.0f && g->res_m <= 1.0e3f && g->res_m <= MAX_SPAN * cell_m &&
-           isfinite(g->origin_x) && isfinite(g->origin_y) && isfinite(g->yaw_rad) && g->width >= 1u &&
-           (g->coarse == RSM_IMPORT_SHARE || g->coarse == RSM_IMPORT_TOUCH);
+    int rc = RSM_OK;
+    if (!map_localizer(loc, &rc)) {
+        return rc;
+    }
+    return g != NULL && g->res_m > 0.0f && g->res_m <= 1.0e3f && g->res_m <= MAX_SPAN * loc->cfg->tmap.cell_m &&
+                   isfinite(g->origin_x) && isfinite(g->origin_y) && isfinite(g->yaw_rad) && g->width >= 1u &&
+                   (g->coarse == RSM_IMPORT_SHARE || g->coarse == RSM_IMPORT_TOUCH)
+               ? RSM_OK
+               : RSM_ERR_INVAL;
 }
 
 /* How one level is written: its cursor, its cell side, and whether it
@@ -143,14 +150,14 @@ int rsm_localizer_import_row(rsm_localizer_t *loc, const rsm_import_grid_t *grid
     uint32_t cells = 0;
     uint32_t dropped = 0;
     uint32_t k;
-    int rc = RSM_OK;
-    if (!map_localizer(loc, &rc)) {
+    int rc = rsm_localizer_import_check(loc, grid);
+    if (rc != RSM_OK) {
         return rc;
     }
-    map = &loc->state.persistent.map;
-    if (!grid_ok(grid, map->cfg.cell_m) || occupied == NULL) {
+    if (occupied == NULL) {
         return RSM_ERR_INVAL;
     }
+    map = &loc->state.persistent.map;
     /* A write spread over the coming scans ends first: it holds the map's
      * current write counter, which the import writes with too. */
     (void)rsm_tmap_write_run(map, loc->frame.world, 0u);
@@ -207,9 +214,7 @@ int rsm_localizer_import_row(rsm_localizer_t *loc, const rsm_import_grid_t *grid
         report->dropped += dropped;
         report->outside += outside;
     }
-    /* As after a load: the next scan is matched against the map. */
-    loc->have_scan = 1u;
-    loc->state.persistent.written = loc->ekf.x;
-    loc->state.persistent.fit = 0.0f;
+    /* As after a load, with no fit known. */
+    rsm_localizer_map_replaced(loc, 0.0f);
     return dropped > 0u ? RSM_ERR_NOMEM : RSM_OK;
 }

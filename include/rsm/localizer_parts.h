@@ -316,7 +316,6 @@ typedef struct rsm_global {
     rsm_global_candidate_t cand[RSM_GLOBAL_CANDIDATES];
     uint32_t found;
     float floor_score;             /* a pose must score at least this to be kept */
-    uint32_t scans;                /* scans the search has run over so far */
     uint32_t unproven;             /* searches in a row that proved nothing (each next one
                                     * keeps poses with a lower share of points on walls) */
     uint32_t work;                 /* cells and blocks read so far */

@@ -74,6 +74,14 @@ typedef struct rsm_import_report {
     uint32_t outside;   /* occupied pixels beyond the map's coordinate range (not written) */
 } rsm_import_report_t;
 
+/* RSM_OK when rsm_localizer_import_row would take rows laid out as grid
+ * describes: res_m above 0, at most 1000 m and at most 256 of the map's
+ * finest cells; a finite origin and yaw; width >= 1; coarse one of the two
+ * modes. Else RSM_ERR_INVAL (RSM_ERR_NOSYS for another method than
+ * RSM_METHOD_MAP). Reads only: a caller checks a whole image's layout
+ * before rsm_localizer_import_begin empties the map. */
+int rsm_localizer_import_check(const rsm_localizer_t *loc, const rsm_import_grid_t *grid);
+
 /* Starts an import: empties loc's persistent map (a write into it still
  * running is dropped) and zeroes *report (may be NULL). Returns RSM_OK;
  * RSM_ERR_INVAL for loc NULL or never initialised; RSM_ERR_NOSYS for

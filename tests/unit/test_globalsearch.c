@@ -74,6 +74,23 @@ static void map_path(const rsm_synth_world_t *world, size_t scans)
     }
 }
 
+/* Maps the path up to 80 scans before its end, then puts the estimate
+ * (dx, dy, dth) from the truth at that scan (a robot carried, or a rough
+ * guess); returns the scan. */
+static size_t mapped_then_moved(const rsm_synth_world_t *world, float dx, float dy, float dth)
+{
+    rsm_pose_t moved;
+    size_t at;
+    make_path();
+    at = path_len - 80u;
+    map_path(world, at);
+    moved.x = path[at].x + dx;
+    moved.y = path[at].y + dy;
+    moved.theta = rsm_wrap_angle(path[at].theta + dth);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_pose(&loc, &moved, NULL));
+    return at;
+}
+
 /* Forgotten at scan `at` (the robot carried: the estimate jumped 3 m and
  * half a turn), found again; scans report searching and lost until the
  * pose is proven, and that pose is the true one. */
@@ -81,17 +98,9 @@ static void test_a_forgotten_robot_is_found(void)
 {
     const rsm_synth_world_t world = rsm_synth_world_room();
     rsm_localizer_report_t rep;
-    rsm_pose_t wrong;
-    size_t at;
+    const size_t at = mapped_then_moved(&world, 3.0f, -1.0f, 3.0f);
     size_t k;
     size_t found = 0;
-    make_path();
-    at = path_len - 80u;
-    wrong.x = path[at].x + 3.0f;
-    wrong.y = path[at].y - 1.0f;
-    wrong.theta = rsm_wrap_angle(path[at].theta + 3.0f);
-    map_path(&world, at);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_pose(&loc, &wrong, NULL));
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
     TEST_ASSERT_TRUE(rsm_localizer_searching(&loc));
     TEST_ASSERT_EQUAL_INT(RSM_TRACK_LOST, rsm_localizer_track(&loc));
@@ -226,19 +235,11 @@ static size_t search_from(const rsm_synth_world_t *world, size_t at, uint32_t *w
 static void test_a_search_near_the_estimate(void)
 {
     const rsm_synth_world_t world = rsm_synth_world_room();
-    rsm_pose_t rough;
-    size_t at;
+    const size_t at = mapped_then_moved(&world, 0.3f, -0.2f, 1.0f);
     size_t near_at;
     size_t all_at;
     uint32_t near_work;
     uint32_t all_work;
-    make_path();
-    at = path_len - 80u;
-    map_path(&world, at);
-    rough.x = path[at].x + 0.3f;
-    rough.y = path[at].y - 0.2f;
-    rough.theta = rsm_wrap_angle(path[at].theta + 1.0f);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_pose(&loc, &rough, NULL));
     before = loc;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global_near(&loc, 0.6f));
     near_at = search_from(&world, at, &near_work);
@@ -258,16 +259,8 @@ static void test_a_search_near_the_estimate(void)
 static void test_a_window_that_misses_grows(void)
 {
     const rsm_synth_world_t world = rsm_synth_world_room();
-    rsm_pose_t far;
-    size_t at;
+    const size_t at = mapped_then_moved(&world, 2.5f, 1.5f, 0.0f);
     uint32_t work;
-    make_path();
-    at = path_len - 80u;
-    map_path(&world, at);
-    far.x = path[at].x + 2.5f;
-    far.y = path[at].y + 1.5f;
-    far.theta = path[at].theta;
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_pose(&loc, &far, NULL));
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global_near(&loc, 0.3f));
     TEST_ASSERT_TRUE(search_from(&world, at, &work) > 0u);
     TEST_ASSERT_TRUE(loc.counters.global_ambiguous >= 1u);
@@ -390,7 +383,7 @@ static void test_too_wide_a_map(void)
     before = loc;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_NOMEM, rsm_localizer_global(&loc));
     TEST_ASSERT_EQUAL_MEMORY(&before, &loc, sizeof loc);
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_fits(&loc.state.persistent.map));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_NOMEM, rsm_global_check(&loc.state.persistent.map));
 }
 
 static void test_bad_calls(void)

@@ -547,16 +547,15 @@ int rsm_rosmap_load(const char *yaml_path, rsm_localizer_t *loc, rsm_import_repo
     grid.origin_y = (float)y.origin[1];
     grid.yaw_rad = (float)y.origin[2];
     grid.coarse = RSM_IMPORT_SHARE;
-    /* What the import would refuse, refused before loc's map is emptied. */
-    if (!(grid.res_m > 0.0f && grid.res_m <= 1.0e3f) || !isfinite(grid.origin_x) || !isfinite(grid.origin_y) ||
-        !isfinite(grid.yaw_rad)) {
-        say(err, errcap, "%s: resolution (above 0, at most 1000 m) or origin out of range", yaml_path);
-        return -1;
-    }
-    if (loc->magic == (uint32_t)RSM_LOCALIZER_MAGIC && loc->cfg != NULL &&
-        grid.res_m > 256.0f * loc->cfg->tmap.cell_m) {
-        say(err, errcap, "%s: resolution %g m is more than 256 of the map's %g m cells", yaml_path, y.resolution,
-            (double)loc->cfg->tmap.cell_m);
+    /* What the import would refuse, refused before loc's map is emptied
+     * (the width is the image's, read below: 1 stands in for it here). */
+    grid.width = 1u;
+    rc = rsm_localizer_import_check(loc, &grid);
+    if (rc == RSM_ERR_INVAL) {
+        say(err, errcap, "%s: resolution %g m or origin [%g, %g, %g] out of range: the resolution must be above 0,"
+                         " at most 1000 m and no more than 256 of the map's %g m cells (or the localizer is not"
+                         " initialised)", yaml_path, y.resolution, y.origin[0], y.origin[1], y.origin[2],
+            loc->magic == (uint32_t)RSM_LOCALIZER_MAGIC && loc->cfg != NULL ? (double)loc->cfg->tmap.cell_m : 0.0);
         return -1;
     }
     memset(&img, 0, sizeof img);

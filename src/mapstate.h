@@ -1,0 +1,17 @@
+/* What the modules that replace the localizer's persistent map (mapfile.c,
+ * mapimport.c) share with the localizer (localizer.c). Internal. */
+#ifndef RSM_MAPSTATE_H
+#define RSM_MAPSTATE_H
+
+#include "rsm/localizer.h"
+
+/* 1 for a localizer rsm_localizer_init set up (magic and cfg), else 0. */
+int rsm_localizer_ready(const rsm_localizer_t *loc);
+
+/* The persistent map was replaced (loaded, imported): the next scan is
+ * matched against it, not written as a first; writes count from the
+ * estimate; fit (0: unknown) is the recent scans' and the map's own; a
+ * global search under way starts over in the new map. */
+void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit);
+
+#endif /* RSM_MAPSTATE_H */
