@@ -69,6 +69,7 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.recover_rad = 0.3f;
     c.recover_margin = 0.1f;
     c.refute_margin = 0.1f;
+    c.refute_min_fit = 0.7f;
     c.doubt_m = 0.1f;
     c.doubt_rad = 0.1f;
     c.isolation.tol_m = 0.0f;
@@ -807,9 +808,14 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  * move, either one winning says the step repeated that motion (odometry
  * and matching need not agree on how far the robot went meanwhile, so the
  * last estimate may fit better than odometry counted from the stall's
- * start). Returns what was made of the step. */
+ * start). The last estimate drops the step only when the scan fits it
+ * nearly as well as recent scans (refute_min_fit): a step over a long gap
+ * in the scans, into ground the map does not hold yet, is poorly matched
+ * either way, and a robot that stood still through it is the less likely
+ * story; such a weaker case sets *doubted instead, and the caller searches
+ * around pred. Returns what was made of the step. */
 static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred,
-                                         int odometry_moved, int *rc, rsm_mapmatch_result_t *res)
+                                         int odometry_moved, int *rc, rsm_mapmatch_result_t *res, int *doubted)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t *anchor = &loc->state.persistent.anchor;
@@ -853,6 +859,11 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
             alt.used >= cfg->min_points / 2u && alt.hit >= cfg->recover_ratio * loc->state.persistent.fit &&
             (*rc != RSM_OK || (k == 0 && counted_first ? res->hit <= alt.hit * (1.0f + cfg->refute_margin)
                                                        : alt.hit > res->hit * (1.0f + cfg->refute_margin)))) {
+            if (kind[k] == RSM_ODOMETRY_REFUTED && *rc == RSM_OK &&
+                alt.hit < cfg->refute_min_fit * loc->state.persistent.fit) {
+                *doubted = 1;
+                continue;
+            }
             *res = alt;
             *rc = RSM_OK;
             verdict = kind[k];
@@ -939,6 +950,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     rsm_mapmatch_result_t res;
     rsm_mapmatch_unpin_t unpin;
     int ambiguous = 0;
+    int doubted = 0;
     int poor;
     int rc;
     if (!loc->have_scan) {
@@ -952,7 +964,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     }
     rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
                       &res);
-    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, &rc, &res);
+    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, &rc, &res, &doubted);
     if (rep->odometry == RSM_ODOMETRY_CAUGHT_UP) {
         loc->counters.caught_up++;
     } else if (rep->odometry == RSM_ODOMETRY_REFUTED) {
@@ -961,8 +973,9 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
         loc->counters.recounted++;
     }
     poor = rc == RSM_OK && res.hit < cfg->recover_ratio * loc->state.persistent.fit;
-    if (poor && cfg->recover_m > 0.0f) {
-        /* Far worse than recent scans: odometry may be off by more than any
+    if ((poor || doubted) && cfg->recover_m > 0.0f) {
+        /* Far worse than recent scans, or odometry's step doubted with no
+         * prediction fitting well: odometry may be off by more than any
          * basin. The smallest correction that explains the scan first: a
          * turn misjudged (every heading within recover_rad, the position
          * within one coarse cell), and only if that does not fit, a shift up

@@ -119,6 +119,12 @@ typedef struct rsm_localizer_config {
      * (docs/robustness.md, "Odometry that lies"). */
     float refute_margin;            /* a second prediction replaces odometry's when its fit beats
                                      * it by this share; 0 = never doubt odometry; default 0.1 */
+    float refute_min_fit;           /* ... and the last estimate without the step (a spike, a
+                                     * counter reset, a slip) only when the scan fits it at least
+                                     * this share of recent scans' fit; a weaker case searches
+                                     * around odometry's prediction (recover_m) and keeps the step
+                                     * unless a pose is proven (a long gap in the scans);
+                                     * default 0.7 */
     float doubt_m;                  /* odometry counted from the last scan that trusted it (not
                                      * from the last scan) predicts a pose this far ... */
     float doubt_rad;                /* ... or turned this far from the step's: both are matched

@@ -395,6 +395,8 @@ void test_localizer_init_should_reject_bad_configs(void)
     BAD(lost_scans, 0u);
     BAD(refute_margin, -0.1f);
     BAD(refute_margin, NAN);
+    BAD(refute_min_fit, -0.1f);
+    BAD(refute_min_fit, NAN);
     BAD(doubt_m, 0.0f);
     BAD(doubt_rad, NAN);
     BAD(occlusion.window, (uint8_t)(RSM_OCCLUSION_MAX_WINDOW + 1u));
@@ -1140,6 +1142,32 @@ void test_localizer_scan_should_refute_a_spike_and_a_counter_reset(void)
     TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.refuted);
 }
 
+void test_localizer_scan_should_search_before_dropping_a_step_the_scan_fits_weakly_without(void)
+{
+    /* A step is dropped outright only when the scan without it fits nearly
+     * as well as recent scans (refute_min_fit); else odometry's prediction
+     * is searched around first and the step kept unless a pose is proven
+     * (over a long gap into new ground both fit poorly, and a robot that
+     * stood still through it is the less likely story). The same spike as
+     * above (beyond the search's heading reach): dropped with the default
+     * bar; with the bar out of reach, searched and kept. */
+    static const rsm_pose_t spike = {0.6f, 0.4f, 1.2f};
+    char msg[160];
+    float err = run_false_step(&spike, 0);
+    snprintf(msg, sizeof msg, "default: %.3f m worst, %u refuted", (double)err, (unsigned)loc.counters.refuted);
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(1u, loc.counters.refuted, msg);
+    TEST_ASSERT_TRUE_MESSAGE(err < QUANT + 0.01f, msg);
+    cfg.refute_min_fit = 10.0f;
+    err = run_false_step(&spike, 0);
+    snprintf(msg, sizeof msg, "bar out of reach: %.3f m worst, %u refuted, %u searches, %u recovered", (double)err,
+             (unsigned)loc.counters.refuted, (unsigned)loc.counters.searches, (unsigned)loc.counters.recovered);
+    TEST_MESSAGE(msg);
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, loc.counters.refuted, msg);
+    TEST_ASSERT_TRUE_MESSAGE(loc.counters.searches >= 1u, msg);
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, loc.counters.recovered, msg);
+    TEST_ASSERT_TRUE_MESSAGE(err > 0.5f, msg);
+}
+
 void test_localizer_scan_should_doubt_no_step_of_honest_odometry(void)
 {
     /* The whole loop with odometry's systematic errors (3 % long, drifting)
@@ -1772,6 +1800,7 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_recover_from_being_carried_by_searching);
     RUN_TEST(test_localizer_scan_should_count_a_stalled_odometrys_catch_up_once);
     RUN_TEST(test_localizer_scan_should_refute_a_spike_and_a_counter_reset);
+    RUN_TEST(test_localizer_scan_should_search_before_dropping_a_step_the_scan_fits_weakly_without);
     RUN_TEST(test_localizer_scan_should_doubt_no_step_of_honest_odometry);
     RUN_TEST(test_localizer_scan_should_not_take_an_ambiguous_recovery);
     RUN_TEST(test_localizer_should_say_when_it_is_uncertain_and_when_lost);

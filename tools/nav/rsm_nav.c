@@ -94,6 +94,7 @@
     F("recover_rad", recover_rad) \
     F("recover_margin", recover_margin) \
     F("refute_margin", refute_margin) \
+    F("refute_min_fit", refute_min_fit) \
     U("lost_scans", lost_scans, uint16_t) \
     U("refuse_poor", refuse_poor, uint8_t) \
     U("global_budget", global_budget, uint32_t) \
