@@ -69,7 +69,8 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.recover_rad = 0.3f;
     c.recover_margin = 0.1f;
     c.refute_margin = 0.1f;
-    c.refute_min_fit = 0.7f;
+    c.track_min_fit = 0.7f;
+    c.conflict_max = 0.5f;
     c.doubt_m = 0.1f;
     c.doubt_rad = 0.1f;
     c.isolation.tol_m = 0.0f;
@@ -765,6 +766,39 @@ static void apply_mount(rsm_localizer_t *loc, size_t n)
 /* Basins a recovery search descends from. */
 #define RECOVER_STARTS 3
 
+/* The conflict check (conflict_max): beams are looked at on the finest
+ * level, up to CONFLICT_BEAMS of them spread over the scan (a share needs
+ * no more, and each costs a walk of its length), and a wall counts only
+ * more than CONFLICT_MARGIN cells before the return, so that a return a
+ * little off its wall (noise, a match a cell off) or a beam grazing a wall
+ * near its end does not count. */
+#define CONFLICT_BEAMS 64u
+#define CONFLICT_MARGIN 4u
+
+/* The share of the scan's beams, placed at pose, that pass through walls
+ * of the persistent map; stored in the report. */
+static float crossing_share(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t npts, rsm_localizer_report_t *rep)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_point_t origin = {cfg->laser_mount.x, cfg->laser_mount.y};
+    uint32_t checked = 0;
+    uint32_t crossing = rsm_tmap_beams_crossing(&loc->state.persistent.map, 0u, pose, &origin, loc->pts, npts,
+                                                (npts + CONFLICT_BEAMS - 1u) / CONFLICT_BEAMS, cfg->tmap.saturation,
+                                                CONFLICT_MARGIN, &checked);
+    rep->crossing = checked > 0u ? (float)crossing / (float)checked : 0.0f;
+    return rep->crossing;
+}
+
+/* Whether the scan at pose contradicts the map (conflict_max). */
+static int contradicts(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t npts, rsm_localizer_report_t *rep)
+{
+    if (loc->cfg->conflict_max <= 0.0f || crossing_share(loc, pose, npts, rep) <= loc->cfg->conflict_max) {
+        return 0;
+    }
+    loc->counters.contradicted++;
+    return 1;
+}
+
 
 /* Whether odometry reported any motion since the last scan's estimate: a
  * stalled odometry repeats its pose exactly, and so predicts exactly that
@@ -809,7 +843,7 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  * and matching need not agree on how far the robot went meanwhile, so the
  * last estimate may fit better than odometry counted from the stall's
  * start). The last estimate drops the step only when the scan fits it
- * nearly as well as recent scans (refute_min_fit): a step over a long gap
+ * nearly as well as recent scans (track_min_fit): a step over a long gap
  * in the scans, into ground the map does not hold yet, is poorly matched
  * either way, and a robot that stood still through it is the less likely
  * story; such a weaker case sets *doubted instead, and the caller searches
@@ -860,7 +894,7 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
             (*rc != RSM_OK || (k == 0 && counted_first ? res->hit <= alt.hit * (1.0f + cfg->refute_margin)
                                                        : alt.hit > res->hit * (1.0f + cfg->refute_margin)))) {
             if (kind[k] == RSM_ODOMETRY_REFUTED && *rc == RSM_OK &&
-                alt.hit < cfg->refute_min_fit * loc->state.persistent.fit) {
+                alt.hit < cfg->track_min_fit * loc->state.persistent.fit) {
                 *doubted = 1;
                 continue;
             }
@@ -886,15 +920,19 @@ typedef enum recovery {
  * better than the last) and is proven: it beats every pose a doubt away
  * from it (another basin's descent, or the plain match) by recover_margin.
  * Only the winner's index, pose and fit are kept, and the winner is
- * descended again when taken: a search is rare, the stack is not. */
+ * descended again when taken: a search is rare, the stack is not. A winner
+ * that would not track by its fit (track_min_fit) and contradicts the map
+ * (conflict_max: a look-alike place within reach of a robot carried
+ * farther) is not taken. */
 static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
-                          rsm_mapmatch_result_t *res)
+                          rsm_mapmatch_result_t *res, rsm_localizer_report_t *rep)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const float fit = loc->state.persistent.fit;
     const float need = res->hit + 0.5f * (fit - res->hit);
     rsm_pose_t start[RECOVER_STARTS];
     rsm_pose_t found_pose[RECOVER_STARTS];
+    rsm_mapmatch_result_t won;
     float found_hit[RECOVER_STARTS];
     float rival;
     float wide[9];
@@ -936,14 +974,17 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
         return RECOVERY_AMBIGUOUS;
     }
     /* The same descent again: deterministic, so the same result. */
-    return rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[best], NULL,
-                        res) == RSM_OK
-               ? RECOVERY_TAKEN
-               : RECOVERY_NONE;
+    if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[best], NULL,
+                     &won) != RSM_OK ||
+        (won.hit < cfg->track_min_fit * fit && contradicts(loc, &won.pose, npts, rep))) {
+        return RECOVERY_NONE;
+    }
+    *res = won;
+    return RECOVERY_TAKEN;
 }
 
 static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_moved, rsm_localizer_report_t *rep,
-                              stage_clock_t *clk)
+                              stage_clock_t *clk, int *contradicted)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t pred = loc->ekf.x;
@@ -985,9 +1026,9 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
         loc->counters.searches++;
         /* An ambiguous near search is not widened: a farther pose would
          * have that same rival, and the wider search might not see it. */
-        recovery_t r = recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res);
+        recovery_t r = recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res, rep);
         if (r == RECOVERY_NONE && near_m < cfg->recover_m) {
-            r = recover(loc, npts, &pred, cfg->recover_m, &res);
+            r = recover(loc, npts, &pred, cfg->recover_m, &res, rep);
         }
         if (r == RECOVERY_TAKEN) {
             loc->counters.recovered++;
@@ -1009,14 +1050,27 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     if (rc != RSM_OK || res.used < cfg->min_points / 2u) {
         return RSM_SCAN_LOW_SUPPORT;
     }
+    if (!rep->recovered && res.hit < cfg->track_min_fit * loc->state.persistent.fit &&
+        contradicts(loc, &res.pose, npts, rep)) {
+        /* Its beams pass through the map's walls: placed where the map
+         * holds other walls (a robot carried, a look-alike place), or the
+         * map holds a wall twice (a place mapped again after a drift). It
+         * does not track and is not written (the map would soon agree with
+         * a wrong pose); fitting poorly it is refused, else fused: the
+         * match may still be the best there is. */
+        *contradicted = 1;
+        if (poor) {
+            return RSM_SCAN_POOR_FIT;
+        }
+    }
     if (poor && cfg->refuse_poor && (ambiguous || !odometry_moved)) {
         /* Fitted far worse than recent scans and no search proved a pose,
          * while odometry stood still (the robot carried, or turning faster
          * than the scans can follow) or a search found rival poses: the
          * prediction is kept, and the scan is not written. A robot that
-         * drives into new ground fits poorly too (its new points read 0),
-         * and its scans are fused and written as before, or the map could
-         * not grow into a hall. */
+         * drives into new ground fits poorly too (its new points read 0,
+         * its beams cross nothing the map holds), and its scans are fused
+         * and written as before, or the map could not grow into a hall. */
         return RSM_SCAN_POOR_FIT;
     }
     rep->residual_m = sqrtf(res.cost);
@@ -1042,7 +1096,8 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
  * then runs over this and the next scans (tmap.write_cells), from loc->frame.world,
  * which nothing else writes meanwhile. A write still running when the next
  * one is due is finished first. */
-static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, int first)
+static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, int first, int unmatched,
+                       rsm_localizer_report_t *rep)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     rsm_tmap_t *map = &loc->state.persistent.map;
@@ -1050,6 +1105,12 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
     uint8_t isolated[(RSM_MAX_BEAMS + 7) / 8];
     rsm_point_t origin;
     if (!first && sqrtf(d.x * d.x + d.y * d.y) < cfg->map_update_m && fabsf(d.theta) < cfg->map_update_rad) {
+        return;
+    }
+    if (unmatched && contradicts(loc, est, npts, rep)) {
+        /* Too little map to match, and its beams pass through walls the
+         * map holds: not new ground but a wrong pose, and written the scan
+         * would make the map agree with it within a few writes. */
         return;
     }
     (void)rsm_tmap_write_run(map, loc->frame.world, 0u);
@@ -1103,11 +1164,6 @@ static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
     return out;
 }
 
-/* The tracking state after a scan: a scan tracks when it was fused and,
- * matched against the persistent map, fitted as well as recent scans
- * (recover_ratio of their fit; a proven search's winner does) or it
- * started the map; odometry alone is not checked. Counts the scans in a
- * row that did not. */
 /* A global search is to begin at the next usable scan, over positions
  * within radius_m of the estimate then (0: the whole map). */
 static void begin_global(rsm_localizer_t *loc, float radius_m)
@@ -1320,12 +1376,19 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
     return RSM_SCAN_SEARCHING;
 }
 
+/* The tracking state after a scan: a scan tracks when it was fused and,
+ * matched against the persistent map, fitted about as well as recent scans
+ * (track_min_fit of their fit; a proven search's winner does) without its
+ * beams passing through the map's walls (conflict_max), or it started the
+ * map; odometry alone is not checked. Counts the scans in a row that did
+ * not. */
 static rsm_track_t track_state(rsm_localizer_t *loc, rsm_outcome_t outcome, const rsm_localizer_report_t *rep)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     int tracks = outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_ODOMETRY || outcome == RSM_SCAN_ACCEPTED;
     if (outcome == RSM_SCAN_ACCEPTED && cfg->method == RSM_METHOD_MAP) {
-        tracks = rep->fit_ratio >= cfg->recover_ratio;
+        tracks = rep->fit_ratio >= cfg->track_min_fit &&
+                 !(cfg->conflict_max > 0.0f && rep->crossing > cfg->conflict_max);
     }
     if (tracks) {
         loc->poor_run = 0u;
@@ -1347,6 +1410,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     float prior_var;
     int odometry_moved;
     int global_taken = 0;
+    int contradicted = 0;
     rsm_pose_t pred;
     int n;
     if (rep == NULL) {
@@ -1410,7 +1474,7 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         outcome = step_global(loc, npts, rep);
         global_taken = outcome == RSM_SCAN_ACCEPTED;
     } else if (loc->cfg->method == RSM_METHOD_MAP) {
-        outcome = step_map(loc, npts, odometry_moved, rep, &clk);
+        outcome = step_map(loc, npts, odometry_moved, rep, &clk, &contradicted);
     } else {
         outcome = step_rsm(loc, npts, rep, &clk);
     }
@@ -1453,9 +1517,10 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         case RSM_METHOD_MAP:
             /* A scan that found too little map to match (new ground, or the
              * map there was evicted) is written at the prediction, or the
-             * map could never grow back; one that was refused is not. */
-            if ((fused || outcome == RSM_SCAN_LOW_SUPPORT) && !loc->cfg->map_frozen) {
-                write_tmap(loc, &est, npts, outcome == RSM_SCAN_FIRST);
+             * map could never grow back; one that was refused, or whose beams
+             * pass through the map's walls (conflict_max), is not. */
+            if ((fused || outcome == RSM_SCAN_LOW_SUPPORT) && !contradicted && !loc->cfg->map_frozen) {
+                write_tmap(loc, &est, npts, outcome == RSM_SCAN_FIRST, outcome == RSM_SCAN_LOW_SUPPORT, rep);
             }
             break;
         case RSM_METHOD_PAPER:

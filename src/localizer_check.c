@@ -40,7 +40,8 @@ static int check_method_part(const rsm_localizer_config_t *cfg, const char **fie
         RSM_CHECK_FIELD(cfg->global_when_lost <= 1u, "global_when_lost");
         RSM_CHECK_FIELD(cfg->recover_margin >= 0.0f && cfg->recover_margin <= 10.0f, "recover_margin");
         RSM_CHECK_FIELD(cfg->refute_margin >= 0.0f && cfg->refute_margin <= 10.0f, "refute_margin");
-        RSM_CHECK_FIELD(cfg->refute_min_fit >= 0.0f && cfg->refute_min_fit <= 10.0f, "refute_min_fit");
+        RSM_CHECK_FIELD(cfg->conflict_max >= 0.0f && cfg->conflict_max <= 1.0f, "conflict_max");
+        RSM_CHECK_FIELD(cfg->track_min_fit >= 0.0f && cfg->track_min_fit <= 10.0f, "track_min_fit");
         RSM_CHECK_FIELD(cfg->doubt_m > 0.0f && cfg->doubt_m <= 100.0f, "doubt_m");
         RSM_CHECK_FIELD(cfg->doubt_rad > 0.0f && cfg->doubt_rad <= RSM_TWO_PI, "doubt_rad");
         RSM_CHECK_FIELD(cfg->occlusion.window <= RSM_OCCLUSION_MAX_WINDOW, "occlusion.window");

@@ -473,6 +473,84 @@ static RSM_NOINLINE uint32_t clear_beam(rsm_tmap_t *map, rsm_tmap_cursor_t *c, i
                       : walk_beam(map, c, x0, y0, x1, y1, adx, ady, dec, margin, 0);
 }
 
+/* The highest value on a beam's cells from (x0, y0) towards (x1, y1),
+ * stopping margin + 1 cells short of the end, stepping as walk_beam does
+ * but reading only, one cell at a time (it runs on the rare scans that
+ * fitted poorly, not on every write). */
+static uint32_t beam_top(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t x0, int32_t y0, int32_t x1, int32_t y1,
+                         uint32_t margin)
+{
+    const int32_t adx = x1 > x0 ? x1 - x0 : x0 - x1;
+    const int32_t ady = y1 > y0 ? y1 - y0 : y0 - y1;
+    const int32_t sx = x1 > x0 ? 1 : -1;
+    const int32_t sy = y1 > y0 ? 1 : -1;
+    const int32_t big = adx >= ady ? adx : ady;
+    int32_t err = adx - ady;
+    int32_t left = big - (int32_t)margin;
+    int32_t x = x0;
+    int32_t y = y0;
+    uint32_t top = 0;
+    while (left > 0) {
+        const uint32_t v = rsm_tmap_cell_value(map, c, x, y);
+        const int32_t e2 = 2 * err;
+        top = v > top ? v : top;
+        if (e2 > -ady) {
+            err -= ady;
+            x += sx;
+        }
+        if (e2 < adx) {
+            err += adx;
+            y += sy;
+        }
+        --left;
+    }
+    return top;
+}
+
+uint32_t rsm_tmap_beams_crossing(const rsm_tmap_t *map, uint32_t level, const rsm_pose_t *pose,
+                                 const rsm_point_t *origin, const rsm_point_t *pts, size_t n, size_t stride,
+                                 uint32_t value, uint32_t margin, uint32_t *checked)
+{
+    rsm_tmap_cursor_t c;
+    rsm_point_t o;
+    float inv;
+    int32_t ox;
+    int32_t oy;
+    uint32_t crossing = 0;
+    uint32_t looked = 0;
+    size_t k;
+    if (checked != NULL) {
+        *checked = 0u;
+    }
+    if (map == NULL || pose == NULL || origin == NULL || pts == NULL || stride == 0u || level >= map->cfg.levels) {
+        return 0u;
+    }
+    inv = 1.0f / rsm_tmap_cell(map, level);
+    o = rsm_pose_apply(pose, origin);
+    ox = cell_of(o.x, inv);
+    oy = cell_of(o.y, inv);
+    if (!in_range(ox, oy)) {
+        return 0u;
+    }
+    rsm_tmap_cursor_init(&c, level);
+    for (k = 0; k < n; k += stride) {
+        const rsm_point_t w = rsm_pose_apply(pose, &pts[k]);
+        const int32_t gx = cell_of(w.x, inv);
+        const int32_t gy = cell_of(w.y, inv);
+        if (!in_range(gx, gy)) {
+            continue;
+        }
+        ++looked;
+        if (beam_top(map, &c, ox, oy, gx, gy, margin) >= value) {
+            ++crossing;
+        }
+    }
+    if (checked != NULL) {
+        *checked = looked;
+    }
+    return crossing;
+}
+
 /* The slot of the tile holding a cell, taking one for it if needed;
  * RSM_TMAP_NONE (counted as dropped) when every slot is in use by the write. */
 static uint32_t slot_for(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t level, int32_t gx, int32_t gy)

@@ -83,6 +83,17 @@ uint32_t rsm_tmap_tiles(const rsm_tmap_t *map, uint32_t level);
 /* Bounding box (cells, inclusive) of the tiles held at a level; 0 if none. */
 int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t *gy0, int32_t *gx1, int32_t *gy1);
 
+/* Of the beams from the laser (origin, robot frame) to the points pts
+ * (robot frame), every stride-th from the first, placed at pose: how many
+ * meet a cell of at least value on a level, stopping margin + 1 cells short
+ * of their return. A beam that passes through a wall the map holds says
+ * the map, or the pose, is wrong there: a phantom return or a wall that
+ * went, now and then; most beams of a scan, a robot placed where it is
+ * not. *checked gets the beams looked at. Reads only. */
+uint32_t rsm_tmap_beams_crossing(const rsm_tmap_t *map, uint32_t level, const rsm_pose_t *pose,
+                                 const rsm_point_t *origin, const rsm_point_t *pts, size_t n, size_t stride,
+                                 uint32_t value, uint32_t margin, uint32_t *checked);
+
 /* Occupancy in [0, 1] of the cell holding world (x, y) on a level. */
 float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y);
 

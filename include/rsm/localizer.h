@@ -118,13 +118,23 @@ typedef struct rsm_localizer_config {
      * cause to doubt it, and the prediction the scan fits better is kept
      * (docs/robustness.md, "Odometry that lies"). */
     float refute_margin;            /* a second prediction replaces odometry's when its fit beats
-                                     * it by this share; 0 = never doubt odometry; default 0.1 */
-    float refute_min_fit;           /* ... and the last estimate without the step (a spike, a
-                                     * counter reset, a slip) only when the scan fits it at least
-                                     * this share of recent scans' fit; a weaker case searches
-                                     * around odometry's prediction (recover_m) and keeps the step
-                                     * unless a pose is proven (a long gap in the scans);
-                                     * default 0.7 */
+                                     * it by this share; 0 = never doubt odometry; default 0.1.
+                                     * The last estimate without the step (a spike, a counter
+                                     * reset, a slip) only when it fits as a tracking scan does
+                                     * (track_min_fit); a weaker case searches around odometry's
+                                     * prediction (recover_m) and keeps the step unless a pose is
+                                     * proven (a long gap in the scans) */
+    float conflict_max;             /* a scan whose beams pass through walls of the map (cells at
+                                     * saturation on the finest level, more than 4 cells before
+                                     * their return; up to 64 beams looked at) in more than this
+                                     * share contradicts the map where it is placed (a robot
+                                     * carried to where the map holds other walls): checked when
+                                     * the match would not track by its fit (track_min_fit: a
+                                     * search's winner too, then not taken; a plain match, then
+                                     * refused if poor, else fused), and before
+                                     * writing a scan that found too little map to match (then not
+                                     * written); such a scan does not track. 0 = off; default 0.5
+                                     * (docs/robustness.md) */
     float doubt_m;                  /* odometry counted from the last scan that trusted it (not
                                      * from the last scan) predicts a pose this far ... */
     float doubt_rad;                /* ... or turned this far from the step's: both are matched
@@ -160,6 +170,11 @@ typedef struct rsm_localizer_config {
                                      * odometry stood still or after an ambiguous search, is
                                      * refused (RSM_SCAN_POOR_FIT); 0: fused; default 1
                                      * (RSM_METHOD_MAP) */
+    float track_min_fit;            /* a matched scan tracks when its fit reaches this share of
+                                     * recent scans' (and its beams do not contradict the map,
+                                     * conflict_max); a few scans in a thousand fall below it on
+                                     * Intel and ACES, a robot carried to a look-alike place
+                                     * stays below it; default 0.7 */
     uint16_t lost_scans;            /* scans in a row that do not track (poor fit, refused,
                                      * unusable) after which the estimate is reported lost;
                                      * >= 1; default 10 */
@@ -234,6 +249,9 @@ typedef struct rsm_localizer_report {
     uint32_t iterations;      /* RANSAC hypotheses or ICP iterations */
     float residual_m;         /* RMS residual of the accepted fit */
     float mahalanobis_d2;     /* of the measurement against the prediction */
+    float crossing;           /* RSM_METHOD_MAP: the share of the beams checked that passed
+                               * through walls of the map (conflict_max); 0 when none were
+                               * checked (a scan that fitted and was not due to be written) */
     float unpinned;           /* RSM_METHOD_MAP: the share (0 to 1) of the match's pull along
                                * the scan's surfaces left out because they all run one way
                                * (a bare corridor): the prediction kept that direction */
@@ -266,6 +284,8 @@ typedef struct rsm_localizer_counters {
                                               * dropped (RSM_ODOMETRY_REFUTED) */
     uint32_t recounted;                      /* matches taken back: odometry counted from before
                                               * them fitted far better (RSM_ODOMETRY_RECOUNTED) */
+    uint32_t contradicted;                   /* scans whose beams passed through the map's walls
+                                              * beyond conflict_max: refused or not written */
     uint32_t track[RSM_TRACK_STATES];        /* scans that left the estimate in each state (a
                                               * scan refused as out of order leaves none) */
     uint32_t unconfirmed;                    /* returns kept out of the persistent map: no

@@ -12,6 +12,7 @@ import zlib
 import pytest
 
 from rsm_tools import bench
+from rsm_tools import evaluate as ev
 from rsm_tools.bench import knownmap as km
 from rsm_tools.bench.common import SECTION_TITLES, BenchError
 
@@ -276,3 +277,151 @@ def test_bench_options_of_the_section():
         p.parse_args(["--only", "accuracy"])
     text = p.format_help()
     assert "--only" in text and "knownmap" in text and "--global-starts" in text
+
+
+# ---------------------------------------------------------------------------
+# kidnapping
+
+
+def test_kidnaps_are_placed_in_the_span_that_leaves_room():
+    # 190 s of log: 100 s where a 60 s cut can begin with 30 s of log after it
+    assert km.kidnap_offsets(190.0, 4) == [12.5, 37.5, 62.5, 87.5]
+    offs = km.kidnap_offsets(2691.287, km.KIDNAP_RUNS)
+    assert len(offs) == 20 and offs[0] > 0
+    assert all(s + km.KIDNAP_S + km.KIDNAP_TAIL_S <= 2691.287 for s in offs)
+    assert km.kidnap_offsets(90.0, 4) == [] and km.kidnap_offsets(500.0, 0) == []
+    assert km.kidnap_offsets(100.0, 1, length=10.0, tail=10.0) == [40.0]
+
+
+def test_scan_log_rows_are_read_in_file_order(tmp_path):
+    s = tmp_path / "k.scans"
+    s.write_text("# rsm-nav scan log: timestamp[s] outcome tracking odometry recovered fit_ratio\n"
+                 "12.5 accepted tracking trusted 0 0.97\n12.4 searching lost trusted 0 0.0000\n\n")
+    assert km.read_scan_log(s) == [(12.5, "accepted", "tracking"), (12.4, "searching", "lost")]
+
+
+def kidnap_inputs():
+    """A made-up run of 30 scans (stamps 1..30 s), the cut before stamp 11.
+    The mapping run is at (t, 0, 0); the run's scans after the cut: 1-3
+    trusted 2 m off, 4-5 lost and searching (no pose), 6 uncertain and right,
+    7 trusted 5 cm off, 8 trusted 0.3 m off, 9 trusted with no mapping-run
+    pose, 10 trusted 10 deg off, 11-20 trusted and right."""
+    ref = [(float(t), float(t), 0.0, 0.0) for t in range(1, 31) if t != 19]
+    rows, traj = [], []
+    for t in range(1, 31):
+        state, pose = "tracking", (float(t), 0.0, 0.0)
+        if 11 <= t <= 13:
+            pose = (t + 2.0, 0.0, 0.0)
+        elif t in (14, 15):
+            state, pose = "lost", None
+        elif t == 16:
+            state = "uncertain"
+        elif t == 17:
+            pose = (t + 0.05, 0.0, 0.0)
+        elif t == 18:
+            pose = (t + 0.3, 0.0, 0.0)
+        elif t == 20:
+            pose = (float(t), 0.0, math.radians(10.0))
+        rows.append((float(t), "accepted" if pose else "searching", state))
+        if pose:
+            traj.append((float(t), *pose))
+    return rows, ev.Trajectory(traj), ev.Trajectory(ref)
+
+
+def test_a_kidnap_run_is_judged_from_the_first_scan_after_the_cut():
+    rows, traj, ref = kidnap_inputs()
+    e = km.judge_kidnap(rows, traj, ref, 11.0)
+    assert e["cut_seen"] and e["after"] == 20
+    assert e["before"] == {"tracking": "tracking", "verdict": "right"}
+    assert e["found"] == 7  # scan 6 was right but not trusted
+    assert (e["first_trusted"], e["first_lost"]) == (1, 4)
+    assert (e["wrong"], e["first_wrong"], e["wrong_before_found"]) == (4, 1, 3)  # 2 m off three times, 10 deg once
+    assert math.isclose(e["first_wrong_error"][0], 2.0) and e["first_wrong_error"][1] == 0.0
+    assert e["no_reference"] == 1 and e["judged"] == 17
+    # judged from the cut on: the same run cut later
+    e = km.judge_kidnap(rows, traj, ref, 17.0)
+    assert (e["found"], e["wrong"], e["first_wrong"], e["first_lost"]) == (1, 1, 4, None)
+    # a cut the scan log does not hold: nothing judged, never found
+    e = km.judge_kidnap(rows, traj, ref, 10.5)
+    assert not e["cut_seen"] and e["found"] is None and e["wrong"] == 0
+
+
+def kid(found, wrong=0, first_wrong=None, lost=None, k=0, before="right", searches=2, proven=1, control=None):
+    """A kidnap run's entry; control: (found, wrong) of the run without a kidnap, from the same scan."""
+    return {"k": k, "offset_s": 10.0 * k, "cut_seen": True, "found": found, "wrong": wrong,
+            "first_wrong": first_wrong, "first_lost": lost, "before": {"tracking": "tracking", "verdict": before},
+            "searches": searches, "searches_found": proven,
+            "control": None if control is None else {"found": control[0], "wrong": control[1],
+                                                     "first_wrong": 1 if control[1] else None, "first_lost": None}}
+
+
+def test_kidnap_figures_of_a_log_and_mode():
+    s = km.aggregate_kidnaps([kid(3, lost=2), kid(20, lost=4), kid(21, wrong=5, first_wrong=9), kid(None, wrong=1,
+                                                                                                      first_wrong=2)])
+    assert (s["runs"], s["found_within"], s["found"], s["never"]) == (4, 2, 3, 1)
+    assert s["scans_to_found"] == {"n": 4, "median": 20.5, "max": None}  # the worst never came
+    assert (s["wrong_runs"], s["wrong_scans"], s["earliest_wrong"]) == (2, 6, 2)
+    assert s["lost_runs"] == 2 and s["first_lost"]["median"] == 3
+    assert (s["searches"], s["searches_found"], s["right_before"], s["not_seen"]) == (8, 4, 4, 0)
+    assert s["control_runs"] == 0
+    s = km.aggregate_kidnaps([kid(3, control=(1, 0)), kid(5, before="wrong", control=(25, 3))])
+    assert s["scans_to_found"] == {"n": 2, "median": 4, "max": 5} and s["right_before"] == 1
+    assert (s["control_runs"], s["control_found_within"], s["control_wrong_runs"]) == (2, 1, 1)
+    assert s["earliest_wrong"] is None and s["wrong_runs"] == 0
+    # more than half never found: no median either
+    assert km.aggregate_kidnaps([kid(None), kid(None), kid(2)])["scans_to_found"]["median"] is None
+
+
+def kidnap_part(per_log, runs=3):
+    """A made-up kidnapping part: per log, (frozen runs, updates runs)."""
+    kd = {"runs": runs, "length_s": km.KIDNAP_S, "tail_s": km.KIDNAP_TAIL_S, "modes": ["frozen", "updates"],
+          "within": km.WITHIN_SCANS, "note": km.KIDNAP_NOTE, "seconds": 4.2, "logs": {}}
+    for label, (frozen, updates) in per_log.items():
+        r = {"frozen": frozen, "updates": updates}
+        kd["logs"][label] = {"span_s": 500.0, "offsets": [10.0 * k for k in range(runs)], "runs": r,
+                             "summary": {m: km.aggregate_kidnaps(v) for m, v in r.items()}}
+    return kd
+
+
+def test_kidnap_floors_and_report():
+    good = [kid(2, k=0, control=(1, 0)), kid(20, k=1, control=(1, 0)), kid(5, k=2, control=(None, 40))]
+    late = [kid(2, k=0), kid(21, k=1), kid(None, k=2, wrong=1234, first_wrong=8)]
+    s = section({"a": ([start("right")] * 3, 0.015, 0.015, 0.014, True, True)}, n=3)
+    s["kidnap"] = kidnap_part({"a": (good, late)})
+    fl = [f for f in km.knownmap_floors(s) if f["kind"].startswith("knownmap-kidnap")]
+    assert [(f["kind"], f["status"]) for f in fl] == [("knownmap-kidnap", "PASS"), ("knownmap-kidnap-wrong", "PASS"),
+                                                      ("knownmap-kidnap", "MISS"), ("knownmap-kidnap-wrong", "MISS")]
+    assert all(f["line"].startswith(f["status"] + " a: known map, kidnapping ") for f in fl)
+    assert "frozen, 3 runs with a 60 s cut: 3 found again" in fl[0]["line"] and "median 5, worst 20" in fl[0]["line"]
+    assert "with updates, 3 runs with a 60 s cut: 1 found again" in fl[2]["line"]
+    assert "< 3" in fl[2]["line"] and "worst never (1 never)" in fl[2]["line"]
+    assert "1 gave a trusted pose more than 0.5 m or 5 deg off after the cut (1 234 such scans in all, the earliest " \
+           "at scan 8 after the cut) > 0" in fl[3]["line"]
+    assert (fl[2]["value"], fl[2]["limit"], fl[3]["value"], fl[3]["limit"]) == (1, 3, 1, 0)
+    text = "\n".join(km.report_knownmap(s))
+    assert "<!-- table: knownmap kidnap -->" in text
+    assert "| a | frozen | 3 | 3 | 3 | 5 / 20 | 0 | 0 | 3 | 6 / 3 | 2 / 1 |" in text
+    assert "| a | with updates | 3 | 1 | 2 | 21 / never | 1 (1 234 scans) | 0 | 3 | 6 / 3 | n/a |" in text
+    assert "a run is judged from the first scan after the cut" in text and "global_when_lost=1" in text
+    assert "- a, with updates: never found again in runs 2; found again later (scan) in runs 1 (21); wrong trusted " \
+           "scans (from scan) in runs 2 (1 234 from scan 8)." in text
+    assert "- a, frozen" not in text
+    for f in fl:
+        assert f["line"] in text
+    # skipped, or a manifest from before the part: said so, no floor
+    s["kidnap"] = {"skipped": "--kidnap-runs 0"}
+    assert "*Kidnapping*: not measured in this run (--kidnap-runs 0)." in km.report_knownmap(s)
+    assert not [f for f in km.knownmap_floors(s) if f["kind"].startswith("knownmap-kidnap")]
+    del s["kidnap"]
+    assert "*Kidnapping*: not measured in this run." in km.report_knownmap(s)
+    # a log too short for a cut: a SKIP line
+    s["kidnap"] = kidnap_part({"a": ([], [])}, runs=0)
+    fl = [f for f in km.knownmap_floors(s) if f["kind"].startswith("knownmap-kidnap")]
+    assert [f["status"] for f in fl] == ["SKIP", "SKIP"] and "no room for a 60 s cut" in fl[0]["line"]
+
+
+def test_bench_option_of_the_kidnapping():
+    p = bench.build_parser()
+    assert p.parse_args(["--only", "knownmap", "--kidnap-runs", "3"]).kidnap_runs == 3
+    assert p.parse_args([]).kidnap_runs is None
+    assert "--kidnap-runs" in p.format_help()

@@ -239,6 +239,83 @@ def test_gap_removes_the_scans_of_that_time_span(tmp_path, head_log, original):
     assert all(o.timestamp in got for o in original if not (t0 + 40 <= o.timestamp < t0 + 55))
 
 
+def kidnap_ends(original, s, t):
+    """(a, b, cut): the first scan stamped after the cut (b), the last one
+    before it stamped before the cut (a), and the scans stamped within it
+    (the Intel excerpt's stamps are not all in file order: some come after b)."""
+    t0 = original[0].timestamp
+    b = next(i for i, o in enumerate(original) if o.timestamp >= t0 + s + t)
+    a = max(i for i in range(b) if original[i].timestamp < t0 + s)
+    cut = [i for i, o in enumerate(original) if t0 + s <= o.timestamp < t0 + s + t]
+    return a, b, cut
+
+
+def test_kidnap_removes_the_span_and_hides_the_motion_across_it(tmp_path, head_log, original, capsys):
+    s, t = 40, 15
+    a, b, cut = kidnap_ends(original, s, t)
+    assert set(range(a + 1, b)) <= set(cut) and len(cut) > 50
+    out = run(tmp_path, head_log, "--kidnap", f"{s}:{t}")
+    got = scans(out)
+    src = [i for i in range(len(original)) if i not in cut]
+    assert [g.timestamp for g in got] == [original[i].timestamp for i in src]
+    # the robot really moved across the cut: the fault hides something
+    assert math.dist(original[a].odom_pose[:2], original[b].odom_pose[:2]) > 0.05 or \
+        abs(math.remainder(original[b].odom_pose[2] - original[a].odom_pose[2], 2 * math.pi)) > 0.1
+    k = src.index(b)
+    assert src[k - 1] == a
+    assert all(got[j].odom_pose == original[i].odom_pose and got[j].ranges == original[i].ranges
+               for j, i in enumerate(src[:k]))
+    # no motion across the cut, to the character
+    assert got[k].odom_pose == original[a].odom_pose and got[k].ranges == original[b].ranges
+    assert got[k].laser_pose == got[k].odom_pose  # still no mount for rsm-nav
+    # every later step is the log's own
+    for j in range(k + 1, len(got)):
+        assert close(step(got[j - 1].odom_pose, got[j].odom_pose),
+                     step(original[src[j - 1]].odom_pose, original[src[j]].odom_pose), 4e-6)
+    # the ODOM lines between scans a and b are gone; the later ones moved with the scans
+    want, seen = [], 0
+    for r in records(head_log):
+        if isinstance(r, FLaser):
+            seen += 1
+        elif seen <= a:
+            want.append(r.pose)
+        elif seen > b:
+            want.append(pose_compose(original[a].odom_pose, pose_in_frame(original[b].odom_pose, r.pose)))
+    odoms = [r.pose for r in records(out) if isinstance(r, Odom)]
+    assert len(odoms) == len(want) and all(close(g, w, 4e-6) for g, w in zip(odoms, want))
+    err = capsys.readouterr().err
+    assert f"kidnap: {len(cut)} scans removed with stamps 40 s to 55 s" in err
+    assert f"between scans {a} and {b}" in err and f"stamped {original[b].timestamp:.6f}" in err
+
+
+def test_kidnap_result_names_the_first_scan_after_each_cut(head_log, original):
+    log = faults.load_log(head_log)
+    spec = faults.FaultSpec(kidnaps=[(70.0, 10.0), (30.0, 5.0)], drop=20, seed=3)
+    res = faults.apply_faults(log, spec)
+    dropped = faults.apply_faults(log, faults.FaultSpec(drop=20, seed=3))  # the same draw without the kidnaps
+    assert [(c.offset, c.length) for c in res.kidnaps] == [(30.0, 5.0), (70.0, 10.0)]  # in time order
+    for c in res.kidnaps:
+        a, b, cut = kidnap_ends(original, c.offset, c.length)
+        assert (c.before, c.after) == (a, b)
+        assert res.scan_pose(b) == res.scan_pose(a)
+        # the first scan written after the cut, the drop's choice included
+        first = next(o for o in res.kept_scans if o.src >= b)
+        assert c.stamp == original[first.src].timestamp
+        assert not any(o.src in cut for o in res.kept_scans)
+        assert c.removed == sum(1 for o in dropped.kept_scans if o.src in cut) > 0
+    assert "--drop 20 --kidnap 70:10 --kidnap 30:5 --seed 3" in faults.describe(spec)  # as given
+
+
+def test_kidnap_at_a_slip_is_refused(tmp_path, head_log, original):
+    a, b, _ = kidnap_ends(original, 40, 15)
+    for s in (a, b):
+        res = subprocess.run([sys.executable, "-m", "rsm_tools.faults", str(head_log), str(tmp_path / "o.clf"),
+                              "--kidnap", "40:15", "--slip", f"{s}:3"], capture_output=True, text=True,
+                             env=subprocess_env())
+        assert res.returncode == 2 and f"--slip {s}:3: the slip's scan {s} is at the cut" in res.stderr
+    assert run(tmp_path, head_log, "--kidnap", "40:15", "--slip", f"{b + 5}:3")
+
+
 def test_mount_moves_the_robot_and_keeps_the_laser(tmp_path, head_log, original):
     m = (0.22, 0.03, 0.1)
     out = run(tmp_path, head_log, "--mount", ",".join(map(str, m)))
@@ -306,7 +383,8 @@ def test_same_arguments_give_the_same_bytes(tmp_path, head_log):
 @pytest.mark.parametrize("args", [
     [], ["--stall", "5"], ["--stall", "0@3"], ["--stall", "x@3"], ["--spike", "3:1,2"], ["--spike", "3:1,2,z"],
     ["--reset", "-1"], ["--slip", "3:1"], ["--scale", "-1"], ["--scale", "nan"], ["--drop", "120"],
-    ["--gap", "5:0"], ["--gap", "5"], ["--mount", "1,2"], ["--start-offsets", "-1"], ["--start-offsets", "50"],
+    ["--gap", "5:0"], ["--gap", "5"], ["--kidnap", "5:0"], ["--kidnap", "-1:5"], ["--kidnap", "5"],
+    ["--kidnap", "x:5"], ["--mount", "1,2"], ["--start-offsets", "-1"], ["--start-offsets", "50"],
     ["--every-m", "0"], ["--stall-at-turns", "3"], ["--stall-len", "3"], ["--seed", "x", "--scale", "1.1"],
 ])
 def test_bad_arguments_exit_2(tmp_path, head_log, args, capsys):
@@ -321,6 +399,8 @@ def test_bad_arguments_exit_2(tmp_path, head_log, args, capsys):
     (["--stall", "10@595"], "--stall 10@595"), (["--spike", "600:1,0,0"], "scan 600 is not in the log"),
     (["--reset", "1000"], "scan 1000"), (["--slip", "598:5"], "--slip 598:5"),
     (["--stall-at-turns", "20", "--stall-len", "10", "--stall-spacing", "100"], "only"),
+    (["--kidnap", "0:10"], "--kidnap 0:10: needs a scan before 0 s"), (["--kidnap", "100:30"], "spans 117.495 s"),
+    (["--kidnap", "40:15", "--kidnap", "50:20"], "--kidnap 50:20: begins before scan"),
 ])
 def test_faults_that_do_not_fit_the_log_exit_2_with_a_message(tmp_path, head_log, args, what):
     res = subprocess.run([sys.executable, "-m", "rsm_tools.faults", str(head_log), str(tmp_path / "o.clf"), *args],

@@ -270,8 +270,7 @@ static void test_a_window_that_misses_grows(void)
  * from another place while odometry shows no jump. With global_when_lost
  * the localizer reports lost after lost_scans poor scans, searches by
  * itself and finds the new place; without it, it never searches. (With the
- * map being written, the scans placed wrongly while uncertain go into the
- * map and soon fit it: issue 29's "know when lost", not solved here.) */
+ * map being written: test_scans_that_contradict_the_map_are_not_written.) */
 static void test_lost_then_found_by_itself(void)
 {
     const rsm_synth_world_t world = rsm_synth_world_room();
@@ -312,6 +311,64 @@ static void test_lost_then_found_by_itself(void)
             TEST_ASSERT_TRUE(loc.counters.global_searches >= 1u);
         } else {
             TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.global_searches);
+        }
+    }
+}
+
+/* A scan that contradicts the map where it is placed (its beams pass
+ * through the map's walls: every reading here is 4.5 m in a room at most
+ * 4 m across, as if the robot had been carried into a hall while odometry
+ * drove on): it fits poorly or finds too little map to match, and with
+ * the map being written it is not written, nor does it track
+ * (conflict_max); lost after lost_scans of them. Without the check each
+ * one was written at the prediction, and the map soon agreed with the
+ * wrong pose. */
+static void test_scans_that_contradict_the_map_are_not_written(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_localizer_report_t rep;
+    const size_t at = 60u;
+    int pass;
+    make_path();
+    for (pass = 0; pass < 2; ++pass) {
+        uint32_t writes;
+        size_t k;
+        size_t b;
+        cfg.map_frozen = 0u;
+        cfg.lost_scans = 3u;
+        cfg.map_update_m = 0.01f; /* every scan due to be written */
+        cfg.map_update_rad = 0.01f;
+        cfg.conflict_max = pass == 0 ? rsm_localizer_config_default().conflict_max : 0.0f;
+        map_path(&world, at);
+        (void)rsm_tmap_write_run(&loc.state.persistent.map, loc.frame.world, 0u);
+        writes = loc.state.persistent.map.counters.updates;
+        for (k = at; k < at + 4u; ++k) {
+            const rsm_motion_t u = rsm_synth_motion(&path[k - 1u], &path[k], NULL);
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &path[k], &scan_cfg, NULL, (uint64_t)k * STEP_US,
+                                                         &scan));
+            for (b = 0; b < scan.count; ++b) {
+                scan.range_m[b] = 4.5f;
+            }
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+            TEST_ASSERT_EQUAL_UINT8(0u, rep.recovered);
+            if (pass == 0) {
+                TEST_ASSERT_TRUE(rep.fit_ratio < cfg.recover_ratio);
+                TEST_ASSERT_TRUE(rep.track != RSM_TRACK_TRACKING);
+                TEST_ASSERT_TRUE(rep.crossing > cfg.conflict_max);
+            }
+        }
+        (void)rsm_tmap_write_run(&loc.state.persistent.map, loc.frame.world, 0u);
+        if (pass == 0) {
+            TEST_ASSERT_EQUAL_INT(RSM_TRACK_LOST, rep.track);
+            TEST_ASSERT_EQUAL_UINT32(4u, loc.counters.contradicted);
+            TEST_ASSERT_EQUAL_UINT32(writes, loc.state.persistent.map.counters.updates);
+        } else {
+            /* Written, and by the fourth scan the map agrees with it well
+             * enough that it no longer counts as a poor fit. */
+            TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.contradicted);
+            TEST_ASSERT_TRUE(loc.state.persistent.map.counters.updates > writes);
+            TEST_ASSERT_TRUE(rep.fit_ratio >= cfg.recover_ratio);
         }
     }
 }
@@ -418,6 +475,7 @@ int main(void)
     RUN_TEST(test_a_search_near_the_estimate);
     RUN_TEST(test_a_window_that_misses_grows);
     RUN_TEST(test_lost_then_found_by_itself);
+    RUN_TEST(test_scans_that_contradict_the_map_are_not_written);
     RUN_TEST(test_few_points_wait);
     RUN_TEST(test_far_readings);
     RUN_TEST(test_too_wide_a_map);

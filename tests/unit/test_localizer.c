@@ -395,8 +395,11 @@ void test_localizer_init_should_reject_bad_configs(void)
     BAD(lost_scans, 0u);
     BAD(refute_margin, -0.1f);
     BAD(refute_margin, NAN);
-    BAD(refute_min_fit, -0.1f);
-    BAD(refute_min_fit, NAN);
+    BAD(track_min_fit, -0.1f);
+    BAD(track_min_fit, NAN);
+    BAD(conflict_max, -0.1f);
+    BAD(conflict_max, 1.5f);
+    BAD(conflict_max, NAN);
     BAD(doubt_m, 0.0f);
     BAD(doubt_rad, NAN);
     BAD(occlusion.window, (uint8_t)(RSM_OCCLUSION_MAX_WINDOW + 1u));
@@ -1145,7 +1148,7 @@ void test_localizer_scan_should_refute_a_spike_and_a_counter_reset(void)
 void test_localizer_scan_should_search_before_dropping_a_step_the_scan_fits_weakly_without(void)
 {
     /* A step is dropped outright only when the scan without it fits nearly
-     * as well as recent scans (refute_min_fit); else odometry's prediction
+     * as well as recent scans (track_min_fit); else odometry's prediction
      * is searched around first and the step kept unless a pose is proven
      * (over a long gap into new ground both fit poorly, and a robot that
      * stood still through it is the less likely story). The same spike as
@@ -1157,7 +1160,7 @@ void test_localizer_scan_should_search_before_dropping_a_step_the_scan_fits_weak
     snprintf(msg, sizeof msg, "default: %.3f m worst, %u refuted", (double)err, (unsigned)loc.counters.refuted);
     TEST_ASSERT_EQUAL_UINT32_MESSAGE(1u, loc.counters.refuted, msg);
     TEST_ASSERT_TRUE_MESSAGE(err < QUANT + 0.01f, msg);
-    cfg.refute_min_fit = 10.0f;
+    cfg.track_min_fit = 10.0f;
     err = run_false_step(&spike, 0);
     snprintf(msg, sizeof msg, "bar out of reach: %.3f m worst, %u refuted, %u searches, %u recovered", (double)err,
              (unsigned)loc.counters.refuted, (unsigned)loc.counters.searches, (unsigned)loc.counters.recovered);

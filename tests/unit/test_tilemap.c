@@ -759,6 +759,62 @@ void test_tmap_write_should_run_over_several_calls_sector_by_sector_finest_level
     TEST_ASSERT_EQUAL_UINT32(whole.counters.updates, map.counters.updates);
 }
 
+void test_tmap_beams_crossing_should_count_beams_through_walls_beyond_the_margin(void)
+{
+    /* A wall of saturated cells at x = 1.05 (level 0), the robot at the
+     * origin facing +x, the laser 0.1 m ahead. Returns at 2 m pass through
+     * the wall; returns at 1.05 m land on it; returns at 0.9 m stop short;
+     * a return 0.15 m (three cells) behind the wall counts only with a margin
+     * of at most one cell: the margin's cells before the return are not
+     * looked at. */
+    static const rsm_pose_t pose = {0.0f, 0.0f, 0.0f};
+    static const rsm_point_t laser = {0.1f, 0.0f};
+    static rsm_tmap_t before;
+    rsm_point_t pts[8];
+    uint32_t checked = 99u;
+    float y;
+    size_t k;
+    init();
+    for (y = -0.5f; y <= 0.5f; y += 0.05f) {
+        update_one(0.05f, y, 1.05f, y);
+        update_one(0.05f, y, 1.05f, y);
+    }
+    TEST_ASSERT_TRUE(rsm_tmap_value(&map, 0u, cell(1.05f), cell(0.0f)) >= cfg.saturation);
+    memcpy(&before, &map, sizeof map);
+    for (k = 0; k < 8u; ++k) {
+        pts[k].y = -0.3f + 0.08f * (float)k;
+        pts[k].x = k < 4u ? 2.0f : k < 6u ? 1.05f : 0.9f;
+    }
+    TEST_ASSERT_EQUAL_UINT32(4u, rsm_tmap_beams_crossing(&map, 0u, &pose, &laser, pts, 8u, 1u, cfg.saturation, 4u,
+                                                         &checked));
+    TEST_ASSERT_EQUAL_UINT32(8u, checked);
+    /* Every other beam: two of the four. */
+    TEST_ASSERT_EQUAL_UINT32(2u, rsm_tmap_beams_crossing(&map, 0u, &pose, &laser, pts, 8u, 2u, cfg.saturation, 4u,
+                                                         &checked));
+    TEST_ASSERT_EQUAL_UINT32(4u, checked);
+    /* Turned half a turn, the same beams point away from the wall. */
+    {
+        const rsm_pose_t back = {0.0f, 0.0f, 3.14159265f};
+        TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_beams_crossing(&map, 0u, &back, &laser, pts, 8u, 1u, cfg.saturation,
+                                                             4u, &checked));
+    }
+    /* Three cells behind the wall. */
+    pts[0].x = 1.2f;
+    TEST_ASSERT_EQUAL_UINT32(1u, rsm_tmap_beams_crossing(&map, 0u, &pose, &laser, pts, 1u, 1u, cfg.saturation, 1u,
+                                                         &checked));
+    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_beams_crossing(&map, 0u, &pose, &laser, pts, 1u, 1u, cfg.saturation, 3u,
+                                                         &checked));
+    /* Reads only; bad calls look at nothing. */
+    TEST_ASSERT_EQUAL_MEMORY(&before, &map, sizeof map);
+    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_beams_crossing(&map, 0u, &pose, &laser, pts, 8u, 0u, cfg.saturation, 4u,
+                                                         &checked));
+    TEST_ASSERT_EQUAL_UINT32(0u, checked);
+    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_beams_crossing(&map, cfg.levels, &pose, &laser, pts, 8u, 1u,
+                                                         cfg.saturation, 4u, &checked));
+    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_beams_crossing(NULL, 0u, &pose, &laser, pts, 8u, 1u, cfg.saturation, 4u,
+                                                         NULL));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -781,5 +837,6 @@ int main(void)
     RUN_TEST(test_tmap_sample_should_interpolate_and_give_the_gradient);
     RUN_TEST(test_tmap_bounds_should_cover_the_held_tiles);
     RUN_TEST(test_tmap_write_should_run_over_several_calls_sector_by_sector_finest_level_first);
+    RUN_TEST(test_tmap_beams_crossing_should_count_beams_through_walls_beyond_the_margin);
     return UNITY_END();
 }

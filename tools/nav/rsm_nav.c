@@ -94,7 +94,8 @@
     F("recover_rad", recover_rad) \
     F("recover_margin", recover_margin) \
     F("refute_margin", refute_margin) \
-    F("refute_min_fit", refute_min_fit) \
+    F("track_min_fit", track_min_fit) \
+    F("conflict_max", conflict_max) \
     U("lost_scans", lost_scans, uint16_t) \
     U("refuse_poor", refuse_poor, uint8_t) \
     U("global_budget", global_budget, uint32_t) \
@@ -1155,6 +1156,8 @@ static void time_stats(nav_t *nav, double *median, double *p95)
  * matches taken back because odometry counted from before them fitted far
  * better),
  * unpinned (matches that left the position along a corridor to odometry),
+ * contradicted (scans whose beams passed through the map's walls: refused
+ * or not written, conflict_max),
  * heading_correction {turn, drift_rad_per_m, scans} and distance_correction
  * {scale, scans} (what the odometry calibration learnt; the distance's is
  * 0 from 0 scans while it is off).
@@ -1210,10 +1213,11 @@ static int write_summary_json(nav_t *nav, const char *path)
         }
         fprintf(f, "], \"taken\": %u, \"evicted\": %u, \"dropped\": %u, \"freed\": %u, \"behind\": %u, "
                    "\"unconfirmed\": %u},\n  \"recovery\": {\"searches\": %u, \"taken\": %u, \"ambiguous\": %u},\n"
-                   "  \"unpinned\": %u",
+                   "  \"unpinned\": %u,\n  \"contradicted\": %u",
                 (unsigned)m->counters.allocated, (unsigned)m->counters.evicted, (unsigned)m->counters.dropped,
                 (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed,
-                (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->ambiguous, (unsigned)c->unpinned);
+                (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->ambiguous, (unsigned)c->unpinned,
+                (unsigned)c->contradicted);
         fprintf(f, ",\n  \"fit\": %.4f", (double)nav->loc.state.persistent.fit);
         fprintf(f, ",\n  \"global\": {\"searches\": %u, \"found\": %u, \"not_proven\": %u, \"work\": %u, "
                    "\"max_work_per_scan\": %u, \"first_trusted_scan\": %llu, \"first_trusted_stamp\": %.6f}",
@@ -1283,6 +1287,8 @@ static void print_summary(nav_t *nav)
                (unsigned)c->caught_up, (unsigned)c->refuted, (unsigned)c->recounted);
         printf("  unpinned        %u matches left the position along the scan's surfaces to odometry\n",
                (unsigned)c->unpinned);
+        printf("  contradicted    %u scans whose beams passed through the map's walls, not written\n",
+               (unsigned)c->contradicted);
         printf("  occluded        %u returns behind a surface their neighbours span, dropped\n",
                (unsigned)c->occluded);
         if (nav->cfg.odometry_cal.memory > 0.0f) {

@@ -32,6 +32,11 @@ what each fault does and how the bench uses them; in short:
 ``--drop P``, ``--gap S:T``
     P % of the scans dropped at random; every scan whose stamp lies S to
     S+T seconds after the log's first scan removed (a long gap).
+``--kidnap S:T``
+    the robot carried away: the scans (and ODOM lines) of S to S+T seconds
+    removed as by ``--gap``, and the odometry from the first scan after the
+    cut on re-expressed so that it reports no motion across the cut (that
+    scan's pose is the last scan's before it; later steps unchanged).
 ``--mount X,Y,TH``
     the laser re-expressed as mounted at (X, Y, TH) on the robot: the
     ranges and the laser's world pose are kept, the robot's (odometry) pose
@@ -124,7 +129,8 @@ class StallTurns:
 class FaultSpec:
     """What to break; every list is applied in the order given below (the
     order of docs/faults.md): mount, resets, scale, stalls, spikes, slips,
-    then the selection of scans (every-m/rad, drop, gaps), then offsets."""
+    the kidnaps' odometry, then the selection of scans (every-m/rad, drop,
+    gaps, the kidnaps' cuts), then offsets."""
 
     stalls: List[Tuple[int, int]] = field(default_factory=list)  # (length N, first scan S)
     stall_turns: Optional[StallTurns] = None
@@ -136,6 +142,7 @@ class FaultSpec:
     every_rad: Optional[float] = None
     drop: Optional[Fraction] = None  # percent
     gaps: List[Tuple[float, float]] = field(default_factory=list)  # (offset S s, length T s)
+    kidnaps: List[Tuple[float, float]] = field(default_factory=list)  # (offset S s, length T s)
     mount: Optional[Pose] = None
     start_offsets: List[float] = field(default_factory=list)  # degrees
     seed: int = 0
@@ -145,7 +152,8 @@ class FaultSpec:
     def empty(self) -> bool:
         return not (self.stalls or self.stall_turns or self.spikes or self.resets or self.slips
                     or self.scale is not None or self.every_m is not None or self.every_rad is not None
-                    or self.drop is not None or self.gaps or self.mount is not None or self.start_offsets)
+                    or self.drop is not None or self.gaps or self.kidnaps or self.mount is not None
+                    or self.start_offsets)
 
 
 def fault_rng(seed: int, what: str) -> random.Random:
@@ -264,6 +272,19 @@ class OutScan:
 
 
 @dataclass
+class KidnapCut:
+    """Where one kidnap cut the log (input scan indices)."""
+    offset: float        # S, seconds after the first scan
+    length: float        # T, seconds
+    before: int          # the last scan before the cut
+    after: int           # the first scan after it
+    hidden: Tuple[float, float]  # what the odometry no longer reports across the cut: m, rad
+    odom_removed: int = 0        # ODOM lines between the two scans
+    removed: int = 0             # scans removed (set with the selection)
+    stamp: Optional[float] = None  # the first scan written after the cut (None: none is)
+
+
+@dataclass
 class FaultResult:
     log: LoadedLog
     spec: FaultSpec
@@ -273,6 +294,8 @@ class FaultResult:
     summaries: List[str]
     stalls: List[Tuple[int, int]] = field(default_factory=list)  # every stall applied (N, S)
     recast_dropped: int = 0
+    kidnaps: List[KidnapCut] = field(default_factory=list)  # in time order
+    removed_odom: set = field(default_factory=set)  # ODOM events not written (kidnaps)
 
     def scan_pose(self, i: int) -> Pose:
         """Input scan i's odometry after the pose faults (slips included)."""
@@ -313,6 +336,29 @@ def turn_places(poses: Sequence[Pose], length: int, count: int, spacing: int) ->
             if len(chosen) == count:
                 break
     return sorted(chosen)
+
+
+def kidnap_places(log: LoadedLog, kidnaps: Sequence[Tuple[float, float]]) -> List[Tuple[float, float, int, int]]:
+    """(S, T, a, b) of each kidnap in time order: b is the first scan stamped
+    at or after S+T, a the last one before b stamped before S; every scan
+    between them is stamped within [S, S+T). Raises FaultError when a kidnap
+    has no scan on one side or begins before the scan ending the one before."""
+    t0 = log.first_stamp
+    stamps = [_us(sc.stamp) for sc in log.scans]
+    span = max(sc.stamp for sc in log.scans) - t0 if log.scans else 0.0
+    out: List[Tuple[float, float, int, int]] = []
+    for g0, gl in sorted(kidnaps):
+        lo, hi = _us(t0 + g0), _us(t0 + g0 + gl)
+        b = next((i for i, t in enumerate(stamps) if t >= hi), None)
+        a = None if b is None else next((i for i in range(b - 1, -1, -1) if stamps[i] < lo), None)
+        if a is None:
+            raise FaultError(f"--kidnap {g0:g}:{gl:g}: needs a scan before {g0:g} s and one at or after "
+                             f"{g0 + gl:g} s after the first scan's (the log spans {span:.3f} s)")
+        if out and a < out[-1][3]:
+            raise FaultError(f"--kidnap {g0:g}:{gl:g}: begins before scan {out[-1][3]}, which ends the kidnap "
+                             f"{out[-1][0]:g}:{out[-1][1]:g}")
+        out.append((g0, gl, a, b))
+    return out
 
 
 def apply_faults(log: LoadedLog, spec: FaultSpec) -> FaultResult:
@@ -427,14 +473,39 @@ def apply_faults(log: LoadedLog, spec: FaultSpec) -> FaultResult:
                          f"the odometry advances {d:.3f} m, {_deg(t):.1f} deg by the log's next steps; "
                          f"{m - s - 1} later scans follow on from scan {s}'s place, their odometry shifted by that")
 
+    # 7. kidnaps' odometry: a carried robot's wheels do not turn, so the
+    # odometry goes on from where it was lifted; last of the pose faults, so
+    # that the step across the cut is zero whatever else was given
+    cuts: List[KidnapCut] = []
+    removed_odom: set = set()
+    for g0, gl, a, b in kidnap_places(log, spec.kidnaps):
+        for s, n in spec.slips:
+            if a <= s <= b:
+                # its copies would stand on either side of the cut
+                raise FaultError(f"--kidnap {g0:g}:{gl:g} and --slip {s}:{n}: the slip's scan {s} is at the cut "
+                                 f"(scans {a}..{b})")
+        pa, pb = poses[se[a]], poses[se[b]]
+        d, t = step_size(pa, pb)
+        shift = pose_compose(pa, pose_inverse(pb))
+        for e in range(se[b], nev):
+            poses[e] = pose_compose(shift, poses[e])
+        poses[se[b]] = pa  # exactly, not to rounding
+        for s, made in copies.items():
+            if s > b:
+                for o in made:
+                    o.pose = pose_compose(shift, o.pose)
+        gone = [e for e in range(se[a] + 1, se[b]) if log.events[e][1] < 0]
+        removed_odom.update(gone)
+        cuts.append(KidnapCut(g0, gl, a, b, (d, t), len(gone)))
+
     out: List[OutScan] = []
     for i in range(m):
         out.append(OutScan(i, poses[se[i]]))
         out.extend(copies.get(i, ()))
 
-    res = FaultResult(log, spec, poses, zero_v, out, summaries, stalls)
+    res = FaultResult(log, spec, poses, zero_v, out, summaries, stalls, kidnaps=cuts, removed_odom=removed_odom)
 
-    # 7. selection
+    # 8. selection
     if spec.every_m is not None or spec.every_rad is not None:
         dm = spec.every_m if spec.every_m is not None else math.inf
         dr = spec.every_rad if spec.every_rad is not None else math.inf
@@ -461,17 +532,21 @@ def apply_faults(log: LoadedLog, spec: FaultSpec) -> FaultResult:
                          f"seed {spec.seed})")
     t_first = log.first_stamp
     for g0, gl in spec.gaps:
-        lo, hi = _us(t_first + g0), _us(t_first + g0 + gl)
-        gone = 0
-        for o in out:
-            t = o.stamp_us if o.stamp_us is not None else _us(log.scans[o.src].stamp)
-            if o.kept and lo <= t < hi:
-                o.kept = False
-                gone += 1
+        gone = _remove_span(out, log, _us(t_first + g0), _us(t_first + g0 + gl))
         summaries.append(f"gap: {gone} scans removed with stamps {g0:g} s to {g0 + gl:g} s after the first "
                          "scan's (ODOM lines kept)")
+    for c in cuts:
+        c.removed = _remove_span(out, log, _us(t_first + c.offset), _us(t_first + c.offset + c.length))
+        first = next((o for o in out if o.kept and o.src >= c.after), None)
+        c.stamp = None if first is None else _out_stamp_us(first, log) / 1e6
+        after = "is not written" if c.stamp is None else f"is stamped {c.stamp:.6f}"
+        summaries.append(f"kidnap: {c.removed} scans removed with stamps {c.offset:g} s to {c.offset + c.length:g} s "
+                         f"after the first scan's, and the {c.odom_removed} ODOM lines between scans {c.before} and "
+                         f"{c.after}; the odometry from scan {c.after} on goes on from scan {c.before}'s pose (the "
+                         f"{c.hidden[0]:.3f} m, {_deg(c.hidden[1]):.1f} deg moved across the cut hidden); the first "
+                         f"scan after the cut {after}")
 
-    # 8. start offsets, in turn over the scans written
+    # 9. start offsets, in turn over the scans written
     if spec.start_offsets:
         k = 0
         converted = 0
@@ -490,6 +565,20 @@ def apply_faults(log: LoadedLog, spec: FaultSpec) -> FaultResult:
 
 def _us(t: float) -> int:
     return int(round(t * 1e6))
+
+
+def _out_stamp_us(o: OutScan, log: LoadedLog) -> int:
+    return o.stamp_us if o.stamp_us is not None else _us(log.scans[o.src].stamp)
+
+
+def _remove_span(out: List[OutScan], log: LoadedLog, lo: int, hi: int) -> int:
+    """Unkeeps the output scans stamped in [lo, hi) (microseconds); returns how many."""
+    gone = 0
+    for o in out:
+        if o.kept and lo <= _out_stamp_us(o, log) < hi:
+            o.kept = False
+            gone += 1
+    return gone
 
 
 # ---------------------------------------------------------------------------
@@ -698,6 +787,9 @@ class _Writer:
         after: Dict[int, List[bytes]] = {}
         for e, (idx, sc) in enumerate(log.events):
             if sc < 0:
+                if e in res.removed_odom:
+                    replace[idx] = None
+                    continue
                 new = self.odom_line(e) if odom_lines else None
                 if new is not None or not odom_lines:
                     replace[idx] = new
@@ -808,12 +900,21 @@ def _slip(text: str) -> Tuple[int, int]:
     return _int(s, "--slip S"), _int(n, "--slip N", 2)
 
 
-def _gap(text: str) -> Tuple[float, float]:
-    s, t = _split(text, ":", 2, "--gap", "S:T (seconds after the first scan, seconds)")
-    a, b = _number(s, "--gap S"), _number(t, "--gap T")
+def _span(text: str, flag: str) -> Tuple[float, float]:
+    """S:T of --gap and --kidnap: seconds after the first scan, seconds."""
+    s, t = _split(text, ":", 2, flag, "S:T (seconds after the first scan, seconds)")
+    a, b = _number(s, f"{flag} S"), _number(t, f"{flag} T")
     if a < 0 or b <= 0:
-        raise argparse.ArgumentTypeError(f"--gap wants S >= 0 and T > 0, got {text!r}")
+        raise argparse.ArgumentTypeError(f"{flag} wants S >= 0 and T > 0, got {text!r}")
     return a, b
+
+
+def _gap(text: str) -> Tuple[float, float]:
+    return _span(text, "--gap")
+
+
+def _kidnap(text: str) -> Tuple[float, float]:
+    return _span(text, "--kidnap")
 
 
 def _mount(text: str) -> Pose:
@@ -848,7 +949,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog=PROG,
         description="Copy a CARMEN log with odometry and sampling faults (stalls, spikes, counter resets, slip, "
-                    "scale errors, sparse, dropped or missing scans, another laser mount, shifted start angles), "
+                    "scale errors, sparse, dropped or missing scans, a kidnapped robot, another laser mount, "
+                    "shifted start angles), "
                     "deterministically from a seed. Scan indices count the log's scan lines from 0; angles are "
                     "in radians unless written with 'deg' (start offsets: degrees). See docs/faults.md.")
     p.add_argument("input", help="CARMEN log (plain or gzip)")
@@ -879,6 +981,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--drop", type=percent_argument, metavar="P", help="drop P %% of the scans at random")
     g.add_argument("--gap", type=_gap, action="append", default=[], metavar="S:T",
                    help="remove every scan stamped S to S+T seconds after the first scan (repeatable)")
+    g.add_argument("--kidnap", type=_kidnap, action="append", default=[], metavar="S:T",
+                   help="the robot carried away from S to S+T seconds after the first scan: those scans and "
+                        "ODOM lines removed, the odometry after the cut going on from the pose before it "
+                        "(repeatable)")
     g = p.add_argument_group("laser geometry")
     g.add_argument("--mount", type=_mount, metavar="X,Y,TH",
                    help="the laser mounted at X, Y (m), TH on the robot; laser poses kept, robot poses moved")
@@ -916,6 +1022,7 @@ def describe(spec: FaultSpec) -> str:
     if spec.drop is not None:
         out.append(f"--drop {float(spec.drop):g}")
     out += [f"--gap {a:g}:{b:g}" for a, b in spec.gaps]
+    out += [f"--kidnap {a:g}:{b:g}" for a, b in spec.kidnaps]
     if spec.start_offsets:
         out.append("--start-offsets " + ",".join(f"{v:g}" for v in spec.start_offsets))
     if spec.fov179:
@@ -932,8 +1039,9 @@ def spec_from_args(args: argparse.Namespace) -> FaultSpec:
         st = StallTurns(args.stall_at_turns, args.stall_len, args.stall_spacing, args.stall_jitter)
     return FaultSpec(stalls=list(args.stall), stall_turns=st, spikes=list(args.spike), resets=list(args.reset),
                      slips=list(args.slip), scale=args.scale, every_m=args.every_m, every_rad=args.every_rad,
-                     drop=args.drop, gaps=list(args.gap), mount=args.mount, start_offsets=args.start_offsets or [],
-                     seed=args.seed, fov179=args.fov179, max_range=args.max_range)
+                     drop=args.drop, gaps=list(args.gap), kidnaps=list(args.kidnap), mount=args.mount,
+                     start_offsets=args.start_offsets or [], seed=args.seed, fov179=args.fov179,
+                     max_range=args.max_range)
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -19,8 +19,8 @@ report (``docs/RESULTS.md`` by default) has these sections:
    update distance varied) clean and at 43 %, whose means the floors compare
    too; and rsm on copies of every log with odometry and sampling faults
    (:mod:`rsm_tools.faults`; the subsection "Faults", :mod:`.faults`); and rsm
-   on a map it saved: the round trip, localization mode and the global
-   search from starts spread over every log (the subsection "Known map",
+   on a map it saved: the round trip, localization mode, the global
+   search from starts spread over every log and kidnaps (the subsection "Known map",
    :mod:`.knownmap`; ``--only knownmap`` runs it alone).
 3. Sharp turns, the paper's Fig. 8: residuals at the local relations with the
    fastest true turn, and over all local relations binned by true rotation.
@@ -76,7 +76,8 @@ from .measure import (build_small, cmake_cache, cpu_info, discover_logs, hash_lo
     run_robustness, run_scaling, run_speed, run_spread, run_stage_speed, run_stages, run_turns, scaling_variants,
     shared_dir, source_digest, spread_updates, stages_exe, variant_header, write_head)
 from .faults import FAULT_RUNS, QUICK_FAULT_RUNS, fault_floors, run_faults
-from .knownmap import QUICK_STARTS, STARTS, START_SCANS, knownmap_floors, run_knownmap
+from .knownmap import (KIDNAP_RUNS, QUICK_KIDNAP_RUNS, QUICK_STARTS, STARTS, START_SCANS, knownmap_floors,
+    run_knownmap)
 from . import knownmap as _knownmap
 from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors,
     context_from_manifest, floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_report)
@@ -143,9 +144,13 @@ def build_parser() -> argparse.ArgumentParser:
                    "section)")
     p.add_argument("--global-scans", type=int, default=START_SCANS, help=f"scans each of those starts runs at most "
                    f"(default {START_SCANS})")
+    p.add_argument("--kidnap-runs", type=int, help=f"runs per log of the section Known map's kidnapping, one "
+                   f"kidnap each, frozen and with updates (default {KIDNAP_RUNS}; quick {QUICK_KIDNAP_RUNS}; 0: skip "
+                   "that part)")
     p.add_argument("--only", choices=("knownmap",), help="run one section alone and write it into the existing "
                    "report and the work directory's manifest, the rest left as it is: knownmap (the section Known "
-                   "map; with --global-starts, --global-scans, --quick, --jobs, --shared, --output, --work-dir)")
+                   "map; with --global-starts, --global-scans, --kidnap-runs, --quick, --jobs, --shared, --output, "
+                   "--work-dir)")
     p.add_argument("--speed-repeats", type=int, help=f"timed runs per method (default {SPEED_REPEATS}; quick 1)")
     p.add_argument("--callgrind-scans", type=int, default=CALLGRIND_SCANS,
                    help=f"scans from the start of every log counted by callgrind (default {CALLGRIND_SCANS})")
@@ -230,6 +235,7 @@ def run(args: argparse.Namespace) -> Path:
     nstarts = args.global_starts if args.global_starts is not None else (QUICK_STARTS if args.quick else STARTS)
     if args.global_scans < 1:
         raise BenchError("--global-scans must be at least 1")
+    nkidnap = args.kidnap_runs if args.kidnap_runs is not None else (QUICK_KIDNAP_RUNS if args.quick else KIDNAP_RUNS)
     km_jobs = max(args.jobs, os.cpu_count() or 1)  # the section's many short runs: every core
     if args.only == "knownmap":
         if nstarts < 1:
@@ -238,7 +244,7 @@ def run(args: argparse.Namespace) -> Path:
               flush=True)
         km, floors = _knownmap.run_only(nav, logs, work, km_jobs, nstarts, args.global_scans,
                                         stages_bin if stages_bin.is_file() else None, provenance(root, build),
-                                        output, SECTION_TITLES[2])
+                                        output, SECTION_TITLES[2], nkidnap)
         print("rsm-bench: the section's floors:")
         for f in floors:
             print(f"  {f['line']}")
@@ -305,7 +311,7 @@ def run(args: argparse.Namespace) -> Path:
                      stage("faults", run_faults, nav, logs, nfaults, work, args.jobs, reuse))
     ctx["knownmap"] = ({"skipped": "--global-starts 0"} if nstarts <= 0 else
                        stage("known map", run_knownmap, nav, logs, work, km_jobs, nstarts, args.global_scans,
-                             stages_bin))
+                             stages_bin, nkidnap))
     if "skipped" not in ctx["knownmap"]:
         ctx["knownmap"]["provenance"] = prov
     sanitized = cmake_cache(build).get("RSM_SANITIZE", "OFF").upper() in ("ON", "TRUE", "1", "YES")

@@ -26,16 +26,31 @@ For every log:
    (``work``) and in one scan (``max_work_per_scan``) come from rsm-nav's
    summary. A start whose surroundings the saved map does not hold (the pool
    evicted them) is counted apart: see HELD_NOTE.
+4. *Kidnapping*: ``kidnaps`` runs per log (default KIDNAP_RUNS), run k on a
+   copy of the log with one kidnap (:mod:`rsm_tools.faults`, ``--kidnap
+   S:KIDNAP_S``: the scans of KIDNAP_S seconds removed, the odometry made to
+   report no motion across the cut) at (k + 0.5)/kidnaps of the span that
+   leaves room for it and KIDNAP_TAIL_S seconds after it; each run the whole
+   copy on MAP with ``--set global_when_lost=1``, frozen and with updates
+   (KIDNAP_MODES). A run is judged from the first scan after the cut (scan
+   1) to its end, see KIDNAP_NOTE: the scans to the first trusted pose that
+   is right, and the trusted poses that are wrong. Beside them, not a floor:
+   the same judge on a run of the log without a kidnap (the control, one per
+   log and mode), from the same scans, which says what the judge makes of a
+   run the kidnap did not disturb (on ACES the mapping run's pose is no
+   exact reference: docs/globalsearch.md).
 
 The floors (issue 31): the round trip bit for bit; localization mode at or
 below the mapping run's all-relations error, frozen and with updates; at
 least FLOOR_RIGHT_SHARE of the held starts right within WITHIN_SCANS scans;
-no start wrong. The issue's cost floor (instructions per scan of the global
-search on the M4) is not measured here: the section prints the reads per
-scan, a SKIP line says so.
+no start wrong; after every kidnap, in both modes, a trusted right pose
+within WITHIN_SCANS scans and no trusted wrong one. The issue's cost floor
+(instructions per scan of the global search on the M4) is not measured here:
+the section prints the reads per scan, a SKIP line says so.
 """
 
 import math
+import os
 import statistics
 import struct
 import subprocess
@@ -44,6 +59,7 @@ from pathlib import Path
 from typing import List, Optional, Sequence, Tuple
 
 from .. import evaluate as ev
+from .. import faults as flt
 from .common import BenchError, LOCAL_SPAN, fmt_int, fmt_q, provenance_line, ratio
 
 STARTS = 100          # global starts per log
@@ -72,6 +88,18 @@ HELD_NOTE = (f"a start's surroundings count as held by the saved map when rsm-na
              f"with the map) of at least {HELD_FIT:g}; below, the pool evicted them and the start is counted apart")
 
 VERDICTS = ("right", "between", "wrong", "none", "no reference")
+
+KIDNAP_RUNS = 20      # kidnaps per log (one per run)
+QUICK_KIDNAP_RUNS = 2
+KIDNAP_S = 60.0       # the cut: seconds of log the robot is carried through
+KIDNAP_TAIL_S = 30.0  # seconds of log after the cut, at least
+# (mode, rsm-nav options beside --load-map MAP --set global_when_lost=1)
+KIDNAP_MODES = (("frozen", ("--freeze-map",)), ("updates", ()))
+KIDNAP_NOTE = (f"a run is judged from the first scan after the cut (scan 1) to its end, at every scan with a "
+               f"trajectory line and a mapping-run pose at its stamp (exact): a scan is trusted when rsm-nav's "
+               f"scan log says `tracking`; the run is found again at its first trusted scan within {RIGHT_M:g} m and "
+               f"{RIGHT_DEG:g} deg of the mapping run's pose; a trusted scan more than {WRONG_M:g} m or "
+               f"{WRONG_DEG:g} deg off is wrong, wherever it comes")
 
 
 # ---------------------------------------------------------------------------
@@ -204,6 +232,114 @@ def right_needed(held_starts: int) -> int:
     return math.ceil(FLOOR_RIGHT_SHARE * held_starts - 1e-9)
 
 
+def kidnap_offsets(span_s: float, n: int, length: float = KIDNAP_S, tail: float = KIDNAP_TAIL_S) -> List[float]:
+    """S (seconds after the first scan) of n kidnaps of ``length`` s: kidnap k
+    at (k + 0.5)/n of the span that leaves room for the cut and ``tail`` s of
+    log after it (ms resolution); none when the log is too short."""
+    room = span_s - length - tail
+    if n <= 0 or room <= 0:
+        return []
+    return [round((k + 0.5) * room / n, 3) for k in range(n)]
+
+
+def read_scan_log(path: Path) -> List[Tuple[float, str, str]]:
+    """(stamp, outcome, tracking) of every line of rsm-nav --scan-log, in order."""
+    rows = []
+    for line in Path(path).read_text().splitlines():
+        f = line.split()
+        if len(f) >= 3 and not line.startswith("#"):
+            rows.append((float(f[0]), f[1], f[2]))
+    return rows
+
+
+def judge_kidnap(rows: Sequence[Tuple[float, str, str]], traj: ev.Trajectory, ref: ev.Trajectory,
+                 cut_stamp: float) -> dict:
+    """One kidnap run (KIDNAP_NOTE): ``rows`` its scan log, ``traj`` its
+    trajectory, ``ref`` the mapping run's, ``cut_stamp`` the stamp of the
+    first scan after the cut. Scans are counted from that scan, which is 1.
+    found: the first trusted right scan (None: never); wrong: the trusted
+    wrong scans after the cut, first_wrong the first of them; first_trusted,
+    first_lost: the first scan trusted, reported lost; before: the last
+    judged scan before the cut (tracking state and verdict), whether the run
+    was right when the robot was carried off."""
+    out = {"cut_seen": False, "after": 0, "judged": 0, "found": None, "first_trusted": None, "first_lost": None,
+           "wrong": 0, "first_wrong": None, "first_wrong_error": None, "wrong_before_found": 0,
+           "no_reference": 0, "before": None}
+    key = ev.time_key(cut_stamp)
+    i0 = next((i for i, r in enumerate(rows) if ev.time_key(r[0]) == key), None)
+    if i0 is None:
+        return out
+    out["cut_seen"] = True
+    out["after"] = len(rows) - i0
+    for stamp, _, tracking in reversed(rows[:i0]):
+        est, r = traj.lookup(stamp, 0.0), ref.lookup(stamp, 0.0)
+        if est is not None and r is not None:
+            out["before"] = {"tracking": tracking, "verdict": verdict(est, r)}
+            break
+    for j, (stamp, _, tracking) in enumerate(rows[i0:], start=1):
+        trusted = tracking == "tracking"
+        if tracking == "lost" and out["first_lost"] is None:
+            out["first_lost"] = j
+        est = traj.lookup(stamp, 0.0)
+        if est is None:
+            continue  # a search under way writes no pose
+        if trusted and out["first_trusted"] is None:
+            out["first_trusted"] = j
+        r = ref.lookup(stamp, 0.0)
+        if r is None:
+            out["no_reference"] += 1
+            continue
+        out["judged"] += 1
+        if not trusted:
+            continue
+        v = verdict(est, r)
+        if v == "right" and out["found"] is None:
+            out["found"] = j
+        elif v == "wrong":
+            out["wrong"] += 1
+            if out["found"] is None:
+                out["wrong_before_found"] += 1
+            if out["first_wrong"] is None:
+                out["first_wrong"] = j
+                out["first_wrong_error"] = list(pose_error(est, r))
+    return out
+
+
+def _stat_never(values: Sequence[Optional[int]]) -> dict:
+    """Median and worst of scan counts where None is never (counted as
+    infinitely many): either is None when it falls on a never."""
+    vals = sorted(math.inf if v is None else v for v in values)
+    if not vals:
+        return {"n": 0, "median": None, "max": None}
+    med, top = statistics.median(vals), vals[-1]
+    return {"n": len(vals), "median": None if math.isinf(med) else med, "max": None if math.isinf(top) else top}
+
+
+def aggregate_kidnaps(runs: Sequence[dict], within: int = WITHIN_SCANS) -> dict:
+    """The figures of one log's kidnap runs in one mode: found again within
+    ``within`` scans, at all, never; scans to found (median, worst; None:
+    never); runs with a wrong trusted pose and those scans; runs reported
+    lost after the cut; runs right before the cut; the global searches."""
+    found = [r["found"] for r in runs]
+    return {"runs": len(runs), "within": within,
+            "found_within": sum(1 for v in found if v is not None and v <= within),
+            "found": sum(1 for v in found if v is not None), "never": sum(1 for v in found if v is None),
+            "scans_to_found": _stat_never(found),
+            "wrong_runs": sum(1 for r in runs if r["wrong"]), "wrong_scans": sum(r["wrong"] for r in runs),
+            "first_wrong": _stat([r["first_wrong"] for r in runs]),
+            "earliest_wrong": min((r["first_wrong"] for r in runs if r["first_wrong"] is not None), default=None),
+            "lost_runs": sum(1 for r in runs if r["first_lost"] is not None),
+            "first_lost": _stat([r["first_lost"] for r in runs]),
+            "not_seen": sum(1 for r in runs if not r["cut_seen"]),
+            "right_before": sum(1 for r in runs if (r.get("before") or {}).get("verdict") == "right"),
+            "searches": sum(r.get("searches") or 0 for r in runs),
+            "searches_found": sum(r.get("searches_found") or 0 for r in runs),
+            "control_runs": sum(1 for r in runs if r.get("control")),
+            "control_found_within": sum(1 for r in runs if r.get("control") and r["control"]["found"] is not None
+                                        and r["control"]["found"] <= within),
+            "control_wrong_runs": sum(1 for r in runs if r.get("control") and r["control"]["wrong"])}
+
+
 # ---------------------------------------------------------------------------
 # measuring
 
@@ -252,9 +388,11 @@ def map_state_bytes(stages: Optional[Path], log: Path) -> Optional[dict]:
 
 
 def run_knownmap(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, jobs: int,
-                 starts: int = STARTS, cap: int = START_SCANS, stages: Optional[Path] = None) -> dict:
+                 starts: int = STARTS, cap: int = START_SCANS, stages: Optional[Path] = None,
+                 kidnaps: int = KIDNAP_RUNS) -> dict:
     """The section on every log (see the module's docstring); returns its
-    manifest entry. ``jobs`` rsm-nav processes at a time."""
+    manifest entry. ``jobs`` rsm-nav processes at a time; ``kidnaps`` 0
+    skips the kidnapping part."""
     from .measure import parallel
 
     t_start = time.monotonic()
@@ -347,7 +485,86 @@ def run_knownmap(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, 
         entry["starts"] = sorted((e for (lab, _, _, _), e in done if lab == label), key=lambda e: e["k"])
         entry["summary"] = aggregate(entry["starts"])
         entry["summary_near"] = aggregate([e["near"] for e in entry["starts"] if "near" in e])
+    out["kidnap"] = (run_kidnaps(nav, logs, d, jobs, kidnaps, refs) if kidnaps > 0
+                     else {"skipped": "--kidnap-runs 0"})
     out["seconds"] = time.monotonic() - t_start
+    return out
+
+
+def run_kidnaps(nav: Path, logs: Sequence[Tuple[str, Path, Path]], d: Path, jobs: int, runs: int,
+                refs: dict) -> dict:
+    """The kidnapping part (the module's docstring, item 4) on the maps the
+    mapping runs saved in ``d``/LOG/map.rsmm, judged against their
+    trajectories ``refs``; returns its manifest entry (per log the runs of
+    each mode, each with its control's figures, and their summary)."""
+    from .measure import parallel
+
+    t0 = time.monotonic()
+    loaded = {label: flt.load_log(log) for label, log, _ in logs}
+    out = {"runs": runs, "length_s": KIDNAP_S, "tail_s": KIDNAP_TAIL_S, "modes": [m for m, _ in KIDNAP_MODES],
+           "within": WITHIN_SCANS, "note": KIDNAP_NOTE, "logs": {}}
+    tasks = []
+    for label, _, _ in logs:
+        lg = loaded[label]
+        span = max(sc.stamp for sc in lg.scans) - lg.first_stamp if lg.scans else 0.0
+        offs = kidnap_offsets(span, runs)
+        out["logs"][label] = {"span_s": span, "offsets": offs}
+        tasks += [(label, k, s) for k, s in enumerate(offs)] + ([(label, None, None)] if offs else [])
+    logs_by = {label: log for label, log, _ in logs}
+
+    def nav_kidnap(label, path, mode, flags, name):
+        traj, slog = d / label / "kidnap" / f"{name}.txt", d / label / "kidnap" / f"{name}.scans"
+        summ = _nav(nav, path, traj, ["--load-map", str(d / label / "map.rsmm"), *flags,
+                                      "--set", "global_when_lost=1", "--scan-log", str(slog)])
+        return summ, read_scan_log(slog), ev.load_trajectory(traj)
+
+    def one(task):
+        label, k, s = task
+        o = d / label / "kidnap"
+        o.mkdir(parents=True, exist_ok=True)
+        if k is None:  # the control: the log itself
+            return task, {mode: nav_kidnap(label, logs_by[label], mode, flags, f"control-{mode}")[1:]
+                          for mode, flags in KIDNAP_MODES}
+        spec = flt.FaultSpec(kidnaps=[(s, KIDNAP_S)])
+        res = flt.apply_faults(loaded[label], spec)
+        cut = res.kidnaps[0]
+        path = o / f"kidnap-{k}.clf"
+        tmp = o / f"kidnap-{k}.clf.tmp{os.getpid()}"
+        with open(tmp, "wb") as fh:
+            # rsm-nav --carmen reads the odometry of the scan lines only: no ODOM lines
+            flt.write_result(res, fh, "rsm-faults " + flt.describe(spec), odom_lines=False)
+        os.replace(tmp, path)
+        got = {}
+        try:
+            for mode, flags in KIDNAP_MODES:
+                summ, rows, traj = nav_kidnap(label, path, mode, flags, f"{mode}-{k}")
+                e = judge_kidnap(rows, traj, refs[label], cut.stamp)
+                g, rec = summ.get("global") or {}, summ.get("recovery") or {}
+                e.update({"k": k, "offset_s": s, "cut_stamp": cut.stamp, "removed": cut.removed,
+                          "hidden_m": cut.hidden[0], "hidden_deg": math.degrees(cut.hidden[1]),
+                          "scans": summ.get("scans"), "searches": g.get("searches"),
+                          "searches_found": g.get("found"), "not_proven": g.get("not_proven"),
+                          "work": g.get("work"), "max_work_per_scan": g.get("max_work_per_scan"),
+                          "recoveries": rec.get("taken"), "seconds": summ["seconds"]})
+                got[mode] = e
+        finally:
+            path.unlink()
+        return task, got
+
+    # the big log's runs first, so that the last ones are short
+    tasks.sort(key=lambda tk: -len(loaded[tk[0]].scans))
+    done = parallel(one, tasks, jobs)
+    for label, entry in out["logs"].items():
+        mine = [g for (_, k, _), g in sorted((tg for tg in done if tg[0][0] == label and tg[0][1] is not None),
+                                             key=lambda tg: tg[0][1])]
+        control = next((g for (lab, k, _), g in done if lab == label and k is None), None)
+        entry["runs"] = {mode: [g[mode] for g in mine] for mode, _ in KIDNAP_MODES}
+        for mode, _ in KIDNAP_MODES:
+            for r in entry["runs"][mode]:
+                c = judge_kidnap(*control[mode], refs[label], r["cut_stamp"])
+                r["control"] = {key: c[key] for key in ("found", "wrong", "first_wrong", "first_lost")}
+        entry["summary"] = {mode: aggregate_kidnaps(entry["runs"][mode]) for mode, _ in KIDNAP_MODES}
+    out["seconds"] = time.monotonic() - t0
     return out
 
 
@@ -411,7 +628,106 @@ def knownmap_floors(km: Optional[dict]) -> List[dict]:
                           f"bench counts map reads: at most {_n(w['max'])} in one scan, median start "
                           f"{_n(w['median'])}; {_n(s['work']['median'])} reads per start, median, "
                           f"{_n(s['work']['max'])} worst)"))
+        out += kidnap_floors(km.get("kidnap"), label)
     return out
+
+
+MODE_WHAT = {"frozen": "frozen", "updates": "with updates"}
+
+
+def _scans_text(v, never: int) -> str:
+    """A scan count of _stat_never: None is never (when some run never was)."""
+    return ("never" if never else "n/a") if v is None else _n(v)
+
+
+def kidnap_floors(kd: Optional[dict], label: str) -> List[dict]:
+    """The kidnapping part's floors on one log, per mode: every run found
+    again within its WITHIN_SCANS scans, and no trusted wrong pose."""
+    if not kd or "skipped" in kd or label not in kd.get("logs", {}):
+        return []
+    e = kd["logs"][label]
+    out = []
+    head = f"{label}: {MARK}, kidnapping"
+    for mode in kd["modes"]:
+        s = e["summary"][mode]
+        n = s["runs"]
+        what = f"{head} {MODE_WHAT.get(mode, mode)}, {n} runs"
+        if n == 0:
+            out.append(_floor("SKIP", "knownmap-kidnap", label, None, None,
+                              f"{what}: not measured (the log has no room for a {kd['length_s']:g} s cut)"))
+            continue
+        sp = s["scans_to_found"]
+        ok = s["found_within"] == n
+        out.append(_floor("PASS" if ok else "MISS", "knownmap-kidnap", label, s["found_within"], n,
+                          f"{what} with a {kd['length_s']:g} s cut: {s['found_within']} found again (a trusted pose "
+                          f"within {RIGHT_M:g} m and {RIGHT_DEG:g} deg of the mapping run's) within {s['within']} "
+                          f"scans of the cut {'==' if ok else '<'} {n}; scans to it median "
+                          f"{_scans_text(sp['median'], s['never'])}, worst {_scans_text(sp['max'], s['never'])}"
+                          + (f" ({s['never']} never)" if s["never"] else "")))
+        ok = s["wrong_runs"] == 0
+        out.append(_floor("PASS" if ok else "MISS", "knownmap-kidnap-wrong", label, s["wrong_runs"], 0,
+                          f"{what}: {s['wrong_runs']} gave a trusted pose more than {WRONG_M:g} m or "
+                          f"{WRONG_DEG:g} deg off after the cut "
+                          + (f"({_n(s['wrong_scans'])} such scans in all, the earliest at scan "
+                             f"{_n(s['earliest_wrong'])} after the cut) " if s["wrong_runs"] else "")
+                          + f"{'==' if ok else '>'} 0"))
+    return out
+
+
+def report_kidnap(kd: Optional[dict]) -> List[str]:
+    """The kidnapping part of the subsection "Known map"."""
+    if not kd:
+        return ["*Kidnapping*: not measured in this run.", ""]
+    if "skipped" in kd:
+        return [f"*Kidnapping*: not measured in this run ({kd['skipped']}).", ""]
+    from .report import md_table
+
+    n = kd["runs"]
+    L = [f"*Kidnapping*: {n} runs per log, run k on a copy of the log with one kidnap of {kd['length_s']:g} s "
+         f"(`rsm-faults --kidnap S:{kd['length_s']:g}`, docs/faults.md: the scans of those seconds removed and the "
+         "odometry made to report no motion across the cut, as a robot carried elsewhere) at S = (k + 0.5)/"
+         f"{n} of the span that leaves room for the cut and {kd['tail_s']:g} s of log after it; each run the whole "
+         "copy on the saved map from the log's first pose, `--load-map MAP --set global_when_lost=1`, frozen "
+         f"(`--freeze-map`) and with updates. Judged: {kd['note']}. Lost: the first scan reported lost after the "
+         "cut; right before: the run was right at the last scan before the cut; global searches: rsm-nav's count "
+         "over the whole runs, before the cut too, and those that proved a pose. Without a kidnap (not a floor): "
+         "one run of the log itself per mode, with the same options, judged the same way from each run's first "
+         "scan after the cut: runs whose scan there or a later one within the limit was trusted and right, and "
+         "runs with a wrong trusted scan from there on; what the judge makes of a run no kidnap disturbed. "
+         f"This part took {kd['seconds']:.0f} s.", ""]
+    rows = []
+    for label, e in kd["logs"].items():
+        for mode in kd["modes"]:
+            s = e["summary"][mode]
+            sp, fl = s["scans_to_found"], s["first_lost"]
+            rows.append([label, MODE_WHAT.get(mode, mode), str(s["runs"]), str(s["found_within"]), str(s["found"]),
+                         f"{_scans_text(sp['median'], s['never'])} / {_scans_text(sp['max'], s['never'])}",
+                         f"{s['wrong_runs']}" + (f" ({_n(s['wrong_scans'])} scans)" if s["wrong_scans"] else ""),
+                         f"{s['lost_runs']}" + (f" (median scan {_n(fl['median'])})" if fl["n"] else ""),
+                         str(s["right_before"]), f"{s['searches']} / {s['searches_found']}",
+                         (f"{s['control_found_within']} / {s['control_wrong_runs']}" if s.get("control_runs")
+                          else "n/a")])
+    L += md_table(["log", "mode", "runs", f"found again within {kd['within']} scans", "found again",
+                   "scans to found again, median / worst", "runs with a wrong trusted pose",
+                   "runs reported lost (first lost scan)", "right before the cut", "global searches / proven",
+                   f"without a kidnap: right within {kd['within']} scans / runs with a wrong trusted pose"],
+                  rows, "knownmap kidnap")
+    missed = []
+    for label, e in kd["logs"].items():
+        for mode in kd["modes"]:
+            runs = e["runs"][mode]
+            never = [str(r["k"]) for r in runs if r["found"] is None]
+            late = [f"{r['k']} ({_n(r['found'])})" for r in runs
+                    if r["found"] is not None and r["found"] > kd["within"]]
+            wrong = [f"{r['k']} ({_n(r['wrong'])} from scan {_n(r['first_wrong'])})" for r in runs if r["wrong"]]
+            parts = ([f"never found again in runs {', '.join(never)}"] if never else []) + \
+                    ([f"found again later (scan) in runs {', '.join(late)}"] if late else []) + \
+                    ([f"wrong trusted scans (from scan) in runs {', '.join(wrong)}"] if wrong else [])
+            if parts:
+                missed.append(f"- {label}, {MODE_WHAT.get(mode, mode)}: " + "; ".join(parts) + ".")
+    if missed:
+        L += ["The runs that missed a floor:", ""] + missed + [""]
+    return L
 
 
 def _f(v, fmt="{:.2f}") -> str:
@@ -501,6 +817,7 @@ def report_knownmap(km: Optional[dict]) -> List[str]:
                          f"{_n(sp['median'])} / {_n(sp['max'])}", f"{_n(w['median'])} / {_n(w['max'])}",
                          f"{_n(wp['median'])} / {_n(wp['max'])}"])
         L += md_table(head, rows, "knownmap near")
+    L += report_kidnap(km.get("kidnap"))
     L += ["The section's floors (also in section 7):", "", "```"]
     L += [f["line"] for f in knownmap_floors(km)]
     L += ["```", ""]
@@ -583,7 +900,8 @@ def merge_manifest(manifest: dict, km: dict, floors: Sequence[dict]) -> dict:
 
 
 def run_only(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, jobs: int, starts: int, cap: int,
-             stages: Optional[Path], prov: dict, output: Path, next_title: str) -> Tuple[dict, List[dict]]:
+             stages: Optional[Path], prov: dict, output: Path, next_title: str,
+             kidnaps: int = KIDNAP_RUNS) -> Tuple[dict, List[dict]]:
     """rsm-bench --only knownmap: this section alone, written into the
     manifest of the work directory (bench.json, made when there is none) and
     spliced into the existing report ``output`` (its subsection and its floor
@@ -593,7 +911,7 @@ def run_only(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, jobs
     if not output.is_file():
         raise BenchError(f"--only knownmap writes its section into an existing report, and {output} is missing "
                          "(run the whole bench once first)")
-    km = run_knownmap(nav, logs, work, jobs, starts, cap, stages)
+    km = run_knownmap(nav, logs, work, jobs, starts, cap, stages, kidnaps)
     km["provenance"] = prov
     floors = knownmap_floors(km)
     path = work / "bench.json"
