@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "rsm/geom.h"
+#include "check.h"
 
 RSM_STATIC_ASSERT(aria_buffer_holds_any_frame, RSM_ARIA_MAX_PACKET >= 258);
 
@@ -418,8 +419,11 @@ static int abandon(rsm_aria_parser_t *p)
     return 0;
 }
 
-int rsm_aria_parser_init(rsm_aria_parser_t *p)
+int rsm_aria_parser_init_checked(rsm_aria_parser_t *p, size_t p_size, unsigned long fingerprint)
 {
+    if (!RSM_SAME_BUILD(rsm_aria_parser_t, p_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (p == NULL) {
         return RSM_ERR_INVAL;
     }
@@ -427,11 +431,14 @@ int rsm_aria_parser_init(rsm_aria_parser_t *p)
     return RSM_OK;
 }
 
-int rsm_aria_parser_feed(rsm_aria_parser_t *p, const uint8_t *data, size_t len, size_t *consumed,
-                         rsm_aria_packet_t *out)
+int rsm_aria_parser_feed_checked(rsm_aria_parser_t *p, const uint8_t *data, size_t len, size_t *consumed,
+                                 rsm_aria_packet_t *out, size_t out_size, unsigned long fingerprint)
 {
     size_t i = 0u;
 
+    if (!RSM_SAME_BUILD(rsm_aria_packet_t, out_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (consumed != NULL) {
         *consumed = 0u;
     }
@@ -525,10 +532,14 @@ const uint8_t *rsm_aria_payload(const rsm_aria_packet_t *pkt)
     return (pkt == NULL) ? NULL : pkt->frame + 4;
 }
 
-int rsm_aria_packet_build(rsm_aria_packet_t *pkt, uint8_t id, const uint8_t *payload, size_t len)
+int rsm_aria_packet_build_checked(rsm_aria_packet_t *pkt, size_t pkt_size, unsigned long fingerprint, uint8_t id,
+                                  const uint8_t *payload, size_t len)
 {
     int n;
 
+    if (!RSM_SAME_BUILD(rsm_aria_packet_t, pkt_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (pkt == NULL || (payload == NULL && len > 0u)) {
         return RSM_ERR_INVAL;
     }
@@ -668,13 +679,17 @@ int rsm_aria_decode_sync(const rsm_aria_packet_t *pkt)
     return (int)pkt->id;
 }
 
-int rsm_aria_decode_sync2(const rsm_aria_packet_t *pkt, rsm_aria_sync2_t *out)
+int rsm_aria_decode_sync2_checked(const rsm_aria_packet_t *pkt, rsm_aria_sync2_t *out, size_t out_size,
+                                  unsigned long fingerprint)
 {
     rsm_aria_sync2_t s;
     reader_t r;
     char *dst[3];
     unsigned i;
 
+    if (!RSM_SAME_BUILD(rsm_aria_sync2_t, out_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (!packet_ok(pkt) || out == NULL || pkt->id != RSM_ARIA_PAC_SYNC2) {
         return RSM_ERR_INVAL;
     }
@@ -697,13 +712,17 @@ int rsm_aria_decode_sync2(const rsm_aria_packet_t *pkt, rsm_aria_sync2_t *out)
     return RSM_OK;
 }
 
-int rsm_aria_decode_sip(const rsm_aria_packet_t *pkt, rsm_aria_sip_t *out)
+int rsm_aria_decode_sip_checked(const rsm_aria_packet_t *pkt, rsm_aria_sip_t *out, size_t out_size,
+                                unsigned long fingerprint)
 {
     rsm_aria_sip_t s;
     reader_t r;
     uint16_t u;
     size_t k;
 
+    if (!RSM_SAME_BUILD(rsm_aria_sip_t, out_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (!packet_ok(pkt) || out == NULL ||
         (pkt->id != RSM_ARIA_PAC_SIP_STOPPED && pkt->id != RSM_ARIA_PAC_SIP_MOVING)) {
         return RSM_ERR_INVAL;
@@ -795,13 +814,17 @@ int rsm_aria_decode_encoder(const rsm_aria_packet_t *pkt, rsm_aria_encoder_t *ou
     return RSM_OK;
 }
 
-int rsm_aria_decode_config(const rsm_aria_packet_t *pkt, rsm_aria_config_t *out)
+int rsm_aria_decode_config_checked(const rsm_aria_packet_t *pkt, rsm_aria_config_t *out, size_t out_size,
+                                   unsigned long fingerprint)
 {
     rsm_aria_config_t c;
     reader_t r;
     int cut = 0;
     int ok;
 
+    if (!RSM_SAME_BUILD(rsm_aria_config_t, out_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (!packet_ok(pkt) || out == NULL || pkt->id != RSM_ARIA_PAC_CONFIG) {
         return RSM_ERR_INVAL;
     }

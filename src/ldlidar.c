@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "check.h"
 #include "stamps.h"
 
 int rsm_ldlidar_config_default(rsm_ldlidar_config_t *cfg)
@@ -19,15 +20,19 @@ int rsm_ldlidar_config_default(rsm_ldlidar_config_t *cfg)
     return RSM_OK;
 }
 
-int rsm_ldlidar_init(rsm_ldlidar_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
-                     const rsm_ldlidar_config_t *cfg)
+int rsm_ldlidar_init_checked(rsm_ldlidar_t *d, size_t d_size, unsigned long fingerprint, const rsm_link_t *link,
+                             const rsm_clock_t *clock, const rsm_ldlidar_config_t *cfg)
 {
     rsm_link_rx_t io;
+    if (!RSM_SAME_BUILD(rsm_ldlidar_t, d_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (d == NULL || cfg == NULL || cfg->stream_timeout_us == 0u ||
         rsm_link_rx_init(&io, link, clock, cfg->read_timeout_us, cfg->byte_timeout_us) != RSM_OK) {
         return RSM_ERR_INVAL;
     }
     memset(d, 0, sizeof *d);
+    d->magic = (uint32_t)RSM_LDLIDAR_MAGIC;
     d->cfg = cfg;
     d->io = io;
     d->state = RSM_LDLIDAR_IDLE;
@@ -35,10 +40,16 @@ int rsm_ldlidar_init(rsm_ldlidar_t *d, const rsm_link_t *link, const rsm_clock_t
     return RSM_OK;
 }
 
+/* Whether rsm_ldlidar_init set d up (not for NULL, zeroed or stale memory). */
+static int ready(const rsm_ldlidar_t *d)
+{
+    return d != NULL && d->magic == (uint32_t)RSM_LDLIDAR_MAGIC && d->cfg != NULL;
+}
+
 int rsm_ldlidar_connect(rsm_ldlidar_t *d)
 {
     int st;
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     st = rsm_link_set_baud(d->io.link, d->cfg->baud);
@@ -56,7 +67,7 @@ int rsm_ldlidar_connect(rsm_ldlidar_t *d)
 
 int rsm_ldlidar_disconnect(rsm_ldlidar_t *d)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     d->state = RSM_LDLIDAR_IDLE;
@@ -187,13 +198,13 @@ static const rsm_link_poll_ops_t ldlidar_poll_ops = {drain_cb, timers_cb, until_
 
 uint64_t rsm_ldlidar_next_deadline_us(const rsm_ldlidar_t *d)
 {
-    return d == NULL ? UINT64_MAX : rsm_link_next_deadline(&d->io, &ldlidar_poll_ops, d);
+    return !ready(d) ? UINT64_MAX : rsm_link_next_deadline(&d->io, &ldlidar_poll_ops, d);
 }
 
 int rsm_ldlidar_poll(rsm_ldlidar_t *d, rsm_ldlidar_event_t *ev)
 {
     int st;
-    if (d == NULL || ev == NULL) {
+    if (!ready(d) || ev == NULL) {
         return RSM_ERR_INVAL;
     }
     memset(&d->out, 0, sizeof d->out);

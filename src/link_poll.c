@@ -2,10 +2,14 @@
 #include "rsm/link_poll.h"
 
 #include "rsm/status.h"
+#include "check.h"
 
-int rsm_link_rx_init(rsm_link_rx_t *rx, const rsm_link_t *link, const rsm_clock_t *clock,
-                     uint32_t read_timeout_us, uint32_t byte_timeout_us)
+int rsm_link_rx_init_checked(rsm_link_rx_t *rx, size_t rx_size, unsigned long fingerprint, const rsm_link_t *link,
+                             const rsm_clock_t *clock, uint32_t read_timeout_us, uint32_t byte_timeout_us)
 {
+    if (!RSM_SAME_BUILD(rsm_link_rx_t, rx_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (rx == NULL || link == NULL || clock == NULL || link->read == NULL ||
         link->write == NULL || clock->now_us == NULL) {
         return RSM_ERR_INVAL;

@@ -5,6 +5,7 @@
 
 #include "rsm/geom.h"
 #include "rsm/status.h"
+#include "check.h"
 
 /* Capacity checks: the parser buffer must hold the largest telegram it may
  * accept, and a 401-value 0xB0 telegram must be acceptable. */
@@ -334,8 +335,11 @@ static void clear_event(rsm_lms_event_t *out)
     out->type = RSM_LMS_EVENT_NONE;
 }
 
-int rsm_lms_parser_init(rsm_lms_parser_t *p)
+int rsm_lms_parser_init_checked(rsm_lms_parser_t *p, size_t p_size, unsigned long fingerprint)
 {
+    if (!RSM_SAME_BUILD(rsm_lms_parser_t, p_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (p == NULL) {
         return RSM_ERR_INVAL;
     }
@@ -679,13 +683,16 @@ rsm_lms_reading_t rsm_lms_b0_reading(const rsm_lms_b0_view_t *v, size_t i)
     return r;
 }
 
-int rsm_lms_decode_b0(const rsm_lms_telegram_t *t, const rsm_lms_b0_format_t *fmt,
-                      rsm_lms_scan_t *out)
+int rsm_lms_decode_b0_checked(const rsm_lms_telegram_t *t, const rsm_lms_b0_format_t *fmt, rsm_lms_scan_t *out,
+                              size_t out_size, unsigned long fingerprint)
 {
     rsm_lms_b0_view_t v;
     size_t i;
     int rc;
 
+    if (!RSM_SAME_BUILD(rsm_lms_scan_t, out_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (out == NULL) {
         return RSM_ERR_INVAL;
     }

@@ -133,7 +133,7 @@ const char *rsm_track_name(rsm_track_t t)
 
 rsm_track_t rsm_localizer_track(const rsm_localizer_t *loc)
 {
-    return loc == NULL ? RSM_TRACK_LOST : loc->last.track;
+    return rsm_localizer_ready(loc) ? loc->last.track : RSM_TRACK_LOST;
 }
 
 const char *rsm_stage_name(rsm_stage_t s)
@@ -364,7 +364,7 @@ size_t rsm_localizer_scan_points(const rsm_localizer_t *loc, rsm_point_t *out, s
 {
     size_t n;
     size_t k;
-    if (loc == NULL) {
+    if (!ready(loc)) {
         return 0u;
     }
     n = loc->last.points <= RSM_MAX_BEAMS ? (size_t)loc->last.points : (size_t)RSM_MAX_BEAMS;
@@ -376,7 +376,7 @@ size_t rsm_localizer_scan_points(const rsm_localizer_t *loc, rsm_point_t *out, s
 
 int rsm_localizer_map_occupancy(const rsm_localizer_t *loc, float x, float y, float *occupancy)
 {
-    if (loc == NULL || loc->cfg == NULL || occupancy == NULL) {
+    if (!ready(loc) || occupancy == NULL) {
         return RSM_ERR_INVAL;
     }
     if (loc->cfg->method != RSM_METHOD_MAP) {
@@ -390,7 +390,7 @@ int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, f
 {
     int32_t g[4];
     float a;
-    if (loc == NULL || loc->cfg == NULL || x0 == NULL || y0 == NULL || x1 == NULL || y1 == NULL) {
+    if (!ready(loc) || x0 == NULL || y0 == NULL || x1 == NULL || y1 == NULL) {
         return RSM_ERR_INVAL;
     }
     if (loc->cfg->method != RSM_METHOD_MAP) {

@@ -2,6 +2,8 @@
 
 #include <string.h>
 
+#include "check.h"
+
 /* Rates tried in turn when the robot does not answer (p2os's order). */
 static const uint32_t probe_rates[5] = {9600u, 38400u, 19200u, 115200u, 57600u};
 #define N_PROBE_RATES 5u
@@ -132,10 +134,13 @@ static void begin_handshake(rsm_p3dx_t *d, uint64_t now)
     send_sync(d, 0u, now);
 }
 
-int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
-                  const rsm_p3dx_config_t *cfg)
+int rsm_p3dx_init_checked(rsm_p3dx_t *d, size_t d_size, unsigned long fingerprint, const rsm_link_t *link,
+                          const rsm_clock_t *clock, const rsm_p3dx_config_t *cfg)
 {
     rsm_link_rx_t io;
+    if (!RSM_SAME_BUILD(rsm_p3dx_t, d_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (d == NULL || cfg == NULL ||
         rsm_link_rx_init(&io, link, clock, cfg->read_timeout_us, cfg->byte_timeout_us) != RSM_OK ||
         cfg->sync_tries == 0u || cfg->step_timeout_us == 0u || cfg->keepalive_us == 0u ||
@@ -145,6 +150,7 @@ int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *cloc
         return RSM_ERR_INVAL;
     }
     memset(d, 0, sizeof *d);
+    d->magic = (uint32_t)RSM_P3DX_MAGIC;
     d->cfg = cfg;
     d->link = link;
     d->clock = clock;
@@ -158,9 +164,15 @@ int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *cloc
     return RSM_OK;
 }
 
+/* Whether rsm_p3dx_init set d up (not for NULL, zeroed or stale memory). */
+static int ready(const rsm_p3dx_t *d)
+{
+    return d != NULL && d->magic == (uint32_t)RSM_P3DX_MAGIC && d->cfg != NULL;
+}
+
 int rsm_p3dx_connect(rsm_p3dx_t *d)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     d->lost = 0u;
@@ -175,7 +187,7 @@ int rsm_p3dx_connect(rsm_p3dx_t *d)
 
 int rsm_p3dx_listen(rsm_p3dx_t *d)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     forget_motion(d);
@@ -612,12 +624,12 @@ static const rsm_link_poll_ops_t p3dx_poll_ops = {drain_cb, timers_cb, until_due
 
 uint64_t rsm_p3dx_next_deadline_us(const rsm_p3dx_t *d)
 {
-    return d == NULL ? UINT64_MAX : rsm_link_next_deadline(&d->io, &p3dx_poll_ops, d);
+    return !ready(d) ? UINT64_MAX : rsm_link_next_deadline(&d->io, &p3dx_poll_ops, d);
 }
 
 int rsm_p3dx_odometry_config(const rsm_p3dx_t *d, rsm_odometry_config_t *cfg)
 {
-    if (d == NULL || cfg == NULL || d->ticks_mm == 0u) {
+    if (!ready(d) || cfg == NULL || d->ticks_mm == 0u) {
         return RSM_ERR_INVAL;
     }
     cfg->ticks_per_m_left = (float)d->ticks_mm * 1000.0f;
@@ -629,7 +641,7 @@ int rsm_p3dx_odometry_config(const rsm_p3dx_t *d, rsm_odometry_config_t *cfg)
 int rsm_p3dx_poll(rsm_p3dx_t *d, rsm_p3dx_event_t *ev)
 {
     int st;
-    if (d == NULL || ev == NULL) {
+    if (!ready(d) || ev == NULL) {
         return RSM_ERR_INVAL;
     }
     memset(&d->out, 0, sizeof d->out);
@@ -643,7 +655,7 @@ int rsm_p3dx_poll(rsm_p3dx_t *d, rsm_p3dx_event_t *ev)
 
 int rsm_p3dx_set_vel(rsm_p3dx_t *d, int32_t mm_s, int32_t deg_s)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     if (mm_s < -RSM_ARIA_INT_MAX || mm_s > RSM_ARIA_INT_MAX || deg_s < -RSM_ARIA_INT_MAX ||
@@ -660,7 +672,7 @@ int rsm_p3dx_set_vel(rsm_p3dx_t *d, int32_t mm_s, int32_t deg_s)
 
 int rsm_p3dx_set_vel2(rsm_p3dx_t *d, int32_t left, int32_t right)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     if (left < -RSM_ARIA_VEL2_MAX || left > RSM_ARIA_VEL2_MAX || right < -RSM_ARIA_VEL2_MAX ||
@@ -677,7 +689,7 @@ int rsm_p3dx_set_vel2(rsm_p3dx_t *d, int32_t left, int32_t right)
 
 int rsm_p3dx_stop(rsm_p3dx_t *d)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     d->pend_stop = 1u;
@@ -692,7 +704,7 @@ int rsm_p3dx_disconnect(rsm_p3dx_t *d)
     uint64_t now;
     int st;
     int st2;
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     now = rsm_link_rx_now(&d->io);

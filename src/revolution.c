@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "check.h"
 #include "fmath.h"
 
 int rsm_rev_config_default(rsm_rev_config_t *cfg)
@@ -26,8 +27,17 @@ static int pose_finite(const rsm_pose_t *p)
     return isfinite(p->x) && isfinite(p->y) && isfinite(p->theta);
 }
 
-int rsm_rev_init(rsm_rev_t *r, const rsm_rev_config_t *cfg)
+/* Whether rsm_rev_init set r up (not for NULL, zeroed or stale memory). */
+static int ready(const rsm_rev_t *r)
 {
+    return r != NULL && r->magic == (uint32_t)RSM_REV_MAGIC && r->cfg != NULL;
+}
+
+int rsm_rev_init_checked(rsm_rev_t *r, size_t r_size, unsigned long fingerprint, const rsm_rev_config_t *cfg)
+{
+    if (!RSM_SAME_BUILD(rsm_rev_t, r_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (r == NULL || cfg == NULL || cfg->keep_every == 0u || cfg->min_points == 0u ||
         !(cfg->wrap_deg > 0.0f && cfg->wrap_deg < 360.0f) || cfg->max_gap_us == 0u ||
         cfg->clockwise > 1u || cfg->deskew > 1u || cfg->upside_down > 1u ||
@@ -35,6 +45,7 @@ int rsm_rev_init(rsm_rev_t *r, const rsm_rev_config_t *cfg)
         return RSM_ERR_INVAL;
     }
     memset(r, 0, sizeof *r);
+    r->magic = (uint32_t)RSM_REV_MAGIC;
     r->cfg = cfg;
     return RSM_OK;
 }
@@ -42,7 +53,7 @@ int rsm_rev_init(rsm_rev_t *r, const rsm_rev_config_t *cfg)
 int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
 {
     size_t slot;
-    if (r == NULL || pose == NULL) {
+    if (!ready(r) || pose == NULL) {
         return RSM_ERR_INVAL;
     }
     if (!pose_finite(pose)) {
@@ -222,7 +233,7 @@ static void drop_turn(rsm_rev_t *r)
 
 void rsm_rev_reset(rsm_rev_t *r)
 {
-    if (r == NULL) {
+    if (!ready(r)) {
         return;
     }
     drop_turn(r);
@@ -234,8 +245,8 @@ int rsm_rev_push(rsm_rev_t *r, const rsm_lidar_point_t *pt)
 {
     const rsm_rev_config_t *cfg;
     int done = 0;
-    if (r == NULL || pt == NULL || r->cfg == NULL) {
-        return RSM_ERR_INVAL; /* r->cfg NULL: never initialised (rsm_rev_init) */
+    if (!ready(r) || pt == NULL) {
+        return RSM_ERR_INVAL;
     }
     cfg = r->cfg;
     if (!(pt->angle_deg >= 0.0f && pt->angle_deg < 360.0f) ||

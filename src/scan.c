@@ -5,6 +5,7 @@
 
 #include "rsm/status.h"
 #include "bits.h"
+#include "check.h"
 #include "fmath.h"
 
 rsm_scan_limits_t rsm_scan_limits_default(void)
@@ -15,9 +16,13 @@ rsm_scan_limits_t rsm_scan_limits_default(void)
     return l;
 }
 
-int rsm_scan_set_uniform(rsm_scan_t *scan, size_t count, float start_rad, float step_rad)
+int rsm_scan_set_uniform_checked(rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint, size_t count,
+                                 float start_rad, float step_rad)
 {
     size_t i;
+    if (!RSM_SAME_BUILD(rsm_scan_t, scan_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (scan == NULL) {
         return RSM_ERR_INVAL;
     }
@@ -107,15 +112,19 @@ int rsm_scan_to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm
     return to_points(scan, lim, NULL, out, cap, drops);
 }
 
-void rsm_scan_trig_init(rsm_scan_trig_t *trig)
+int rsm_scan_trig_init_checked(rsm_scan_trig_t *trig, size_t trig_size, unsigned long fingerprint)
 {
     size_t i;
+    if (!RSM_SAME_BUILD(rsm_scan_trig_t, trig_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (trig == NULL) {
-        return;
+        return RSM_ERR_INVAL;
     }
     for (i = 0; i < (size_t)RSM_MAX_BEAMS; ++i) {
         trig->angle[i] = NAN; /* no finite angle has its bits */
     }
+    return RSM_OK;
 }
 
 int rsm_scan_to_points_cached(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_scan_trig_t *trig,

@@ -2,6 +2,8 @@
 
 #include <string.h>
 
+#include "check.h"
+
 /* Start-up steps, in order. */
 #define STEP_PROBE 0u   /* 0x20 0x25 at a candidate rate */
 #define STEP_BAUD 1u    /* 0x20 0x40/0x41/0x42 */
@@ -62,11 +64,14 @@ int rsm_sicklms_config_default(rsm_sicklms_config_t *cfg)
     return RSM_OK;
 }
 
-int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
-                     const rsm_sicklms_config_t *cfg, rsm_scan_t *scan)
+int rsm_sicklms_init_checked(rsm_sicklms_t *d, size_t d_size, unsigned long fingerprint, const rsm_link_t *link,
+                             const rsm_clock_t *clock, const rsm_sicklms_config_t *cfg, rsm_scan_t *scan)
 {
     uint8_t probe[16];
     rsm_link_rx_t io;
+    if (!RSM_SAME_BUILD(rsm_sicklms_t, d_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (d == NULL || cfg == NULL || scan == NULL ||
         rsm_link_rx_init(&io, link, clock, cfg->read_timeout_us, cfg->byte_timeout_us) != RSM_OK ||
         cfg->ack_timeout_us == 0u || cfg->reply_timeout_us == 0u || cfg->mode_timeout_us == 0u ||
@@ -77,6 +82,7 @@ int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t
         return RSM_ERR_INVAL;
     }
     memset(d, 0, sizeof *d);
+    d->magic = (uint32_t)RSM_SICKLMS_MAGIC;
     d->cfg = cfg;
     d->link = link;
     d->clock = clock;
@@ -179,9 +185,15 @@ static void begin_probing(rsm_sicklms_t *d, uint32_t first, uint64_t now)
     probe_at(d, (uint8_t)idx, now);
 }
 
+/* Whether rsm_sicklms_init set d up (not for NULL, zeroed or stale memory). */
+static int ready(const rsm_sicklms_t *d)
+{
+    return d != NULL && d->magic == (uint32_t)RSM_SICKLMS_MAGIC && d->cfg != NULL;
+}
+
 int rsm_sicklms_connect(rsm_sicklms_t *d)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     d->lost = 0u;
@@ -195,7 +207,7 @@ int rsm_sicklms_connect(rsm_sicklms_t *d)
 
 int rsm_sicklms_listen(rsm_sicklms_t *d)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     d->lost = 0u;
@@ -233,7 +245,7 @@ static void fail(rsm_sicklms_t *d, int status, uint64_t now)
 
 int rsm_sicklms_disconnect(rsm_sicklms_t *d)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     if (d->state == RSM_SICKLMS_IDLE || d->state == RSM_SICKLMS_STOPPING) {
@@ -443,12 +455,16 @@ static int put_beam(rsm_scan_t *out, size_t i, float start_rad, float step_rad, 
     return 1;
 }
 
-int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan_t *out)
+int rsm_sicklms_to_scan_checked(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan_t *out, size_t out_size,
+                                unsigned long fingerprint)
 {
     size_t i;
     int invalid = 0;
     float start_rad;
     float step_rad;
+    if (!RSM_SAME_BUILD(rsm_scan_t, out_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (raw == NULL || out == NULL) {
         return RSM_ERR_INVAL;
     }
@@ -674,13 +690,13 @@ static const rsm_link_poll_ops_t sicklms_poll_ops = {drain_cb, timers_cb, until_
 
 uint64_t rsm_sicklms_next_deadline_us(const rsm_sicklms_t *d)
 {
-    return d == NULL ? UINT64_MAX : rsm_link_next_deadline(&d->io, &sicklms_poll_ops, d);
+    return !ready(d) ? UINT64_MAX : rsm_link_next_deadline(&d->io, &sicklms_poll_ops, d);
 }
 
 int rsm_sicklms_poll(rsm_sicklms_t *d, rsm_sicklms_event_t *ev)
 {
     int st;
-    if (d == NULL || ev == NULL) {
+    if (!ready(d) || ev == NULL) {
         return RSM_ERR_INVAL;
     }
     memset(&d->out, 0, sizeof d->out);

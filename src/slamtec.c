@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "check.h"
 #include "stamps.h"
 
 /* Start-up steps, in order, then the shutdown step. */
@@ -38,10 +39,13 @@ int rsm_slamtec_config_default(rsm_slamtec_config_t *cfg)
     return RSM_OK;
 }
 
-int rsm_slamtec_init(rsm_slamtec_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
-                     const rsm_slamtec_config_t *cfg)
+int rsm_slamtec_init_checked(rsm_slamtec_t *d, size_t d_size, unsigned long fingerprint, const rsm_link_t *link,
+                             const rsm_clock_t *clock, const rsm_slamtec_config_t *cfg)
 {
     rsm_link_rx_t io;
+    if (!RSM_SAME_BUILD(rsm_slamtec_t, d_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (d == NULL || cfg == NULL || cfg->reply_timeout_us == 0u || cfg->stream_timeout_us == 0u ||
         cfg->max_tries == 0u || cfg->scan_mode > RSM_SLAMTEC_SCAN_EXPRESS ||
         cfg->motor > RSM_SLAMTEC_MOTOR_RPM ||
@@ -49,6 +53,7 @@ int rsm_slamtec_init(rsm_slamtec_t *d, const rsm_link_t *link, const rsm_clock_t
         return RSM_ERR_INVAL;
     }
     memset(d, 0, sizeof *d);
+    d->magic = (uint32_t)RSM_SLAMTEC_MAGIC;
     d->cfg = cfg;
     d->io = io;
     d->state = RSM_SLAMTEC_IDLE;
@@ -189,9 +194,15 @@ static void start_session(rsm_slamtec_t *d, uint8_t listen)
     memset(&d->samplerate, 0, sizeof d->samplerate);
 }
 
+/* Whether rsm_slamtec_init set d up (not for NULL, zeroed or stale memory). */
+static int ready(const rsm_slamtec_t *d)
+{
+    return d != NULL && d->magic == (uint32_t)RSM_SLAMTEC_MAGIC && d->cfg != NULL;
+}
+
 int rsm_slamtec_connect(rsm_slamtec_t *d)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     start_session(d, 0u);
@@ -209,7 +220,7 @@ static void await_descriptor(rsm_slamtec_t *d)
 
 int rsm_slamtec_listen(rsm_slamtec_t *d)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     start_session(d, 1u);
@@ -219,7 +230,7 @@ int rsm_slamtec_listen(rsm_slamtec_t *d)
 
 int rsm_slamtec_disconnect(rsm_slamtec_t *d)
 {
-    if (d == NULL) {
+    if (!ready(d)) {
         return RSM_ERR_INVAL;
     }
     if (d->listen) {
@@ -466,13 +477,13 @@ static const rsm_link_poll_ops_t slamtec_poll_ops = {drain_cb, timers_cb, until_
 
 uint64_t rsm_slamtec_next_deadline_us(const rsm_slamtec_t *d)
 {
-    return d == NULL ? UINT64_MAX : rsm_link_next_deadline(&d->io, &slamtec_poll_ops, d);
+    return !ready(d) ? UINT64_MAX : rsm_link_next_deadline(&d->io, &slamtec_poll_ops, d);
 }
 
 int rsm_slamtec_poll(rsm_slamtec_t *d, rsm_slamtec_event_t *ev)
 {
     int st;
-    if (d == NULL || ev == NULL) {
+    if (!ready(d) || ev == NULL) {
         return RSM_ERR_INVAL;
     }
     memset(&d->out, 0, sizeof d->out);

@@ -6,6 +6,7 @@
 
 #include "rsm/odometry.h"
 #include "rsm/status.h"
+#include "check.h"
 
 typedef enum fuse_class {
     FUSE_ON_TIME = 0, /* interpolated or exact, decided in fuse() */
@@ -165,16 +166,28 @@ static void fuse(rsm_sync_t *s, const rsm_scan_t *scan, uint64_t t, fuse_class_t
     }
 }
 
+/* Whether rsm_sync_init set s up (not for NULL, zeroed or stale memory). */
+static int ready(const rsm_sync_t *s)
+{
+    return s != NULL && s->magic == (uint32_t)RSM_SYNC_MAGIC && s->loc != NULL && s->cfg != NULL;
+}
+
 static void fuse_held(rsm_sync_t *s, fuse_class_t cls)
 {
     s->holding = 0u;
     fuse(s, &s->held, s->held_since_us, cls);
 }
 
-int rsm_sync_init(rsm_sync_t *s, rsm_localizer_t *loc, const rsm_sync_config_t *cfg,
-                  rsm_sync_result_fn on_result, void *ctx)
+int rsm_sync_init_checked(rsm_sync_t *s, size_t s_size, unsigned long fingerprint, rsm_localizer_t *loc,
+                          const rsm_sync_config_t *cfg, rsm_sync_result_fn on_result, void *ctx)
 {
-    if (s == NULL || loc == NULL || loc->cfg == NULL || cfg == NULL) {
+    if (!RSM_SAME_BUILD(rsm_sync_t, s_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
+    /* The localizer's own mark, not just a config pointer: stale memory
+     * has one. */
+    if (s == NULL || loc == NULL || loc->magic != (uint32_t)RSM_LOCALIZER_MAGIC || loc->cfg == NULL ||
+        cfg == NULL) {
         return RSM_ERR_INVAL;
     }
     if (cfg->max_wait_us == 0u && cfg->hold_us == 0u) {
@@ -185,6 +198,7 @@ int rsm_sync_init(rsm_sync_t *s, rsm_localizer_t *loc, const rsm_sync_config_t *
         return RSM_ERR_INVAL;
     }
     memset(s, 0, sizeof *s);
+    s->magic = (uint32_t)RSM_SYNC_MAGIC;
     s->loc = loc;
     s->cfg = cfg;
     s->on_result = on_result;
@@ -197,7 +211,7 @@ int rsm_sync_encoder(rsm_sync_t *s, const rsm_odometry_sample_t *sample)
     const rsm_odometry_sample_t *last;
     rsm_odometry_sample_t smp;
     uint64_t stamp_us;
-    if (s == NULL || s->loc == NULL || sample == NULL) {
+    if (!ready(s) || sample == NULL) {
         return RSM_ERR_INVAL;
     }
     s->counters.encoders++;
@@ -230,7 +244,7 @@ int rsm_sync_encoder(rsm_sync_t *s, const rsm_odometry_sample_t *sample)
 
 int rsm_sync_encoder_restart(rsm_sync_t *s)
 {
-    if (s == NULL || s->loc == NULL) {
+    if (!ready(s)) {
         return RSM_ERR_INVAL;
     }
     while (s->count > 0u) {
@@ -246,7 +260,7 @@ int rsm_sync_scan(rsm_sync_t *s, const rsm_scan_t *scan)
 {
     const rsm_odometry_sample_t *last;
     uint64_t t;
-    if (s == NULL || s->loc == NULL || scan == NULL) {
+    if (!ready(s) || scan == NULL) {
         return RSM_ERR_INVAL;
     }
     s->counters.scans++;
@@ -275,7 +289,7 @@ int rsm_sync_scan(rsm_sync_t *s, const rsm_scan_t *scan)
 
 int rsm_sync_poll(rsm_sync_t *s, uint64_t now_us)
 {
-    if (s == NULL) {
+    if (!ready(s)) {
         return RSM_ERR_INVAL;
     }
     if (s->holding && now_us >= s->held_since_us && now_us - s->held_since_us >= s->cfg->max_wait_us) {
@@ -288,7 +302,7 @@ int rsm_sync_poll(rsm_sync_t *s, uint64_t now_us)
 int rsm_sync_flush(rsm_sync_t *s)
 {
     int fused = 0;
-    if (s == NULL) {
+    if (!ready(s)) {
         return RSM_ERR_INVAL;
     }
     if (s->holding) {
@@ -308,7 +322,7 @@ rsm_pose_t rsm_sync_pose(const rsm_sync_t *s)
     rsm_pose_t pose;
     const rsm_odometry_sample_t *from;
     const rsm_odometry_sample_t *to;
-    if (s == NULL || s->loc == NULL) {
+    if (!ready(s)) {
         const rsm_pose_t none = {NAN, NAN, NAN};
         return none;
     }

@@ -27,7 +27,14 @@ extern "C" {
 #endif
 
 /* Capacities (RSM_ARIA_MAX_PACKET, RSM_ARIA_MAX_SONAR, RSM_ARIA_STR_SIZE)
- * are in rsm/config.h. */
+ * are in rsm/config.h. They size the parser, the packet and the SYNC2, SIP
+ * and CONFIGpac structs, so every function that sets one of those up or
+ * fills it (rsm_aria_parser_init, rsm_aria_parser_feed,
+ * rsm_aria_packet_build, rsm_aria_decode_sync2, _sip and _config) is a
+ * macro, as rsm_localizer_init: it passes the caller's sizeof and
+ * RSM_CONFIG_FINGERPRINT to the function of the same name ending in
+ * _checked, which returns RSM_ERR_CONFIG, with nothing written, to a caller
+ * compiled with other capacities than the library. */
 
 /* ---- framing constants ------------------------------------------------------ */
 
@@ -441,9 +448,12 @@ int rsm_aria_baud_code(uint32_t baud);
 
 /* Puts p into its initial state: nothing held, every counter zero. Also
  * the way to drop held bytes, e.g. after a baud-rate change.
- * Returns RSM_OK, or RSM_ERR_INVAL if p is NULL. Reentrant on distinct
- * parsers. */
-int rsm_aria_parser_init(rsm_aria_parser_t *p);
+ * Returns RSM_OK, or RSM_ERR_INVAL if p is NULL (RSM_ERR_CONFIG: see the
+ * capacities above). Reentrant on distinct parsers. */
+#define rsm_aria_parser_init(p) \
+    rsm_aria_parser_init_checked((p), sizeof(rsm_aria_parser_t), (unsigned long)RSM_CONFIG_FINGERPRINT)
+
+int rsm_aria_parser_init_checked(rsm_aria_parser_t *p, size_t p_size, unsigned long fingerprint);
 
 /* Feeds received bytes; publishes at most one verified packet per call.
  * p: an initialised parser, caller owned, modified.
@@ -455,7 +465,8 @@ int rsm_aria_parser_init(rsm_aria_parser_t *p);
  * data + *consumed. Returns 0 when all of data was consumed and no further
  * packet can be completed from the bytes held. RSM_ERR_INVAL (with
  * *consumed = 0 when consumed is not NULL) for NULL p, consumed or out,
- * or NULL data with len > 0. Intended use: call in a loop until it
+ * or NULL data with len > 0; RSM_ERR_CONFIG (nothing written, see the
+ * capacities above). Intended use: call in a loop until it
  * returns 0 -- also with len 0 after a 1 -- since held bytes can complete
  * more than one packet.
  * Receiver rules: hunt for FA FB (a byte after FA that is not FB restarts
@@ -472,8 +483,12 @@ int rsm_aria_parser_init(rsm_aria_parser_t *p);
  * Processing is byte-exact: splitting the same bytes into different
  * chunks gives the same packets and counters. Reentrant on distinct
  * parsers; not ISR-safe against another call on the same parser. */
-int rsm_aria_parser_feed(rsm_aria_parser_t *p, const uint8_t *data, size_t len, size_t *consumed,
-                         rsm_aria_packet_t *out);
+#define rsm_aria_parser_feed(p, data, len, consumed, out)                                        \
+    rsm_aria_parser_feed_checked((p), (data), (len), (consumed), (out), sizeof(rsm_aria_packet_t), \
+                                 (unsigned long)RSM_CONFIG_FINGERPRINT)
+
+int rsm_aria_parser_feed_checked(rsm_aria_parser_t *p, const uint8_t *data, size_t len, size_t *consumed,
+                                 rsm_aria_packet_t *out, size_t out_size, unsigned long fingerprint);
 
 /* Tells the receiver that the line has been silent for the inter-byte
  * timeout (ARIA uses 100 ms). A partial candidate that already has FA FB
@@ -504,14 +519,21 @@ const uint8_t *rsm_aria_payload(const rsm_aria_packet_t *pkt);
 /* Builds pkt as if the receiver had published the frame with this ID and
  * payload (checksum computed). payload: len bytes, borrowed, len <= 252.
  * Returns RSM_OK, RSM_ERR_INVAL (NULL pkt, NULL payload with len > 0) or
- * RSM_ERR_RANGE (len > 252); pkt untouched on error. Pure, reentrant. */
-int rsm_aria_packet_build(rsm_aria_packet_t *pkt, uint8_t id, const uint8_t *payload, size_t len);
+ * RSM_ERR_RANGE (len > 252) or RSM_ERR_CONFIG (see the capacities above);
+ * pkt untouched on error. Pure, reentrant. */
+#define rsm_aria_packet_build(pkt, id, payload, len)                                                    \
+    rsm_aria_packet_build_checked((pkt), sizeof(rsm_aria_packet_t), (unsigned long)RSM_CONFIG_FINGERPRINT, \
+                                  (id), (payload), (len))
+
+int rsm_aria_packet_build_checked(rsm_aria_packet_t *pkt, size_t pkt_size, unsigned long fingerprint, uint8_t id,
+                                  const uint8_t *payload, size_t len);
 
 /* The decoders below read pkt (borrowed) and fill *out (caller owned).
  * They do not re-verify the checksum; they do check that pkt is
  * self-consistent (frame_len = payload_len + 6 <= RSM_ARIA_MAX_PACKET,
- * frame[3] = id) and return RSM_ERR_INVAL otherwise. On any error *out is
- * left untouched. All are pure, reentrant and ISR-safe. */
+ * frame[3] = id) and return RSM_ERR_INVAL otherwise. Those of SYNC2, SIP
+ * and CONFIGpac also return RSM_ERR_CONFIG (see the capacities above). On
+ * any error *out is left untouched. All are pure, reentrant and ISR-safe. */
 
 /* SYNC reply: returns the handshake step 0, 1 or 2 of a packet with ID
  * 0, 1 or 2 (payload ignored), RSM_ERR_INVAL for NULL or any other ID. */
@@ -522,14 +544,22 @@ int rsm_aria_decode_sync(const rsm_aria_packet_t *pkt);
  * counted out of out->present. Strings longer than RSM_ARIA_STR_SIZE - 1
  * are cut, flagged in out->truncated and still skipped correctly.
  * Returns RSM_OK, or RSM_ERR_INVAL (NULL, inconsistent packet, ID != 2). */
-int rsm_aria_decode_sync2(const rsm_aria_packet_t *pkt, rsm_aria_sync2_t *out);
+#define rsm_aria_decode_sync2(pkt, out) \
+    rsm_aria_decode_sync2_checked((pkt), (out), sizeof(rsm_aria_sync2_t), (unsigned long)RSM_CONFIG_FINGERPRINT)
+
+int rsm_aria_decode_sync2_checked(const rsm_aria_packet_t *pkt, rsm_aria_sync2_t *out, size_t out_size,
+                                  unsigned long fingerprint);
 
 /* Standard SIP (ID 0x32 or 0x33). Fields through the sonar readings are
  * required; each later field is decoded only if all its bytes remain, in
  * wire order, stopping at the first that does not fit, and is flagged in
  * out->present. Returns RSM_OK, RSM_ERR_INVAL (NULL, inconsistent packet,
  * other ID) or RSM_ERR_RANGE (payload shorter than 19 + 3 * SONAR COUNT). */
-int rsm_aria_decode_sip(const rsm_aria_packet_t *pkt, rsm_aria_sip_t *out);
+#define rsm_aria_decode_sip(pkt, out) \
+    rsm_aria_decode_sip_checked((pkt), (out), sizeof(rsm_aria_sip_t), (unsigned long)RSM_CONFIG_FINGERPRINT)
+
+int rsm_aria_decode_sip_checked(const rsm_aria_packet_t *pkt, rsm_aria_sip_t *out, size_t out_size,
+                                unsigned long fingerprint);
 
 /* ENCODER packet (ID 0x90): left and right s32 LE counts; bytes after the
  * first 8 are ignored (N >= 11). Returns RSM_OK, RSM_ERR_INVAL (NULL,
@@ -541,7 +571,11 @@ int rsm_aria_decode_encoder(const rsm_aria_packet_t *pkt, rsm_aria_encoder_t *ou
  * string (ended by a NUL or the payload end) are optional and flagged in
  * out->present. Returns RSM_OK, RSM_ERR_INVAL (NULL, inconsistent packet,
  * other ID) or RSM_ERR_RANGE (payload ends before TicksMM). */
-int rsm_aria_decode_config(const rsm_aria_packet_t *pkt, rsm_aria_config_t *out);
+#define rsm_aria_decode_config(pkt, out) \
+    rsm_aria_decode_config_checked((pkt), (out), sizeof(rsm_aria_config_t), (unsigned long)RSM_CONFIG_FINGERPRINT)
+
+int rsm_aria_decode_config_checked(const rsm_aria_packet_t *pkt, rsm_aria_config_t *out, size_t out_size,
+                                   unsigned long fingerprint);
 
 /* ---- odometry helpers -------------------------------------------------------------- */
 

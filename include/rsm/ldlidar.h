@@ -84,9 +84,14 @@ typedef struct rsm_ldlidar_stats {
     uint32_t stamp_shifts; /* packets moved later to keep stamps in order */
 } rsm_ldlidar_stats_t;
 
+/* What rsm_ldlidar_init writes into rsm_ldlidar_t.magic: the other
+ * functions refuse a driver without it (never initialised, or zeroed). */
+#define RSM_LDLIDAR_MAGIC 0x52534d44UL
+
 /* Driver state, caller owned. state, stats, parser.stats and last may be
  * read at any time; the rest is private. */
 typedef struct rsm_ldlidar {
+    uint32_t magic;           /* RSM_LDLIDAR_MAGIC once initialised */
     const rsm_ldlidar_config_t *cfg;
     rsm_ldlidar_state_t state;
     rsm_ldlidar_stats_t stats;
@@ -103,12 +108,23 @@ typedef struct rsm_ldlidar {
 
 /* Initialises d (IDLE, zero counters); nothing is read. Returns RSM_OK, or
  * RSM_ERR_INVAL for NULL pointers, a link without read or write, a clock
- * without now_us, or a zero read or stream timeout (d unchanged). */
-int rsm_ldlidar_init(rsm_ldlidar_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
-                     const rsm_ldlidar_config_t *cfg);
+ * without now_us, or a zero read or stream timeout (d unchanged).
+ * A macro, as rsm_localizer_init: it passes the caller's
+ * sizeof(rsm_ldlidar_t) and RSM_CONFIG_FINGERPRINT, so that a caller
+ * compiled with other capacities than the library (RSM_LINK_RX_CHUNK sizes
+ * the driver) gets RSM_ERR_CONFIG, with d unchanged. */
+#define rsm_ldlidar_init(d, link, clock, cfg) \
+    rsm_ldlidar_init_checked((d), sizeof(rsm_ldlidar_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (link), (clock), (cfg))
+
+int rsm_ldlidar_init_checked(rsm_ldlidar_t *d, size_t d_size, unsigned long fingerprint, const rsm_link_t *link,
+                             const rsm_clock_t *clock, const rsm_ldlidar_config_t *cfg);
+
+/* The functions below that take d refuse d NULL or never initialised (no
+ * RSM_LDLIDAR_MAGIC: zeroed or stale memory) with RSM_ERR_INVAL
+ * (rsm_ldlidar_next_deadline_us: UINT64_MAX), touching nothing. */
 
 /* Starts listening (sets the rate where the link has one, drops what was
- * received). Returns RSM_OK or RSM_ERR_INVAL (d NULL). */
+ * received). Returns RSM_OK or RSM_ERR_INVAL (d NULL or never initialised). */
 int rsm_ldlidar_connect(rsm_ldlidar_t *d);
 
 /* Stops listening: IDLE, nothing more is read. RSM_OK or RSM_ERR_INVAL. */
@@ -122,10 +138,10 @@ int rsm_ldlidar_poll(rsm_ldlidar_t *d, rsm_ldlidar_event_t *ev);
 /* Clock time (the driver's clock, microseconds) at which the driver next
  * needs a poll even if nothing arrives: the stream's silence check; the
  * current time when received bytes are still unexamined or a packet waits
- * to be delivered; UINT64_MAX in IDLE or for d NULL. As
- * rsm_p3dx_next_deadline_us: a caller serving several links waits until
- * the earliest deadline of all or until bytes arrive, then polls each
- * driver (read_timeout_us 0) until it gives no event. */
+ * to be delivered; UINT64_MAX in IDLE or for d NULL or never initialised.
+ * As rsm_p3dx_next_deadline_us: a caller serving several links waits
+ * until the earliest deadline of all or until bytes arrive, then polls
+ * each driver (read_timeout_us 0) until it gives no event. */
 uint64_t rsm_ldlidar_next_deadline_us(const rsm_ldlidar_t *d);
 
 /* The stamped points of packet pkt whose last point was measured at

@@ -74,9 +74,16 @@ typedef struct rsm_link_poll_ops {
  * caller waits for all its links at once, up to the drivers' next
  * deadlines). Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers, a link
  * without read or write, or a clock without now_us (*rx untouched).
- * Nothing is read or sent. */
-int rsm_link_rx_init(rsm_link_rx_t *rx, const rsm_link_t *link, const rsm_clock_t *clock,
-                     uint32_t read_timeout_us, uint32_t byte_timeout_us);
+ * Nothing is read or sent. A macro, as rsm_localizer_init: it passes the
+ * caller's sizeof(rsm_link_rx_t) and RSM_CONFIG_FINGERPRINT, so that a
+ * caller compiled with other capacities than the library
+ * (RSM_LINK_RX_CHUNK sizes the chunk) gets RSM_ERR_CONFIG, *rx untouched. */
+#define rsm_link_rx_init(rx, link, clock, read_timeout_us, byte_timeout_us)                                  \
+    rsm_link_rx_init_checked((rx), sizeof(rsm_link_rx_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (link), (clock), \
+                             (read_timeout_us), (byte_timeout_us))
+
+int rsm_link_rx_init_checked(rsm_link_rx_t *rx, size_t rx_size, unsigned long fingerprint, const rsm_link_t *link,
+                             const rsm_clock_t *clock, uint32_t read_timeout_us, uint32_t byte_timeout_us);
 
 /* Discards received input: the link's pending bytes (rsm_link_flush, where
  * the link can) and the rest of the chunk. Safe to call from a callback of

@@ -288,8 +288,15 @@ typedef struct rsm_lms_event {
 } rsm_lms_event_t;
 
 /* Sets *p to the empty hunting state with all counters zero.
- * Returns RSM_OK, or RSM_ERR_INVAL if p is NULL. Reentrant (per parser). */
-int rsm_lms_parser_init(rsm_lms_parser_t *p);
+ * Returns RSM_OK, or RSM_ERR_INVAL if p is NULL. Reentrant (per parser).
+ * A macro, as rsm_localizer_init: it passes the caller's
+ * sizeof(rsm_lms_parser_t) and RSM_CONFIG_FINGERPRINT, so that a caller
+ * compiled with other capacities than the library (RSM_LMS_MAX_TELEGRAM
+ * sizes the parser) gets RSM_ERR_CONFIG, with p unchanged. */
+#define rsm_lms_parser_init(p) \
+    rsm_lms_parser_init_checked((p), sizeof(rsm_lms_parser_t), (unsigned long)RSM_CONFIG_FINGERPRINT)
+
+int rsm_lms_parser_init_checked(rsm_lms_parser_t *p, size_t p_size, unsigned long fingerprint);
 
 /* Feeds received bytes, in chunks of any size, and stops at the first event.
  *
@@ -484,9 +491,17 @@ rsm_lms_reading_t rsm_lms_b0_reading(const rsm_lms_b0_view_t *v, size_t i);
  * RSM_ERR_INVAL. Distances are raw & distance_mask scaled by the units
  * (1 mm or 1 cm); the top nine distance values are error codes and give an
  * invalid reading (code != OK, range_m 0). Flag bits never invalidate a
- * reading. Returns RSM_OK; *out untouched on error. */
-int rsm_lms_decode_b0(const rsm_lms_telegram_t *t, const rsm_lms_b0_format_t *fmt,
-                      rsm_lms_scan_t *out);
+ * reading. Returns RSM_OK; *out untouched on error.
+ * A macro, as rsm_localizer_init: it passes the caller's
+ * sizeof(rsm_lms_scan_t) and RSM_CONFIG_FINGERPRINT, so that a caller
+ * compiled with other capacities than the library (RSM_MAX_BEAMS sizes
+ * the scan) gets RSM_ERR_CONFIG, with out unchanged, instead of readings
+ * written past its struct. */
+#define rsm_lms_decode_b0(t, fmt, out) \
+    rsm_lms_decode_b0_checked((t), (fmt), (out), sizeof(rsm_lms_scan_t), (unsigned long)RSM_CONFIG_FINGERPRINT)
+
+int rsm_lms_decode_b0_checked(const rsm_lms_telegram_t *t, const rsm_lms_b0_format_t *fmt, rsm_lms_scan_t *out,
+                              size_t out_size, unsigned long fingerprint);
 
 /* Scanner-frame angle of reading i of a decoded scan, in radians (0 right,
  * pi/2 ahead, pi left). Returns RSM_OK; RSM_ERR_INVAL for NULL pointers;

@@ -478,7 +478,7 @@ int rsm_localizer_set_odometry(rsm_localizer_t *loc, const rsm_odometry_config_t
  * draw them). Copies min(cap, count) points to out (out may be NULL when
  * cap is 0) and returns count: the usable readings of the last scan
  * processed (0 before the first; a scan refused as out of order leaves the
- * previous one's). 0 for loc NULL. Reads only. */
+ * previous one's). 0 for loc NULL or never initialised. Reads only. */
 size_t rsm_localizer_scan_points(const rsm_localizer_t *loc, rsm_point_t *out, size_t cap);
 
 /* What the persistent map looks like (RSM_METHOD_MAP): the occupancy in
@@ -486,8 +486,8 @@ size_t rsm_localizer_scan_points(const rsm_localizer_t *loc, rsm_point_t *out, s
  * was seen, or the tile was reused), in *occupancy; and, with
  * rsm_localizer_map_bounds, the world box (metres) of the finest tiles
  * held (RSM_ERR_DEGENERATE while the map is empty). Both return RSM_OK,
- * RSM_ERR_NOSYS for another method, or RSM_ERR_INVAL for NULL pointers
- * (outputs untouched on error). Read only. */
+ * RSM_ERR_NOSYS for another method, or RSM_ERR_INVAL for NULL pointers or
+ * loc never initialised (outputs untouched on error). Read only. */
 int rsm_localizer_map_occupancy(const rsm_localizer_t *loc, float x, float y, float *occupancy);
 int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, float *x1, float *y1);
 
@@ -496,7 +496,7 @@ rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc);
 
 /* How far the current estimate can be trusted, as the last scan left it
  * (RSM_TRACK_TRACKING before any scan: the start pose is the caller's).
- * RSM_TRACK_LOST for loc NULL. Reads only. */
+ * RSM_TRACK_LOST for loc NULL or never initialised. Reads only. */
 rsm_track_t rsm_localizer_track(const rsm_localizer_t *loc);
 
 /* Short name of a tracking state ("tracking", "uncertain", "lost";

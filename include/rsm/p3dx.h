@@ -163,10 +163,15 @@ typedef struct rsm_p3dx_stats {
     uint32_t read_errors;        /* link reads that failed */
 } rsm_p3dx_stats_t;
 
+/* What rsm_p3dx_init writes into rsm_p3dx_t.magic: the other functions
+ * refuse a driver without it (never initialised, or zeroed). */
+#define RSM_P3DX_MAGIC 0x52534d50UL
+
 /* Driver state, caller owned (about 1 KB). Members are read-only for the
  * caller; stats, state, robot, sip, ticks_mm, rev_count, watchdog_ms,
  * auto_baud and baud may be read at any time. */
 typedef struct rsm_p3dx {
+    uint32_t magic;           /* RSM_P3DX_MAGIC once initialised */
     const rsm_p3dx_config_t *cfg;
     const rsm_link_t *link;
     const rsm_clock_t *clock;
@@ -211,15 +216,25 @@ typedef struct rsm_p3dx {
  * Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers, a link without read or
  * write, a clock without now_us, sync_tries 0, a zero
  * timeout, a host_baud HOSTBAUD cannot select, or host_baud with
- * baud_check_us 0 (d is then unchanged). */
-int rsm_p3dx_init(rsm_p3dx_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
-                  const rsm_p3dx_config_t *cfg);
+ * baud_check_us 0 (d is then unchanged).
+ * A macro, as rsm_localizer_init: it passes the caller's sizeof(rsm_p3dx_t)
+ * and RSM_CONFIG_FINGERPRINT, so that a caller compiled with other
+ * capacities than the library gets RSM_ERR_CONFIG, with d unchanged. */
+#define rsm_p3dx_init(d, link, clock, cfg) \
+    rsm_p3dx_init_checked((d), sizeof(rsm_p3dx_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (link), (clock), (cfg))
+
+int rsm_p3dx_init_checked(rsm_p3dx_t *d, size_t d_size, unsigned long fingerprint, const rsm_link_t *link,
+                          const rsm_clock_t *clock, const rsm_p3dx_config_t *cfg);
+
+/* The functions below refuse d NULL or never initialised (no
+ * RSM_P3DX_MAGIC: zeroed or stale memory) with RSM_ERR_INVAL
+ * (rsm_p3dx_next_deadline_us: UINT64_MAX), touching nothing. */
 
 /* Starts the handshake: puts the link at cfg->baud (where the link can
  * change rates; d->baud is then that rate) and sends SYNC0. Also restarts
- * it from any other state. Returns RSM_OK, RSM_ERR_INVAL (d NULL) or a link
- * error from the write (the handshake still proceeds: a timeout will
- * resend). */
+ * it from any other state. Returns RSM_OK, RSM_ERR_INVAL (d NULL or never
+ * initialised) or a link error from the write (the handshake still
+ * proceeds: a timeout will resend). */
 int rsm_p3dx_connect(rsm_p3dx_t *d);
 
 /* Listen-only mode, from any state: the driver sends nothing, never
@@ -230,7 +245,7 @@ int rsm_p3dx_connect(rsm_p3dx_t *d);
  * first ENCODER packet has has_delta 0. A CONFIGpac updates ticks_mm and
  * the rest as in a session. rsm_p3dx_connect leaves the mode,
  * rsm_p3dx_disconnect goes to IDLE (nothing sent). Received input is kept.
- * Returns RSM_OK or RSM_ERR_INVAL (d NULL). */
+ * Returns RSM_OK or RSM_ERR_INVAL (d NULL or never initialised). */
 int rsm_p3dx_listen(rsm_p3dx_t *d);
 
 /* Runs the state machine once: at most one link read of at most
@@ -247,9 +262,10 @@ int rsm_p3dx_poll(rsm_p3dx_t *d, rsm_p3dx_event_t *ev);
  * needs a poll even if nothing arrives: a handshake step's timeout, the
  * keep-alive, a motion re-send, the link-loss check; the current time when
  * received bytes are still unexamined or a command is queued; UINT64_MAX
- * in IDLE or for d NULL. A caller serving several links waits until the
- * earliest deadline of all or until bytes arrive, then polls each driver
- * (with read_timeout_us 0) until it gives no event. */
+ * in IDLE or for d NULL or never initialised. A caller serving several
+ * links waits until the earliest deadline of all or until bytes arrive,
+ * then polls each driver (with read_timeout_us 0) until it gives no
+ * event. */
 uint64_t rsm_p3dx_next_deadline_us(const rsm_p3dx_t *d);
 
 /* The robot's odometry geometry as this connection reported it: *cfg

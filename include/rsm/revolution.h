@@ -91,9 +91,14 @@ typedef struct rsm_rev_stats {
                                pose (extrapolated) or before the oldest (held) */
 } rsm_rev_stats_t;
 
+/* What rsm_rev_init writes into rsm_rev_t.magic: the other functions
+ * refuse an assembler without it (never initialised, or zeroed). */
+#define RSM_REV_MAGIC 0x52534d52UL
+
 /* Assembler state, caller owned. stats and scan may be read at any time
  * (scan holds the last delivered turn); the rest is private. */
 typedef struct rsm_rev {
+    uint32_t magic;                /* RSM_REV_MAGIC once initialised */
     const rsm_rev_config_t *cfg;
     rsm_rev_stats_t stats;
     rsm_scan_t scan;
@@ -117,24 +122,33 @@ typedef struct rsm_rev {
 
 /* Initialises r with no turn in progress and no odometry; cfg is kept by
  * pointer. Returns RSM_OK, or RSM_ERR_INVAL for NULL pointers or a setting
- * outside its range (r unchanged). */
-int rsm_rev_init(rsm_rev_t *r, const rsm_rev_config_t *cfg);
+ * outside its range (r unchanged).
+ * A macro, as rsm_localizer_init: it passes the caller's sizeof(rsm_rev_t)
+ * and RSM_CONFIG_FINGERPRINT, so that a caller compiled with other
+ * capacities than the library gets RSM_ERR_CONFIG, with r unchanged. */
+#define rsm_rev_init(r, cfg) \
+    rsm_rev_init_checked((r), sizeof(rsm_rev_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (cfg))
+
+int rsm_rev_init_checked(rsm_rev_t *r, size_t r_size, unsigned long fingerprint, const rsm_rev_config_t *cfg);
 
 /* An odometry pose (any fixed frame: only the motion between two times is
  * used) at stamp_us, on the clock the points are stamped with. The newest
- * RSM_REV_ODOM_DEPTH poses are kept. Returns RSM_OK, RSM_ERR_INVAL (NULL),
- * RSM_ERR_ORDER for a stamp before the newest pose's (dropped, counted) or
- * RSM_ERR_RANGE for a pose that is not finite (dropped, counted). */
+ * RSM_REV_ODOM_DEPTH poses are kept. Returns RSM_OK, RSM_ERR_INVAL (NULL
+ * pointers, r never initialised: no RSM_REV_MAGIC), RSM_ERR_ORDER for a
+ * stamp before the newest pose's (dropped, counted) or RSM_ERR_RANGE for a
+ * pose that is not finite (dropped, counted). */
 int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose);
 
 /* One point, in measuring order. Returns 1 if it completed a turn (r->scan
  * holds it, valid until the next completed turn; the point itself starts the
- * next turn), 0 if not, RSM_ERR_INVAL for NULL pointers, RSM_ERR_RANGE or
- * RSM_ERR_ORDER for a point counted in bad_points and dropped. */
+ * next turn), 0 if not, RSM_ERR_INVAL for NULL pointers or r never
+ * initialised, RSM_ERR_RANGE or RSM_ERR_ORDER for a point counted in
+ * bad_points and dropped. */
 int rsm_rev_push(rsm_rev_t *r, const rsm_lidar_point_t *pt);
 
 /* Drops the turn in progress (counted as partial if it held points): call
- * it when the link was lost. Odometry is kept. No-op for NULL. */
+ * it when the link was lost. Odometry is kept. No-op for NULL or r never
+ * initialised. */
 void rsm_rev_reset(rsm_rev_t *r);
 
 #ifdef __cplusplus

@@ -36,9 +36,18 @@ typedef struct rsm_scan_limits {
 rsm_scan_limits_t rsm_scan_limits_default(void);
 
 /* Sets count readings at angles start + i * step (radians). Ranges are not
- * touched. Returns RSM_OK, or RSM_ERR_NOMEM if count > RSM_MAX_BEAMS (scan
- * unchanged). */
-int rsm_scan_set_uniform(rsm_scan_t *scan, size_t count, float start_rad, float step_rad);
+ * touched. Returns RSM_OK, RSM_ERR_INVAL for scan NULL, or RSM_ERR_NOMEM if
+ * count > RSM_MAX_BEAMS (scan unchanged).
+ * A macro, as rsm_localizer_init: it passes the caller's sizeof(rsm_scan_t)
+ * and RSM_CONFIG_FINGERPRINT, so that a caller compiled with other
+ * capacities than the library gets RSM_ERR_CONFIG, with scan unchanged,
+ * instead of angles written past its scan. */
+#define rsm_scan_set_uniform(scan, count, start_rad, step_rad)                                                  \
+    rsm_scan_set_uniform_checked((scan), sizeof(rsm_scan_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (count), \
+                                 (start_rad), (step_rad))
+
+int rsm_scan_set_uniform_checked(rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint, size_t count,
+                                 float start_rad, float step_rad);
 
 /* True if reading i is usable under the limits; otherwise counts why in
  * drops (which may be NULL). False, counting nothing, if scan or lim is NULL
@@ -62,8 +71,15 @@ typedef struct rsm_scan_trig {
     float sin[RSM_MAX_BEAMS];
 } rsm_scan_trig_t;
 
-/* Empties the cache: no angle matches until one has been converted. */
-void rsm_scan_trig_init(rsm_scan_trig_t *trig);
+/* Empties the cache: no angle matches until one has been converted.
+ * Returns RSM_OK, or RSM_ERR_INVAL for trig NULL. A macro passing the
+ * caller's sizeof(rsm_scan_trig_t) and RSM_CONFIG_FINGERPRINT: RSM_ERR_CONFIG,
+ * with trig unchanged, for a caller compiled with other capacities than the
+ * library (as rsm_localizer_init). */
+#define rsm_scan_trig_init(trig) \
+    rsm_scan_trig_init_checked((trig), sizeof(rsm_scan_trig_t), (unsigned long)RSM_CONFIG_FINGERPRINT)
+
+int rsm_scan_trig_init_checked(rsm_scan_trig_t *trig, size_t trig_size, unsigned long fingerprint);
 
 /* rsm_scan_to_points through a cache (not NULL): the same points bit for
  * bit, with the cosine and sine of each angle computed only when the angle

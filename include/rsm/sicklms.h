@@ -151,10 +151,15 @@ typedef struct rsm_sicklms_stats {
     uint32_t read_errors;
 } rsm_sicklms_stats_t;
 
+/* What rsm_sicklms_init writes into rsm_sicklms_t.magic: the other
+ * functions refuse a driver without it (never initialised, or zeroed). */
+#define RSM_SICKLMS_MAGIC 0x52534d53UL
+
 /* Driver state, caller owned. Read-only for the caller: state, stats, baud,
  * format, config and have_config may be read at any time; the rest is
  * private. */
 typedef struct rsm_sicklms {
+    uint32_t magic;            /* RSM_SICKLMS_MAGIC once initialised */
     const rsm_sicklms_config_t *cfg;
     const rsm_link_t *link;
     const rsm_clock_t *clock;
@@ -194,13 +199,26 @@ typedef struct rsm_sicklms {
  * write, a clock without now_us, a zero ack/reply/mode timeout,
  * max_tries 0, an address above 0x7F, rates other than 9600/19200/38400
  * (baud may be 0), or a variant rsm_lms_encode_variant refuses (d is then
- * unchanged). */
-int rsm_sicklms_init(rsm_sicklms_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
-                     const rsm_sicklms_config_t *cfg, rsm_scan_t *scan);
+ * unchanged).
+ * A macro, as rsm_localizer_init: it passes the caller's
+ * sizeof(rsm_sicklms_t) and RSM_CONFIG_FINGERPRINT, so that a caller
+ * compiled with other capacities than the library (which size d and *scan)
+ * gets RSM_ERR_CONFIG, with d unchanged, instead of scans decoded past its
+ * own. */
+#define rsm_sicklms_init(d, link, clock, cfg, scan)                                                        \
+    rsm_sicklms_init_checked((d), sizeof(rsm_sicklms_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (link), (clock), \
+                             (cfg), (scan))
+
+int rsm_sicklms_init_checked(rsm_sicklms_t *d, size_t d_size, unsigned long fingerprint, const rsm_link_t *link,
+                             const rsm_clock_t *clock, const rsm_sicklms_config_t *cfg, rsm_scan_t *scan);
+
+/* The functions below that take d refuse d NULL or never initialised (no
+ * RSM_SICKLMS_MAGIC: zeroed or stale memory) with RSM_ERR_INVAL
+ * (rsm_sicklms_next_deadline_us: UINT64_MAX), touching nothing. */
 
 /* Starts (or restarts) the start-up: sets the link to power_up_baud when it
  * can change rates (d->baud is then that rate), then sends the first
- * probe. Returns RSM_OK or RSM_ERR_INVAL (d NULL). */
+ * probe. Returns RSM_OK or RSM_ERR_INVAL (d NULL or never initialised). */
 int rsm_sicklms_connect(rsm_sicklms_t *d);
 
 /* Listen-only mode, from any state: the driver sends nothing, never
@@ -221,8 +239,15 @@ int rsm_sicklms_listen(rsm_sicklms_t *d);
  * core drops and counts. out->stamp_us is not touched. Returns the number
  * of invalid readings (>= 0), RSM_ERR_PROTO if the scan's angles are unknown
  * (step 0) or RSM_ERR_INVAL for NULL pointers (out untouched on error).
- * Pure, reentrant; used by the driver and by log/capture readers alike. */
-int rsm_sicklms_to_scan(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan_t *out);
+ * Pure, reentrant; used by the driver and by log/capture readers alike.
+ * A macro, as rsm_scan_set_uniform: it passes the caller's
+ * sizeof(rsm_scan_t) and RSM_CONFIG_FINGERPRINT; RSM_ERR_CONFIG, out
+ * untouched, for a caller compiled with other capacities than the library. */
+#define rsm_sicklms_to_scan(raw, upside_down, out) \
+    rsm_sicklms_to_scan_checked((raw), (upside_down), (out), sizeof(rsm_scan_t), (unsigned long)RSM_CONFIG_FINGERPRINT)
+
+int rsm_sicklms_to_scan_checked(const rsm_lms_scan_t *raw, uint8_t upside_down, rsm_scan_t *out, size_t out_size,
+                                unsigned long fingerprint);
 
 /* Runs the state machine once: at most one link read of at most
  * cfg->read_timeout_us (0: only what has already arrived; see
@@ -234,15 +259,15 @@ int rsm_sicklms_poll(rsm_sicklms_t *d, rsm_sicklms_event_t *ev);
 /* Clock time at which the driver next needs a poll even if nothing
  * arrives (a request's timeout, a pause's end, the stream's silence
  * check; now when received bytes are still unexamined); UINT64_MAX in
- * IDLE or for d NULL. As rsm_p3dx_next_deadline_us: one wait for all
- * links. */
+ * IDLE or for d NULL or never initialised. As rsm_p3dx_next_deadline_us:
+ * one wait for all links. */
 uint64_t rsm_sicklms_next_deadline_us(const rsm_sicklms_t *d);
 
 /* Starts the shutdown described above, from any state but IDLE (a start-up
  * in progress is abandoned; the requests go out at the current rate).
  * Never blocks: later polls send the requests and, at the end, give a
  * DISCONNECTED event. In IDLE, or while already stopping, does nothing.
- * Returns RSM_OK or RSM_ERR_INVAL (d NULL). */
+ * Returns RSM_OK or RSM_ERR_INVAL (d NULL or never initialised). */
 int rsm_sicklms_disconnect(rsm_sicklms_t *d);
 
 #ifdef __cplusplus

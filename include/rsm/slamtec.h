@@ -155,9 +155,14 @@ typedef struct rsm_slamtec_stats {
     uint32_t stamp_shifts;    /* frames moved later to keep stamps in order */
 } rsm_slamtec_stats_t;
 
+/* What rsm_slamtec_init writes into rsm_slamtec_t.magic: the other
+ * functions refuse a driver without it (never initialised, or zeroed). */
+#define RSM_SLAMTEC_MAGIC 0x52534d54UL
+
 /* Driver state, caller owned. state, stats, parser.stats, info, health and
  * samplerate may be read at any time; the rest is private. */
 typedef struct rsm_slamtec {
+    uint32_t magic;           /* RSM_SLAMTEC_MAGIC once initialised */
     const rsm_slamtec_config_t *cfg;
     rsm_slamtec_state_t state;
     rsm_slamtec_stats_t stats;
@@ -186,23 +191,35 @@ typedef struct rsm_slamtec {
 /* Initialises d (IDLE, zero counters); nothing is sent. Returns RSM_OK, or
  * RSM_ERR_INVAL for NULL pointers, a link without read or write, a clock
  * without now_us, a zero read, reply or stream timeout, max_tries 0, or an
- * unknown scan mode or motor setting (d unchanged). */
-int rsm_slamtec_init(rsm_slamtec_t *d, const rsm_link_t *link, const rsm_clock_t *clock,
-                     const rsm_slamtec_config_t *cfg);
+ * unknown scan mode or motor setting (d unchanged).
+ * A macro, as rsm_localizer_init: it passes the caller's
+ * sizeof(rsm_slamtec_t) and RSM_CONFIG_FINGERPRINT, so that a caller
+ * compiled with other capacities than the library (RSM_LINK_RX_CHUNK sizes
+ * the driver) gets RSM_ERR_CONFIG, with d unchanged. */
+#define rsm_slamtec_init(d, link, clock, cfg) \
+    rsm_slamtec_init_checked((d), sizeof(rsm_slamtec_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (link), (clock), (cfg))
 
-/* Starts (or restarts) the start-up. RSM_OK or RSM_ERR_INVAL (d NULL). */
+int rsm_slamtec_init_checked(rsm_slamtec_t *d, size_t d_size, unsigned long fingerprint, const rsm_link_t *link,
+                             const rsm_clock_t *clock, const rsm_slamtec_config_t *cfg);
+
+/* The functions below refuse d NULL or never initialised (no
+ * RSM_SLAMTEC_MAGIC: zeroed or stale memory) with RSM_ERR_INVAL
+ * (rsm_slamtec_next_deadline_us: UINT64_MAX), touching nothing. */
+
+/* Starts (or restarts) the start-up. RSM_OK or RSM_ERR_INVAL (d NULL or
+ * never initialised). */
 int rsm_slamtec_connect(rsm_slamtec_t *d);
 
 /* Listen-only mode (see above): drops what was received, awaits a scan
  * descriptor and sends nothing, ever; the link's rate is set to cfg.baud
  * where the link has one. rsm_slamtec_connect leaves the mode,
  * rsm_slamtec_disconnect goes straight to IDLE (nothing sent, no event).
- * RSM_OK or RSM_ERR_INVAL (d NULL). */
+ * RSM_OK or RSM_ERR_INVAL (d NULL or never initialised). */
 int rsm_slamtec_listen(rsm_slamtec_t *d);
 
 /* Starts the shutdown from any state but IDLE; later polls finish it and
  * give DISCONNECTED (listen-only: IDLE at once, no event). RSM_OK or
- * RSM_ERR_INVAL (d NULL). */
+ * RSM_ERR_INVAL (d NULL or never initialised). */
 int rsm_slamtec_disconnect(rsm_slamtec_t *d);
 
 /* One cycle: at most one read of at most read_timeout_us, then the timers.
@@ -214,10 +231,10 @@ int rsm_slamtec_poll(rsm_slamtec_t *d, rsm_slamtec_event_t *ev);
  * needs a poll even if nothing arrives: a start-up pause or answer
  * timeout, the pause after an error, the stream's silence check; the
  * current time when received bytes are still unexamined; UINT64_MAX in
- * IDLE, while listening for a descriptor, or for d NULL. As
- * rsm_p3dx_next_deadline_us: a caller serving several links waits until
- * the earliest deadline of all or until bytes arrive, then polls each
- * driver (read_timeout_us 0) until it gives no event. */
+ * IDLE, while listening for a descriptor, or for d NULL or never
+ * initialised. As rsm_p3dx_next_deadline_us: a caller serving several
+ * links waits until the earliest deadline of all or until bytes arrive,
+ * then polls each driver (read_timeout_us 0) until it gives no event. */
 uint64_t rsm_slamtec_next_deadline_us(const rsm_slamtec_t *d);
 
 #ifdef __cplusplus

@@ -73,7 +73,12 @@ typedef struct rsm_sync_counters {
 typedef void (*rsm_sync_result_fn)(void *ctx, const rsm_scan_t *scan, int status,
                                    const rsm_localizer_report_t *rep);
 
+/* What rsm_sync_init writes into rsm_sync_t.magic: the other functions
+ * refuse an aligner without it (never initialised, or zeroed). */
+#define RSM_SYNC_MAGIC 0x52534d41UL
+
 typedef struct rsm_sync {
+    uint32_t magic;                   /* RSM_SYNC_MAGIC once initialised */
     rsm_localizer_t *loc;
     const rsm_sync_config_t *cfg;     /* kept by pointer */
     rsm_sync_result_fn on_result;
@@ -94,13 +99,24 @@ typedef struct rsm_sync {
 } rsm_sync_t;
 
 /* Binds the aligner to an initialised localizer (which must outlive it) and
- * validates cfg. on_result may be NULL. Returns RSM_OK or RSM_ERR_INVAL. */
-int rsm_sync_init(rsm_sync_t *s, rsm_localizer_t *loc, const rsm_sync_config_t *cfg,
-                  rsm_sync_result_fn on_result, void *ctx);
+ * validates cfg. on_result may be NULL. Returns RSM_OK, or RSM_ERR_INVAL
+ * (s, loc or cfg NULL, loc never initialised, a bad cfg) with s unchanged.
+ * A macro, as rsm_localizer_init: it passes the caller's sizeof(rsm_sync_t)
+ * and RSM_CONFIG_FINGERPRINT, so that a caller compiled with other
+ * capacities than the library gets RSM_ERR_CONFIG, with s unchanged. */
+#define rsm_sync_init(s, loc, cfg, on_result, ctx)                                                          \
+    rsm_sync_init_checked((s), sizeof(rsm_sync_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (loc), (cfg), \
+                          (on_result), (ctx))
+
+int rsm_sync_init_checked(rsm_sync_t *s, size_t s_size, unsigned long fingerprint, rsm_localizer_t *loc,
+                          const rsm_sync_config_t *cfg, rsm_sync_result_fn on_result, void *ctx);
+
+/* The functions below refuse s NULL or never initialised (no
+ * RSM_SYNC_MAGIC: zeroed or stale memory) with RSM_ERR_INVAL. */
 
 /* An encoder sample (raw counters, as a driver delivers them: rsm/p3dx.h
  * ENCODER events; copied). May fuse a waiting scan. Returns RSM_OK or
- * RSM_ERR_INVAL (NULL). */
+ * RSM_ERR_INVAL (sample NULL). */
 int rsm_sync_encoder(rsm_sync_t *s, const rsm_odometry_sample_t *sample);
 
 /* The encoder counters start over (the first sample of a new connection
@@ -113,21 +129,22 @@ int rsm_sync_encoder_restart(rsm_sync_t *s);
  * return). Fuses it now when odometry past its time is already held, or
  * when no encoder sample was ever seen; otherwise it waits. A scan already
  * waiting is fused first with the odometry there is. Returns RSM_OK or
- * RSM_ERR_INVAL (NULL, or more than RSM_MAX_BEAMS readings: dropped). */
+ * RSM_ERR_INVAL (scan NULL, or more than RSM_MAX_BEAMS readings: dropped). */
 int rsm_sync_scan(rsm_sync_t *s, const rsm_scan_t *scan);
 
 /* Fuses a waiting scan whose wait has expired at now_us (call it from the
- * main loop). Returns 1 if a scan was fused, else 0; RSM_ERR_INVAL for NULL. */
+ * main loop). Returns 1 if a scan was fused, else 0; or RSM_ERR_INVAL. */
 int rsm_sync_poll(rsm_sync_t *s, uint64_t now_us);
 
 /* End of input: fuses a waiting scan with the odometry there is, then
  * applies every held encoder sample and predicts what was composed.
- * Returns 1 if a scan was fused, else 0. */
+ * Returns 1 if a scan was fused, else 0; or RSM_ERR_INVAL. */
 int rsm_sync_flush(rsm_sync_t *s);
 
 /* Best current pose: the localizer's estimate moved on by the odometry
  * composed but not yet predicted and the odometry still held back. NaN in
- * every field for s NULL, or a localizer never initialised. */
+ * every field for s NULL or never initialised, or a localizer never
+ * initialised. */
 rsm_pose_t rsm_sync_pose(const rsm_sync_t *s);
 
 #ifdef __cplusplus

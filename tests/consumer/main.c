@@ -1,7 +1,8 @@
 /* Links against an installed rsm and checks a few calls give real answers.
  * Built twice: as is, and with EXPECT_MISMATCH and a capacity the library
- * was not built with, where starting a localizer must fail cleanly
- * (RSM_ERR_CONFIG) instead of writing past the application's object. */
+ * was not built with, where starting a localizer, laying out a scan and
+ * starting an aligner must fail cleanly (RSM_ERR_CONFIG) instead of writing
+ * past the application's objects. */
 #include <stdio.h>
 #include <string.h>
 
@@ -26,6 +27,9 @@
 
 static rsm_localizer_t loc;
 static rsm_localizer_config_t cfg;
+static rsm_scan_t scan;
+static rsm_sync_config_t scfg;
+static rsm_sync_t aligner;
 
 int main(void)
 {
@@ -40,6 +44,17 @@ int main(void)
     rc = rsm_localizer_init(&loc, &cfg, &x0, NULL);
     if (rc != want) {
         fprintf(stderr, "rsm_localizer_init: %d (%s), expected %d\n", rc, rsm_strerror(rc), want);
+        return 1;
+    }
+    rc = rsm_scan_set_uniform(&scan, 181u, -1.5707964f, 0.017453292f);
+    if (rc != want) {
+        fprintf(stderr, "rsm_scan_set_uniform: %d (%s), expected %d\n", rc, rsm_strerror(rc), want);
+        return 1;
+    }
+    scfg = rsm_sync_config_default();
+    rc = rsm_sync_init(&aligner, &loc, &scfg, NULL, NULL);
+    if (rc != want) {
+        fprintf(stderr, "rsm_sync_init: %d (%s), expected %d\n", rc, rsm_strerror(rc), want);
         return 1;
     }
     printf("rsm consumer ok (%d beams, localizer %lu bytes: %s; AddressSanitizer %s)\n", RSM_MAX_BEAMS,

@@ -151,19 +151,21 @@ def test_floors_on_made_up_numbers():
     got = [(f["log"], f["kind"], f["status"]) for f in fl]
     assert got == [("a", "knownmap-roundtrip", "PASS"), ("a", "knownmap-localization", "PASS"),
                    ("a", "knownmap-localization", "PASS"), ("a", "knownmap-global", "PASS"),
-                   ("a", "knownmap-wrong", "PASS"), ("a", "knownmap-cost", "SKIP"),
+                   ("a", "knownmap-wrong", "PASS"),
                    ("b", "knownmap-roundtrip", "MISS"), ("b", "knownmap-localization", "MISS"),
                    ("b", "knownmap-localization", "MISS"), ("b", "knownmap-global", "MISS"),
-                   ("b", "knownmap-wrong", "MISS"), ("b", "knownmap-cost", "SKIP")]
+                   ("b", "knownmap-wrong", "MISS"), (None, "knownmap-cost", "SKIP")]
     assert all(": known map, " in f["line"] and f["line"].startswith(f["status"] + " ") for f in fl)
-    g = fl[9]
+    g = fl[8]
     assert (g["value"], g["limit"]) == (80, 86)  # 95 % of the 90 held starts
     assert "100 starts (10 not held by the map, counted apart): 80 of 90 held starts" in g["line"]
     assert "9 gave none within 400 scans" in g["line"]
-    assert "1 gave a trusted pose more than 0.5 m or 5 deg off > 0" in fl[10]["line"]
-    assert "0.8649 and 0.0349" in fl[6]["line"]  # why the trajectory differs: the header's fit
-    assert "5.7500 m > the mapping run's 0.0600 m" in fl[7]["line"]
-    assert "not measured" in fl[5]["line"] and "M4" in fl[5]["line"]
+    assert "1 gave a trusted pose more than 0.5 m or 5 deg off > 0" in fl[9]["line"]
+    assert "0.8649 and 0.0349" in fl[5]["line"]  # why the trajectory differs: the header's fit
+    assert "5.7500 m > the mapping run's 0.0600 m" in fl[6]["line"]
+    # the M4's cost: one line, not per log, SKIP without the m4 stage's figures
+    assert fl[10]["line"].startswith("SKIP Cortex-M4F: known map, global search, instructions per scan on the M4")
+    assert "not measured (not run)" in fl[10]["line"]
     assert "median 4, worst 4 scans" in fl[3]["line"]
     # equal to the mapping run's error is at it: a PASS
     eq = km.knownmap_floors(section({"a": (good, 0.015, 0.015, 0.015, True, True)}))
@@ -172,6 +174,35 @@ def test_floors_on_made_up_numbers():
     none_held = km.knownmap_floors(section({"a": ([start("none", held=False)] * 3, 0.01, 0.01, 0.01, True, True)}))
     assert next(f for f in none_held if f["kind"] == "knownmap-global")["status"] == "MISS"
     assert km.knownmap_floors({"skipped": "--global-starts 0"}) == [] and km.knownmap_floors(None) == []
+
+
+M4_GLOBAL = {"scans": 6, "max": 4336270.0, "mean": 3221949.5, "max_work": 100164, "work": 451232, "proven": True,
+             "scans_to_pose": 6, "budget": 100000, "last_scan": 355, "pose": [4.8, -0.3, 0.07], "map_bytes": 10652,
+             "map_tiles": 265, "mapped_scans": 350}
+
+
+def test_the_cost_floor_judges_the_worst_scan_of_the_global_search_on_the_m4():
+    good = [start("right", scan=4)] * 3
+    s = section({"a": (good, 0.015, 0.015, 0.014, True, True), "b": (good, 0.015, 0.015, 0.014, True, True)}, n=3)
+    s["m4_global"] = km.m4_global_entry({"cost": {}, "global": M4_GLOBAL})
+    cost = [f for f in km.knownmap_floors(s) if f["kind"] == "knownmap-cost"]
+    assert len(cost) == 1 and cost[0]["log"] is None  # one measurement, one line
+    f = cost[0]
+    assert f["status"] == "MISS" and (f["value"], f["limit"]) == (4336270.0, 1000000)
+    for part in ("Cortex-M4F: known map, global search", "the excerpt's map (small: 265 tiles, 10 652 bytes",
+                 "first 350 scans", "default global_budget (100 000 reads a scan)", "worst 4 336 270 > 1 000 000",
+                 "mean 3 221 950 over 6 scans", "first proven pose after 6 scans"):
+        assert part in f["line"], (part, f["line"])
+    ok = dict(M4_GLOBAL, max=999999.0, proven=False, scans_to_pose=None, scans=100)
+    f = km.m4_global_floor(ok)
+    assert f["status"] == "PASS" and "999 999 <= 1 000 000" in f["line"]
+    assert "no pose proven within 100 scans" in f["line"]
+    # where the figures come from: the m4 stage, or why there are none
+    assert km.m4_global_entry({"skipped": "--no-m4"}) == {"skipped": "--no-m4"}
+    assert "skipped" in km.m4_global_entry(None) and "skipped" in km.m4_global_entry({"cost": {}})
+    for why in ("--no-m4", km.ONLY_M4, "rsm-mapflash-host was not built"):
+        f = km.m4_global_floor({"skipped": why})
+        assert f["status"] == "SKIP" and f"not measured ({why})" in f["line"] and ": known map, " in f["line"]
 
 
 def test_report_section_holds_the_tables_and_the_floors():
@@ -187,7 +218,7 @@ def test_report_section_holds_the_tables_and_the_floors():
     assert "| intel | localization, frozen | 0.0215 |" in text
     assert "| intel | 4 | 1 | 3 | 3 | 0 | 0 | 0 | 4 / 4 |" in text
     assert "fit_ratio" in text and "at least 0.8" in text  # the held rule is said
-    assert "not measured here" in text  # the M4's cost
+    assert "not measured on these logs" in text and "map-in-flash firmware" in text  # the M4's cost
     for f in km.knownmap_floors(s):
         assert f["line"] in text
     assert km.report_knownmap(None)[-2] == "Not measured in this run."
@@ -252,6 +283,39 @@ def test_only_knownmap_splices_its_section_and_floors_into_a_report():
     assert out.split("```")[1].splitlines()[1:] == ["PASS intel: a"] + floors2 + ["MISS aces: b"]
     with pytest.raises(BenchError):
         km.splice_report("# nothing\n", section_, floors, SECTION_TITLES[2])
+
+
+def test_only_knownmap_says_why_the_m4_cost_is_not_measured(tmp_path, monkeypatch):
+    """--only knownmap runs no firmware image: its cost line is a SKIP that says so."""
+    made = section({"intel": ([start("right", scan=4)] * 3, 0.015, 0.015, 0.014, True, True)}, n=3)
+    monkeypatch.setattr(km, "run_knownmap", lambda *a, **k: dict(made))
+    out = tmp_path / "RESULTS.md"
+    out.write_text(REPORT.format(old_headline="", old_section="", count="1 PASS, 1 MISS:"), encoding="utf-8")
+    res, floors = km.run_only(tmp_path / "rsm-nav", [], tmp_path, 1, 3, 400, None, {}, out, SECTION_TITLES[2], 0)
+    cost = [f for f in floors if f["kind"] == "knownmap-cost"]
+    assert len(cost) == 1 and cost[0]["status"] == "SKIP" and km.ONLY_M4 in cost[0]["line"]
+    assert res["m4_global"] == {"skipped": km.ONLY_M4}
+    assert cost[0]["line"] in out.read_text(encoding="utf-8")
+    assert json.loads((tmp_path / "bench.json").read_text())["knownmap"]["m4_global"] == {"skipped": km.ONLY_M4}
+
+
+def test_the_target_section_shows_the_global_search():
+    from rsm_tools.bench import report
+    line = report.global_line(M4_GLOBAL)
+    assert "265 tiles, global_budget 100 000" in line and "worst 4 336 270, mean 3 221 950 over 6 scans" in line
+    assert line.endswith("first proven pose after 6 scans")
+    assert report.global_line({"skipped": "rsm-mapflash-host was not built"}).endswith(
+        "not measured (rsm-mapflash-host was not built)")
+    m = {"compiler": "gcc", "qemu": "qemu", "icount_shift": 3, "images": {}, "global": M4_GLOBAL,
+         "cost": {"scans": 600, "mean": 1.0, "p95": 2.0, "p99": 3.0, "max": 4.0, "stages": {"points": 1.0},
+                  "calibration": {"insns": 200000, "measured": 200000.0, "per_tick": 5.0}},
+         "host": {"skipped": "valgrind is not installed"}}
+    text = "\n".join(report.report_m4(m))
+    assert "<!-- table: speed m4 global -->" in text and "| instructions per scan, worst | 4 336 270 |" in text
+    assert "| first proven pose after [scans] | 6 |" in text and "first 350 scans" in text
+    assert any("global search" in l for l in report.m4_lines(m))
+    m["global"] = {"skipped": "rsm-mapflash-host was not built"}
+    assert "global search (map-in-flash image, the excerpt's map): not measured" in "\n".join(report.report_m4(m))
 
 
 def test_only_knownmap_merges_into_the_manifest_after_the_faults_floors():

@@ -104,6 +104,38 @@ def test_header_errors(tmp_path):
             cap.CaptureReader(io.BytesIO(data))
 
 
+class PieceStream(io.RawIOBase):
+    """A raw stream over data giving at most one byte per read (a pipe may),
+    and failing with EIO once fail_after bytes were read, if given."""
+
+    def __init__(self, data, fail_after=None):
+        self.data, self.pos, self.fail_after = data, 0, fail_after
+
+    def readable(self):
+        return True
+
+    def readinto(self, b):
+        if self.fail_after is not None and self.pos >= self.fail_after:
+            raise OSError(5, "Input/output error")
+        piece = self.data[self.pos:self.pos + min(1, len(b))]
+        b[:len(piece)] = piece
+        self.pos += len(piece)
+        return len(piece)
+
+
+def test_header_read_in_pieces_or_failing_is_not_a_bad_header(tmp_path):
+    """A header that arrives a byte per read is read whole (it was 'bad
+    magic'), and a read error inside it is raised as the OSError it is,
+    never as a HeaderError ('bad magic', 'truncated'; issue 30)."""
+    recs = make_records(5)
+    data = write_file(tmp_path / "p.cap", recs).read_bytes()
+    assert as_tuples(cap.CaptureReader(PieceStream(data))) == recs
+    for after in (0, 4, 20, 40):
+        with pytest.raises(OSError) as ei:
+            cap.CaptureReader(PieceStream(data, fail_after=after))
+        assert not isinstance(ei.value, cap.CaptureError)
+
+
 def corrupt_file(tmp_path, recs):
     """A capture with record 10 bit-flipped, garbage before record 20, and a cut last record."""
     f = write_file(tmp_path / "x.cap", recs)
@@ -173,6 +205,65 @@ def test_out_of_order_and_unknown_channel(tmp_path):
         list(cap.CaptureReader(io.BytesIO(data)))
 
 
+def test_lenient_reader_follows_a_clock_that_steps_back(tmp_path):
+    """An earlier stamp is not trusted alone (one record lost), but the next
+    record stamped within an hour of it confirms the step: before, every
+    record after a step back was skipped. A strict reader still raises."""
+    recs = [(1000, 0, 0, b"a"), (1001, 1, 0, b"b"), (10, 0, 0, b"c"), (11, 1, 0, b"d"), (12, 0, 0, b"e")]
+    data = raw_capture(recs)
+    r = cap.CaptureReader(io.BytesIO(data), lenient=True)
+    assert as_tuples(r) == [recs[0], recs[1], recs[3], recs[4]]
+    assert r.stats.out_of_order == 1
+    with pytest.raises(cap.OutOfOrderError, match="earlier than the previous 1001 us"):
+        list(cap.CaptureReader(io.BytesIO(data)))
+
+
+class CountingZlib:
+    """zlib for the capture module, counting the bytes given to crc32."""
+
+    def __init__(self):
+        self.crc_bytes = 0
+
+    def crc32(self, data, value=0):
+        self.crc_bytes += len(data)
+        return zlib.crc32(data, value)
+
+
+def test_resync_over_false_record_starts_crcs_each_byte_about_once(tmp_path, monkeypatch):
+    """512 KiB of "RC\\xff\\xff": a false record start every 4 bytes, each
+    claiming 64 KiB. The reader CRCed each claim anew (issue 30: 7.2 s per
+    MiB, some 17 GB through the CRC); now the file goes through it about
+    once, and each false start at most two steps of the prefix grid more,
+    whatever it claims. The work is counted, not timed."""
+    recs = make_records(40, seed=9)
+    good = write_file(tmp_path / "g.cap", recs).read_bytes()
+    hsize = cap.CaptureReader(io.BytesIO(good)).header_size
+    cut = hsize + sum(cap.REC_OVERHEAD + len(r[3]) for r in recs[:20])
+    garbage = b"RC\xff\xff" * (1 << 17)
+    f = tmp_path / "hostile.cap"
+    f.write_bytes(good[:cut] + garbage + good[cut:])
+    counting = CountingZlib()
+    monkeypatch.setattr(cap, "zlib", counting)
+    r = cap.CaptureReader(f, lenient=True)
+    assert as_tuples(r) == recs
+    assert (r.stats.corrupt, r.stats.skipped_bytes) == (1, len(garbage))
+    size = f.stat().st_size
+    false_starts = garbage.count(cap.SYNC)
+    per_start = 128  # two steps of the prefix grid at most, never the 64 KiB claimed
+    assert counting.crc_bytes <= 2 * size + per_start * false_starts, (counting.crc_bytes, size)
+    assert 2 * cap._SpanCrc.GRID <= per_start
+    assert r.stats.crc_bytes <= counting.crc_bytes  # the header's CRC is not a record's
+
+
+def test_span_crc_is_zlibs_crc_of_the_span():
+    rng = random.Random(11)
+    buf = bytearray(rng.randrange(256) for _ in range(150_000))
+    spans = cap._SpanCrc(buf, cap.ReadStats())
+    for a, b in [(0, 0), (0, 1), (5, 70), (63, 64), (64, 128), (1, 150_000)] + [
+            sorted((rng.randrange(150_001), rng.randrange(150_001))) for _ in range(300)]:
+        assert spans.crc(a, b) == zlib.crc32(bytes(buf[a:b])), (a, b)
+
+
 # ---------------------------------------------------------------------------
 # C reader
 
@@ -233,7 +324,14 @@ def test_c_reader_matches_python_on_damaged_files(tmp_path, c_reader):
     (tmp_path / "badhdr.cap").write_bytes(good[:20] + b"\xff" + good[21:])
     (tmp_path / "order.cap").write_bytes(
         raw_capture([(10, 0, 0, b"a"), (5, 0, 0, b"b"), (11, 9, 0, b"c"), (12, 1, 1, b"d")]))
-    files += [tmp_path / n for n in ("cut.cap", "junk.cap", "half_sync.cap", "badhdr.cap", "order.cap")]
+    # The clock steps back (confirmed by the next record), then one record far ahead alone.
+    (tmp_path / "steps.cap").write_bytes(
+        raw_capture([(100, 0, 0, b"a"), (40, 0, 0, b"b"), (41, 1, 0, b"c"), (45, 1, 0, b"d"),
+                     (45 + 2 * cap.MAX_STEP_US, 0, 0, b"e"), (46, 0, 0, b"f")]))
+    # False record starts over more than the reader's window, each claiming 64 KiB.
+    (tmp_path / "false_starts.cap").write_bytes(good[:300] + b"RC\xff\xff" * (1 << 17) + good[300:])
+    files += [tmp_path / n for n in ("cut.cap", "junk.cap", "half_sync.cap", "badhdr.cap", "order.cap",
+                                     "steps.cap", "false_starts.cap")]
     for f in files:
         for lenient in (False, True):
             py = python_dump(f, lenient)

@@ -221,6 +221,35 @@ def test_carmen_reading_counts_that_are_not_whole_numbers_are_malformed(tmp_path
     assert len(rows(tmp_path / "t.txt")) == 26
 
 
+def test_both_carmen_readers_take_the_same_spellings_of_counts_and_numbers(tmp_path, head_log):
+    """A count of readings is decimal digits alone (CARMEN writes %d) and a
+    number is decimal: rsm-nav's reader took 0x10 (strtod reads hex) and
+    16.0 as 16 where rsm-convert's refused them, and rsm-convert's took +16
+    and 1_6 (int() reads both) where rsm-nav's refused 1_6 (issue 30)."""
+    from rsm_tools import carmen as cm
+    bad_counts = ["0x10", "16.0", "1e1", "+16", "1_6", "-16", "\u0661\u0666"]
+    bad_numbers = ["0x1p3", "1_0.5", "nan(1)"]
+    lines = []
+    for k, line in enumerate(flaser_lines(head_log, 40)):
+        f = line.split()
+        n = int(f[1])
+        f = ["FLASER", "016" if k == 0 else "16"] + f[2:18] + f[2 + n:]  # 16 readings, the pose and stamp
+        if k < len(bad_counts):
+            f[1] = bad_counts[k]
+        elif k - len(bad_counts) < len(bad_numbers):
+            f[5] = bad_numbers[k - len(bad_counts)]               # a reading
+        lines.append(" ".join(f))
+    log = tmp_path / "spelled.clf"
+    log.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    reader = cm.LogReader(log)
+    taken = len(list(reader))
+    bad = len(bad_counts) + len(bad_numbers)
+    assert (taken, reader.stats.malformed_total) == (40 - bad, bad), reader.stats.summary()
+    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert re.search(rf"lines +40 \(scans {40 - bad}, .*malformed {bad},", res.stdout), res.stdout
+
+
 def test_carmen_line_longer_than_the_buffer_with_a_nul_is_one_line(tmp_path, head_log):
     lines = flaser_lines(head_log, 10)
     # Over 64 KiB, with a NUL early on and what looks like a record after it.
@@ -393,6 +422,68 @@ def test_active_mode_with_no_device_ever_connecting_fails(tmp_path):
         os.close(slave)
     assert res.returncode == 1, res.stderr
     assert "no robot ever connected" in res.stderr, res.stderr
+
+
+def test_active_mode_backs_off_from_a_device_that_opens_and_fails_at_once(tmp_path):
+    """An empty file opens and fails at the first poll, as a device that
+    enumerates and dies does: the back-off (0.1 s doubling to 2 s) starts
+    again only after a connection, not after every open (issue 30: thirty
+    reopens in 3 s). The schedule allows four in 3 s; a slower machine
+    makes fewer."""
+    dead = tmp_path / "dead"
+    dead.write_bytes(b"")
+    res = run_nav("--robot", dead, "--seconds", "3", "--trajectory", tmp_path / "t.txt", timeout=60)
+    assert res.returncode == 1 and "no robot ever connected" in res.stderr, res.stderr
+    assert 1 <= number(r"robot link reopened (\d+) times", res.stderr) <= 6, res.stderr
+
+
+def wait_for_rows(path: Path, n: int, proc, limit: float = 60.0) -> None:
+    """Until the live run's trajectory (flushed per pose) has n rows."""
+    end = time.monotonic() + limit
+    while time.monotonic() < end and proc.poll() is None:
+        if path.is_file() and len(rows(path)) >= n:
+            return
+        time.sleep(0.1)
+    pytest.fail(f"no {n} poses from the live run")
+
+
+@pytest.mark.parametrize("how", ["silent", "vanished"])
+def test_active_mode_run_whose_device_never_came_back_fails(tmp_path, excerpt_capture, how):
+    """The laser goes quiet for good (its line cut) or both devices vanish
+    (the fake killed) while the run goes on to its time limit: rsm-nav
+    keeps and sums up what it got, says in one line which device was lost
+    and did not come back, and exits 1 (issue 30: exit 0)."""
+    extra = ["--lms-drop", "2:1000"] if how == "silent" else []
+    fake = FakeDevices(tmp_path, "--capture", str(excerpt_capture), *extra)
+    # Named as udev names them: a pseudo-terminal's number may be taken
+    # again by another test's, which the reopening must not find.
+    links = {dev: tmp_path / dev for dev in ("robot", "laser")}
+    for dev, link in links.items():
+        point_link(link, fake.paths[dev])
+    traj = tmp_path / "t.txt"
+    nav = subprocess.Popen([str(rsm_nav_binary()), "--robot", str(links["robot"]), "--lms", str(links["laser"]),
+                            "--seconds", "10", "--trajectory", str(traj)],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        wait_for_rows(traj, 5, nav)
+        if how == "vanished":
+            fake.proc.send_signal(signal.SIGKILL)  # gone without a word, never back
+            fake.proc.wait()
+            for link in links.values():
+                link.unlink()
+        out, err = nav.communicate(timeout=NAV_TIMEOUT)
+    finally:
+        if nav.poll() is None:
+            nav.kill()
+            nav.wait()
+        if how == "silent":
+            fake.stop()
+    assert nav.returncode == 1, err
+    last = err.strip().splitlines()[-1]
+    assert re.fullmatch(r"rsm-nav: .*the laser link \S+ was lost [0-9.]+ s into the run and no scan came after that",
+                        last), err
+    assert ("the robot never connected again" in last) == (how == "vanished"), err
+    assert "rsm-nav summary" in out and len(rows(traj)) >= 5, out
 
 
 # ---- hostile captures -------------------------------------------------------------------
@@ -591,6 +682,58 @@ def test_a_capture_whose_clock_jumps_is_read_on(tmp_path, excerpt_capture):
     assert re.search(rf"records\s+{n - 1} \(corrupt 0, truncated 0, out of order 1,", res.stdout), res.stdout
     _, recs, stats = cap.read_capture(tmp_path / "jump.cap", lenient=True)
     assert (len(recs), stats.out_of_order) == (n - 1, 1)
+
+
+def clock_steps(stdout: str):
+    m = re.search(r"capture clock +(\d+) steps back, (\d+) jumps over an hour ahead", stdout)
+    assert m, stdout
+    return int(m.group(1)), int(m.group(2))
+
+
+def test_a_capture_whose_clock_steps_back_is_read_on(tmp_path, excerpt_capture):
+    """From record 300 on the clock reads three days earlier: every later
+    record was skipped as out of order (issue 30: exit 0 with half the
+    poses). The record after the first earlier one confirms the step; the
+    drivers' time carries on across it, so the run is the clean one."""
+    days3 = 3 * 86_400_000_000
+    n = restamped_capture(excerpt_capture, tmp_path / "back.cap",
+                          {k: (lambda t: t - days3) for k in range(300, 100000)})
+    traj = tmp_path / "t.txt"
+    res = run_nav("--capture", tmp_path / "back.cap", "--trajectory", traj, "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert re.search(rf"records\s+{n - 1} \(corrupt 0, truncated 0, out of order 1,", res.stdout), res.stdout
+    assert clock_steps(res.stdout) == (1, 0)
+    _, recs, stats = cap.read_capture(tmp_path / "back.cap", lenient=True)
+    assert (len(recs), stats.out_of_order) == (n - 1, 1)
+    ref = rows_of_clean_run(tmp_path, excerpt_capture)
+    got = rows(traj)
+    assert len(got) == len(ref)
+    # The one record lost is an encoder packet the next one makes up for.
+    assert all(abs(float(a.split()[1]) - float(b.split()[1])) < 0.01 for a, b in zip(ref, got))
+
+
+def test_an_rplidar_capture_whose_clock_jumps_keeps_every_scan(tmp_path, head_log):
+    """The clock jumps two hours ahead mid-capture: the listen-only RPLIDAR
+    driver took the jump for an hour's silence, gave the link up and waited
+    for a scan descriptor that never came (issue 30: 309 of 598 poses,
+    exit 0). Now no time passes across the jump, the summary counts it, and
+    the trajectory keeps the capture's own stamps."""
+    from rsm_tools import convert
+    clean = tmp_path / "rp.cap"
+    convert.convert(str(head_log), str(clean), lidar="rplidar")
+    hour2 = 7_200_000_000
+    with cap.CaptureReader(clean) as r:
+        half = sum(1 for _ in r) // 2
+    n = restamped_capture(clean, tmp_path / "jump.cap", {k: (lambda t: t + hour2) for k in range(half, 10 ** 6)})
+    traj = tmp_path / "t.txt"
+    res = run_nav("--capture", tmp_path / "jump.cap", "--trajectory", traj, "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert re.search(rf"records\s+{n - 1} \(corrupt 0, truncated 0, out of order 1,", res.stdout), res.stdout
+    assert clock_steps(res.stdout) == (0, 1)
+    ref = rows_of_clean_run(tmp_path, clean)
+    got = rows(traj)
+    assert len(ref) > 500 and len(got) >= len(ref) - 1, (len(ref), len(got))
+    assert float(got[-1].split()[0]) == pytest.approx(float(ref[-1].split()[0]) + 7200.0, abs=1e-6)
 
 
 # ---- the C and Python capture readers refuse the same headers ---------------------------------

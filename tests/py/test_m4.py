@@ -1,6 +1,8 @@
 """rsm_tools.m4 (the QEMU runner of the firmware images) on made-up console
-output: the cost figures, the calibration check and the generator of the
-replay's input.  The images themselves run in the m4.* ctest entries."""
+output: the cost figures, the calibration check, the generator of the
+replay's input and the map-in-flash image's lines (its global search's
+costs and its agreement with the host's).  The images themselves run in the
+m4.* ctest entries."""
 
 import re
 
@@ -168,3 +170,66 @@ def test_mapflash_run_lets_qemu_reset_and_stops_a_reset_loop(tmp_path, monkeypat
     monkeypatch.setenv("PATH", f"{tmp_path}{m4.os.pathsep}{m4.os.environ.get('PATH', '')}")
     with pytest.raises(m4.M4Error, match="more than 2 boots"):
         m4.run_rebooting(tmp_path / "x.elf", m4.MAPFLASH_BANNER, 2, timeout=30)
+
+
+def _search_boot(rows, proven=1, scans=None, pose="3f800000 3dcccccd 00000000", c=(1000, 400, 101000, 40400)):
+    """A second mapflash boot's global search: the C line, G lines (scan,
+    outcome, search_work, ticks) and the GE line."""
+    lines = [f"{m4.MAPFLASH_BANNER}, region at 0x00200000", "C " + " ".join(str(v) for v in c),
+             "E scans 1 accepted 1 map_bytes 92"]
+    lines += [f"G {s} {o} {w} {t}" for s, o, w, t in rows]
+    lines += [f"GE proven {proven} scans {len(rows) if scans is None else scans} budget 100000 pose {pose}",
+              "rsm mapflash: done"]
+    return "\n".join(lines) + "\n"
+
+
+SEARCH = [(350, 11, 64344, 598960), (351, 11, 100012, 867254), (352, 0, 0, 348908)]
+
+
+def test_mapflash_global_search_costs_are_ticks_times_instructions_per_tick():
+    boot = _search_boot(SEARCH)
+    m4.calibration(boot)  # the C line the costs rest on
+    g = m4.global_search(boot)
+    assert g["rows"] == SEARCH and g["proven"] and g["scans"] == 3
+    assert g["pose"] == (1.0, pytest.approx(0.1), 0.0)
+    c = m4.global_costs(g)
+    k = m4.INSNS_PER_TICK
+    assert c["max"] == 867254 * k and c["mean"] == pytest.approx(k * (598960 + 867254 + 348908) / 3)
+    assert c["scans"] == 3 and c["scans_to_pose"] == 3 and c["last_scan"] == 352 and c["budget"] == 100000
+    assert c["work"] == 64344 + 100012 and c["max_work"] == 100012
+    # a search that proved nothing has no scans to a pose, but its costs
+    c = m4.global_costs(m4.global_search(_search_boot(SEARCH[:2], proven=0)))
+    assert c["scans_to_pose"] is None and not c["proven"] and c["max"] == 867254 * k
+
+
+def test_mapflash_global_search_lines_must_be_whole():
+    with pytest.raises(m4.M4Error, match="GE"):
+        m4.global_search(_search_boot(SEARCH).replace("GE proven", "GX proven"))
+    with pytest.raises(m4.M4Error, match="says 5 scans, 3 G lines"):
+        m4.global_search(_search_boot(SEARCH, scans=5))
+    with pytest.raises(m4.M4Error, match="malformed"):
+        m4.global_search(_search_boot(SEARCH).replace("G 351 11 100012 867254", "G 351 11 100012"))
+    with pytest.raises(m4.M4Error, match="0 G lines"):
+        m4.global_search(_search_boot([], scans=0))
+
+
+def test_mapflash_global_search_host_and_target_agree_but_for_the_cost():
+    target = m4.global_search(_search_boot(SEARCH))
+    host_rows = [(s, o, w, 0) for s, o, w, _ in SEARCH]
+    m4.compare_global(target, m4.global_search(_search_boot(host_rows)), m4.MAPFLASH_HOST_TOL)
+    other = list(host_rows)
+    other[1] = (351, 11, 100013, 0)  # one read more
+    with pytest.raises(m4.M4Error, match="search_work 100013"):
+        m4.compare_global(target, m4.global_search(_search_boot(other)), m4.MAPFLASH_HOST_TOL)
+    other[1] = (351, 0, 100012, 0)  # another outcome
+    with pytest.raises(m4.M4Error, match="outcome 0"):
+        m4.compare_global(target, m4.global_search(_search_boot(other)), m4.MAPFLASH_HOST_TOL)
+    with pytest.raises(m4.M4Error, match="proven"):  # the host searched on
+        m4.compare_global(target, m4.global_search(_search_boot(host_rows + [(353, 11, 5, 0)], proven=0)),
+                          m4.MAPFLASH_HOST_TOL)
+    with pytest.raises(m4.M4Error, match="budget 200000"):
+        m4.compare_global(target, m4.global_search(_search_boot(host_rows).replace("budget 100000", "budget 200000")),
+                          m4.MAPFLASH_HOST_TOL)
+    with pytest.raises(m4.M4Error, match="global search, host"):  # 0.1 m away in y
+        m4.compare_global(target, m4.global_search(_search_boot(host_rows, pose="3f800000 3e4ccccd 00000000")),
+                          m4.MAPFLASH_HOST_TOL)

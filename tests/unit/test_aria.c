@@ -2072,6 +2072,116 @@ void test_th_to_rad_should_use_4096_units_per_turn(void)
     TEST_ASSERT_FLOAT_WITHIN(1e-5f, 1024.0f * pi / 2048.0f, rsm_aria_th_to_rad(-32768 + 1024));
 }
 
+/* ---- capacities: callers built with other capacities than the library ---------- */
+
+/* The wrong size and the wrong fingerprint the _checked functions refuse:
+ * what an application compiled with other capacities passes (a struct of
+ * another size, or of the same size by chance). */
+#define WRONG_SIZE(obj) (sizeof(obj) - 8u)
+#define WRONG_PRINT ((unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul)
+#define OWN_PRINT ((unsigned long)RSM_CONFIG_FINGERPRINT)
+
+void test_parser_init_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    static rsm_aria_parser_t p;
+    static rsm_aria_parser_t before;
+    memset(&p, 0x5A, sizeof p);
+    memcpy(&before, &p, sizeof p);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_parser_init_checked(&p, WRONG_SIZE(p), OWN_PRINT));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_parser_init_checked(&p, sizeof p, WRONG_PRINT));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &p, sizeof p);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_parser_init(&p));
+}
+
+void test_parser_feed_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* The packet it would publish is the caller's: nothing is taken, and
+     * neither the parser nor the packet nor *consumed is written. */
+    static rsm_aria_parser_t p;
+    static rsm_aria_parser_t p_before;
+    static rsm_aria_packet_t pkt;
+    static rsm_aria_packet_t pkt_before;
+    size_t used = 77u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_parser_init(&p));
+    memcpy(&p_before, &p, sizeof p);
+    memset(&pkt, 0x5A, sizeof pkt);
+    memcpy(&pkt_before, &pkt, sizeof pkt);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_parser_feed_checked(&p, V_SYNC0, sizeof(V_SYNC0), &used, &pkt,
+                                                                       WRONG_SIZE(pkt), OWN_PRINT));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_parser_feed_checked(&p, V_SYNC0, sizeof(V_SYNC0), &used, &pkt,
+                                                                       sizeof pkt, WRONG_PRINT));
+    TEST_ASSERT_EQUAL_MEMORY(&pkt_before, &pkt, sizeof pkt);
+    TEST_ASSERT_EQUAL_MEMORY(&p_before, &p, sizeof p);
+    TEST_ASSERT_EQUAL_size_t(77u, used);
+    TEST_ASSERT_EQUAL_INT(1, rsm_aria_parser_feed(&p, V_SYNC0, sizeof(V_SYNC0), &used, &pkt));
+}
+
+void test_packet_build_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    static const uint8_t payload[2] = {1u, 2u};
+    static rsm_aria_packet_t pkt;
+    static rsm_aria_packet_t before;
+    memset(&pkt, 0x5A, sizeof pkt);
+    memcpy(&before, &pkt, sizeof pkt);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_packet_build_checked(&pkt, WRONG_SIZE(pkt), OWN_PRINT, 0x90u,
+                                                                        payload, sizeof payload));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_packet_build_checked(&pkt, sizeof pkt, WRONG_PRINT, 0x90u,
+                                                                        payload, sizeof payload));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &pkt, sizeof pkt);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_packet_build(&pkt, 0x90u, payload, sizeof payload));
+}
+
+void test_decode_sync2_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* RSM_ARIA_STR_SIZE sizes the three strings. */
+    static rsm_aria_packet_t pkt;
+    static rsm_aria_sync2_t out;
+    static rsm_aria_sync2_t before;
+    feed_one(V_SYNC2_REPLY_EXAMPLE, sizeof(V_SYNC2_REPLY_EXAMPLE), &pkt);
+    memset(&out, 0x5A, sizeof out);
+    memcpy(&before, &out, sizeof out);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_decode_sync2_checked(&pkt, &out, WRONG_SIZE(out), OWN_PRINT));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_decode_sync2_checked(&pkt, &out, sizeof out, WRONG_PRINT));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &out, sizeof out);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_decode_sync2(&pkt, &out));
+}
+
+void test_decode_sip_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* RSM_ARIA_MAX_SONAR sizes the readings. */
+    static rsm_aria_packet_t pkt;
+    static rsm_aria_sip_t out;
+    static rsm_aria_sip_t before;
+    feed_one(V_SIP_STOPPED_2SONAR, sizeof(V_SIP_STOPPED_2SONAR), &pkt);
+    memset(&out, 0x5A, sizeof out);
+    memcpy(&before, &out, sizeof out);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_decode_sip_checked(&pkt, &out, WRONG_SIZE(out), OWN_PRINT));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_decode_sip_checked(&pkt, &out, sizeof out, WRONG_PRINT));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &out, sizeof out);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_decode_sip(&pkt, &out));
+}
+
+void test_decode_config_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* RSM_ARIA_STR_SIZE sizes the five strings. */
+    uint8_t payload[RSM_ARIA_MAX_PAYLOAD];
+    uint8_t frame[RSM_ARIA_MAX_PACKET];
+    size_t required;
+    const size_t len = build_config(payload, sizeof(payload), "Robot1", &required);
+    const int w = rsm_aria_encode_raw((uint8_t)RSM_ARIA_PAC_CONFIG, payload, len, frame, sizeof(frame));
+    static rsm_aria_packet_t pkt;
+    static rsm_aria_config_t out;
+    static rsm_aria_config_t before;
+    TEST_ASSERT_TRUE(w > 0);
+    feed_one(frame, (size_t)w, &pkt);
+    memset(&out, 0x5A, sizeof out);
+    memcpy(&before, &out, sizeof out);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_decode_config_checked(&pkt, &out, WRONG_SIZE(out), OWN_PRINT));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_aria_decode_config_checked(&pkt, &out, sizeof out, WRONG_PRINT));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &out, sizeof out);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_aria_decode_config(&pkt, &out));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -2155,5 +2265,11 @@ int main(void)
     RUN_TEST(test_pos_delta15_should_wrap_modulo_32768);
     RUN_TEST(test_odometry_count_delta_should_wrap_aria_counts_modulo_2_pow_32);
     RUN_TEST(test_th_to_rad_should_use_4096_units_per_turn);
+    RUN_TEST(test_parser_init_should_refuse_a_caller_built_with_other_capacities);
+    RUN_TEST(test_parser_feed_should_refuse_a_caller_built_with_other_capacities);
+    RUN_TEST(test_packet_build_should_refuse_a_caller_built_with_other_capacities);
+    RUN_TEST(test_decode_sync2_should_refuse_a_caller_built_with_other_capacities);
+    RUN_TEST(test_decode_sip_should_refuse_a_caller_built_with_other_capacities);
+    RUN_TEST(test_decode_config_should_refuse_a_caller_built_with_other_capacities);
     return UNITY_END();
 }

@@ -40,7 +40,7 @@ static int cmp_str(const void *a, const void *b)
 /* The reader's view of fp, in the format of make_golden.py's dump(). */
 static void dump(FILE *fp, int lenient, char *out, size_t cap)
 {
-    char line[160];
+    char line[CAP_MAX_NAME + 64]; /* a channel line holds a whole name */
     const char *keys[64];
     size_t at = 0, i, n_keys = 0;
     cap_record rec;

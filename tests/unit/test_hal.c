@@ -426,6 +426,25 @@ void test_link_rx_init_should_check_its_arguments(void)
     TEST_ASSERT_EQUAL_INT(0, fake.writes);
 }
 
+void test_link_rx_init_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* What rsm_link_rx_init passes for an application compiled with other
+     * capacities (RSM_LINK_RX_CHUNK sizes the chunk), or with capacities
+     * that give the same size: refused, and not one byte written. */
+    rsm_link_rx_t rx;
+    rsm_link_rx_t before;
+    memset(&rx, 0xA5, sizeof rx);
+    memcpy(&before, &rx, sizeof rx);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_link_rx_init_checked(&rx, sizeof rx - 8u,
+                                                                   (unsigned long)RSM_CONFIG_FINGERPRINT, &the_link,
+                                                                   &the_clock, 10u, 20u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_link_rx_init_checked(&rx, sizeof rx,
+                                                                   (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul,
+                                                                   &the_link, &the_clock, 10u, 20u));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &rx, sizeof rx);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_rx_init(&rx, &the_link, &the_clock, 10u, 20u));
+}
+
 void test_link_poll_should_run_the_steps_in_order_and_stamp_what_it_read(void)
 {
     fake.now = 5000u;
@@ -602,6 +621,7 @@ int main(void)
     RUN_TEST(test_clock_now_us_should_read_the_clock);
     RUN_TEST(test_clock_now_us_should_leave_the_output_untouched_on_error);
     RUN_TEST(test_link_rx_init_should_check_its_arguments);
+    RUN_TEST(test_link_rx_init_should_refuse_a_caller_built_with_other_capacities);
     RUN_TEST(test_link_poll_should_run_the_steps_in_order_and_stamp_what_it_read);
     RUN_TEST(test_link_poll_should_not_wait_past_the_next_deadline);
     RUN_TEST(test_link_poll_with_a_zero_read_timeout_should_never_wait);

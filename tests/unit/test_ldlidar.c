@@ -326,6 +326,57 @@ void test_next_deadline_serves_a_caller_that_never_blocks(void)
     TEST_ASSERT_TRUE(ev.stamp_us == due);
 }
 
+void test_init_refuses_a_caller_built_with_other_capacities(void)
+{
+    /* What rsm_ldlidar_init passes for an application compiled with other
+     * capacities (RSM_LINK_RX_CHUNK sizes the driver): refused, and not one
+     * byte written. */
+    static rsm_ldlidar_t d;
+    static rsm_ldlidar_t before;
+    memset(&d, 0x5A, sizeof d);
+    memcpy(&before, &d, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_ldlidar_init_checked(&d, sizeof d - 8u,
+                                                                   (unsigned long)RSM_CONFIG_FINGERPRINT, &link, &clk,
+                                                                   &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_ldlidar_init_checked(&d, sizeof d,
+                                                                   (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul, &link,
+                                                                   &clk, &cfg));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &d, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ldlidar_init(&d, &link, &clk, &cfg));
+}
+
+/* Every call on d refused (RSM_ERR_INVAL; no deadline) and d untouched. */
+static void assert_refused(rsm_ldlidar_t *d)
+{
+    static rsm_ldlidar_t before;
+    rsm_ldlidar_event_t ev;
+    if (d != NULL) {
+        memcpy(&before, d, sizeof before);
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_ldlidar_connect(d));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_ldlidar_poll(d, &ev));
+    TEST_ASSERT_TRUE(rsm_ldlidar_next_deadline_us(d) == UINT64_MAX);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_ldlidar_disconnect(d));
+    if (d != NULL) {
+        TEST_ASSERT_EQUAL_MEMORY(&before, d, sizeof before);
+    }
+}
+
+void test_a_driver_never_initialised_is_refused(void)
+{
+    /* Zeroed (connect read through its NULL config and crashed), stale
+     * memory, NULL, and what a failed init left. */
+    static rsm_ldlidar_t d;
+    memset(&d, 0, sizeof d);
+    assert_refused(&d);
+    memset(&d, 0x5A, sizeof d);
+    assert_refused(&d);
+    assert_refused(NULL);
+    memset(&d, 0, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_ldlidar_init(&d, NULL, &clk, &cfg));
+    assert_refused(&d);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -337,6 +388,8 @@ int main(void)
     RUN_TEST(test_disconnected_driver_reads_nothing_into_events);
     RUN_TEST(test_points_through_the_assembler_make_whole_turns_on_the_walls);
     RUN_TEST(test_stamp_and_init_reject_bad_arguments);
+    RUN_TEST(test_init_refuses_a_caller_built_with_other_capacities);
+    RUN_TEST(test_a_driver_never_initialised_is_refused);
     RUN_TEST(test_next_deadline_serves_a_caller_that_never_blocks);
     return UNITY_END();
 }

@@ -1925,6 +1925,43 @@ void test_rsm_lms_parser_feed_should_handle_ack_and_telegram_in_one_chunk_after_
     TEST_ASSERT_EQUAL_UINT32(0, log.st.truncated);
 }
 
+/* ---- capacities: callers built with other capacities than the library ---------- */
+
+void test_rsm_lms_parser_init_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* What rsm_lms_parser_init passes for an application compiled with
+     * other capacities (RSM_LMS_MAX_TELEGRAM sizes the parser), or with
+     * capacities that give the same size: refused, not one byte written. */
+    static rsm_lms_parser_t p;
+    static rsm_lms_parser_t before;
+    memset(&p, 0x5A, sizeof p);
+    memcpy(&before, &p, sizeof p);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_lms_parser_init_checked(&p, sizeof p - 8u,
+                                                                      (unsigned long)RSM_CONFIG_FINGERPRINT));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_lms_parser_init_checked(&p, sizeof p,
+                                                                      (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &p, sizeof p);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_lms_parser_init(&p));
+}
+
+void test_rsm_lms_decode_b0_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* RSM_MAX_BEAMS sizes the readings: another build's scan would get
+     * them, and the header fields after them, past its end. */
+    static rsm_lms_scan_t scan;
+    static rsm_lms_scan_t before;
+    const rsm_lms_telegram_t t = view_of(v_b0_short_cm, sizeof v_b0_short_cm);
+    memset(&scan, 0x5A, sizeof scan);
+    memcpy(&before, &scan, sizeof scan);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_lms_decode_b0_checked(&t, NULL, &scan, sizeof scan - 8u,
+                                                                    (unsigned long)RSM_CONFIG_FINGERPRINT));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_lms_decode_b0_checked(&t, NULL, &scan, sizeof scan,
+                                                                    (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &scan, sizeof scan);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_lms_decode_b0(&t, NULL, &scan));
+    TEST_ASSERT_EQUAL_size_t(5u, scan.count);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -1991,5 +2028,7 @@ int main(void)
     RUN_TEST(test_rsm_lms_parser_feed_should_lose_no_telegram_to_random_garbage);
     RUN_TEST(test_rsm_lms_parser_feed_should_give_the_same_events_byte_by_byte_as_whole);
     RUN_TEST(test_rsm_lms_parser_feed_should_handle_ack_and_telegram_in_one_chunk_after_garbage);
+    RUN_TEST(test_rsm_lms_parser_init_should_refuse_a_caller_built_with_other_capacities);
+    RUN_TEST(test_rsm_lms_decode_b0_should_refuse_a_caller_built_with_other_capacities);
     return UNITY_END();
 }

@@ -1486,6 +1486,30 @@ void test_localizer_scan_should_reject_invalid_arguments(void)
     }
 }
 
+void test_localizer_accessors_should_refuse_a_localizer_never_initialised(void)
+{
+    /* Zeroed (it reported "tracking") and stale memory (its config pointer
+     * was followed): the answers given for NULL, and nothing written. */
+    static const unsigned char fills[2] = {0x00u, 0x5Au};
+    rsm_point_t pts[4];
+    float occ = -1.0f;
+    float b[4] = {-1.0f, -1.0f, -1.0f, -1.0f};
+    size_t k;
+    for (k = 0; k < 2u; ++k) {
+        memset(&loc2, fills[k], sizeof loc2);
+        memcpy(&snapshot, &loc2, sizeof loc2);
+        TEST_ASSERT_EQUAL_INT((int)RSM_TRACK_LOST, (int)rsm_localizer_track(&loc2));
+        TEST_ASSERT_EQUAL_size_t(0u, rsm_localizer_scan_points(&loc2, pts, 4u));
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_map_occupancy(&loc2, 0.0f, 0.0f, &occ));
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_map_bounds(&loc2, &b[0], &b[1], &b[2], &b[3]));
+        TEST_ASSERT_EQUAL_INT(0, rsm_localizer_searching(&loc2));
+        TEST_ASSERT_EQUAL_MEMORY(&snapshot, &loc2, sizeof loc2);
+    }
+    TEST_ASSERT_EQUAL_FLOAT(-1.0f, occ);
+    TEST_ASSERT_EQUAL_FLOAT(-1.0f, b[0]);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_map_occupancy(NULL, 0.0f, 0.0f, &occ));
+}
+
 /* ---- determinism and independence ------------------------------------------------ */
 
 void test_localizer_scan_should_be_bit_identical_side_by_side(void)
@@ -1812,6 +1836,7 @@ int main(void)
     RUN_TEST(test_localizer_motion_should_refuse_non_finite_increments);
     RUN_TEST(test_localizer_motion_before_the_first_scan_should_move_the_start_without_noise);
     RUN_TEST(test_localizer_scan_should_reject_invalid_arguments);
+    RUN_TEST(test_localizer_accessors_should_refuse_a_localizer_never_initialised);
     RUN_TEST(test_localizer_scan_should_be_bit_identical_side_by_side);
     RUN_TEST(test_localizer_scan_should_not_interfere_with_another_localizer);
     RUN_TEST(test_localizer_scan_should_charge_each_rsm_stage_through_the_clock_hook);

@@ -334,6 +334,69 @@ void test_p3dx_init_should_reject_bad_arguments(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_config_default(NULL));
 }
 
+void test_p3dx_init_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* What rsm_p3dx_init passes for an application compiled with other
+     * capacities (a driver of another size, or the same size by chance):
+     * refused, and not one byte written. */
+    static rsm_p3dx_t d;
+    static rsm_p3dx_t before;
+    memset(&d, 0x5A, sizeof d);
+    memcpy(&before, &d, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_p3dx_init_checked(&d, sizeof d - 8u,
+                                                                (unsigned long)RSM_CONFIG_FINGERPRINT, &link, &clk,
+                                                                &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_p3dx_init_checked(&d, sizeof d,
+                                                                (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul, &link,
+                                                                &clk, &cfg));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &d, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_p3dx_init(&d, &link, &clk, &cfg));
+}
+
+/* Every call on d refused (RSM_ERR_INVAL; no deadline), d untouched and
+ * nothing sent. */
+static void assert_p3dx_refused(rsm_p3dx_t *d)
+{
+    static rsm_p3dx_t before;
+    rsm_odometry_config_t odo = rsm_odometry_config_default();
+    const rsm_odometry_config_t odo_before = odo;
+    rsm_p3dx_event_t ev;
+    const size_t sent = fl.host_log_len;
+    if (d != NULL) {
+        memcpy(&before, d, sizeof before);
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_connect(d));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_listen(d));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_poll(d, &ev));
+    TEST_ASSERT_TRUE(rsm_p3dx_next_deadline_us(d) == UINT64_MAX);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_odometry_config(d, &odo));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_set_vel(d, 100, 0));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_set_vel2(d, 1, 1));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_stop(d));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_disconnect(d));
+    TEST_ASSERT_EQUAL_MEMORY(&odo_before, &odo, sizeof odo);
+    TEST_ASSERT_EQUAL_size_t(sent, fl.host_log_len);
+    if (d != NULL) {
+        TEST_ASSERT_EQUAL_MEMORY(&before, d, sizeof before);
+    }
+}
+
+void test_p3dx_should_refuse_a_driver_never_initialised(void)
+{
+    /* Zeroed (connect, poll and the deadline read through its NULL config
+     * and crashed), stale memory, and NULL. */
+    static rsm_p3dx_t d;
+    memset(&d, 0, sizeof d);
+    assert_p3dx_refused(&d);
+    memset(&d, 0x5A, sizeof d);
+    assert_p3dx_refused(&d);
+    assert_p3dx_refused(NULL);
+    /* A failed init leaves it refused. */
+    memset(&d, 0, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_p3dx_init(&d, NULL, &clk, &cfg));
+    assert_p3dx_refused(&d);
+}
+
 void test_p3dx_connect_should_put_the_link_at_the_configured_rate(void)
 {
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_link_set_baud(&link, 38400u)); /* a previous session's HOSTBAUD */
@@ -986,6 +1049,8 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_p3dx_init_should_reject_bad_arguments);
+    RUN_TEST(test_p3dx_init_should_refuse_a_caller_built_with_other_capacities);
+    RUN_TEST(test_p3dx_should_refuse_a_driver_never_initialised);
     RUN_TEST(test_p3dx_connect_should_put_the_link_at_the_configured_rate);
     RUN_TEST(test_p3dx_next_deadline_should_follow_the_timers_and_calibration_the_configpac);
     RUN_TEST(test_p3dx_listen_should_give_encoder_events_and_send_nothing);

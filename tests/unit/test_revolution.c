@@ -351,6 +351,62 @@ void test_init_rejects_bad_settings(void)
     rsm_rev_reset(NULL);
 }
 
+void test_init_refuses_a_caller_built_with_other_capacities(void)
+{
+    /* What rsm_rev_init passes for an application compiled with other
+     * capacities (RSM_MAX_BEAMS and RSM_REV_ODOM_DEPTH size the assembler),
+     * or with capacities that give the same size: refused, and not one
+     * byte written. */
+    static rsm_rev_t r;
+    static rsm_rev_t before;
+    rsm_rev_config_t cfg;
+    (void)rsm_rev_config_default(&cfg);
+    memset(&r, 0x5A, sizeof r);
+    memcpy(&before, &r, sizeof r);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_rev_init_checked(&r, sizeof r - 8u,
+                                                               (unsigned long)RSM_CONFIG_FINGERPRINT, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_rev_init_checked(&r, sizeof r,
+                                                               (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul, &cfg));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &r, sizeof r);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_init(&r, &cfg));
+}
+
+/* Every call on r refused (RSM_ERR_INVAL) and r untouched. */
+static void assert_rev_refused(rsm_rev_t *r)
+{
+    static rsm_rev_t before;
+    const rsm_pose_t pose = {0.0f, 0.0f, 0.0f};
+    rsm_lidar_point_t pt;
+    memset(&pt, 0, sizeof pt);
+    if (r != NULL) {
+        memcpy(&before, r, sizeof before);
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_odometry(r, 1000u, &pose));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_push(r, &pt));
+    rsm_rev_reset(r);
+    if (r != NULL) {
+        TEST_ASSERT_EQUAL_MEMORY(&before, r, sizeof before);
+    }
+}
+
+void test_an_assembler_never_initialised_is_refused(void)
+{
+    /* Zeroed (rsm_rev_odometry took the pose into it), stale memory (push
+     * went through its config pointer), NULL, and what a failed init left. */
+    static rsm_rev_t r;
+    rsm_rev_config_t cfg;
+    memset(&r, 0, sizeof r);
+    assert_rev_refused(&r);
+    memset(&r, 0x5A, sizeof r);
+    assert_rev_refused(&r);
+    assert_rev_refused(NULL);
+    (void)rsm_rev_config_default(&cfg);
+    cfg.keep_every = 0u;
+    memset(&r, 0, sizeof r);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_rev_init(&r, &cfg));
+    assert_rev_refused(&r);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -361,5 +417,7 @@ int main(void)
     RUN_TEST(test_counters_for_overflow_gaps_bad_points_and_reset);
     RUN_TEST(test_odometry_out_of_order_is_refused_and_without_any_no_deskew_is_counted);
     RUN_TEST(test_init_rejects_bad_settings);
+    RUN_TEST(test_init_refuses_a_caller_built_with_other_capacities);
+    RUN_TEST(test_an_assembler_never_initialised_is_refused);
     return UNITY_END();
 }

@@ -60,6 +60,43 @@ void test_scan_set_uniform_should_respect_capacity(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_scan_set_uniform(NULL, 10, 0.0f, 0.1f));
 }
 
+void test_scan_set_uniform_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* What rsm_scan_set_uniform passes for an application compiled with
+     * another RSM_MAX_BEAMS (its scan of another size: the angles would land
+     * past it), or with capacities that give the same size: refused, and
+     * not one byte written. */
+    static rsm_scan_t before;
+    memset(&scan, 0x5A, sizeof scan);
+    memcpy(&before, &scan, sizeof scan);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_scan_set_uniform_checked(&scan, sizeof scan - 8u,
+                                                                       (unsigned long)RSM_CONFIG_FINGERPRINT, 2u, 0.0f,
+                                                                       0.01f));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_scan_set_uniform_checked(&scan, sizeof scan,
+                                                                       (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul, 2u,
+                                                                       0.0f, 0.01f));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &scan, sizeof scan);
+    /* The macro passes this build's own. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_scan_set_uniform(&scan, 2u, 0.0f, 0.01f));
+    TEST_ASSERT_EQUAL_size_t(2u, scan.count);
+}
+
+void test_scan_trig_init_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    static rsm_scan_trig_t trig;
+    static rsm_scan_trig_t before;
+    memset(&trig, 0x5A, sizeof trig);
+    memcpy(&before, &trig, sizeof trig);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_scan_trig_init_checked(&trig, sizeof trig - 12u,
+                                                                     (unsigned long)RSM_CONFIG_FINGERPRINT));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_scan_trig_init_checked(&trig, sizeof trig,
+                                                                     (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &trig, sizeof trig);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_scan_trig_init(NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_scan_trig_init(&trig));
+    TEST_ASSERT_TRUE(isnan(trig.angle[0]) && isnan(trig.angle[RSM_MAX_BEAMS - 1]));
+}
+
 void test_scan_reading_ok_should_count_each_reason_separately(void)
 {
     const float ranges[] = {
@@ -538,6 +575,8 @@ int main(void)
     RUN_TEST(test_scan_limits_default_should_be_5_cm_to_20_m);
     RUN_TEST(test_scan_set_uniform_should_lay_out_beam_angles);
     RUN_TEST(test_scan_set_uniform_should_respect_capacity);
+    RUN_TEST(test_scan_set_uniform_should_refuse_a_caller_built_with_other_capacities);
+    RUN_TEST(test_scan_trig_init_should_refuse_a_caller_built_with_other_capacities);
     RUN_TEST(test_scan_reading_ok_should_count_each_reason_separately);
     RUN_TEST(test_scan_reading_ok_should_refuse_indices_past_the_count);
     RUN_TEST(test_scan_to_points_should_convert_usable_readings);

@@ -293,6 +293,62 @@ void test_sicklms_init_should_reject_bad_arguments(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_config_default(NULL));
 }
 
+void test_sicklms_init_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* What rsm_sicklms_init passes for an application compiled with other
+     * capacities (its driver and its scan of another size, or of the same
+     * size by chance): refused, and not one byte written. */
+    static rsm_sicklms_t d;
+    static rsm_sicklms_t before;
+    memset(&d, 0x5A, sizeof d);
+    memcpy(&before, &d, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_sicklms_init_checked(&d, sizeof d - 8u,
+                                                                   (unsigned long)RSM_CONFIG_FINGERPRINT, &link, &clk,
+                                                                   &cfg, &drv_scan));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_sicklms_init_checked(&d, sizeof d,
+                                                                   (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul,
+                                                                   &link, &clk, &cfg, &drv_scan));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &d, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sicklms_init(&d, &link, &clk, &cfg, &drv_scan));
+}
+
+/* Every call on d refused (RSM_ERR_INVAL; no deadline), d untouched and
+ * nothing sent. */
+static void assert_sicklms_refused(rsm_sicklms_t *d)
+{
+    static rsm_sicklms_t before;
+    rsm_sicklms_event_t ev;
+    const size_t sent = fl.host_log_len;
+    if (d != NULL) {
+        memcpy(&before, d, sizeof before);
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_connect(d));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_listen(d));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_poll(d, &ev));
+    TEST_ASSERT_TRUE(rsm_sicklms_next_deadline_us(d) == UINT64_MAX);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_disconnect(d));
+    TEST_ASSERT_EQUAL_size_t(sent, fl.host_log_len);
+    if (d != NULL) {
+        TEST_ASSERT_EQUAL_MEMORY(&before, d, sizeof before);
+    }
+}
+
+void test_sicklms_should_refuse_a_driver_never_initialised(void)
+{
+    /* Zeroed (connect and listen read through its NULL config and
+     * crashed), stale memory, and NULL. */
+    static rsm_sicklms_t d;
+    memset(&d, 0, sizeof d);
+    assert_sicklms_refused(&d);
+    memset(&d, 0x5A, sizeof d);
+    assert_sicklms_refused(&d);
+    assert_sicklms_refused(NULL);
+    /* A failed init leaves it refused. */
+    memset(&d, 0, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sicklms_init(&d, &link, &clk, &cfg, NULL));
+    assert_sicklms_refused(&d);
+}
+
 void test_sicklms_connect_should_set_the_variant_and_start_streaming(void)
 {
     uint8_t expect[64];
@@ -499,6 +555,25 @@ void test_sicklms_to_scan_should_lay_out_bearings_as_a_carmen_scan_bit_for_bit(v
     for (i = 0; i < 101u; i++) {
         TEST_ASSERT_FLOAT_WITHIN(1e-6f, ((float)i - 50.0f) * (RSM_PI / 180.0f), got.angle_rad[i]);
     }
+}
+
+void test_sicklms_to_scan_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* An application compiled with another RSM_MAX_BEAMS has a scan of
+     * another size: its bearings would land past it. */
+    static rsm_lms_scan_t raw;
+    static rsm_scan_t got;
+    static rsm_scan_t before;
+    lms_layout(&raw, 101u, 4000u, 100u);
+    memset(&got, 0x5A, sizeof got);
+    memcpy(&before, &got, sizeof got);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_sicklms_to_scan_checked(&raw, 0u, &got, sizeof got - 8u,
+                                                                      (unsigned long)RSM_CONFIG_FINGERPRINT));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_sicklms_to_scan_checked(&raw, 0u, &got, sizeof got,
+                                                                      (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &got, sizeof got);
+    TEST_ASSERT_EQUAL_INT(0, rsm_sicklms_to_scan(&raw, 0u, &got));
+    TEST_ASSERT_EQUAL_size_t(101u, got.count);
 }
 
 void test_sicklms_poll_should_count_a_corrupted_telegram_and_keep_streaming(void)
@@ -752,6 +827,8 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_sicklms_init_should_reject_bad_arguments);
+    RUN_TEST(test_sicklms_init_should_refuse_a_caller_built_with_other_capacities);
+    RUN_TEST(test_sicklms_should_refuse_a_driver_never_initialised);
     RUN_TEST(test_sicklms_connect_should_set_the_variant_and_start_streaming);
     RUN_TEST(test_sicklms_connect_should_resend_no_sooner_than_30_ms_after_a_nak);
     RUN_TEST(test_sicklms_connect_should_retry_an_unacknowledged_request_three_times_then_fail);
@@ -760,6 +837,7 @@ int main(void)
     RUN_TEST(test_sicklms_connect_should_reprobe_instead_of_repeating_a_lost_baud_change);
     RUN_TEST(test_sicklms_poll_should_yield_robot_frame_scans_from_the_b0_stream);
     RUN_TEST(test_sicklms_to_scan_should_lay_out_bearings_as_a_carmen_scan_bit_for_bit);
+    RUN_TEST(test_sicklms_to_scan_should_refuse_a_caller_built_with_other_capacities);
     RUN_TEST(test_sicklms_poll_should_count_a_corrupted_telegram_and_keep_streaming);
     RUN_TEST(test_sicklms_poll_should_report_link_loss_and_reconnect);
     RUN_TEST(test_sicklms_connect_should_decode_scans_with_the_measuring_mode_read_from_the_unit);

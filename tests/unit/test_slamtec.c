@@ -510,6 +510,61 @@ void test_next_deadline_serves_a_caller_that_never_blocks(void)
     TEST_ASSERT_TRUE(rsm_slamtec_next_deadline_us(&drv) == UINT64_MAX);
 }
 
+void test_init_refuses_a_caller_built_with_other_capacities(void)
+{
+    /* What rsm_slamtec_init passes for an application compiled with other
+     * capacities (RSM_LINK_RX_CHUNK sizes the driver): refused, and not one
+     * byte written. */
+    static rsm_slamtec_t d;
+    static rsm_slamtec_t before;
+    memset(&d, 0x5A, sizeof d);
+    memcpy(&before, &d, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_slamtec_init_checked(&d, sizeof d - 8u,
+                                                                   (unsigned long)RSM_CONFIG_FINGERPRINT, &link, &clk,
+                                                                   &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_slamtec_init_checked(&d, sizeof d,
+                                                                   (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul, &link,
+                                                                   &clk, &cfg));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &d, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_slamtec_init(&d, &link, &clk, &cfg));
+}
+
+/* Every call on d refused (RSM_ERR_INVAL; no deadline), d untouched and
+ * nothing sent. */
+static void assert_refused(rsm_slamtec_t *d)
+{
+    static rsm_slamtec_t before;
+    rsm_slamtec_event_t ev;
+    const size_t sent = fl.host_log_len;
+    if (d != NULL) {
+        memcpy(&before, d, sizeof before);
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_slamtec_connect(d));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_slamtec_listen(d));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_slamtec_poll(d, &ev));
+    TEST_ASSERT_TRUE(rsm_slamtec_next_deadline_us(d) == UINT64_MAX);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_slamtec_disconnect(d));
+    TEST_ASSERT_EQUAL_size_t(sent, fl.host_log_len);
+    if (d != NULL) {
+        TEST_ASSERT_EQUAL_MEMORY(&before, d, sizeof before);
+    }
+}
+
+void test_a_driver_never_initialised_is_refused(void)
+{
+    /* Zeroed (connect and listen read through its NULL config and
+     * crashed), stale memory, NULL, and what a failed init left. */
+    static rsm_slamtec_t d;
+    memset(&d, 0, sizeof d);
+    assert_refused(&d);
+    memset(&d, 0x5A, sizeof d);
+    assert_refused(&d);
+    assert_refused(NULL);
+    memset(&d, 0, sizeof d);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_slamtec_init(&d, &link, NULL, &cfg));
+    assert_refused(&d);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -522,6 +577,8 @@ int main(void)
     RUN_TEST(test_disconnect_stops_the_scan_and_the_motor);
     RUN_TEST(test_listen_decodes_a_scan_run_by_another_host_and_sends_nothing);
     RUN_TEST(test_init_rejects_bad_settings);
+    RUN_TEST(test_init_refuses_a_caller_built_with_other_capacities);
+    RUN_TEST(test_a_driver_never_initialised_is_refused);
     RUN_TEST(test_next_deadline_serves_a_caller_that_never_blocks);
     return UNITY_END();
 }

@@ -115,6 +115,82 @@ void test_init_should_reject_bad_arguments(void)
     }
 }
 
+void test_init_should_refuse_a_caller_built_with_other_capacities(void)
+{
+    /* What rsm_sync_init passes for an application compiled with other
+     * capacities (RSM_SYNC_DEPTH and RSM_MAX_BEAMS size the aligner), or
+     * with capacities that give the same size: refused, and not one byte
+     * written. */
+    static rsm_sync_t s;
+    static rsm_sync_t before;
+    memset(&s, 0x5A, sizeof s);
+    memcpy(&before, &s, sizeof s);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_sync_init_checked(&s, sizeof s - 8u,
+                                                                (unsigned long)RSM_CONFIG_FINGERPRINT, &loc, &scfg,
+                                                                NULL, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_sync_init_checked(&s, sizeof s,
+                                                                (unsigned long)RSM_CONFIG_FINGERPRINT ^ 1ul, &loc,
+                                                                &scfg, NULL, NULL));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &s, sizeof s);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_sync_init(&s, &loc, &scfg, NULL, NULL));
+}
+
+/* Every call on s refused (RSM_ERR_INVAL; a NaN pose), s untouched and
+ * nothing fused. */
+static void assert_sync_refused(rsm_sync_t *s)
+{
+    static rsm_sync_t before;
+    const rsm_odometry_sample_t smp = {1000u, 10u, 10u};
+    rsm_pose_t p;
+    if (s != NULL) {
+        memcpy(&before, s, sizeof before);
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_encoder(s, &smp));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_encoder_restart(s));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_scan(s, &scan));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_poll(s, 1000000u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_flush(s));
+    p = rsm_sync_pose(s);
+    TEST_ASSERT_TRUE(isnan(p.x) && isnan(p.y) && isnan(p.theta));
+    if (s != NULL) {
+        TEST_ASSERT_EQUAL_MEMORY(&before, s, sizeof before);
+    }
+    TEST_ASSERT_EQUAL_size_t(0u, res.n);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.scans);
+}
+
+void test_an_aligner_never_initialised_should_be_refused(void)
+{
+    /* Zeroed (poll and flush answered 0 as if it were running), stale
+     * memory (every call went through its loc pointer), NULL, and what a
+     * failed init left. */
+    static rsm_sync_t s;
+    memset(&s, 0, sizeof s);
+    assert_sync_refused(&s);
+    memset(&s, 0x5A, sizeof s);
+    assert_sync_refused(&s);
+    assert_sync_refused(NULL);
+    memset(&s, 0, sizeof s);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(&s, &loc, NULL, on_result, &res));
+    assert_sync_refused(&s);
+}
+
+void test_init_should_refuse_a_localizer_never_initialised(void)
+{
+    /* Stale memory has a config pointer too: the localizer's own mark is
+     * what counts. */
+    static rsm_localizer_t stale;
+    static rsm_sync_t s;
+    static rsm_sync_t before;
+    memset(&s, 0, sizeof s);
+    memcpy(&before, &s, sizeof s);
+    memset(&stale, 0, sizeof stale);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(&s, &stale, &scfg, NULL, NULL));
+    memset(&stale, 0x5A, sizeof stale);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_sync_init(&s, &stale, &scfg, NULL, NULL));
+    TEST_ASSERT_EQUAL_MEMORY(&before, &s, sizeof s);
+}
+
 void test_scan_without_any_odometry_should_be_fused_at_once(void)
 {
     scan_at(1000u);
@@ -534,6 +610,9 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_init_should_reject_bad_arguments);
+    RUN_TEST(test_init_should_refuse_a_caller_built_with_other_capacities);
+    RUN_TEST(test_an_aligner_never_initialised_should_be_refused);
+    RUN_TEST(test_init_should_refuse_a_localizer_never_initialised);
     RUN_TEST(test_scan_without_any_odometry_should_be_fused_at_once);
     RUN_TEST(test_scan_stamped_with_its_encoder_packet_should_see_exactly_those_counts);
     RUN_TEST(test_odometry_set_at_run_time_should_convert_the_next_counts);

@@ -487,18 +487,21 @@ int cap_next(cap_reader *r, cap_record *rec, uint8_t *buf, size_t cap)
             if (st != CAP_OK) return st;
             continue;
         }
-        if (r->lenient && r->have_last && ts > r->last_ts && ts - r->last_ts > CAP_MAX_STEP_US &&
+        if (r->lenient && r->have_last && (ts < r->last_ts || ts - r->last_ts > CAP_MAX_STEP_US) &&
             !(r->have_far && (ts > r->far_ts ? ts - r->far_ts : r->far_ts - ts) <= CAP_MAX_STEP_US)) {
-            /* One record far ahead would make every later one out of order:
-             * it counts as out of order itself unless the next one agrees. */
+            /* One record far ahead would make every later one out of order,
+             * and a clock that stepped back would lose every later one: the
+             * record counts as out of order unless the next one agrees. */
             drop(r, size);
             r->have_far = 1;
             r->far_ts = ts;
             r->count.out_of_order++;
-            (void)problem(r, CAP_ERR_ORDER, "record stamped over an hour after the previous one (not trusted alone)");
+            (void)problem(r, CAP_ERR_ORDER,
+                          ts < r->last_ts ? "record timestamp earlier than the previous one (not trusted alone)"
+                                          : "record stamped over an hour after the previous one (not trusted alone)");
             continue;
         }
-        if (r->have_last && ts < r->last_ts) {
+        if (!r->lenient && r->have_last && ts < r->last_ts) {
             drop(r, size);
             r->count.out_of_order++;
             st = problem(r, CAP_ERR_ORDER, "record timestamp earlier than the previous one");

@@ -19,7 +19,8 @@
 #define CAP_REC_HEAD 14u
 #define CAP_REC_OVERHEAD 18u
 /* Lenient readers do not trust alone a record stamped this much after the
- * previous one (one hour, in microseconds). */
+ * previous one (one hour, in microseconds), nor one stamped before it; the
+ * next record confirms either when it is stamped within this of it. */
 #define CAP_MAX_STEP_US 3600000000ull
 
 enum cap_status {
@@ -85,8 +86,8 @@ typedef struct {
     cap_counters count;
     int have_last;
     uint64_t last_ts;
-    int have_far;                /* lenient: a record far ahead of last_ts was skipped ... */
-    uint64_t far_ts;             /* ... stamped this (docs/capture.md, "Far ahead") */
+    int have_far;                /* lenient: a record far ahead of last_ts or before it was skipped ... */
+    uint64_t far_ts;             /* ... stamped this (docs/capture.md, "Far ahead", "Stepped back") */
     uint64_t base;               /* file offset of win[start] */
     size_t start, end;           /* valid bytes are win[start..end) */
     int eof;

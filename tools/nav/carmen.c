@@ -68,9 +68,14 @@ static size_t split(char *line, char **f, size_t cap)
     return n;
 }
 
+/* A decimal number (or inf, nan), as the Python reader takes it: strtod
+ * alone would also take hexadecimal (0x10 as 16) and nan(...). */
 static int num(const char *s, double *out)
 {
     char *end;
+    if (strpbrk(s, "xX(") != NULL) {
+        return 0;
+    }
     errno = 0;
     *out = strtod(s, &end);
     return end != s && *end == '\0' && errno == 0;
@@ -118,15 +123,26 @@ static void set_odom(carmen_record_t *rec, const double pose[3])
     rec->odom.theta = (float)pose[2];
 }
 
-/* A count of readings: a whole number in 0..MAX_FIELDS (NaN and fractions
- * are malformed; converting them to size_t would be undefined). */
+/* A count of readings: decimal digits only, as CARMEN writes it (%d) and
+ * the Python reader takes it (0x10, 16.0, 1e1, +16 and NaN are malformed),
+ * at most MAX_FIELDS. */
 static int count_field(const char *s, size_t *out)
 {
-    double v;
-    if (!num(s, &v) || !(v >= 0.0 && v <= (double)MAX_FIELDS) || v != floor(v)) {
+    size_t v = 0;
+    const char *p = s;
+    if (*p == '\0') {
         return 0;
     }
-    *out = (size_t)v;
+    for (; *p != '\0'; ++p) {
+        if (*p < '0' || *p > '9') {
+            return 0;
+        }
+        v = v * 10u + (size_t)(*p - '0');
+        if (v > MAX_FIELDS) {
+            return 0;
+        }
+    }
+    *out = v;
     return 1;
 }
 

@@ -475,6 +475,18 @@ uint32_t nav_devices_connects(const nav_devices_t *dv, int robot)
     }
 }
 
+uint32_t nav_devices_losses(const nav_devices_t *dv, int robot)
+{
+    if (robot) {
+        return dv->robot.stats.link_lost;
+    }
+    switch (dv->kind) {
+    case NAV_LASER_LD06: return dv->ld06.stats.link_lost;
+    case NAV_LASER_RPLIDAR: return dv->rplidar.stats.link_lost;
+    default: return dv->laser.stats.link_lost;
+    }
+}
+
 uint32_t nav_devices_scans(const nav_devices_t *dv)
 {
     return dv->kind == NAV_LASER_LMS ? dv->laser.stats.scans : dv->rev.stats.scans;

@@ -93,12 +93,14 @@ long nav_devices_drain(nav_devices_t *dv, int robot, const nav_sink_t *sink, uin
 
 /* Live mode's view of either driver: connect again (a reopened link; a
  * lidar's turn in progress is dropped), start the shutdown, whether it has
- * not yet reached IDLE, CONNECTED events so far, scans delivered, and the
- * next time its poll has something to do (UINT64_MAX: only bytes). */
+ * not yet reached IDLE, CONNECTED and LINK_LOST events so far, scans
+ * delivered, and the next time its poll has something to do (UINT64_MAX:
+ * only bytes). */
 void nav_devices_restart(nav_devices_t *dv, int robot);
 void nav_devices_stop(nav_devices_t *dv, int robot);
 int nav_devices_busy(const nav_devices_t *dv, int robot);
 uint32_t nav_devices_connects(const nav_devices_t *dv, int robot);
+uint32_t nav_devices_losses(const nav_devices_t *dv, int robot);
 uint32_t nav_devices_scans(const nav_devices_t *dv);
 uint64_t nav_devices_next_deadline(const nav_devices_t *dv, int robot);
 

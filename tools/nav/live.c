@@ -31,7 +31,10 @@ static double mono_s(void)
 }
 
 /* Active mode: a device that went away is reopened after this long, doubling
- * up to the cap while it stays away (an adapter unplugged and plugged back). */
+ * up to the cap while it stays away (an adapter unplugged and plugged back).
+ * An open alone does not start the back-off again: only a connection over
+ * the reopened link (its driver's handshake or stream verified), so that a
+ * device that opens and fails at once is not reopened ten times a second. */
 #define REOPEN_FIRST_S 0.1
 #define REOPEN_MAX_S 2.0
 /* Listen mode: bytes taken from one link per wake-up, so that a source that
@@ -48,8 +51,16 @@ typedef struct endpoint {
     int ended;
     int down;                  /* active mode: the link failed; reopened at retry_at */
     double retry_at;
-    double backoff_s;
+    double backoff_s;          /* 0 until the first failure */
+    uint32_t connects_at_open; /* the driver's CONNECTED count when the link was last opened */
     unsigned reopens;
+    unsigned failures;         /* the link failed (active mode) */
+    /* Losses (link failures and the driver's LINK_LOST events) seen so far,
+     * and when the last one was: whether the device came back after it is
+     * judged at the end of the run. */
+    uint32_t losses;
+    double lost_at;            /* seconds into the run */
+    uint32_t back_mark;        /* laser: scans, robot: connects, at the last loss */
 } endpoint_t;
 
 static void report_open_error(const endpoint_t *e, int rc)
@@ -80,18 +91,25 @@ static int open_endpoint(endpoint_t *e, const char *what, const char *path, uint
 }
 
 /* Active mode: the driver's poll failed (the device vanished, the peer
- * died). The link is closed and reopened later, never polled in a loop. */
-static void endpoint_failed(endpoint_t *e, int status)
+ * died). The link is closed and reopened later, never polled in a loop.
+ * connects: the driver's CONNECTED count now. */
+static void endpoint_failed(endpoint_t *e, int status, uint32_t connects)
 {
     fprintf(stderr, "rsm-nav: %s link %s failed (%s): reopening\n", e->what, e->path, rsm_strerror(status));
     (void)rsm_posix_link_close(&e->state);
     e->down = 1;
-    e->backoff_s = REOPEN_FIRST_S;
+    e->failures++;
+    if (e->backoff_s <= 0.0 || connects != e->connects_at_open) {
+        e->backoff_s = REOPEN_FIRST_S; /* the link had proved itself: a new outage */
+    } else {
+        e->backoff_s = e->backoff_s * 2.0 < REOPEN_MAX_S ? e->backoff_s * 2.0 : REOPEN_MAX_S;
+    }
     e->retry_at = mono_s() + e->backoff_s;
 }
 
-/* Returns 1 when the link is open again (the driver must start over). */
-static int endpoint_retry(endpoint_t *e, int quiet)
+/* Returns 1 when the link is open again (the driver must start over);
+ * connects: the driver's CONNECTED count now. */
+static int endpoint_retry(endpoint_t *e, int quiet, uint32_t connects)
 {
     int rc;
     if (mono_s() < e->retry_at) {
@@ -105,6 +123,7 @@ static int endpoint_retry(endpoint_t *e, int quiet)
     }
     e->down = 0;
     e->reopens++;
+    e->connects_at_open = connects;
     if (!quiet) {
         fprintf(stderr, "rsm-nav: %s link %s reopened\n", e->what, e->path);
     }
@@ -126,6 +145,7 @@ typedef struct live {
     uint64_t now_us;          /* the monotonic clock when the cycle began */
     uint64_t bytes;
     double last_data;         /* when bytes last came */
+    double t0;                /* when the run began */
     int clock_fd;             /* the lockstep feeder's clock file, or -1 */
 } live_t;
 
@@ -220,6 +240,54 @@ static void live_wait(live_t *lv)
     }
 }
 
+/* What shows that a device came back after a loss: the laser's scans, the
+ * robot's connections. */
+static uint32_t came_back_count(const live_t *lv, int i)
+{
+    return i == 0 ? nav_devices_connects(&lv->dev, 1) : nav_devices_scans(&lv->dev);
+}
+
+/* Active mode: notes a new loss of either device (its link failed, or its
+ * driver reported LINK_LOST) with the time and what had come until then. */
+static void live_note_losses(live_t *lv)
+{
+    int i;
+    if (lv->dev.listen) {
+        return; /* a link that fails there has ended: a replay finished */
+    }
+    for (i = 0; i < 2; ++i) {
+        endpoint_t *e = lv->ep[i];
+        const uint32_t losses = e->failures + nav_devices_losses(&lv->dev, i == 0);
+        if (e->open && losses != e->losses) {
+            e->losses = losses;
+            e->lost_at = mono_s() - lv->t0;
+            e->back_mark = came_back_count(lv, i);
+        }
+    }
+}
+
+/* Active mode, at the end of a run: a device lost and not back since (the
+ * laser with no scan after the loss, the robot not connected again) is
+ * said in one line into why. Returns 1 if any was. */
+static int live_never_back(const live_t *lv, char *why, size_t cap)
+{
+    size_t at = 0;
+    int i;
+    why[0] = '\0';
+    for (i = 0; i < 2; ++i) {
+        const endpoint_t *e = lv->ep[i];
+        int n;
+        if (!e->open || e->losses == 0u || came_back_count(lv, i) != e->back_mark) {
+            continue;
+        }
+        n = snprintf(why + at, cap - at, "%sthe %s link %s was lost %.1f s into the run and %s", at > 0u ? "; " : "",
+                     e->what, e->path, e->lost_at,
+                     i == 0 ? "the robot never connected again" : "no scan came after that");
+        at = n < 0 ? at : (size_t)n + at < cap ? (size_t)n + at : cap - 1u;
+    }
+    return at > 0u;
+}
+
 /* One cycle: each driver (robot first: a replayer writes an encoder packet
  * before the scan it precedes, and this keeps that order whenever both have
  * arrived) takes what has arrived; a link that failed is reopened later
@@ -236,7 +304,7 @@ static uint64_t live_cycle(live_t *lv)
             continue;
         }
         if (e->down) {
-            if (endpoint_retry(e, lv->opt->quiet)) {
+            if (endpoint_retry(e, lv->opt->quiet, nav_devices_connects(&lv->dev, i == 0))) {
                 nav_devices_restart(&lv->dev, i == 0);
             }
             continue;
@@ -248,11 +316,12 @@ static uint64_t live_cycle(live_t *lv)
             e->ended = 1;
             fprintf(stderr, "rsm-nav: %s link %s ended (%s)\n", e->what, e->path, rsm_strerror((int)r));
         } else if (r < 0) {
-            endpoint_failed(e, (int)r);
+            endpoint_failed(e, (int)r, nav_devices_connects(&lv->dev, i == 0));
         } else {
             got += (uint64_t)r;
         }
     }
+    live_note_losses(lv);
     if (got > 0u) {
         lv->bytes += got;
         lv->last_data = mono_s();
@@ -316,7 +385,11 @@ static int live_run(live_t *lv)
 {
     const nav_live_options_t *opt = lv->opt;
     const double t0 = mono_s();
+    char why[512];
+    int never_back;
+    int rc;
     int i;
+    lv->t0 = t0;
     nav_devices_defaults(&lv->dev, opt->listen_only, opt->quiet);
     lv->clock.now_us = live_now;
     lv->clock.ctx = lv;
@@ -373,7 +446,14 @@ static int live_run(live_t *lv)
         }
         return 0;
     }
-    return live_shutdown(lv);
+    never_back = live_never_back(lv, why, sizeof why);
+    rc = live_shutdown(lv);
+    if (rc == 0 && never_back && !stop_requested) {
+        /* What ran is kept; the caller sums it up and fails. */
+        fprintf(stderr, "rsm-nav: %s\n", why);
+        return NAV_LIVE_NEVER_BACK;
+    }
+    return rc;
 }
 
 /* The rate the laser's link opens at: the flag's, else what the device

@@ -31,9 +31,16 @@ typedef struct nav_live_options {
     int quiet;
 } nav_live_options_t;
 
+/* nav_live_run's status for a run that went to its end (the time limit or
+ * --idle-exit) with a device lost and not back since: the laser gave no scan
+ * after its loss, or the robot never connected again (active mode; one line
+ * on stderr says which). What ran is valid: the caller sums it up, then
+ * fails. */
+#define NAV_LIVE_NEVER_BACK 3
+
 /* Runs until both links end, the time limit passes, or SIGINT/SIGTERM.
- * Events go to sink. Returns 0, or 1 if a link cannot be opened (message on
- * stderr). */
+ * Events go to sink. Returns 0, NAV_LIVE_NEVER_BACK, or 1 if a link cannot
+ * be opened or a device never connected (message on stderr). */
 int nav_live_run(const nav_live_options_t *opt, const nav_sink_t *sink);
 
 #endif

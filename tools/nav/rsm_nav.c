@@ -311,6 +311,10 @@ typedef struct nav {
     int live;              /* a live run: outputs flushed at every pose */
     stamp_repair_t repair; /* scan stamps as the localizer gets them */
     double t_start;
+    /* Capture mode: the drivers' clock is the records' stamps plus this
+     * (modulo 2^64), so that it carries on across a step of the capture's
+     * clock; the trajectory keeps the capture's own stamps. */
+    uint64_t cap_base_us;
     /* Capture mode: original stamps of scans whose stamp the converter clamped. */
     uint64_t *restore_idx;
     int64_t *restore_us;   /* signed: a log's stamp may be negative */
@@ -660,7 +664,7 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan)
     static rsm_scan_t copy;
     nav_t *nav = (nav_t *)ctx;
     const uint64_t stamp_us = scan->stamp_us;
-    double file_s = (double)stamp_us * 1e-6;
+    double file_s = (double)(uint64_t)(stamp_us - nav->cap_base_us) * 1e-6;
     size_t k;
     while (nav->restore_next < nav->nrestore && nav->restore_idx[nav->restore_next] < nav->scan_index) {
         nav->restore_next++;
@@ -905,6 +909,14 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink, con
     int rc;
     int status;
     const char *v;
+    /* Steps of the capture's clock the reader delivered (docs/capture.md,
+     * "Far ahead", "Stepped back"): the drivers' time carries on across each
+     * from where it was, as stamp_repair does for a CARMEN log's jump. */
+    int have_prev = 0;
+    uint64_t prev_us = 0;
+    uint64_t prev_clock_us = 0;
+    uint64_t steps_back = 0;
+    uint64_t jumps = 0;
     if (fp == NULL) {
         fprintf(stderr, "rsm-nav: cannot open %s: %s\n", path, strerror(errno));
         return 1;
@@ -1012,13 +1024,27 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink, con
         if (rc != CAP_OK) {
             continue; /* lenient: counted in reader.count */
         }
+        if (have_prev && (rec.timestamp_us < prev_us || rec.timestamp_us - prev_us > CAP_MAX_STEP_US)) {
+            /* No time passes across the step: otherwise the drivers would
+             * see the clock go back, or an hour's silence that ends a
+             * spinning lidar's stream. */
+            if (rec.timestamp_us < prev_us) {
+                steps_back++;
+            } else {
+                jumps++;
+            }
+            nav->cap_base_us = prev_clock_us - rec.timestamp_us;
+        }
+        have_prev = 1;
+        prev_us = rec.timestamp_us;
+        prev_clock_us = rec.timestamp_us + nav->cap_base_us;
         if (rec.direction != CAP_RX) {
             continue;
         }
         if ((int)rec.channel == robot_id) {
-            nav_devices_feed(&dev, 1, &feed[0], buf, rec.length, rec.timestamp_us, sink);
+            nav_devices_feed(&dev, 1, &feed[0], buf, rec.length, prev_clock_us, sink);
         } else if ((int)rec.channel == laser_id) {
-            nav_devices_feed(&dev, 0, &feed[1], buf, rec.length, rec.timestamp_us, sink);
+            nav_devices_feed(&dev, 0, &feed[1], buf, rec.length, prev_clock_us, sink);
         }
     }
     printf("rsm-nav summary\n");
@@ -1029,6 +1055,11 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink, con
            (unsigned long long)reader.count.truncated, (unsigned long long)reader.count.out_of_order,
            (unsigned long long)reader.count.unknown_channel, (unsigned long long)reader.count.skipped_bytes,
            (unsigned long long)reader.count.crc_bytes);
+    if (steps_back != 0u || jumps != 0u) {
+        printf("  capture clock   %llu steps back, %llu jumps over an hour ahead (the time carried on across"
+               " each; the first record after each, not trusted alone, counted out of order)\n",
+               (unsigned long long)steps_back, (unsigned long long)jumps);
+    }
     printf("  robot link      %u encoder packets, %u other; checksum errors %u, bytes skipped %u\n",
            (unsigned)dev.robot.stats.encoder_packets,
            (unsigned)(dev.robot.stats.sips + dev.robot.stats.config_packets + dev.robot.stats.unknown_packets),
@@ -1441,6 +1472,7 @@ int main(int argc, char **argv)
     float ticks_per_m = 0.0f;
     float wheel_base = 0.0f;
     int fov179 = 0;
+    int never_back = 0;
     int rc;
     int opt;
     int li = 0;
@@ -1755,6 +1787,11 @@ int main(int argc, char **argv)
         rc = run_capture(&nav, capture, &sink, &live);
     } else {
         rc = nav_live_run(&live, &sink);
+        if (rc == NAV_LIVE_NEVER_BACK) {
+            /* Said already; what ran is summed up and kept, then the run fails. */
+            never_back = 1;
+            rc = 0;
+        }
     }
     if (nav.initialised) {
         nav.call_t0 = now_s();
@@ -1830,6 +1867,9 @@ int main(int argc, char **argv)
                 : capture != NULL ? "no scan came out of the capture (its laser channel empty, or its protocol "
                                     "tag not what the bytes are)"
                                   : "no scan arrived on the laser link");
+        rc = 1;
+    }
+    if (rc == 0 && never_back) {
         rc = 1;
     }
     hitmap_free(&nav.hits);

@@ -35,7 +35,9 @@ REC_HEAD = struct.Struct("<2sHQBB")   # sync, n, timestamp, channel, direction
 REC_HEAD_SIZE = REC_HEAD.size          # 14
 REC_OVERHEAD = REC_HEAD_SIZE + 4       # + CRC
 # Lenient readers do not trust alone a record stamped this much after the
-# previous one (one hour; docs/capture.md, "Far ahead").
+# previous one (one hour), nor one stamped before it; the next record confirms
+# either when it is stamped within this of it (docs/capture.md, "Far ahead",
+# "Stepped back").
 MAX_STEP_US = 3_600_000_000
 MAX_CHUNK = 0xFFFF
 MAX_CHANNELS = 32
@@ -154,12 +156,114 @@ class ReadStats:
     truncated: int = 0        # 1 if the file ended inside a record
     out_of_order: int = 0
     unknown_channel: int = 0
+    # bytes run through the CRC: about the file's size however many false
+    # record starts a resync meets (the C reader's crc_bytes)
+    crc_bytes: int = 0
     problems: List[str] = field(default_factory=list)
 
     def summary(self) -> str:
         return (f"{self.records} records, {self.bytes} bytes; corrupt {self.corrupt} "
                 f"({self.skipped_bytes} bytes skipped), truncated {self.truncated}, "
                 f"out of order {self.out_of_order}, unknown channel {self.unknown_channel}")
+
+
+# ---------------------------------------------------------------------------
+# CRC-32 of a span from prefix CRCs, for the resync
+#
+# crc(A B) = crc(A) * x^(8 |B|) + crc(B) modulo the polynomial (zlib's initial
+# and final inversions cancel), so crc(B) = crc(A B) ^ crc(A) * x^(8 |B|), as in
+# tools/nav/capture.c.  Polynomials are held reflected: bit 31 is x^0.
+
+CRC_POLY = 0xEDB88320
+
+
+def _gf2_mul(a: int, b: int) -> int:
+    p = 0
+    m = 1 << 31
+    while m and a:
+        if a & m:
+            p ^= b
+            a &= ~m
+        m >>= 1
+        b = (b >> 1) ^ CRC_POLY if b & 1 else b >> 1
+    return p
+
+
+def _x8n(n: int) -> int:
+    """x^(8 n) modulo the polynomial."""
+    sq, p = 1 << 23, 1 << 31   # x^8, x^0
+    while n:
+        if n & 1:
+            p = _gf2_mul(sq, p)
+        sq = _gf2_mul(sq, sq)
+        n >>= 1
+    return p
+
+
+# (k, d) -> four byte tables of the product with x^(8 d 16^k): a product is
+# linear in each factor, so four table reads per hex digit of the length
+# replace a pure-Python multiplication (made when first needed; a record's
+# span, under 2^17 bytes, needs 61 at most).
+_SHIFT_TABLES: Dict[Tuple[int, int], List[List[int]]] = {}
+
+
+def _shift_table(k: int, d: int) -> List[List[int]]:
+    t = _SHIFT_TABLES.get((k, d))
+    if t is None:
+        m = _x8n(d << (4 * k))
+        unit = [_gf2_mul(m, 1 << bit) for bit in range(32)]
+        t = []
+        for pos in range(4):
+            row = [0] * 256
+            for v in range(1, 256):
+                low = v & -v
+                row[v] = row[v ^ low] ^ unit[8 * pos + low.bit_length() - 1]
+            t.append(row)
+        _SHIFT_TABLES[(k, d)] = t
+    return t
+
+
+def _crc_times_x8n(crc: int, n: int) -> int:
+    """crc * x^(8 n) modulo the polynomial: a CRC moved on past n zero bytes' worth."""
+    k = 0
+    while n:
+        d = n & 15
+        if d:
+            t = _shift_table(k, d)
+            crc = t[0][crc & 255] ^ t[1][(crc >> 8) & 255] ^ t[2][(crc >> 16) & 255] ^ t[3][crc >> 24]
+        n >>= 4
+        k += 1
+    return crc
+
+
+class _SpanCrc:
+    """CRC-32 of any span of a growing buffer, from CRCs of its prefixes kept
+    every GRID bytes: the buffer goes through the CRC about once, and each
+    span at most two grid steps more, however long it is (a resync CRCed
+    each candidate's claim of up to 64 KiB anew: seconds per MiB of false
+    record starts)."""
+
+    GRID = 32
+
+    def __init__(self, buf: bytearray, stats: "ReadStats") -> None:
+        self.buf = buf
+        self.stats = stats
+        self.pre = [0]          # pre[k]: CRC of buf[:k * GRID]
+
+    def prefix(self, p: int) -> int:
+        g = self.GRID
+        pre = self.pre
+        while len(pre) <= p // g:
+            k = len(pre)
+            pre.append(zlib.crc32(memoryview(self.buf)[(k - 1) * g:k * g], pre[-1]))
+            self.stats.crc_bytes += g
+        base = p - p % g
+        self.stats.crc_bytes += p - base
+        return zlib.crc32(memoryview(self.buf)[base:p], pre[p // g])
+
+    def crc(self, a: int, b: int) -> int:
+        """CRC-32 of buf[a:b]."""
+        return self.prefix(b) ^ _crc_times_x8n(self.prefix(a), b - a)
 
 
 # ---------------------------------------------------------------------------
@@ -188,9 +292,22 @@ def encode_header(header: Header) -> bytes:
     return head + struct.pack("<I", zlib.crc32(head))
 
 
+def _read_exact(fh: IO[bytes], n: int) -> bytes:
+    """n bytes, fewer only at the end of the file: a raw stream (a pipe) may
+    return less per read, which is not the end.  A read error raises."""
+    out = b""
+    while len(out) < n:
+        chunk = fh.read(n - len(out))
+        if not chunk:
+            break
+        out += chunk
+    return out
+
+
 def read_header(fh: IO[bytes]) -> Tuple[Header, int]:
-    """Read and check the header; returns it and its size in bytes."""
-    fixed = fh.read(16)
+    """Read and check the header; returns it and its size in bytes.  A read
+    error is raised as the OSError it is, never a HeaderError."""
+    fixed = _read_exact(fh, 16)
     if len(fixed) < 8 or fixed[:8] != MAGIC:
         raise HeaderError("not an rsm capture file (bad magic)", 0)
     if len(fixed) < 16:
@@ -200,8 +317,8 @@ def read_header(fh: IO[bytes]) -> Tuple[Header, int]:
         raise HeaderError(f"unsupported capture version {version} (this reader reads {VERSION})", 8)
     if hlen > 16 * 1024 * 1024:
         raise HeaderError(f"implausible header length {hlen}", 12)
-    body = fh.read(hlen)
-    crc = fh.read(4)
+    body = _read_exact(fh, hlen)
+    crc = _read_exact(fh, 4)
     if len(body) < hlen or len(crc) < 4:
         raise HeaderError("capture header truncated", 16 + len(body))
     if zlib.crc32(fixed + body) != struct.unpack("<I", crc)[0]:
@@ -271,7 +388,6 @@ class CaptureWriter:
         self.records = 0
         self.bytes = 0
         self.last_ts: Optional[int] = None
-        self._far_ts: Optional[int] = None   # lenient: a far-ahead record skipped, stamped this
         self._write(head)
 
     def _write(self, b: bytes) -> None:
@@ -360,6 +476,8 @@ class CaptureReader:
         self._base = self.header_size   # file offset of _buf[0]
         self._eof = False
         self.last_ts: Optional[int] = None
+        # lenient: a record far ahead of last_ts or before it skipped, stamped this
+        self._far_ts: Optional[int] = None
 
     # buffered access -------------------------------------------------------
     def _fill(self, need: int) -> bool:
@@ -376,8 +494,9 @@ class CaptureReader:
         del self._buf[:n]
         self._base += n
 
-    def _complete_at(self, i: int) -> int:
-        """Size of a valid record starting at buffer index i, 0 if none (incomplete/CRC bad)."""
+    def _complete_at(self, i: int, spans: Optional[_SpanCrc] = None) -> int:
+        """Size of a valid record starting at buffer index i, 0 if none (incomplete/CRC bad).
+        spans: the buffer's prefix CRCs (a resync), else the record is CRCed."""
         if not self._fill(i + REC_HEAD_SIZE):
             return 0
         b = self._buf
@@ -389,6 +508,9 @@ class CaptureReader:
             return 0
         end = i + REC_HEAD_SIZE + n
         crc = struct.unpack_from("<I", b, end)[0]
+        if spans is not None:
+            return size if spans.crc(i, end) == crc else 0
+        self.stats.crc_bytes += end - i
         return size if zlib.crc32(memoryview(b)[i:end]) == crc else 0
 
     def _problem(self, exc: CaptureError) -> None:
@@ -400,7 +522,15 @@ class CaptureReader:
     def _resync(self) -> bool:
         """Skip from buffer start to the next valid record; False if none before EOF."""
         i = 1
+        spans = _SpanCrc(self._buf, self.stats)
         while True:
+            if i >= self.WINDOW:
+                # The bytes before i are garbage either way: the buffer stays
+                # bounded whatever the length of the garbage.
+                self.stats.skipped_bytes += i
+                self._drop(i)
+                spans = _SpanCrc(self._buf, self.stats)
+                i = 0
             self._fill(i + REC_HEAD_SIZE)
             j = self._buf.find(SYNC, i)
             if j < 0:
@@ -410,9 +540,10 @@ class CaptureReader:
                 keep = max(len(self._buf) - 1, 1)
                 self.stats.skipped_bytes += keep
                 self._drop(keep)
+                spans = _SpanCrc(self._buf, self.stats)
                 i = 0
                 continue
-            if self._complete_at(j):
+            if self._complete_at(j, spans):
                 self.stats.skipped_bytes += j
                 self._drop(j)
                 return True
@@ -468,17 +599,20 @@ class CaptureReader:
                 self._problem(UnknownChannelError(
                     f"record for channel id {ch}, which the header does not list", off, st.records))
                 continue
-            if (self.lenient and self.last_ts is not None and ts - self.last_ts > MAX_STEP_US
+            if (self.lenient and self.last_ts is not None
+                    and (ts < self.last_ts or ts - self.last_ts > MAX_STEP_US)
                     and not (self._far_ts is not None and abs(ts - self._far_ts) <= MAX_STEP_US)):
-                # One record far ahead would make every later one out of order:
-                # it counts as out of order itself unless the next one agrees.
+                # One record far ahead would make every later one out of order,
+                # and a clock that stepped back would lose every later one: the
+                # record counts as out of order unless the next one agrees.
                 self._far_ts = ts
                 st.out_of_order += 1
+                how = ("earlier than" if ts < self.last_ts else "over an hour after")
                 self._problem(OutOfOrderError(
-                    f"record timestamp {ts} us is over an hour after the previous {self.last_ts} us "
+                    f"record timestamp {ts} us is {how} the previous {self.last_ts} us "
                     "(not trusted alone)", off, st.records))
                 continue
-            if self.last_ts is not None and ts < self.last_ts:
+            if not self.lenient and self.last_ts is not None and ts < self.last_ts:
                 st.out_of_order += 1
                 self._problem(OutOfOrderError(
                     f"record timestamp {ts} us is earlier than the previous {self.last_ts} us",

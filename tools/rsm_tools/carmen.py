@@ -25,9 +25,11 @@ these buckets, counted in :class:`LogStats`:
       the number of fields does not match the reading counts;
   ``bad_count``
       a reading count (``n``, ``m``) or an integer field (``laser_type``,
-      ``remission_mode``) is not a non-negative integer;
+      ``remission_mode``) is not a non-negative integer written in decimal
+      digits alone (``0x10``, ``16.0``, ``+16`` are not);
   ``non_numeric``
-      a field that must be a number is not one;
+      a field that must be a number is not one in decimal (``0x10`` and
+      ``1_000`` are not; ``inf`` and ``nan`` are numbers);
   ``non_finite``
       NaN or infinity in a field where it is not allowed.  Only range and
       remission readings may be non-finite (some drivers write ``inf`` or
@@ -219,6 +221,10 @@ class MalformedLine(ValueError):
 
 
 def _num(tok: str, finite: bool = True) -> float:
+    # Decimal, as rsm-nav's reader takes it: float() alone would also take
+    # 1_000 and digits of other scripts.
+    if "_" in tok or not tok.isascii():
+        raise MalformedLine("non_numeric", repr(tok))
     try:
         v = float(tok)
     except ValueError:
@@ -229,13 +235,12 @@ def _num(tok: str, finite: bool = True) -> float:
 
 
 def _count(tok: str) -> int:
-    try:
-        v = int(tok)
-    except ValueError:
-        raise MalformedLine("bad_count", repr(tok)) from None
-    if v < 0:
+    # Decimal digits only, as CARMEN writes a count (%d) and rsm-nav's reader
+    # takes it: int() alone would also take +16, 1_6 and digits of other
+    # scripts (0x10 and 16.0 it refuses, as it should).
+    if not (tok.isascii() and tok.isdigit()):
         raise MalformedLine("bad_count", repr(tok))
-    return v
+    return int(tok)
 
 
 def _pose(tokens: Sequence[str], i: int) -> Pose:

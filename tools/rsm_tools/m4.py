@@ -50,7 +50,14 @@ same QEMU run, must load the same bytes, tiles and pose and localize, the map
 frozen; both boots' lines must match ``HOST_EXE`` (rsm-mapflash-host, both
 boots on the host) within MAPFLASH_HOST_TOL, and the localized poses must stay
 within MAPFLASH_MAPPER_TOL of the uninterrupted mapping run
-(``REPLAY_HOST_EXE``, rsm-replay-host) at the same scans.
+(``REPLAY_HOST_EXE``, rsm-replay-host) at the same scans.  Then the second
+boot searches the map globally (``G`` and ``GE`` lines, mapflash.h): its
+scans must have the host's outcomes and reads (``search_work``) and end the
+same way, the last pose within MAPFLASH_HOST_TOL of the host's and, when
+proven, within MAPFLASH_MAPPER_TOL of the uninterrupted run's; the check
+prints the search's worst and mean instructions per scan on the M4 (the
+target's clock ticks around each ``rsm_localizer_scan``, converted as the
+replay's after the same calibration) and the scans to the proven pose.
 
 QEMU runs with ``-icount shift=ICOUNT_SHIFT,sleep=off``: the virtual clock
 advances exactly 2^shift ns per executed instruction, so the board's 25 MHz
@@ -406,10 +413,14 @@ def mapflash_info(boot: str, tag: str) -> Dict[str, object]:
             "pose": (m.group(4), m.group(5), m.group(6))}
 
 
+def _float_of(h: str) -> float:
+    """A float from its IEEE bits in hexadecimal (the images' lines)."""
+    return struct.unpack("<f", struct.pack("<I", int(h, 16)))[0]
+
+
 def pose_lines(text: str) -> List[Tuple[int, int, float, float, float]]:
     """(scan, outcome, x, y, theta) of each P line."""
-    def f(h: str) -> float:
-        return struct.unpack("<f", struct.pack("<I", int(h, 16)))[0]
+    f = _float_of
     return [(int(p[0]), int(p[1]), f(p[2]), f(p[3]), f(p[4])) for p in lines_of(text, "P") if len(p) == 5]
 
 
@@ -433,7 +444,63 @@ def compare_poses(what: str, got: Sequence[Tuple[int, int, float, float, float]]
     return worst
 
 
+def global_search(boot: str) -> Dict[str, object]:
+    """The global search of a mapflash boot: its G lines as (scan, outcome,
+    search_work, ticks) and its GE line (proven, scans, budget, pose as floats);
+    M4Error when either is missing or they disagree on the scan count."""
+    rows = []
+    for g in lines_of(boot, "G"):
+        if len(g) != 4 or not all(v.isdigit() for v in g):
+            raise M4Error(f"a malformed G line: G {' '.join(g)}")
+        rows.append(tuple(int(v) for v in g))
+    m = re.search(r"^GE proven ([01]) scans (\d+) budget (\d+) pose ([0-9a-f]{8}) ([0-9a-f]{8}) ([0-9a-f]{8})$",
+                  boot, re.M)
+    if m is None:
+        raise M4Error(f"no 'GE' line (the global search's end) in:\n{boot[-2000:]}")
+    end = {"proven": m.group(1) == "1", "scans": int(m.group(2)), "budget": int(m.group(3)),
+           "pose": tuple(_float_of(m.group(i)) for i in (4, 5, 6))}
+    if not rows or end["scans"] != len(rows):
+        raise M4Error(f"the global search's end says {end['scans']} scans, {len(rows)} G lines")
+    return {"rows": rows, **end}
+
+
+def compare_global(target: Dict[str, object], host: Dict[str, object], tol: Tuple[float, float]) -> None:
+    """Target and host searched alike: the same scans, outcomes and
+    search_work (the cost, the target's clock, apart), the same verdict, and
+    the last pose within tol (metres, radians)."""
+    t_rows = [r[:3] for r in target["rows"]]
+    h_rows = [r[:3] for r in host["rows"]]
+    for a, b in zip(h_rows, t_rows):
+        if a != b:
+            raise M4Error(f"global search: host scan {a[0]} outcome {a[1]} search_work {a[2]}, target scan "
+                          f"{b[0]} outcome {b[1]} search_work {b[2]}")
+    if len(t_rows) != len(h_rows) or target["proven"] != host["proven"] or target["budget"] != host["budget"]:
+        raise M4Error(f"global search: host {len(h_rows)} scans (proven {host['proven']}, budget "
+                      f"{host['budget']}), target {len(t_rows)} (proven {target['proven']}, budget "
+                      f"{target['budget']})")
+    tp, hp = target["pose"], host["pose"]
+    compare_poses("global search, host", [(0, 0, *tp)], {0: (0, 0, *hp)}, tol, False)
+
+
+def global_costs(search: Dict[str, object], per_tick: float = INSNS_PER_TICK) -> Dict[str, object]:
+    """Instructions per scan of a global search (global_search of a target
+    boot, whose C line checked the clock): worst and mean over its scans,
+    the proving one included; reads; scans to the first proven pose."""
+    insns = [r[3] * per_tick for r in search["rows"]]
+    work = [r[2] for r in search["rows"]]
+    return {"scans": len(insns), "max": max(insns), "mean": statistics.fmean(insns),
+            "max_work": max(work), "work": sum(work), "proven": search["proven"],
+            "scans_to_pose": search["scans"] if search["proven"] else None, "budget": search["budget"],
+            "last_scan": search["rows"][-1][0], "pose": list(search["pose"])}
+
+
 def check_mapflash(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path) -> str:
+    return mapflash_run(elf, host_exe, replay_host_exe, work)[0]
+
+
+def mapflash_run(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path) -> Tuple[str, Dict[str, object]]:
+    """check_mapflash's checks; returns its summary and the global search's
+    figures on the M4 (global_costs)."""
     work.mkdir(parents=True, exist_ok=True)
     out = run_rebooting(elf, MAPFLASH_BANNER, MAPFLASH_MAX_BOOTS)
     (work / "mapflash-m4.out").write_text(out)
@@ -493,11 +560,28 @@ def check_mapflash(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path)
     mapper = {p[0]: p for p in pose_lines(ref.stdout)}
     compare_poses("mapping, rsm-replay-host", target_map, mapper, MAPFLASH_HOST_TOL, True)
     worst = compare_poses("localizing, the uninterrupted run", target_loc, mapper, MAPFLASH_MAPPER_TOL, False)
-    return (f"mapflash: first boot refused the region ({refused.group(1)}), mapped {len(target_map)} scans, saved "
-            f"{saved['bytes']} bytes ({saved['tiles']} tiles), reset; second boot loaded the same and localized "
-            f"{len(target_loc)} scans in the frozen map: {bits} of {len(target_map) + len(target_loc)} poses equal "
-            f"the host's bit for bit (largest difference {host_worst[0]:.2g} m, {host_worst[1]:.2g} rad), within "
-            f"{worst[0]:.3f} m and {worst[1]:.3f} rad of the uninterrupted run")
+    # The global search in the loaded map: as the host's, and where it proves
+    # a pose, near the uninterrupted run's at that scan.
+    calibration(second)
+    t_search, h_search = global_search(second), global_search(host_boots[1])
+    if any(r[3] != 0 for r in h_search["rows"]):
+        raise M4Error("the host's global search lines have a cost: the host has no clock to time them")
+    compare_global(t_search, h_search, MAPFLASH_HOST_TOL)
+    cost = {**global_costs(t_search), "map_bytes": saved["bytes"], "map_tiles": saved["tiles"],
+            "mapped_scans": len(target_map)}
+    if cost["proven"]:
+        last = (cost["last_scan"], 0, *cost["pose"])
+        compare_poses("global search, the uninterrupted run", [last], mapper, MAPFLASH_MAPPER_TOL, False)
+    found = (f"a pose proven after {cost['scans']} scans" if cost["proven"]
+             else f"no pose proven within {cost['scans']} scans")
+    summary = (f"mapflash: first boot refused the region ({refused.group(1)}), mapped {len(target_map)} scans, "
+               f"saved {saved['bytes']} bytes ({saved['tiles']} tiles), reset; second boot loaded the same and "
+               f"localized {len(target_loc)} scans in the frozen map: {bits} of {len(target_map) + len(target_loc)} "
+               f"poses equal the host's bit for bit (largest difference {host_worst[0]:.2g} m, {host_worst[1]:.2g} "
+               f"rad), within {worst[0]:.3f} m and {worst[1]:.3f} rad of the uninterrupted run; then a global search "
+               f"in the map loaded again, as the host's: {found} ({cost['work']} reads, at most {cost['max_work']} "
+               f"in one scan), instructions per scan on the M4 worst {cost['max']:.0f}, mean {cost['mean']:.0f}")
+    return summary, cost
 
 
 def percentile(values: Sequence[float], q: float) -> float:

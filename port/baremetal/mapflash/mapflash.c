@@ -115,6 +115,18 @@ static uint32_t step_of_scan(uint32_t scan)
     return i;
 }
 
+/* Puts scan `scan` (1-based) of the excerpt into m->scan. */
+static void load_scan(rsm_mapflash_t *m, uint32_t scan)
+{
+    const rsm_replay_scan_t *sc = &rsm_replay_scans[scan - 1u];
+    uint32_t b;
+    for (b = 0; b < RSM_REPLAY_BEAMS; ++b) {
+        m->scan.range_m[b] = (float)sc->range_cm[b] * 0.01f;
+    }
+    (void)rsm_scan_set_uniform(&m->scan, RSM_REPLAY_BEAMS, -RSM_PI / 2.0f, RSM_PI / (float)RSM_REPLAY_BEAMS);
+    m->scan.stamp_us = sc->stamp_us;
+}
+
 /* Feeds steps from `first` on, up to the one bringing scan `last` (1-based),
  * as rsm_replay_run does; a P line after each scan. */
 static void run_steps(rsm_mapflash_t *m, const rsm_replay_io_t *io, uint32_t first, uint32_t last)
@@ -124,13 +136,7 @@ static void run_steps(rsm_mapflash_t *m, const rsm_replay_io_t *io, uint32_t fir
         const rsm_replay_step_t *st = &rsm_replay_steps[i];
         (void)rsm_localizer_ticks(&m->loc, st->left, st->right);
         if (st->scan != 0u && st->scan <= rsm_replay_scan_count) {
-            const rsm_replay_scan_t *sc = &rsm_replay_scans[st->scan - 1u];
-            uint32_t b;
-            for (b = 0; b < RSM_REPLAY_BEAMS; ++b) {
-                m->scan.range_m[b] = (float)sc->range_cm[b] * 0.01f;
-            }
-            (void)rsm_scan_set_uniform(&m->scan, RSM_REPLAY_BEAMS, -RSM_PI / 2.0f, RSM_PI / (float)RSM_REPLAY_BEAMS);
-            m->scan.stamp_us = sc->stamp_us;
+            load_scan(m, st->scan);
             (void)rsm_localizer_scan(&m->loc, &m->scan, &m->rep);
             rsm_replay_put_str(io, "P ");
             rsm_replay_put_dec(io, (uint32_t)st->scan - 1u);
@@ -164,8 +170,89 @@ static rsm_mapflash_result_t map_and_save(rsm_mapflash_t *m, rsm_mapflash_region
     return RSM_MAPFLASH_RESET;
 }
 
+/* The global search in the loaded map (rsm_localizer_global: no pose), as
+ * a robot switched on somewhere in it: the localizer set up and the map
+ * loaded from the region again (frozen, as for localizing), then the
+ * excerpt's scans from RSM_MAPFLASH_GLOBAL_FROM on fed until a pose is
+ * trusted or RSM_MAPFLASH_GLOBAL_SCANS scans. By default these are the
+ * localized run's scans again, which a fresh localizer takes (the old one
+ * would refuse their stamps as out of order): from the scans after them,
+ * where the robot drives on down the corridor, no search proved a pose
+ * within the 150 the excerpt has left. A G line per scan, its cost the
+ * clock's ticks around rsm_localizer_scan (0 without a clock); then the GE
+ * line. */
+static rsm_mapflash_result_t global_search(rsm_mapflash_t *m, rsm_mapflash_region_t *flash,
+                                           const rsm_replay_io_t *io)
+{
+    const rsm_pose_t start = {0.0f, 0.0f, 0.0f};
+    const uint32_t from = RSM_MAPFLASH_GLOBAL_FROM;
+    /* Odometry moves from the encoders' counts where the scan before was
+     * taken (from the first step's for scan 1). */
+    const uint32_t at = from > 1u ? step_of_scan(from - 1u) : 0u;
+    uint32_t i;
+    uint32_t scans = 0u;
+    int trusted = 0;
+    int rc = rsm_localizer_init(&m->loc, &m->cfg, &start, NULL);
+    if (rc != RSM_OK) {
+        return fail(io, "init", rc);
+    }
+    rc = rsm_localizer_load_map(&m->loc, rsm_mapflash_read, flash, &m->info);
+    if (rc != RSM_OK) {
+        return fail(io, "load_map", rc);
+    }
+    rc = rsm_localizer_global(&m->loc);
+    if (rc != RSM_OK) {
+        return fail(io, "global", rc);
+    }
+    if (at >= rsm_replay_step_count) {
+        return fail(io, "no such scan in the excerpt", RSM_ERR_RANGE);
+    }
+    (void)rsm_localizer_ticks(&m->loc, rsm_replay_steps[at].left, rsm_replay_steps[at].right);
+    for (i = from > 1u ? at + 1u : 0u; i < rsm_replay_step_count && scans < RSM_MAPFLASH_GLOBAL_SCANS && !trusted; ++i) {
+        const rsm_replay_step_t *st = &rsm_replay_steps[i];
+        uint32_t t0 = 0u;
+        uint32_t cost = 0u;
+        (void)rsm_localizer_ticks(&m->loc, st->left, st->right);
+        if (st->scan == 0u || st->scan > rsm_replay_scan_count) {
+            continue;
+        }
+        load_scan(m, st->scan);
+        if (io->clock_fn != NULL) {
+            t0 = io->clock_fn(io->clock_ctx);
+        }
+        rc = rsm_localizer_scan(&m->loc, &m->scan, &m->rep);
+        if (io->clock_fn != NULL) {
+            cost = io->clock_fn(io->clock_ctx) - t0; /* modulo 2^32: the counter may wrap */
+        }
+        if (rc != RSM_OK) {
+            return fail(io, "scan", rc); /* a refused scan would time no search */
+        }
+        ++scans;
+        /* Trusted as rsm-nav counts its first_trusted_scan: no search under
+         * way and this scan's pose not a searching one. */
+        trusted = !rsm_localizer_searching(&m->loc) && m->rep.outcome != RSM_SCAN_SEARCHING;
+        rsm_replay_put_str(io, "G ");
+        rsm_replay_put_dec(io, (uint32_t)st->scan - 1u);
+        rsm_replay_put_str(io, " ");
+        rsm_replay_put_dec(io, (uint32_t)m->rep.outcome);
+        rsm_replay_put_str(io, " ");
+        rsm_replay_put_dec(io, m->rep.search_work);
+        rsm_replay_put_str(io, " ");
+        rsm_replay_put_dec(io, cost);
+        rsm_replay_put_str(io, "\n");
+    }
+    rsm_replay_put_str(io, trusted ? "GE proven 1 scans " : "GE proven 0 scans ");
+    rsm_replay_put_dec(io, scans);
+    rsm_replay_put_str(io, " budget ");
+    rsm_replay_put_dec(io, m->cfg.global_budget);
+    rsm_replay_put_str(io, " pose");
+    put_pose(io, &m->rep.pose);
+    rsm_replay_put_str(io, "\n");
+    return RSM_MAPFLASH_DONE;
+}
+
 /* A valid map: localize in it, frozen, from where it was saved. */
-static rsm_mapflash_result_t localize(rsm_mapflash_t *m, const rsm_replay_io_t *io)
+static rsm_mapflash_result_t localize(rsm_mapflash_t *m, rsm_mapflash_region_t *flash, const rsm_replay_io_t *io)
 {
     const uint32_t at = step_of_scan(RSM_MAPFLASH_MAP_SCANS);
     int rc;
@@ -188,7 +275,11 @@ static rsm_mapflash_result_t localize(rsm_mapflash_t *m, const rsm_replay_io_t *
     /* Frozen: the map is as large as it was loaded. */
     rsm_replay_put_str(io, " map_bytes ");
     rsm_replay_put_dec(io, rsm_localizer_map_bytes(&m->loc));
-    rsm_replay_put_str(io, "\nrsm mapflash: done\n");
+    rsm_replay_put_str(io, "\n");
+    if (global_search(m, flash, io) != RSM_MAPFLASH_DONE) {
+        return RSM_MAPFLASH_FAILED;
+    }
+    rsm_replay_put_str(io, "rsm mapflash: done\n");
     return RSM_MAPFLASH_DONE;
 }
 
@@ -226,5 +317,5 @@ rsm_mapflash_result_t rsm_mapflash_boot(rsm_mapflash_t *m, rsm_mapflash_region_t
         }
         return map_and_save(m, flash, io);
     }
-    return localize(m, io);
+    return localize(m, flash, io);
 }

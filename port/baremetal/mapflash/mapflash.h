@@ -9,16 +9,33 @@
  * region, or garbage): it maps the replay's scans 1 .. RSM_MAPFLASH_MAP_SCANS,
  * saves the map into the region and asks for a reset. Loaded: it localizes,
  * the map frozen, from the saved pose over the next RSM_MAPFLASH_LOC_SCANS
- * scans, as if the robot had stood still while it rebooted.
+ * scans, as if the robot had stood still while it rebooted; then, as a robot
+ * switched on somewhere in the mapped building, it sets the localizer up
+ * again, loads the map again and searches it globally
+ * (rsm_localizer_global: no pose) over the scans from
+ * RSM_MAPFLASH_GLOBAL_FROM on until a pose is trusted, at most
+ * RSM_MAPFLASH_GLOBAL_SCANS scans, each scan timed with the io's clock
+ * (the target's: the global search's cost per scan on the M4).
  *
  * Output, one line each (floats as their IEEE bits in hexadecimal, as the
  * replay's, so that host and target compare bit for bit):
  *   F region <bytes> page <bytes>                 the flash region
+ *   C <n1> <ticks1> <n2> <ticks2>                 the clock's check (calib.h),
+ *                                                 the target only, before F
  *   L refused <status> <text>                     the load's refusal, first boot
  *   L loaded bytes <n> tiles <n> stamp <n> pose <x> <y> <theta>
  *   P <scan> <outcome> <x> <y> <theta>            pose after each scan
  *   S saved bytes <n> tiles <n> stamp <n> pose <x> <y> <theta>
  *   E scans <n> accepted <n> map_bytes <n>        after localizing
+ *   G <scan> <outcome> <search_work> <cost>       each scan of the global search:
+ *                                                 report.search_work, the clock's
+ *                                                 ticks of rsm_localizer_scan (0
+ *                                                 without a clock)
+ *   GE proven <0|1> scans <n> budget <reads> pose <x> <y> <theta>
+ *                                                 its end: a pose trusted (as rsm-nav's
+ *                                                 first_trusted_scan) or not, after n
+ *                                                 scans at global_budget reads a scan
+ *                                                 at most, the last scan's pose
  * then "rsm mapflash: saved, resetting" or "rsm mapflash: done". */
 #ifndef RSM_MAPFLASH_H
 #define RSM_MAPFLASH_H
@@ -40,6 +57,15 @@
 #endif
 #ifndef RSM_MAPFLASH_LOC_SCANS
 #define RSM_MAPFLASH_LOC_SCANS 100u
+#endif
+/* The global search's scans: from the localized run's first on (again),
+ * at most this many; it proves a pose within a few (mapflash.c says why
+ * not the scans after the localized run). */
+#ifndef RSM_MAPFLASH_GLOBAL_FROM
+#define RSM_MAPFLASH_GLOBAL_FROM (RSM_MAPFLASH_MAP_SCANS + 1u)
+#endif
+#ifndef RSM_MAPFLASH_GLOBAL_SCANS
+#define RSM_MAPFLASH_GLOBAL_SCANS 100u
 #endif
 
 /* Flash as a NOR part behaves: erased to 0xFF a page at a time; a write

@@ -4,10 +4,13 @@
  * loads the image's segments again, leaves it as the previous boot wrote
  * it, and the start-up code, which zeroes only .bss and .ccm, does too.
  * After saving, the firmware resets the system (SYSRESETREQ) and the next
- * boot finds the map there. */
+ * boot finds the map there. Each boot checks the cycle counter against a
+ * known loop (the C line, calib.h), whose ticks time the global search's
+ * scans. */
 #include <stdint.h>
 
 #include "board.h"
+#include "calib.h"
 #include "mapflash.h"
 
 /* The region's bytes: a NOLOAD section, never zeroed by anyone; at power-up
@@ -36,6 +39,12 @@ static void target_write(void *ctx, const char *s, size_t n)
     rsm_board_console_write(s, n);
 }
 
+static uint32_t target_clock(void *ctx)
+{
+    (void)ctx;
+    return rsm_board_cycles();
+}
+
 static rsm_mapflash_t fw_mapflash;
 
 int main(void)
@@ -46,7 +55,7 @@ int main(void)
     rsm_board_init();
     io.write = target_write;
     io.ctx = NULL;
-    io.clock_fn = NULL;
+    io.clock_fn = target_clock;
     io.clock_ctx = NULL;
     flash.bytes = rsm_mapflash_bytes;
     flash.size = (uint32_t)sizeof rsm_mapflash_bytes;
@@ -55,6 +64,7 @@ int main(void)
     rsm_replay_put_str(&io, ", region at 0x");
     rsm_replay_put_hex(&io, (uint32_t)(uintptr_t)rsm_mapflash_bytes);
     rsm_replay_put_str(&io, "\n");
+    rsm_calib_put(&io);
     res = rsm_mapflash_boot(&fw_mapflash, &flash, &io);
     if (res == RSM_MAPFLASH_RESET) {
         system_reset();

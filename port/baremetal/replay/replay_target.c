@@ -2,12 +2,13 @@
  * the cost of every scan (T lines, in the board's cycle counter's unit), a
  * known loop that checks that unit (C line) and the stack used (M line).
  *
- *   C <n1> <counts1> <n2> <counts2>  counter ticks around known_loop(n1), (n2)
+ *   C <n1> <counts1> <n2> <counts2>  counter ticks around a known loop (calib.h)
  *   M stack <bytes used> of <bytes> cycles_hz <rate>
  * then "rsm replay: done" and exit status 0 (semihosting on QEMU). */
 #include <stdint.h>
 
 #include "board.h"
+#include "calib.h"
 #include "replay.h"
 #include "rsm/status.h"
 
@@ -21,19 +22,6 @@ static uint32_t target_clock(void *ctx)
 {
     (void)ctx;
     return rsm_board_cycles();
-}
-
-/* Exactly 2 n instructions (subs, bne) whatever the compiler does around it. */
-static void __attribute__((noinline)) known_loop(uint32_t n)
-{
-    __asm__ volatile("1:\n\tsubs %0, %0, #1\n\tbne 1b" : "+r"(n) : : "cc");
-}
-
-static uint32_t time_loop(uint32_t n)
-{
-    const uint32_t t0 = rsm_board_cycles();
-    known_loop(n);
-    return rsm_board_cycles() - t0;
 }
 
 /* State of the replay: static, the application's (the library keeps none). */
@@ -58,21 +46,7 @@ int main(void)
         rsm_replay_put_str(&io, "FAULT: start-up did not initialise .data or .bss\n");
         rsm_board_exit(1);
     }
-    {
-        const uint32_t n1 = 1000u;
-        const uint32_t n2 = 101000u;
-        const uint32_t c1 = time_loop(n1);
-        const uint32_t c2 = time_loop(n2);
-        rsm_replay_put_str(&io, "C ");
-        rsm_replay_put_dec(&io, n1);
-        rsm_replay_put_str(&io, " ");
-        rsm_replay_put_dec(&io, c1);
-        rsm_replay_put_str(&io, " ");
-        rsm_replay_put_dec(&io, n2);
-        rsm_replay_put_str(&io, " ");
-        rsm_replay_put_dec(&io, c2);
-        rsm_replay_put_str(&io, "\n");
-    }
+    rsm_calib_put(&io);
     rc = rsm_replay_run(&fw_replay, &io);
     if (rc != RSM_OK) {
         rsm_replay_put_str(&io, "FAULT: ");

@@ -30,7 +30,9 @@ report (``docs/RESULTS.md`` by default) has these sections:
    configuration), in total and by stage; and on the target: instructions per
    scan and per stage of the replay firmware on an emulated Cortex-M4F (QEMU
    mps2-an386, ``-O2``, :mod:`rsm_tools.m4`) beside callgrind's count of the
-   same excerpt on the host, with the images' flash, RAM and painted stack.
+   same excerpt on the host, with the images' flash, RAM and painted stack;
+   and the global search's instructions per scan in the excerpt's map, from
+   the map-in-flash firmware (the floor of the subsection "Known map").
 5. Memory: the localizer state per part on this host (``rsm-stages``) and on
    Cortex-M4F (a cross build per configuration), flash per object, the
    example firmware, the stack of one localizer step.
@@ -327,7 +329,11 @@ def run(args: argparse.Namespace) -> Path:
                         else stage("callgrind", run_callgrind, navs, logs, args.callgrind_scans, cg_methods, work,
                                    args.jobs, root))
     ctx["m4"] = ({"skipped": "--no-m4"} if args.no_m4
-                 else stage("m4", run_m4, root, work, build / "port" / "baremetal" / "rsm-replay-host"))
+                 else stage("m4", run_m4, root, work, build / "port" / "baremetal" / "rsm-replay-host",
+                            build / "port" / "baremetal" / "rsm-mapflash-host"))
+    if "skipped" not in ctx["knownmap"]:
+        # the section's cost floor is the M4's, measured in the stage above
+        ctx["knownmap"]["m4_global"] = _knownmap.m4_global_entry(ctx["m4"])
     ctx["memory"] = stage("memory", run_memory, {"default": stages_bin, "small": small["stages"]}, main_log, build)
     ctx["cross_check"] = ({"skipped": "--no-cross-check"} if args.no_cross_check
                           else stage("cross-check", run_cross_check, root))

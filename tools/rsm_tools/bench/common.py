@@ -252,7 +252,9 @@ STACK_ROOTS = ("rsm_localizer_scan", "rsm_localizer_motion", "rsm_sync_scan", "r
 INDIRECT_TARGETS = {"rsm_harris_detect": ("patch_map", "rsm_harris_patch_image")}
 
 
-M4_TARGETS = ("rsm_firmware", "rsm_replay_m4")
+# The images the bench runs under QEMU: the example, the replay (instructions per scan) and the
+# map-in-flash firmware (the global search's instructions per scan, the section "Known map").
+M4_TARGETS = ("rsm_firmware", "rsm_replay_m4", "rsm_mapflash_m4")
 
 
 SCALING_BEAMS = (181, 361, 721)

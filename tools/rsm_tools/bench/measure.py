@@ -717,12 +717,26 @@ def _symbol_bytes(elf: Path, names: Sequence[str]) -> int:
                if len(f) == 4 and f[3] in names)
 
 
-def run_m4(root: Path, work: Path, replay_host: Optional[Path]) -> dict:
+def m4_global(elf: Path, mapflash_host: Optional[Path], replay_host: Optional[Path], work: Path) -> dict:
+    """The global search's instructions per scan on the M4: the map-in-flash
+    image's run with all of ``rsm-m4 mapflash``'s checks (its search as the
+    host's, same source, rsm-mapflash-host), its figures (m4.global_costs)."""
+    for exe, name in ((mapflash_host, "rsm-mapflash-host"), (replay_host, "rsm-replay-host")):
+        if exe is None or not exe.is_file():
+            return {"skipped": f"{name} was not built (its run is what the target's is checked against)"}
+    try:
+        return m4.mapflash_run(elf, mapflash_host, replay_host, work)[1]
+    except m4.M4Error as e:
+        raise BenchError(str(e))
+
+
+def run_m4(root: Path, work: Path, replay_host: Optional[Path], mapflash_host: Optional[Path] = None) -> dict:
     """The firmware images cross-built at -O2 and run under QEMU (mps2-an386):
     instructions per scan and per stage of the replay firmware on the shipped
     excerpt, the known-loop calibration, each image's flash, RAM and painted
-    stack; and callgrind's count of the same excerpt through the same source
-    on the host (rsm-replay-host), when valgrind is there."""
+    stack; callgrind's count of the same excerpt through the same source on
+    the host (rsm-replay-host), when valgrind is there; and the global
+    search's instructions per scan from the map-in-flash image (m4_global)."""
     for tool in ("arm-none-eabi-gcc", "arm-none-eabi-size", "arm-none-eabi-nm", "qemu-system-arm", "cmake",
                  "ninja"):
         if shutil.which(tool) is None:
@@ -754,7 +768,8 @@ def run_m4(root: Path, work: Path, replay_host: Optional[Path]) -> dict:
                           "stack_size": int(ex_m[0][3]) if ex_m else None, "excerpt": 0}}
     res_out = {"compiler": first_line(["arm-none-eabi-gcc", "--version"]) or "arm-none-eabi-gcc",
                "qemu": first_line(["qemu-system-arm", "--version"]) or "qemu-system-arm",
-               "icount_shift": m4.ICOUNT_SHIFT, "cost": cost, "images": images}
+               "icount_shift": m4.ICOUNT_SHIFT, "cost": cost, "images": images,
+               "global": m4_global(fw_dir / "rsm_mapflash_m4.elf", mapflash_host, replay_host, work / "m4-mapflash")}
     valgrind = shutil.which("valgrind")
     if replay_host is None or not replay_host.is_file():
         res_out["host"] = {"skipped": "rsm-replay-host was not built"}

@@ -32,12 +32,24 @@ def m4_lines(m: Optional[dict]) -> List[str]:
     if "skipped" not in h:
         L.append(f"host x86-64 (callgrind, same excerpt and source): {fmt_int(round(h['ir_per_scan']))} "
                  f"instructions per scan; trajectories {'bit-identical' if h['identical'] else 'DIFFERENT'}")
+    L.append(global_line(m.get("global")))
     for name, im in m["images"].items():
         stack = ("n/a" if im["stack_used"] is None else f"{fmt_int(im['stack_used'])} of {fmt_int(im['stack_size'])}")
         extra = f" (of which the excerpt {fmt_int(im['excerpt'])})" if im["excerpt"] else ""
         L.append(f"{name} image: flash {fmt_int(im['flash'])} bytes{extra}, RAM {fmt_int(im['ram'])} bytes "
                  f"(stack included), stack used {stack} bytes")
     return L
+
+
+def global_line(g: Optional[dict]) -> str:
+    """The global search's cost on the target (run_m4's "global"), one line."""
+    what = "global search (map-in-flash image, the excerpt's map"
+    if not g or "skipped" in g:
+        return f"{what}): not measured ({(g or {}).get('skipped', 'not run')})"
+    found = (f"first proven pose after {g['scans_to_pose']} scans" if g["proven"] else
+             f"no pose proven within {g['scans']} scans")
+    return (f"{what}, {fmt_int(g['map_tiles'])} tiles, global_budget {fmt_int(g['budget'])}): instructions per scan "
+            f"worst {fmt_int(round(g['max']))}, mean {fmt_int(round(g['mean']))} over {g['scans']} scans; {found}")
 
 
 def report_m4(m: Optional[dict]) -> List[str]:
@@ -72,6 +84,23 @@ def report_m4(m: Optional[dict]) -> List[str]:
     if "skipped" not in h:
         L += [("The host's trajectory of the same excerpt is bit-identical to the target's."
                if h["identical"] else "WARNING: the host's trajectory differs from the target's."), ""]
+    g = m.get("global")
+    if not g or "skipped" in g:
+        return L + [f"The {global_line(g)}.", ""]
+    L += ["The global search (issue 31's cost floor; the subsection \"Known map\"): the map-in-flash firmware "
+          f"(`port/baremetal/mapflash/`) maps the excerpt's first {g['mapped_scans']} scans, saves the map "
+          f"({fmt_int(g['map_bytes'])} bytes, {fmt_int(g['map_tiles'])} tiles: a small map), resets, loads it, "
+          "then sets the localizer up again, loads the map again and searches it globally with no pose "
+          f"(`rsm_localizer_global`, default configuration: at most {fmt_int(g['budget'])} reads a scan) over the "
+          "scans after the mapped ones, until a pose is trusted. Each `rsm_localizer_scan` is timed on the board's "
+          "timer (the same calibration); its outcomes and reads equal those of the same source on the host "
+          "(`rsm-m4 mapflash`).", ""]
+    rows = [["scans searched", str(g["scans"])],
+            ["first proven pose after [scans]", "none" if not g["proven"] else str(g["scans_to_pose"])],
+            ["reads in one scan, at most", fmt_int(g["max_work"])], ["reads in all", fmt_int(g["work"])],
+            ["instructions per scan, mean", fmt_int(round(g["mean"]))],
+            ["instructions per scan, worst", fmt_int(round(g["max"]))]]
+    L += md_table(["global search on the M4", "value"], rows, "speed m4 global")
     return L
 
 
