@@ -133,8 +133,8 @@ typedef struct rsm_localizer_config {
                                      * search's winner too, then not taken; a plain match, then
                                      * refused if poor, else fused), and before
                                      * writing a scan that found too little map to match (then not
-                                     * written); such a scan does not track. 0 = off; default 0.5
-                                     * (docs/robustness.md) */
+                                     * written); such a scan does not track, and reports lost at
+                                     * once. 0 = off; default 0.5 (docs/robustness.md) */
     float doubt_m;                  /* odometry counted from the last scan that trusted it (not
                                      * from the last scan) predicts a pose this far ... */
     float doubt_rad;                /* ... or turned this far from the step's: both are matched
