@@ -775,28 +775,23 @@ static void apply_mount(rsm_localizer_t *loc, size_t n)
 #define CONFLICT_BEAMS 64u
 #define CONFLICT_MARGIN 4u
 
-/* The share of the scan's beams, placed at pose, that pass through walls
- * of the persistent map; stored in the report. */
-static float crossing_share(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t npts, rsm_localizer_report_t *rep)
+/* Whether the scan placed at pose contradicts the map: more than
+ * conflict_max of its beams pass through walls of the persistent map;
+ * *share gets the share (when the check is on). */
+static int contradicts(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t npts, float *share)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_point_t origin = {cfg->laser_mount.x, cfg->laser_mount.y};
     uint32_t checked = 0;
-    uint32_t crossing = rsm_tmap_beams_crossing(&loc->state.persistent.map, 0u, pose, &origin, loc->pts, npts,
-                                                (npts + CONFLICT_BEAMS - 1u) / CONFLICT_BEAMS, cfg->tmap.saturation,
-                                                CONFLICT_MARGIN, &checked);
-    rep->crossing = checked > 0u ? (float)crossing / (float)checked : 0.0f;
-    return rep->crossing;
-}
-
-/* Whether the scan at pose contradicts the map (conflict_max). */
-static int contradicts(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t npts, rsm_localizer_report_t *rep)
-{
-    if (loc->cfg->conflict_max <= 0.0f || crossing_share(loc, pose, npts, rep) <= loc->cfg->conflict_max) {
+    uint32_t crossing;
+    if (cfg->conflict_max <= 0.0f) {
         return 0;
     }
-    loc->counters.contradicted++;
-    return 1;
+    crossing = rsm_tmap_beams_crossing(&loc->state.persistent.map, 0u, pose, &origin, loc->pts, npts,
+                                       (npts + CONFLICT_BEAMS - 1u) / CONFLICT_BEAMS, cfg->tmap.saturation,
+                                       CONFLICT_MARGIN, &checked);
+    *share = checked > 0u ? (float)crossing / (float)checked : 0.0f;
+    return *share > cfg->conflict_max;
 }
 
 
@@ -925,7 +920,7 @@ typedef enum recovery {
  * (conflict_max: a look-alike place within reach of a robot carried
  * farther) is not taken. */
 static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
-                          rsm_mapmatch_result_t *res, rsm_localizer_report_t *rep)
+                          rsm_mapmatch_result_t *res)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const float fit = loc->state.persistent.fit;
@@ -933,6 +928,7 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
     rsm_pose_t start[RECOVER_STARTS];
     rsm_pose_t found_pose[RECOVER_STARTS];
     rsm_mapmatch_result_t won;
+    float share;
     float found_hit[RECOVER_STARTS];
     float rival;
     float wide[9];
@@ -976,7 +972,7 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
     /* The same descent again: deterministic, so the same result. */
     if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[best], NULL,
                      &won) != RSM_OK ||
-        (won.hit < cfg->track_min_fit * fit && contradicts(loc, &won.pose, npts, rep))) {
+        (won.hit < cfg->track_min_fit * fit && contradicts(loc, &won.pose, npts, &share))) {
         return RECOVERY_NONE;
     }
     *res = won;
@@ -1026,9 +1022,9 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
         loc->counters.searches++;
         /* An ambiguous near search is not widened: a farther pose would
          * have that same rival, and the wider search might not see it. */
-        recovery_t r = recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res, rep);
+        recovery_t r = recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res);
         if (r == RECOVERY_NONE && near_m < cfg->recover_m) {
-            r = recover(loc, npts, &pred, cfg->recover_m, &res, rep);
+            r = recover(loc, npts, &pred, cfg->recover_m, &res);
         }
         if (r == RECOVERY_TAKEN) {
             loc->counters.recovered++;
@@ -1051,7 +1047,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
         return RSM_SCAN_LOW_SUPPORT;
     }
     if (!rep->recovered && res.hit < cfg->track_min_fit * loc->state.persistent.fit &&
-        contradicts(loc, &res.pose, npts, rep)) {
+        contradicts(loc, &res.pose, npts, &rep->crossing)) {
         /* Its beams pass through the map's walls: placed where the map
          * holds other walls (a robot carried, a look-alike place), or the
          * map holds a wall twice (a place mapped again after a drift). It
@@ -1095,9 +1091,11 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
  * moved far enough since the last write (or for the first scan); the write
  * then runs over this and the next scans (tmap.write_cells), from loc->frame.world,
  * which nothing else writes meanwhile. A write still running when the next
- * one is due is finished first. */
-static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, int first, int unmatched,
-                       rsm_localizer_report_t *rep)
+ * one is due is finished first. Returns 1 when a scan that found too
+ * little map to match (unmatched) was not written because it contradicts
+ * the map, else 0. */
+static int write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, int first, int unmatched,
+                      rsm_localizer_report_t *rep)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     rsm_tmap_t *map = &loc->state.persistent.map;
@@ -1105,13 +1103,13 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
     uint8_t isolated[(RSM_MAX_BEAMS + 7) / 8];
     rsm_point_t origin;
     if (!first && sqrtf(d.x * d.x + d.y * d.y) < cfg->map_update_m && fabsf(d.theta) < cfg->map_update_rad) {
-        return;
+        return 0;
     }
-    if (unmatched && contradicts(loc, est, npts, rep)) {
+    if (unmatched && contradicts(loc, est, npts, &rep->crossing)) {
         /* Too little map to match, and its beams pass through walls the
          * map holds: not new ground but a wrong pose, and written the scan
          * would make the map agree with it within a few writes. */
-        return;
+        return 1;
     }
     (void)rsm_tmap_write_run(map, loc->frame.world, 0u);
     to_world(loc, est, npts);
@@ -1138,6 +1136,7 @@ static void write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts,
     if (rsm_tmap_write_begin(map, &origin, loc->frame.world, npts) == RSM_OK) {
         loc->state.persistent.written = *est;
     }
+    return 0;
 }
 
 static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
@@ -1385,19 +1384,19 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
  * robot is elsewhere, and with global_when_lost the search should not
  * wait (on Intel's kidnaps with the map written, found again after a
  * median 73 scans instead of 104). */
-static rsm_track_t track_state(rsm_localizer_t *loc, rsm_outcome_t outcome, const rsm_localizer_report_t *rep)
+static rsm_track_t track_state(rsm_localizer_t *loc, rsm_outcome_t outcome, const rsm_localizer_report_t *rep,
+                               int contradicted)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     int tracks = outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_ODOMETRY || outcome == RSM_SCAN_ACCEPTED;
     if (outcome == RSM_SCAN_ACCEPTED && cfg->method == RSM_METHOD_MAP) {
-        tracks = rep->fit_ratio >= cfg->track_min_fit &&
-                 !(cfg->conflict_max > 0.0f && rep->crossing > cfg->conflict_max);
+        tracks = rep->fit_ratio >= cfg->track_min_fit && !contradicted;
     }
     if (tracks) {
         loc->poor_run = 0u;
         return RSM_TRACK_TRACKING;
     }
-    if (cfg->conflict_max > 0.0f && rep->crossing > cfg->conflict_max && loc->poor_run < cfg->lost_scans) {
+    if (contradicted && loc->poor_run < cfg->lost_scans) {
         loc->poor_run = cfg->lost_scans - 1u;
     }
     if (loc->poor_run < UINT32_MAX) {
@@ -1526,7 +1525,8 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
              * map could never grow back; one that was refused, or whose beams
              * pass through the map's walls (conflict_max), is not. */
             if ((fused || outcome == RSM_SCAN_LOW_SUPPORT) && !contradicted && !loc->cfg->map_frozen) {
-                write_tmap(loc, &est, npts, outcome == RSM_SCAN_FIRST, outcome == RSM_SCAN_LOW_SUPPORT, rep);
+                contradicted = write_tmap(loc, &est, npts, outcome == RSM_SCAN_FIRST,
+                                          outcome == RSM_SCAN_LOW_SUPPORT, rep);
             }
             break;
         case RSM_METHOD_PAPER:
@@ -1553,7 +1553,10 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
         (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world,
                                  outcome == RSM_SCAN_FIRST ? 0u : loc->cfg->tmap.write_cells);
     }
-    rep->track = track_state(loc, outcome, rep);
+    if (contradicted) {
+        loc->counters.contradicted++;
+    }
+    rep->track = track_state(loc, outcome, rep, contradicted);
     if (global_running(loc)) {
         /* Searching, the estimate is unknown whatever the scans did. */
         rep->track = RSM_TRACK_LOST;
