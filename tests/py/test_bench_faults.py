@@ -89,7 +89,8 @@ def test_floors_on_made_up_numbers():
                             "all-relations translation")
     assert f[4]["line"] == "MISS log: bad-median fault, median of 20 runs 0.0140 m = x1.27 the clean median > x1.25"
     assert "= x2.01 the clean median 0.0110 m > x2, < odometry alone" in f[5]["line"]
-    assert f[-1]["line"].startswith("PASS log: false recoveries 0 of 60 taken in 60 fault runs == 0")
+    assert f[-1]["line"].startswith("PASS log: false recoveries 0 of 60 judged in 60 fault runs (0 more not judged: "
+                                    "no relation near) == 0")
     # one false recovery anywhere is a MISS
     fa = section(clean, {"good": [0.011] * 20}, odometry_all=0.030, false={"good": [0] * 19 + [1]})
     f = bf.fault_floors(fa)
@@ -121,11 +122,51 @@ def test_report_table_shows_the_figures():
     assert "### Faults" in text and "<!-- table: faults -->" in text
     rows = [l for l in text.splitlines() if l.startswith("| log | fault |")]
     assert len(rows) == 1
-    assert "| log | clean | 4 | 0.0115 | 0.0130 | 1.00 | 1.13 |  | 0.5000 |  |  |  |" in text
+    assert "| log | clean | 4 | 0.0115 | 0.0130 | 1.00 | 1.13 |  |  | 0.5000 |  |  |  |" in text
     # the worst stall run is run 1 (map_update_m 0.31), where the clean run made 0.012
-    assert "| log | stall | 2 | 0.0160 | 0.0200 | 1.39 | 1.74 | 0.0120 (0.310) | 0.5000 | 1.0000 | 1 / 1 | 0 of 2 |" in text
+    assert "| log | stall | 2 | 0.0160 | 0.0200 | 1.39 | 1.74 | 0.0120 (0.310) |  | 0.5000 | 1.0000 | 1 / 1 | 0 of 2 (+0) |" in text
     assert "False recoveries: a recovery is false when" in text
     assert "Not measured in this run (--faults 0)." in "\n".join(bf.report_faults({"skipped": "--faults 0"}))
+
+
+def test_a_fault_that_removes_scans_is_set_beside_the_clean_runs_judged_alike():
+    """For sparse, dropped or missing scans the clean run at the same
+    map_update_m, judged as the faulty run is (dead reckoning over the
+    scans the fault removed), is reported beside the median: the share of
+    the error that the judge, not the fault, makes."""
+    fa = section([0.010] * 4, {"sparse": [0.015, 0.016]})
+    for r, cj in zip(fa["logs"]["log"]["faults"]["sparse"]["runs"], (0.012, 0.014)):
+        r["clean_judged"] = cj
+    fr = fa["logs"]["log"]["faults"]["sparse"]["runs"]
+    fa["logs"]["log"]["faults"]["sparse"] = {"runs": fr, **bf.summarize(fr, 0.010)}
+    f = bf.fault_floors(fa)
+    assert f[2]["status"] == "MISS" and "x1.55 the clean median > x1.25" in f[2]["line"]
+    assert "judged alike" in f[2]["line"] and "median 0.0130 m, the fault's median x1.19 that" in f[2]["line"]
+    assert "| 0.0130 (x1.19) |" in "\n".join(bf.report_faults(fa))
+
+
+def test_the_clean_run_judged_alike_is_dead_reckoned_over_the_removed_scans():
+    """The clean run's poses at the scans the faulty run kept, the rest
+    moved on by the faulty log's odometry; with a mount the clean run's
+    laser pose (the clean log's laser is at the robot's origin) is taken
+    back to the robot before and composed again after."""
+    log = _log()
+    res = flt.apply_faults(log, flt.FaultSpec(gaps=[(3.0, 4.0)]))  # scans 3..6 removed
+    # the clean run drifts 0.01 m sideways a scan; the faulty run keeps what the fault kept
+    clean = ev.Trajectory((s.stamp, s.odom[0], s.odom[1] + 0.01 * i, s.odom[2]) for i, s in enumerate(log.scans))
+    run = ev.Trajectory((log.scans[o.src].stamp, *o.pose) for o in res.kept_scans)
+    got = bf.clean_as_judged(clean, run, res)
+    assert [t for t, *_ in got] == [s.stamp for s in log.scans]
+    for i, (t, x, y, th) in enumerate(got):
+        drift = 0.01 * (i if i not in (3, 4, 5, 6) else 2)  # the removed ones carry scan 2's offset on
+        assert math.isclose(y, log.scans[i].odom[1] + drift, abs_tol=1e-9), i
+    m = (0.22, 0.0, 0.0)
+    res = flt.apply_faults(log, flt.FaultSpec(mount=m, gaps=[(3.0, 4.0)]))
+    clean = ev.Trajectory((s.stamp, *s.laser) for s in log.scans)  # exact
+    run = ev.Trajectory((log.scans[o.src].stamp, *o.pose) for o in res.kept_scans)
+    for (t, x, y, th), s in zip(bf.clean_as_judged(clean, run, res), log.scans):
+        assert math.isclose(x, s.laser[0], abs_tol=1e-9) and math.isclose(y, s.laser[1], abs_tol=1e-9)
+        assert math.isclose(th, s.laser[2], abs_tol=1e-9)
 
 
 def _log(n=12, mount=False):
@@ -184,37 +225,101 @@ def test_every_fault_plan_fits_a_short_log(name, head_log):
         assert len({flt.describe(bf.plan(name, log, k, "head")) for k in range(6)}) > 1  # places vary by run
 
 
-def test_false_recoveries_are_told_by_the_clean_runs_pose(tmp_path):
-    """A recovery is judged at its scan against the clean run's pose there,
-    both seen from their poses 10 s before (runs drift apart as a whole):
-    within 0.3 m and 5 deg it is right, beyond either it is false; a stamp
-    the clean run has not, or one with no scan 10 s before, is not judged;
-    with a mount the laser's pose is compared. The stamps come from
-    rsm-nav's --scan-log."""
+def test_recovered_stamps_come_from_the_scan_log(tmp_path):
     slog = tmp_path / "s.scans"
     slog.write_text("# rsm-nav scan log: timestamp[s] outcome tracking odometry recovered fit_ratio\n"
                     "11.000000 accepted tracking trusted 1 0.9\n12.000000 accepted tracking trusted 0 0.9\n"
-                    "13.000000 accepted tracking refuted 1 0.8\n14.000000 accepted tracking trusted 1 0.7\n"
-                    "15.000000 poor_fit uncertain trusted 0 0.1\n16.000000 accepted tracking trusted 1 0.9\n"
+                    "13.000000 accepted tracking refuted 1 0.8\n15.000000 poor_fit uncertain trusted 0 0.1\n"
                     "5.000000 accepted tracking trusted 1 0.9\n")
-    stamps = bf.recovered_stamps(slog)
-    assert stamps == [11.0, 13.0, 14.0, 16.0, 5.0]
-    clean = ev.Trajectory([(1.0, 0.0, 0.0, 0.0), (5.0, 0.5, 0.0, 0.0), (11.0, 1.0, 0.0, 0.0), (13.0, 2.0, 0.0, 0.0),
-                           (14.0, 3.0, 0.0, 0.0)])
-    # The run drifted 2 m sideways and 0.1 rad before scan 1, which does not count. From there:
-    # 0.25 m off: right; 0.35 m off: false; 6 deg off: false; 16 not in the clean run; 5 has no scan 10 s before.
-    base = (0.0, 2.0, 0.1)
+    assert bf.recovered_stamps(slog) == [11.0, 13.0, 5.0]
 
-    def at(x, y, th):
-        return pose_compose(base, (x, y, th))
 
-    run = ev.Trajectory([(1.0, *at(0.0, 0.0, 0.0)), (5.0, *at(0.5, 0.0, 0.0)), (11.0, *at(1.25, 0.0, 0.0)),
-                         (13.0, *at(2.0, 0.35, 0.0)), (14.0, *at(3.0, 0.0, math.radians(6.0))),
-                         (16.0, 9.0, 9.0, 0.0)])
-    assert bf.false_recoveries(stamps, run, clean) == (3, 2)
-    # the robot 0.22 m behind the laser: its laser is compared, as the clean run's (no mount)
-    clean = ev.Trajectory([(0.0, 0.0, 0.0, 0.0), (11.0, 1.0, 0.0, 0.0)])
-    mounted = ev.Trajectory([(0.0, -0.22, 0.0, 0.0), (11.0, 0.78, 0.0, 0.0)])
-    assert bf.false_recoveries([11.0], mounted, clean, (0.22, 0.0, 0.0)) == (1, 0)
-    turned = ev.Trajectory([(0.0, -0.22, 0.0, 0.0), (11.0, 1.22, 0.0, math.pi)])
-    assert bf.false_recoveries([11.0], turned, clean, (0.22, 0.0, 0.0)) == (1, 1)
+def _rel(truth, t1, t2):
+    return ev.Relation(t1, t2, *ev.between(truth(t1), truth(t2)))
+
+
+def test_false_recoveries_are_told_by_the_relations_across_them():
+    """A recovery at t is judged by the ground truth across it: relations
+    with one end from t to 20 s after it (or to the next recovery) and the
+    other up to 60 s before t. It is right when one of them agrees within
+    0.3 m and 5 deg (the run may have gone wrong before a search put it
+    right), false when none does, not judged with none at all. Relations
+    that do not cross it cannot tell: a wrong pose tracked on agrees with
+    itself."""
+    def truth(t):
+        return (0.1 * t, 0.0, 0.0)
+
+    # right up to 9.9; a recovery at 10 lands 0.4 m off and tracking carries that on to 19.9; one at 20 lands
+    # 6 deg off; one at 30 puts it right again after it went 1 m wrong at 29 (a pose 1 s before it)
+    def run_pose(t):
+        x, y, th = truth(t)
+        if 10.0 <= t < 20.0:
+            return (x, y + 0.4, th)
+        if 20.0 <= t < 29.0:
+            return pose_compose((x, y, th), (0.0, 0.0, math.radians(6.0)))
+        if 29.0 <= t < 30.0:
+            return (x, y + 1.0, th)
+        return (x, y, th)
+
+    stamps = [0.5 * i for i in range(0, 201)]
+    judged = ev.Trajectory((t, *run_pose(t)) for t in stamps)
+    rels = [_rel(truth, a, b) for a, b in ((5.0, 11.0), (12.0, 15.0), (15.0, 21.0), (29.0, 30.5), (25.0, 31.0),
+                                           (1.0, 32.0), (60.0, 65.0))]
+    # 10: 5->11 is off 0.4 m (12->15 does not cross it): false
+    assert bf.false_recoveries([10.0], judged, rels) == (1, 1, 0)
+    # 20 (the next recovery at 30): 15->21 off 6 deg: false; 30: 29->30.5 and 25->31 disagree (poses it
+    # replaced), 1->32 agrees: right
+    assert bf.false_recoveries([20.0, 30.0], judged, rels) == (2, 1, 0)
+    # without the one at 30, 1->32 would answer for 20's pose carried on (and is right there)
+    assert bf.false_recoveries([20.0], judged, rels) == (1, 0, 0)
+    # without 1->32 nothing agrees at 30; a far end more than 60 s before does not count
+    assert bf.false_recoveries([30.0], judged, [r for r in rels if r.t1 != 1.0]) == (1, 1, 0)
+    far = [_rel(truth, 0.0, 70.0)]
+    assert bf.false_recoveries([65.0], judged, far) == (0, 0, 1)
+    # 62: 60->65 crosses it; 50: nothing crosses it within 20 s
+    assert bf.false_recoveries([62.0, 50.0], judged, rels) == (1, 0, 1)
+    # the next recovery ends the span a recovery answers for: with one at 10.5, 5->11 judges that one, not 10
+    assert bf.false_recoveries([10.0, 10.5], judged, rels) == (1, 1, 1)
+    # an end the run did not estimate (dead reckoning placed it) says nothing
+    est = set(stamps) - {11.0}
+    assert bf.false_recoveries([10.0], judged, rels, est) == (0, 0, 1)
+
+
+def test_a_recovery_that_moves_as_the_clean_run_does_is_right():
+    """Where every run jumps back onto a place mapped long before (drift put
+    right at a loop), the relation across the jump is off in the clean run
+    too: a recovery that moved over it as the clean run did is right."""
+    def truth(t):
+        return (0.1 * t, 0.0, 0.0)
+
+    def jumped(t):
+        x, y, th = truth(t)
+        return (x, y + (0.35 if t >= 10.0 else 0.0), th)
+
+    stamps = [0.5 * i for i in range(0, 41)]
+    run = ev.Trajectory((t, *jumped(t)) for t in stamps)
+    rels = [_rel(truth, 9.0, 10.5)]
+    assert bf.false_recoveries([10.0], run, rels) == (1, 1, 0)
+    clean = ev.Trajectory((t, *jumped(t)) for t in stamps)
+    assert bf.false_recoveries([10.0], run, rels, None, clean) == (1, 0, 0)
+    other = ev.Trajectory((t, *truth(t)) for t in stamps)  # the clean run did not jump: no excuse
+    assert bf.false_recoveries([10.0], run, rels, None, other) == (1, 1, 0)
+
+
+def test_false_recoveries_are_judged_at_the_laser_with_a_mount():
+    """With the laser off the robot's origin the judged trajectory holds the
+    laser's pose (judged_trajectory composes the mount), as the relations do."""
+    log = _log()
+    m = (0.22, 0.0, 0.0)
+    res = flt.apply_faults(log, flt.FaultSpec(mount=m))
+    est = ev.Trajectory((log.scans[o.src].stamp, *o.pose) for o in res.kept_scans)
+    judged = ev.Trajectory(bf.judged_trajectory(est, res))
+    stamps = [s.stamp for s in log.scans]
+    rels = [ev.Relation(stamps[a], stamps[b], *ev.between(log.scans[a].laser, log.scans[b].laser))
+            for a, b in ((0, 5), (1, 6), (0, 8))]
+    assert bf.false_recoveries([stamps[5]], judged, rels) == (1, 0, 0)
+    # the robot's pose judged instead of the laser's would be off by the lever arm turned with the robot
+    errs = [ev.relation_error(ev.between(tuple(est.lookup(r.t1, tolerance=0.0)), tuple(est.lookup(r.t2, tolerance=0.0))),
+                              (r.x, r.y, r.yaw))[0] for r in rels]
+    assert max(errs) > 0.01
+

@@ -18,11 +18,17 @@ et al.) of its trajectory, keyed by the original log's scans:
 odometry is in the table too. The floors (FLOOR_*): the worst run of each
 fault at most x2 the clean runs' median and below odometry alone, the median
 at most x1.25; the worst clean run at most x3 the clean median. rsm-nav
-writes which scans a recovery search placed (--scan-log); a recovery that
-lands more than FALSE_RECOVERY_M or FALSE_RECOVERY_DEG from the clean run's
-pose at that scan, both seen from their poses FALSE_RECOVERY_REF_S before
-(the clean run at the same map_update_m, laser poses compared), is a false
-one, and the floor on them is zero.
+writes which scans a recovery search placed (--scan-log). A recovery is
+judged by the ground truth: the relations across it, one end within
+FALSE_RECOVERY_AFTER_S after its scan (and before the next recovery) and the
+other up to FALSE_RECOVERY_SPAN_S before, both at scans the run estimated,
+or by the clean run's motion over them. When none of
+them agrees within FALSE_RECOVERY_M and FALSE_RECOVERY_DEG (in the judged
+trajectory above) the recovery is a false one, and the floor on them is
+zero; with no such relation it is counted as not judged. (Comparing a
+recovery with the clean run's pose, each seen from a pose some seconds
+before, called false the recoveries that put right a run which had gone
+wrong before them.)
 """
 
 import bisect
@@ -49,7 +55,8 @@ FLOOR_CLEAN_WORST_X = 3.0  # the worst clean run over the clean median
 FLOOR_EPS = 1e-9  # a ratio this close to its limit meets it (0.022 / 0.011 is 2.0000000000000004)
 FALSE_RECOVERY_M = 0.3
 FALSE_RECOVERY_DEG = 5.0
-FALSE_RECOVERY_REF_S = 10.0  # the span over which a recovery's pose is compared with the clean run's
+FALSE_RECOVERY_AFTER_S = 20.0  # relations with an end this soon after a recovery (and before the next) judge it ...
+FALSE_RECOVERY_SPAN_S = 60.0  # ... and the other end up to this long before it (a building-wide drift is no recovery's)
 
 STALL_TURNS = 6
 STALL_LEN = 10
@@ -82,10 +89,12 @@ FAULTS = (
 )
 FAULT_NAMES = tuple(n for n, _ in FAULTS)
 
-RECOVERY_NOTE = ("a recovery is false when the pose it gave lands more than "
-                 f"{FALSE_RECOVERY_M:g} m or {FALSE_RECOVERY_DEG:g} deg from the clean run's pose at that scan, both "
-                 f"seen from their poses {FALSE_RECOVERY_REF_S:g} s before (the clean run at the same map_update_m; "
-                 "rsm-nav --scan-log says which scans a search placed)")
+RECOVERY_NOTE = ("a recovery is false when no relation across it (one end within "
+                 f"{FALSE_RECOVERY_AFTER_S:g} s after its scan and before the next recovery, the other up to "
+                 f"{FALSE_RECOVERY_SPAN_S:g} s before, both at scans the run estimated) agrees, with the ground truth "
+                 "or with the clean run's motion over it at the same map_update_m, within "
+                 f"{FALSE_RECOVERY_M:g} m and {FALSE_RECOVERY_DEG:g} deg; with no such relation it is not judged "
+                 "(rsm-nav --scan-log says which scans a search placed)")
 
 
 def fault_update(k: int) -> float:
@@ -175,6 +184,26 @@ def judged_trajectory(traj: ev.Trajectory, res: flt.FaultResult) -> List[Tuple[f
     return out
 
 
+REMOVING = ("sparse", "drop", "gap")  # faults whose removed scans the judge dead-reckons
+
+
+def clean_as_judged(clean: ev.Trajectory, run: ev.Trajectory,
+                    res: flt.FaultResult) -> List[Tuple[float, float, float, float]]:
+    """The clean run judged as ``run`` is: its poses at the scans the faulty
+    run has, the others dead-reckoned by judged_trajectory. Dead reckoning
+    over the removed scans costs accuracy whatever the matcher does; this is
+    what the same matcher, unhurt by the fault, scores under that judge. The
+    clean log's laser is at the robot's origin, so with a mount its pose is
+    taken back to the robot's."""
+    back = ev.between(res.spec.mount, (0.0, 0.0, 0.0)) if res.spec.mount is not None else None
+    kept = ev.Trajectory()
+    for p in clean.points():
+        if run.lookup(p.t, tolerance=0.0) is not None:
+            q = (p.x, p.y, p.theta)
+            kept.add(p.t, *(pose_compose(q, back) if back is not None else q))
+    return judged_trajectory(kept, res)
+
+
 def odometry_alone(res: flt.FaultResult) -> List[Tuple[float, float, float, float]]:
     """The faulty log's odometry at every scan of the original log (laser pose with a mount)."""
     out = []
@@ -204,34 +233,61 @@ def recovered_stamps(scan_log: Path) -> List[float]:
     return out
 
 
-def false_recoveries(stamps: Sequence[float], traj: ev.Trajectory, clean: ev.Trajectory,
-                     mount: Optional[Pose] = None) -> Tuple[int, int]:
-    """(recoveries judged, false ones): each recovery's pose (the laser's with
-    a mount) against the clean run's, both seen from their poses at the last
-    scan both runs have at least FALSE_RECOVERY_REF_S earlier (two runs drift
-    apart over a building by more than a recovery's tolerance, so their
-    poses are compared over that span, not as they are); a recovery without
-    such a scan, or at a stamp the clean run has not (a slip's copies), is
-    not judged."""
-    def laser(p):
-        return pose_compose(tuple(p), mount) if mount is not None else tuple(p)
-
-    common = sorted({p.t for p in traj.points()} & {p.t for p in clean.points()})
-    judged = false = 0
+def false_recoveries(stamps: Sequence[float], judged: ev.Trajectory, relations: Sequence[ev.Relation],
+                     estimated: Optional[set] = None, clean: Optional[ev.Trajectory] = None) -> Tuple[int, int, int]:
+    """(judged, false, not judged) of the recoveries at ``stamps``. A
+    recovery at t is judged by the relations across it: one end from t to
+    FALSE_RECOVERY_AFTER_S after it or to the next recovery, whichever comes
+    first, the other up to FALSE_RECOVERY_SPAN_S before t, both at scans
+    the run estimated (in
+    ``estimated``, when given: an end dead reckoning placed says nothing of
+    the recovery). ``judged`` is the run's trajectory as judged_trajectory
+    gives it (the laser's pose). The recovery is right when one of them
+    agrees within FALSE_RECOVERY_M and FALSE_RECOVERY_DEG: a run can have
+    gone wrong some seconds before a search put it right, so a recovery is
+    false only when it agrees with no pose of the run in that span. With
+    ``clean`` (the clean run at the same map_update_m, laser poses) a
+    relation also agrees when the run moved over it as the clean run did:
+    where every run jumps back onto a place mapped long before (a drift put
+    right at a loop), the jump is the map's, not the fault's. Relations that
+    do not cross the recovery cannot tell: a wrong pose tracked on stays
+    consistent with itself."""
+    span = FALSE_RECOVERY_SPAN_S
+    n_judged = n_false = n_not = 0
+    order = sorted(stamps)
     for t in stamps:
-        est = traj.lookup(t, tolerance=0.0)
-        ref = clean.lookup(t, tolerance=0.0)
-        i = bisect.bisect_right(common, t - FALSE_RECOVERY_REF_S) - 1
-        if est is None or ref is None or i < 0:
-            continue
-        t0 = common[i]
-        moved_run = ev.between(laser(traj.lookup(t0, tolerance=0.0)), laser(est))
-        moved_clean = ev.between(tuple(clean.lookup(t0, tolerance=0.0)), tuple(ref))
-        d = ev.between(moved_clean, moved_run)
-        judged += 1
-        if math.hypot(d[0], d[1]) > FALSE_RECOVERY_M or abs(math.degrees(d[2])) > FALSE_RECOVERY_DEG:
-            false += 1
-    return judged, false
+        # the recovery's pose as tracking carried it on, until the next recovery takes over
+        later = [u for u in order if u > t]
+        end = min([t + FALSE_RECOVERY_AFTER_S] + later[:1])
+        seen = agreed = False
+        for r in relations:
+            a, b = sorted((r.t1, r.t2))
+            if not (t <= b < end and t - span <= a < t):
+                continue
+            if estimated is not None and (a not in estimated or b not in estimated):
+                continue
+            pa, pb = judged.lookup(r.t1, tolerance=0.0), judged.lookup(r.t2, tolerance=0.0)
+            if pa is None or pb is None:
+                continue
+            seen = True
+            moved = ev.between(tuple(pa), tuple(pb))
+            refs = [(r.x, r.y, r.yaw)]
+            if clean is not None:
+                ca, cb = clean.lookup(r.t1, tolerance=0.0), clean.lookup(r.t2, tolerance=0.0)
+                if ca is not None and cb is not None:
+                    refs.append(ev.between(tuple(ca), tuple(cb)))
+            for ref in refs:
+                dt, dr = ev.relation_error(moved, ref)
+                if dt <= FALSE_RECOVERY_M and math.degrees(abs(dr)) <= FALSE_RECOVERY_DEG:
+                    agreed = True
+            if agreed:
+                break
+        if not seen:
+            n_not += 1
+        else:
+            n_judged += 1
+            n_false += 0 if agreed else 1
+    return n_judged, n_false, n_not
 
 
 def stats(values: Sequence[float]) -> dict:
@@ -258,6 +314,7 @@ def summarize(fault_runs: Sequence[dict], clean_median: float,
     judged = [r for r in fault_runs if r.get("false_recoveries") is not None]
     s["false_recoveries"] = sum(r["false_recoveries"] for r in judged)
     s["recoveries_judged"] = sum(r["recoveries_judged"] for r in judged)
+    s["recoveries_unjudged"] = sum(r.get("recoveries_unjudged") or 0 for r in judged)
     s["runs_judged"] = len(judged)
     s["x_median"] = ratio(s["median"], clean_median)
     s["x_worst"] = ratio(s["max"], clean_median)
@@ -265,6 +322,8 @@ def summarize(fault_runs: Sequence[dict], clean_median: float,
     worst = max(finite, key=lambda r: r["all"]) if finite else None
     s["worst_update"] = worst.get("update") if worst else None
     s["worst_clean"] = (clean_by_update or {}).get(s["worst_update"])
+    s["clean_judged"] = stats([r["clean_judged"] for r in fault_runs if r.get("clean_judged") is not None])
+    s["x_median_judged"] = ratio(s["median"], s["clean_judged"]["median"]) if s["clean_judged"]["n"] else None
     return s
 
 
@@ -358,12 +417,14 @@ def run_faults(nav: Path, logs: Sequence[Tuple[str, Path, Path]], runs: int, wor
             fr = sorted((r for (lab, n, _), r in done if lab == label and n == name), key=lambda r: r["k"])
             for r in fr:
                 ref = clean_traj.get(r["update"])
-                if ref is None:
-                    r["false_recoveries"] = r["recoveries_judged"] = None
-                    continue
-                r["recoveries_judged"], r["false_recoveries"] = false_recoveries(
-                    r["recovered_at"], ev.load_trajectory(Path(r["trajectory"])), ev.load_trajectory(Path(ref)),
-                    tuple(r["mount"]) if r["mount"] is not None else None)
+                clean_run = ev.load_trajectory(Path(ref)) if ref is not None else None
+                run_traj = ev.load_trajectory(Path(r["trajectory"]))
+                res = flt.apply_faults(loaded[label], plan(name, loaded[label], r["k"], label))
+                r["recoveries_judged"], r["false_recoveries"], r["recoveries_unjudged"] = false_recoveries(
+                    r["recovered_at"], ev.Trajectory(judged_trajectory(run_traj, res)), rels[label],
+                    {p.t for p in run_traj.points()}, clean_run)
+                if clean_run is not None and name in REMOVING:
+                    r["clean_judged"] = errors(clean_as_judged(clean_run, run_traj, res), rels[label])["all"]
             entry["faults"][name] = {"runs": fr, **summarize(fr, cs["median"], {r["update"]: r["all"] for r in clean})}
         out["logs"][label] = entry
     return out
@@ -371,6 +432,15 @@ def run_faults(nav: Path, logs: Sequence[Tuple[str, Path, Path]], runs: int, wor
 
 # ---------------------------------------------------------------------------
 # floors and report
+
+
+def _judged_alike(f: dict) -> str:
+    """For a fault that removes scans: the clean runs judged the same way."""
+    cj = f.get("clean_judged") or {}
+    if not cj.get("n"):
+        return ""
+    return (f" (the clean runs judged alike, the scans the fault removed dead-reckoned: median "
+            f"{fmt_q('translation', cj['median'])} m, the fault's median x{f['x_median_judged']:.2f} that)")
 
 
 def _floor(status: str, kind: str, log: Optional[str], value, limit, text: str) -> dict:
@@ -418,18 +488,20 @@ def fault_floors(fa: Optional[dict]) -> List[dict]:
             ok = math.isfinite(xm) and xm <= FLOOR_MEDIAN_X + FLOOR_EPS
             out.append(_floor("PASS" if ok else "MISS", "faults", label, xm, FLOOR_MEDIAN_X,
                               f"{head}, median of {n_runs} runs {fmt_q('translation', f['median'])} m = x{xm:.2f} "
-                              f"the clean median {'<=' if ok else '>'} x{FLOOR_MEDIAN_X:g}"))
+                              f"the clean median {'<=' if ok else '>'} x{FLOOR_MEDIAN_X:g}" + _judged_alike(f)))
     for label, e in fa["logs"].items():
         fr = [f for f in e["faults"].values() if f.get("runs_judged")]
         if not fr:
             out.append(_floor("SKIP", "faults-recovery", label, None, 0,
-                              f"{label}: false recoveries: no fault run had a clean run at its map_update_m"))
+                              f"{label}: false recoveries: no fault run was judged"))
             continue
         false = sum(f["false_recoveries"] for f in fr)
         judged = sum(f["recoveries_judged"] for f in fr)
         runs = sum(f["runs_judged"] for f in fr)
+        unjudged = sum(f.get("recoveries_unjudged") or 0 for f in fr)
         out.append(_floor("PASS" if false == 0 else "MISS", "faults-recovery", label, false, 0,
-                          f"{label}: false recoveries {false} of {judged} taken in {runs} fault runs "
+                          f"{label}: false recoveries {false} of {judged} judged in {runs} fault runs "
+                          f"({unjudged} more not judged: no relation near) "
                           f"{'==' if false == 0 else '>'} 0 ({RECOVERY_NOTE})"))
     return out
 
@@ -454,7 +526,9 @@ def report_faults(fa: Optional[dict]) -> List[str]:
           "estimate moved by the faulty log's odometry, and a laser off the robot's origin is judged at the "
           "laser's pose, so every run is judged on every relation. Worst and median over the runs, each beside "
           "the clean runs' median, and the clean run at the worst run's update distance (one run's figure is partly "
-          "luck: when that clean run is as bad, the fault is not what made the worst run bad); odometry alone on "
+          "luck: when that clean run is as bad, the fault is not what made the worst run bad); for the faults that "
+          "remove scans, the clean runs judged alike (their poses at the scans the fault removed dead-reckoned the "
+          "same way: what the judge costs a matcher the fault did not hurt); odometry alone on "
           "the clean log and on the faulty one (median over the runs); recoveries: rsm-nav's count of recoveries "
           "taken (median and most in a run).", ""]
     for f in fa["faults"]:
@@ -464,19 +538,23 @@ def report_faults(fa: Optional[dict]) -> List[str]:
     for label, e in fa["logs"].items():
         c = e["clean"]
         rows.append([label, "clean", str(c["n"]), _m(c["median"]), _m(c["max"]), "1.00",
-                     f"{ratio(c['max'], c['median']):.2f}", "", _m(e["odometry"]["all"]), "", "", ""])
+                     f"{ratio(c['max'], c['median']):.2f}", "", "", _m(e["odometry"]["all"]), "", "", ""])
         for name, f in e["faults"].items():
             rc = f["recoveries"]
             rows.append([label, name, str(f["n"] + f["missing"]), _m(f["median"]), _m(f["max"]),
                          f"{f['x_median']:.2f}", f"{f['x_worst']:.2f}",
                          "n/a" if f.get("worst_clean") is None else f"{_m(f['worst_clean'])} ({f['worst_update']:.3f})",
+                         "" if not (f.get("clean_judged") or {}).get("n") else
+                         f"{_m(f['clean_judged']['median'])} (x{f['x_median_judged']:.2f})",
                          _m(e["odometry"]["all"]),
                          _m(f["odometry"]["median"]),
                          "n/a" if rc["n"] == 0 else f"{rc['median']:g} / {rc['max']:g}",
-                         "n/a" if not f.get("runs_judged") else f"{f['false_recoveries']} of {f['recoveries_judged']}"])
+                         "n/a" if not f.get("runs_judged") else
+                         f"{f['false_recoveries']} of {f['recoveries_judged']} (+{f.get('recoveries_unjudged') or 0})"])
     from .report import md_table
     L += md_table(["log", "fault", "runs", "median [m]", "worst [m]", "median x clean", "worst x clean",
-                   "clean at the worst's distance [m] (map_update_m)", "odometry alone [m]", "faulty odometry [m]",
-                   "recoveries", "false recoveries"], rows, "faults")
+                   "clean at the worst's distance [m] (map_update_m)",
+                   "clean judged alike, median [m] (fault's median x that)", "odometry alone [m]", "faulty odometry [m]",
+                   "recoveries", "false recoveries of judged (+ not judged)"], rows, "faults")
     L += [f"False recoveries: {RECOVERY_NOTE}.", ""]
     return L
