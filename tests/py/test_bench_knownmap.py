@@ -299,6 +299,27 @@ def test_only_knownmap_says_why_the_m4_cost_is_not_measured(tmp_path, monkeypatc
     assert json.loads((tmp_path / "bench.json").read_text())["knownmap"]["m4_global"] == {"skipped": km.ONLY_M4}
 
 
+def test_only_knownmap_keeps_the_last_whole_benchs_m4_cost(tmp_path, monkeypatch):
+    """After a whole bench (its manifest holds the M4 figures), --only
+    knownmap keeps them, named as the whole bench's at its commit, and a
+    second --only run keeps that name; their floor is judged as before."""
+    made = section({"intel": ([start("right", scan=4)] * 3, 0.015, 0.015, 0.014, True, True)}, n=3)
+    monkeypatch.setattr(km, "run_knownmap", lambda *a, **k: dict(made))
+    out = tmp_path / "RESULTS.md"
+    out.write_text(REPORT.format(old_headline="", old_section="", count="1 PASS, 1 MISS:"), encoding="utf-8")
+    (tmp_path / "bench.json").write_text(json.dumps({"provenance": {"commit": "abc1234"},
+                                                     "knownmap": {"m4_global": M4_GLOBAL}, "floors": []}))
+    for _ in range(2):
+        res, floors = km.run_only(tmp_path / "rsm-nav", [], tmp_path, 1, 3, 400, None, {}, out,
+                                  SECTION_TITLES[2], 0)
+        cost = [f for f in floors if f["kind"] == "knownmap-cost"]
+        assert len(cost) == 1 and cost[0]["status"] == "MISS" and cost[0]["value"] == 4336270.0
+        assert "kept from the whole bench at `abc1234`" in cost[0]["line"]
+        assert res["m4_global"]["kept_from"] == "abc1234"
+    assert km.kept_m4_global({"knownmap": {"m4_global": {"skipped": km.ONLY_M4}}}) == {"skipped": km.ONLY_M4}
+    assert km.kept_m4_global({}) == {"skipped": km.ONLY_M4}
+
+
 def test_the_target_section_shows_the_global_search():
     from rsm_tools.bench import report
     line = report.global_line(M4_GLOBAL)

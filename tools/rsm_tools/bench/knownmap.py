@@ -653,8 +653,10 @@ def m4_global_floor(g: Optional[dict]) -> dict:
     ok = g["max"] <= FLOOR_GLOBAL_M4
     found = (f"first proven pose after {g['scans_to_pose']} scans" if g["proven"] else
              f"no pose proven within {g['scans']} scans")
+    kept = (f" (kept from the whole bench at `{g['kept_from']}`: --only knownmap runs no firmware)"
+            if g.get("kept_from") else "")
     return _floor("PASS" if ok else "MISS", "knownmap-cost", None, g["max"], FLOOR_GLOBAL_M4,
-                  f"{what}, the excerpt's map (small: {fmt_int(g['map_tiles'])} tiles, {fmt_int(g['map_bytes'])} "
+                  f"{what}{kept}, the excerpt's map (small: {fmt_int(g['map_tiles'])} tiles, {fmt_int(g['map_bytes'])} "
                   f"bytes, mapped from its first {g['mapped_scans']} scans; the map-in-flash firmware, -O2, QEMU) at "
                   f"the default global_budget ({fmt_int(g['budget'])} reads a scan): worst "
                   f"{fmt_int(round(g['max']))} {'<=' if ok else '>'} {fmt_int(FLOOR_GLOBAL_M4)}, mean "
@@ -932,6 +934,17 @@ def merge_manifest(manifest: dict, km: dict, floors: Sequence[dict]) -> dict:
     return out
 
 
+def kept_m4_global(manifest: dict) -> dict:
+    """The M4 cost of the global search for --only knownmap, which runs no
+    firmware: the last whole bench's figures from its manifest, named as
+    such (its commit), else skipped with ONLY_M4."""
+    old = (manifest.get("knownmap") or {}).get("m4_global") or {}
+    if "skipped" in old or "max" not in old:
+        return {"skipped": ONLY_M4}
+    commit = old.get("kept_from") or (manifest.get("provenance") or {}).get("commit", "?")
+    return {**old, "kept_from": commit}
+
+
 def run_only(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, jobs: int, starts: int, cap: int,
              stages: Optional[Path], prov: dict, output: Path, next_title: str,
              kidnaps: int = KIDNAP_RUNS) -> Tuple[dict, List[dict]]:
@@ -946,11 +959,11 @@ def run_only(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, jobs
                          "(run the whole bench once first)")
     km = run_knownmap(nav, logs, work, jobs, starts, cap, stages, kidnaps)
     km["provenance"] = prov
-    km["m4_global"] = {"skipped": ONLY_M4}
-    floors = knownmap_floors(km)
     path = work / "bench.json"
     manifest = json.loads(path.read_text()) if path.is_file() else {"provenance": prov, "report": str(output),
                                                                     "only": "knownmap"}
+    km["m4_global"] = kept_m4_global(manifest)
+    floors = knownmap_floors(km)
     path.write_text(json.dumps(merge_manifest(manifest, km, floors), indent=1, allow_nan=True))
     text = output.read_text(encoding="utf-8")
     output.write_text(splice_report(text, report_knownmap(km), [f["line"] for f in floors], next_title),
