@@ -24,5 +24,6 @@
 #include "rsm/slamtec.h"
 #include "rsm/status.h"
 #include "rsm/sync.h"
+#include "rsm/version.h"
 
 #endif /* RSM_RSM_H */

@@ -167,8 +167,10 @@ rsm_cmake_configure() {
     printf '%s\n' "$want" >"$stamp"
 }
 
-# The main host build: build/ with every test, against the venv's Python.
+# The main host build: build/ with every test, against the venv's Python;
+# the firmware tests required (RSM_TARGET_TESTS=ON), not skipped when the
+# cross toolchain or QEMU is missing as a plain configure would.
 rsm_build_main() {
-    rsm_cmake_configure build -DRSM_WERROR="$RSM_WERROR" -DRSM_PYTHON="$RSM_VENV_PY"
+    rsm_cmake_configure build -DRSM_WERROR="$RSM_WERROR" -DRSM_PYTHON="$RSM_VENV_PY" -DRSM_TARGET_TESTS=ON
     cmake --build "$RSM_ROOT/build" -j"$RSM_JOBS"
 }
