@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #include "capture.h"
@@ -161,7 +162,8 @@ static void usage(FILE *f)
             "               [--laser-pose X Y THETA] [--upside-down] [--set KEY=VALUE]... [--quiet]\n"
             "SOURCE is one of:\n"
             "  --carmen LOG [--fov179]   a CARMEN log, plain or gzip (FLASER/ROBOTLASER1 scans;\n"
-            "                            odometry from the pose fields of the laser lines)\n"
+            "                            odometry from the pose fields of the laser lines;\n"
+            "                            a pipe is read once: no mount looked up in it)\n"
             "  --capture FILE            a capture of the robot (ARIA) and laser (LMS, or an\n"
             "                            rsm-convert --lidar ld06|rplidar stream) links\n"
             "  --robot DEV --lms DEV     live serial links (devices or pseudo-terminals), with\n"
@@ -711,8 +713,15 @@ static void carmen_mount(nav_t *nav, const char *path, int fov179, rsm_pose_t *l
 {
     static carmen_reader_t ahead;
     static carmen_record_t rec;
+    struct stat st;
     *have_log = 0;
     nav->mount_source = nav->mount_flag ? "flag" : "default zero";
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        /* A pipe (a log streamed in) can be read once: the mount is the
+         * flag's or zero, and the run reads every line. */
+        snprintf(nav->mount_note, sizeof nav->mount_note, "not looked up: the log is not a regular file");
+        return;
+    }
     ahead.fov179 = fov179;
     if (carmen_open(&ahead, path) != 0) {
         return; /* the real pass says why */

@@ -81,6 +81,7 @@ from .faults import FAULT_RUNS, QUICK_FAULT_RUNS, fault_floors, run_faults
 from .knownmap import (KIDNAP_RUNS, QUICK_KIDNAP_RUNS, QUICK_STARTS, STARTS, START_SCANS, knownmap_floors,
     run_knownmap)
 from . import knownmap as _knownmap
+from . import navmemory as _navmemory
 from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors,
     context_from_manifest, floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_report)
 
@@ -296,6 +297,9 @@ def run(args: argparse.Namespace) -> Path:
     ctx["lidar_streams"] = stage("lidar streams", lidarbench.run, nav, logs, work / "lidar-streams", ctx["accuracy"])
     ctx["corridors"] = stage("corridors", corridors.run, nav, work / "corridors", args.quick)
     ctx["speed"] = stage("speed", run_speed, nav, main_log, repeats, work)
+    # one process at a time, like the speed runs: a long run alone, then a short one
+    ctx["nav_memory"] = stage("rsm-nav memory", _navmemory.run, nav, main_log, work,
+                              _navmemory.QUICK_SCANS if args.quick else _navmemory.SCANS)
     lv_by_log = {label: (levels if label == main_label else other_levels) for label, _, _ in logs}
     ctx["robustness"] = stage("robustness", run_robustness, nav, logs, ctx["accuracy"], lv_by_log, seeds, work,
                               cache, args.jobs)
@@ -381,7 +385,8 @@ def run(args: argparse.Namespace) -> Path:
         print(f"rsm-bench: WARNING: {ctx['sources_changed']}", flush=True)
     ctx["floors"] = (check_floors(**floor_inputs(ctx)) + m4_floors(ctx.get("m4")) +
                      spread_floors(ctx.get("spread")) + fault_floors(ctx.get("faults")) +
-                     knownmap_floors(ctx.get("knownmap")) + ctx["full_checks"] +
+                     knownmap_floors(ctx.get("knownmap")) + _navmemory.floors(ctx.get("nav_memory")) +
+                     ctx["full_checks"] +
                      ctx["lidar_streams"] + ctx["corridors"])
     ctx["losses"] = losses(ctx)
     ctx["elapsed"] = time.monotonic() - t_start

@@ -1159,6 +1159,8 @@ def report_memory(ctx: dict, root: Path) -> List[str]:
     else:
         L += [f"Cortex-M4F sizes (tools/cross-check) not measured: {(xc or {}).get('skipped', 'disabled')}.", ""]
     L += report_arm_memory(am, root)
+    from .navmemory import report as nav_memory_report
+    L += nav_memory_report(ctx.get("nav_memory"))
     L += report_stack(am, ctx.get("host_stack"), ctx.get("stages"), ctx.get("stack_note"))
     return L
 
