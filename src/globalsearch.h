@@ -77,7 +77,7 @@ void rsm_global_window(rsm_global_t *g, const rsm_tmap_t *map, float x, float y,
  * heading is done (g->cand[0 .. g->found) then hold the kept poses, best
  * first). Adds the cells and blocks read to g->work and to *used (may be
  * NULL). */
-int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
+int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
 
 #ifdef __cplusplus
 }
