@@ -184,6 +184,7 @@ static uint32_t grid_up(const rsm_global_t *g, uint8_t *grid, uint32_t i)
     int32_t d0;
     int32_t d1;
     int32_t c;
+    int32_t step;
     uint32_t reads = 0;
     while (h < g->top_h && i >= g->grid_at[h + 1u]) {
         ++h;
@@ -203,14 +204,23 @@ static uint32_t grid_up(const rsm_global_t *g, uint8_t *grid, uint32_t i)
     d0 = d0 > 0 ? d0 : 0;
     c1 = c1 < (int32_t)g->grid_ny[h - 1u] - 1 ? c1 : (int32_t)g->grid_ny[h - 1u] - 1;
     d1 = d1 < (int32_t)g->grid_nx[h - 1u] - 1 ? d1 : (int32_t)g->grid_nx[h - 1u] - 1;
-    for (c = c0; c <= c1; ++c) {
+    /* Finer blocks overlap: every step-th of them still covers the span
+     * (the last one always read). */
+    step = (int32_t)(((uint32_t)half >> f) + 1u);
+    for (c = c0; c <= c1; c = (c < c1 && c + step > c1) ? c1 : c + step) {
         int32_t d;
-        for (d = d0; d <= d1; ++d) {
+        for (d = d0; d <= d1; d = (d < d1 && d + step > d1) ? d1 : d + step) {
             reads++;
             if (get_bit(grid, g->grid_at[h - 1u] + (uint32_t)c * g->grid_nx[h - 1u] + (uint32_t)d) != 0u) {
                 set_bit(grid, i);
                 return reads;
             }
+            if (d == d1) {
+                break;
+            }
+        }
+        if (c == c1) {
+            break;
         }
     }
     return reads;
@@ -368,15 +378,28 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
         g->headings += g->headings & 1u;
     }
     g->step_rad = 2.0f * RSM_PI / (float)g->headings;
-    if ((rc = begin_grids(g, grid, gx0, gy0, gx1, gy1)) != RSM_OK) {
-        return rc;
-    }
-    for (k = 0; k < g->npts; ++k) {
-        g->ord[k] = (uint16_t)k;
+    if (g->cached != 0u && g->cache_stamp == map->stamp && g->cache_used == map->used && g->cache_box[0] == gx0 &&
+        g->cache_box[1] == gy0 && g->cache_box[2] == gx1 && g->cache_box[3] == gy1) {
+        /* The map as the last search built its grids and directions from:
+         * they stand (only the agreement with this scan is new). */
+        g->dir_next = map->used;
+        g->build_next = g->build_end;
+        g->root_i = g->ox;
+        g->root_j = g->oy;
+        g->root_h = g->top_h;
+    } else {
+        g->cached = 0u;
+        if ((rc = begin_grids(g, grid, gx0, gy0, gx1, gy1)) != RSM_OK) {
+            return rc;
+        }
+        memset(g->dir_map, 0, sizeof g->dir_map);
+        g->dir_next = 0;
+        g->cache_box[0] = gx0;
+        g->cache_box[1] = gy0;
+        g->cache_box[2] = gx1;
+        g->cache_box[3] = gy1;
     }
     scan_directions(g, pts, n);
-    memset(g->dir_map, 0, sizeof g->dir_map);
-    g->dir_next = 0;
     g->at = *at;
     g->heading = 0;
     g->pass = 0;
@@ -390,34 +413,43 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
 
 /* The map's wall directions from one tile of the direction level: the
  * gradient of its cell values (a 3 x 3 Sobel inside the tile) is normal to
- * its walls. Returns the cells looked at. */
+ * its walls. The tile's rows are unpacked once, three at a time. Returns
+ * the cells looked at. */
 static uint32_t tile_directions(rsm_global_t *g, const rsm_tile_t *t)
 {
-    const int32_t side = RSM_TMAP_TILE_SIDE;
-    int32_t y;
-    for (y = 1; y < side - 1; ++y) {
-        int32_t x;
-        for (x = 1; x < side - 1; ++x) {
-            int32_t v[3][3];
-            int32_t dy;
-            float gx;
-            float gy;
-            for (dy = -1; dy <= 1; ++dy) {
-                int32_t dx;
-                for (dx = -1; dx <= 1; ++dx) {
-                    const uint32_t c = (uint32_t)((y + dy) * side + x + dx);
-                    v[dy + 1][dx + 1] = (int32_t)(((uint32_t)t->cell[c >> 1] >> ((c & 1u) << 2)) & 15u);
+    const uint32_t side = (uint32_t)RSM_TMAP_TILE_SIDE;
+    uint8_t row[3][RSM_TMAP_TILE_SIDE];
+    uint32_t y;
+    for (y = 0; y < side; ++y) {
+        uint32_t x;
+        for (x = 0; x < side; ++x) {
+            const uint32_t c = y * side + x;
+            row[y % 3u][x] = (uint8_t)(((uint32_t)t->cell[c >> 1] >> ((c & 1u) << 2)) & 15u);
+        }
+        if (y < 2u) {
+            continue;
+        }
+        {
+            /* Rows y - 2, y - 1, y: the cells of row y - 1 have all their
+             * neighbours. */
+            const uint8_t *lo = row[(y - 2u) % 3u];
+            const uint8_t *mid = row[(y - 1u) % 3u];
+            const uint8_t *hi = row[y % 3u];
+            for (x = 1; x + 1u < side; ++x) {
+                const int32_t gx = ((int32_t)lo[x + 1u] + 2 * (int32_t)mid[x + 1u] + (int32_t)hi[x + 1u]) -
+                                   ((int32_t)lo[x - 1u] + 2 * (int32_t)mid[x - 1u] + (int32_t)hi[x - 1u]);
+                const int32_t gy = ((int32_t)hi[x - 1u] + 2 * (int32_t)hi[x] + (int32_t)hi[x + 1u]) -
+                                   ((int32_t)lo[x - 1u] + 2 * (int32_t)lo[x] + (int32_t)lo[x + 1u]);
+                if (gx != 0 || gy != 0) {
+                    const float fx = (float)gx;
+                    const float fy = (float)gy;
+                    /* The wall runs across its normal (gx, gy). */
+                    add_direction(g->dir_map, -fy, fx, sqrtf(fx * fx + fy * fy));
                 }
-            }
-            gx = (float)((v[0][2] + 2 * v[1][2] + v[2][2]) - (v[0][0] + 2 * v[1][0] + v[2][0]));
-            gy = (float)((v[2][0] + 2 * v[2][1] + v[2][2]) - (v[0][0] + 2 * v[0][1] + v[0][2]));
-            if (gx != 0.0f || gy != 0.0f) {
-                /* The wall runs across its normal (gx, gy). */
-                add_direction(g->dir_map, -gy, gx, sqrtf(gx * gx + gy * gy));
             }
         }
     }
-    return (uint32_t)((side - 2) * (side - 2));
+    return (side - 2u) * (side - 2u);
 }
 
 /* How well the scan's wall directions, turned by each heading, fall on the
@@ -520,7 +552,48 @@ static uint32_t window4(const rsm_tmap_t *map, uint32_t level, int32_t u, int32_
     }
 }
 
-/* The points a box of 2^h positions a side reads (the first of g->ord):
+/* The cells of the search level in the window [u, u + 2] x [v, v + 2],
+ * row by row into c[9]: one tile lookup when they share a tile. */
+static void window9(const rsm_tmap_t *map, uint32_t level, int32_t u, int32_t v, uint32_t *c)
+{
+    const int32_t lim = RSM_TMAP_CELL_LIMIT - 3;
+    const int32_t tx = u >> RSM_TMAP_TILE_LOG2;
+    const int32_t ty = v >> RSM_TMAP_TILE_LOG2;
+    uint32_t slot[4];
+    uint32_t r;
+    if (!(u > -lim && u < lim && v > -lim && v < lim)) {
+        for (r = 0; r < 9u; ++r) {
+            c[r] = rsm_tmap_value(map, level, u + (int32_t)(r % 3u), v + (int32_t)(r / 3u));
+        }
+        return;
+    }
+    /* The window spans one tile, or two or four at a tile's edge: each
+     * looked up once. */
+    slot[0] = rsm_tmap_find_slot(map, level, tx, ty);
+    slot[1] = ((u + 2) >> RSM_TMAP_TILE_LOG2) != tx ? rsm_tmap_find_slot(map, level, tx + 1, ty) : slot[0];
+    if (((v + 2) >> RSM_TMAP_TILE_LOG2) != ty) {
+        slot[2] = rsm_tmap_find_slot(map, level, tx, ty + 1);
+        slot[3] = ((u + 2) >> RSM_TMAP_TILE_LOG2) != tx ? rsm_tmap_find_slot(map, level, tx + 1, ty + 1) : slot[2];
+    } else {
+        slot[2] = slot[0];
+        slot[3] = slot[1];
+    }
+    for (r = 0; r < 9u; ++r) {
+        const int32_t x = u + (int32_t)(r % 3u);
+        const int32_t y = v + (int32_t)(r / 3u);
+        const uint32_t s = slot[(uint32_t)((x >> RSM_TMAP_TILE_LOG2) - tx) + 2u * (uint32_t)((y >> RSM_TMAP_TILE_LOG2) - ty)];
+        c[r] = s == RSM_TMAP_NONE ? 0u : rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(x, y));
+    }
+}
+
+static uint32_t max4(uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+    const uint32_t x = a > b ? a : b;
+    const uint32_t y = c > d ? c : d;
+    return x > y ? x : y;
+}
+
+/* The points a box of 2^h positions a side reads (the first of g->pts):
  * all for leaves and the smallest boxes, fewer for large ones, where most
  * boxes pass anyway and a point not read counts as on a wall. */
 static uint32_t points_read(const rsm_global_t *g, uint32_t h)
@@ -532,12 +605,18 @@ static uint32_t points_read(const rsm_global_t *g, uint32_t h)
 /* The point at place q of the order, which ended a box's bound, moves up
  * one place: points that fall off the map's walls where others do not are
  * read first, and poor boxes are given up after fewer reads. */
-static void promote(rsm_global_t *g, uint32_t q)
+static void promote(rsm_global_t *g, int32_t *fx, int32_t *fy, uint32_t q)
 {
     if (q > 0u) {
-        const uint16_t t = g->ord[q];
-        g->ord[q] = g->ord[q - 1u];
-        g->ord[q - 1u] = t;
+        const rsm_point_t p = g->pts[q];
+        int32_t t = fx[q];
+        g->pts[q] = g->pts[q - 1u];
+        g->pts[q - 1u] = p;
+        fx[q] = fx[q - 1u];
+        fx[q - 1u] = t;
+        t = fy[q];
+        fy[q] = fy[q - 1u];
+        fy[q - 1u] = t;
     }
 }
 
@@ -549,14 +628,14 @@ static void promote(rsm_global_t *g, uint32_t q)
  * lift the sum to thr (each adds 1 at most): what it returns is then below
  * thr, which is all the caller asks. Adds the reads (a grid block, or the
  * four cells of a leaf's window: 4) to *work. */
-static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, const int32_t *fx, const int32_t *fy,
+static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, int32_t *fx, int32_t *fy,
                        int32_t i, int32_t j, uint32_t h, float thr, uint32_t *work)
 {
     uint32_t q;
     if (h == 0u) {
         float sum = 0.0f;
         for (q = 0; q < g->npts; ++q) {
-            const uint32_t k = g->ord[q];
+            const uint32_t k = q;
             const int32_t u = fx[k] + i;
             const int32_t v = fy[k] + j;
             /* Grid 1 bounds a wider window: nothing there, nothing here. */
@@ -565,7 +644,7 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
             }
             if (sum + (float)(g->npts - q - 1u) < thr) {
                 *work += 4u * (q + 1u);
-                promote(g, q);
+                promote(g, fx, fy, q);
                 return sum;
             }
         }
@@ -586,7 +665,7 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
         const float slack = (float)g->npts - thr;
         uint32_t miss = 0;
         for (q = 0; q < n; ++q) {
-            const uint32_t k = g->ord[q];
+            const uint32_t k = q;
             const uint32_t a = (uint32_t)(fx[k] + x0) >> e;
             const uint32_t b = (uint32_t)(fy[k] + y0) >> e;
             uint32_t bit = 0;
@@ -598,7 +677,7 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
                 ++miss;
                 if ((float)miss > slack) {
                     *work += q + 1u;
-                    promote(g, q);
+                    promote(g, fx, fy, q);
                     return (float)(g->npts - miss);
                 }
             }
@@ -606,6 +685,151 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
         *work += n;
         return (float)(g->npts - miss);
     }
+}
+
+/* The four leaves of box (i, j, 1), their scores into bound[] (child c at
+ * (i + (c & 1), j + (c >> 1))): each point's 3 x 3 window, read once,
+ * holds the four leaves' 2 x 2 ones. A leaf whose points left could not
+ * lift it to thr is given up (its sum so far, below thr); the reads stop
+ * when all four are. Adds 4 a point read to *work. */
+static void leaf_bounds(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, int32_t *fx,
+                        int32_t *fy, int32_t i, int32_t j, float thr, float *bound, uint32_t *work)
+{
+    uint32_t q;
+    uint32_t live = 15u;
+    bound[0] = bound[1] = bound[2] = bound[3] = 0.0f;
+    for (q = 0; q < g->npts && live != 0u; ++q) {
+        const uint32_t k = q;
+        const int32_t u = fx[k] + i;
+        const int32_t v = fy[k] + j;
+        const float rest = (float)(g->npts - q - 1u);
+        uint32_t c;
+        /* Grid 1 bounds the whole 3 x 3 window: nothing there, nothing here. */
+        if (grid_read(g, grid, 1u, u, v) != 0u) {
+            uint32_t w[9];
+            window9(map, g->level, u, v, w);
+            bound[0] += map->occ[max4(w[0], w[1], w[3], w[4])];
+            bound[1] += map->occ[max4(w[1], w[2], w[4], w[5])];
+            bound[2] += map->occ[max4(w[3], w[4], w[6], w[7])];
+            bound[3] += map->occ[max4(w[4], w[5], w[7], w[8])];
+        }
+        for (c = 0; c < 4u; ++c) {
+            if ((live & (1u << c)) != 0u && bound[c] + rest < thr) {
+                live &= ~(1u << c);
+                if (live == 0u) {
+                    promote(g, fx, fy, q);
+                }
+            }
+        }
+        *work += 4u;
+    }
+}
+
+/* The four children of box (i, j, h + 1), boxes of 2^h positions a side
+ * (h >= 1), their bounds into bound[] (child c at (i + (c & 1) 2^h, j +
+ * (c >> 1) 2^h)), as box_bound gives each, in one pass over the points: a
+ * child whose misses could no longer leave thr is given up, the reads stop
+ * when all four are. Adds the blocks read to *work. */
+static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int32_t *fy, int32_t i,
+                         int32_t j, uint32_t h, float thr, float *bound, uint32_t *work)
+{
+    /* Grid h's block of a window [u, u + 2^h] is (u - ox + 2^h) >> e: one
+     * read a point; a window left of the map wraps to a huge block index,
+     * which is past the grid like one right of it (the grids are far
+     * narrower than 2^(32 - e) blocks). */
+    const uint32_t n = points_read(g, h);
+    const uint32_t e = g->grid_e[h];
+    const uint32_t nx = g->grid_nx[h];
+    const uint32_t ny = g->grid_ny[h];
+    const uint32_t at = g->grid_at[h];
+    const int32_t half = (int32_t)(1u << h);
+    const int32_t x0 = i - g->ox + half;
+    const int32_t y0 = j - g->oy + half;
+    const float slack = (float)g->npts - thr;
+    /* A child is given up once its misses exceed this. */
+    const int32_t allowed = slack >= 0.0f ? (int32_t)slack : -1;
+    int32_t m0 = 0;
+    int32_t m1 = 0;
+    int32_t m2 = 0;
+    int32_t m3 = 0;
+    uint32_t q;
+    if (e > h) {
+        /* Blocks wider than the children: each child's own block (rare:
+         * the coarsest grids of a wide map). */
+        for (q = 0; q < n && (m0 <= allowed || m1 <= allowed || m2 <= allowed || m3 <= allowed); ++q) {
+            const uint32_t k = q;
+            uint32_t c;
+            for (c = 0; c < 4u; ++c) {
+                const uint32_t a = (uint32_t)(fx[k] + x0 + ((c & 1u) != 0u ? half : 0)) >> e;
+                const uint32_t b = (uint32_t)(fy[k] + y0 + ((c & 2u) != 0u ? half : 0)) >> e;
+                const uint32_t bit = a < nx && b < ny ? get_bit(grid, at + b * nx + a) : 0u;
+                int32_t *m = c == 0u ? &m0 : c == 1u ? &m1 : c == 2u ? &m2 : &m3;
+                *m += (int32_t)(1u - bit);
+            }
+            *work += 4u;
+        }
+    } else {
+        /* The children's blocks are d apart; where all four lie in the
+         * grid (most points: they fall on the map) no bound is tested. */
+        const uint32_t d = (uint32_t)half >> e;
+        const uint32_t row = d * nx;
+        const uint32_t nx_in = nx > d ? nx - d : 0u;
+        const uint32_t ny_in = ny > d ? ny - d : 0u;
+        uint32_t reads = 0;
+        for (q = 0; q < n && (m0 <= allowed || m1 <= allowed || m2 <= allowed || m3 <= allowed); ++q) {
+            const uint32_t a = (uint32_t)(fx[q] + x0) >> e;
+            const uint32_t b = (uint32_t)(fy[q] + y0) >> e;
+            const uint32_t first = at + b * nx + a;
+            if (a < nx_in && b < ny_in) {
+                if (m0 <= allowed) {
+                    m0 += (int32_t)(1u - get_bit(grid, first));
+                    reads++;
+                }
+                if (m1 <= allowed) {
+                    m1 += (int32_t)(1u - get_bit(grid, first + d));
+                    reads++;
+                }
+                if (m2 <= allowed) {
+                    m2 += (int32_t)(1u - get_bit(grid, first + row));
+                    reads++;
+                }
+                if (m3 <= allowed) {
+                    m3 += (int32_t)(1u - get_bit(grid, first + row + d));
+                    reads++;
+                }
+            } else {
+                const uint32_t left = a < nx ? 1u : 0u;
+                const uint32_t right = a + d < nx ? 1u : 0u;
+                const uint32_t low = b < ny ? 1u : 0u;
+                const uint32_t high = b + d < ny ? 1u : 0u;
+                if (m0 <= allowed) {
+                    m0 += (left & low) != 0u ? (int32_t)(1u - get_bit(grid, first)) : 1;
+                    reads++;
+                }
+                if (m1 <= allowed) {
+                    m1 += (right & low) != 0u ? (int32_t)(1u - get_bit(grid, first + d)) : 1;
+                    reads++;
+                }
+                if (m2 <= allowed) {
+                    m2 += (left & high) != 0u ? (int32_t)(1u - get_bit(grid, first + row)) : 1;
+                    reads++;
+                }
+                if (m3 <= allowed) {
+                    m3 += (right & high) != 0u ? (int32_t)(1u - get_bit(grid, first + row + d)) : 1;
+                    reads++;
+                }
+            }
+        }
+        *work += reads;
+    }
+    if (q > 0u && m0 > allowed && m1 > allowed && m2 > allowed && m3 > allowed) {
+        /* The point that ended the last child's bound moves up. */
+        promote(g, fx, fy, q - 1u);
+    }
+    bound[0] = (float)((int32_t)g->npts - m0);
+    bound[1] = (float)((int32_t)g->npts - m1);
+    bound[2] = (float)((int32_t)g->npts - m2);
+    bound[3] = (float)((int32_t)g->npts - m3);
 }
 
 /* The score a box must reach to be split or kept. */
@@ -715,6 +939,9 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
         g->build_next++;
     }
     if (g->dir_next == map->used && g->build_next == g->build_end) {
+        g->cached = 1u;
+        g->cache_stamp = map->stamp;
+        g->cache_used = map->used;
         direction_agreement(g);
         g->dir_next++;
     }
@@ -765,15 +992,21 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
             const uint32_t h = b.h - 1u;
             const int32_t half = (int32_t)(1u << h);
             rsm_global_box_t child[4];
+            float leaf[4];
             uint32_t c;
             uint32_t nc = 0;
+            if (h == 0u) {
+                leaf_bounds(g, grid, map, fx, fy, b.i, b.j, threshold(g), leaf, &work);
+            } else {
+                child_bounds(g, grid, fx, fy, b.i, b.j, h, threshold(g), leaf, &work);
+            }
             for (c = 0; c < 4u; ++c) {
                 rsm_global_box_t ch;
                 uint32_t at;
                 ch.i = b.i + ((c & 1u) ? half : 0);
                 ch.j = b.j + ((c & 2u) ? half : 0);
                 ch.h = h;
-                ch.bound = box_bound(g, grid, map, fx, fy, ch.i, ch.j, h, threshold(g), &work);
+                ch.bound = leaf[c];
                 if (ch.bound < threshold(g)) {
                     continue;
                 }

@@ -56,11 +56,15 @@ int rsm_global_check(const rsm_tmap_t *map);
  * RSM_GLOBAL_POINTS of them, taken evenly, are kept, and all give the
  * scan's wall directions) over map, whose estimate from odometry at this
  * scan is *at. grid (RSM_GLOBAL_GRID_BYTES) holds the bound grids until
- * the search ends: the caller's, untouched by anything else meanwhile. A pose is kept only when it
- * scores at least min_share of the kept points' count and within keep of
- * the best so far. Returns RSM_OK, or RSM_ERR_DEGENERATE when the map's
- * coarsest level is empty or fewer than 8 readings are given, or
- * RSM_ERR_NOMEM as rsm_global_check says. */
+ * the search ends: the caller's, untouched by anything else meanwhile.
+ * The grids and the map's wall directions a search built on g are kept for
+ * the next search on g while g->cached is set and the map's write counter,
+ * tiles and box are as they were: the caller passes the same grid, and
+ * clears g->cached when it writes the map or the grid memory in between.
+ * A pose is kept only when it scores at least min_share of the kept
+ * points' count and within keep of the best so far. Returns RSM_OK, or
+ * RSM_ERR_DEGENERATE when the map's coarsest level is empty or fewer than
+ * 8 readings are given, or RSM_ERR_NOMEM as rsm_global_check says. */
 int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
                      const rsm_pose_t *at, float min_share);
 

@@ -269,6 +269,7 @@ void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
     loc->state.persistent.written = loc->ekf.x;
     loc->state.persistent.fit = fit;
     loc->state.persistent.map_fit = fit;
+    loc->state.persistent.global.cached = 0u;
     if (global_running(loc)) {
         loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
     }
@@ -1112,6 +1113,8 @@ static int write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, 
         return 1;
     }
     (void)rsm_tmap_write_run(map, loc->frame.world, 0u);
+    /* The scan takes the memory of the global search's grids. */
+    loc->state.persistent.global.cached = 0u;
     to_world(loc, est, npts);
     origin.x = cfg->laser_mount.x;
     origin.y = cfg->laser_mount.y;

@@ -296,7 +296,9 @@ typedef struct rsm_global {
     float agree[RSM_GLOBAL_BINS];  /* how well the directions agree at each heading (mod half a
                                     * turn, best 1), the best within a bin either side */
     uint32_t pass;                 /* headings are searched in passes, best agreeing first */
-    rsm_point_t pts[RSM_GLOBAL_POINTS];  /* the searched scan's readings, robot frame */
+    rsm_point_t pts[RSM_GLOBAL_POINTS];  /* the searched scan's readings, robot frame, in the
+                                          * order they are read: one that ends a box's bound
+                                          * moves up one place */
     uint32_t npts;
     rsm_pose_t at;                 /* the estimate (odometry's) at the scan searched */
     /* The bound grids (the caller's memory, RSM_GLOBAL_GRID_BYTES), one
@@ -314,8 +316,14 @@ typedef struct rsm_global {
     uint32_t top_h;                /* the whole map: 2^top_h cells a side from (ox, oy) */
     uint32_t build_next;           /* the next block of grids 2 and up to build (bit index) */
     uint32_t build_end;            /* the grids' bits */
-    uint16_t ord[RSM_GLOBAL_POINTS];  /* the order the points are read in: one that ends a
-                                       * box's bound moves up one place */
+    /* The grids and dir_map, once built, hold for the next search while
+     * the map is not written (the localizer clears cached when it writes
+     * the map or the grids' memory, or replaces the map): the map's write
+     * counter, tiles and box on the search level they were built from. */
+    uint32_t cached;
+    uint32_t cache_stamp;
+    uint32_t cache_used;
+    int32_t cache_box[4];
     int32_t root_i;                /* the root box: 2^root_h positions a side from here */
     int32_t root_j;
     uint32_t root_h;
