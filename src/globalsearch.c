@@ -12,8 +12,11 @@
 /* A pose is kept while it scores within this share of the best: its rivals
  * must be descended too, or a wrong winner could not be told apart. */
 #define KEEP_SHARE 0.2f
+#define LEAF_SLACK 0.05f
 #define MAX_H ((uint32_t)RSM_GLOBAL_MAX_H)
 #define MAX_BASE_H ((uint32_t)RSM_GLOBAL_MAX_BASE_H)
+/* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart. */
+#define FINEST_BELOW 2u
 
 /* Floor division by 2^h for any sign. */
 static int32_t floor_shift(int32_t v, uint32_t h)
@@ -88,7 +91,10 @@ static int layout(uint32_t w, uint32_t hgt, uint32_t *top, uint8_t *e)
         }
     }
     for (h = 1; h <= *top; ++h) {
-        while (e[h] > 0u) {
+        /* Blocks a quarter of the box apart at the finest: beyond that the
+         * bound hardly tightens (windows of 1.8 m and more hold walls
+         * anyway), and every bit costs its build. */
+        while (e[h] > 0u && e[h] + FINEST_BELOW > h) {
             e[h]--;
             if (grid_bits(w, hgt, *top, e) > cap) {
                 e[h]++;
@@ -449,7 +455,9 @@ static uint32_t tile_directions(rsm_global_t *g, const rsm_tile_t *t)
             }
         }
     }
-    return (side - 2u) * (side - 2u);
+    /* Two reads' worth a cell: the gradient's direction costs about as much
+     * as its cells (measured on the M4). */
+    return 2u * (side - 2u) * (side - 2u);
 }
 
 /* How well the scan's wall directions, turned by each heading, fall on the
@@ -798,24 +806,29 @@ static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int3
                     reads++;
                 }
             } else {
+                /* At the grid's edge: each child's block from its own
+                 * window (a window left of the grid wraps to a huge index,
+                 * so the blocks are not d apart there). */
+                const uint32_t a1 = (uint32_t)(fx[q] + x0 + half) >> e;
+                const uint32_t b1 = (uint32_t)(fy[q] + y0 + half) >> e;
                 const uint32_t left = a < nx ? 1u : 0u;
-                const uint32_t right = a + d < nx ? 1u : 0u;
+                const uint32_t right = a1 < nx ? 1u : 0u;
                 const uint32_t low = b < ny ? 1u : 0u;
-                const uint32_t high = b + d < ny ? 1u : 0u;
+                const uint32_t high = b1 < ny ? 1u : 0u;
                 if (m0 <= allowed) {
-                    m0 += (left & low) != 0u ? (int32_t)(1u - get_bit(grid, first)) : 1;
+                    m0 += (left & low) != 0u ? (int32_t)(1u - get_bit(grid, at + b * nx + a)) : 1;
                     reads++;
                 }
                 if (m1 <= allowed) {
-                    m1 += (right & low) != 0u ? (int32_t)(1u - get_bit(grid, first + d)) : 1;
+                    m1 += (right & low) != 0u ? (int32_t)(1u - get_bit(grid, at + b * nx + a1)) : 1;
                     reads++;
                 }
                 if (m2 <= allowed) {
-                    m2 += (left & high) != 0u ? (int32_t)(1u - get_bit(grid, first + row)) : 1;
+                    m2 += (left & high) != 0u ? (int32_t)(1u - get_bit(grid, at + b1 * nx + a)) : 1;
                     reads++;
                 }
                 if (m3 <= allowed) {
-                    m3 += (right & high) != 0u ? (int32_t)(1u - get_bit(grid, first + row + d)) : 1;
+                    m3 += (right & high) != 0u ? (int32_t)(1u - get_bit(grid, at + b1 * nx + a1)) : 1;
                     reads++;
                 }
             }
@@ -837,6 +850,17 @@ static float threshold(const rsm_global_t *g)
 {
     const float rel = (1.0f - KEEP_SHARE) * g->best_score;
     return rel > g->floor_score ? rel : g->floor_score;
+}
+
+/* The score a leaf must reach to be kept, below the boxes' by LEAF_SLACK of
+ * the points: a leaf scores the lattice's heading, and a place that looks
+ * the same as the best one (a room's twin turned half round) can score a
+ * point or two less there than the best does at its own. Such a rival
+ * must be kept, or the proof would take the best unopposed; its box above
+ * reached the bar. */
+static float leaf_threshold(const rsm_global_t *g)
+{
+    return threshold(g) - LEAF_SLACK * (float)g->npts;
 }
 
 /* How well the kept points fit at pose x itself: their occupancy on the
@@ -975,7 +999,7 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
             continue;
         }
         b = g->stack[--g->depth];
-        if (b.bound < threshold(g)) {
+        if (b.bound < (b.h == 0u ? leaf_threshold(g) : threshold(g))) {
             continue;
         }
         if (b.h == 0u) {
@@ -996,7 +1020,7 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
             uint32_t c;
             uint32_t nc = 0;
             if (h == 0u) {
-                leaf_bounds(g, grid, map, fx, fy, b.i, b.j, threshold(g), leaf, &work);
+                leaf_bounds(g, grid, map, fx, fy, b.i, b.j, leaf_threshold(g), leaf, &work);
             } else {
                 child_bounds(g, grid, fx, fy, b.i, b.j, h, threshold(g), leaf, &work);
             }
@@ -1007,7 +1031,7 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
                 ch.j = b.j + ((c & 2u) ? half : 0);
                 ch.h = h;
                 ch.bound = leaf[c];
-                if (ch.bound < threshold(g)) {
+                if (ch.bound < (h == 0u ? leaf_threshold(g) : threshold(g))) {
                     continue;
                 }
                 /* Ascending, so that the best is pushed last, popped first. */

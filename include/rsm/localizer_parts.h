@@ -339,6 +339,17 @@ typedef struct rsm_global {
     float best_score;              /* the best coarse score found */
     uint32_t unproven;             /* searches in a row that proved nothing (each next one
                                     * keeps poses with a lower share of points on walls) */
+    /* The proof, spread over scans: every kept pose descended with the
+     * same scan, a share of it kept here (the scan searched, or the one a
+     * proof left in doubt began again with; the estimate then at seen_at),
+     * to end with fit hit; then the winner, carried to the scan at hand. */
+    rsm_point_t seen[2 * RSM_GLOBAL_POINTS];
+    uint32_t nseen;
+    rsm_pose_t seen_at;
+    uint32_t proved;               /* kept poses descended so far (found + 1: the winner too) */
+    uint32_t rounds;               /* proofs of the same kept poses that were left in doubt */
+    float hit[RSM_GLOBAL_CANDIDATES];
+    rsm_pose_t end[RSM_GLOBAL_CANDIDATES];
     uint32_t work;                 /* cells and blocks read so far */
 } rsm_global_t;
 
