@@ -1228,8 +1228,11 @@ static float bar_fit(const rsm_localizer_t *loc)
 #define BEGIN_WORK 3000u
 /* Proofs of the same kept poses, each with a scan that follows, while the
  * best fits well but a rival is too close or the scan does not pin it,
- * before a new search. */
+ * before a new search; each once the robot has moved this far or turned
+ * this much since the last. */
 #define PROVE_ROUNDS 4u
+#define PROVE_AGAIN_M 0.3f
+#define PROVE_AGAIN_RAD 0.2f
 /* The winner is looked for again around where odometry carried it (a near
  * search: most of a descent's cost) only when its reach is this much
  * beyond two cells: within it, the descent from the wide prior finds it. */
@@ -1406,6 +1409,22 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
     const rsm_tmap_t *map = &loc->state.persistent.map;
     const uint32_t budget = cfg->global_budget;
     uint32_t used = 0;
+    if (g->phase == RSM_GLOBAL_PROVING && g->proved == 0u && g->rounds > 0u) {
+        /* A proof left in doubt is made again only from a new view: once
+         * the robot has moved on since (a stationary robot sees the same
+         * corridor, the same look-alike room). */
+        const rsm_pose_t d = rsm_pose_between(&g->seen_at, &loc->ekf.x);
+        uint32_t k;
+        if (sqrtf(d.x * d.x + d.y * d.y) < PROVE_AGAIN_M && fabsf(d.theta) < PROVE_AGAIN_RAD) {
+            return RSM_SCAN_SEARCHING;
+        }
+        /* The poses, carried by odometry to this scan, are descended with
+         * it. */
+        for (k = 0; k < g->found; ++k) {
+            g->cand[k].pose = rsm_pose_compose(&g->cand[k].pose, &d);
+        }
+        keep_seen(loc, npts);
+    }
     if (g->phase == RSM_GLOBAL_PROVING) {
         /* The kept poses first, as many a scan as global_budget pays for
          * (at least one; all with no budget); the winner with a scan of
@@ -1452,7 +1471,9 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
             for (k = 0; k < g->found; ++k) {
                 g->cand[k].pose = proved_now(loc, k);
             }
-            keep_seen(loc, npts);
+            /* The poses now stand for this scan; the next round's kept
+             * scan is taken once the robot has moved. */
+            g->seen_at = loc->ekf.x;
             g->at = loc->ekf.x;
             g->proved = 0;
             g->rounds++;
