@@ -46,12 +46,19 @@ static uint32_t grid_blocks(uint32_t w, uint32_t h, uint32_t e)
     return ((w - 1u + (1u << h)) >> e) + 1u;
 }
 
+/* The bits of grids 1 .. top; more than any cap when a grid is wider than
+ * its block count's type holds. */
 static uint32_t grid_bits(uint32_t w, uint32_t hgt, uint32_t top, const uint8_t *e)
 {
     uint32_t bits = 0;
     uint32_t h;
     for (h = 1; h <= top; ++h) {
-        bits += grid_blocks(w, h, e[h]) * grid_blocks(hgt, h, e[h]);
+        const uint32_t nx = grid_blocks(w, h, e[h]);
+        const uint32_t ny = grid_blocks(hgt, h, e[h]);
+        if (nx > 0xFFFFu || ny > 0xFFFFu) {
+            return UINT32_MAX;
+        }
+        bits += nx * ny;
     }
     return bits;
 }
@@ -251,8 +258,8 @@ static int begin_grids(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0,
     memset(g->grid_e, 0, sizeof g->grid_e);
     for (h = 1; h <= g->top_h; ++h) {
         g->grid_e[h] = e[h];
-        g->grid_nx[h] = grid_blocks(w, h, e[h]);
-        g->grid_ny[h] = grid_blocks(hgt, h, e[h]);
+        g->grid_nx[h] = (uint16_t)grid_blocks(w, h, e[h]);
+        g->grid_ny[h] = (uint16_t)grid_blocks(hgt, h, e[h]);
         g->grid_at[h] = at;
         at += g->grid_nx[h] * g->grid_ny[h];
     }
@@ -368,6 +375,16 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
             --m;
         }
     }
+    /* For the proof, as many again: the readings halfway between those
+     * (when the scan has them). */
+    g->nseen = g->npts;
+    if (n >= 2u * (size_t)g->npts) {
+        for (k = 0; k < g->npts; ++k) {
+            g->pts[g->npts + k] = pts[(2u * (size_t)k + 1u) * n / (2u * (size_t)g->npts)];
+        }
+        g->nseen = 2u * g->npts;
+    }
+    g->seen_at = *at;
     /* Headings so spaced that the scan's far points (its upper decile)
      * move one cell from one heading to the next. */
     reach = range[(g->npts * 9u) / 10u];

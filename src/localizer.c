@@ -1243,11 +1243,11 @@ static float bar_fit(const rsm_localizer_t *loc)
 static void keep_seen(rsm_localizer_t *loc, size_t npts)
 {
     rsm_global_t *g = &loc->state.persistent.global;
-    const size_t cap = sizeof g->seen / sizeof g->seen[0];
+    const size_t cap = sizeof g->pts / sizeof g->pts[0];
     const size_t n = npts < cap ? npts : cap;
     size_t k;
     for (k = 0; k < n; ++k) {
-        g->seen[k] = loc->pts[k * npts / n];
+        g->pts[k] = loc->pts[k * npts / n];
     }
     g->nseen = (uint32_t)n;
     g->seen_at = loc->ekf.x;
@@ -1269,7 +1269,7 @@ static void prove_one(rsm_localizer_t *loc, uint32_t k)
     wide[8] = 4.0f * g->step_rad * g->step_rad;
     g->hit[k] = -1.0f;
     g->end[k] = g->cand[k].pose;
-    if (rsm_mapmatch(map, &cfg->mapmatch, g->seen, g->nseen, &g->cand[k].pose, wide, &g->cand[k].pose, NULL, &res) ==
+    if (rsm_mapmatch(map, &cfg->mapmatch, g->pts, g->nseen, &g->cand[k].pose, wide, &g->cand[k].pose, NULL, &res) ==
         RSM_OK) {
         g->hit[k] = res.hit;
         g->end[k] = res.pose;
@@ -1518,7 +1518,6 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
             const float grow = (float)(1u << (g->unproven < 16u ? g->unproven : 16u));
             rsm_global_window(g, map, loc->ekf.x.x, loc->ekf.x.y, g->radius_m * grow);
         }
-        keep_seen(loc, npts);
         loc->counters.global_searches++;
         g->phase = RSM_GLOBAL_RUNNING;
         used += BEGIN_WORK;

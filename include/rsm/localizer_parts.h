@@ -257,9 +257,9 @@ typedef struct rsm_tmap {
 #define RSM_GLOBAL_GRID_BYTES_SIDE ((RSM_GLOBAL_SIDE * RSM_GLOBAL_SIDE * 4) / 3 + 4 * RSM_GLOBAL_SIDE + 32)
 #define RSM_GLOBAL_GRID_BYTES                                                                                      \
     (RSM_GLOBAL_GRID_BYTES_SIDE > RSM_MAX_BEAMS * 8 ? RSM_GLOBAL_GRID_BYTES_SIDE : RSM_MAX_BEAMS * 8)
-/* Boxes of at most 2^RSM_GLOBAL_MAX_H positions a side (26 km with 0.2 m
+/* Boxes of at most 2^RSM_GLOBAL_MAX_H positions a side (13 km with 0.2 m
  * cells): one bound grid per box size up to it. */
-#define RSM_GLOBAL_MAX_H 17
+#define RSM_GLOBAL_MAX_H 16
 /* The finest grid's blocks start at most 2^RSM_GLOBAL_MAX_BASE_H cells
  * apart (beyond: the map is too wide for the memory). */
 #define RSM_GLOBAL_MAX_BASE_H 10
@@ -296,10 +296,14 @@ typedef struct rsm_global {
     float agree[RSM_GLOBAL_BINS];  /* how well the directions agree at each heading (mod half a
                                     * turn, best 1), the best within a bin either side */
     uint32_t pass;                 /* headings are searched in passes, best agreeing first */
-    rsm_point_t pts[RSM_GLOBAL_POINTS];  /* the searched scan's readings, robot frame, in the
-                                          * order they are read: one that ends a box's bound
-                                          * moves up one place */
+    /* The searched scan's readings, robot frame: the first npts the search
+     * reads, in the order it reads them (one that ends a box's bound moves
+     * up one place); all nseen, evenly over the scan, the proof's (then
+     * those of the scan a proof left in doubt begins again with). */
+    rsm_point_t pts[2 * RSM_GLOBAL_POINTS];
     uint32_t npts;
+    uint32_t nseen;
+    rsm_pose_t seen_at;            /* the estimate at the scan of pts[0 .. nseen) */
     rsm_pose_t at;                 /* the estimate (odometry's) at the scan searched */
     /* The bound grids (the caller's memory, RSM_GLOBAL_GRID_BYTES), one
      * bit a block: grid h (boxes of 2^h positions a side, h >= 1) has
@@ -308,8 +312,8 @@ typedef struct rsm_global {
      * 2^h + 2^grid_e[h] cells a side from cell (ox - 2^h + a 2^grid_e[h],
      * oy - 2^h + b 2^grid_e[h]). */
     uint32_t grid_at[RSM_GLOBAL_MAX_H + 1];
-    uint32_t grid_nx[RSM_GLOBAL_MAX_H + 1];
-    uint32_t grid_ny[RSM_GLOBAL_MAX_H + 1];
+    uint16_t grid_nx[RSM_GLOBAL_MAX_H + 1];
+    uint16_t grid_ny[RSM_GLOBAL_MAX_H + 1];
     uint8_t grid_e[RSM_GLOBAL_MAX_H + 1];
     int32_t ox;                    /* the map's first cell on the search level */
     int32_t oy;
@@ -339,13 +343,8 @@ typedef struct rsm_global {
     float best_score;              /* the best coarse score found */
     uint32_t unproven;             /* searches in a row that proved nothing (each next one
                                     * keeps poses with a lower share of points on walls) */
-    /* The proof, spread over scans: every kept pose descended with the
-     * same scan, a share of it kept here (the scan searched, or the one a
-     * proof left in doubt began again with; the estimate then at seen_at),
-     * to end with fit hit; then the winner, carried to the scan at hand. */
-    rsm_point_t seen[2 * RSM_GLOBAL_POINTS];
-    uint32_t nseen;
-    rsm_pose_t seen_at;
+    /* The proof, spread over scans: every kept pose descended with pts, to
+     * end with fit hit; then the winner, carried to the scan at hand. */
     uint32_t proved;               /* kept poses descended so far (found + 1: the winner too) */
     uint32_t rounds;               /* proofs of the same kept poses that were left in doubt */
     float hit[RSM_GLOBAL_CANDIDATES];
