@@ -73,13 +73,13 @@ static uint32_t grid_bits(uint32_t w, uint32_t hgt, uint32_t top, const uint8_t 
  * the Intel log, exact windows at 0.4 and 0.8 m read 2.5 times fewer
  * blocks than windows twice as wide). RSM_ERR_NOMEM when even the coarsest
  * does not fit. */
-static int layout(uint32_t w, uint32_t hgt, uint32_t *top, uint8_t *e)
+static int layout(uint32_t w, uint32_t hgt, uint32_t min_top, uint32_t *top, uint8_t *e)
 {
     const uint32_t cap = (uint32_t)RSM_GLOBAL_GRID_BYTES * 8u;
     const uint32_t side = w > hgt ? w : hgt;
     uint32_t r;
     uint32_t h;
-    *top = 1u;
+    *top = min_top > 1u ? min_top : 1u;
     while (*top <= MAX_H && (1u << *top) < side) {
         ++*top;
     }
@@ -120,7 +120,7 @@ int rsm_global_check(const rsm_tmap_t *map)
     if (!rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3])) {
         return RSM_ERR_DEGENERATE;
     }
-    return layout((uint32_t)(b[2] - b[0] + 1), (uint32_t)(b[3] - b[1] + 1), &top, e);
+    return layout((uint32_t)(b[2] - b[0] + 1), (uint32_t)(b[3] - b[1] + 1), 1u, &top, e);
 }
 
 static void set_bit(uint8_t *grid, uint32_t i)
@@ -152,8 +152,9 @@ static uint32_t grid_read(const rsm_global_t *g, const uint8_t *grid, uint32_t h
     return get_bit(grid, g->grid_at[h] + b * g->grid_nx[h] + a);
 }
 
-/* A tile of the search level into the finest grid: each nonzero cell sets
- * the blocks whose windows hold it. Returns the cells looked at. */
+/* A tile of the search level into the finest grid: each nonzero cell of
+ * the grids' box (g->cache_box) sets the blocks whose windows hold it.
+ * Returns the cells looked at. */
 static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t *t)
 {
     const uint32_t e = g->grid_e[1];
@@ -165,9 +166,12 @@ static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t
             continue;
         }
         for (k = c; k < c + 2u; ++k) {
-            if (((((uint32_t)t->cell[k >> 1]) >> ((k & 1u) << 2)) & 15u) != 0u) {
-                const uint32_t x = (uint32_t)((int32_t)t->tx * RSM_TMAP_TILE_SIDE + (int32_t)(k & (RSM_TMAP_TILE_SIDE - 1u)) - g->ox);
-                const uint32_t y = (uint32_t)((int32_t)t->ty * RSM_TMAP_TILE_SIDE + (int32_t)(k >> RSM_TMAP_TILE_LOG2) - g->oy);
+            const int32_t cx = (int32_t)t->tx * RSM_TMAP_TILE_SIDE + (int32_t)(k & (RSM_TMAP_TILE_SIDE - 1u));
+            const int32_t cy = (int32_t)t->ty * RSM_TMAP_TILE_SIDE + (int32_t)(k >> RSM_TMAP_TILE_LOG2);
+            if (((((uint32_t)t->cell[k >> 1]) >> ((k & 1u) << 2)) & 15u) != 0u && cx >= g->cache_box[0] &&
+                cx <= g->cache_box[2] && cy >= g->cache_box[1] && cy <= g->cache_box[3]) {
+                const uint32_t x = (uint32_t)(cx - g->ox);
+                const uint32_t y = (uint32_t)(cy - g->oy);
                 uint32_t b;
                 for (b = y >> e; b <= (y + 2u) >> e; ++b) {
                     uint32_t a;
@@ -241,7 +245,8 @@ static uint32_t grid_up(const rsm_global_t *g, uint8_t *grid, uint32_t i)
 
 /* Lays the grids out over the map's box on the search level and clears
  * them; they are filled by rsm_global_run, a tile at a time. */
-static int begin_grids(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1)
+static int begin_grids(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1,
+                       uint32_t min_top)
 {
     const uint32_t w = (uint32_t)(gx1 - gx0 + 1);
     const uint32_t hgt = (uint32_t)(gy1 - gy0 + 1);
@@ -249,7 +254,7 @@ static int begin_grids(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0,
     uint32_t at = 0;
     uint32_t h;
     int rc;
-    if ((rc = layout(w, hgt, &g->top_h, e)) != RSM_OK) {
+    if ((rc = layout(w, hgt, min_top, &g->top_h, e)) != RSM_OK) {
         return rc;
     }
     memset(g->grid_at, 0, sizeof g->grid_at);
@@ -412,7 +417,7 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
         g->root_h = g->top_h;
     } else {
         g->cached = 0u;
-        if ((rc = begin_grids(g, grid, gx0, gy0, gx1, gy1)) != RSM_OK) {
+        if ((rc = begin_grids(g, grid, gx0, gy0, gx1, gy1, 1u)) != RSM_OK) {
             return rc;
         }
         memset(g->dir_map, 0, sizeof g->dir_map);
@@ -946,6 +951,17 @@ static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score, 
     g->found++;
 }
 
+/* Whether tile t (of a level `up` finer than the search level) overlaps
+ * the grids' box. */
+static int in_box(const rsm_global_t *g, const rsm_tile_t *t, uint32_t up)
+{
+    const int32_t x0 = floor_shift((int32_t)t->tx * RSM_TMAP_TILE_SIDE, up);
+    const int32_t y0 = floor_shift((int32_t)t->ty * RSM_TMAP_TILE_SIDE, up);
+    const int32_t x1 = floor_shift((int32_t)t->tx * RSM_TMAP_TILE_SIDE + RSM_TMAP_TILE_SIDE - 1, up);
+    const int32_t y1 = floor_shift((int32_t)t->ty * RSM_TMAP_TILE_SIDE + RSM_TMAP_TILE_SIDE - 1, up);
+    return x1 >= g->cache_box[0] && x0 <= g->cache_box[2] && y1 >= g->cache_box[1] && y0 <= g->cache_box[3];
+}
+
 int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used)
 {
     const float cell = rsm_tmap_cell(map, g->level);
@@ -964,10 +980,10 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
         if (budget > 0u && work >= budget) {
             break;
         }
-        if (level == g->level) {
+        if (level == g->level && in_box(g, t, 0u)) {
             work += grid_tile(g, grid, t);
         }
-        if (level == direction_level(g->level)) {
+        if (level == direction_level(g->level) && in_box(g, t, g->level - level)) {
             work += tile_directions(g, t);
         }
         g->dir_next++;
@@ -1072,15 +1088,20 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
     return more;
 }
 
-void rsm_global_window(rsm_global_t *g, const rsm_tmap_t *map, float x, float y, float radius_m)
+void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, float x, float y, float radius_m)
 {
-    const float inv = 1.0f / rsm_tmap_cell(map, g->level);
+    const float cell = rsm_tmap_cell(map, g->level);
+    const float inv = 1.0f / cell;
     const float lim = (float)(RSM_TMAP_TILE_LIMIT * RSM_TMAP_TILE_SIDE);
     float fx0 = rsm_floorf((x - radius_m) * inv);
     float fy0 = rsm_floorf((y - radius_m) * inv);
     float w = rsm_floorf((x + radius_m) * inv) - fx0 + 1.0f;
     const float hgt = rsm_floorf((y + radius_m) * inv) - fy0 + 1.0f;
+    int32_t box[4];
+    float far = 0.0f;
+    int32_t reach;
     uint32_t h = 0;
+    uint32_t k;
     w = hgt > w ? hgt : w;
     /* Far outside the map's range, or wider than the map: the whole map. */
     if (!(fx0 > -lim && fx0 < lim && fy0 > -lim && fy0 < lim && w >= 1.0f && w < lim)) {
@@ -1091,6 +1112,32 @@ void rsm_global_window(rsm_global_t *g, const rsm_tmap_t *map, float x, float y,
     }
     if (h >= g->top_h) {
         return;
+    }
+    if (g->cached == 0u) {
+        /* The grids are yet to be built: only over what the window's
+         * points can reach (the window, twice over for the windows of its
+         * boxes, and the farthest point's range around it), so that the
+         * build and the map's directions cost what is near, and the grids'
+         * blocks come finer. */
+        for (k = 0; k < g->npts; ++k) {
+            const float r = sqrtf(g->pts[k].x * g->pts[k].x + g->pts[k].y * g->pts[k].y);
+            far = r > far ? r : far;
+        }
+        reach = (int32_t)(far * inv) + 2;
+        box[0] = (int32_t)fx0 - reach;
+        box[1] = (int32_t)fy0 - reach;
+        box[2] = (int32_t)fx0 + (int32_t)(2u << h) + reach;
+        box[3] = (int32_t)fy0 + (int32_t)(2u << h) + reach;
+        box[0] = box[0] > g->cache_box[0] ? box[0] : g->cache_box[0];
+        box[1] = box[1] > g->cache_box[1] ? box[1] : g->cache_box[1];
+        box[2] = box[2] < g->cache_box[2] ? box[2] : g->cache_box[2];
+        box[3] = box[3] < g->cache_box[3] ? box[3] : g->cache_box[3];
+        if (box[0] <= box[2] && box[1] <= box[3] &&
+            (box[0] != g->cache_box[0] || box[1] != g->cache_box[1] || box[2] != g->cache_box[2] ||
+             box[3] != g->cache_box[3]) &&
+            begin_grids(g, grid, box[0], box[1], box[2], box[3], h) == RSM_OK) {
+            memcpy(g->cache_box, box, sizeof box);
+        }
     }
     g->root_i = (int32_t)fx0;
     g->root_j = (int32_t)fy0;

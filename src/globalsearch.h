@@ -71,8 +71,10 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
 /* Narrows a search begun (rsm_global_begin, before any rsm_global_run) to
  * the positions within radius_m of (x, y), in a square of a power of two
  * cells; every heading still. A window as wide as the map, or one out of
- * the map's range, leaves the whole map. */
-void rsm_global_window(rsm_global_t *g, const rsm_tmap_t *map, float x, float y, float radius_m);
+ * the map's range, leaves the whole map. Grids still to be built are laid
+ * out over what the window's points can reach only (grid: as given to
+ * rsm_global_begin). */
+void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, float x, float y, float radius_m);
 
 /* Goes on with the search for about budget reads of cells and blocks (0 =
  * to the end): it stops before the next box once budget is reached, so a
