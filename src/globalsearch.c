@@ -914,6 +914,9 @@ static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score, 
     uint32_t m;
     uint32_t kept = 0;
     uint32_t at;
+    if (score > g->best_score) {
+        g->best_score = score;
+    }
     for (m = 0; m < g->found; ++m) {
         const rsm_pose_t *o = &g->cand[m].pose;
         if (fabsf(o->x - x->x) <= near_m && fabsf(o->y - x->y) <= near_m &&
@@ -926,9 +929,6 @@ static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score, 
         }
     }
     g->found = kept;
-    if (score > g->best_score) {
-        g->best_score = score;
-    }
     /* Those the best leaves behind by more than the share go. */
     for (m = 0, kept = 0; m < g->found; ++m) {
         if (!(g->cand[m].score < (1.0f - KEEP_SHARE) * g->best_score)) {
