@@ -7,15 +7,16 @@
 
 #include "fmath.h"
 #include "rsm/status.h"
+#include "tmap_read.h"
 
 /* A pose is kept while it scores within this share of the best: its rivals
  * must be descended too, or a wrong winner could not be told apart. */
 #define KEEP_SHARE 0.2f
-/* Blocks of at most 2^MAX_BASE_H cells (beyond: RSM_ERR_NOMEM). */
+#define LEAF_SLACK 0.05f
+#define MAX_H ((uint32_t)RSM_GLOBAL_MAX_H)
 #define MAX_BASE_H ((uint32_t)RSM_GLOBAL_MAX_BASE_H)
-/* The first bound grid has blocks of 2^MIN_BASE_H cells: smaller windows
- * are read from the map's coarser levels (box_bound). */
-#define MIN_BASE_H 2u
+/* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart. */
+#define FINEST_BELOW 2u
 
 /* Floor division by 2^h for any sign. */
 static int32_t floor_shift(int32_t v, uint32_t h)
@@ -38,104 +39,243 @@ static uint32_t direction_level(uint32_t level)
     return level > 0u ? level - 1u : 0u;
 }
 
-/* The smallest block exponent whose grid of a w-cell-wide map has at most
- * RSM_GLOBAL_SIDE blocks a side; MAX_BASE_H + 1 when none has. */
-static uint32_t base_for(uint32_t w)
+/* Blocks a side of grid h over w cells, its blocks 2^e cells apart: the
+ * windows [u, u + 2^h] that touch the map start at u = -2^h .. w - 1. */
+static uint32_t grid_blocks(uint32_t w, uint32_t h, uint32_t e)
 {
-    uint32_t h = MIN_BASE_H;
-    while (h <= MAX_BASE_H && ((w + (1u << h) - 1u) >> h) > (uint32_t)RSM_GLOBAL_SIDE) {
-        ++h;
-    }
-    return h;
+    return ((w - 1u + (1u << h)) >> e) + 1u;
 }
 
-static uint32_t map_width(int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1)
+/* The bits of grids 1 .. top; more than any cap when a grid is wider than
+ * its block count's type holds. */
+static uint32_t grid_bits(uint32_t w, uint32_t hgt, uint32_t top, const uint8_t *e)
 {
-    return (uint32_t)((gx1 - gx0 > gy1 - gy0 ? gx1 - gx0 : gy1 - gy0) + 1);
+    uint32_t bits = 0;
+    uint32_t h;
+    for (h = 1; h <= top; ++h) {
+        const uint32_t nx = grid_blocks(w, h, e[h]);
+        const uint32_t ny = grid_blocks(hgt, h, e[h]);
+        if (nx > 0xFFFFu || ny > 0xFFFFu) {
+            return UINT32_MAX;
+        }
+        bits += nx * ny;
+    }
+    return bits;
+}
+
+/* The grids for a map of w x hgt cells on the search level: the boxes'
+ * sizes up to the whole map (*top), and for each box size h the spacing
+ * 2^e[h] of its grid's blocks, each of which bounds the windows of 2^h + 1
+ * cells that start in it: 2^e[h] - 1 cells wider than a window, so the
+ * finer the spacing, the tighter the bound and the more bits. The coarsest
+ * that fits (blocks 2^(h + 1 + r) apart) is made finer a box size at a
+ * time, the smallest boxes first: they are the most numerous (measured on
+ * the Intel log, exact windows at 0.4 and 0.8 m read 2.5 times fewer
+ * blocks than windows twice as wide). RSM_ERR_NOMEM when even the coarsest
+ * does not fit. */
+static int layout(uint32_t w, uint32_t hgt, uint32_t min_top, uint32_t *top, uint8_t *e)
+{
+    const uint32_t cap = (uint32_t)RSM_GLOBAL_GRID_BYTES * 8u;
+    const uint32_t side = w > hgt ? w : hgt;
+    uint32_t r;
+    uint32_t h;
+    *top = min_top > 1u ? min_top : 1u;
+    while (*top <= MAX_H && (1u << *top) < side) {
+        ++*top;
+    }
+    if (*top > MAX_H) {
+        return RSM_ERR_NOMEM;
+    }
+    for (r = 0;; ++r) {
+        if (2u + r > MAX_BASE_H) {
+            return RSM_ERR_NOMEM;
+        }
+        for (h = 1; h <= *top; ++h) {
+            e[h] = (uint8_t)(h + 1u + r);
+        }
+        if (grid_bits(w, hgt, *top, e) <= cap) {
+            break;
+        }
+    }
+    for (h = 1; h <= *top; ++h) {
+        /* Blocks a quarter of the box apart at the finest: beyond that the
+         * bound hardly tightens (windows of 1.8 m and more hold walls
+         * anyway), and every bit costs its build. */
+        while (e[h] > 0u && e[h] + FINEST_BELOW > h) {
+            e[h]--;
+            if (grid_bits(w, hgt, *top, e) > cap) {
+                e[h]++;
+                break;
+            }
+        }
+    }
+    return RSM_OK;
 }
 
 int rsm_global_check(const rsm_tmap_t *map)
 {
     int32_t b[4];
+    uint8_t e[RSM_GLOBAL_MAX_H + 1];
+    uint32_t top;
     if (!rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3])) {
         return RSM_ERR_DEGENERATE;
     }
-    return base_for(map_width(b[0], b[1], b[2], b[3])) <= MAX_BASE_H ? RSM_OK : RSM_ERR_NOMEM;
+    return layout((uint32_t)(b[2] - b[0] + 1), (uint32_t)(b[3] - b[1] + 1), 1u, &top, e);
 }
 
-/* The blocks' maxima of the coarsest level into grid 0, then each grid's
- * 2 x 2 maxima into the next, down to one block. */
-static int build_grids(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1)
+static void set_bit(uint8_t *grid, uint32_t i)
 {
-    const uint32_t level = g->level;
-    const uint32_t w = map_width(gx0, gy0, gx1, gy1);
-    uint32_t at = 0;
-    uint32_t side;
-    uint32_t s;
-    uint32_t k;
-    g->base_h = base_for(w);
-    if (g->base_h > MAX_BASE_H) {
-        return RSM_ERR_NOMEM;
+    grid[i >> 3] = (uint8_t)(grid[i >> 3] | (1u << (i & 7u)));
+}
+
+static uint32_t get_bit(const uint8_t *grid, uint32_t i)
+{
+    return ((uint32_t)grid[i >> 3] >> (i & 7u)) & 1u;
+}
+
+/* Whether grid h holds a nonzero cell in the window [u, u + 2^h] x [v, v +
+ * 2^h] (cells of the search level): 1 when it may, 0 when it holds none. */
+static uint32_t grid_read(const rsm_global_t *g, const uint8_t *grid, uint32_t h, int32_t u, int32_t v)
+{
+    const int32_t x = u - g->ox + (int32_t)(1u << h);
+    const int32_t y = v - g->oy + (int32_t)(1u << h);
+    uint32_t a;
+    uint32_t b;
+    if (x < 0 || y < 0) {
+        return 0u;
     }
-    g->ox = gx0;
-    g->oy = gy0;
-    side = (w + (1u << g->base_h) - 1u) >> g->base_h;
-    g->grids = 0;
-    for (;;) {
-        if (g->grids == (uint32_t)RSM_GLOBAL_GRIDS || at + side * side > (uint32_t)RSM_GLOBAL_GRID_BYTES) {
-            return RSM_ERR_NOMEM;
-        }
-        g->grid_at[g->grids] = at;
-        g->grid_side[g->grids] = side;
-        at += side * side;
-        g->grids++;
-        if (side == 1u) {
-            break;
-        }
-        side = (side + 1u) >> 1;
+    a = (uint32_t)x >> g->grid_e[h];
+    b = (uint32_t)y >> g->grid_e[h];
+    if (a >= g->grid_nx[h] || b >= g->grid_ny[h]) {
+        return 0u;
     }
-    memset(grid, 0, at);
-    side = g->grid_side[0];
-    for (s = 0; s < map->used; ++s) {
-        const rsm_tile_t *t = &map->tile[s];
-        uint32_t c;
-        if ((t->stamp >> 30) != level) {
+    return get_bit(grid, g->grid_at[h] + b * g->grid_nx[h] + a);
+}
+
+/* A tile of the search level into the finest grid: each nonzero cell of
+ * the grids' box (g->cache_box) sets the blocks whose windows hold it.
+ * Returns the cells looked at. */
+static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t *t)
+{
+    const uint32_t e = g->grid_e[1];
+    const uint32_t nx = g->grid_nx[1];
+    uint32_t c;
+    for (c = 0; c < (uint32_t)RSM_TMAP_TILE_CELLS; c += 2u) {
+        uint32_t k;
+        if (t->cell[c >> 1] == 0u) {
             continue;
         }
-        for (c = 0; c < (uint32_t)RSM_TMAP_TILE_CELLS; ++c) {
-            const uint32_t v = ((uint32_t)t->cell[c >> 1] >> ((c & 1u) << 2)) & 15u;
-            if (v != 0u) {
-                const int32_t gx = (int32_t)t->tx * RSM_TMAP_TILE_SIDE + (int32_t)(c & (RSM_TMAP_TILE_SIDE - 1u));
-                const int32_t gy = (int32_t)t->ty * RSM_TMAP_TILE_SIDE + (int32_t)(c >> RSM_TMAP_TILE_LOG2);
-                const uint32_t u = (uint32_t)(gx - gx0) >> g->base_h;
-                const uint32_t vv = (uint32_t)(gy - gy0) >> g->base_h;
-                uint8_t *cell = &grid[vv * side + u];
-                if (v > *cell) {
-                    *cell = (uint8_t)v;
+        for (k = c; k < c + 2u; ++k) {
+            const int32_t cx = (int32_t)t->tx * RSM_TMAP_TILE_SIDE + (int32_t)(k & (RSM_TMAP_TILE_SIDE - 1u));
+            const int32_t cy = (int32_t)t->ty * RSM_TMAP_TILE_SIDE + (int32_t)(k >> RSM_TMAP_TILE_LOG2);
+            if (((((uint32_t)t->cell[k >> 1]) >> ((k & 1u) << 2)) & 15u) != 0u && cx >= g->cache_box[0] &&
+                cx <= g->cache_box[2] && cy >= g->cache_box[1] && cy <= g->cache_box[3]) {
+                const uint32_t x = (uint32_t)(cx - g->ox);
+                const uint32_t y = (uint32_t)(cy - g->oy);
+                uint32_t b;
+                for (b = y >> e; b <= (y + 2u) >> e; ++b) {
+                    uint32_t a;
+                    for (a = x >> e; a <= (x + 2u) >> e; ++a) {
+                        set_bit(grid, g->grid_at[1] + b * nx + a);
+                    }
                 }
             }
         }
     }
-    for (k = 1; k < g->grids; ++k) {
-        const uint8_t *src = grid + g->grid_at[k - 1u];
-        const uint32_t ss = g->grid_side[k - 1u];
-        uint8_t *dst = grid + g->grid_at[k];
-        const uint32_t ds = g->grid_side[k];
-        uint32_t y;
-        for (y = 0; y < ss; ++y) {
-            uint32_t x;
-            for (x = 0; x < ss; ++x) {
-                uint8_t *d = &dst[(y >> 1) * ds + (x >> 1)];
-                if (src[y * ss + x] > *d) {
-                    *d = src[y * ss + x];
-                }
+    return (uint32_t)RSM_TMAP_TILE_CELLS;
+}
+
+/* Block i of the grids (counted over all of them, from grid 2's first) from
+ * the grid below: the union of the finer blocks that cover its cells.
+ * Returns the blocks read. */
+static uint32_t grid_up(const rsm_global_t *g, uint8_t *grid, uint32_t i)
+{
+    uint32_t h = 2;
+    uint32_t e;
+    uint32_t f;
+    int32_t half;
+    uint32_t a;
+    uint32_t b;
+    int32_t c0;
+    int32_t c1;
+    int32_t d0;
+    int32_t d1;
+    int32_t c;
+    int32_t step;
+    uint32_t reads = 0;
+    while (h < g->top_h && i >= g->grid_at[h + 1u]) {
+        ++h;
+    }
+    e = g->grid_e[h];
+    f = g->grid_e[h - 1u];
+    half = (int32_t)(1u << (h - 1u));
+    b = (i - g->grid_at[h]) / g->grid_nx[h];
+    a = (i - g->grid_at[h]) - b * g->grid_nx[h];
+    /* Block a holds the cells a 2^e - 2^h .. a 2^e + 2^e - 1 from the map's
+     * first; finer block d those d 2^f - 2^(h-1) .. d 2^f + 2^f - 1. */
+    c0 = floor_shift((int32_t)(b << e) - half, f);
+    c1 = (int32_t)(((b << e) + (1u << e) - 1u) >> f);
+    d0 = floor_shift((int32_t)(a << e) - half, f);
+    d1 = (int32_t)(((a << e) + (1u << e) - 1u) >> f);
+    c0 = c0 > 0 ? c0 : 0;
+    d0 = d0 > 0 ? d0 : 0;
+    c1 = c1 < (int32_t)g->grid_ny[h - 1u] - 1 ? c1 : (int32_t)g->grid_ny[h - 1u] - 1;
+    d1 = d1 < (int32_t)g->grid_nx[h - 1u] - 1 ? d1 : (int32_t)g->grid_nx[h - 1u] - 1;
+    /* Finer blocks overlap: every step-th of them still covers the span
+     * (the last one always read). */
+    step = (int32_t)(((uint32_t)half >> f) + 1u);
+    for (c = c0; c <= c1; c = (c < c1 && c + step > c1) ? c1 : c + step) {
+        int32_t d;
+        for (d = d0; d <= d1; d = (d < d1 && d + step > d1) ? d1 : d + step) {
+            reads++;
+            if (get_bit(grid, g->grid_at[h - 1u] + (uint32_t)c * g->grid_nx[h - 1u] + (uint32_t)d) != 0u) {
+                set_bit(grid, i);
+                return reads;
+            }
+            if (d == d1) {
+                break;
             }
         }
+        if (c == c1) {
+            break;
+        }
     }
-    g->top_h = g->base_h + g->grids - 1u;
-    g->root_i = g->ox;
-    g->root_j = g->oy;
+    return reads;
+}
+
+/* Lays the grids out over the map's box on the search level and clears
+ * them; they are filled by rsm_global_run, a tile at a time. */
+static int begin_grids(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1,
+                       uint32_t min_top)
+{
+    const uint32_t w = (uint32_t)(gx1 - gx0 + 1);
+    const uint32_t hgt = (uint32_t)(gy1 - gy0 + 1);
+    uint8_t e[RSM_GLOBAL_MAX_H + 1];
+    uint32_t at = 0;
+    uint32_t h;
+    int rc;
+    if ((rc = layout(w, hgt, min_top, &g->top_h, e)) != RSM_OK) {
+        return rc;
+    }
+    memset(g->grid_at, 0, sizeof g->grid_at);
+    memset(g->grid_nx, 0, sizeof g->grid_nx);
+    memset(g->grid_ny, 0, sizeof g->grid_ny);
+    memset(g->grid_e, 0, sizeof g->grid_e);
+    for (h = 1; h <= g->top_h; ++h) {
+        g->grid_e[h] = e[h];
+        g->grid_nx[h] = (uint16_t)grid_blocks(w, h, e[h]);
+        g->grid_ny[h] = (uint16_t)grid_blocks(hgt, h, e[h]);
+        g->grid_at[h] = at;
+        at += g->grid_nx[h] * g->grid_ny[h];
+    }
+    g->build_end = at;
+    memset(grid, 0, (at + 7u) >> 3);
+    g->ox = gx0;
+    g->oy = gy0;
+    g->root_i = gx0;
+    g->root_j = gy0;
     g->root_h = g->top_h;
+    g->build_next = g->top_h >= 2u ? g->grid_at[2] : at;
     return RSM_OK;
 }
 
@@ -240,6 +380,16 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
             --m;
         }
     }
+    /* For the proof, as many again: the readings halfway between those
+     * (when the scan has them). */
+    g->nseen = g->npts;
+    if (n >= 2u * (size_t)g->npts) {
+        for (k = 0; k < g->npts; ++k) {
+            g->pts[g->npts + k] = pts[(2u * (size_t)k + 1u) * n / (2u * (size_t)g->npts)];
+        }
+        g->nseen = 2u * g->npts;
+    }
+    g->seen_at = *at;
     /* Headings so spaced that the scan's far points (its upper decile)
      * move one cell from one heading to the next. */
     reach = range[(g->npts * 9u) / 10u];
@@ -256,17 +406,34 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
         g->headings += g->headings & 1u;
     }
     g->step_rad = 2.0f * RSM_PI / (float)g->headings;
-    if ((rc = build_grids(g, grid, map, gx0, gy0, gx1, gy1)) != RSM_OK) {
-        return rc;
+    if (g->cached != 0u && g->cache_stamp == map->stamp && g->cache_used == map->used && g->cache_box[0] == gx0 &&
+        g->cache_box[1] == gy0 && g->cache_box[2] == gx1 && g->cache_box[3] == gy1) {
+        /* The map as the last search built its grids and directions from:
+         * they stand (only the agreement with this scan is new). */
+        g->dir_next = map->used;
+        g->build_next = g->build_end;
+        g->root_i = g->ox;
+        g->root_j = g->oy;
+        g->root_h = g->top_h;
+    } else {
+        g->cached = 0u;
+        if ((rc = begin_grids(g, grid, gx0, gy0, gx1, gy1, 1u)) != RSM_OK) {
+            return rc;
+        }
+        memset(g->dir_map, 0, sizeof g->dir_map);
+        g->dir_next = 0;
+        g->cache_box[0] = gx0;
+        g->cache_box[1] = gy0;
+        g->cache_box[2] = gx1;
+        g->cache_box[3] = gy1;
     }
     scan_directions(g, pts, n);
-    memset(g->dir_map, 0, sizeof g->dir_map);
-    g->dir_next = 0;
     g->at = *at;
     g->heading = 0;
     g->pass = 0;
     g->depth = 0;
     g->found = 0;
+    g->best_score = 0.0f;
     g->floor_score = min_share * (float)g->npts;
     g->work = 0;
     return RSM_OK;
@@ -274,34 +441,45 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
 
 /* The map's wall directions from one tile of the direction level: the
  * gradient of its cell values (a 3 x 3 Sobel inside the tile) is normal to
- * its walls. Returns the cells looked at. */
+ * its walls. The tile's rows are unpacked once, three at a time. Returns
+ * the cells looked at. */
 static uint32_t tile_directions(rsm_global_t *g, const rsm_tile_t *t)
 {
-    const int32_t side = RSM_TMAP_TILE_SIDE;
-    int32_t y;
-    for (y = 1; y < side - 1; ++y) {
-        int32_t x;
-        for (x = 1; x < side - 1; ++x) {
-            int32_t v[3][3];
-            int32_t dy;
-            float gx;
-            float gy;
-            for (dy = -1; dy <= 1; ++dy) {
-                int32_t dx;
-                for (dx = -1; dx <= 1; ++dx) {
-                    const uint32_t c = (uint32_t)((y + dy) * side + x + dx);
-                    v[dy + 1][dx + 1] = (int32_t)(((uint32_t)t->cell[c >> 1] >> ((c & 1u) << 2)) & 15u);
+    const uint32_t side = (uint32_t)RSM_TMAP_TILE_SIDE;
+    uint8_t row[3][RSM_TMAP_TILE_SIDE];
+    uint32_t y;
+    for (y = 0; y < side; ++y) {
+        uint32_t x;
+        for (x = 0; x < side; ++x) {
+            const uint32_t c = y * side + x;
+            row[y % 3u][x] = (uint8_t)(((uint32_t)t->cell[c >> 1] >> ((c & 1u) << 2)) & 15u);
+        }
+        if (y < 2u) {
+            continue;
+        }
+        {
+            /* Rows y - 2, y - 1, y: the cells of row y - 1 have all their
+             * neighbours. */
+            const uint8_t *lo = row[(y - 2u) % 3u];
+            const uint8_t *mid = row[(y - 1u) % 3u];
+            const uint8_t *hi = row[y % 3u];
+            for (x = 1; x + 1u < side; ++x) {
+                const int32_t gx = ((int32_t)lo[x + 1u] + 2 * (int32_t)mid[x + 1u] + (int32_t)hi[x + 1u]) -
+                                   ((int32_t)lo[x - 1u] + 2 * (int32_t)mid[x - 1u] + (int32_t)hi[x - 1u]);
+                const int32_t gy = ((int32_t)hi[x - 1u] + 2 * (int32_t)hi[x] + (int32_t)hi[x + 1u]) -
+                                   ((int32_t)lo[x - 1u] + 2 * (int32_t)lo[x] + (int32_t)lo[x + 1u]);
+                if (gx != 0 || gy != 0) {
+                    const float fx = (float)gx;
+                    const float fy = (float)gy;
+                    /* The wall runs across its normal (gx, gy). */
+                    add_direction(g->dir_map, -fy, fx, sqrtf(fx * fx + fy * fy));
                 }
-            }
-            gx = (float)((v[0][2] + 2 * v[1][2] + v[2][2]) - (v[0][0] + 2 * v[1][0] + v[2][0]));
-            gy = (float)((v[2][0] + 2 * v[2][1] + v[2][2]) - (v[0][0] + 2 * v[0][1] + v[0][2]));
-            if (gx != 0.0f || gy != 0.0f) {
-                /* The wall runs across its normal (gx, gy). */
-                add_direction(g->dir_map, -gy, gx, sqrtf(gx * gx + gy * gy));
             }
         }
     }
-    return (uint32_t)((side - 2) * (side - 2));
+    /* Two reads' worth a cell: the gradient's direction costs about as much
+     * as its cells (measured on the M4). */
+    return 2u * (side - 2u) * (side - 2u);
 }
 
 /* How well the scan's wall directions, turned by each heading, fall on the
@@ -367,108 +545,383 @@ static void offsets(const rsm_global_t *g, float cell, uint32_t a, int32_t *fx, 
     }
 }
 
-/* The largest value of grid gr over the blocks the window [u, u + 2^h] x
- * [v, v + 2^h] touches (two a side at most); 0 outside the grid. */
-static uint32_t grid_max(const rsm_global_t *g, const uint8_t *grids, uint32_t gr, uint32_t h, int32_t u, int32_t v)
+/* The largest cell value of the search level in the window [u, u + 1] x
+ * [v, v + 1]: one tile lookup when the four cells share a tile. */
+static uint32_t window4(const rsm_tmap_t *map, uint32_t level, int32_t u, int32_t v)
 {
-    const uint32_t side = g->grid_side[gr];
-    const uint8_t *grid = grids + g->grid_at[gr];
-    const int32_t u0 = floor_shift(u - g->ox, h);
-    const int32_t u1 = floor_shift(u - g->ox + (int32_t)(1u << h), h);
-    const int32_t v0 = floor_shift(v - g->oy, h);
-    const int32_t v1 = floor_shift(v - g->oy + (int32_t)(1u << h), h);
-    uint32_t best = 0;
-    int32_t y;
-    for (y = v0; y <= v1; ++y) {
-        int32_t x;
-        if (y < 0 || (uint32_t)y >= side) {
-            continue;
+    const int32_t lim = RSM_TMAP_CELL_LIMIT - 2;
+    uint32_t best;
+    if ((u & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (v & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK &&
+        u > -lim && u < lim && v > -lim && v < lim) {
+        const uint32_t s = rsm_tmap_find_slot(map, level, u >> RSM_TMAP_TILE_LOG2, v >> RSM_TMAP_TILE_LOG2);
+        const rsm_tile_t *t;
+        uint32_t k;
+        uint32_t c;
+        if (s == RSM_TMAP_NONE) {
+            return 0u;
         }
-        for (x = u0; x <= u1; ++x) {
-            if (x >= 0 && (uint32_t)x < side && grid[(uint32_t)y * side + (uint32_t)x] > best) {
-                best = grid[(uint32_t)y * side + (uint32_t)x];
-            }
-        }
+        t = &map->tile[s];
+        k = rsm_tmap_cell_index(u, v);
+        best = rsm_tmap_get_cell(t, k);
+        c = rsm_tmap_get_cell(t, k + 1u);
+        best = c > best ? c : best;
+        c = rsm_tmap_get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE);
+        best = c > best ? c : best;
+        c = rsm_tmap_get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u);
+        return c > best ? c : best;
     }
-    return best;
+    {
+        uint32_t c;
+        best = rsm_tmap_value(map, level, u, v);
+        c = rsm_tmap_value(map, level, u + 1, v);
+        best = c > best ? c : best;
+        c = rsm_tmap_value(map, level, u, v + 1);
+        best = c > best ? c : best;
+        c = rsm_tmap_value(map, level, u + 1, v + 1);
+        return c > best ? c : best;
+    }
+}
+
+/* The cells of the search level in the window [u, u + 2] x [v, v + 2],
+ * row by row into c[9]: one tile lookup when they share a tile. */
+static void window9(const rsm_tmap_t *map, uint32_t level, int32_t u, int32_t v, uint32_t *c)
+{
+    const int32_t lim = RSM_TMAP_CELL_LIMIT - 3;
+    const int32_t tx = u >> RSM_TMAP_TILE_LOG2;
+    const int32_t ty = v >> RSM_TMAP_TILE_LOG2;
+    uint32_t slot[4];
+    uint32_t r;
+    if (!(u > -lim && u < lim && v > -lim && v < lim)) {
+        for (r = 0; r < 9u; ++r) {
+            c[r] = rsm_tmap_value(map, level, u + (int32_t)(r % 3u), v + (int32_t)(r / 3u));
+        }
+        return;
+    }
+    /* The window spans one tile, or two or four at a tile's edge: each
+     * looked up once. */
+    slot[0] = rsm_tmap_find_slot(map, level, tx, ty);
+    slot[1] = ((u + 2) >> RSM_TMAP_TILE_LOG2) != tx ? rsm_tmap_find_slot(map, level, tx + 1, ty) : slot[0];
+    if (((v + 2) >> RSM_TMAP_TILE_LOG2) != ty) {
+        slot[2] = rsm_tmap_find_slot(map, level, tx, ty + 1);
+        slot[3] = ((u + 2) >> RSM_TMAP_TILE_LOG2) != tx ? rsm_tmap_find_slot(map, level, tx + 1, ty + 1) : slot[2];
+    } else {
+        slot[2] = slot[0];
+        slot[3] = slot[1];
+    }
+    for (r = 0; r < 9u; ++r) {
+        const int32_t x = u + (int32_t)(r % 3u);
+        const int32_t y = v + (int32_t)(r / 3u);
+        const uint32_t s = slot[(uint32_t)((x >> RSM_TMAP_TILE_LOG2) - tx) + 2u * (uint32_t)((y >> RSM_TMAP_TILE_LOG2) - ty)];
+        c[r] = s == RSM_TMAP_NONE ? 0u : rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(x, y));
+    }
+}
+
+static uint32_t max4(uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+    const uint32_t x = a > b ? a : b;
+    const uint32_t y = c > d ? c : d;
+    return x > y ? x : y;
+}
+
+/* The points a box of 2^h positions a side reads (the first of g->pts):
+ * all for leaves and the smallest boxes, fewer for large ones, where most
+ * boxes pass anyway and a point not read counts as on a wall. */
+static uint32_t points_read(const rsm_global_t *g, uint32_t h)
+{
+    const uint32_t n = h >= 3u ? g->npts / 4u : h == 2u ? g->npts / 2u : g->npts;
+    return n > 0u ? n : 1u;
+}
+
+/* The point at place q of the order, which ended a box's bound, moves up
+ * one place: points that fall off the map's walls where others do not are
+ * read first, and poor boxes are given up after fewer reads. */
+static void promote(rsm_global_t *g, int32_t *fx, int32_t *fy, uint32_t q)
+{
+    if (q > 0u) {
+        const rsm_point_t p = g->pts[q];
+        int32_t t = fx[q];
+        g->pts[q] = g->pts[q - 1u];
+        g->pts[q - 1u] = p;
+        fx[q] = fx[q - 1u];
+        fx[q - 1u] = t;
+        t = fy[q];
+        fy[q] = fy[q - 1u];
+        fy[q - 1u] = t;
+    }
 }
 
 /* The most a pose of box (i, j, h) scores at this heading: each point's
- * largest cell value in its window, read from the map for small windows and
- * from the grids for large ones. Stops as soon as the points left could not
+ * largest cell value in the window of 2^h + 1 cells a side it can reach
+ * (for leaves, h = 0, the score itself, from the map; for larger boxes
+ * 1 where the grid of h holds a nonzero cell over the window, else 0;
+ * points not read count 1). Stops as soon as the points left could not
  * lift the sum to thr (each adds 1 at most): what it returns is then below
- * thr, which is all the caller asks. Adds the cells and blocks read to
- * *work. */
-static float box_bound(const rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, const int32_t *fx, const int32_t *fy,
+ * thr, which is all the caller asks. Adds the reads (a grid block, or the
+ * four cells of a leaf's window: 4) to *work. */
+static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, int32_t *fx, int32_t *fy,
                        int32_t i, int32_t j, uint32_t h, float thr, uint32_t *work)
 {
-    float sum = 0.0f;
-    uint32_t reads = 0;
-    uint32_t k;
-    for (k = 0; k < g->npts; ++k) {
-        const int32_t u = fx[k] + i;
-        const int32_t v = fy[k] + j;
-        uint32_t best = 0;
-        if (h >= g->base_h) {
-            best = grid_max(g, grid, h - g->base_h, h, u, v);
-            reads += 4u;
-        } else {
-            /* The window as a coarser level holds it (the level h up, or
-             * the coarsest; for a leaf, the window's four cells themselves):
-             * a coarse cell over a wall reads
-             * about as high as the finest cell in it, so this bounds the
-             * window in practice though not by construction; nothing is
-             * taken without the proof that follows the search. Measured on
-             * the Intel log: the same poses found as with every cell of the
-             * window read, with a third fewer reads. */
-            const uint32_t up = g->level + h < (uint32_t)map->cfg.levels ? h : (uint32_t)map->cfg.levels - 1u - g->level;
-            const int32_t x0 = floor_shift(u, up);
-            const int32_t y0 = floor_shift(v, up);
-            const int32_t x1 = floor_shift(u + (int32_t)(1u << h), up);
-            const int32_t y1 = floor_shift(v + (int32_t)(1u << h), up);
-            int32_t yy;
-            for (yy = y0; yy <= y1; ++yy) {
-                int32_t xx;
-                for (xx = x0; xx <= x1; ++xx) {
-                    const uint32_t val = rsm_tmap_value(map, g->level + up, xx, yy);
-                    reads++;
-                    if (val > best) {
-                        best = val;
-                    }
+    uint32_t q;
+    if (h == 0u) {
+        float sum = 0.0f;
+        for (q = 0; q < g->npts; ++q) {
+            const uint32_t k = q;
+            const int32_t u = fx[k] + i;
+            const int32_t v = fy[k] + j;
+            /* Grid 1 bounds a wider window: nothing there, nothing here. */
+            if (grid_read(g, grid, 1u, u, v) != 0u) {
+                sum += map->occ[window4(map, g->level, u, v)];
+            }
+            if (sum + (float)(g->npts - q - 1u) < thr) {
+                *work += 4u * (q + 1u);
+                promote(g, fx, fy, q);
+                return sum;
+            }
+        }
+        *work += 4u * g->npts;
+        return sum;
+    } else {
+        /* Grid h's block of a window [u, u + 2^h] is (u - ox + 2^h) >>
+         * e: one read a point; a window left of the map wraps to a huge
+         * block index, which is past the grid like one right of it (the
+         * grids are far narrower than 2^(32 - e) blocks). */
+        const uint32_t n = points_read(g, h);
+        const uint32_t e = g->grid_e[h];
+        const uint32_t nx = g->grid_nx[h];
+        const uint32_t ny = g->grid_ny[h];
+        const uint32_t at = g->grid_at[h];
+        const int32_t x0 = i - g->ox + (int32_t)(1u << h);
+        const int32_t y0 = j - g->oy + (int32_t)(1u << h);
+        const float slack = (float)g->npts - thr;
+        uint32_t miss = 0;
+        for (q = 0; q < n; ++q) {
+            const uint32_t k = q;
+            const uint32_t a = (uint32_t)(fx[k] + x0) >> e;
+            const uint32_t b = (uint32_t)(fy[k] + y0) >> e;
+            uint32_t bit = 0;
+            if (a < nx && b < ny) {
+                const uint32_t at_bit = at + b * nx + a;
+                bit = ((uint32_t)grid[at_bit >> 3] >> (at_bit & 7u)) & 1u;
+            }
+            if (bit == 0u) {
+                ++miss;
+                if ((float)miss > slack) {
+                    *work += q + 1u;
+                    promote(g, fx, fy, q);
+                    return (float)(g->npts - miss);
                 }
             }
         }
-        sum += map->occ[best];
-        if (sum + (float)(g->npts - k - 1u) < thr) {
-            *work += reads;
-            return sum;
-        }
+        *work += n;
+        return (float)(g->npts - miss);
     }
-    *work += reads;
-    return sum;
+}
+
+/* The four leaves of box (i, j, 1), their scores into bound[] (child c at
+ * (i + (c & 1), j + (c >> 1))): each point's 3 x 3 window, read once,
+ * holds the four leaves' 2 x 2 ones. A leaf whose points left could not
+ * lift it to thr is given up (its sum so far, below thr); the reads stop
+ * when all four are. Adds 4 a point read to *work. */
+static void leaf_bounds(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, int32_t *fx,
+                        int32_t *fy, int32_t i, int32_t j, float thr, float *bound, uint32_t *work)
+{
+    uint32_t q;
+    uint32_t live = 15u;
+    bound[0] = bound[1] = bound[2] = bound[3] = 0.0f;
+    for (q = 0; q < g->npts && live != 0u; ++q) {
+        const uint32_t k = q;
+        const int32_t u = fx[k] + i;
+        const int32_t v = fy[k] + j;
+        const float rest = (float)(g->npts - q - 1u);
+        uint32_t c;
+        /* Grid 1 bounds the whole 3 x 3 window: nothing there, nothing here. */
+        if (grid_read(g, grid, 1u, u, v) != 0u) {
+            uint32_t w[9];
+            window9(map, g->level, u, v, w);
+            bound[0] += map->occ[max4(w[0], w[1], w[3], w[4])];
+            bound[1] += map->occ[max4(w[1], w[2], w[4], w[5])];
+            bound[2] += map->occ[max4(w[3], w[4], w[6], w[7])];
+            bound[3] += map->occ[max4(w[4], w[5], w[7], w[8])];
+        }
+        for (c = 0; c < 4u; ++c) {
+            if ((live & (1u << c)) != 0u && bound[c] + rest < thr) {
+                live &= ~(1u << c);
+                if (live == 0u) {
+                    promote(g, fx, fy, q);
+                }
+            }
+        }
+        *work += 4u;
+    }
+}
+
+/* The four children of box (i, j, h + 1), boxes of 2^h positions a side
+ * (h >= 1), their bounds into bound[] (child c at (i + (c & 1) 2^h, j +
+ * (c >> 1) 2^h)), as box_bound gives each, in one pass over the points: a
+ * child whose misses could no longer leave thr is given up, the reads stop
+ * when all four are. Adds the blocks read to *work. */
+static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int32_t *fy, int32_t i,
+                         int32_t j, uint32_t h, float thr, float *bound, uint32_t *work)
+{
+    /* Grid h's block of a window [u, u + 2^h] is (u - ox + 2^h) >> e: one
+     * read a point; a window left of the map wraps to a huge block index,
+     * which is past the grid like one right of it (the grids are far
+     * narrower than 2^(32 - e) blocks). */
+    const uint32_t n = points_read(g, h);
+    const uint32_t e = g->grid_e[h];
+    const uint32_t nx = g->grid_nx[h];
+    const uint32_t ny = g->grid_ny[h];
+    const uint32_t at = g->grid_at[h];
+    const int32_t half = (int32_t)(1u << h);
+    const int32_t x0 = i - g->ox + half;
+    const int32_t y0 = j - g->oy + half;
+    const float slack = (float)g->npts - thr;
+    /* A child is given up once its misses exceed this. */
+    const int32_t allowed = slack >= 0.0f ? (int32_t)slack : -1;
+    int32_t m0 = 0;
+    int32_t m1 = 0;
+    int32_t m2 = 0;
+    int32_t m3 = 0;
+    uint32_t q;
+    if (e > h) {
+        /* Blocks wider than the children: each child's own block (rare:
+         * the coarsest grids of a wide map). */
+        for (q = 0; q < n && (m0 <= allowed || m1 <= allowed || m2 <= allowed || m3 <= allowed); ++q) {
+            const uint32_t k = q;
+            uint32_t c;
+            for (c = 0; c < 4u; ++c) {
+                const uint32_t a = (uint32_t)(fx[k] + x0 + ((c & 1u) != 0u ? half : 0)) >> e;
+                const uint32_t b = (uint32_t)(fy[k] + y0 + ((c & 2u) != 0u ? half : 0)) >> e;
+                const uint32_t bit = a < nx && b < ny ? get_bit(grid, at + b * nx + a) : 0u;
+                int32_t *m = c == 0u ? &m0 : c == 1u ? &m1 : c == 2u ? &m2 : &m3;
+                *m += (int32_t)(1u - bit);
+            }
+            *work += 4u;
+        }
+    } else {
+        /* The children's blocks are d apart; where all four lie in the
+         * grid (most points: they fall on the map) no bound is tested. */
+        const uint32_t d = (uint32_t)half >> e;
+        const uint32_t row = d * nx;
+        const uint32_t nx_in = nx > d ? nx - d : 0u;
+        const uint32_t ny_in = ny > d ? ny - d : 0u;
+        uint32_t reads = 0;
+        for (q = 0; q < n && (m0 <= allowed || m1 <= allowed || m2 <= allowed || m3 <= allowed); ++q) {
+            const uint32_t a = (uint32_t)(fx[q] + x0) >> e;
+            const uint32_t b = (uint32_t)(fy[q] + y0) >> e;
+            const uint32_t first = at + b * nx + a;
+            if (a < nx_in && b < ny_in) {
+                if (m0 <= allowed) {
+                    m0 += (int32_t)(1u - get_bit(grid, first));
+                    reads++;
+                }
+                if (m1 <= allowed) {
+                    m1 += (int32_t)(1u - get_bit(grid, first + d));
+                    reads++;
+                }
+                if (m2 <= allowed) {
+                    m2 += (int32_t)(1u - get_bit(grid, first + row));
+                    reads++;
+                }
+                if (m3 <= allowed) {
+                    m3 += (int32_t)(1u - get_bit(grid, first + row + d));
+                    reads++;
+                }
+            } else {
+                /* At the grid's edge: each child's block from its own
+                 * window (a window left of the grid wraps to a huge index,
+                 * so the blocks are not d apart there). */
+                const uint32_t a1 = (uint32_t)(fx[q] + x0 + half) >> e;
+                const uint32_t b1 = (uint32_t)(fy[q] + y0 + half) >> e;
+                const uint32_t left = a < nx ? 1u : 0u;
+                const uint32_t right = a1 < nx ? 1u : 0u;
+                const uint32_t low = b < ny ? 1u : 0u;
+                const uint32_t high = b1 < ny ? 1u : 0u;
+                if (m0 <= allowed) {
+                    m0 += (left & low) != 0u ? (int32_t)(1u - get_bit(grid, at + b * nx + a)) : 1;
+                    reads++;
+                }
+                if (m1 <= allowed) {
+                    m1 += (right & low) != 0u ? (int32_t)(1u - get_bit(grid, at + b * nx + a1)) : 1;
+                    reads++;
+                }
+                if (m2 <= allowed) {
+                    m2 += (left & high) != 0u ? (int32_t)(1u - get_bit(grid, at + b1 * nx + a)) : 1;
+                    reads++;
+                }
+                if (m3 <= allowed) {
+                    m3 += (right & high) != 0u ? (int32_t)(1u - get_bit(grid, at + b1 * nx + a1)) : 1;
+                    reads++;
+                }
+            }
+        }
+        *work += reads;
+    }
+    if (q > 0u && m0 > allowed && m1 > allowed && m2 > allowed && m3 > allowed) {
+        /* The point that ended the last child's bound moves up. */
+        promote(g, fx, fy, q - 1u);
+    }
+    bound[0] = (float)((int32_t)g->npts - m0);
+    bound[1] = (float)((int32_t)g->npts - m1);
+    bound[2] = (float)((int32_t)g->npts - m2);
+    bound[3] = (float)((int32_t)g->npts - m3);
 }
 
 /* The score a box must reach to be split or kept. */
 static float threshold(const rsm_global_t *g)
 {
-    const float rel = g->found > 0u ? (1.0f - KEEP_SHARE) * g->cand[0].score : 0.0f;
+    const float rel = (1.0f - KEEP_SHARE) * g->best_score;
     return rel > g->floor_score ? rel : g->floor_score;
 }
 
-/* Keeps a leaf among the best distinct poses: one within two lattice steps
- * and two heading steps of a better kept one is its basin, not a rival. */
-static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score)
+/* The score a leaf must reach to be kept, below the boxes' by LEAF_SLACK of
+ * the points: a leaf scores the lattice's heading, and a place that looks
+ * the same as the best one (a room's twin turned half round) can score a
+ * point or two less there than the best does at its own. Such a rival
+ * must be kept, or the proof would take the best unopposed; its box above
+ * reached the bar. */
+static float leaf_threshold(const rsm_global_t *g)
+{
+    return threshold(g) - LEAF_SLACK * (float)g->npts;
+}
+
+/* How well the kept points fit at pose x itself: their occupancy on the
+ * search level, interpolated, summed. Leaves that reach the bar often all
+ * score the most (every point's window of two cells a side on a wall), so
+ * this, not the leaf's score, ranks them. */
+static float fine_score(const rsm_global_t *g, const rsm_tmap_t *map, const rsm_pose_t *x)
+{
+    const float c = rsm_cosf(x->theta);
+    const float s = rsm_sinf(x->theta);
+    float sum = 0.0f;
+    uint32_t k;
+    for (k = 0; k < g->npts; ++k) {
+        const rsm_point_t *p = &g->pts[k];
+        float dx;
+        float dy;
+        sum += rsm_tmap_sample(map, g->level, x->x + c * p->x - s * p->y, x->y + s * p->x + c * p->y, &dx, &dy);
+    }
+    return sum;
+}
+
+/* Keeps a leaf among the best distinct poses, ranked by fine: one within
+ * two lattice steps and two heading steps of a better kept one is its
+ * basin, not a rival. */
+static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score, float fine)
 {
     const float near_m = 2.0f * cell + 1e-3f;
     const float near_rad = 2.0f * g->step_rad + 1e-4f;
     uint32_t m;
     uint32_t kept = 0;
     uint32_t at;
+    if (score > g->best_score) {
+        g->best_score = score;
+    }
     for (m = 0; m < g->found; ++m) {
         const rsm_pose_t *o = &g->cand[m].pose;
         if (fabsf(o->x - x->x) <= near_m && fabsf(o->y - x->y) <= near_m &&
             fabsf(rsm_wrap_angle(o->theta - x->theta)) <= near_rad) {
-            if (g->cand[m].score >= score) {
+            if (g->cand[m].fine >= fine) {
                 return;
             }
         } else {
@@ -476,25 +929,40 @@ static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score)
         }
     }
     g->found = kept;
-    /* Those the new best leaves behind by more than the share go. */
-    while (g->found > 0u && g->cand[g->found - 1u].score < (1.0f - KEEP_SHARE) * score) {
-        g->found--;
+    /* Those the best leaves behind by more than the share go. */
+    for (m = 0, kept = 0; m < g->found; ++m) {
+        if (!(g->cand[m].score < (1.0f - KEEP_SHARE) * g->best_score)) {
+            g->cand[kept++] = g->cand[m];
+        }
     }
+    g->found = kept;
     if (g->found == (uint32_t)RSM_GLOBAL_CANDIDATES) {
-        if (!(score > g->cand[g->found - 1u].score)) {
+        if (!(fine > g->cand[g->found - 1u].fine)) {
             return;
         }
         g->found--;
     }
-    for (at = g->found; at > 0u && g->cand[at - 1u].score < score; --at) {
+    for (at = g->found; at > 0u && g->cand[at - 1u].fine < fine; --at) {
         g->cand[at] = g->cand[at - 1u];
     }
     g->cand[at].pose = *x;
     g->cand[at].score = score;
+    g->cand[at].fine = fine;
     g->found++;
 }
 
-int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used)
+/* Whether tile t (of a level `up` finer than the search level) overlaps
+ * the grids' box. */
+static int in_box(const rsm_global_t *g, const rsm_tile_t *t, uint32_t up)
+{
+    const int32_t x0 = floor_shift((int32_t)t->tx * RSM_TMAP_TILE_SIDE, up);
+    const int32_t y0 = floor_shift((int32_t)t->ty * RSM_TMAP_TILE_SIDE, up);
+    const int32_t x1 = floor_shift((int32_t)t->tx * RSM_TMAP_TILE_SIDE + RSM_TMAP_TILE_SIDE - 1, up);
+    const int32_t y1 = floor_shift((int32_t)t->ty * RSM_TMAP_TILE_SIDE + RSM_TMAP_TILE_SIDE - 1, up);
+    return x1 >= g->cache_box[0] && x0 <= g->cache_box[2] && y1 >= g->cache_box[1] && y0 <= g->cache_box[3];
+}
+
+int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used)
 {
     const float cell = rsm_tmap_cell(map, g->level);
     int32_t fx[RSM_GLOBAL_POINTS];
@@ -504,19 +972,34 @@ int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, 
     if (g->depth > 0u) {
         offsets(g, cell, g->heading - 1u, fx, fy);
     }
-    /* First the map's wall directions, a tile at a time. */
-    while (g->dir_next <= map->used) {
+    /* First the grids and the map's wall directions, a tile at a time;
+     * then the coarser grids, a block at a time. */
+    while (g->dir_next < map->used) {
+        const rsm_tile_t *t = &map->tile[g->dir_next];
+        const uint32_t level = t->stamp >> 30;
         if (budget > 0u && work >= budget) {
             break;
         }
-        if (g->dir_next == map->used) {
-            direction_agreement(g);
-            g->dir_next++;
+        if (level == g->level && in_box(g, t, 0u)) {
+            work += grid_tile(g, grid, t);
+        }
+        if (level == direction_level(g->level) && in_box(g, t, g->level - level)) {
+            work += tile_directions(g, t);
+        }
+        g->dir_next++;
+    }
+    while (g->dir_next == map->used && g->build_next < g->build_end) {
+        if (budget > 0u && work >= budget) {
             break;
         }
-        if ((map->tile[g->dir_next].stamp >> 30) == direction_level(g->level)) {
-            work += tile_directions(g, &map->tile[g->dir_next]);
-        }
+        work += grid_up(g, grid, g->build_next);
+        g->build_next++;
+    }
+    if (g->dir_next == map->used && g->build_next == g->build_end) {
+        g->cached = 1u;
+        g->cache_stamp = map->stamp;
+        g->cache_used = map->used;
+        direction_agreement(g);
         g->dir_next++;
     }
     for (;;) {
@@ -549,31 +1032,39 @@ int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, 
             continue;
         }
         b = g->stack[--g->depth];
-        if (b.bound < threshold(g)) {
+        if (b.bound < (b.h == 0u ? leaf_threshold(g) : threshold(g))) {
             continue;
         }
         if (b.h == 0u) {
             rsm_pose_t x;
-            x.x = (float)b.i * cell;
-            x.y = (float)b.j * cell;
+            /* The leaf's positions span its cell: its centre stands for them. */
+            x.x = ((float)b.i + 0.5f) * cell;
+            x.y = ((float)b.j + 0.5f) * cell;
             x.theta = rsm_wrap_angle((float)(g->heading - 1u) * g->step_rad);
-            keep(g, cell, &x, b.bound);
+            keep(g, cell, &x, b.bound, fine_score(g, map, &x));
+            work += 4u * g->npts;
             continue;
         }
         {
             const uint32_t h = b.h - 1u;
             const int32_t half = (int32_t)(1u << h);
             rsm_global_box_t child[4];
+            float leaf[4];
             uint32_t c;
             uint32_t nc = 0;
+            if (h == 0u) {
+                leaf_bounds(g, grid, map, fx, fy, b.i, b.j, leaf_threshold(g), leaf, &work);
+            } else {
+                child_bounds(g, grid, fx, fy, b.i, b.j, h, threshold(g), leaf, &work);
+            }
             for (c = 0; c < 4u; ++c) {
                 rsm_global_box_t ch;
                 uint32_t at;
                 ch.i = b.i + ((c & 1u) ? half : 0);
                 ch.j = b.j + ((c & 2u) ? half : 0);
                 ch.h = h;
-                ch.bound = box_bound(g, grid, map, fx, fy, ch.i, ch.j, h, threshold(g), &work);
-                if (ch.bound < threshold(g)) {
+                ch.bound = leaf[c];
+                if (ch.bound < (h == 0u ? leaf_threshold(g) : threshold(g))) {
                     continue;
                 }
                 /* Ascending, so that the best is pushed last, popped first. */
@@ -597,15 +1088,20 @@ int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, 
     return more;
 }
 
-void rsm_global_window(rsm_global_t *g, const rsm_tmap_t *map, float x, float y, float radius_m)
+void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, float x, float y, float radius_m)
 {
-    const float inv = 1.0f / rsm_tmap_cell(map, g->level);
+    const float cell = rsm_tmap_cell(map, g->level);
+    const float inv = 1.0f / cell;
     const float lim = (float)(RSM_TMAP_TILE_LIMIT * RSM_TMAP_TILE_SIDE);
     float fx0 = rsm_floorf((x - radius_m) * inv);
     float fy0 = rsm_floorf((y - radius_m) * inv);
     float w = rsm_floorf((x + radius_m) * inv) - fx0 + 1.0f;
     const float hgt = rsm_floorf((y + radius_m) * inv) - fy0 + 1.0f;
+    int32_t box[4];
+    float far = 0.0f;
+    int32_t reach;
     uint32_t h = 0;
+    uint32_t k;
     w = hgt > w ? hgt : w;
     /* Far outside the map's range, or wider than the map: the whole map. */
     if (!(fx0 > -lim && fx0 < lim && fy0 > -lim && fy0 < lim && w >= 1.0f && w < lim)) {
@@ -616,6 +1112,32 @@ void rsm_global_window(rsm_global_t *g, const rsm_tmap_t *map, float x, float y,
     }
     if (h >= g->top_h) {
         return;
+    }
+    if (g->cached == 0u) {
+        /* The grids are yet to be built: only over what the window's
+         * points can reach (the window, twice over for the windows of its
+         * boxes, and the farthest point's range around it), so that the
+         * build and the map's directions cost what is near, and the grids'
+         * blocks come finer. */
+        for (k = 0; k < g->npts; ++k) {
+            const float r = sqrtf(g->pts[k].x * g->pts[k].x + g->pts[k].y * g->pts[k].y);
+            far = r > far ? r : far;
+        }
+        reach = (int32_t)(far * inv) + 2;
+        box[0] = (int32_t)fx0 - reach;
+        box[1] = (int32_t)fy0 - reach;
+        box[2] = (int32_t)fx0 + (int32_t)(2u << h) + reach;
+        box[3] = (int32_t)fy0 + (int32_t)(2u << h) + reach;
+        box[0] = box[0] > g->cache_box[0] ? box[0] : g->cache_box[0];
+        box[1] = box[1] > g->cache_box[1] ? box[1] : g->cache_box[1];
+        box[2] = box[2] < g->cache_box[2] ? box[2] : g->cache_box[2];
+        box[3] = box[3] < g->cache_box[3] ? box[3] : g->cache_box[3];
+        if (box[0] <= box[2] && box[1] <= box[3] &&
+            (box[0] != g->cache_box[0] || box[1] != g->cache_box[1] || box[2] != g->cache_box[2] ||
+             box[3] != g->cache_box[3]) &&
+            begin_grids(g, grid, box[0], box[1], box[2], box[3], h) == RSM_OK) {
+            memcpy(g->cache_box, box, sizeof box);
+        }
     }
     g->root_i = (int32_t)fx0;
     g->root_j = (int32_t)fy0;

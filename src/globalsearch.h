@@ -56,19 +56,25 @@ int rsm_global_check(const rsm_tmap_t *map);
  * RSM_GLOBAL_POINTS of them, taken evenly, are kept, and all give the
  * scan's wall directions) over map, whose estimate from odometry at this
  * scan is *at. grid (RSM_GLOBAL_GRID_BYTES) holds the bound grids until
- * the search ends: the caller's, untouched by anything else meanwhile. A pose is kept only when it
- * scores at least min_share of the kept points' count and within keep of
- * the best so far. Returns RSM_OK, or RSM_ERR_DEGENERATE when the map's
- * coarsest level is empty or fewer than 8 readings are given, or
- * RSM_ERR_NOMEM as rsm_global_check says. */
+ * the search ends: the caller's, untouched by anything else meanwhile.
+ * The grids and the map's wall directions a search built on g are kept for
+ * the next search on g while g->cached is set and the map's write counter,
+ * tiles and box are as they were: the caller passes the same grid, and
+ * clears g->cached when it writes the map or the grid memory in between.
+ * A pose is kept only when it scores at least min_share of the kept
+ * points' count and within keep of the best so far. Returns RSM_OK, or
+ * RSM_ERR_DEGENERATE when the map's coarsest level is empty or fewer than
+ * 8 readings are given, or RSM_ERR_NOMEM as rsm_global_check says. */
 int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
                      const rsm_pose_t *at, float min_share);
 
 /* Narrows a search begun (rsm_global_begin, before any rsm_global_run) to
  * the positions within radius_m of (x, y), in a square of a power of two
  * cells; every heading still. A window as wide as the map, or one out of
- * the map's range, leaves the whole map. */
-void rsm_global_window(rsm_global_t *g, const rsm_tmap_t *map, float x, float y, float radius_m);
+ * the map's range, leaves the whole map. Grids still to be built are laid
+ * out over what the window's points can reach only (grid: as given to
+ * rsm_global_begin). */
+void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, float x, float y, float radius_m);
 
 /* Goes on with the search for about budget reads of cells and blocks (0 =
  * to the end): it stops before the next box once budget is reached, so a
@@ -77,7 +83,7 @@ void rsm_global_window(rsm_global_t *g, const rsm_tmap_t *map, float x, float y,
  * heading is done (g->cand[0 .. g->found) then hold the kept poses, best
  * first). Adds the cells and blocks read to g->work and to *used (may be
  * NULL). */
-int rsm_global_run(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
+int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
 
 #ifdef __cplusplus
 }

@@ -142,9 +142,12 @@ typedef struct rsm_localizer_config {
                                      * spike, the step that takes it back); defaults 0.1 m and
                                      * 0.1 rad */
     /* The global search (rsm_localizer_global; docs/globalsearch.md). */
-    uint32_t global_budget;         /* map cells and bound blocks a scan gives the search at most
-                                     * to read; 0 = the whole search in one scan; default 100000
-                                     * (a search of the Intel or ACES map reads 5 to 60 million:
+    uint32_t global_budget;         /* the search's work a scan may take at most, in reads of its
+                                     * bound grids and map cells (about 45 instructions each on a
+                                     * Cortex-M4; its proof's steps count as many reads as they
+                                     * cost); 0 = the whole search and proof in one scan; default
+                                     * 20000, about a million instructions a scan (a search of the
+                                     * Intel map reads about 0.6 million, of ACES 1 to 4 million:
                                      * docs/globalsearch.md has the cost and the time it takes) */
     float global_min_share;         /* a pose is kept only when the occupancy summed under the
                                      * scan's points (cells of about 0.2 m) reaches a share of

@@ -251,19 +251,21 @@ typedef struct rsm_tmap {
 
 /* ---- globalsearch.h ---------------------------------------------------------- */
 
-/* Bytes of the bound grids: the base grid's square and the coarser ones
- * above it (each a quarter, rounded up), with room to spare. */
-#define RSM_GLOBAL_GRID_BYTES ((RSM_GLOBAL_SIDE * RSM_GLOBAL_SIDE * 4) / 3 + 4 * RSM_GLOBAL_SIDE + 32)
-/* Grids at most (40 -> 20 -> 10 -> 5 -> 3 -> 2 -> 1: 7). */
-#define RSM_GLOBAL_GRIDS                                                                                           \
-    (RSM_GLOBAL_SIDE <= 4 ? 3 : RSM_GLOBAL_SIDE <= 8 ? 4 : RSM_GLOBAL_SIDE <= 16 ? 5 : RSM_GLOBAL_SIDE <= 32 ? 6  \
-     : RSM_GLOBAL_SIDE <= 64 ? 7 : RSM_GLOBAL_SIDE <= 128 ? 8 : RSM_GLOBAL_SIDE <= 256 ? 9                      \
-     : RSM_GLOBAL_SIDE <= 512 ? 10 : 11)
-/* The first grid's blocks are at most 2^RSM_GLOBAL_MAX_BASE_H cells a side. */
+/* Bytes of the bound grids: at least those of the scan a map write reads
+ * (RSM_MAX_BEAMS points of 8 bytes), whose memory they share, or more
+ * with a larger RSM_GLOBAL_SIDE. */
+#define RSM_GLOBAL_GRID_BYTES_SIDE ((RSM_GLOBAL_SIDE * RSM_GLOBAL_SIDE * 4) / 3 + 4 * RSM_GLOBAL_SIDE + 32)
+#define RSM_GLOBAL_GRID_BYTES                                                                                      \
+    (RSM_GLOBAL_GRID_BYTES_SIDE > RSM_MAX_BEAMS * 8 ? RSM_GLOBAL_GRID_BYTES_SIDE : RSM_MAX_BEAMS * 8)
+/* Boxes of at most 2^RSM_GLOBAL_MAX_H positions a side (13 km with 0.2 m
+ * cells): one bound grid per box size up to it. */
+#define RSM_GLOBAL_MAX_H 16
+/* The finest grid's blocks start at most 2^RSM_GLOBAL_MAX_BASE_H cells
+ * apart (beyond: the map is too wide for the memory). */
 #define RSM_GLOBAL_MAX_BASE_H 10
 /* Boxes the depth-first search holds: three siblings waiting per level of
  * a descent from the root. */
-#define RSM_GLOBAL_STACK (3 * (RSM_GLOBAL_MAX_BASE_H + RSM_GLOBAL_GRIDS) + 4)
+#define RSM_GLOBAL_STACK (3 * RSM_GLOBAL_MAX_H + 4)
 /* Wall directions over half a turn, in bins of 4 degrees: the scan's and
  * the map's, whose correlation tells which headings to search. */
 #define RSM_GLOBAL_BINS 45
@@ -279,7 +281,10 @@ typedef struct rsm_global_box {
 
 typedef struct rsm_global_candidate {
     rsm_pose_t pose; /* in the map, at the scan searched */
-    float score;     /* coarse score: summed occupancy under its points */
+    float score;     /* coarse score: summed occupancy under its points, each the largest of
+                      * the cells it may fall in (the search's bound at a leaf) */
+    float fine;      /* how they are ranked: the occupancy summed under its points at the
+                      * pose itself, interpolated */
 } rsm_global_candidate_t;
 
 typedef struct rsm_global {
@@ -291,19 +296,38 @@ typedef struct rsm_global {
     float agree[RSM_GLOBAL_BINS];  /* how well the directions agree at each heading (mod half a
                                     * turn, best 1), the best within a bin either side */
     uint32_t pass;                 /* headings are searched in passes, best agreeing first */
-    rsm_point_t pts[RSM_GLOBAL_POINTS];  /* the searched scan's readings, robot frame */
+    /* The searched scan's readings, robot frame: the first npts the search
+     * reads, in the order it reads them (one that ends a box's bound moves
+     * up one place); all nseen, evenly over the scan, the proof's (then
+     * those of the scan a proof left in doubt begins again with). */
+    rsm_point_t pts[2 * RSM_GLOBAL_POINTS];
     uint32_t npts;
+    uint32_t nseen;
+    rsm_pose_t seen_at;            /* the estimate at the scan of pts[0 .. nseen) */
     rsm_pose_t at;                 /* the estimate (odometry's) at the scan searched */
-    /* The bound grids (the caller's memory, RSM_GLOBAL_GRID_BYTES): the
-     * largest cell value per block, grid g at grid_at[g], blocks of
-     * 2^(base_h + g) cells. */
-    uint32_t grid_at[RSM_GLOBAL_GRIDS];
-    uint32_t grid_side[RSM_GLOBAL_GRIDS];
-    uint32_t grids;
-    uint32_t base_h;
-    int32_t ox;                    /* first cell of block 0 (coarse level) */
+    /* The bound grids (the caller's memory, RSM_GLOBAL_GRID_BYTES), one
+     * bit a block: grid h (boxes of 2^h positions a side, h >= 1) has
+     * grid_nx[h] x grid_ny[h] blocks from bit grid_at[h]; block (a, b)
+     * says whether any cell of the search level is nonzero in the
+     * 2^h + 2^grid_e[h] cells a side from cell (ox - 2^h + a 2^grid_e[h],
+     * oy - 2^h + b 2^grid_e[h]). */
+    uint32_t grid_at[RSM_GLOBAL_MAX_H + 1];
+    uint16_t grid_nx[RSM_GLOBAL_MAX_H + 1];
+    uint16_t grid_ny[RSM_GLOBAL_MAX_H + 1];
+    uint8_t grid_e[RSM_GLOBAL_MAX_H + 1];
+    int32_t ox;                    /* the map's first cell on the search level */
     int32_t oy;
-    uint32_t top_h;                /* the grids' top: 2^top_h cells a side from (ox, oy) */
+    uint32_t top_h;                /* the whole map: 2^top_h cells a side from (ox, oy) */
+    uint32_t build_next;           /* the next block of grids 2 and up to build (bit index) */
+    uint32_t build_end;            /* the grids' bits */
+    /* The grids and dir_map, once built, hold for the next search while
+     * the map is not written (the localizer clears cached when it writes
+     * the map or the grids' memory, or replaces the map): the map's write
+     * counter, tiles and box on the search level they were built from. */
+    uint32_t cached;
+    uint32_t cache_stamp;
+    uint32_t cache_used;
+    int32_t cache_box[4];
     int32_t root_i;                /* the root box: 2^root_h positions a side from here */
     int32_t root_j;
     uint32_t root_h;
@@ -316,8 +340,15 @@ typedef struct rsm_global {
     rsm_global_candidate_t cand[RSM_GLOBAL_CANDIDATES];
     uint32_t found;
     float floor_score;             /* a pose must score at least this to be kept */
+    float best_score;              /* the best coarse score found */
     uint32_t unproven;             /* searches in a row that proved nothing (each next one
                                     * keeps poses with a lower share of points on walls) */
+    /* The proof, spread over scans: every kept pose descended with pts, to
+     * end with fit hit; then the winner, carried to the scan at hand. */
+    uint32_t proved;               /* kept poses descended so far (found + 1: the winner too) */
+    uint32_t rounds;               /* proofs of the same kept poses that were left in doubt */
+    float hit[RSM_GLOBAL_CANDIDATES];
+    rsm_pose_t end[RSM_GLOBAL_CANDIDATES];
     uint32_t work;                 /* cells and blocks read so far */
 } rsm_global_t;
 

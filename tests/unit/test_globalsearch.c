@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "fmath.h"
 #include "globalsearch.h"
 #include "rsm/config.h"
 #include "rsm/localizer.h"
@@ -162,6 +163,105 @@ static void test_spread_search_finds_the_same(void)
     /* The best kept pose is the true one, within two cells of the lattice
      * (a kept pose stands for a cell of positions). */
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&g1.cand[0].pose, &loc.ekf.x) < 0.45f);
+}
+
+/* The best leaf score of every position of the search's root box and every
+ * heading it searches, counted one by one (search g1 done). */
+static float exhaustive_best(const rsm_tmap_t *map)
+{
+    const float cell = rsm_tmap_cell(map, g1.level);
+    float best = 0.0f;
+    uint32_t a;
+    for (a = 0; a < g1.headings; ++a) {
+        /* The headings searched: those whose wall directions agree. */
+        const float th = (float)a * g1.step_rad;
+        const float c = rsm_cosf(th);
+        const float sn = rsm_sinf(th);
+        float half = th;
+        int32_t fx[RSM_GLOBAL_POINTS];
+        int32_t fy[RSM_GLOBAL_POINTS];
+        int32_t i;
+        uint32_t k;
+        while (half >= RSM_PI) {
+            half -= RSM_PI;
+        }
+        if (g1.agree[(int32_t)(half * ((float)RSM_GLOBAL_BINS / RSM_PI) + 0.5f) % RSM_GLOBAL_BINS] < 0.5f) {
+            continue;
+        }
+        for (k = 0; k < g1.npts; ++k) {
+            fx[k] = (int32_t)floorf((c * g1.pts[k].x - sn * g1.pts[k].y) * (1.0f / cell));
+            fy[k] = (int32_t)floorf((sn * g1.pts[k].x + c * g1.pts[k].y) * (1.0f / cell));
+        }
+        for (i = 0; i < (int32_t)(1u << g1.root_h); ++i) {
+            int32_t j;
+            for (j = 0; j < (int32_t)(1u << g1.root_h); ++j) {
+                float sum = 0.0f;
+                for (k = 0; k < g1.npts; ++k) {
+                    /* A leaf: positions anywhere in the cell, each point's
+                     * largest cell value of the two a side it may fall in. */
+                    const int32_t u = g1.root_i + i + fx[k];
+                    const int32_t v = g1.root_j + j + fy[k];
+                    uint32_t m = rsm_tmap_value(map, g1.level, u, v);
+                    uint32_t w = rsm_tmap_value(map, g1.level, u + 1, v);
+                    m = w > m ? w : m;
+                    w = rsm_tmap_value(map, g1.level, u, v + 1);
+                    m = w > m ? w : m;
+                    w = rsm_tmap_value(map, g1.level, u + 1, v + 1);
+                    m = w > m ? w : m;
+                    sum += map->occ[m];
+                }
+                best = sum > best ? sum : best;
+            }
+        }
+    }
+    return best;
+}
+
+/* The search is exact for its score: the best leaf it finds scores what
+ * the best of every position of the map and every heading it searches
+ * scores, counted one by one, when that reaches the bar (its bounds never prune a box that holds a
+ * better leaf; they did at the map's lower edge, where a window's block
+ * index wraps, which the symmetric room's scans reach). Sums of eighths:
+ * exact in either order. */
+static void test_search_is_exact(void)
+{
+    static const rsm_synth_segment_t box[4] = {
+        {-2.5f, -1.5f, 2.5f, -1.5f}, {2.5f, -1.5f, 2.5f, 1.5f}, {2.5f, 1.5f, -2.5f, 1.5f}, {-2.5f, 1.5f, -2.5f, -1.5f}};
+    static const rsm_synth_leg_t legs[] = {{1.5f, 0.0f}, {0.0f, 1.5f}, {1.0f, 0.0f}, {0.0f, 1.5f}, {2.0f, 0.0f}};
+    const rsm_synth_world_t room = rsm_synth_world_room();
+    const rsm_synth_world_t bare = {box, 4u};
+    const rsm_pose_t start = {-1.3f, -0.6f, 0.2f};
+    const rsm_tmap_t *map = &loc.state.persistent.map;
+    rsm_localizer_report_t rep;
+    float best;
+    size_t k;
+    int world;
+    for (world = 0; world < 2; ++world) {
+        const rsm_synth_world_t *w = world == 0 ? &room : &bare;
+        size_t from;
+        if (world == 0) {
+            make_path();
+        } else {
+            path_len = rsm_synth_path(&start, legs, sizeof legs / sizeof legs[0], 0.05f, 0.05f, path, PATH_CAP);
+        }
+        from = world == 0 ? path_len - 80u : path_len / 2u;
+        cfg.global_budget = 0u; /* each search whole in the scan that begins it */
+        map_path(w, from);
+        for (k = from; k < from + 16u && k < path_len; ++k) {
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+            step(&loc, w, k, &rep);
+            g1 = loc.state.persistent.global;
+            TEST_ASSERT_EQUAL_UINT32(RSM_GLOBAL_PROVING, g1.phase);
+            best = exhaustive_best(map);
+            if (best >= g1.floor_score) {
+                TEST_ASSERT_EQUAL_FLOAT(best, g1.best_score);
+            } else {
+                /* Below the bar nothing need be found (a leaf a little
+                 * below may be, when its box reached the bar). */
+                TEST_ASSERT_TRUE(g1.best_score <= best);
+            }
+        }
+    }
 }
 
 /* A bare rectangular room looks the same from a pose and from that pose
@@ -473,6 +573,7 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(test_a_forgotten_robot_is_found);
     RUN_TEST(test_spread_search_finds_the_same);
+    RUN_TEST(test_search_is_exact);
     RUN_TEST(test_a_symmetric_room_gives_no_pose);
     RUN_TEST(test_a_search_near_the_estimate);
     RUN_TEST(test_a_window_that_misses_grows);
