@@ -64,7 +64,8 @@ static uint32_t grid_bits(uint32_t w, uint32_t hgt, uint32_t top, const uint8_t 
 }
 
 /* The grids for a map of w x hgt cells on the search level: the boxes'
- * sizes up to the whole map (*top), and for each box size h the spacing
+ * sizes up to the whole map (*top; up to `fixed` instead, for a window,
+ * when not 0), and for each box size h the spacing
  * 2^e[h] of its grid's blocks, each of which bounds the windows of 2^h + 1
  * cells that start in it: 2^e[h] - 1 cells wider than a window, so the
  * finer the spacing, the tighter the bound and the more bits. The coarsest
@@ -73,14 +74,14 @@ static uint32_t grid_bits(uint32_t w, uint32_t hgt, uint32_t top, const uint8_t 
  * the Intel log, exact windows at 0.4 and 0.8 m read 2.5 times fewer
  * blocks than windows twice as wide). RSM_ERR_NOMEM when even the coarsest
  * does not fit. */
-static int layout(uint32_t w, uint32_t hgt, uint32_t min_top, uint32_t *top, uint8_t *e)
+static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t *top, uint8_t *e)
 {
     const uint32_t cap = (uint32_t)RSM_GLOBAL_GRID_BYTES * 8u;
     const uint32_t side = w > hgt ? w : hgt;
     uint32_t r;
     uint32_t h;
-    *top = min_top > 1u ? min_top : 1u;
-    while (*top <= MAX_H && (1u << *top) < side) {
+    *top = fixed > 1u ? fixed : 1u;
+    while (fixed == 0u && *top <= MAX_H && (1u << *top) < side) {
         ++*top;
     }
     if (*top > MAX_H) {
@@ -120,7 +121,7 @@ int rsm_global_check(const rsm_tmap_t *map)
     if (!rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3])) {
         return RSM_ERR_DEGENERATE;
     }
-    return layout((uint32_t)(b[2] - b[0] + 1), (uint32_t)(b[3] - b[1] + 1), 1u, &top, e);
+    return layout((uint32_t)(b[2] - b[0] + 1), (uint32_t)(b[3] - b[1] + 1), 0u, &top, e);
 }
 
 static void set_bit(uint8_t *grid, uint32_t i)
@@ -246,7 +247,7 @@ static uint32_t grid_up(const rsm_global_t *g, uint8_t *grid, uint32_t i)
 /* Lays the grids out over the map's box on the search level and clears
  * them; they are filled by rsm_global_run, a tile at a time. */
 static int begin_grids(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1,
-                       uint32_t min_top)
+                       uint32_t fixed)
 {
     const uint32_t w = (uint32_t)(gx1 - gx0 + 1);
     const uint32_t hgt = (uint32_t)(gy1 - gy0 + 1);
@@ -254,7 +255,7 @@ static int begin_grids(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0,
     uint32_t at = 0;
     uint32_t h;
     int rc;
-    if ((rc = layout(w, hgt, min_top, &g->top_h, e)) != RSM_OK) {
+    if ((rc = layout(w, hgt, fixed, &g->top_h, e)) != RSM_OK) {
         return rc;
     }
     memset(g->grid_at, 0, sizeof g->grid_at);
@@ -417,7 +418,7 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
         g->root_h = g->top_h;
     } else {
         g->cached = 0u;
-        if ((rc = begin_grids(g, grid, gx0, gy0, gx1, gy1, 1u)) != RSM_OK) {
+        if ((rc = begin_grids(g, grid, gx0, gy0, gx1, gy1, 0u)) != RSM_OK) {
             return rc;
         }
         memset(g->dir_map, 0, sizeof g->dir_map);
@@ -1135,7 +1136,7 @@ void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, fl
         if (box[0] <= box[2] && box[1] <= box[3] &&
             (box[0] != g->cache_box[0] || box[1] != g->cache_box[1] || box[2] != g->cache_box[2] ||
              box[3] != g->cache_box[3]) &&
-            begin_grids(g, grid, box[0], box[1], box[2], box[3], h) == RSM_OK) {
+            begin_grids(g, grid, box[0], box[1], box[2], box[3], h > 0u ? h : 1u) == RSM_OK) {
             memcpy(g->cache_box, box, sizeof box);
         }
     }

