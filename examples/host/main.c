@@ -14,7 +14,7 @@
 
 #include "rsm/rsm.h"
 
-/* The localizer is about 122 KiB: static, as on a robot, not on the stack. */
+/* The localizer is about 125 KiB: static, as on a robot, not on the stack. */
 static rsm_localizer_t loc;
 static rsm_localizer_config_t cfg; /* kept by pointer: lives as long as loc */
 static rsm_scan_t scan;

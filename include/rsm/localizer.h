@@ -7,7 +7,7 @@
  * -> EKF), the ICP baseline or odometry alone through the same filter, so
  * all are compared on equal terms.
  *
- * All state is caller-owned (rsm_localizer_t: about 122 KiB with the
+ * All state is caller-owned (rsm_localizer_t: about 125 KiB with the
  * default config.h and 64 KiB with rsm/config_small.h on a 32-bit target;
  * docs/RESULTS.md has the breakdown). Two localizers never interfere. Not
  * reentrant for one state; no function blocks or allocates. */
