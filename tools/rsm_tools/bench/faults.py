@@ -257,8 +257,8 @@ def false_recoveries(stamps: Sequence[float], judged: ev.Trajectory, relations: 
     order = sorted(stamps)
     for t in stamps:
         # the recovery's pose as tracking carried it on, until the next recovery takes over
-        later = [u for u in order if u > t]
-        end = min([t + FALSE_RECOVERY_AFTER_S] + later[:1])
+        i = bisect.bisect_right(order, t)
+        end = min(t + FALSE_RECOVERY_AFTER_S, order[i]) if i < len(order) else t + FALSE_RECOVERY_AFTER_S
         seen = agreed = False
         for r in relations:
             a, b = sorted((r.t1, r.t2))

@@ -80,12 +80,11 @@ def peak_rss_kib(nav: Path, lines: Sequence[bytes], scans: int, work: Path) -> D
     ended = threading.Event()  # set once rsm-nav has ended
 
     def feed():
-        # Opened once (rsm-nav looks up no mount in a log that is not a
-        # regular file); no second pass, which a reader at its end would
-        # take as more of the log.
-        opened = 0
+        # Served once, when rsm-nav opens it (it looks up no mount in a log
+        # that is not a regular file): a reader at its end would take a
+        # second pass as more of the log.
         try:
-            while opened < 1 and not ended.is_set():
+            while not ended.is_set():
                 try:
                     fd = os.open(fifo, os.O_WRONLY | os.O_NONBLOCK)
                 except OSError as e:
@@ -93,13 +92,13 @@ def peak_rss_kib(nav: Path, lines: Sequence[bytes], scans: int, work: Path) -> D
                         raise
                     time.sleep(0.01)
                     continue
-                opened += 1
                 os.set_blocking(fd, True)
                 try:
                     with os.fdopen(fd, "wb") as fh:
                         written.append(write_scans(lines, scans, fh))
                 except BrokenPipeError:
                     pass
+                return
         except BaseException as e:  # reported below, after rsm-nav has ended
             error.append(e)
 
