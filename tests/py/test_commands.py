@@ -14,7 +14,7 @@ from conftest import REPO_ROOT
 
 # The commands only the scripts and the tests run, as python -m rsm_tools.NAME.
 INTERNAL = [("rsm-m4", "rsm_tools.m4", "main"), ("rsm-sweep", "rsm_tools.sweep", "main"),
-            ("rsm-fullchecks", "rsm_tools.fullchecks", "main")]
+            ("rsm-fullchecks", "rsm_tools.fullchecks", "main"), ("rsm-demo", "rsm_tools.demo", "main")]
 
 
 def commands():

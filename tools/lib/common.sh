@@ -16,6 +16,8 @@ RSM_VENV_PY="$RSM_VENV/bin/python"
 RSM_DEBS=(cmake ninja-build gcc g++ pkg-config libserialport-dev
           gcc-arm-none-eabi libnewlib-arm-none-eabi clang libclang-rt-dev
           python3-venv valgrind zlib1g-dev qemu-system-arm)
+# Extra apt-get install options (tools/demo: --no-install-recommends).
+RSM_APT_OPTS=()
 
 # ---- messages and stages ------------------------------------------------------
 
@@ -97,7 +99,8 @@ rsm_ensure_debs() {
     fi
     rsm_info "Debian packages: installing ${missing[*]}"
     rsm_as_root env DEBIAN_FRONTEND=noninteractive apt-get update -qq
-    rsm_as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq -o Dpkg::Use-Pty=0 "${missing[@]}" </dev/null
+    rsm_as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq -o Dpkg::Use-Pty=0 \
+        ${RSM_APT_OPTS[@]+"${RSM_APT_OPTS[@]}"} "${missing[@]}" </dev/null
 }
 
 # ---- Python venv -------------------------------------------------------------------
