@@ -209,8 +209,8 @@ typedef struct rsm_aria_parser_stats {
 } rsm_aria_parser_stats_t;
 
 /* Incremental receiver. Initialise with rsm_aria_parser_init; the fields
- * other than stats are private. About 300 bytes, no pointers kept, so it
- * may be copied or placed anywhere. */
+ * other than stats are private. No pointers kept, so it may be copied or
+ * placed anywhere. */
 typedef struct rsm_aria_parser {
     rsm_aria_parser_stats_t stats;    /* public, read-only for the caller */
     uint8_t buf[RSM_ARIA_MAX_PACKET]; /* held bytes; a candidate starts at buf[0] */

@@ -82,8 +82,7 @@ typedef struct rsm_ld06_stats {
     uint32_t truncated;     /* partial candidates dropped by a flush */
 } rsm_ld06_stats_t;
 
-/* Receiver state, caller owned (about 80 bytes). Members other than stats
- * are private. */
+/* Receiver state, caller owned. Members other than stats are private. */
 typedef struct rsm_ld06_parser {
     uint8_t buf[RSM_LD06_PACKET];
     size_t n;

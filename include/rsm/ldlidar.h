@@ -19,9 +19,9 @@
  * packet for cfg.stream_timeout_us gives LINK_LOST and listening starts
  * over (the next packet gives CONNECTED again, counted as a reconnect).
  *
- * All state is in the caller's rsm_ldlidar_t (about 500 bytes with the
- * default receive chunk); link, clock and cfg are kept by pointer and must
- * outlive it. One driver must not be used from two contexts at once. */
+ * All state is in the caller's rsm_ldlidar_t; link, clock and cfg are kept
+ * by pointer and must outlive it. One driver must not be used from two
+ * contexts at once. */
 #ifndef RSM_LDLIDAR_H
 #define RSM_LDLIDAR_H
 

@@ -181,8 +181,7 @@ typedef struct rsm_rplidar_stats {
     uint32_t truncated;       /* partial candidates dropped by _expect */
 } rsm_rplidar_stats_t;
 
-/* Receiver state, caller owned (about 260 bytes). Members other than stats
- * are private. */
+/* Receiver state, caller owned. Members other than stats are private. */
 typedef struct rsm_rplidar_parser {
     uint8_t buf[RSM_RPLIDAR_MAX_FRAME];
     size_t n;

@@ -82,6 +82,7 @@ from .knownmap import (KIDNAP_RUNS, QUICK_KIDNAP_RUNS, QUICK_STARTS, STARTS, STA
     run_knownmap)
 from . import knownmap as _knownmap
 from . import navmemory as _navmemory
+from . import figures as _figures
 from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors,
     context_from_manifest, floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_report)
 
@@ -398,6 +399,8 @@ def run(args: argparse.Namespace) -> Path:
     (work / "bench.json").write_text(manifest_text)
     # The report is written from the manifest, as rsm-bench-report does.
     text = write_report(context_from_manifest(json.loads(manifest_text), root))
+    # The figures the README and the headers quote, committed beside the plots.
+    _figures.write(context_from_manifest(json.loads(manifest_text), root), plots / "figures.json")
     output.parent.mkdir(parents=True, exist_ok=True)
     output.write_text(text, encoding="utf-8")
     print("rsm-bench: on the target:")

@@ -15,6 +15,7 @@ from .. import fullchecks, outliers
 from .common import (CG_STAGE_ORDER, DRIVER_OBJECTS, HOST_PARTS, LOCAL_SPAN, MEMORY_OTHER, METHODS, PEER_COLUMNS,
     QUANTITIES, ROBUST_METHODS, SCOPES, SECTION_TITLES, SMALL, SMALL_HEADER, STAGES, STAGE_WHAT, UNITS, BenchError,
     cg_run, find_root, fmt_int, fmt_pct, fmt_q, fmt_ratio, provenance_line, ratio, run_labels, shown_path)
+from . import figures
 from .faults import report_faults
 from .knownmap import report_knownmap
 from .parse import best_peers, fused_percent
@@ -1347,6 +1348,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("manifest", type=Path, help="the manifest rsm-bench wrote (BUILD/bench-work/bench.json)")
     p.add_argument("--root", type=Path, help="repository root (default: found from the current folder)")
     p.add_argument("--output", type=Path, help="report (default: the one the manifest names)")
+    p.add_argument("--figures", type=Path, help="the figures the README and the headers quote (default: "
+                   "ROOT/docs/results/figures.json)")
     return p
 
 
@@ -1358,7 +1361,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         manifest = json.loads(args.manifest.read_text(encoding="utf-8"))
         root = (args.root or find_root()).resolve()
         output = args.output or Path(manifest["report"])
-        output.write_text(write_report(context_from_manifest(manifest, root)), encoding="utf-8")
+        ctx = context_from_manifest(manifest, root)
+        figures.write(ctx, args.figures or root / "docs" / "results" / "figures.json")  # before: the report reads ctx
+        output.write_text(write_report(ctx), encoding="utf-8")
     except (OSError, ValueError, KeyError, BenchError) as exc:
         print(f"rsm-bench-report: error: {exc}", file=sys.stderr)
         return 1
