@@ -86,6 +86,16 @@ def build_dir() -> Path:
     return Path(build)
 
 
+def project_venv() -> Path:
+    """The venv running the tests, whose console commands (rsm-evaluate,
+    ...) the scripts under test call: the project's .venv under tools/test."""
+    venv = Path(sys.executable).parent.parent
+    if not (venv / "bin" / "rsm-evaluate").is_file():
+        pytest.fail(f"no rsm-evaluate in {venv}/bin: run the tests with the project's .venv (tools/test)",
+                    pytrace=False)
+    return venv
+
+
 def built_tool(relpath: str) -> Path:
     """A program built in the build directory, e.g. ``tools/nav/rsm-nav``."""
     exe = build_dir() / relpath

@@ -196,6 +196,11 @@ def test_the_report_is_written_from_the_manifest_alone(run, tmp_path):
     manifest = run["dir"] / "work" / "bench.json"
     assert bench_report.main([str(manifest), "--root", str(REPO_ROOT), "--output", str(out)]) == 0
     assert out.read_text(encoding="utf-8") == run["report"]
+    # The figures the README quotes, beside the report as the bench's run wrote them beside its plots.
+    again = json.loads((tmp_path / "results" / "figures.json").read_text())
+    assert again == json.loads((run["dir"] / "results" / "figures.json").read_text())
+    assert again["accuracy"]["head"]["rsm"]["local_translation"] == \
+        run["manifest"]["accuracy"]["head"]["runs"]["rsm"]["errors"]["local"]["translation"]["mean"]
     assert bench_report.main([str(tmp_path / "missing.json"), "--output", str(out)]) == 1
 
 

@@ -15,25 +15,16 @@ figures and the picture's path.
 import json
 import re
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from conftest import REPO_ROOT, build_dir
+from conftest import REPO_ROOT, build_dir, project_venv
 
 MAX_LINES = 40
 ROW = re.compile(r"^  (rsm|the paper's method|odometry alone) +([0-9.]+) m +([0-9.]+) deg +([0-9.]+) m +([0-9.]+) deg$",
                  re.M)
 
-
-def venv_dir() -> Path:
-    """The venv running the tests: the demo calls its console commands."""
-    venv = Path(sys.executable).parent.parent
-    if not (venv / "bin" / "rsm-evaluate").is_file():
-        pytest.fail(f"no rsm-evaluate in {venv}/bin: run the tests with the project's .venv (tools/test)",
-                    pytrace=False)
-    return venv
 
 
 @pytest.fixture(scope="module")
@@ -41,7 +32,7 @@ def demo(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("demo")
     out = tmp / "out"
     env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp), "RSM_DEMO_BUILD": str(build_dir()),
-           "RSM_DEMO_LOCKSTEP": "1", "RSM_DEMO_OUT": str(out), "RSM_VENV": str(venv_dir()),
+           "RSM_DEMO_LOCKSTEP": "1", "RSM_DEMO_OUT": str(out), "RSM_VENV": str(project_venv()),
            "MPLBACKEND": "Agg"}
     res = subprocess.run(["bash", str(REPO_ROOT / "tools" / "demo")], capture_output=True, text=True, env=env,
                          cwd=REPO_ROOT, timeout=600)

@@ -13,12 +13,11 @@ import os
 import re
 import stat
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from conftest import REPO_ROOT, build_dir
+from conftest import REPO_ROOT, build_dir, project_venv
 
 README = REPO_ROOT / "README.md"
 ENV_SH = REPO_ROOT / "tools" / "env.sh"
@@ -28,13 +27,6 @@ def blocks(lang: str):
     return re.findall(rf"^```{lang}\n(.*?)^```$", README.read_text(encoding="utf-8"), re.M | re.S)
 
 
-def venv_dir() -> Path:
-    venv = Path(sys.executable).parent.parent
-    if not (venv / "bin" / "rsm-evaluate").is_file():
-        pytest.fail(f"no rsm-evaluate in {venv}/bin: run the tests with the project's .venv (tools/test)",
-                    pytrace=False)
-    return venv
-
 
 def test_the_readme_commands_run_as_printed(tmp_path):
     block = [b for b in blocks("sh") if b.startswith("source tools/env.sh\n")]
@@ -43,7 +35,7 @@ def test_the_readme_commands_run_as_printed(tmp_path):
     clone.mkdir()
     for name in ("tools", "data"):
         (clone / name).symlink_to(REPO_ROOT / name)
-    (clone / ".venv").symlink_to(venv_dir())
+    (clone / ".venv").symlink_to(project_venv())
     env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), "RSM_BUILD_DIR": str(build_dir()),
            "MPLBACKEND": "Agg"}
     res = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", block[0]], cwd=clone, env=env,

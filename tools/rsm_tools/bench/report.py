@@ -1349,7 +1349,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--root", type=Path, help="repository root (default: found from the current folder)")
     p.add_argument("--output", type=Path, help="report (default: the one the manifest names)")
     p.add_argument("--figures", type=Path, help="the figures the README and the headers quote (default: "
-                   "ROOT/docs/results/figures.json)")
+                   "results/figures.json beside the report, as rsm-bench writes it)")
     return p
 
 
@@ -1362,7 +1362,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         root = (args.root or find_root()).resolve()
         output = args.output or Path(manifest["report"])
         ctx = context_from_manifest(manifest, root)
-        figures.write(ctx, args.figures or root / "docs" / "results" / "figures.json")  # before: the report reads ctx
+        figures.write(ctx, args.figures or output.parent / "results" / "figures.json")  # before: the report reads ctx
         output.write_text(write_report(ctx), encoding="utf-8")
     except (OSError, ValueError, KeyError, BenchError) as exc:
         print(f"rsm-bench-report: error: {exc}", file=sys.stderr)
