@@ -1134,3 +1134,17 @@ def test_logs_as_lidar_streams_are_reported_with_the_floors(run):
         assert sum("LD06 stream" in f["line"] for f in mine) == 2 and sum("RPLIDAR" in f["line"] for f in mine) == 2
         for f in mine:
             assert f["status"] == ("PASS" if f["value"] <= lidarbench.TOLERANCE else "MISS")
+
+
+def test_the_many_run_sections_vary_the_librarys_default_update_distance():
+    # The spread and faults sections sweep map_update_m around the default:
+    # a default changed in C alone would leave them measuring another rsm.
+    src = (REPO_ROOT / "src" / "localizer.c").read_text()
+    m = re.search(r"c\.map_update_m = ([0-9.]+)f;", src)
+    assert m, "src/localizer.c no longer sets map_update_m's default as the test expects"
+    from rsm_tools.bench import common, faults, measure
+    assert float(m.group(1)) == common.DEFAULT_MAP_UPDATE_M
+    ups = measure.spread_updates(40)
+    assert ups[0] < common.DEFAULT_MAP_UPDATE_M < ups[-1]
+    assert faults.clean_updates(40) == ups
+    assert faults.fault_update(0) == ups[0] and faults.fault_update(19) < ups[-1] * 1.05

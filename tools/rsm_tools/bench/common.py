@@ -40,8 +40,12 @@ FIRST_SEED = 7  # the seed of the peers' outlier runs; further seeds count up fr
 
 
 SEEDS = 2
-# The spread section: rsm once per map_update_m of 0.300, 0.305, ... (this
-# many values, around the default 0.4 m) on the clean logs, and at every
+# rsm's default map_update_m (src/localizer.c; test_bench checks they agree).
+# The many-run sections vary it around this value: one run's result depends
+# on where its writes fall, and a robot gets one run.
+DEFAULT_MAP_UPDATE_M = 0.4
+# The spread section: rsm once per map_update_m of 0.75, 0.7625, ... times
+# the default (this many values, up to 1.24 times) on the clean logs, and at every
 # other of them on the outlier copies of each of SPREAD_SEEDS seeds: which
 # phantoms a seed draws moves the mean of its runs by more than a tenth,
 # so the ratio is taken over many seeds, not many runs of two.

@@ -1,8 +1,9 @@
 """The bench's section "Faults": rsm on copies of every log with odometry and sampling faults (rsm-faults).
 
 For every fault of FAULTS and every log, ``runs`` runs of rsm-nav (default
-20), run k at map_update_m = 0.300 + 0.010 k and with the fault placed by
-seed k; beside them ``2 runs`` clean runs (0.300, 0.305, ... m: the spread
+20), run k at map_update_m = (0.75 + 0.025 k) times the default and with the
+fault placed by seed k; beside them ``2 runs`` clean runs (0.75, 0.7625, ...
+times the default: the spread
 section's, whose trajectories are reused when it ran) and odometry alone.
 The error of a run is the mean all-relations translation error (Kuemmerle
 et al.) of its trajectory, keyed by the original log's scans:
@@ -43,7 +44,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 from .. import evaluate as ev
 from .. import faults as flt
 from ..carmen import Pose, pose_compose
-from .common import BenchError, LOCAL_SPAN, fmt_q, ratio
+from .common import BenchError, DEFAULT_MAP_UPDATE_M, LOCAL_SPAN, fmt_q, ratio
 
 FAULT_RUNS = 20
 QUICK_FAULT_RUNS = 2
@@ -98,13 +99,14 @@ RECOVERY_NOTE = ("a recovery is false when no relation across it (one end within
 
 
 def fault_update(k: int) -> float:
-    """map_update_m of fault run k."""
-    return round(0.300 + 0.010 * k, 3)
+    """map_update_m of fault run k: 0.75 + 0.025 k times the default."""
+    return round(DEFAULT_MAP_UPDATE_M * (0.75 + 0.025 * k), 4)
 
 
 def clean_updates(count: int) -> List[float]:
-    """map_update_m of the clean runs: 0.300, 0.305, ... (the spread section's values)."""
-    return [round(0.300 + 0.005 * k, 3) for k in range(count)]
+    """map_update_m of the clean runs: 0.75, 0.7625, ... times the default
+    (the spread section's values)."""
+    return [round(DEFAULT_MAP_UPDATE_M * (0.75 + 0.0125 * k), 4) for k in range(count)]
 
 
 def _rng(*what) -> random.Random:
@@ -519,9 +521,10 @@ def report_faults(fa: Optional[dict]) -> List[str]:
         return L + [f"Not measured in this run ({fa['skipped']}).", ""]
     L += ["rsm on copies of every log broken by `rsm-faults` (docs/faults.md): odometry stalls, spikes, a counter "
           "reset, wheel slip, a scale error, and sparse, dropped or missing scans. "
-          f"Each fault {fa['runs']} times per log, run k at `map_update_m` = {fa['updates'][0]:.3f} + 0.010 k m "
+          f"Each fault {fa['runs']} times per log, run k at `map_update_m` = {fa['updates'][0]:.3f} + "
+          f"{fa['updates'][1] - fa['updates'][0] if len(fa['updates']) > 1 else 0.0:.4f} k m "
           f"with the fault placed by seed k; {fa['clean_runs']} clean runs per log at "
-          + ", ".join(f"{u:.3f}" for u in fa["clean_updates"][:2]) + ", ... m. "
+          + ", ".join(f"{u:g}" for u in fa["clean_updates"][:2]) + ", ... m. "
           "Error: mean all-relations translation error of a run; a scan the fault removed is given the last "
           "estimate moved by the faulty log's odometry, and a laser off the robot's origin is judged at the "
           "laser's pose, so every run is judged on every relation. Worst and median over the runs, each beside "

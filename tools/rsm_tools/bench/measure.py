@@ -19,7 +19,7 @@ from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 from .. import evaluate as ev
 from .. import m4, outliers
-from .common import (ARM_CONFIGS, ARM_CPU, BenchError, DEFAULT_MAP_LOG2, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
+from .common import (ARM_CONFIGS, ARM_CPU, BenchError, DEFAULT_MAP_LOG2, DEFAULT_MAP_UPDATE_M, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
     DRIVER_OBJECTS, KIND_METHODS, LOCAL_SPAN, M4_TARGETS, MAIN_LOG, MEMORY_TILES, METHODS, QUANTITIES,
     ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS, SCALING_MAP_LOG2, SCALING_PRESETS, SCALING_TILES, SCOPES, SMALL,
     SMALL_HEADER, STAGES, STATE_SIZES, TIMING_STATS, TURNS, TURN_SEPARATION_SCANS, bin_label, ratio)
@@ -349,8 +349,9 @@ def run_robustness(nav: Path, logs: List[Tuple[str, Path, Path]], acc: dict, lev
 
 
 def spread_updates(count: int) -> List[float]:
-    """map_update_m values of the spread section: 0.300, 0.305, ... (count of them)."""
-    return [round(0.300 + 0.005 * k, 3) for k in range(count)]
+    """map_update_m values of the spread section: 0.75, 0.7625, ... times the
+    default (count of them; 0.300, 0.305, ... m)."""
+    return [round(DEFAULT_MAP_UPDATE_M * (0.75 + 0.0125 * k), 4) for k in range(count)]
 
 
 def run_spread(nav: Path, logs: List[Tuple[str, Path, Path]], level: int, seeds: Sequence[int],
