@@ -20,4 +20,19 @@
 #define RSM_ALWAYS_INLINE inline
 #endif
 
+/* The index of the highest set bit of x (x > 0): one instruction where the
+ * core has it (clz on Armv7-M, bsr on x86). */
+static inline unsigned rsm_top_bit(unsigned long x)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return (unsigned)(sizeof(unsigned long) * 8u - 1u) - (unsigned)__builtin_clzl(x);
+#else
+    unsigned k = 0;
+    while ((x >>= 1) != 0u) {
+        ++k;
+    }
+    return k;
+#endif
+}
+
 #endif /* RSM_COMPILER_H */

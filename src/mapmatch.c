@@ -119,7 +119,7 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
         float gt;
         cost += r * r;
         hit += m;
-        if (gu == 0.0f && gv == 0.0f) {
+        if (rsm_tmap_flat(gu, gv)) {
             ++unused;
             continue;
         }
