@@ -1,5 +1,6 @@
 /* Coarse-to-fine Gauss-Newton of a scan against the tile map with the
  * prediction as a prior; see src/mapmatch.h. */
+#include "hot.h" /* first: speed over size */
 #include "mapmatch.h"
 
 #include <math.h>
