@@ -633,6 +633,28 @@ def test_m4_floors_judge_the_other_builds_of_issue_33():
     assert bench.m4_floors({"cost": cost(1.0, 1.0), "variants": v})[6]["status"] == "SKIP"
 
 
+def test_the_target_section_shows_every_build_beside_the_m4s():
+    from rsm_tools.bench import report
+
+    def cost(mean, odo):
+        stages = {k: 0.0 for k in ("points", "map", "mapmatch", "icp")}
+        stages.update(points=1000.0, mapmatch=mean - 1000.0 - odo, odometry=odo)
+        return {"scans": 600, "mean": mean, "p95": mean * 2, "p99": mean * 3, "max": mean * 4, "stages": stages}
+    v = {"m4-Os": {"cost": cost(320000.0, 11000.0), "identical": True, "machine": "mps2-an386"},
+         "m3-O2": {"cost": cost(3000000.0, 99000.0), "identical": False, "machine": "mps2-an385"},
+         "m0plus": {"image": {"ram": 152304, "flash": 102456}, "name": "rsm_firmware_rp2040_ld06"}}
+    text = "\n".join(report.report_variants(v, cost(300000.0, 10000.0), None))
+    assert "| instructions per scan | Cortex-M4F -O2 | Cortex-M4F -Os | Cortex-M3 soft float -O2 |" in text
+    assert "| mean | 300 000 | 320 000 | 3 000 000 |" in text and "| p99 | 900 000 | 960 000 | 9 000 000 |" in text
+    assert "| stage odometry (mean) | 10 000 | 11 000 | 99 000 |" in text and "stage icp" not in text
+    assert "| trajectory as the host's | n/a | yes | NO |" in text
+    assert "RAM 152 304 bytes" in text and "rsm_firmware_rp2040_ld06.elf" in text
+    lines = report.variant_lines(v)
+    assert lines[1].startswith("Cortex-M3 soft float -O2 (QEMU mps2-an385): instructions per scan mean 3 000 000")
+    assert lines[1].endswith("DIFFERENT from the host's") and "flash 102 456 bytes" in lines[2]
+    assert report.report_variants(None, cost(1.0, 0.0), True) == [] and report.variant_lines(None) == []
+
+
 def test_outlier_floors_are_judged_again_by_the_means_of_many_runs():
     stats = bench.measure.spread
     s = stats([1.0, 2.0, 3.0, 4.0, float("nan")])  # the NaN is left out

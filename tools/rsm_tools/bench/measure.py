@@ -742,10 +742,12 @@ def _cross_build(root: Path, b: Path, toolchain: str, opt: str, targets: Sequenc
 
 
 # The replay on the other builds (issue 33): the M4F at -Os, and the
-# Cortex-M3 with soft float on QEMU's mps2-an385: (key, toolchain, option,
+# Cortex-M3 and the Cortex-M0+ with soft float on QEMU's mps2-an385 (an M3,
+# which runs the M0+'s ARMv6-M code as it is): (key, toolchain, option,
 # image, machine).
 M4_VARIANTS = (("m4-Os", "toolchain-arm-none-eabi.cmake", "-Os", "rsm_replay_m4", m4.MACHINE),
-               ("m3-O2", "toolchain-arm-cortex-m3.cmake", "-O2", "rsm_replay_m3", m4.MACHINE_M3))
+               ("m3-O2", "toolchain-arm-cortex-m3.cmake", "-O2", "rsm_replay_m3", m4.MACHINE_M3),
+               ("m0plus-O2", "toolchain-arm-cortex-m0plus.cmake", "-O2", "rsm_replay_m0plus", m4.MACHINE_M3))
 # The Cortex-M0+ build (RP2040), which only links: its LD06 example's size.
 M0PLUS_IMAGE = "rsm_firmware_rp2040_ld06"
 
