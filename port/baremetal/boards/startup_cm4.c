@@ -103,17 +103,22 @@ void rsm_board_put_hex(uint32_t v)
 void rsm_fault_report(const uint32_t *frame);
 void rsm_fault_report(const uint32_t *frame)
 {
-    /* HFSR and CFSR say why (ARMv7-M ARM, B3.2.15 and B3.2.16). */
-    const uint32_t cfsr = *(volatile const uint32_t *)0xE000ED28u;
-    const uint32_t hfsr = *(volatile const uint32_t *)0xE000ED2Cu;
     rsm_board_put_str("\nFAULT: pc ");
     rsm_board_put_hex(frame[6]);
     rsm_board_put_str(" lr ");
     rsm_board_put_hex(frame[5]);
-    rsm_board_put_str(" cfsr ");
-    rsm_board_put_hex(cfsr);
-    rsm_board_put_str(" hfsr ");
-    rsm_board_put_hex(hfsr);
+#if !defined(__ARM_ARCH_6M__)
+    /* HFSR and CFSR say why (ARMv7-M ARM, B3.2.15 and B3.2.16); ARMv6-M has
+     * neither. */
+    {
+        const uint32_t cfsr = *(volatile const uint32_t *)0xE000ED28u;
+        const uint32_t hfsr = *(volatile const uint32_t *)0xE000ED2Cu;
+        rsm_board_put_str(" cfsr ");
+        rsm_board_put_hex(cfsr);
+        rsm_board_put_str(" hfsr ");
+        rsm_board_put_hex(hfsr);
+    }
+#endif
     rsm_board_put_str("\n");
     rsm_board_exit(1);
 }
