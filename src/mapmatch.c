@@ -124,6 +124,32 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
             ++unused;
             continue;
         }
+#if RSM_TMAP_BITS_SPLIT
+        /* Without an FPU each product is a call: a zero component of the
+         * gradient adds only zeros to its sums, which are never -0 (they
+         * start at +0, and a sum is -0 only of two), so those are left out
+         * with the same bits; gt's sign, when it is zero, matters nowhere. */
+        if (rsm_tmap_is_zero(gu)) {
+            gt = gv * (cx - sy);
+            h3 += gv * gv;
+            h4 += gv * gt;
+            h5 += gt * gt;
+            b1 += gv * r;
+            b2 += gt * r;
+            cost_used += r * r;
+            continue;
+        }
+        if (rsm_tmap_is_zero(gv)) {
+            gt = gu * (-sx - cy);
+            h0 += gu * gu;
+            h2 += gu * gt;
+            h5 += gt * gt;
+            b0 += gu * r;
+            b2 += gt * r;
+            cost_used += r * r;
+            continue;
+        }
+#endif
         /* d(cell)/d(theta) = (-s px - c py, c px - s py) / cell. */
         gt = gu * (-sx - cy) + gv * (cx - sy);
         h0 += gu * gu;

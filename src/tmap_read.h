@@ -103,7 +103,7 @@ static inline float rsm_tmap_read_reach(const rsm_tmap_t *map)
  * and fraction on its bits, and test a gradient for zero on its bits, with
  * the same results as the float operations (the host replay equals the
  * Cortex-M3's bit for bit: m3.replay_matches_host). */
-#if defined(__arm__) && !defined(__ARM_FP) && !defined(RSM_TMAP_FLOAT_SPLIT)
+#if defined(__arm__) && !defined(__ARM_FP)
 #define RSM_TMAP_BITS_SPLIT 1
 #else
 #define RSM_TMAP_BITS_SPLIT 0
@@ -273,9 +273,22 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
     }
     a = m10 - m00;
     b = m11 - m01;
+#if RSM_TMAP_BITS_SPLIT
+    /* A call saved for each zero difference (two equal cells), with the
+     * float path's bits: no occupancy, difference or corner value is -0,
+     * so x + 0 * t is x whatever the zero's sign. */
+    top = rsm_tmap_bits(a) == 0u ? m00 : m00 + a * du;
+    bottom = rsm_tmap_bits(b) == 0u ? m01 : m01 + b * du;
+    *du_out = rsm_tmap_bits(a) == rsm_tmap_bits(b) ? a : a + (b - a) * dv;
+    if (rsm_tmap_bits(top) == rsm_tmap_bits(bottom)) {
+        *dv_out = 0.0f;
+        return top;
+    }
+#else
     top = m00 + a * du;
     bottom = m01 + b * du;
     *du_out = a + (b - a) * dv;
+#endif
     *dv_out = bottom - top;
     return top + (bottom - top) * dv;
 }
