@@ -46,6 +46,13 @@ def test_costs_count_the_encoder_steps_in_each_scan():
         m4.costs(old)
 
 
+def test_costs_are_printed_a_figure_a_line():
+    text = m4.format_costs(m4.costs(_output([100, 200, 300], odo=2)))
+    lines = text.splitlines()
+    assert lines[0].startswith("scans 3 ") and lines[1] == f"mean {round(m4.INSNS_PER_TICK * 202)}"
+    assert f"stage odometry {round(2 * m4.INSNS_PER_TICK)}" in lines and not any("stage icp" in l for l in lines)
+
+
 def test_size_check_fails_over_the_ram_limit(tmp_path, monkeypatch):
     class Res:
         returncode = 0

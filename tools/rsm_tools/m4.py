@@ -5,6 +5,7 @@
     python3 tools/rsm_tools/m4.py example-rplidar ELF WORKDIR
     python3 tools/rsm_tools/m4.py example-rplidar-answered ELF WORKDIR
     python3 tools/rsm_tools/m4.py replay ELF HOST_EXE WORKDIR [--machine mps2-an385]
+    python3 tools/rsm_tools/m4.py costs ELF [--machine mps2-an385]
     python3 tools/rsm_tools/m4.py size ELF --ram-max BYTES
     python3 tools/rsm_tools/m4.py mapflash ELF HOST_EXE REPLAY_HOST_EXE WORKDIR
     python3 tools/rsm_tools/m4.py profile ELF [--top N]
@@ -40,7 +41,9 @@ replay firmware, checks its start-up, the instruction-count calibration (the
 known loop) and that its trajectory equals the host's (``HOST_EXE``, the same
 source built for the host) bit for bit; ``--machine mps2-an385`` runs the
 Cortex-M3 build (soft float, rsm_replay_m3.elf) on QEMU's M3 board, the
-same memory map and devices.  ``size`` prints an image's flash and RAM and
+same memory map and devices.  ``costs`` runs a replay image and prints
+its instructions per scan (mean, p95, p99, max, each stage's mean; the
+encoder steps included), the bench's figures for one image.  ``size`` prints an image's flash and RAM and
 fails when the RAM is over ``--ram-max`` (the Cortex-M0+ image, which no
 emulated board here runs).  Both fail on a fault report, a
 non-zero exit status or a time-out: a locked-up image never hangs the test.
@@ -647,6 +650,13 @@ def costs(out: str) -> dict:
             "stack_used": stack, "stack_size": stack_size, "calibration": calibration(out)}
 
 
+def format_costs(c: dict) -> str:
+    """costs' figures, one line each: the statistics, then every stage's mean."""
+    out = [f"{k} {round(c[k])}" for k in ("mean", "p95", "p99", "max")]
+    out += [f"stage {k} {round(v)}" for k, v in c["stages"].items() if v > 0]
+    return "\n".join([f"scans {c['scans']} (instructions per scan, encoder steps included)"] + out)
+
+
 def profile_log(lines: Iterable[str]) -> Dict[str, int]:
     """Instructions executed per function, from QEMU's log of translated
     blocks and their executions (``-d in_asm,exec,nochain``): each block's
@@ -731,6 +741,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     r.add_argument("work", type=Path, help="folder for the outputs")
     r.add_argument("--machine", default=MACHINE, help=f"QEMU machine (default {MACHINE}; {MACHINE_M3} for the "
                    "Cortex-M3 image, rsm_replay_m3.elf)")
+    co = sub.add_parser("costs", help="run a replay image and print its instructions per scan, per stage")
+    co.add_argument("elf", type=Path, help="a replay image, e.g. rsm_replay_m3.elf")
+    co.add_argument("--machine", default=MACHINE, help=f"QEMU machine (default {MACHINE}; {MACHINE_M3} for the "
+                    "soft-float images)")
     sz = sub.add_parser("size", help="an image's flash and RAM (stack included); fails over --ram-max")
     sz.add_argument("elf", type=Path, help="a firmware image, e.g. rsm_firmware_rp2040_ld06.elf")
     sz.add_argument("--ram-max", type=int, required=True, help="bytes of RAM the image may take at most")
@@ -757,6 +771,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(check_mapflash(a.elf, a.host_exe, a.replay_host_exe, a.work))
         elif a.cmd == "profile":
             print(format_profile(profile(a.elf, machine=a.machine), a.top))
+        elif a.cmd == "costs":
+            print(format_costs(costs(run(a.elf, machine=a.machine))))
         elif a.cmd == "size":
             print(check_size(a.elf, a.ram_max))
         else:
