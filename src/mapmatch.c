@@ -131,8 +131,8 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
          * start at +0, and a sum is -0 only of two), so those are left out
          * with the same bits; gt's sign, when it is zero, matters nowhere.
          * With an FPU the tests cost more than they save: zu and zv are 0. */
-        zu = RSM_TMAP_BITS_SPLIT && rsm_tmap_is_zero(gu);
-        zv = RSM_TMAP_BITS_SPLIT && rsm_tmap_is_zero(gv);
+        zu = RSM_SOFT_FLOAT && rsm_tmap_is_zero(gu);
+        zv = RSM_SOFT_FLOAT && rsm_tmap_is_zero(gv);
         /* d(cell)/d(theta) = (-s px - c py, c px - s py) / cell. */
         gt = zu ? gv * (cx - sy) : zv ? gu * (-sx - cy) : gu * (-sx - cy) + gv * (cx - sy);
         if (!zu) {

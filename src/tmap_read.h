@@ -98,16 +98,11 @@ static inline float rsm_tmap_read_reach(const rsm_tmap_t *map)
     return (float)(RSM_TMAP_CELL_LIMIT - 3) / map->inv_cell[0];
 }
 
-/* Without an FPU (an Arm core built with soft float) every float operation
- * is a call into libgcc: there the reads split a coordinate into its floor
- * and fraction on its bits, and test a gradient for zero on its bits, with
- * the same results as the float operations (the host replay equals the
- * Cortex-M3's bit for bit: m3.replay_matches_host). */
-#if defined(__arm__) && !defined(__ARM_FP)
-#define RSM_TMAP_BITS_SPLIT 1
-#else
-#define RSM_TMAP_BITS_SPLIT 0
-#endif
+/* Without an FPU (RSM_SOFT_FLOAT) the reads split a coordinate into its
+ * floor and fraction on its bits, test a gradient for zero on its bits and
+ * skip the products a zero makes exact, with the same results as the float
+ * operations (the host replay equals the Cortex-M3's and the M0+'s bit for
+ * bit: m3.replay_matches_host, m0plus.replay_matches_host). */
 
 static inline uint32_t rsm_tmap_bits(float f)
 {
@@ -125,7 +120,7 @@ static inline int rsm_tmap_is_zero(float f)
 /* No gradient: gu and gv both zero (on the bits without an FPU). */
 static inline int rsm_tmap_flat(float gu, float gv)
 {
-#if RSM_TMAP_BITS_SPLIT
+#if RSM_SOFT_FLOAT
     return ((rsm_tmap_bits(gu) | rsm_tmap_bits(gv)) << 1) == 0u;
 #else
     return gu == 0.0f && gv == 0.0f;
@@ -209,7 +204,7 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
         *dv_out = 0.0f;
         return 0.0f;
     }
-    if (!RSM_TMAP_BITS_SPLIT || !rsm_tmap_split(u, &i, &du) || !rsm_tmap_split(v, &j, &dv)) {
+    if (!RSM_SOFT_FLOAT || !rsm_tmap_split(u, &i, &du) || !rsm_tmap_split(v, &j, &dv)) {
         i = (int32_t)u;
         j = (int32_t)v;
         fu = (float)i;
@@ -240,7 +235,7 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
             *dv_out = 0.0f;
             return 0.0f;
         }
-#if RSM_TMAP_BITS_SPLIT
+#if RSM_SOFT_FLOAT
         /* Four equal cells: the interpolation below gives their value and
          * a zero gradient exactly (no occupancy is -0), at a dozen calls
          * into libgcc. */
@@ -273,7 +268,7 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
     }
     a = m10 - m00;
     b = m11 - m01;
-#if RSM_TMAP_BITS_SPLIT
+#if RSM_SOFT_FLOAT
     /* A call saved for each zero difference (two equal cells), with the
      * float path's bits: no occupancy, difference or corner value is -0,
      * so x + 0 * t is x whatever the zero's sign. */
