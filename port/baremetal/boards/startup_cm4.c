@@ -154,6 +154,23 @@ void rsm_default_handler(void)
     rsm_board_exit(1);
 }
 
+/* A real board's idle and end of run (the emulated one ends the run
+ * through semihosting instead): sleep until the next interrupt; stop in a
+ * loop where a debugger will look. */
+void __attribute__((weak)) rsm_board_idle(void *hw)
+{
+    (void)hw;
+    __asm__ volatile("wfi");
+}
+
+void __attribute__((weak)) rsm_board_exit(int status)
+{
+    (void)status;
+    for (;;) {
+        __asm__ volatile("wfi"); /* a debugger finds the run ended here */
+    }
+}
+
 /* The application's handlers, when it has none. */
 void __attribute__((weak)) rsm_app_tick_isr(void)
 {

@@ -255,20 +255,6 @@ void rsm_board_start_interrupts(void)
     NVIC_ISER = (1u << IRQ_UART0) | (1u << IRQ_UART1);
 }
 
-void rsm_board_idle(void *hw)
-{
-    (void)hw;
-    __asm__ volatile("wfi");
-}
-
-void rsm_board_exit(int status)
-{
-    (void)status;
-    for (;;) {
-        __asm__ volatile("wfi"); /* a debugger finds the run ended here */
-    }
-}
-
 /* ---- vector table ---------------------------------------------------------- */
 
 static void uart0_isr(void)
