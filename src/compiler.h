@@ -20,4 +20,28 @@
 #define RSM_ALWAYS_INLINE inline
 #endif
 
+/* 1 where every float operation is a call into the compiler's library (an
+ * Arm core built with soft float: Cortex-M0+, M3): there a few hot loops
+ * take integer shortcuts with the same bits as the float operations. */
+#if defined(__arm__) && !defined(__ARM_FP)
+#define RSM_SOFT_FLOAT 1
+#else
+#define RSM_SOFT_FLOAT 0
+#endif
+
+/* The index of the highest set bit of x (x > 0): one instruction where the
+ * core has it (clz on Armv7-M, bsr on x86). */
+static inline unsigned rsm_top_bit(unsigned long x)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return (unsigned)(sizeof(unsigned long) * 8u - 1u) - (unsigned)__builtin_clzl(x);
+#else
+    unsigned k = 0;
+    while ((x >>= 1) != 0u) {
+        ++k;
+    }
+    return k;
+#endif
+}
+
 #endif /* RSM_COMPILER_H */

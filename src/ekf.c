@@ -28,27 +28,30 @@ static int pose_finite(const rsm_pose_t *p)
     return isfinite(p->x) && isfinite(p->y) && isfinite(p->theta);
 }
 
-/* out = a * b */
+/* out = a * b. A row's three entries written out (the same terms in the
+ * same order as a loop over them): every encoder step runs four of these
+ * products, and the loop's indexing cost a Cortex-M4F as much as the
+ * arithmetic. */
 static void mat3_mul(const float a[9], const float b[9], float out[9])
 {
     int r;
-    int c;
     for (r = 0; r < 3; ++r) {
-        for (c = 0; c < 3; ++c) {
-            out[r * 3 + c] = a[r * 3] * b[c] + a[r * 3 + 1] * b[3 + c] + a[r * 3 + 2] * b[6 + c];
-        }
+        const float *x = &a[r * 3];
+        out[r * 3] = x[0] * b[0] + x[1] * b[3] + x[2] * b[6];
+        out[r * 3 + 1] = x[0] * b[1] + x[1] * b[4] + x[2] * b[7];
+        out[r * 3 + 2] = x[0] * b[2] + x[1] * b[5] + x[2] * b[8];
     }
 }
 
-/* out = a * b^T */
+/* out = a * b^T, written out as mat3_mul */
 static void mat3_mul_bt(const float a[9], const float b[9], float out[9])
 {
     int r;
-    int c;
     for (r = 0; r < 3; ++r) {
-        for (c = 0; c < 3; ++c) {
-            out[r * 3 + c] = a[r * 3] * b[c * 3] + a[r * 3 + 1] * b[c * 3 + 1] + a[r * 3 + 2] * b[c * 3 + 2];
-        }
+        const float *x = &a[r * 3];
+        out[r * 3] = x[0] * b[0] + x[1] * b[1] + x[2] * b[2];
+        out[r * 3 + 1] = x[0] * b[3] + x[1] * b[4] + x[2] * b[5];
+        out[r * 3 + 2] = x[0] * b[6] + x[1] * b[7] + x[2] * b[8];
     }
 }
 

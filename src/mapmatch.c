@@ -1,5 +1,6 @@
 /* Coarse-to-fine Gauss-Newton of a scan against the tile map with the
  * prediction as a prior; see src/mapmatch.h. */
+#include "hot.h" /* first: speed over size */
 #include "mapmatch.h"
 
 #include <math.h>
@@ -117,22 +118,37 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
         const float m = rsm_tmap_read_cells(map, &cur, tu + cx - sy, tv + sx + cy, inside, &gu, &gv);
         const float r = 1.0f - m;
         float gt;
+        int zu;
+        int zv;
         cost += r * r;
         hit += m;
-        if (gu == 0.0f && gv == 0.0f) {
+        if (rsm_tmap_flat(gu, gv)) {
             ++unused;
             continue;
         }
+        /* Without an FPU each product is a call: a zero component of the
+         * gradient adds only zeros to its sums, which are never -0 (they
+         * start at +0, and a sum is -0 only of two), so those are left out
+         * with the same bits; gt's sign, when it is zero, matters nowhere.
+         * With an FPU the tests cost more than they save: zu and zv are 0. */
+        zu = RSM_SOFT_FLOAT && rsm_tmap_is_zero(gu);
+        zv = RSM_SOFT_FLOAT && rsm_tmap_is_zero(gv);
         /* d(cell)/d(theta) = (-s px - c py, c px - s py) / cell. */
-        gt = gu * (-sx - cy) + gv * (cx - sy);
-        h0 += gu * gu;
-        h1 += gu * gv;
-        h2 += gu * gt;
-        h3 += gv * gv;
-        h4 += gv * gt;
+        gt = zu ? gv * (cx - sy) : zv ? gu * (-sx - cy) : gu * (-sx - cy) + gv * (cx - sy);
+        if (!zu) {
+            h0 += gu * gu;
+            h2 += gu * gt;
+            b0 += gu * r;
+        }
+        if (!zv) {
+            h3 += gv * gv;
+            h4 += gv * gt;
+            b1 += gv * r;
+        }
+        if (!zu && !zv) {
+            h1 += gu * gv;
+        }
         h5 += gt * gt;
-        b0 += gu * r;
-        b1 += gv * r;
         b2 += gt * r;
         cost_used += r * r;
     }

@@ -1,3 +1,4 @@
+#include "hot.h" /* first: speed over size */
 #include "rsm/scan.h"
 
 #include <math.h>

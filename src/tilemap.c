@@ -1,5 +1,6 @@
 /* Persistent multi-resolution occupancy map in a fixed tile pool; see
  * src/tilemap.h for the contract and docs/map.md for the design. */
+#include "hot.h" /* first: speed over size */
 #include "tilemap.h"
 
 #include <math.h>

@@ -6,7 +6,9 @@
 #define RSM_TMAP_READ_H
 
 #include <stdint.h>
+#include <string.h>
 
+#include "compiler.h"
 #include "tilemap.h"
 
 #define RSM_TMAP_TILE_MASK ((int32_t)RSM_TMAP_TILE_SIDE - 1)
@@ -96,6 +98,80 @@ static inline float rsm_tmap_read_reach(const rsm_tmap_t *map)
     return (float)(RSM_TMAP_CELL_LIMIT - 3) / map->inv_cell[0];
 }
 
+/* Without an FPU (RSM_SOFT_FLOAT) the reads split a coordinate into its
+ * floor and fraction on its bits, test a gradient for zero on its bits and
+ * skip the products a zero makes exact, with the same results as the float
+ * operations (the host replay equals the Cortex-M3's and the M0+'s bit for
+ * bit: m3.replay_matches_host, m0plus.replay_matches_host). */
+
+static inline uint32_t rsm_tmap_bits(float f)
+{
+    uint32_t b;
+    memcpy(&b, &f, sizeof b);
+    return b;
+}
+
+/* f == 0.0f (either zero), on the bits. */
+static inline int rsm_tmap_is_zero(float f)
+{
+    return (rsm_tmap_bits(f) << 1) == 0u;
+}
+
+/* No gradient: gu and gv both zero (on the bits without an FPU). */
+static inline int rsm_tmap_flat(float gu, float gv)
+{
+#if RSM_SOFT_FLOAT
+    return ((rsm_tmap_bits(gu) | rsm_tmap_bits(gv)) << 1) == 0u;
+#else
+    return gu == 0.0f && gv == 0.0f;
+#endif
+}
+
+/* floor(u) into *i and u - floor(u) into *frac, exactly as the float path
+ * of rsm_tmap_read_cells computes them, on u's bits: returns 0 (nothing
+ * written) where the difference would round, u in (-1, 0), or where u is
+ * 2^23 or more, which the caller's range test keeps out. */
+static inline int rsm_tmap_split(float u, int32_t *i, float *frac)
+{
+    const uint32_t b = rsm_tmap_bits(u);
+    const int32_t e = (int32_t)((b >> 23) & 0xFFu) - 127;
+    uint32_t shift;
+    uint32_t m;
+    uint32_t f;
+    uint32_t p;
+    if (e < 0) {
+        if ((b >> 31) != 0u && (b << 1) != 0u) {
+            return 0; /* u + 1 rounds for small negative u */
+        }
+        *i = 0;
+        *frac = u; /* u - 0 */
+        return 1;
+    }
+    if (e > 22) {
+        return 0;
+    }
+    shift = 23u - (uint32_t)e;
+    m = (b & 0x7FFFFFu) | 0x800000u;
+    f = m & ((1u << shift) - 1u);
+    if ((b >> 31) == 0u) {
+        *i = (int32_t)(m >> shift);
+    } else if (f == 0u) {
+        *i = -(int32_t)(m >> shift);
+    } else {
+        *i = -(int32_t)(m >> shift) - 1;
+        f = (1u << shift) - f;
+    }
+    if (f == 0u) {
+        *frac = 0.0f;
+        return 1;
+    }
+    /* f 2^-shift, f < 2^23: its leading bit p places the exponent. */
+    p = (uint32_t)rsm_top_bit(f);
+    f = ((f << (23u - p)) & 0x7FFFFFu) | ((p + 127u - shift) << 23);
+    memcpy(frac, &f, sizeof f);
+    return 1;
+}
+
 /* The occupancy at (u, v) in cells of the cursor's level, cell centres at
  * whole numbers: bilinear between the four centres around it. Its
  * gradient per cell goes to *du_out and *dv_out. inside: the caller knows
@@ -128,20 +204,22 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
         *dv_out = 0.0f;
         return 0.0f;
     }
-    i = (int32_t)u;
-    j = (int32_t)v;
-    fu = (float)i;
-    fv = (float)j;
-    if (fu > u) {
-        --i;
-        fu -= 1.0f;
+    if (!RSM_SOFT_FLOAT || !rsm_tmap_split(u, &i, &du) || !rsm_tmap_split(v, &j, &dv)) {
+        i = (int32_t)u;
+        j = (int32_t)v;
+        fu = (float)i;
+        fv = (float)j;
+        if (fu > u) {
+            --i;
+            fu -= 1.0f;
+        }
+        if (fv > v) {
+            --j;
+            fv -= 1.0f;
+        }
+        du = u - fu;
+        dv = v - fv;
     }
-    if (fv > v) {
-        --j;
-        fv -= 1.0f;
-    }
-    du = u - fu;
-    dv = v - fv;
     if ((i & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (j & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK) {
         /* All four cells in one tile: looked up only when it is not the
          * last such sample's tile. */
@@ -157,6 +235,21 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
             *dv_out = 0.0f;
             return 0.0f;
         }
+#if RSM_SOFT_FLOAT
+        /* Four equal cells: the interpolation below gives their value and
+         * a zero gradient exactly (no occupancy is -0), at a dozen calls
+         * into libgcc. */
+        {
+            const uint32_t v00 = rsm_tmap_get_cell(c->last, k);
+            if (rsm_tmap_get_cell(c->last, k + 1u) == v00 &&
+                rsm_tmap_get_cell(c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE) == v00 &&
+                rsm_tmap_get_cell(c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u) == v00) {
+                *du_out = 0.0f;
+                *dv_out = 0.0f;
+                return map->occ[v00];
+            }
+        }
+#endif
         rsm_tmap_occ_pair(map, c->last, k, &m00, &m10);
         rsm_tmap_occ_pair(map, c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE, &m01, &m11);
     } else {
@@ -175,9 +268,22 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
     }
     a = m10 - m00;
     b = m11 - m01;
+#if RSM_SOFT_FLOAT
+    /* A call saved for each zero difference (two equal cells), with the
+     * float path's bits: no occupancy, difference or corner value is -0,
+     * so x + 0 * t is x whatever the zero's sign. */
+    top = rsm_tmap_bits(a) == 0u ? m00 : m00 + a * du;
+    bottom = rsm_tmap_bits(b) == 0u ? m01 : m01 + b * du;
+    *du_out = rsm_tmap_bits(a) == rsm_tmap_bits(b) ? a : a + (b - a) * dv;
+    if (rsm_tmap_bits(top) == rsm_tmap_bits(bottom)) {
+        *dv_out = 0.0f;
+        return top;
+    }
+#else
     top = m00 + a * du;
     bottom = m01 + b * du;
     *du_out = a + (b - a) * dv;
+#endif
     *dv_out = bottom - top;
     return top + (bottom - top) * dv;
 }

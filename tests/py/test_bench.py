@@ -411,8 +411,10 @@ def test_floors_are_checked_on_this_runs_figures(run):
     if "skipped" not in am:
         small = am["configs"]["small"]["state"][0]["bytes"]
         assert mem[1].startswith("PASS" if small <= 64 * 1024 else "MISS") and bench.fmt_int(small) in mem[1]
-    m4 = [l for l in lines if "of the replay firmware" in l]  # issue 11's, on the target: not run (--no-m4)
-    assert len(m4) == 2 and all(l.startswith("SKIP Cortex-M4F: ") for l in m4), m4
+    m4 = [l for l in lines if "of the replay firmware" in l]  # issues 11 and 33, on the target: not run (--no-m4)
+    assert len(m4) == 6 and all(l.startswith(("SKIP Cortex-M4F: ", "SKIP Cortex-M3 ")) for l in m4), m4
+    assert sum(l.startswith("SKIP Cortex-M3 soft float: ") for l in lines) == 3
+    assert sum(l.startswith("SKIP Cortex-M0+: ") for l in lines) == 1
     # the callgrind line (the known-map section's M4 line is its own)
     ir = [l for l in lines if "instructions per scan" in l and l not in m4 and "known map" not in l]
     assert len(ir) == 1
@@ -605,12 +607,57 @@ def test_floor_checks_on_made_up_numbers():
 
 def test_m4_floors_judge_the_mean_and_p99_of_the_replay():
     f = bench.m4_floors({"cost": {"scans": 600, "mean": 300000.0, "p99": 600005.0}})
-    assert [(x["kind"], x["status"]) for x in f] == [("m4", "PASS"), ("m4", "MISS")]
+    assert [(x["kind"], x["status"]) for x in f[:2]] == [("m4", "PASS"), ("m4", "MISS")]
     assert "mean instructions per scan" in f[0]["line"] and "300 000 <= 300 000 (over 600 scans)" in f[0]["line"]
+    assert "-O2" in f[0]["line"] and "encoder steps included" in f[0]["line"]
     assert "600 005 > 600 000" in f[1]["line"] and f[1]["value"] == 600005.0 and f[1]["limit"] == 600000
+    # without the other builds' figures, their floors are not judged
+    assert [x["status"] for x in f[2:]] == ["SKIP"] * 6
     f = bench.m4_floors({"skipped": "qemu-system-arm is not installed"})
-    assert [x["status"] for x in f] == ["SKIP", "SKIP"] and "qemu-system-arm" in f[0]["line"]
-    assert [x["status"] for x in bench.m4_floors(None)] == ["SKIP", "SKIP"]
+    assert [x["status"] for x in f] == ["SKIP"] * 8 and all("qemu-system-arm" in x["line"] for x in f)
+    assert [x["status"] for x in bench.m4_floors(None)] == ["SKIP"] * 8
+
+
+def test_m4_floors_judge_the_other_builds_of_issue_33():
+    def cost(mean, p99):
+        return {"scans": 600, "mean": mean, "p99": p99}
+    v = {"m4-Os": {"cost": cost(290000.0, 610000.0)},
+         "m3-O2": {"cost": cost(1500000.0, 2900000.0), "identical": False},
+         "m0plus": {"image": {"ram": 204801, "flash": 100000}}}
+    f = bench.m4_floors({"cost": cost(1.0, 1.0), "variants": v})
+    got = [(x["kind"], x["status"]) for x in f[2:]]
+    assert got == [("m4", "PASS"), ("m4", "MISS"), ("m3", "PASS"), ("m3", "PASS"), ("m3", "MISS"),
+                   ("m0plus", "MISS")]
+    assert "-Os" in f[2]["line"] and "610 000 > 600 000" in f[3]["line"]
+    assert "1 500 000 <= 1 500 000" in f[4]["line"] and "bit-identical" in f[6]["line"]
+    assert "204 801 > 204 800 bytes" in f[7]["line"]
+    v["m3-O2"]["identical"], v["m0plus"]["image"]["ram"] = True, 204800
+    f = bench.m4_floors({"cost": cost(1.0, 1.0), "variants": v})
+    assert f[6]["status"] == "PASS" and f[7]["status"] == "PASS"
+    v["m3-O2"]["identical"] = None  # no host run to compare with
+    assert bench.m4_floors({"cost": cost(1.0, 1.0), "variants": v})[6]["status"] == "SKIP"
+
+
+def test_the_target_section_shows_every_build_beside_the_m4s():
+    from rsm_tools.bench import report
+
+    def cost(mean, odo):
+        stages = {k: 0.0 for k in ("points", "map", "mapmatch", "icp")}
+        stages.update(points=1000.0, mapmatch=mean - 1000.0 - odo, odometry=odo)
+        return {"scans": 600, "mean": mean, "p95": mean * 2, "p99": mean * 3, "max": mean * 4, "stages": stages}
+    v = {"m4-Os": {"cost": cost(320000.0, 11000.0), "identical": True, "machine": "mps2-an386"},
+         "m3-O2": {"cost": cost(3000000.0, 99000.0), "identical": False, "machine": "mps2-an385"},
+         "m0plus": {"image": {"ram": 152304, "flash": 102456}, "name": "rsm_firmware_rp2040_ld06"}}
+    text = "\n".join(report.report_variants(v, cost(300000.0, 10000.0), None))
+    assert "| instructions per scan | Cortex-M4F -O2 | Cortex-M4F -Os | Cortex-M3 soft float -O2 |" in text
+    assert "| mean | 300 000 | 320 000 | 3 000 000 |" in text and "| p99 | 900 000 | 960 000 | 9 000 000 |" in text
+    assert "| stage odometry (mean) | 10 000 | 11 000 | 99 000 |" in text and "stage icp" not in text
+    assert "| trajectory as the host's | n/a | yes | NO |" in text
+    assert "RAM 152 304 bytes" in text and "rsm_firmware_rp2040_ld06.elf" in text
+    lines = report.variant_lines(v)
+    assert lines[1].startswith("Cortex-M3 soft float -O2 (QEMU mps2-an385): instructions per scan mean 3 000 000")
+    assert lines[1].endswith("DIFFERENT from the host's") and "flash 102 456 bytes" in lines[2]
+    assert report.report_variants(None, cost(1.0, 0.0), True) == [] and report.variant_lines(None) == []
 
 
 def test_outlier_floors_are_judged_again_by_the_means_of_many_runs():

@@ -12,13 +12,13 @@ from conftest import TEST_DATA
 from rsm_tools import m4
 
 
-def _output(steps, c=(1000, 400, 101000, 40400)):
+def _output(steps, c=(1000, 400, 101000, 40400), odo=0):
     lines = ["rsm replay on mps2-an386", "C " + " ".join(str(v) for v in c)]
     for i, s in enumerate(steps):
         lines.append(f"P {i} 0 00000000 00000000 00000000")
         stages = [0] * len(m4.STAGES)
         stages[0], stages[-1] = 10, s - 10
-        lines.append(f"T {i} {s} " + " ".join(str(v) for v in stages))
+        lines.append(f"T {i} {s} " + " ".join(str(v) for v in stages) + f" {odo}")
     lines += ["E scans 3 accepted 3 motions 3", "M stack 1900 of 16384 cycles_hz 25000000", "rsm replay: done"]
     return "\n".join(lines) + "\n"
 
@@ -33,6 +33,47 @@ def test_costs_are_ticks_times_instructions_per_tick():
     assert res["stages"]["points"] == 10 * k
     assert res["stages"]["mapmatch"] == pytest.approx(k * (sum(steps) / len(steps) - 10))
     assert res["stack_used"] == 1900 and res["stack_size"] == 16384
+
+
+def test_costs_count_the_encoder_steps_in_each_scan():
+    k = m4.INSNS_PER_TICK
+    res = m4.costs(_output([100, 200, 300], odo=7))
+    assert res["mean"] == pytest.approx(k * 207) and res["max"] == k * 307
+    assert res["stages"]["odometry"] == 7 * k and res["stages"]["mapmatch"] == pytest.approx(k * 190)
+    # A T line of an older image, without the encoder steps, is refused, not misread.
+    old = "\n".join(l.rsplit(" ", 1)[0] if l.startswith("T ") else l for l in _output([100]).splitlines())
+    with pytest.raises(m4.M4Error, match="encoder steps"):
+        m4.costs(old)
+
+
+def test_costs_are_printed_a_figure_a_line():
+    text = m4.format_costs(m4.costs(_output([100, 200, 300], odo=2)))
+    lines = text.splitlines()
+    assert lines[0].startswith("scans 3 ") and lines[1] == f"mean {round(m4.INSNS_PER_TICK * 202)}"
+    assert f"stage odometry {round(2 * m4.INSNS_PER_TICK)}" in lines and not any("stage icp" in l for l in lines)
+
+
+def test_size_check_fails_over_the_ram_limit(tmp_path, monkeypatch):
+    class Res:
+        returncode = 0
+        stdout = "   text    data     bss     dec     hex filename\n 100000    1000  150000  251000   3d478 x.elf\n"
+        stderr = ""
+    monkeypatch.setattr(m4.shutil, "which", lambda name: "/bin/true")
+    monkeypatch.setattr(m4.subprocess, "run", lambda *a, **k: Res())
+    assert m4.image_size(tmp_path / "x.elf") == {"text": 100000, "data": 1000, "bss": 150000, "flash": 101000,
+                                                 "ram": 151000}
+    assert "RAM 151000 bytes" in m4.check_size(tmp_path / "x.elf", 151000)
+    with pytest.raises(m4.M4Error, match="over 150999"):
+        m4.check_size(tmp_path / "x.elf", 150999)
+
+
+def test_qemu_command_runs_the_machine_asked():
+    if m4.shutil.which("qemu-system-arm") is None:
+        pytest.fail("qemu-system-arm is not installed (./tools/test installs it)")
+    from pathlib import Path
+    cmd = m4.qemu_command(Path("x.elf"), machine=m4.MACHINE_M3)
+    assert cmd[cmd.index("-M") + 1] == "mps2-an385"
+    assert m4.qemu_command(Path("x.elf"))[cmd.index("-M") + 1] == "mps2-an386"
 
 
 def test_calibration_fails_when_the_timer_does_not_count_instructions():

@@ -10,6 +10,7 @@
 #include "rsm/config.h"
 #include "rsm/status.h"
 #include "tilemap.h"
+#include "tmap_read.h"
 #include "synth.h"
 #include "unity.h"
 
@@ -815,10 +816,77 @@ void test_tmap_beams_crossing_should_count_beams_through_walls_beyond_the_margin
                                                          NULL));
 }
 
+/* The float path of rsm_tmap_read_cells' floor and fraction. */
+static void float_split(float u, int32_t *i, float *frac)
+{
+    float fu;
+    *i = (int32_t)u;
+    fu = (float)*i;
+    if (fu > u) {
+        --*i;
+        fu -= 1.0f;
+    }
+    *frac = u - fu;
+}
+
+static void check_split(float u)
+{
+    int32_t i;
+    int32_t want_i;
+    float frac;
+    float want;
+    uint32_t a;
+    uint32_t b;
+    float_split(u, &want_i, &want);
+    if (!rsm_tmap_split(u, &i, &frac)) {
+        /* only where u - floor(u) rounds, or out of the cells' range */
+        TEST_ASSERT_TRUE((u < 0.0f && u > -1.0f) || fabsf(u) >= 8388608.0f);
+        return;
+    }
+    memcpy(&a, &frac, sizeof a);
+    memcpy(&b, &want, sizeof b);
+    TEST_ASSERT_EQUAL_INT32(want_i, i);
+    TEST_ASSERT_EQUAL_HEX32(b, a);
+}
+
+/* The soft-float cores' split of a cell coordinate on its bits equals the
+ * float operations bit for bit (zeros' signs included), so that a
+ * Cortex-M3 reads the map as the host does. */
+void test_tmap_split_should_equal_the_float_floor_and_fraction(void)
+{
+    static const float edge[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -0.5f, 1.5f, -1.5f, 2.0f, -2.0f, 0.999999940f,
+                                 -0.999999940f, 1.00000012f, -1.00000012f, 1e-30f, -1e-30f, 1e-45f, 4194303.5f,
+                                 -4194303.5f, 8388607.0f, -8388607.0f, 8388608.0f, 3.0e7f, -3.0e7f, 255.99998f,
+                                 -255.99998f, 65536.0f, -65536.0f};
+    uint32_t seed = 12345u;
+    size_t k;
+    int32_t i;
+    float frac;
+    for (k = 0; k < sizeof edge / sizeof edge[0]; ++k) {
+        check_split(edge[k]);
+    }
+    /* Every exponent of the cells' range, random mantissas and signs. */
+    for (k = 0; k < 200000u; ++k) {
+        uint32_t bits;
+        float u;
+        seed = seed * 1664525u + 1013904223u;
+        bits = (seed & 0x807FFFFFu) | ((uint32_t)(100u + (seed >> 8) % 52u) << 23);
+        memcpy(&u, &bits, sizeof u);
+        check_split(u);
+    }
+    TEST_ASSERT_FALSE(rsm_tmap_split(-0.25f, &i, &frac));
+    TEST_ASSERT_TRUE(rsm_tmap_split(-1.25f, &i, &frac));
+    TEST_ASSERT_EQUAL_INT32(-2, i);
+    TEST_ASSERT_EQUAL_FLOAT(0.75f, frac);
+    TEST_ASSERT_TRUE(rsm_tmap_flat(0.0f, -0.0f));
+    TEST_ASSERT_FALSE(rsm_tmap_flat(0.0f, 1e-45f));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_tmap_init_should_reject_bad_configs);
+    RUN_TEST(test_tmap_split_should_equal_the_float_floor_and_fraction);
     RUN_TEST(test_tmap_update_should_add_hits_and_saturate);
     RUN_TEST(test_tmap_update_should_clear_along_the_beam_but_not_near_the_return);
     RUN_TEST(test_tmap_update_should_lower_exactly_the_cells_of_bresenhams_line);

@@ -4,7 +4,9 @@
     python3 tools/rsm_tools/m4.py example-ld06 ELF WORKDIR
     python3 tools/rsm_tools/m4.py example-rplidar ELF WORKDIR
     python3 tools/rsm_tools/m4.py example-rplidar-answered ELF WORKDIR
-    python3 tools/rsm_tools/m4.py replay ELF HOST_EXE WORKDIR
+    python3 tools/rsm_tools/m4.py replay ELF HOST_EXE WORKDIR [--machine mps2-an385]
+    python3 tools/rsm_tools/m4.py costs ELF [--machine mps2-an385]
+    python3 tools/rsm_tools/m4.py size ELF --ram-max BYTES
     python3 tools/rsm_tools/m4.py mapflash ELF HOST_EXE REPLAY_HOST_EXE WORKDIR
     python3 tools/rsm_tools/m4.py profile ELF [--top N]
 
@@ -37,7 +39,13 @@ time, so this run lets the board's clock follow the host's while it idles
 and only "at least one" is asserted.  ``replay`` boots the
 replay firmware, checks its start-up, the instruction-count calibration (the
 known loop) and that its trajectory equals the host's (``HOST_EXE``, the same
-source built for the host) bit for bit.  Both fail on a fault report, a
+source built for the host) bit for bit; ``--machine mps2-an385`` runs the
+Cortex-M3 build (soft float, rsm_replay_m3.elf) on QEMU's M3 board, the
+same memory map and devices.  ``costs`` runs a replay image and prints
+its instructions per scan (mean, p95, p99, max, each stage's mean; the
+encoder steps included), the bench's figures for one image.  ``size`` prints an image's flash and RAM and
+fails when the RAM is over ``--ram-max`` (the Cortex-M0+ image, which no
+emulated board here runs).  Both fail on a fault report, a
 non-zero exit status or a time-out: a locked-up image never hangs the test.
 ``profile`` runs an image once with QEMU's log of every block it executes
 and prints the instructions spent in each function (a minute for the
@@ -88,6 +96,11 @@ INSNS_PER_TICK = NS_PER_TICK / (1 << ICOUNT_SHIFT)  # 5 at shift 3
 TIMEOUT_S = 300
 SYNC0 = bytes([0xFA, 0xFB, 0x03, 0x00, 0x00, 0x00])  # ARIA SYNC0 packet (docs protocols.md 1.6)
 STAGES = ("points", "grid", "harris", "match", "ransac", "refine", "icp", "ekf", "map", "mapmatch")
+# The encoder steps (rsm_localizer_ticks) since the previous scan: the T
+# lines' last field, outside the localizer's step time and added to it here.
+ODOMETRY = "odometry"
+MACHINE = "mps2-an386"      # Cortex-M4F
+MACHINE_M3 = "mps2-an385"   # the same board with a Cortex-M3: no FPU, the soft-float images
 
 
 class M4Error(RuntimeError):
@@ -95,7 +108,7 @@ class M4Error(RuntimeError):
 
 
 def qemu_command(elf: Path, serial_files: Sequence[Path] = (), pipe: Optional[Path] = None,
-                 tty: Optional[str] = None) -> List[str]:
+                 tty: Optional[str] = None, machine: str = MACHINE) -> List[str]:
     """Console on stdio, then one UART per serial file (output only), then,
     with ``pipe``, one on the named pipes PIPE.in (input) and PIPE.out, or,
     with ``tty``, one on that terminal (a pseudo-terminal a device answers
@@ -105,7 +118,7 @@ def qemu_command(elf: Path, serial_files: Sequence[Path] = (), pipe: Optional[Pa
     qemu = shutil.which("qemu-system-arm")
     if qemu is None:
         raise M4Error("qemu-system-arm not found (Debian: qemu-system-arm; ./tools/test installs it)")
-    cmd = [qemu, "-M", "mps2-an386", "-kernel", str(elf), "-display", "none", "-monitor", "none",
+    cmd = [qemu, "-M", machine, "-kernel", str(elf), "-display", "none", "-monitor", "none",
            "-serial", "stdio"]
     for f in serial_files:
         cmd += ["-serial", f"file:{f}"]
@@ -119,9 +132,9 @@ def qemu_command(elf: Path, serial_files: Sequence[Path] = (), pipe: Optional[Pa
 
 
 def run(elf: Path, serial_files: Sequence[Path] = (), timeout: float = TIMEOUT_S,
-        pipe: Optional[Path] = None, tty: Optional[str] = None) -> str:
+        pipe: Optional[Path] = None, tty: Optional[str] = None, machine: str = MACHINE) -> str:
     """Console output of one run; M4Error unless it ended by itself with status 0."""
-    cmd = qemu_command(elf, serial_files, pipe, tty)
+    cmd = qemu_command(elf, serial_files, pipe, tty, machine)
     try:
         res = subprocess.run(cmd, stdin=subprocess.DEVNULL, capture_output=True, timeout=timeout)
     except subprocess.TimeoutExpired as e:
@@ -325,9 +338,9 @@ def calibration(out: str) -> Dict[str, float]:
     return {"insns": insns, "measured": measured, "per_tick": INSNS_PER_TICK}
 
 
-def check_replay(elf: Path, host_exe: Path, work: Path) -> str:
+def check_replay(elf: Path, host_exe: Path, work: Path, machine: str = MACHINE) -> str:
     work.mkdir(parents=True, exist_ok=True)
-    out = run(elf)
+    out = run(elf, machine=machine)
     (work / "replay-m4.out").write_text(out)
     host = subprocess.run([str(host_exe)], capture_output=True, text=True, timeout=TIMEOUT_S)
     if host.returncode != 0:
@@ -335,6 +348,8 @@ def check_replay(elf: Path, host_exe: Path, work: Path) -> str:
     (work / "replay-host.out").write_text(host.stdout)
     if "rsm replay: done" not in out:
         raise M4Error("the replay firmware did not finish")
+    if f"rsm replay on {machine}\n" not in out:
+        raise M4Error(f"the replay firmware does not name the board {machine} (an image for another core?)")
     cal = calibration(out)
     target_p = [l for l in out.splitlines() if l.startswith(("P ", "E "))]
     host_p = [l for l in host.stdout.splitlines() if l.startswith(("P ", "E "))]
@@ -350,7 +365,7 @@ def check_replay(elf: Path, host_exe: Path, work: Path) -> str:
         # A refused scan costs next to nothing: the cost figures would time
         # refusals, not steps (the excerpt's stamps are made monotonic).
         raise M4Error(f"the replay refused scans as out of order: {refused.group(0) if refused else 'no E line'}")
-    return (f"replay: {len(host_p) - 1} poses equal bit for bit on host and M4; calibration "
+    return (f"replay: {len(host_p) - 1} poses equal bit for bit on host and {machine}; calibration "
             f"{cal['insns']} instructions measured as {cal['measured']:.0f}")
 
 
@@ -584,6 +599,30 @@ def mapflash_run(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path) -
     return summary, cost
 
 
+def image_size(elf: Path) -> Dict[str, int]:
+    """Berkeley sizes of an image (arm-none-eabi-size): flash = text + data,
+    RAM = data + bss, the linker scripts' stack reserved in bss."""
+    size = shutil.which("arm-none-eabi-size")
+    if size is None:
+        raise M4Error("arm-none-eabi-size not found (Debian: binutils-arm-none-eabi)")
+    res = subprocess.run([size, str(elf)], capture_output=True, text=True)
+    vals = res.stdout.splitlines()[-1].split() if res.returncode == 0 and res.stdout.strip() else []
+    if len(vals) < 3 or not all(v.isdigit() for v in vals[:3]):
+        raise M4Error(f"arm-none-eabi-size {elf} gave no sizes: {res.stderr}")
+    text, data, bss = (int(v) for v in vals[:3])
+    return {"text": text, "data": data, "bss": bss, "flash": text + data, "ram": data + bss}
+
+
+def check_size(elf: Path, ram_max: int) -> str:
+    """An image that only links (no emulator runs its core): its sizes, and
+    M4Error when its RAM is over ram_max bytes."""
+    s = image_size(elf)
+    what = f"{elf.name}: flash {s['flash']} bytes, RAM {s['ram']} bytes (stack included)"
+    if s["ram"] > ram_max:
+        raise M4Error(f"{what}: over {ram_max}")
+    return f"{what}, at most {ram_max}"
+
+
 def percentile(values: Sequence[float], q: float) -> float:
     """Nearest-rank percentile (q in 0..100)."""
     s = sorted(values)
@@ -592,18 +631,30 @@ def percentile(values: Sequence[float], q: float) -> float:
 
 
 def costs(out: str) -> dict:
-    """Instructions per scan and per stage from a replay run's T lines."""
+    """Instructions per scan and per stage from a replay run's T lines: a
+    scan's cost is its localizer step plus the encoder steps since the
+    previous scan (the stage ``odometry``)."""
     t = lines_of(out, "T")
     if not t:
         raise M4Error("no T lines in the replay output")
-    steps = [int(r[1]) * INSNS_PER_TICK for r in t]
+    if any(len(r) != 3 + len(STAGES) for r in t):
+        raise M4Error(f"a T line without {len(STAGES)} stages and the encoder steps (an older image?)")
+    steps = [(int(r[1]) + int(r[-1])) * INSNS_PER_TICK for r in t]
     stages = {name: statistics.fmean(int(r[2 + i]) * INSNS_PER_TICK for r in t) for i, name in enumerate(STAGES)}
+    stages[ODOMETRY] = statistics.fmean(int(r[-1]) * INSNS_PER_TICK for r in t)
     m = lines_of(out, "M")
     stack = int(m[0][1]) if m else None
     stack_size = int(m[0][3]) if m else None
     return {"scans": len(steps), "mean": statistics.fmean(steps), "p95": percentile(steps, 95),
             "p99": percentile(steps, 99), "max": max(steps), "stages": stages,
             "stack_used": stack, "stack_size": stack_size, "calibration": calibration(out)}
+
+
+def format_costs(c: dict) -> str:
+    """costs' figures, one line each: the statistics, then every stage's mean."""
+    out = [f"{k} {round(c[k])}" for k in ("mean", "p95", "p99", "max")]
+    out += [f"stage {k} {round(v)}" for k, v in c["stages"].items() if v > 0]
+    return "\n".join([f"scans {c['scans']} (instructions per scan, encoder steps included)"] + out)
 
 
 def profile_log(lines: Iterable[str]) -> Dict[str, int]:
@@ -641,11 +692,11 @@ def profile_log(lines: Iterable[str]) -> Dict[str, int]:
     return per
 
 
-def profile(elf: Path, timeout: float = 20 * TIMEOUT_S) -> Dict[str, int]:
+def profile(elf: Path, timeout: float = 20 * TIMEOUT_S, machine: str = MACHINE) -> Dict[str, int]:
     """profile_log of one run of a firmware image (its console discarded):
     slow (the log has a line per block executed), for finding where the
     instructions go, not for the figures the bench prints."""
-    cmd = ["null" if c == "stdio" else c for c in qemu_command(elf)]
+    cmd = ["null" if c == "stdio" else c for c in qemu_command(elf, machine=machine)]
     cmd += ["-d", "in_asm,exec,nochain", "-D", "/dev/stdout"]
     with subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                           text=True, errors="replace") as proc:
@@ -688,6 +739,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     r.add_argument("elf", type=Path, help="the replay firmware image (rsm_replay_m4.elf)")
     r.add_argument("host_exe", type=Path, help="rsm-replay-host, whose trajectory the target's must equal")
     r.add_argument("work", type=Path, help="folder for the outputs")
+    r.add_argument("--machine", default=MACHINE, help=f"QEMU machine (default {MACHINE}; {MACHINE_M3} for the "
+                   "Cortex-M3 image, rsm_replay_m3.elf)")
+    co = sub.add_parser("costs", help="run a replay image and print its instructions per scan, per stage")
+    co.add_argument("elf", type=Path, help="a replay image, e.g. rsm_replay_m3.elf")
+    co.add_argument("--machine", default=MACHINE, help=f"QEMU machine (default {MACHINE}; {MACHINE_M3} for the "
+                    "soft-float images)")
+    sz = sub.add_parser("size", help="an image's flash and RAM (stack included); fails over --ram-max")
+    sz.add_argument("elf", type=Path, help="a firmware image, e.g. rsm_firmware_rp2040_ld06.elf")
+    sz.add_argument("--ram-max", type=int, required=True, help="bytes of RAM the image may take at most")
     mf = sub.add_parser("mapflash", help="run the map-in-flash firmware over its reset and compare with the host")
     mf.add_argument("elf", type=Path, help="the map-in-flash firmware image (rsm_mapflash_m4.elf)")
     mf.add_argument("host_exe", type=Path, help="rsm-mapflash-host, both boots on the host")
@@ -696,6 +756,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     pr = sub.add_parser("profile", help="instructions per function of one run (QEMU's block log; slow)")
     pr.add_argument("elf", type=Path, help="a firmware image, e.g. rsm_replay_m4.elf")
     pr.add_argument("--top", type=int, default=25, help="functions to print (default 25)")
+    pr.add_argument("--machine", default=MACHINE, help=f"QEMU machine (default {MACHINE})")
     a = ap.parse_args(argv)
     try:
         if a.cmd == "example":
@@ -709,9 +770,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         elif a.cmd == "mapflash":
             print(check_mapflash(a.elf, a.host_exe, a.replay_host_exe, a.work))
         elif a.cmd == "profile":
-            print(format_profile(profile(a.elf), a.top))
+            print(format_profile(profile(a.elf, machine=a.machine), a.top))
+        elif a.cmd == "costs":
+            print(format_costs(costs(run(a.elf, machine=a.machine))))
+        elif a.cmd == "size":
+            print(check_size(a.elf, a.ram_max))
         else:
-            print(check_replay(a.elf, a.host_exe, a.work))
+            print(check_replay(a.elf, a.host_exe, a.work, a.machine))
     except M4Error as err:
         print(f"rsm-m4: FAIL: {err}", file=sys.stderr)
         return 1

@@ -66,7 +66,8 @@ int rsm_board_uart_rx_byte(void *hw, uint8_t *byte);
  * interrupts (the handlers are the application's, below). */
 void rsm_board_start_interrupts(void);
 
-/* Sleeps until the next interrupt. */
+/* Sleeps until the next interrupt. This and rsm_board_exit have defaults
+ * for real boards in boards/startup_cm4.c (weak: a board may define its own). */
 void rsm_board_idle(void *hw);
 
 /* Ends the run: on the emulated board QEMU exits with status 0 when status is

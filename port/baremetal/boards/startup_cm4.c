@@ -1,5 +1,8 @@
-/* Start-up code common to every Cortex-M4F board: what runs between reset and
- * main, the fault report and the stack measurement. The vector table itself
+/* Start-up code common to every Cortex-M board: what runs between reset and
+ * main, the fault report and the stack measurement. Written for the M4F; on
+ * a core without FPU (soft float: __ARM_FP undefined) there is no FPU to
+ * enable, and on ARMv6-M (Cortex-M0+) the fault handler keeps to its
+ * instruction set. The vector table itself
  * is the board's (its device interrupts differ), in boards/<board>/board.c. */
 #include <stddef.h>
 #include <stdint.h>
@@ -47,10 +50,12 @@ static void __attribute__((noinline)) paint_stack(void)
 
 void rsm_reset_handler(void)
 {
+#if defined(__ARM_FP)
     /* The FPU first: any float instruction before this is a UsageFault, and
      * the compiler may use FPU registers anywhere in C code. */
     CPACR |= CPACR_CP10_CP11_FULL;
     __asm__ volatile("dsb\n\tisb" ::: "memory");
+#endif
     init_memory();
     paint_stack();
     (void)main();
@@ -98,17 +103,22 @@ void rsm_board_put_hex(uint32_t v)
 void rsm_fault_report(const uint32_t *frame);
 void rsm_fault_report(const uint32_t *frame)
 {
-    /* HFSR and CFSR say why (ARMv7-M ARM, B3.2.15 and B3.2.16). */
-    const uint32_t cfsr = *(volatile const uint32_t *)0xE000ED28u;
-    const uint32_t hfsr = *(volatile const uint32_t *)0xE000ED2Cu;
     rsm_board_put_str("\nFAULT: pc ");
     rsm_board_put_hex(frame[6]);
     rsm_board_put_str(" lr ");
     rsm_board_put_hex(frame[5]);
-    rsm_board_put_str(" cfsr ");
-    rsm_board_put_hex(cfsr);
-    rsm_board_put_str(" hfsr ");
-    rsm_board_put_hex(hfsr);
+#if !defined(__ARM_ARCH_6M__)
+    /* HFSR and CFSR say why (ARMv7-M ARM, B3.2.15 and B3.2.16); ARMv6-M has
+     * neither. */
+    {
+        const uint32_t cfsr = *(volatile const uint32_t *)0xE000ED28u;
+        const uint32_t hfsr = *(volatile const uint32_t *)0xE000ED2Cu;
+        rsm_board_put_str(" cfsr ");
+        rsm_board_put_hex(cfsr);
+        rsm_board_put_str(" hfsr ");
+        rsm_board_put_hex(hfsr);
+    }
+#endif
     rsm_board_put_str("\n");
     rsm_board_exit(1);
 }
@@ -116,17 +126,49 @@ void rsm_fault_report(const uint32_t *frame)
 /* Finds the frame on whichever stack was in use (EXC_RETURN bit 2). */
 void __attribute__((naked)) rsm_fault_handler(void)
 {
+#if defined(__ARM_ARCH_6M__)
+    /* No IT blocks, no test of lr against an immediate, a short b range. */
+    __asm__ volatile("movs r0, #4\n\t"
+                     "mov r1, lr\n\t"
+                     "tst r0, r1\n\t"
+                     "bne 1f\n\t"
+                     "mrs r0, msp\n\t"
+                     "b 2f\n"
+                     "1:\n\t"
+                     "mrs r0, psp\n"
+                     "2:\n\t"
+                     "ldr r1, =rsm_fault_report\n\t"
+                     "bx r1\n");
+#else
     __asm__ volatile("tst lr, #4\n\t"
                      "ite eq\n\t"
                      "mrseq r0, msp\n\t"
                      "mrsne r0, psp\n\t"
                      "b rsm_fault_report\n");
+#endif
 }
 
 void rsm_default_handler(void)
 {
     rsm_board_put_str("\nFAULT: unexpected interrupt\n");
     rsm_board_exit(1);
+}
+
+/* A real board's idle and end of run (the emulated one ends the run
+ * through semihosting instead): sleep until the next interrupt; stop in a
+ * loop where a debugger will look. */
+void __attribute__((weak)) rsm_board_idle(void *hw)
+{
+    (void)hw;
+    __asm__ volatile("wfi");
+}
+
+void __attribute__((weak)) rsm_board_exit(int status)
+{
+    (void)status;
+    for (;;) {
+        __asm__ volatile("wfi"); /* a debugger finds the run ended here */
+    }
 }
 
 /* The application's handlers, when it has none. */

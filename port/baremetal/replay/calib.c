@@ -7,7 +7,13 @@
 /* Exactly 2 n instructions (subs, bne) whatever the compiler does around it. */
 static void __attribute__((noinline)) known_loop(uint32_t n)
 {
+#if defined(__ARM_ARCH_6M__)
+    /* GCC writes ARMv6-M code in the divided syntax, whose Thumb-1 sub sets
+     * the flags. */
+    __asm__ volatile("1:\n\tsub %0, #1\n\tbne 1b" : "+l"(n) : : "cc");
+#else
     __asm__ volatile("1:\n\tsubs %0, %0, #1\n\tbne 1b" : "+r"(n) : : "cc");
+#endif
 }
 
 static uint32_t time_loop(uint32_t n)

@@ -37,7 +37,7 @@ static void put_bits(const rsm_replay_io_t *io, float f)
     rsm_replay_put_hex(io, b);
 }
 
-static void put_report(const rsm_replay_io_t *io, uint32_t scan, const rsm_localizer_report_t *rep)
+static void put_report(const rsm_replay_io_t *io, uint32_t scan, const rsm_localizer_report_t *rep, uint32_t odo)
 {
     uint32_t s;
     rsm_replay_put_str(io, "P ");
@@ -59,6 +59,8 @@ static void put_report(const rsm_replay_io_t *io, uint32_t scan, const rsm_local
         rsm_replay_put_str(io, " ");
         rsm_replay_put_dec(io, rep->stage_time[s]);
     }
+    rsm_replay_put_str(io, " ");
+    rsm_replay_put_dec(io, odo);
     rsm_replay_put_str(io, "\n");
 }
 
@@ -66,6 +68,7 @@ int rsm_replay_run(rsm_replay_t *r, const rsm_replay_io_t *io)
 {
     const rsm_pose_t start = {0.0f, 0.0f, 0.0f};
     uint32_t i;
+    uint32_t odo = 0u; /* clock_fn time in the encoder steps since the last scan */
     int rc;
     r->cfg = rsm_localizer_config_default();
     r->cfg.clock_fn = io->clock_fn;
@@ -76,7 +79,15 @@ int rsm_replay_run(rsm_replay_t *r, const rsm_replay_io_t *io)
     }
     for (i = 0; i < rsm_replay_step_count; ++i) {
         const rsm_replay_step_t *st = &rsm_replay_steps[i];
-        (void)rsm_localizer_ticks(&r->loc, st->left, st->right);
+        /* The encoder steps are part of a scan's cost on a robot: timed
+         * here, outside the report's step_time, and added in the T line. */
+        if (io->clock_fn != NULL) {
+            const uint32_t t0 = io->clock_fn(io->clock_ctx);
+            (void)rsm_localizer_ticks(&r->loc, st->left, st->right);
+            odo += io->clock_fn(io->clock_ctx) - t0;
+        } else {
+            (void)rsm_localizer_ticks(&r->loc, st->left, st->right);
+        }
         if (st->scan != 0u && st->scan <= rsm_replay_scan_count) {
             const rsm_replay_scan_t *sc = &rsm_replay_scans[st->scan - 1u];
             uint32_t b;
@@ -86,7 +97,8 @@ int rsm_replay_run(rsm_replay_t *r, const rsm_replay_io_t *io)
             (void)rsm_scan_set_uniform(&r->scan, RSM_REPLAY_BEAMS, -RSM_PI / 2.0f, RSM_PI / (float)RSM_REPLAY_BEAMS);
             r->scan.stamp_us = sc->stamp_us;
             (void)rsm_localizer_scan(&r->loc, &r->scan, &r->rep);
-            put_report(io, (uint32_t)st->scan - 1u, &r->rep);
+            put_report(io, (uint32_t)st->scan - 1u, &r->rep, odo);
+            odo = 0u;
         }
     }
     rsm_replay_put_str(io, "E scans ");

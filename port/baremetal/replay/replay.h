@@ -4,8 +4,11 @@
  *
  * Output, one line each, numbers in hexadecimal where they are floats' bits:
  *   P <scan> <outcome> <x> <y> <theta>    pose after each scan (IEEE bits)
- *   T <scan> <step> <stage 0> .. <stage 9>  the report's clock_fn times (when
- *                                         a clock is given), decimal, in its unit
+ *   T <scan> <step> <stage 0> .. <stage 9> <odo>  the report's clock_fn times
+ *                                         (when a clock is given), decimal, in
+ *                                         its unit; odo: the encoder steps
+ *                                         (rsm_localizer_ticks) since the
+ *                                         previous scan, outside step
  *   E scans <n> accepted <n> motions <n>   counters at the end */
 #ifndef RSM_REPLAY_H
 #define RSM_REPLAY_H

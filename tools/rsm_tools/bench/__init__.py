@@ -30,7 +30,10 @@ report (``docs/RESULTS.md`` by default) has these sections:
    configuration), in total and by stage; and on the target: instructions per
    scan and per stage of the replay firmware on an emulated Cortex-M4F (QEMU
    mps2-an386, ``-O2``, :mod:`rsm_tools.m4`) beside callgrind's count of the
-   same excerpt on the host, with the images' flash, RAM and painted stack;
+   same excerpt on the host, with the images' flash, RAM and painted stack,
+   the encoder steps counted in every scan; the same replay at ``-Os``, on
+   a Cortex-M3 and a Cortex-M0+ with soft float (QEMU mps2-an385), and the
+   RP2040 LD06 example's size (issue 33);
    and the global search's instructions per scan in the excerpt's map, from
    the map-in-flash firmware (the floor of the subsection "Known map").
 5. Memory: the localizer state per part on this host (``rsm-stages``) and on

@@ -704,12 +704,10 @@ def _config_flag(root: Path, header: Optional[str]) -> List[str]:
 
 def _arm_size(elf: Path) -> dict:
     """Berkeley sizes of an image: flash = text + data, RAM = data + bss (stack included)."""
-    res = subprocess.run(["arm-none-eabi-size", str(elf)], capture_output=True, text=True)
-    vals = res.stdout.splitlines()[-1].split() if res.returncode == 0 and res.stdout.strip() else []
-    if len(vals) < 3:
-        raise BenchError(f"arm-none-eabi-size {elf} gave no sizes: {res.stderr}")
-    text, data, bss = (int(v) for v in vals[:3])
-    return {"text": text, "data": data, "bss": bss, "flash": text + data, "ram": data + bss}
+    try:
+        return m4.image_size(elf)
+    except m4.M4Error as e:
+        raise BenchError(str(e))
 
 
 def _symbol_bytes(elf: Path, names: Sequence[str]) -> int:
@@ -731,25 +729,69 @@ def m4_global(elf: Path, mapflash_host: Optional[Path], replay_host: Optional[Pa
         raise BenchError(str(e))
 
 
+def _cross_build(root: Path, b: Path, toolchain: str, opt: str, targets: Sequence[str]) -> Path:
+    """A cross build of the images ``targets`` at ``opt`` with
+    cmake/``toolchain`` in ``b``; returns the folder of the images."""
+    cmd = ["cmake", "-S", str(root), "-B", str(b), "-G", "Ninja",
+           f"-DCMAKE_TOOLCHAIN_FILE={root / 'cmake' / toolchain}",
+           "-DCMAKE_BUILD_TYPE=Release", f"-DCMAKE_C_FLAGS_RELEASE={opt} -DNDEBUG"]
+    for c in (cmd, ["cmake", "--build", str(b), "--parallel", "2", "--target", *targets]):
+        res = subprocess.run(c, capture_output=True, text=True)
+        if res.returncode != 0:
+            raise BenchError(f"{' '.join(c)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
+    return b / "port" / "baremetal"
+
+
+# The replay on the other builds (issue 33): the M4F at -Os, and the
+# Cortex-M3 and the Cortex-M0+ with soft float on QEMU's mps2-an385 (an M3,
+# which runs the M0+'s ARMv6-M code as it is): (key, toolchain, option,
+# image, machine).
+M4_VARIANTS = (("m4-Os", "toolchain-arm-none-eabi.cmake", "-Os", "rsm_replay_m4", m4.MACHINE),
+               ("m3-O2", "toolchain-arm-cortex-m3.cmake", "-O2", "rsm_replay_m3", m4.MACHINE_M3),
+               ("m0plus-O2", "toolchain-arm-cortex-m0plus.cmake", "-O2", "rsm_replay_m0plus", m4.MACHINE_M3))
+# The Cortex-M0+ build (RP2040), which only links: its LD06 example's size.
+M0PLUS_IMAGE = "rsm_firmware_rp2040_ld06"
+
+
+def run_m4_variants(root: Path, work: Path, host_out: Optional[str]) -> dict:
+    """The replay built as M4_VARIANTS says, each run under QEMU: its
+    instructions per scan (m4.costs), its image's sizes and whether its
+    trajectory equals the host's (host_out, rsm-replay-host's output; None
+    when it was not built); and the Cortex-M0+ image's sizes."""
+    out: Dict[str, dict] = {}
+    for key, toolchain, opt, target, machine in M4_VARIANTS:
+        elf = _cross_build(root, work / key, toolchain, opt, [target]) / f"{target}.elf"
+        try:
+            text = m4.run(elf, machine=machine)
+            cost = m4.costs(text)
+        except m4.M4Error as e:
+            raise BenchError(str(e))
+        (work / f"{key}-replay.out").write_text(text)
+        poses = [l for l in text.splitlines() if l.startswith("P ")]
+        out[key] = {"machine": machine, "opt": opt, "cost": cost, "image": _arm_size(elf),
+                    "identical": None if host_out is None else
+                    poses == [l for l in host_out.splitlines() if l.startswith("P ")]}
+    elf = _cross_build(root, work / "m0plus-O2", "toolchain-arm-cortex-m0plus.cmake", "-O2",
+                       [M0PLUS_IMAGE]) / f"{M0PLUS_IMAGE}.elf"
+    out["m0plus"] = {"image": _arm_size(elf), "name": M0PLUS_IMAGE}
+    return out
+
+
 def run_m4(root: Path, work: Path, replay_host: Optional[Path], mapflash_host: Optional[Path] = None) -> dict:
     """The firmware images cross-built at -O2 and run under QEMU (mps2-an386):
     instructions per scan and per stage of the replay firmware on the shipped
     excerpt, the known-loop calibration, each image's flash, RAM and painted
     stack; callgrind's count of the same excerpt through the same source on
-    the host (rsm-replay-host), when valgrind is there; and the global
-    search's instructions per scan from the map-in-flash image (m4_global)."""
+    the host (rsm-replay-host), when valgrind is there; the global
+    search's instructions per scan from the map-in-flash image (m4_global);
+    and the replay at -Os, on a Cortex-M3 and the Cortex-M0+ image's size
+    (run_m4_variants)."""
     for tool in ("arm-none-eabi-gcc", "arm-none-eabi-size", "arm-none-eabi-nm", "qemu-system-arm", "cmake",
                  "ninja"):
         if shutil.which(tool) is None:
             return {"skipped": f"{tool} is not installed"}
     b = work / "m4-O2"
-    cmd = ["cmake", "-S", str(root), "-B", str(b), "-G", "Ninja",
-           f"-DCMAKE_TOOLCHAIN_FILE={root / 'cmake' / 'toolchain-arm-none-eabi.cmake'}",
-           "-DCMAKE_BUILD_TYPE=Release", "-DCMAKE_C_FLAGS_RELEASE=-O2 -DNDEBUG"]
-    for c in (cmd, ["cmake", "--build", str(b), "--parallel", "2", "--target", *M4_TARGETS]):
-        res = subprocess.run(c, capture_output=True, text=True)
-        if res.returncode != 0:
-            raise BenchError(f"{' '.join(c)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
+    _cross_build(root, b, "toolchain-arm-none-eabi.cmake", "-O2", M4_TARGETS)
     fw_dir = b / "port" / "baremetal"
     replay_elf, example_elf = fw_dir / "rsm_replay_m4.elf", fw_dir / "rsm_firmware.elf"
     try:
@@ -787,6 +829,13 @@ def run_m4(root: Path, work: Path, replay_host: Optional[Path], mapflash_host: O
         ir = callgrind_ir(cg_out)
         res_out["host"] = {"ir": ir, "scans": len(host_p), "ir_per_scan": ir / max(1, len(host_p)),
                            "identical": host_p == target_p}
+    host_out = None
+    if replay_host is not None and replay_host.is_file():
+        h = subprocess.run([str(replay_host)], capture_output=True, text=True)
+        if h.returncode != 0:
+            raise BenchError(f"{replay_host} failed: {h.stderr[-2000:]}")
+        host_out = h.stdout
+    res_out["variants"] = run_m4_variants(root, work, host_out)
     return res_out
 
 

@@ -34,11 +34,38 @@ def m4_lines(m: Optional[dict]) -> List[str]:
         L.append(f"host x86-64 (callgrind, same excerpt and source): {fmt_int(round(h['ir_per_scan']))} "
                  f"instructions per scan; trajectories {'bit-identical' if h['identical'] else 'DIFFERENT'}")
     L.append(global_line(m.get("global")))
+    L += variant_lines(m.get("variants"))
     for name, im in m["images"].items():
         stack = ("n/a" if im["stack_used"] is None else f"{fmt_int(im['stack_used'])} of {fmt_int(im['stack_size'])}")
         extra = f" (of which the excerpt {fmt_int(im['excerpt'])})" if im["excerpt"] else ""
         L.append(f"{name} image: flash {fmt_int(im['flash'])} bytes{extra}, RAM {fmt_int(im['ram'])} bytes "
                  f"(stack included), stack used {stack} bytes")
+    return L
+
+
+VARIANT_NAMES = {"m4-Os": "Cortex-M4F -Os", "m3-O2": "Cortex-M3 soft float -O2",
+                 "m0plus-O2": "Cortex-M0+ soft float -O2"}
+
+
+def variant_lines(v: Optional[dict]) -> List[str]:
+    """The replay at -Os, on the Cortex-M3 and the Cortex-M0+ image's size
+    (run_m4's "variants"), a line each."""
+    if not v:
+        return []
+    L = []
+    for key, name in VARIANT_NAMES.items():
+        x = v.get(key)
+        if not x:
+            continue
+        c = x["cost"]
+        same = {None: "", True: "; trajectory bit-identical to the host's",
+                False: "; trajectory DIFFERENT from the host's"}[x["identical"]]
+        L.append(f"{name} (QEMU {x['machine']}): instructions per scan mean {fmt_int(round(c['mean']))}, p95 "
+                 f"{fmt_int(round(c['p95']))}, p99 {fmt_int(round(c['p99']))}, max {fmt_int(round(c['max']))}{same}")
+    m0 = v.get("m0plus")
+    if m0:
+        L.append(f"Cortex-M0+ ({m0['name']}.elf, links only): flash {fmt_int(m0['image']['flash'])} bytes, RAM "
+                 f"{fmt_int(m0['image']['ram'])} bytes (stack and the LD06's buffers included)")
     return L
 
 
@@ -75,6 +102,7 @@ def report_m4(m: Optional[dict]) -> List[str]:
     L += md_table(["instructions per scan", "value"], rows, "speed m4")
     L += md_table(["stage", "M4 instructions per scan (mean)"],
                   [[k, fmt_int(round(v))] for k, v in c["stages"].items() if v > 0], "speed m4 stages")
+    L += report_variants(m.get("variants"), c, (m.get("host") or {}).get("identical"))
     rows = []
     for name, im in m["images"].items():
         rows.append([name, fmt_int(im["flash"]), fmt_int(im["excerpt"]), fmt_int(im["ram"]),
@@ -105,6 +133,35 @@ def report_m4(m: Optional[dict]) -> List[str]:
     return L
 
 
+def report_variants(v: Optional[dict], c: dict, same: Optional[bool]) -> List[str]:
+    """The table of the replay's cost per build (the -O2 M4's c, whose
+    trajectory is the host's or not by callgrind's run (same), beside
+    run_m4_variants'), by stage, and the Cortex-M0+ image."""
+    if not v:
+        return []
+    keys = [k for k in VARIANT_NAMES if k in v]
+    costs = [c] + [v[k]["cost"] for k in keys]
+    L = ["The same replay on the other builds (issue 33): the M4F at `-Os`, a Cortex-M3 with no FPU "
+         "(`cmake/toolchain-arm-cortex-m3.cmake`, `-mfloat-abi=soft`: every float operation a call into libgcc) "
+         "on QEMU's mps2-an385, the same board with an M3, and the Cortex-M0+ build "
+         "(`cmake/toolchain-arm-cortex-m0plus.cmake`) on that M3 too: ARMv6-M code is a subset of the M3's, so "
+         "these are the M0+'s instructions (its cycles are more: two-cycle loads and branches, flash wait "
+         "states). Every figure counts the encoder steps since the previous scan (the stage odometry).", ""]
+    rows = [[stat] + [fmt_int(round(x[stat])) for x in costs] for stat in ("mean", "p95", "p99", "max")]
+    stages = [k for k in c["stages"] if any(x["stages"].get(k, 0) > 0 for x in costs)]
+    rows += [[f"stage {k} (mean)"] + [fmt_int(round(x["stages"].get(k, 0.0))) for x in costs] for k in stages]
+    said = {None: "n/a", True: "yes", False: "NO"}
+    rows.append(["trajectory as the host's"] + [said[same]] + [said[v[k]["identical"]] for k in keys])
+    L += md_table(["instructions per scan", "Cortex-M4F -O2"] + [VARIANT_NAMES[k] for k in keys], rows,
+                  "speed m4 variants")
+    m0 = v.get("m0plus")
+    if m0:
+        L += [f"The Cortex-M0+ build (`cmake/toolchain-arm-cortex-m0plus.cmake`) links the LD06 example for an "
+              f"RP2040 (`{m0['name']}.elf`, docs/bringup-rp2040.md): flash {fmt_int(m0['image']['flash'])} bytes, "
+              f"RAM {fmt_int(m0['image']['ram'])} bytes with its stack and the LD06's buffers.", ""]
+    return L
+
+
 FLOOR_LEVEL = 43
 
 
@@ -118,8 +175,12 @@ FLOOR_IR_PER_SCAN = 1.2e6
 
 
 # Issue 11's cost on the target: instructions per scan of the replay
-# firmware (the excerpt, -O2, default configuration).
+# firmware (the excerpt, -O2, default configuration), the encoder steps
+# included; issue 33's on the M4F at -Os and on a Cortex-M3 with soft
+# float, and the RAM of the Cortex-M0+ image.
 FLOOR_M4 = (("mean", 300000), ("p99", 600000))
+FLOOR_M3 = (("mean", 1500000), ("p99", 3000000))
+FLOOR_M0PLUS_RAM = 200 * 1024
 
 
 PEER_FLOORS = (("all", "translation"), ("local", "translation"), ("local", "rotation"))
@@ -219,20 +280,43 @@ def check_floors(rsm: Dict[str, dict], peers: Optional[Dict[str, List[dict]]], r
 
 def m4_floors(m4: Optional[dict]) -> List[dict]:
     """Issue 11's floors on the replay firmware's instructions per scan
-    (run_m4), each PASS, MISS or SKIP."""
+    (run_m4) and issue 33's on its other builds, each PASS, MISS or SKIP."""
     m4 = m4 or {}
-    cost = m4.get("cost")
+    variants = m4.get("variants") or {}
+    why = m4.get("skipped", "not run")
     out: List[dict] = []
-    for stat, lim in FLOOR_M4:
-        what = f"Cortex-M4F: {stat} instructions per scan of the replay firmware (the excerpt, -O2, QEMU)"
-        if not cost:
-            out.append(_floor("SKIP", "m4", None, None, lim, f"{what}: not measured ({m4.get('skipped', 'not run')})"))
-            continue
-        v = cost[stat]
-        ok = v <= lim
-        out.append(_floor("PASS" if ok else "MISS", "m4", None, v, lim,
-                          f"{what} {fmt_int(round(v))} {'<=' if ok else '>'} {fmt_int(lim)} "
-                          f"(over {cost['scans']} scans)"))
+    builds = (("m4", "Cortex-M4F", "-O2", m4.get("cost"), FLOOR_M4),
+              ("m4", "Cortex-M4F", "-Os", (variants.get("m4-Os") or {}).get("cost"), FLOOR_M4),
+              ("m3", "Cortex-M3 soft float", "-O2", (variants.get("m3-O2") or {}).get("cost"), FLOOR_M3))
+    for kind, core, opt, cost, floors in builds:
+        for stat, lim in floors:
+            what = (f"{core}: {stat} instructions per scan of the replay firmware (the excerpt, {opt}, QEMU, "
+                    "encoder steps included)")
+            if not cost:
+                out.append(_floor("SKIP", kind, None, None, lim, f"{what}: not measured ({why})"))
+                continue
+            v = cost[stat]
+            ok = v <= lim
+            out.append(_floor("PASS" if ok else "MISS", kind, None, v, lim,
+                              f"{what} {fmt_int(round(v))} {'<=' if ok else '>'} {fmt_int(lim)} "
+                              f"(over {cost['scans']} scans)"))
+    m3 = variants.get("m3-O2")
+    what = "Cortex-M3 soft float: the replay's trajectory bit-identical to the host's"
+    if not m3 or m3["identical"] is None:
+        out.append(_floor("SKIP", "m3", None, None, None, f"{what}: not measured ({why if not m3 else 'no host run'})"))
+    else:
+        out.append(_floor("PASS" if m3["identical"] else "MISS", "m3", None, m3["identical"], True,
+                          f"{what}: {'yes' if m3['identical'] else 'no'} (over {m3['cost']['scans']} scans)"))
+    m0 = variants.get("m0plus")
+    what = f"Cortex-M0+: RAM of the RP2040 LD06 example, stack and lidar buffers included"
+    if not m0:
+        out.append(_floor("SKIP", "m0plus", None, None, FLOOR_M0PLUS_RAM, f"{what}: not measured ({why})"))
+    else:
+        ram = m0["image"]["ram"]
+        ok = ram <= FLOOR_M0PLUS_RAM
+        out.append(_floor("PASS" if ok else "MISS", "m0plus", None, ram, FLOOR_M0PLUS_RAM,
+                          f"{what} {fmt_int(ram)} {'<=' if ok else '>'} {fmt_int(FLOOR_M0PLUS_RAM)} bytes (flash "
+                          f"{fmt_int(m0['image']['flash'])})"))
     return out
 
 

@@ -59,7 +59,14 @@ typedef struct timer_regs {
 #define IRQ_UART1_RX 2u
 #define IRQ_UART2_RX 4u
 
+/* The AN385 image is the same board with a Cortex-M3 (no FPU): QEMU's
+ * mps2-an385 machine, on which the soft-float images run, has the same
+ * memory map and devices. */
+#if defined(__ARM_FP)
 const char rsm_board_name[] = "mps2-an386";
+#else
+const char rsm_board_name[] = "mps2-an385";
+#endif
 
 uint32_t rsm_board_core_hz(void)
 {

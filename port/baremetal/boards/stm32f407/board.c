@@ -236,20 +236,6 @@ void rsm_board_start_interrupts(void)
     NVIC_ISER1 = (1u << (IRQ_USART1 - 32u)) | (1u << (IRQ_USART2 - 32u));
 }
 
-void rsm_board_idle(void *hw)
-{
-    (void)hw;
-    __asm__ volatile("wfi");
-}
-
-void rsm_board_exit(int status)
-{
-    (void)status;
-    for (;;) {
-        __asm__ volatile("wfi"); /* a debugger finds the run ended here */
-    }
-}
-
 /* ---- vector table (RM0090 table 61) ------------------------------------------ */
 
 static void usart1_isr(void)
