@@ -56,6 +56,16 @@ extern "C" {
  * blocks 2^RSM_GLOBAL_MAX_BASE_H cells apart). */
 int rsm_global_check(const rsm_tmap_t *map);
 
+/* Builds the bound grids and the map's wall directions over the whole of
+ * map into g and grid (RSM_GLOBAL_GRID_BYTES), at once, and marks them
+ * cached: the next rsm_global_begin on the same g and grid, with the map
+ * unchanged, reads none of it (a map load does this: nothing else runs
+ * then, while a search pays for the build out of its scans' budget). The
+ * reads it took (as rsm_global_run counts them) are added to *used (may
+ * be NULL). Returns as rsm_global_check, with g and grid untouched on an
+ * error. */
+int rsm_global_prepare(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t *used);
+
 /* Starts a search for the readings pts (robot frame, in beam order; up to
  * RSM_GLOBAL_POINTS of them, taken evenly, are kept, and all give the
  * scan's wall directions) over map, whose estimate from odometry at this

@@ -165,6 +165,47 @@ static void test_spread_search_finds_the_same(void)
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&g1.cand[0].pose, &loc.ekf.x) < 0.45f);
 }
 
+/* Grids built ahead (rsm_global_prepare, as a map load does) are the ones
+ * a search builds itself, bit for bit: a search begun on them keeps the
+ * same poses, and reads exactly the build fewer. */
+static void test_prepared_grids_are_the_ones_a_search_builds(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_tmap_t *map;
+    uint32_t prepared = 0;
+    uint32_t used = 0;
+    make_path();
+    map_path(&world, path_len - 80u);
+    map = &loc.state.persistent.map;
+    /* Nothing kept from the tests before. */
+    memset(&g1, 0, sizeof g1);
+    memset(&g2, 0, sizeof g2);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, grid1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g1, grid1, map, 0u, NULL));
+    memset(grid2, 0xA5, sizeof grid2);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g2, grid2, map, &prepared));
+    TEST_ASSERT_EQUAL_UINT32(1u, g2.cached);
+    TEST_ASSERT_TRUE(prepared > 0u);
+    TEST_ASSERT_EQUAL_UINT32(g1.build_end, g2.build_end);
+    TEST_ASSERT_EQUAL_MEMORY(grid1, grid2, (g1.build_end + 7u) / 8u);
+    TEST_ASSERT_EQUAL_MEMORY(g1.dir_map, g2.dir_map, sizeof g1.dir_map);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g2, grid2, map, 0u, &used));
+    TEST_ASSERT_EQUAL_UINT32(g1.work, used + prepared);
+    TEST_ASSERT_EQUAL_UINT32(g1.found, g2.found);
+    TEST_ASSERT_EQUAL_MEMORY(g1.cand, g2.cand, g1.found * sizeof g1.cand[0]);
+    /* An empty map is refused, g as it was. */
+    {
+        static rsm_tmap_t empty;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&empty, &cfg.tmap));
+        g1 = g2;
+        prepared = 7u;
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_DEGENERATE, rsm_global_prepare(&g2, grid2, &empty, &prepared));
+        TEST_ASSERT_EQUAL_UINT32(7u, prepared);
+        TEST_ASSERT_EQUAL_MEMORY(&g1, &g2, sizeof g1);
+    }
+}
+
 /* The best leaf score of every position of the search's root box and every
  * heading it searches, counted one by one (search g1 done). */
 static float exhaustive_best(const rsm_tmap_t *map)
@@ -573,6 +614,7 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(test_a_forgotten_robot_is_found);
     RUN_TEST(test_spread_search_finds_the_same);
+    RUN_TEST(test_prepared_grids_are_the_ones_a_search_builds);
     RUN_TEST(test_search_is_exact);
     RUN_TEST(test_a_symmetric_room_gives_no_pose);
     RUN_TEST(test_a_search_near_the_estimate);
