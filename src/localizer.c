@@ -1494,15 +1494,9 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         }
     }
     if (g->phase == RSM_GLOBAL_PENDING) {
-        /* The first search keeps only poses that put nearly every point on
-         * a wall (most scans of a known place do, and the bar prunes the
-         * most: on the Intel and ACES logs a third to a fifth of the reads
-         * of the floor's); each one that proves nothing lowers the bar, to
-         * global_min_share (people, furniture moved). */
-        float share = 0.95f - 0.05f * (float)(g->unproven < 20u ? g->unproven : 20u);
-        if (share < cfg->global_min_share) {
-            share = cfg->global_min_share;
-        }
+        /* The bar falls with each search that proved nothing
+         * (rsm_global_share). */
+        const float share = rsm_global_share(g->unproven, cfg->global_min_share);
         /* The grids take the memory of the scan a map write reads: the
          * write in progress, if any, ends first. */
         (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world, 0u);

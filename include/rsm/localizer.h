@@ -151,8 +151,8 @@ typedef struct rsm_localizer_config {
                                      * docs/globalsearch.md has the cost and the time it takes) */
     float global_min_share;         /* a pose is kept only when the occupancy summed under the
                                      * scan's points (cells of about 0.2 m) reaches a share of
-                                     * their count: 0.95 in the first search, 0.05 less in each
-                                     * next one after a search that proved nothing, down to this;
+                                     * their count: 0.97 in the first search, then 0.95, 0.90, ...
+                                     * after each search that proved nothing, down to this;
                                      * default 0.8 */
     float global_min_fit;           /* the winner's fit (mean occupancy under all its points at the
                                      * finest level) must reach this share of the fit the map's own
