@@ -113,14 +113,32 @@ static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t *top, uint8
     return RSM_OK;
 }
 
-float rsm_global_share(uint32_t unproven, float min_share)
+float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven, float min_share)
 {
+    uint32_t lowered = unproven;
+    float share;
+    if (radius_m > 0.0f) {
+        /* A window that found nothing doubles at the first bar until it
+         * holds the whole map: a robot carried out of it is no reason to
+         * lower the bar (a search at 0.8 reads ten times as much). */
+        int32_t b[4];
+        if (rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3])) {
+            const int32_t side = b[2] - b[0] > b[3] - b[1] ? b[2] - b[0] + 1 : b[3] - b[1] + 1;
+            float width = 2.0f * radius_m / rsm_tmap_cell(map, search_level(map));
+            uint32_t widen = 0;
+            while (widen < 16u && width < (float)side) {
+                width *= 2.0f;
+                widen++;
+            }
+            lowered = unproven > widen ? unproven - widen : 0u;
+        }
+    }
     /* Measured on the Intel and ACES logs (docs/globalsearch.md): a first
      * search at 0.97, where a box whose window misses a single point is
      * dropped, read about half of what one at 0.95 (a miss allowed) did,
      * and still kept the true pose at most starts; where it keeps none (a
      * person, furniture moved), the next allows a miss. */
-    float share = unproven == 0u ? 0.97f : 1.0f - 0.05f * (float)(unproven < 20u ? unproven : 20u);
+    share = lowered == 0u ? 0.97f : 1.0f - 0.05f * (float)(lowered < 20u ? lowered : 20u);
     return share > min_share ? share : min_share;
 }
 

@@ -206,6 +206,41 @@ static void test_prepared_grids_are_the_ones_a_search_builds(void)
     }
 }
 
+/* The bar: 0.97 of the kept points first, then 0.95, 0.90, ... down to
+ * global_min_share; a near search's window first grows to the whole map
+ * at the first bar. */
+static void test_the_bar_falls_after_searches_of_the_whole_map(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_tmap_t *map;
+    int32_t b[4];
+    float width;
+    uint32_t widen = 0;
+    uint32_t k;
+    make_path();
+    map_path(&world, 60u);
+    map = &loc.state.persistent.map;
+    TEST_ASSERT_EQUAL_FLOAT(0.97f, rsm_global_share(map, 0.0f, 0u, 0.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.0f, 1u, 0.8f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.9f, rsm_global_share(map, 0.0f, 2u, 0.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_share(map, 0.0f, 9u, 0.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_share(map, 0.0f, 1000u, 0.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.9f, rsm_global_share(map, 0.0f, 3u, 0.9f));
+    /* A window of 0.1 m doubles this often before it is as wide as the
+     * map's box on the search level. */
+    TEST_ASSERT_TRUE(rsm_tmap_bounds(map, (uint32_t)map->cfg.levels - 2u, &b[0], &b[1], &b[2], &b[3]));
+    width = 0.2f / rsm_tmap_cell(map, (uint32_t)map->cfg.levels - 2u);
+    while (width < (float)(b[2] - b[0] + 1) || width < (float)(b[3] - b[1] + 1)) {
+        width *= 2.0f;
+        widen++;
+    }
+    TEST_ASSERT_TRUE(widen >= 2u);
+    for (k = 0; k <= widen; ++k) {
+        TEST_ASSERT_EQUAL_FLOAT(0.97f, rsm_global_share(map, 0.1f, k, 0.8f));
+    }
+    TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.1f, widen + 1u, 0.8f));
+}
+
 /* The best leaf score of every position of the search's root box and every
  * heading it searches, counted one by one (search g1 done). */
 static float exhaustive_best(const rsm_tmap_t *map)
@@ -615,6 +650,7 @@ int main(void)
     RUN_TEST(test_a_forgotten_robot_is_found);
     RUN_TEST(test_spread_search_finds_the_same);
     RUN_TEST(test_prepared_grids_are_the_ones_a_search_builds);
+    RUN_TEST(test_the_bar_falls_after_searches_of_the_whole_map);
     RUN_TEST(test_search_is_exact);
     RUN_TEST(test_a_symmetric_room_gives_no_pose);
     RUN_TEST(test_a_search_near_the_estimate);
