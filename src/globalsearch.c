@@ -113,32 +113,45 @@ static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t *top, uint8
     return RSM_OK;
 }
 
-float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven, float min_share)
+/* Doublings of a window of radius_m before it is as wide as map's box on
+ * the search level (none for radius_m 0: the whole map). */
+static uint32_t widenings(const rsm_tmap_t *map, float radius_m)
 {
-    uint32_t lowered = unproven;
-    float share;
-    if (radius_m > 0.0f) {
-        /* A window that found nothing doubles at the first bar until it
-         * holds the whole map: a robot carried out of it is no reason to
-         * lower the bar (a search at 0.8 reads ten times as much). */
-        int32_t b[4];
-        if (rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3])) {
-            const int32_t side = b[2] - b[0] > b[3] - b[1] ? b[2] - b[0] + 1 : b[3] - b[1] + 1;
-            float width = 2.0f * radius_m / rsm_tmap_cell(map, search_level(map));
-            uint32_t widen = 0;
-            while (widen < 16u && width < (float)side) {
-                width *= 2.0f;
-                widen++;
-            }
-            lowered = unproven > widen ? unproven - widen : 0u;
+    int32_t b[4];
+    uint32_t widen = 0;
+    if (radius_m > 0.0f && rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3])) {
+        const int32_t side = b[2] - b[0] > b[3] - b[1] ? b[2] - b[0] + 1 : b[3] - b[1] + 1;
+        float width = 2.0f * radius_m / rsm_tmap_cell(map, search_level(map));
+        while (widen < 16u && width < (float)side) {
+            width *= 2.0f;
+            widen++;
         }
     }
+    return widen;
+}
+
+float rsm_global_radius(float radius_m, uint32_t unproven)
+{
+    const uint32_t d = unproven / 2u;
+    return radius_m * (float)(1u << (d < 16u ? d : 16u));
+}
+
+float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven, float min_share)
+{
+    const uint32_t widen = widenings(map, radius_m);
+    /* Each window, the whole map's last, is searched at the first two
+     * bars before it doubles: one that holds the robot finds it at the
+     * second where a person hides a point (a look-alike further out could
+     * pass the first bar alone), and one that does not costs little, where
+     * a lower bar over a wide window reads ten times as much as the first
+     * (a robot carried away). The bar falls further only after searches of
+     * the whole map that proved nothing. */
+    const uint32_t lowered = unproven < 2u * widen + 2u ? unproven % 2u : unproven - 2u * widen;
     /* Measured on the Intel and ACES logs (docs/globalsearch.md): a first
      * search at 0.97, where a box whose window misses a single point is
      * dropped, read about half of what one at 0.95 (a miss allowed) did,
-     * and still kept the true pose at most starts; where it keeps none (a
-     * person, furniture moved), the next allows a miss. */
-    share = lowered == 0u ? 0.97f : 1.0f - 0.05f * (float)(lowered < 20u ? lowered : 20u);
+     * and still kept the true pose at most starts. */
+    const float share = lowered == 0u ? 0.97f : 1.0f - 0.05f * (float)(lowered < 20u ? lowered : 20u);
     return share > min_share ? share : min_share;
 }
 

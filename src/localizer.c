@@ -1508,10 +1508,10 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
             return RSM_SCAN_SEARCHING;
         }
         if (g->radius_m > 0.0f) {
-            /* Near the estimate, in a window that doubles with each search
-             * that proved nothing, to the whole map. */
-            const float grow = (float)(1u << (g->unproven < 16u ? g->unproven : 16u));
-            rsm_global_window(g, loc->frame.global_grid, map, loc->ekf.x.x, loc->ekf.x.y, g->radius_m * grow);
+            /* Near the estimate, in a window that doubles with every
+             * second search that proved nothing, to the whole map. */
+            rsm_global_window(g, loc->frame.global_grid, map, loc->ekf.x.x, loc->ekf.x.y,
+                              rsm_global_radius(g->radius_m, g->unproven));
         }
         loc->counters.global_searches++;
         g->phase = RSM_GLOBAL_RUNNING;

@@ -207,8 +207,8 @@ static void test_prepared_grids_are_the_ones_a_search_builds(void)
 }
 
 /* The bar: 0.97 of the kept points first, then 0.95, 0.90, ... down to
- * global_min_share; a near search's window first grows to the whole map
- * at the first bar. */
+ * global_min_share; a near search searches each window at 0.97 and 0.95
+ * before it doubles, to the whole map, and only then lowers the bar. */
 static void test_the_bar_falls_after_searches_of_the_whole_map(void)
 {
     const rsm_synth_world_t world = rsm_synth_world_room();
@@ -236,9 +236,13 @@ static void test_the_bar_falls_after_searches_of_the_whole_map(void)
     }
     TEST_ASSERT_TRUE(widen >= 2u);
     for (k = 0; k <= widen; ++k) {
-        TEST_ASSERT_EQUAL_FLOAT(0.97f, rsm_global_share(map, 0.1f, k, 0.8f));
+        TEST_ASSERT_EQUAL_FLOAT(0.1f * (float)(1u << k), rsm_global_radius(0.1f, 2u * k));
+        TEST_ASSERT_EQUAL_FLOAT(0.1f * (float)(1u << k), rsm_global_radius(0.1f, 2u * k + 1u));
+        TEST_ASSERT_EQUAL_FLOAT(0.97f, rsm_global_share(map, 0.1f, 2u * k, 0.8f));
+        TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.1f, 2u * k + 1u, 0.8f));
     }
-    TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.1f, widen + 1u, 0.8f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.9f, rsm_global_share(map, 0.1f, 2u * widen + 2u, 0.8f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.85f, rsm_global_share(map, 0.1f, 2u * widen + 3u, 0.8f));
 }
 
 /* The best leaf score of every position of the search's root box and every
