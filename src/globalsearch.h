@@ -56,6 +56,30 @@ extern "C" {
  * blocks 2^RSM_GLOBAL_MAX_BASE_H cells apart). */
 int rsm_global_check(const rsm_tmap_t *map);
 
+/* Builds the bound grids and the map's wall directions over the whole of
+ * map into g and grid (RSM_GLOBAL_GRID_BYTES), at once, and marks them
+ * cached: the next rsm_global_begin on the same g and grid, with the map
+ * unchanged, reads none of it (a map load does this: nothing else runs
+ * then, while a search pays for the build out of its scans' budget). The
+ * reads it took (as rsm_global_run counts them) are added to *used (may
+ * be NULL). Returns as rsm_global_check, with g and grid untouched on an
+ * error. */
+int rsm_global_prepare(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t *used);
+
+/* The share of kept points a search in map asks for (rsm_global_begin's
+ * min_share) after `unproven` searches in a row that proved nothing: 0.97
+ * for the first (a box whose window misses a single point is dropped),
+ * then 0.95, 0.90, ... down to min_share (global_min_share). A search near
+ * the estimate (radius_m > 0; 0: the whole map) searches each window at
+ * 0.97 then 0.95 before it doubles (rsm_global_radius), and the bar falls
+ * further only once the window holds the whole map. */
+float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven, float min_share);
+
+/* The window's radius for a search near the estimate begun with radius_m,
+ * after `unproven` searches in a row that proved nothing: doubled every
+ * second one (rsm_global_share). */
+float rsm_global_radius(float radius_m, uint32_t unproven);
+
 /* Starts a search for the readings pts (robot frame, in beam order; up to
  * RSM_GLOBAL_POINTS of them, taken evenly, are kept, and all give the
  * scan's wall directions) over map, whose estimate from odometry at this

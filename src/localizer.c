@@ -1494,15 +1494,9 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         }
     }
     if (g->phase == RSM_GLOBAL_PENDING) {
-        /* The first search keeps only poses that put nearly every point on
-         * a wall (most scans of a known place do, and the bar prunes the
-         * most: on the Intel and ACES logs a third to a fifth of the reads
-         * of the floor's); each one that proves nothing lowers the bar, to
-         * global_min_share (people, furniture moved). */
-        float share = 0.95f - 0.05f * (float)(g->unproven < 20u ? g->unproven : 20u);
-        if (share < cfg->global_min_share) {
-            share = cfg->global_min_share;
-        }
+        /* The bar falls with each search that proved nothing
+         * (rsm_global_share). */
+        const float share = rsm_global_share(map, g->radius_m, g->unproven, cfg->global_min_share);
         /* The grids take the memory of the scan a map write reads: the
          * write in progress, if any, ends first. */
         (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world, 0u);
@@ -1514,10 +1508,10 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
             return RSM_SCAN_SEARCHING;
         }
         if (g->radius_m > 0.0f) {
-            /* Near the estimate, in a window that doubles with each search
-             * that proved nothing, to the whole map. */
-            const float grow = (float)(1u << (g->unproven < 16u ? g->unproven : 16u));
-            rsm_global_window(g, loc->frame.global_grid, map, loc->ekf.x.x, loc->ekf.x.y, g->radius_m * grow);
+            /* Near the estimate, in a window that doubles with every
+             * second search that proved nothing, to the whole map. */
+            rsm_global_window(g, loc->frame.global_grid, map, loc->ekf.x.x, loc->ekf.x.y,
+                              rsm_global_radius(g->radius_m, g->unproven));
         }
         loc->counters.global_searches++;
         g->phase = RSM_GLOBAL_RUNNING;

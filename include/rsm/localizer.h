@@ -151,15 +151,15 @@ typedef struct rsm_localizer_config {
                                      * docs/globalsearch.md has the cost and the time it takes) */
     float global_min_share;         /* a pose is kept only when the occupancy summed under the
                                      * scan's points (cells of about 0.2 m) reaches a share of
-                                     * their count: 0.95 in the first search, 0.05 less in each
-                                     * next one after a search that proved nothing, down to this;
+                                     * their count: 0.97 in the first search, then 0.95, 0.90, ...
+                                     * after each search that proved nothing, down to this;
                                      * default 0.8 */
     float global_min_fit;           /* the winner's fit (mean occupancy under all its points at the
                                      * finest level) must reach this share of the fit the map's own
                                      * scans had (saved with the map; 1 when unknown); default 0.8 */
     uint8_t global_when_lost;       /* 1: a localizer that reports lost starts a global search by
                                      * itself, within recover_m of the estimate first, the window
-                                     * doubling with each search that proves nothing
+                                     * doubling with every second search that proves nothing
                                      * (rsm_localizer_global_near); default 0 */
     uint8_t map_frozen;             /* 1: localization mode: the persistent map is read, never
                                      * written (a map loaded with rsm_localizer_load_map stays as
@@ -454,8 +454,9 @@ int rsm_localizer_global(rsm_localizer_t *loc);
 
 /* rsm_localizer_global over the positions within radius_m of the estimate
  * (as odometry carries it to the scan the search begins with; every
- * heading still), a window that doubles with each search that proved
- * nothing, until it holds the whole map: for a robot switched on where it
+ * heading still), a window that doubles with every second search that
+ * proved nothing (each window is searched at two bars: docs/globalsearch.md),
+ * until it holds the whole map: for a robot switched on where it
  * was switched off (rsm_localizer_set_pose to the saved pose first), or
  * one whose estimate is known to be near. radius_m 0 is the whole map.
  * Returns as rsm_localizer_global, and RSM_ERR_INVAL for a negative or

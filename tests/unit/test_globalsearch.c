@@ -165,6 +165,86 @@ static void test_spread_search_finds_the_same(void)
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&g1.cand[0].pose, &loc.ekf.x) < 0.45f);
 }
 
+/* Grids built ahead (rsm_global_prepare, as a map load does) are the ones
+ * a search builds itself, bit for bit: a search begun on them keeps the
+ * same poses, and reads exactly the build fewer. */
+static void test_prepared_grids_are_the_ones_a_search_builds(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_tmap_t *map;
+    uint32_t prepared = 0;
+    uint32_t used = 0;
+    make_path();
+    map_path(&world, path_len - 80u);
+    map = &loc.state.persistent.map;
+    /* Nothing kept from the tests before. */
+    memset(&g1, 0, sizeof g1);
+    memset(&g2, 0, sizeof g2);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, grid1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g1, grid1, map, 0u, NULL));
+    memset(grid2, 0xA5, sizeof grid2);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g2, grid2, map, &prepared));
+    TEST_ASSERT_EQUAL_UINT32(1u, g2.cached);
+    TEST_ASSERT_TRUE(prepared > 0u);
+    TEST_ASSERT_EQUAL_UINT32(g1.build_end, g2.build_end);
+    TEST_ASSERT_EQUAL_MEMORY(grid1, grid2, (g1.build_end + 7u) / 8u);
+    TEST_ASSERT_EQUAL_MEMORY(g1.dir_map, g2.dir_map, sizeof g1.dir_map);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g2, grid2, map, 0u, &used));
+    TEST_ASSERT_EQUAL_UINT32(g1.work, used + prepared);
+    TEST_ASSERT_EQUAL_UINT32(g1.found, g2.found);
+    TEST_ASSERT_EQUAL_MEMORY(g1.cand, g2.cand, g1.found * sizeof g1.cand[0]);
+    /* An empty map is refused, g as it was. */
+    {
+        static rsm_tmap_t empty;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&empty, &cfg.tmap));
+        g1 = g2;
+        prepared = 7u;
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_DEGENERATE, rsm_global_prepare(&g2, grid2, &empty, &prepared));
+        TEST_ASSERT_EQUAL_UINT32(7u, prepared);
+        TEST_ASSERT_EQUAL_MEMORY(&g1, &g2, sizeof g1);
+    }
+}
+
+/* The bar: 0.97 of the kept points first, then 0.95, 0.90, ... down to
+ * global_min_share; a near search searches each window at 0.97 and 0.95
+ * before it doubles, to the whole map, and only then lowers the bar. */
+static void test_the_bar_falls_after_searches_of_the_whole_map(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_tmap_t *map;
+    int32_t b[4];
+    float width;
+    uint32_t widen = 0;
+    uint32_t k;
+    make_path();
+    map_path(&world, 60u);
+    map = &loc.state.persistent.map;
+    TEST_ASSERT_EQUAL_FLOAT(0.97f, rsm_global_share(map, 0.0f, 0u, 0.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.0f, 1u, 0.8f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.9f, rsm_global_share(map, 0.0f, 2u, 0.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_share(map, 0.0f, 9u, 0.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_share(map, 0.0f, 1000u, 0.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.9f, rsm_global_share(map, 0.0f, 3u, 0.9f));
+    /* A window of 0.1 m doubles this often before it is as wide as the
+     * map's box on the search level. */
+    TEST_ASSERT_TRUE(rsm_tmap_bounds(map, (uint32_t)map->cfg.levels - 2u, &b[0], &b[1], &b[2], &b[3]));
+    width = 0.2f / rsm_tmap_cell(map, (uint32_t)map->cfg.levels - 2u);
+    while (width < (float)(b[2] - b[0] + 1) || width < (float)(b[3] - b[1] + 1)) {
+        width *= 2.0f;
+        widen++;
+    }
+    TEST_ASSERT_TRUE(widen >= 2u);
+    for (k = 0; k <= widen; ++k) {
+        TEST_ASSERT_EQUAL_FLOAT(0.1f * (float)(1u << k), rsm_global_radius(0.1f, 2u * k));
+        TEST_ASSERT_EQUAL_FLOAT(0.1f * (float)(1u << k), rsm_global_radius(0.1f, 2u * k + 1u));
+        TEST_ASSERT_EQUAL_FLOAT(0.97f, rsm_global_share(map, 0.1f, 2u * k, 0.8f));
+        TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.1f, 2u * k + 1u, 0.8f));
+    }
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.9f, rsm_global_share(map, 0.1f, 2u * widen + 2u, 0.8f));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.85f, rsm_global_share(map, 0.1f, 2u * widen + 3u, 0.8f));
+}
+
 /* The best leaf score of every position of the search's root box and every
  * heading it searches, counted one by one (search g1 done). */
 static float exhaustive_best(const rsm_tmap_t *map)
@@ -573,6 +653,8 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(test_a_forgotten_robot_is_found);
     RUN_TEST(test_spread_search_finds_the_same);
+    RUN_TEST(test_prepared_grids_are_the_ones_a_search_builds);
+    RUN_TEST(test_the_bar_falls_after_searches_of_the_whole_map);
     RUN_TEST(test_search_is_exact);
     RUN_TEST(test_a_symmetric_room_gives_no_pose);
     RUN_TEST(test_a_search_near_the_estimate);

@@ -169,6 +169,11 @@ static void test_round_trip_is_bit_for_bit(void)
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_load_map(&other, store_read, &store, &loaded));
     TEST_ASSERT_EQUAL_MEMORY(&saved, &loaded, sizeof saved);
     assert_same_map(map_of(&loc), map_of(&other));
+    /* The global search's grids are built with the load, for the map as
+     * loaded. */
+    TEST_ASSERT_EQUAL_UINT32(1u, other.state.persistent.global.cached);
+    TEST_ASSERT_EQUAL_UINT32(map_of(&other)->stamp, other.state.persistent.global.cache_stamp);
+    TEST_ASSERT_EQUAL_UINT32(map_of(&other)->used, other.state.persistent.global.cache_used);
     /* Every cell reads the same through the index too. */
     {
         int32_t x0;
