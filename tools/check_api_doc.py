@@ -5,7 +5,7 @@ The public surface is what `cmake --install` puts in include/rsm/: every
 header there and every function (or function-like macro named rsm_*) it
 declares. docs/api.md must name each header as `rsm/NAME.h` and each
 function by name; it must not name as installed a header that include/rsm/
-does not hold; and every internal header (src/*.h) must be named in its
+does not hold; and every internal header (src/*/*.h) must be named in its
 internal section, so that a header moved in or out shows up here.
 Problems are printed one a line and the exit status is 1; 0 means the page
 is consistent; 2 is a usage error.
@@ -46,9 +46,9 @@ def check(root: pathlib.Path) -> list:
     for listed in sorted(set(INSTALLED.findall(doc))):
         if listed not in names:
             problems.append(f"{doc_path}: rsm/{listed} is listed but not in include/rsm/")
-    for h in sorted((root / "src").glob("*.h")):
+    for h in sorted((root / "src").glob("*/*.h")):
         if f"`{h.name}`" not in internal:
-            problems.append(f"{doc_path}: internal header src/{h.name} is not in the internal section")
+            problems.append(f"{doc_path}: internal header src/{h.parent.name}/{h.name} is not in the internal section")
     return problems
 
 

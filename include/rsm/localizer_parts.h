@@ -7,8 +7,8 @@
  * state structs (grid image, key points, RANSAC, ICP, EKF, window map,
  * persistent map); read them through the rsm_localizer_* accessors, not
  * directly, since their members change between versions. The functions on
- * these types are the core's own and not installed (src/grid.h,
- * src/tilemap.h, ...). */
+ * these types are the core's own and not installed (src/core/grid.h,
+ * src/map/tilemap.h, ...). */
 #ifndef RSM_LOCALIZER_PARTS_H
 #define RSM_LOCALIZER_PARTS_H
 

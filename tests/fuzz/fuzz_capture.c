@@ -1,6 +1,6 @@
 /* libFuzzer target: a capture file through rsm-nav's whole capture path
  * (tools/nav/capture.c reader, lenient; the P3-DX and LMS drivers listening
- * through tools/nav/devices.c; src/sync.c alignment) into the localizer.
+ * through tools/nav/devices.c; src/localizer/sync.c alignment) into the localizer.
  *
  * The input is the file. Whatever it holds, the reader returns documented
  * statuses and never a record longer than a chunk, every decoded scan fits

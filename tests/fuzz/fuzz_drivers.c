@@ -1,5 +1,5 @@
-/* libFuzzer target: the P3-DX and SICK LMS drivers (src/p3dx.c,
- * src/sicklms.c) on two in-memory links (tests/support/fakelink.c) whose
+/* libFuzzer target: the P3-DX and SICK LMS drivers (src/drivers/p3dx.c,
+ * src/drivers/sicklms.c) on two in-memory links (tests/support/fakelink.c) whose
  * far ends say whatever the input says.
  *
  * The input is a script of steps; each starts with an opcode byte:

@@ -1,4 +1,4 @@
-/* libFuzzer target for the LD06 / LD19 codec (src/ld06.c).
+/* libFuzzer target for the LD06 / LD19 codec (src/drivers/ld06.c).
  *
  * The input is a byte stream as it could come from the sensor. It is fed
  * to one receiver in chunks whose sizes come from the input and, byte by

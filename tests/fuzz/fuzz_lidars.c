@@ -1,7 +1,7 @@
-/* libFuzzer target: the spinning-lidar drivers (src/ldlidar.c,
- * src/slamtec.c) on two in-memory links (tests/support/fakelink.c) whose
+/* libFuzzer target: the spinning-lidar drivers (src/drivers/ldlidar.c,
+ * src/drivers/slamtec.c) on two in-memory links (tests/support/fakelink.c) whose
  * far ends say whatever the input says, their points going through a
- * revolution assembler each (src/revolution.c) with odometry of a robot
+ * revolution assembler each (src/drivers/revolution.c) with odometry of a robot
  * turning on the spot.
  *
  * The input is a script of steps; each starts with an opcode byte:

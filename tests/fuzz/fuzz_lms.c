@@ -1,4 +1,4 @@
-/* libFuzzer target for the SICK LMS 2xx codec (src/lms.c).
+/* libFuzzer target for the SICK LMS 2xx codec (src/drivers/lms.c).
  *
  * The input is a byte stream as it could arrive from the serial line. It is
  * fed to one receiver in chunks whose split points come from the input (its

@@ -1,5 +1,5 @@
-/* libFuzzer target for the localizer's persistent-map method (src/localizer.c,
- * src/tilemap.c, src/mapmatch.c).
+/* libFuzzer target for the localizer's persistent-map method (src/localizer/localizer.c,
+ * src/map/tilemap.c, src/map/mapmatch.c).
  *
  * The input is a script: each record starts with an opcode byte.
  *   0: a motion (three floats from the next 12 bytes, any bit pattern:
@@ -20,7 +20,7 @@
 
 #include "rsm/localizer.h"
 #include "rsm/status.h"
-#include "tilemap.h" /* internal (src/): tiles held per level */
+#include "map/tilemap.h" /* internal (src/): tiles held per level */
 
 #include "fuzz_check.h"
 

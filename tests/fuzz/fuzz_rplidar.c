@@ -1,4 +1,4 @@
-/* libFuzzer target for the RPLIDAR codec (src/rplidar.c).
+/* libFuzzer target for the RPLIDAR codec (src/drivers/rplidar.c).
  *
  * The input's first byte chooses when the driver would have sent a request
  * (rsm_rplidar_parser_expect every so many bytes, or never); the rest is a

@@ -3,7 +3,7 @@
  * else changes; the other methods start and localise as usual. */
 #include <string.h>
 
-#include "icp.h"
+#include "paper/icp.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"
 #include "synth.h"

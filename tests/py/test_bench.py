@@ -980,7 +980,7 @@ def test_arm_memory_of_the_small_configuration(run):
     assert list(am["configs"]) == ["small"]
     c = am["configs"]["small"]
     assert c["header"] == bench.SMALL_HEADER
-    sources = {p.name + ".obj" for p in (REPO_ROOT / "src").glob("*.c")}
+    sources = {p.name + ".obj" for p in (REPO_ROOT / "src").glob("*/*.c")}
     assert {o["object"] for o in c["objects"]} == sources
     for o in c["objects"]:
         assert o["flash"] == o["text"] + o["rodata"] > 0 and o["ram"] == 0
@@ -1186,9 +1186,9 @@ def test_logs_as_lidar_streams_are_reported_with_the_floors(run):
 def test_the_many_run_sections_vary_the_librarys_default_update_distance():
     # The spread and faults sections sweep map_update_m around the default:
     # a default changed in C alone would leave them measuring another rsm.
-    src = (REPO_ROOT / "src" / "localizer.c").read_text()
+    src = (REPO_ROOT / "src" / "localizer" / "localizer.c").read_text()
     m = re.search(r"c\.map_update_m = ([0-9.]+)f;", src)
-    assert m, "src/localizer.c no longer sets map_update_m's default as the test expects"
+    assert m, "src/localizer/localizer.c no longer sets map_update_m's default as the test expects"
     from rsm_tools.bench import common, faults, measure
     assert float(m.group(1)) == common.DEFAULT_MAP_UPDATE_M
     ups = measure.spread_updates(40)

@@ -1,10 +1,10 @@
-/* Unit tests for src/ekf.c: prediction, update, angle wrapping, gating,
+/* Unit tests for src/core/ekf.c: prediction, update, angle wrapping, gating,
  * singular innovations and long-run covariance health. */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
-#include "ekf.h"
+#include "core/ekf.h"
 #include "rsm/status.h"
 #include "test_support.h"
 #include "unity.h"

@@ -1,11 +1,11 @@
-/* Unit tests for src/fmath.c: the core's own float functions against libm in
+/* Unit tests for src/core/fmath.c: the core's own float functions against libm in
  * double (the reference), over many arguments, and their special values. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
-#include "fmath.h"
+#include "core/fmath.h"
 #include "test_support.h"
 #include "unity.h"
 

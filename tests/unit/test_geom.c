@@ -1,4 +1,4 @@
-/* Unit tests for src/geom.c: angle wrapping and the pose algebra. */
+/* Unit tests for src/core/geom.c: angle wrapping and the pose algebra. */
 #include <math.h>
 #include <stdint.h>
 

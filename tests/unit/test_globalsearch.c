@@ -7,8 +7,8 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "fmath.h"
-#include "globalsearch.h"
+#include "core/fmath.h"
+#include "map/globalsearch.h"
 #include "rsm/config.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"

@@ -5,7 +5,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "grid.h"
+#include "core/grid.h"
 #include "unity.h"
 
 #define N ((int32_t)RSM_MAP_SIZE)

@@ -1,4 +1,4 @@
-/* Unit tests of the HAL helpers (src/hal.c) against a fake in-memory link. */
+/* Unit tests of the HAL helpers (src/drivers/hal.c) against a fake in-memory link. */
 #include <string.h>
 
 #include "rsm/hal.h"

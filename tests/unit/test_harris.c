@@ -9,8 +9,8 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "grid.h"
-#include "harris.h"
+#include "core/grid.h"
+#include "paper/harris.h"
 #include "rsm/status.h"
 #include "synth.h"
 #include "unity.h"

@@ -1,12 +1,12 @@
-/* Unit tests for src/icp.c: the closed-form rigid fit and the point-to-point
+/* Unit tests for src/paper/icp.c: the closed-form rigid fit and the point-to-point
  * ICP baseline on a synthetic L-shaped room. */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
 #include "rsm/config.h"
-#include "icp.h"
-#include "rigid.h"
+#include "paper/icp.h"
+#include "paper/rigid.h"
 #include "rsm/status.h"
 #include "test_support.h"
 #include "unity.h"

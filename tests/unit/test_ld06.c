@@ -1,4 +1,4 @@
-/* Unit tests of the LD06 / LD19 codec (src/ld06.c): the CRC against the
+/* Unit tests of the LD06 / LD19 codec (src/drivers/ld06.c): the CRC against the
  * vendor's published table, the packets of tests/data/ld06_packets.txt,
  * packets laid out here byte by byte from the documented layout, and the
  * receiver under garbage, bit flips, truncation and arbitrary chunking with

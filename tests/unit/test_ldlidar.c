@@ -1,4 +1,4 @@
-/* Tests of the LD06 / LD19 listening driver (src/ldlidar.c) on the
+/* Tests of the LD06 / LD19 listening driver (src/drivers/ldlidar.c) on the
  * in-memory fakelink: a fake sensor turning at 10 Hz in a square room,
  * 12-point packets every 2.67 ms; stamps, link loss and recovery, faults,
  * and the points through the revolution assembler into whole scans. */

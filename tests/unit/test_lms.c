@@ -1,4 +1,4 @@
-/* Unit tests of the SICK LMS 2xx codec (src/lms.c): every lms_* vector of
+/* Unit tests of the SICK LMS 2xx codec (src/drivers/lms.c): every lms_* vector of
  * the protocol reference, then fault injection on the receiver (garbage,
  * bit flips, truncation, bad LEN fields) with exact counters. The expected
  * counters of the fault-injection tests come from ref_scan() below, a

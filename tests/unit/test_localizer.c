@@ -13,7 +13,7 @@
 #include "rsm/localizer.h"
 #include "rsm/status.h"
 #include "synth.h"
-#include "tilemap.h" /* internal (src/): the persistent map read directly */
+#include "map/tilemap.h" /* internal (src/): the persistent map read directly */
 #include "unity.h"
 
 #define DEG (RSM_PI / 180.0f)

@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "map.h"
+#include "paper/map.h"
 #include "rsm/scan.h"
 #include "rsm/status.h"
 #include "synth.h"

@@ -15,7 +15,7 @@
 #include "rsm/mapimport.h"
 #include "rsm/status.h"
 #include "synth.h"
-#include "tilemap.h"
+#include "map/tilemap.h"
 #include "unity.h"
 
 #define STEP_US 100000u

@@ -10,10 +10,10 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "mapmatch.h"
+#include "map/mapmatch.h"
 #include "rsm/scan.h"
 #include "rsm/status.h"
-#include "tilemap.h"
+#include "map/tilemap.h"
 #include "synth.h"
 #include "unity.h"
 

@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "match.h"
+#include "paper/match.h"
 #include "rsm/status.h"
 #include "unity.h"
 

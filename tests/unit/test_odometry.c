@@ -1,4 +1,4 @@
-/* Unit tests for src/odometry.c: tick deltas to motion increments, counter
+/* Unit tests for src/localizer/odometry.c: tick deltas to motion increments, counter
  * wrap-around, pose round trips, Jacobians and process noise. */
 #include <math.h>
 #include <stdint.h>

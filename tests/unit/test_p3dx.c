@@ -1,4 +1,4 @@
-/* Tests of the P3-DX driver (src/p3dx.c) against a scripted fake robot on
+/* Tests of the P3-DX driver (src/drivers/p3dx.c) against a scripted fake robot on
  * the in-memory fakelink. */
 #include <string.h>
 

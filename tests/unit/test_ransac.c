@@ -7,8 +7,8 @@
 #include <string.h>
 
 #include "rsm/config.h"
-#include "rigid.h"
-#include "ransac.h"
+#include "paper/rigid.h"
+#include "paper/ransac.h"
 #include "rsm/status.h"
 #include "synth.h"
 #include "unity.h"

@@ -1,4 +1,4 @@
-/* Unit tests of the revolution assembler (src/revolution.c): a lidar
+/* Unit tests of the revolution assembler (src/drivers/revolution.c): a lidar
  * turning clockwise at 10 Hz in a square room while the robot turns in place
  * and while it drives an arc; the points of every turn placed in the room
  * with the scan's stamp pose and the mount, the way the localizer does it:

@@ -13,7 +13,7 @@
 #include "rsm/localizer.h"
 #include "rsm/mapimport.h"
 #include "rsm/status.h"
-#include "tilemap.h"
+#include "map/tilemap.h"
 #include "unity.h"
 
 #define FIXTURE RSM_SOURCE_DIR "/tests/data/rosmap/room.yaml"

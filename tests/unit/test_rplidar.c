@@ -1,4 +1,4 @@
-/* Unit tests of the RPLIDAR codec (src/rplidar.c): requests, descriptors
+/* Unit tests of the RPLIDAR codec (src/drivers/rplidar.c): requests, descriptors
  * and answers of tests/data/rplidar_frames.txt; capsules laid out here from
  * the documented layout; the receiver under garbage, bit flips, truncation
  * and arbitrary chunking, with exact counters. */

@@ -1,4 +1,4 @@
-/* Unit tests for src/scan.c: beam layout, reading validity and conversion to
+/* Unit tests for src/core/scan.c: beam layout, reading validity and conversion to
  * points. */
 #include <math.h>
 #include <string.h>

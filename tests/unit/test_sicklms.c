@@ -1,4 +1,4 @@
-/* Tests of the SICK LMS driver (src/sicklms.c) against a scripted fake LMS on
+/* Tests of the SICK LMS driver (src/drivers/sicklms.c) against a scripted fake LMS on
  * the in-memory fakelink. */
 #include <string.h>
 

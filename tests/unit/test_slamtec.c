@@ -1,4 +1,4 @@
-/* Tests of the RPLIDAR driver (src/slamtec.c) against a scripted fake
+/* Tests of the RPLIDAR driver (src/drivers/slamtec.c) against a scripted fake
  * RPLIDAR on the in-memory fakelink: the start-up sequence, standard and
  * dense express streams, motor commands, a unit reporting a health error,
  * unanswered requests, link loss and recovery, and the shutdown. */

@@ -1,4 +1,4 @@
-/* Unit tests for src/sync.c: scans fused with odometry interpolated at their
+/* Unit tests for src/localizer/sync.c: scans fused with odometry interpolated at their
  * own time, whatever order the two links delivered them in. The localizer
  * runs odometry-only, so every reported pose is the prediction and shows
  * exactly which encoder counts were applied before the scan. */

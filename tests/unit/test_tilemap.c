@@ -9,8 +9,8 @@
 
 #include "rsm/config.h"
 #include "rsm/status.h"
-#include "tilemap.h"
-#include "tmap_read.h"
+#include "map/tilemap.h"
+#include "map/tmap_read.h"
 #include "synth.h"
 #include "unity.h"
 

@@ -1,4 +1,4 @@
-/* Unit tests for src/version.c: the library names the version its headers
+/* Unit tests for src/core/version.c: the library names the version its headers
  * carry, and the string is the three numbers. */
 #include <stdio.h>
 #include <string.h>

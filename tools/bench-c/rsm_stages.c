@@ -41,7 +41,7 @@
 #include "logrun.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"
-#include "tilemap.h" /* internal (src/): tiles held per level */
+#include "map/tilemap.h" /* internal (src/): tiles held per level */
 
 #if defined(__SANITIZE_ADDRESS__)
 #define STAGES_ASAN 1

@@ -28,7 +28,7 @@
 #include "rsm/mapfile.h"
 #include "rsm/status.h"
 #include "rsm/sync.h"
-#include "tilemap.h" /* internal (src/): tiles held per level, for the summary */
+#include "map/tilemap.h" /* internal (src/): tiles held per level, for the summary */
 
 
 /* Every --set KEY: F float field, U unsigned or int field, E enum field

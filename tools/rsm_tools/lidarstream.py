@@ -10,7 +10,7 @@ bearing (a CARMEN beam ``i`` of ``m`` is at ``-90 + i * 180 / m`` degrees,
 counter-clockwise; the sensor angle is its negative), so the geometry stays
 as logged; sensor angles no beam points at (the back half, and the odd
 angles of a finer scan) carry "no return" (0).  The C decoders
-(src/ld06.c, src/rplidar.c) read these streams back: tests/py/test_lidarstream.py.
+(src/drivers/ld06.c, src/drivers/rplidar.c) read these streams back: tests/py/test_lidarstream.py.
 :class:`LD06Receiver` and :class:`RplidarReceiver` are those C receivers'
 Python twins, for rsm-record's and rsm-replay's counters.
 """
@@ -130,8 +130,8 @@ def render_turn(kind: str, ranges: Sequence[float], end_us: int, turn_us: int,
 
 
 # --------------------------------------------------------------------------
-# Receivers: the Python twins of the C receivers in src/ld06.c and
-# src/rplidar.c (same framing, same resynchronisation, counters under the
+# Receivers: the Python twins of the C receivers in src/drivers/ld06.c and
+# src/drivers/rplidar.c (same framing, same resynchronisation, counters under the
 # same names), for the host tools' live counters.  tests/py/test_lidarstream.py
 # checks every counter against rsm-dump's on clean and damaged streams.
 

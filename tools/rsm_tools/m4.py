@@ -242,7 +242,7 @@ def check_example_ld06(elf: Path, work: Path, turns: int = 20) -> str:
 
 
 RP_STOP, RP_HEALTH = bytes([0xA5, 0x25]), bytes([0xA5, 0x52])  # RPLIDAR requests (docs lidars.md 2)
-# STOP, GET_HEALTH, GET_INFO, GET_SAMPLERATE, SCAN: the driver's start-up (src/slamtec.c)
+# STOP, GET_HEALTH, GET_INFO, GET_SAMPLERATE, SCAN: the driver's start-up (src/drivers/slamtec.c)
 RP_STARTUP = (0x25, 0x52, 0x50, 0x59, 0x20)
 
 

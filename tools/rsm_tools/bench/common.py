@@ -40,7 +40,7 @@ FIRST_SEED = 7  # the seed of the peers' outlier runs; further seeds count up fr
 
 
 SEEDS = 2
-# rsm's default map_update_m (src/localizer.c; test_bench checks they agree).
+# rsm's default map_update_m (src/localizer/localizer.c; test_bench checks they agree).
 # The many-run sections vary it around this value: one run's result depends
 # on where its writes fall, and a robot gets one run.
 DEFAULT_MAP_UPDATE_M = 0.4

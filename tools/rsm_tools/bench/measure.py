@@ -66,7 +66,7 @@ def cpu_info() -> Tuple[str, int]:
     return model or platform.processor() or platform.machine() or "unknown CPU", cores or (os.cpu_count() or 0)
 
 
-SOURCE_GLOBS = ("src/*.[ch]", "include/rsm/*.h", "tools/nav/*.[ch]", "tools/bench-c/*.c", "port/baremetal/*.[ch]",
+SOURCE_GLOBS = ("src/*/*.[ch]", "include/rsm/*.h", "tools/nav/*.[ch]", "tools/bench-c/*.c", "port/baremetal/*.[ch]",
                 "port/baremetal/*/*.[ch]", "port/baremetal/boards/*/*.[ch]")
 
 
@@ -446,7 +446,7 @@ def run_callgrind(navs: Dict[str, Optional[Path]], logs: List[Tuple[str, Path, P
     valgrind = shutil.which("valgrind")
     if valgrind is None:
         return {"skipped": "valgrind is not installed"}
-    helpers = static_functions((root / "src" / "localizer.c").read_text()) if root else []
+    helpers = static_functions((root / "src" / "localizer" / "localizer.c").read_text()) if root else []
     heads = {}
     for label, log, _ in logs:
         head = work / "callgrind" / f"{label}-head{scans}.clf.gz"
@@ -915,7 +915,7 @@ def run_host_stack(root: Path, build_dir: Path, work: Path, jobs: int = 2) -> di
              "-c", str(src), "-o", str(d / (src.stem + ".o"))]
         return src, subprocess.run(c, capture_output=True, text=True, cwd=d)
 
-    core = [f for f in sorted((root / "src").glob("*.c")) if f.stem not in DRIVER_OBJECTS]
+    core = [f for f in sorted((root / "src").glob("*/*.c")) if f.stem not in DRIVER_OBJECTS]
     for src, res in parallel(compile_one, core, jobs):
         if res.returncode != 0:
             return {"skipped": f"compiling {src.name} with -fcallgraph-info failed: "

@@ -793,7 +793,7 @@ def report_callgrind(cg: Optional[dict], root: Path, main: str) -> List[str]:
                if r and r.get("mapmatch") and r["mapmatch"]["total"]]
     if details:
         L += ["Inside `rsm_mapmatch` (rsm's matching, the default configuration): its own code and the inclusive "
-              "count of each function it calls, per scan (src/mapmatch.h describes the steps: the "
+              "count of each function it calls, per scan (src/map/mapmatch.h describes the steps: the "
               "heading fan, then Gauss-Newton from the coarsest level to the finest).", ""]
         fns = sorted({f for _, _, r in details for f in r["mapmatch"]["callees"]},
                      key=lambda f: -max(r["mapmatch"]["callees"].get(f, 0) for _, _, r in details))

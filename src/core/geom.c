@@ -1,0 +1,58 @@
+#include "rsm/geom.h"
+
+#include <math.h>
+#include "core/fmath.h"
+
+float rsm_wrap_angle(float a)
+{
+    if (!isfinite(a)) {
+        return a;
+    }
+    /* fmodf keeps large inputs exact enough; the loop only fixes the edges. */
+    a = fmodf(a, RSM_TWO_PI);
+    while (a > RSM_PI) {
+        a -= RSM_TWO_PI;
+    }
+    while (a <= -RSM_PI) {
+        a += RSM_TWO_PI;
+    }
+    return a;
+}
+
+rsm_pose_t rsm_pose_compose(const rsm_pose_t *a, const rsm_pose_t *b)
+{
+    const float c = rsm_cosf(a->theta);
+    const float s = rsm_sinf(a->theta);
+    rsm_pose_t r;
+    r.x = a->x + c * b->x - s * b->y;
+    r.y = a->y + s * b->x + c * b->y;
+    r.theta = rsm_wrap_angle(a->theta + b->theta);
+    return r;
+}
+
+rsm_pose_t rsm_pose_inverse(const rsm_pose_t *a)
+{
+    const float c = rsm_cosf(a->theta);
+    const float s = rsm_sinf(a->theta);
+    rsm_pose_t r;
+    r.x = -c * a->x - s * a->y;
+    r.y = s * a->x - c * a->y;
+    r.theta = rsm_wrap_angle(-a->theta);
+    return r;
+}
+
+rsm_pose_t rsm_pose_between(const rsm_pose_t *a, const rsm_pose_t *b)
+{
+    const rsm_pose_t inv = rsm_pose_inverse(a);
+    return rsm_pose_compose(&inv, b);
+}
+
+rsm_point_t rsm_pose_apply(const rsm_pose_t *a, const rsm_point_t *p)
+{
+    const float c = rsm_cosf(a->theta);
+    const float s = rsm_sinf(a->theta);
+    rsm_point_t r;
+    r.x = a->x + c * p->x - s * p->y;
+    r.y = a->y + s * p->x + c * p->y;
+    return r;
+}

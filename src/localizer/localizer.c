@@ -1,0 +1,1735 @@
+#include "rsm/localizer.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "rsm/status.h"
+#include "core/bits.h"
+#include "core/ekf.h"
+#include "core/fmath.h"
+#include "core/grid.h"
+#include "paper/harris.h"
+#include "paper/icp.h"
+#include "paper/map.h"
+#include "map/mapstate.h"
+#include "map/globalsearch.h"
+#include "map/mapmatch.h"
+#include "paper/match.h"
+#include "paper/ransac.h"
+#include "map/tilemap.h"
+
+rsm_localizer_config_t rsm_localizer_config_default(void)
+{
+    rsm_localizer_config_t c;
+    memset(&c, 0, sizeof c);
+    c.method = RSM_METHOD_MAP;
+    c.limits = rsm_scan_limits_default();
+    c.grid = rsm_grid_config_default();
+    c.harris = rsm_harris_config_default();
+    c.ransac = rsm_ransac_config_default();
+    c.icp = rsm_icp_config_default();
+    c.odometry = rsm_odometry_config_default();
+    /* Measured on the Intel and ACES logs (tools/bench): heading drift
+     * dominates, and heading errors grow with turning faster than the
+     * generic 5 % (fast turns). */
+    c.odometry.sigma_rot_per_m = 0.2f;
+    c.odometry.sigma_rot_per_rad = 0.1f;
+    c.map_frozen = 0u;
+    c.global_budget = 20000u;
+    c.global_min_share = 0.8f;
+    c.global_min_fit = 0.8f;
+    c.global_when_lost = 0u;
+    c.map_min_hits = 1u;
+    c.map_on_reject = 1u;
+    c.min_points = 20u;
+    c.lost_scans = 10u;
+    c.refuse_poor = 1u;
+    c.min_keypoints = 4u;
+    c.match_window_m = 0.05f;
+    c.search_sigmas = 3.0f;
+    c.search_min_m = 0.15f;
+    c.search_max_m = 0.6f;
+    c.gate_d2 = 16.27f;
+    c.noise = RSM_NOISE_RESIDUAL;
+    c.r_min_xy_m = 0.003f;
+    c.r_min_theta_rad = 0.001f;
+    c.refine_iterations = 10u;
+    c.refine_saturation = 2u;
+    c.refine_noise_scale = 10.0f;
+    c.laser_mount.x = 0.0f;
+    c.laser_mount.y = 0.0f;
+    c.laser_mount.theta = 0.0f;
+    c.laser_upside_down = 0u;
+    c.tmap = rsm_tmap_config_default();
+    c.mapmatch = rsm_mapmatch_config_default();
+    c.map_update_m = 0.4f;
+    c.map_update_rad = 0.5f;
+    c.recover_ratio = 0.4f;
+    c.recover_m = 1.0f;
+    c.recover_rad = 0.3f;
+    c.recover_margin = 0.1f;
+    c.refute_margin = 0.1f;
+    c.track_min_fit = 0.7f;
+    c.conflict_max = 0.5f;
+    c.doubt_m = 0.1f;
+    c.doubt_rad = 0.1f;
+    c.isolation.tol_m = 0.0f;
+    c.isolation.slope = 3.0f;
+    c.isolation.window = 2u;
+    c.isolation.agree = 1u;
+    /* A laser cannot see through a wall: a return behind two neighbours
+     * that span its beam is a phantom (docs/map.md, "Outliers"). */
+    c.occlusion.window = 2u;
+    c.occlusion.span_m = 0.3f;
+    c.occlusion.tol_m = 0.1f;
+    c.occlusion.slope = 3.0f;
+    c.occlusion.margin_m = 0.2f;
+    c.occlusion.margin_rel = 0.05f;
+    c.odometry_cal = rsm_odometry_cal_config_default();
+    c.clock_fn = NULL;
+    c.clock_ctx = NULL;
+    return c;
+}
+
+const char *rsm_outcome_name(rsm_outcome_t o)
+{
+    switch (o) {
+    case RSM_SCAN_ACCEPTED: return "accepted";
+    case RSM_SCAN_FIRST: return "first";
+    case RSM_SCAN_ODOMETRY: return "odometry";
+    case RSM_SCAN_FEW_POINTS: return "few_points";
+    case RSM_SCAN_FEW_KEYPOINTS: return "few_keypoints";
+    case RSM_SCAN_FEW_MATCHES: return "few_matches";
+    case RSM_SCAN_LOW_SUPPORT: return "low_support";
+    case RSM_SCAN_JUMP: return "jump";
+    case RSM_SCAN_FILTER: return "filter";
+    case RSM_SCAN_OUT_OF_ORDER: return "out_of_order";
+    case RSM_SCAN_POOR_FIT: return "poor_fit";
+    case RSM_SCAN_SEARCHING: return "searching";
+    default: return "unknown";
+    }
+}
+
+const char *rsm_odometry_verdict_name(rsm_odometry_verdict_t v)
+{
+    switch (v) {
+    case RSM_ODOMETRY_TRUSTED: return "trusted";
+    case RSM_ODOMETRY_CAUGHT_UP: return "caught_up";
+    case RSM_ODOMETRY_REFUTED: return "refuted";
+    case RSM_ODOMETRY_RECOUNTED: return "recounted";
+    default: return "unknown";
+    }
+}
+
+const char *rsm_track_name(rsm_track_t t)
+{
+    switch (t) {
+    case RSM_TRACK_TRACKING: return "tracking";
+    case RSM_TRACK_UNCERTAIN: return "uncertain";
+    case RSM_TRACK_LOST: return "lost";
+    default: return "unknown";
+    }
+}
+
+rsm_track_t rsm_localizer_track(const rsm_localizer_t *loc)
+{
+    return rsm_localizer_ready(loc) ? loc->last.track : RSM_TRACK_LOST;
+}
+
+const char *rsm_stage_name(rsm_stage_t s)
+{
+    switch (s) {
+    case RSM_STAGE_POINTS: return "points";
+    case RSM_STAGE_GRID: return "grid";
+    case RSM_STAGE_HARRIS: return "harris";
+    case RSM_STAGE_MATCH: return "match";
+    case RSM_STAGE_RANSAC: return "ransac";
+    case RSM_STAGE_REFINE: return "refine";
+    case RSM_STAGE_ICP: return "icp";
+    case RSM_STAGE_EKF: return "ekf";
+    case RSM_STAGE_MAP: return "map";
+    case RSM_STAGE_MAPMATCH: return "mapmatch";
+    default: return "unknown";
+    }
+}
+
+/* The optional timing hook, on the stack of one rsm_localizer_scan call:
+ * the stage running now and the clock reading when it started. Without a
+ * clock_fn every operation is a single test. */
+typedef struct stage_clock {
+    uint32_t (*fn)(void *ctx);
+    void *ctx;
+    uint32_t start;
+    uint32_t last;
+    rsm_stage_t stage;
+    rsm_localizer_report_t *rep;
+} stage_clock_t;
+
+static void stage_begin(stage_clock_t *c, const rsm_localizer_config_t *cfg, rsm_localizer_report_t *rep)
+{
+    c->fn = cfg->clock_fn;
+    c->ctx = cfg->clock_ctx;
+    c->rep = rep;
+    c->stage = RSM_STAGE_POINTS;
+    c->start = 0u;
+    c->last = 0u;
+    if (c->fn != NULL) {
+        c->start = c->fn(c->ctx);
+        c->last = c->start;
+    }
+}
+
+/* Charges the time since the last switch to the running stage and starts s. */
+static void stage_switch(stage_clock_t *c, rsm_stage_t s)
+{
+    if (c->fn != NULL) {
+        const uint32_t now = c->fn(c->ctx);
+        c->rep->stage_time[c->stage] += now - c->last;
+        c->last = now;
+    }
+    c->stage = s;
+}
+
+/* Charges the running stage and the whole call. */
+static void stage_end(stage_clock_t *c)
+{
+    if (c->fn != NULL) {
+        const uint32_t now = c->fn(c->ctx);
+        c->rep->stage_time[c->stage] += now - c->last;
+        c->rep->step_time = now - c->start;
+        c->last = now;
+    }
+}
+
+int rsm_localizer_init_checked(rsm_localizer_t *loc, size_t loc_size, unsigned long fingerprint,
+                               const rsm_localizer_config_t *cfg, const rsm_pose_t *x0, const float p0[9])
+{
+    int rc;
+    if (loc_size != sizeof(rsm_localizer_t) || fingerprint != (unsigned long)RSM_CONFIG_FINGERPRINT) {
+        return RSM_ERR_CONFIG;
+    }
+    /* Every part of cfg is checked before anything is written (the
+     * field is named by rsm_localizer_config_check, src/localizer/localizer_check.c). */
+    if (loc == NULL || x0 == NULL || rsm_localizer_config_check(cfg, NULL) != RSM_OK) {
+        return RSM_ERR_INVAL;
+    }
+    memset(loc, 0, sizeof *loc);
+    loc->cfg = cfg;
+    rsm_scan_trig_init(&loc->trig);
+    rsm_odometry_cal_init(&loc->odo_cal);
+    if ((rc = rsm_ekf_init(&loc->ekf, x0, p0)) != RSM_OK || (rc = rsm_odometry_init(&loc->odo, &cfg->odometry)) != RSM_OK) {
+        return rc;
+    }
+    /* Each method initialises only its own member of the state union. */
+    switch (cfg->method) {
+    case RSM_METHOD_PAPER:
+        if ((rc = rsm_ransac_init(&loc->state.paper.ransac, &cfg->ransac)) != RSM_OK ||
+            (rc = rsm_map_init(&loc->state.paper.map, cfg->grid.cell_m, x0->x, x0->y)) != RSM_OK) {
+            return rc;
+        }
+        rsm_image_reset(&loc->state.paper.image);
+        break;
+    case RSM_METHOD_ICP:
+        rc = rsm_icp_init(&loc->state.icp, &cfg->icp);
+        break;
+    case RSM_METHOD_MAP:
+        rc = rsm_tmap_init(&loc->state.persistent.map, &cfg->tmap);
+        loc->state.persistent.written = *x0;
+        loc->state.persistent.anchor = *x0;
+        loc->state.persistent.trusted = *x0;
+        break;
+    default:
+        break;
+    }
+    if (rc == RSM_OK) {
+        loc->magic = (uint32_t)RSM_LOCALIZER_MAGIC;
+    }
+    return rc;
+}
+
+int rsm_localizer_ready(const rsm_localizer_t *loc)
+{
+    return loc != NULL && loc->magic == (uint32_t)RSM_LOCALIZER_MAGIC && loc->cfg != NULL;
+}
+
+static int ready(const rsm_localizer_t *loc)
+{
+    return rsm_localizer_ready(loc);
+}
+
+/* A global search is under way (RSM_METHOD_MAP). */
+static int global_running(const rsm_localizer_t *loc)
+{
+    return loc->cfg->method == RSM_METHOD_MAP && loc->state.persistent.global.phase != RSM_GLOBAL_IDLE;
+}
+
+void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
+{
+    loc->have_scan = 1u;
+    loc->state.persistent.written = loc->ekf.x;
+    loc->state.persistent.fit = fit;
+    loc->state.persistent.map_fit = fit;
+    loc->state.persistent.global.cached = 0u;
+    if (global_running(loc)) {
+        loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
+    }
+}
+
+int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const float p[9])
+{
+    static const rsm_pose_t none = {0.0f, 0.0f, 0.0f};
+    rsm_ekf_t ekf;
+    if (!ready(loc) || x == NULL || rsm_ekf_init(&ekf, x, p) != RSM_OK) {
+        return RSM_ERR_INVAL;
+    }
+    /* Only the estimate: the filter's counters stay. */
+    loc->ekf.x = ekf.x;
+    memcpy(loc->ekf.p, ekf.p, sizeof loc->ekf.p);
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        loc->state.persistent.anchor = ekf.x;
+        loc->state.persistent.trusted = ekf.x;
+        loc->state.persistent.since = none;
+        loc->state.persistent.last_step = none;
+    }
+    loc->poor_run = 0u;
+    loc->last.track = RSM_TRACK_TRACKING;
+    loc->last.pose = ekf.x;
+    return RSM_OK;
+}
+
+/* Whether odometry's heading (and distance) is calibrated from the matches. */
+static int calibrating(const rsm_localizer_t *loc)
+{
+    return loc->cfg->method == RSM_METHOD_MAP && loc->cfg->odometry_cal.memory > 0.0f;
+}
+
+int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
+{
+    float q[9];
+    rsm_motion_t v;
+    if (!ready(loc) || u == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (!isfinite(u->dx) || !isfinite(u->dy) || !isfinite(u->dtheta)) {
+        loc->counters.bad_motions++;
+        return RSM_ERR_RANGE;
+    }
+    /* Odometry's systematic errors, as matching has found them. */
+    v = calibrating(loc) ? rsm_odometry_cal_apply(&loc->odo_cal, u) : *u;
+    rsm_odometry_noise(&loc->odo.cfg, &v, q);
+    /* No process noise before the first scan (see localizer.h). */
+    if (rsm_ekf_predict(&loc->ekf, &v, loc->have_scan ? q : NULL) != RSM_OK) {
+        loc->counters.bad_motions++;
+        return RSM_ERR_RANGE;
+    }
+    if (calibrating(loc)) {
+        rsm_odometry_cal_count(&loc->odo_cal, &loc->cfg->odometry_cal, u, loc->have_scan ? q[0] : 0.0f);
+    }
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        const rsm_pose_t step = {v.dx, v.dy, v.dtheta};
+        loc->state.persistent.since = rsm_pose_compose(&loc->state.persistent.since, &step);
+    }
+    loc->counters.motions++;
+    return RSM_OK;
+}
+
+int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right)
+{
+    rsm_motion_t u;
+    int rc;
+    if (!ready(loc)) {
+        return RSM_ERR_INVAL;
+    }
+    rc = rsm_odometry_update_ticks(&loc->odo, left, right, &u);
+    if (rc != RSM_OK) {
+        return rc;
+    }
+    return rsm_localizer_motion(loc, &u);
+}
+
+int rsm_localizer_set_odometry(rsm_localizer_t *loc, const rsm_odometry_config_t *odo_cfg)
+{
+    int rc;
+    if (!ready(loc)) {
+        return RSM_ERR_INVAL;
+    }
+    rc = rsm_odometry_set_config(&loc->odo, odo_cfg);
+    if (rc == RSM_OK) {
+        /* A new geometry: what was learnt under the old one is void. */
+        rsm_odometry_cal_init(&loc->odo_cal);
+    }
+    return rc;
+}
+
+size_t rsm_localizer_scan_points(const rsm_localizer_t *loc, rsm_point_t *out, size_t cap)
+{
+    size_t n;
+    size_t k;
+    if (!ready(loc)) {
+        return 0u;
+    }
+    n = loc->last.points <= RSM_MAX_BEAMS ? (size_t)loc->last.points : (size_t)RSM_MAX_BEAMS;
+    for (k = 0; out != NULL && k < n && k < cap; ++k) {
+        out[k] = loc->pts[k];
+    }
+    return n;
+}
+
+int rsm_localizer_map_occupancy(const rsm_localizer_t *loc, float x, float y, float *occupancy)
+{
+    if (!ready(loc) || occupancy == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (loc->cfg->method != RSM_METHOD_MAP) {
+        return RSM_ERR_NOSYS;
+    }
+    *occupancy = rsm_tmap_occupancy(&loc->state.persistent.map, 0u, x, y);
+    return RSM_OK;
+}
+
+int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, float *x1, float *y1)
+{
+    int32_t g[4];
+    float a;
+    if (!ready(loc) || x0 == NULL || y0 == NULL || x1 == NULL || y1 == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (loc->cfg->method != RSM_METHOD_MAP) {
+        return RSM_ERR_NOSYS;
+    }
+    if (!rsm_tmap_bounds(&loc->state.persistent.map, 0u, &g[0], &g[1], &g[2], &g[3])) {
+        return RSM_ERR_DEGENERATE;
+    }
+    a = rsm_tmap_cell(&loc->state.persistent.map, 0u);
+    *x0 = (float)g[0] * a;
+    *y0 = (float)g[1] * a;
+    *x1 = (float)(g[2] + 1) * a;
+    *y1 = (float)(g[3] + 1) * a;
+    return RSM_OK;
+}
+
+rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc)
+{
+    if (!ready(loc)) {
+        const rsm_pose_t none = {NAN, NAN, NAN};
+        return none;
+    }
+    return loc->ekf.x;
+}
+
+static void to_world(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t n)
+{
+    const float c = rsm_cosf(pose->theta);
+    const float s = rsm_sinf(pose->theta);
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        loc->frame.world[k].x = pose->x + c * loc->pts[k].x - s * loc->pts[k].y;
+        loc->frame.world[k].y = pose->y + s * loc->pts[k].x + c * loc->pts[k].y;
+    }
+}
+
+/* Patch reader over the thresholded map. */
+typedef struct map_src {
+    const rsm_map_t *map;
+    uint8_t min_hits;
+} map_src_t;
+
+static uint32_t patch_map(const void *ctx, int32_t gx, int32_t gy)
+{
+    const map_src_t *src = (const map_src_t *)ctx;
+    const rsm_window_t *w = &src->map->win;
+    uint32_t patch = 0;
+    uint32_t bit = 0;
+    int32_t dy;
+    int32_t dx;
+    if (rsm_window_contains(w, gx - 2, gy - 2) && rsm_window_contains(w, gx + 2, gy + 2)) {
+        /* Whole patch inside the window: index storage directly. */
+        const uint32_t m = (uint32_t)RSM_MAP_SIZE - 1u;
+        for (dy = -2; dy <= 2; ++dy) {
+            const uint32_t row = ((uint32_t)(gy + dy) & m) << RSM_MAP_SIZE_LOG2;
+            for (dx = -2; dx <= 2; ++dx) {
+                if (src->map->hits[row | ((uint32_t)(gx + dx) & m)] >= src->min_hits) {
+                    patch |= 1u << bit;
+                }
+                ++bit;
+            }
+        }
+        return patch;
+    }
+    for (dy = -2; dy <= 2; ++dy) {
+        for (dx = -2; dx <= 2; ++dx) {
+            if (rsm_map_hits(src->map, gx + dx, gy + dy) >= src->min_hits) {
+                patch |= 1u << bit;
+            }
+            ++bit;
+        }
+    }
+    return patch;
+}
+
+/* Key points of the current image. */
+static size_t current_keypoints(rsm_localizer_t *loc)
+{
+    const rsm_window_t *w = &loc->state.paper.map.win;
+    rsm_harris_image_src_t src;
+    size_t n = loc->state.paper.image.count < RSM_MAX_CANDIDATES ? loc->state.paper.image.count : RSM_MAX_CANDIDATES;
+    size_t k;
+    int got;
+    for (k = 0; k < n; ++k) {
+        loc->state.paper.cands[k] = rsm_window_cell(w, loc->state.paper.image.cells[k]);
+    }
+    src.img = &loc->state.paper.image;
+    src.win = w;
+    got = rsm_harris_detect(&loc->cfg->harris, &loc->state.paper.harris, rsm_harris_patch_image, &src, loc->state.paper.cands, n,
+                            loc->state.paper.kp_cur, RSM_MAX_KEYPOINTS, NULL);
+    return got > 0 ? (size_t)got : 0u;
+}
+
+/* Key points of the reference map near the current scan's cells: only map
+ * cells within radius cells of an occupied current cell are candidates. */
+static size_t reference_keypoints(rsm_localizer_t *loc, int32_t radius)
+{
+    const rsm_window_t *w = &loc->state.paper.map.win;
+    const uint8_t min_hits = loc->cfg->map_min_hits;
+    uint32_t *visited = loc->state.paper.visited;
+    map_src_t src;
+    size_t n = 0;
+    size_t k;
+    int got;
+    for (k = 0; k < loc->state.paper.image.count && n < RSM_MAX_CANDIDATES; ++k) {
+        const rsm_cell_t c = rsm_window_cell(w, loc->state.paper.image.cells[k]);
+        int32_t dy;
+        int32_t dx;
+        for (dy = -radius; dy <= radius && n < RSM_MAX_CANDIDATES; ++dy) {
+            for (dx = -radius; dx <= radius && n < RSM_MAX_CANDIDATES; ++dx) {
+                if (rsm_map_hits(&loc->state.paper.map, c.gx + dx, c.gy + dy) >= min_hits) {
+                    const uint32_t i = rsm_window_index(c.gx + dx, c.gy + dy);
+                    const uint32_t bit = 1u << (i & 31u);
+                    if ((visited[i >> 5] & bit) == 0u) {
+                        visited[i >> 5] |= bit;
+                        loc->state.paper.cands[n].gx = c.gx + dx;
+                        loc->state.paper.cands[n].gy = c.gy + dy;
+                        ++n;
+                    }
+                }
+            }
+        }
+    }
+    /* Candidates are the only bits set: clearing them empties the set. */
+    for (k = 0; k < n; ++k) {
+        const uint32_t i = rsm_window_index(loc->state.paper.cands[k].gx, loc->state.paper.cands[k].gy);
+        visited[i >> 5] &= ~(1u << (i & 31u));
+    }
+    src.map = &loc->state.paper.map;
+    src.min_hits = min_hits;
+    got = rsm_harris_detect(&loc->cfg->harris, &loc->state.paper.harris, patch_map, &src, loc->state.paper.cands, n, loc->state.paper.kp_ref,
+                            RSM_MAX_KEYPOINTS, NULL);
+    return got > 0 ? (size_t)got : 0u;
+}
+
+/* Key point centres in metres relative to the predicted robot position. */
+static void keypoints_to_points(const rsm_keypoint_t *kp, size_t n, float a, const rsm_pose_t *origin,
+                                rsm_point_t *out)
+{
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        out[k].x = ((float)kp[k].gx + 0.5f) * a - origin->x;
+        out[k].y = ((float)kp[k].gy + 0.5f) * a - origin->y;
+    }
+}
+
+/* Measurement noise from the fit: residual spread over the inliers, with
+ * the angle's lever arm from how far the inliers spread around the robot. */
+static void measurement_noise(const rsm_localizer_config_t *cfg, float rms, uint32_t inliers, float spread2,
+                              float r[9])
+{
+    float sxy2;
+    float sth2;
+    memset(r, 0, 9 * sizeof r[0]);
+    if (cfg->noise == RSM_NOISE_FIXED) {
+        const float cell = cfg->grid.cell_m;
+        const float th = 0.25f * RSM_PI / 180.0f;
+        r[0] = cell * cell;
+        r[4] = cell * cell;
+        r[8] = th * th;
+        return;
+    }
+    {
+        const float quant = cfg->grid.cell_m * 0.2887f; /* a / sqrt(12): one cell's rounding */
+        const float e2 = rms * rms + quant * quant;
+        const float n = inliers > 2u ? (float)inliers - 2.0f : 1.0f;
+        sxy2 = e2 / n + cfg->r_min_xy_m * cfg->r_min_xy_m;
+        sth2 = e2 / (n * (spread2 > 0.01f ? spread2 : 0.01f)) + cfg->r_min_theta_rad * cfg->r_min_theta_rad;
+    }
+    r[0] = sxy2;
+    r[4] = sxy2;
+    r[8] = sth2;
+}
+
+/* R from the map fit: cost-scaled inverse information, floored. Falls back
+ * to the RANSAC-based r (unchanged) if the information is singular. */
+static void refined_noise(const rsm_localizer_config_t *cfg, const rsm_map_fit_t *fit, float r[9])
+{
+    float inv[9];
+    float s2;
+    size_t k;
+    if (cfg->noise == RSM_NOISE_FIXED || fit->used < 4u || rsm_mat3_inverse(fit->info, inv) != RSM_OK) {
+        return;
+    }
+    s2 = cfg->refine_noise_scale * fit->cost * (float)fit->used / (float)(fit->used - 3u);
+    for (k = 0; k < 9; ++k) {
+        r[k] = s2 * inv[k];
+    }
+    r[0] += cfg->r_min_xy_m * cfg->r_min_xy_m;
+    r[4] += cfg->r_min_xy_m * cfg->r_min_xy_m;
+    r[8] += cfg->r_min_theta_rad * cfg->r_min_theta_rad;
+}
+
+static float search_radius(const rsm_localizer_t *loc)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const float *p = loc->ekf.p;
+    /* Position std plus the heading std acting over a typical 3 m lever. */
+    const float sd = sqrtf((p[0] > p[4] ? p[0] : p[4])) + 3.0f * sqrtf(p[8]);
+    float r = cfg->search_sigmas * sd;
+    if (!(r >= cfg->search_min_m)) {
+        r = cfg->search_min_m;
+    }
+    if (r > cfg->search_max_m) {
+        r = cfg->search_max_m;
+    }
+    return r;
+}
+
+/* Fuses measurement z; returns the outcome. */
+static rsm_outcome_t fuse(rsm_localizer_t *loc, const rsm_pose_t *z, const float r[9], rsm_localizer_report_t *rep)
+{
+    float d2 = 0.0f;
+    int rc;
+    rep->measured = *z;
+    if (rsm_ekf_mahalanobis(&loc->ekf, z, r, &d2) != RSM_OK) {
+        return RSM_SCAN_FILTER;
+    }
+    rep->mahalanobis_d2 = d2;
+    rc = rsm_ekf_update(&loc->ekf, z, r, loc->cfg->gate_d2);
+    if (rc == RSM_ERR_RANGE) {
+        return RSM_SCAN_JUMP;
+    }
+    return rc == RSM_OK ? RSM_SCAN_ACCEPTED : RSM_SCAN_FILTER;
+}
+
+static rsm_outcome_t step_rsm(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const float a = cfg->grid.cell_m;
+    const rsm_pose_t pred = loc->ekf.x;
+    rsm_ransac_result_t rr;
+    size_t nkc;
+    size_t nkr;
+    int nm;
+    float radius_m;
+    float r[9];
+    int32_t radius_cells;
+
+    stage_switch(clk, RSM_STAGE_GRID);
+    (void)rsm_map_recenter(&loc->state.paper.map, pred.x, pred.y);
+    to_world(loc, &pred, npts);
+    rsm_image_clear(&loc->state.paper.image);
+    (void)rsm_image_mark_points(&loc->state.paper.image, &loc->state.paper.map.win, &cfg->grid, loc->frame.world, npts);
+    if (!loc->have_scan) {
+        return RSM_SCAN_FIRST;
+    }
+    stage_switch(clk, RSM_STAGE_HARRIS);
+    nkc = current_keypoints(loc);
+    rep->keypoints_cur = (uint32_t)nkc;
+    if (nkc < cfg->min_keypoints) {
+        return RSM_SCAN_FEW_KEYPOINTS;
+    }
+    radius_m = search_radius(loc);
+    radius_cells = (int32_t)rsm_ceilf(radius_m / a) + 1;
+    nkr = reference_keypoints(loc, radius_cells);
+    rep->keypoints_ref = (uint32_t)nkr;
+    if (nkr < cfg->min_keypoints) {
+        return RSM_SCAN_FEW_KEYPOINTS;
+    }
+    stage_switch(clk, RSM_STAGE_MATCH);
+    keypoints_to_points(loc->state.paper.kp_cur, nkc, a, &pred, loc->state.paper.pt_cur);
+    keypoints_to_points(loc->state.paper.kp_ref, nkr, a, &pred, loc->state.paper.pt_ref);
+    nm = rsm_match_tentative(loc->state.paper.pt_ref, nkr, loc->state.paper.pt_cur, nkc, radius_m, cfg->match_window_m, loc->state.paper.matches,
+                             RSM_MAX_MATCHES, NULL);
+    rep->matches = nm > 0 ? (uint32_t)nm : 0u;
+    if (nm < 2 || (uint32_t)nm < cfg->ransac.min_support) {
+        return RSM_SCAN_FEW_MATCHES;
+    }
+    stage_switch(clk, RSM_STAGE_RANSAC);
+    if (rsm_ransac_estimate(&loc->state.paper.ransac, loc->state.paper.pt_ref, loc->state.paper.pt_cur, loc->state.paper.matches, (size_t)nm, &rr) != RSM_OK) {
+        rep->inliers = rr.support;
+        rep->iterations = rr.iterations;
+        return RSM_SCAN_LOW_SUPPORT;
+    }
+    rep->inliers = rr.support;
+    rep->iterations = rr.iterations;
+    rep->residual_m = rr.rms_m;
+    {
+        /* The robot sits at the origin of the matching frame, so the
+         * corrected pose is T applied to it. */
+        float spread2 = 0.0f;
+        size_t k;
+        uint32_t cnt = 0;
+        rsm_pose_t z;
+        for (k = 0; k < (size_t)nm; ++k) {
+            if (loc->state.paper.ransac.inlier[k]) {
+                const rsm_point_t *p = &loc->state.paper.pt_cur[loc->state.paper.matches[k].cur];
+                spread2 += p->x * p->x + p->y * p->y;
+                ++cnt;
+            }
+        }
+        spread2 = cnt > 0 ? spread2 / (float)cnt : 0.0f;
+        z.x = pred.x + rr.t.x;
+        z.y = pred.y + rr.t.y;
+        z.theta = rsm_wrap_angle(pred.theta + rr.t.theta);
+        measurement_noise(cfg, rr.rms_m, rr.support, spread2, r);
+        stage_switch(clk, RSM_STAGE_REFINE);
+        if (cfg->refine_iterations > 0u) {
+            rsm_map_fit_t fit;
+            if (rsm_map_align(&loc->state.paper.map, loc->pts, npts, &z, cfg->refine_saturation, cfg->refine_iterations, &fit) ==
+                    RSM_OK &&
+                fit.iterations > 0u) {
+                z = fit.pose;
+                refined_noise(cfg, &fit, r);
+            }
+        }
+        stage_switch(clk, RSM_STAGE_EKF);
+        return fuse(loc, &z, r, rep);
+    }
+}
+
+/* Drops the returns behind a surface their neighbours span (in the laser's
+ * frame, before the mount moves them); returns how many are left. */
+static size_t drop_occluded(rsm_localizer_t *loc, size_t n)
+{
+    uint8_t hidden[(RSM_MAX_BEAMS + 7) / 8];
+    size_t kept = 0;
+    size_t k;
+    if (rsm_points_occluded(loc->pts, n, &loc->cfg->occlusion, hidden) == 0u) {
+        return n;
+    }
+    for (k = 0; k < n; ++k) {
+        if (rsm_bit_get(hidden, k)) {
+            loc->counters.occluded++;
+        } else {
+            loc->pts[kept++] = loc->pts[k];
+        }
+    }
+    return kept;
+}
+
+/* One more equation for the odometry calibration from a scan matched on its
+ * own: the heading's weight is the share of the heading's variance the
+ * match removed (a scan that pins the heading tells the most); the
+ * position's covariance tells whether it pinned the distance. A
+ * recovery's jump, or a step of odometry's the scan refuted, is odometry
+ * off by more than its systematic error: a new reference only. */
+static void calibrate(rsm_localizer_t *loc, rsm_outcome_t outcome, float prior_var, int jumped)
+{
+    const rsm_pose_t est = loc->ekf.x;
+    if (outcome == RSM_SCAN_FIRST || (outcome == RSM_SCAN_ACCEPTED && jumped)) {
+        rsm_odometry_cal_reference(&loc->odo_cal, &est);
+    } else if (outcome == RSM_SCAN_ACCEPTED) {
+        const float pos_cov[3] = {loc->ekf.p[0], loc->ekf.p[1], loc->ekf.p[4]};
+        const float w = prior_var > 0.0f ? 1.0f - loc->ekf.p[8] / prior_var : 0.0f;
+        rsm_odometry_cal_update(&loc->odo_cal, &loc->cfg->odometry_cal, &est, w > 1.0f ? 1.0f : w, pos_cov);
+    }
+}
+
+/* Robot-frame points from laser-frame ones: the mounting pose (and a
+ * mirror for an upside-down laser). */
+static void apply_mount(rsm_localizer_t *loc, size_t n)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_pose_t *m = &cfg->laser_mount;
+    size_t k;
+    if (m->x == 0.0f && m->y == 0.0f && m->theta == 0.0f && !cfg->laser_upside_down) {
+        return;
+    }
+    {
+        const float c = rsm_cosf(m->theta);
+        const float s = rsm_sinf(m->theta);
+        for (k = 0; k < n; ++k) {
+            const float lx = loc->pts[k].x;
+            const float ly = cfg->laser_upside_down ? -loc->pts[k].y : loc->pts[k].y;
+            loc->pts[k].x = m->x + c * lx - s * ly;
+            loc->pts[k].y = m->y + s * lx + c * ly;
+        }
+    }
+}
+
+/* Basins a recovery search descends from. */
+#define RECOVER_STARTS 3
+
+/* The conflict check (conflict_max): beams are looked at on the finest
+ * level, up to CONFLICT_BEAMS of them spread over the scan (a share needs
+ * no more, and each costs a walk of its length), and a wall counts only
+ * more than CONFLICT_MARGIN cells before the return, so that a return a
+ * little off its wall (noise, a match a cell off) or a beam grazing a wall
+ * near its end does not count. */
+#define CONFLICT_BEAMS 64u
+#define CONFLICT_MARGIN 4u
+
+/* Whether the scan placed at pose contradicts the map: more than
+ * conflict_max of its beams pass through walls of the persistent map;
+ * *share gets the share (when the check is on). */
+static int contradicts(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t npts, float *share)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_point_t origin = {cfg->laser_mount.x, cfg->laser_mount.y};
+    uint32_t checked = 0;
+    uint32_t crossing;
+    if (cfg->conflict_max <= 0.0f) {
+        return 0;
+    }
+    crossing = rsm_tmap_beams_crossing(&loc->state.persistent.map, 0u, pose, &origin, loc->pts, npts,
+                                       (npts + CONFLICT_BEAMS - 1u) / CONFLICT_BEAMS, cfg->tmap.saturation,
+                                       CONFLICT_MARGIN, &checked);
+    *share = checked > 0u ? (float)crossing / (float)checked : 0.0f;
+    return *share > cfg->conflict_max;
+}
+
+
+/* Whether odometry reported any motion since the last scan's estimate: a
+ * stalled odometry repeats its pose exactly, and so predicts exactly that
+ * estimate (compared as is: the step between them, computed, is not 0 but
+ * rounding far from the origin). */
+static int moved(const rsm_pose_t *anchor, const rsm_pose_t *pred)
+{
+    return anchor->x != pred->x || anchor->y != pred->y || anchor->theta != pred->theta;
+}
+
+/* Whether odometry's steps are checked against the scans. */
+static int refuting(const rsm_localizer_config_t *cfg)
+{
+    return cfg->method == RSM_METHOD_MAP && cfg->refute_margin > 0.0f;
+}
+
+/* Whether b is at least doubt_m or doubt_rad from a. */
+static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, const rsm_pose_t *b)
+{
+    const rsm_pose_t d = rsm_pose_between(a, b);
+    return sqrtf(d.x * d.x + d.y * d.y) >= cfg->doubt_m || fabsf(d.theta) >= cfg->doubt_rad;
+}
+
+/* Odometry's step from the last scan's estimate to pred, checked against the
+ * scan (res: the match from pred, rc its status). Two other predictions are
+ * matched when there is cause:
+ * - odometry counted from the last scan that trusted it, when that differs
+ *   from the step by doubt_m or doubt_rad: after a stall (odometry stood
+ *   still while matching found the robot move) the step reports that motion
+ *   again, and after a refuted spike the step takes the spike back;
+ * - the last estimate without the step, when the match from pred fits
+ *   poorly or moved pred by more than a doubt: the step may be false (a
+ *   spike, a counter reset, wheels that slipped).
+ * One replaces the match from pred only when it fits as well as recent
+ * scans (recover_ratio of their fit: with many outliers in the scans a
+ * poor fit beating a poorer one drops true steps) and beats pred's fit by
+ * refute_margin (or pred found no match at all), except where odometry
+ * counted from the last trusted scan is the better-founded prediction:
+ * then pred's match must beat it so. The scan, not the order of the tries,
+ * decides. After a stall in which matching found the robot
+ * move, either one winning says the step repeated that motion (odometry
+ * and matching need not agree on how far the robot went meanwhile, so the
+ * last estimate may fit better than odometry counted from the stall's
+ * start). The last estimate drops the step only when the scan fits it
+ * nearly as well as recent scans (track_min_fit): a step over a long gap
+ * in the scans, into ground the map does not hold yet, is poorly matched
+ * either way, and a robot that stood still through it is the less likely
+ * story; such a weaker case sets *doubted instead, and the caller searches
+ * around pred. Returns what was made of the step. */
+static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred,
+                                         int odometry_moved, int *rc, rsm_mapmatch_result_t *res, int *doubted)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_pose_t *anchor = &loc->state.persistent.anchor;
+    const rsm_pose_t counted = rsm_pose_compose(&loc->state.persistent.trusted, &loc->state.persistent.since);
+    rsm_pose_t alt_pred[2];
+    rsm_odometry_verdict_t kind[2];
+    rsm_odometry_verdict_t verdict = RSM_ODOMETRY_TRUSTED;
+    int counted_first = 0;
+    int stall_lead = 0; /* a stall in which matching found the robot move */
+    size_t n = 0;
+    size_t k;
+    if (!refuting(cfg) || !odometry_moved) {
+        return verdict;
+    }
+    if (beyond_doubt(cfg, pred, &counted)) {
+        const rsm_odometry_verdict_t held = loc->state.persistent.held;
+        alt_pred[n] = counted;
+        kind[n++] = held;
+        /* Past a refuted step, or after a stall in which matching found the
+         * robot move, odometry counted from the last trusted scan is the
+         * better-founded prediction (the step alone counts the stall's
+         * motion twice): there the step's prediction is the one that must
+         * fit better, which matters where the building looks alike turned
+         * (a corridor crossing). */
+        stall_lead = held == RSM_ODOMETRY_CAUGHT_UP && beyond_doubt(cfg, &loc->state.persistent.trusted, anchor);
+        counted_first = held == RSM_ODOMETRY_REFUTED || stall_lead;
+    }
+    if (*rc != RSM_OK || res->hit < cfg->recover_ratio * loc->state.persistent.fit || beyond_doubt(cfg, pred, &res->pose)) {
+        /* After a stall in which matching found the robot move, the step
+         * repeated that motion; else it was false. */
+        alt_pred[n] = *anchor;
+        kind[n] = stall_lead ? RSM_ODOMETRY_CAUGHT_UP : RSM_ODOMETRY_REFUTED;
+        ++n;
+    }
+    for (k = 0; k < n; ++k) {
+        rsm_mapmatch_unpin_t unpin;
+        rsm_mapmatch_result_t alt;
+        rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, alt_pred[k].theta, &unpin);
+        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &alt_pred[k], loc->ekf.p, NULL,
+                         &unpin, &alt) == RSM_OK &&
+            alt.used >= cfg->min_points / 2u && alt.hit >= cfg->recover_ratio * loc->state.persistent.fit &&
+            (*rc != RSM_OK || (k == 0 && counted_first ? res->hit <= alt.hit * (1.0f + cfg->refute_margin)
+                                                       : alt.hit > res->hit * (1.0f + cfg->refute_margin)))) {
+            if (kind[k] == RSM_ODOMETRY_REFUTED && *rc == RSM_OK &&
+                alt.hit < cfg->track_min_fit * loc->state.persistent.fit) {
+                *doubted = 1;
+                continue;
+            }
+            *res = alt;
+            *rc = RSM_OK;
+            verdict = kind[k];
+        }
+    }
+    return verdict;
+}
+
+/* What a recovery search made of the scan. */
+typedef enum recovery {
+    RECOVERY_NONE = 0,      /* nothing fitted well enough */
+    RECOVERY_TAKEN = 1,     /* *res replaced by a proven winner */
+    RECOVERY_AMBIGUOUS = 2  /* a winner, but a pose a doubt away fitted nearly as well */
+} recovery_t;
+
+/* One recovery search within +-radius_m and +-recover_rad of pred: descends
+ * from the best few candidates under a prior widened as far and replaces
+ * *res with the best fit if it fits well again (at least half of what was
+ * lost regained; need is above the first *res, so each replacement fits
+ * better than the last) and is proven: it beats every pose a doubt away
+ * from it (another basin's descent, or the plain match) by recover_margin.
+ * Only the winner's index, pose and fit are kept, and the winner is
+ * descended again when taken: a search is rare, the stack is not. A winner
+ * that would not track by its fit (track_min_fit) and contradicts the map
+ * (conflict_max: a look-alike place within reach of a robot carried
+ * farther) is not taken. */
+static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
+                          rsm_mapmatch_result_t *res)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const float fit = loc->state.persistent.fit;
+    const float need = res->hit + 0.5f * (fit - res->hit);
+    rsm_pose_t start[RECOVER_STARTS];
+    rsm_pose_t found_pose[RECOVER_STARTS];
+    rsm_mapmatch_result_t won;
+    float share;
+    float found_hit[RECOVER_STARTS];
+    float rival;
+    float wide[9];
+    int found;
+    int k;
+    int best = -1;
+    memcpy(wide, loc->ekf.p, sizeof wide);
+    wide[0] += radius_m * radius_m;
+    wide[4] += radius_m * radius_m;
+    wide[8] += cfg->recover_rad * cfg->recover_rad;
+    found = rsm_mapmatch_search(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, radius_m,
+                                cfg->recover_rad, start, RECOVER_STARTS);
+    /* The coarse score only ranks basins: descend from each. */
+    for (k = 0; k < found; ++k) {
+        rsm_mapmatch_result_t alt;
+        /* Not unpinned: each descent starts where the search put it and
+         * only the fit decides, measured against the plain match. */
+        found_hit[k] = -1.0f;
+        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[k], NULL,
+                         &alt) == RSM_OK) {
+            found_hit[k] = alt.hit;
+            found_pose[k] = alt.pose;
+            if (best < 0 || alt.hit > found_hit[best]) {
+                best = k;
+            }
+        }
+    }
+    if (best < 0 || !(found_hit[best] >= cfg->recover_ratio * fit && found_hit[best] >= need &&
+                      found_hit[best] > res->hit)) {
+        return RECOVERY_NONE;
+    }
+    rival = beyond_doubt(cfg, &res->pose, &found_pose[best]) ? res->hit : 0.0f;
+    for (k = 0; k < found; ++k) {
+        if (k != best && found_hit[k] > rival && beyond_doubt(cfg, &found_pose[k], &found_pose[best])) {
+            rival = found_hit[k];
+        }
+    }
+    if (found_hit[best] <= rival * (1.0f + cfg->recover_margin)) {
+        return RECOVERY_AMBIGUOUS;
+    }
+    /* The same descent again: deterministic, so the same result. */
+    if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[best], NULL,
+                     &won) != RSM_OK ||
+        (won.hit < cfg->track_min_fit * fit && contradicts(loc, &won.pose, npts, &share))) {
+        return RECOVERY_NONE;
+    }
+    *res = won;
+    return RECOVERY_TAKEN;
+}
+
+static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_moved, rsm_localizer_report_t *rep,
+                              stage_clock_t *clk, int *contradicted)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_pose_t pred = loc->ekf.x;
+    rsm_mapmatch_result_t res;
+    rsm_mapmatch_unpin_t unpin;
+    int ambiguous = 0;
+    int doubted = 0;
+    int poor;
+    int rc;
+    if (!loc->have_scan) {
+        return RSM_SCAN_FIRST;
+    }
+    stage_switch(clk, RSM_STAGE_MAPMATCH);
+    rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, pred.theta, &unpin);
+    rep->unpinned = unpin.frac;
+    if (unpin.frac > 0.0f) {
+        loc->counters.unpinned++;
+    }
+    rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
+                      &res);
+    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, &rc, &res, &doubted);
+    if (rep->odometry == RSM_ODOMETRY_CAUGHT_UP) {
+        loc->counters.caught_up++;
+    } else if (rep->odometry == RSM_ODOMETRY_REFUTED) {
+        loc->counters.refuted++;
+    } else if (rep->odometry == RSM_ODOMETRY_RECOUNTED) {
+        loc->counters.recounted++;
+    }
+    poor = rc == RSM_OK && res.hit < cfg->recover_ratio * loc->state.persistent.fit;
+    if ((poor || doubted) && cfg->recover_m > 0.0f) {
+        /* Far worse than recent scans, or odometry's step doubted with no
+         * prediction fitting well: odometry may be off by more than any
+         * basin. The smallest correction that explains the scan first: a
+         * turn misjudged (every heading within recover_rad, the position
+         * within one coarse cell), and only if that does not fit, a shift up
+         * to recover_m (a bump, a kidnap). Along a corridor a shifted pose
+         * can fit about as well as the right one. */
+        const float near_m = rsm_tmap_cell(&loc->state.persistent.map, (uint32_t)cfg->tmap.levels - 1u);
+        loc->counters.searches++;
+        /* An ambiguous near search is not widened: a farther pose would
+         * have that same rival, and the wider search might not see it. */
+        recovery_t r = recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res);
+        if (r == RECOVERY_NONE && near_m < cfg->recover_m) {
+            r = recover(loc, npts, &pred, cfg->recover_m, &res);
+        }
+        if (r == RECOVERY_TAKEN) {
+            loc->counters.recovered++;
+            rep->recovered = 1u;
+            poor = 0;
+        } else if (r == RECOVERY_AMBIGUOUS) {
+            loc->counters.ambiguous++;
+            ambiguous = 1;
+        }
+    }
+    rep->inliers = res.used;
+    rep->iterations = res.iterations;
+    rep->measured = res.pose;
+    rep->mahalanobis_d2 = res.d2;
+    if (rc == RSM_OK) {
+        /* Against the recent scans' fit: 1 for the first match. */
+        rep->fit_ratio = loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 1.0f;
+    }
+    if (rc != RSM_OK || res.used < cfg->min_points / 2u) {
+        return RSM_SCAN_LOW_SUPPORT;
+    }
+    if (!rep->recovered && res.hit < cfg->track_min_fit * loc->state.persistent.fit &&
+        contradicts(loc, &res.pose, npts, &rep->crossing)) {
+        /* Its beams pass through the map's walls: placed where the map
+         * holds other walls (a robot carried, a look-alike place), or the
+         * map holds a wall twice (a place mapped again after a drift). It
+         * does not track and is not written (the map would soon agree with
+         * a wrong pose); fitting poorly it is refused, else fused: the
+         * match may still be the best there is. */
+        *contradicted = 1;
+        if (poor) {
+            return RSM_SCAN_POOR_FIT;
+        }
+    }
+    if (poor && cfg->refuse_poor && (ambiguous || !odometry_moved)) {
+        /* Fitted far worse than recent scans and no search proved a pose,
+         * while odometry stood still (the robot carried, or turning faster
+         * than the scans can follow) or a search found rival poses: the
+         * prediction is kept, and the scan is not written. A robot that
+         * drives into new ground fits poorly too (its new points read 0,
+         * its beams cross nothing the map holds), and its scans are fused
+         * and written as before, or the map could not grow into a hall. */
+        return RSM_SCAN_POOR_FIT;
+    }
+    rep->residual_m = sqrtf(res.cost);
+    stage_switch(clk, RSM_STAGE_EKF);
+    if (cfg->mapmatch.gate_d2 > 0.0f && res.d2 > cfg->mapmatch.gate_d2) {
+        loc->ekf.rejected++;
+        return RSM_SCAN_JUMP;
+    }
+    loc->ekf.x = res.pose;
+    memcpy(loc->ekf.p, res.cov, sizeof loc->ekf.p);
+    loc->ekf.updates++;
+    /* A slow mean, so that a few poor scans do not lower the bar. */
+    if (loc->state.persistent.fit > 0.0f) {
+        loc->state.persistent.fit += 0.05f * (res.hit - loc->state.persistent.fit);
+    } else {
+        loc->state.persistent.fit = res.hit;
+    }
+    return RSM_SCAN_ACCEPTED;
+}
+
+/* Starts writing the scan into the persistent map at est once the robot has
+ * moved far enough since the last write (or for the first scan); the write
+ * then runs over this and the next scans (tmap.write_cells), from loc->frame.world,
+ * which nothing else writes meanwhile. A write still running when the next
+ * one is due is finished first. Returns 1 when a scan that found too
+ * little map to match (unmatched) was not written because it contradicts
+ * the map, else 0. */
+static int write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, int first, int unmatched,
+                      rsm_localizer_report_t *rep)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    rsm_tmap_t *map = &loc->state.persistent.map;
+    const rsm_pose_t d = rsm_pose_between(&loc->state.persistent.written, est);
+    uint8_t isolated[(RSM_MAX_BEAMS + 7) / 8];
+    rsm_point_t origin;
+    if (!first && sqrtf(d.x * d.x + d.y * d.y) < cfg->map_update_m && fabsf(d.theta) < cfg->map_update_rad) {
+        return 0;
+    }
+    if (unmatched && contradicts(loc, est, npts, &rep->crossing)) {
+        /* Too little map to match, and its beams pass through walls the
+         * map holds: not new ground but a wrong pose, and written the scan
+         * would make the map agree with it within a few writes. */
+        return 1;
+    }
+    (void)rsm_tmap_write_run(map, loc->frame.world, 0u);
+    /* The scan takes the memory of the global search's grids. */
+    loc->state.persistent.global.cached = 0u;
+    to_world(loc, est, npts);
+    origin.x = cfg->laser_mount.x;
+    origin.y = cfg->laser_mount.y;
+    origin = rsm_pose_apply(est, &origin);
+    /* With the isolation rule on (off by default: it costs ACES, docs/map.md)
+     * returns no neighbour confirms stay out of the map (they still count
+     * in matching, where a map that holds only confirmed walls outvotes
+     * them): a map keeps what it is given for minutes, and phantom returns
+     * would take its memory and blur its walls. */
+    if (rsm_points_isolated(loc->frame.world, npts, &origin, &cfg->isolation, isolated) > 0u) {
+        size_t k;
+        size_t kept = 0;
+        for (k = 0; k < npts; ++k) {
+            if (rsm_bit_get(isolated, k)) {
+                loc->counters.unconfirmed++;
+            } else {
+                loc->frame.world[kept++] = loc->frame.world[k];
+            }
+        }
+        npts = kept;
+    }
+    if (rsm_tmap_write_begin(map, &origin, loc->frame.world, npts) == RSM_OK) {
+        loc->state.persistent.written = *est;
+    }
+    return 0;
+}
+
+static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep, stage_clock_t *clk)
+{
+    const rsm_pose_t pred = loc->ekf.x;
+    rsm_icp_result_t res;
+    float r[9];
+    int rc;
+    rsm_outcome_t out;
+    if (!loc->have_scan) {
+        return RSM_SCAN_FIRST;
+    }
+    stage_switch(clk, RSM_STAGE_ICP);
+    rc = rsm_icp_align(&loc->state.icp, loc->pts, npts, &pred, &res);
+    rep->iterations = res.iterations;
+    rep->inliers = res.pairs;
+    if (rc != RSM_OK) {
+        return RSM_SCAN_LOW_SUPPORT;
+    }
+    rep->residual_m = res.rms_m;
+    stage_switch(clk, RSM_STAGE_EKF);
+    measurement_noise(loc->cfg, res.rms_m, res.pairs, 4.0f, r);
+    out = fuse(loc, &res.pose, r, rep);
+    return out;
+}
+
+/* A global search is to begin at the next usable scan, over positions
+ * within radius_m of the estimate then (0: the whole map). */
+static void begin_global(rsm_localizer_t *loc, float radius_m)
+{
+    loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
+    loc->state.persistent.global.unproven = 0u;
+    loc->state.persistent.global.radius_m = radius_m;
+    if (!(loc->state.persistent.map_fit > 0.0f)) {
+        /* A map made in this run: its scans' recent fit is the bar. */
+        loc->state.persistent.map_fit = loc->state.persistent.fit;
+    }
+}
+
+int rsm_localizer_global(rsm_localizer_t *loc)
+{
+    return rsm_localizer_global_near(loc, 0.0f);
+}
+
+int rsm_localizer_global_near(rsm_localizer_t *loc, float radius_m)
+{
+    const rsm_tmap_t *map;
+    int rc;
+    if (!ready(loc) || !(radius_m >= 0.0f && radius_m <= 1.0e6f)) {
+        return RSM_ERR_INVAL;
+    }
+    if (loc->cfg->method != RSM_METHOD_MAP) {
+        return RSM_ERR_NOSYS;
+    }
+    map = &loc->state.persistent.map;
+    if ((rc = rsm_global_check(map)) != RSM_OK) {
+        return rc;
+    }
+    begin_global(loc, radius_m);
+    loc->poor_run = loc->cfg->lost_scans;
+    loc->last.track = RSM_TRACK_LOST;
+    return RSM_OK;
+}
+
+int rsm_localizer_searching(const rsm_localizer_t *loc)
+{
+    return ready(loc) && global_running(loc);
+}
+
+/* The fit a proven place must reach a share of: the map's own (saved with
+ * it), else the recent scans' as the search began, else 1. */
+static float bar_fit(const rsm_localizer_t *loc)
+{
+    const float f = loc->state.persistent.map_fit;
+    return f > 0.0f ? f : 1.0f;
+}
+
+/* What the proof's steps cost, in the search's reads (about 45
+ * instructions each on the M4), so that global_budget spreads the proof
+ * over scans too: a kept pose's descent with the kept share of a scan,
+ * and the winner's with the whole scan at hand (measured on the M4). */
+#define PROVE_WORK 3000u
+#define WIN_WORK 12000u
+/* A search's beginning (the scan's points and wall directions, the
+ * grids' layout) costs about this much. */
+#define BEGIN_WORK 3000u
+/* Proofs of the same kept poses, each with a scan that follows, while the
+ * best fits well but a rival is too close or the scan does not pin it,
+ * before a new search; each once the robot has moved this far or turned
+ * this much since the last. */
+#define PROVE_ROUNDS 4u
+#define PROVE_AGAIN_M 0.3f
+#define PROVE_AGAIN_RAD 0.2f
+/* The winner is looked for again around where odometry carried it (a near
+ * search: most of a descent's cost) only when its reach is this much
+ * beyond two cells: within it, the descent from the wide prior finds it. */
+#define NEAR_FROM_M 0.1f
+
+/* Keeps a share of this scan's readings (taken evenly) for the proof, with
+ * the estimate now: every kept pose is descended with the same scan. */
+static void keep_seen(rsm_localizer_t *loc, size_t npts)
+{
+    rsm_global_t *g = &loc->state.persistent.global;
+    const size_t cap = sizeof g->pts / sizeof g->pts[0];
+    const size_t n = npts < cap ? npts : cap;
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        g->pts[k] = loc->pts[k * npts / n];
+    }
+    g->nseen = (uint32_t)n;
+    g->seen_at = loc->ekf.x;
+}
+
+/* Kept pose k descended with the kept scan, from its cell (so under a
+ * prior of two cells and two heading steps): its fit and pose (as of that
+ * scan) to g->hit[k] and g->end[k]. */
+static void prove_one(rsm_localizer_t *loc, uint32_t k)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    rsm_global_t *g = &loc->state.persistent.global;
+    const rsm_tmap_t *map = &loc->state.persistent.map;
+    const float cell = rsm_tmap_cell(map, g->level);
+    float wide[9];
+    rsm_mapmatch_result_t res;
+    memset(wide, 0, sizeof wide);
+    wide[0] = wide[4] = 4.0f * cell * cell;
+    wide[8] = 4.0f * g->step_rad * g->step_rad;
+    g->hit[k] = -1.0f;
+    g->end[k] = g->cand[k].pose;
+    if (rsm_mapmatch(map, &cfg->mapmatch, g->pts, g->nseen, &g->cand[k].pose, wide, &g->cand[k].pose, NULL, &res) ==
+        RSM_OK) {
+        g->hit[k] = res.hit;
+        g->end[k] = res.pose;
+    }
+}
+
+/* Kept pose k as descended, carried by odometry to this scan. */
+static rsm_pose_t proved_now(const rsm_localizer_t *loc, uint32_t k)
+{
+    const rsm_global_t *g = &loc->state.persistent.global;
+    const rsm_pose_t since = rsm_pose_between(&g->seen_at, &loc->ekf.x);
+    return rsm_pose_compose(&g->end[k], &since);
+}
+
+/* The kept poses' verdict once each is descended with the kept scan
+ * (prove_one): the best is the winner when its fit reaches global_min_fit
+ * of the map's (saved with it) and beats every pose a doubt away from it by
+ * recover_margin (all fits of the same scan). 1: a winner, in *win; 0: a
+ * rival too close; -1: the best fits too poorly. */
+static int prove_verdict(const rsm_localizer_t *loc, uint32_t *win)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_global_t *g = &loc->state.persistent.global;
+    float rival = 0.0f;
+    uint32_t k;
+    uint32_t best = 0;
+    if (g->found == 0u) {
+        return -1;
+    }
+    for (k = 1; k < g->found; ++k) {
+        if (g->hit[k] > g->hit[best]) {
+            best = k;
+        }
+    }
+    /* A place the map holds fits about as well as the map's own scans did
+     * (saved with it): a wrong place in a building of look-alike rooms fits
+     * half as well (measured on ACES: 0.41 to 0.44 against 0.86). */
+    if (!(g->hit[best] >= cfg->global_min_fit * bar_fit(loc))) {
+        return -1;
+    }
+    for (k = 0; k < g->found; ++k) {
+        if (k != best && g->hit[k] > rival && beyond_doubt(cfg, &g->end[k], &g->end[best])) {
+            rival = g->hit[k];
+        }
+    }
+    if (g->hit[best] <= rival * (1.0f + cfg->recover_margin)) {
+        return 0;
+    }
+    *win = best;
+    return 1;
+}
+
+/* The winner with the scan at hand: carried forward by odometry's motion
+ * since the kept scan, looked for again around there when the robot drove
+ * far meanwhile (the search was spread over scans), and descended under a
+ * prior as wide as odometry's drift. Taken when it fits this scan as the
+ * verdict asked of the kept one and the scan pins it. 1: taken into the
+ * filter; 0: not. */
+static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    rsm_global_t *g = &loc->state.persistent.global;
+    const rsm_tmap_t *map = &loc->state.persistent.map;
+    const rsm_pose_t moved = rsm_pose_between(&g->seen_at, &loc->ekf.x);
+    const float cell = rsm_tmap_cell(map, g->level);
+    const float travelled = sqrtf(moved.x * moved.x + moved.y * moved.y);
+    /* How far odometry may have drifted since the kept scan: 10 % of the
+     * travel and 0.05 rad a metre or radian, within the recovery search's
+     * reach. */
+    float reach_m = 2.0f * cell + 0.1f * travelled;
+    float reach_rad = 2.0f * g->step_rad + 0.05f * (travelled + fabsf(moved.theta));
+    float wide[9];
+    rsm_pose_t start = proved_now(loc, win);
+    rsm_pose_t near[2];
+    rsm_mapmatch_result_t res;
+    rsm_mapmatch_result_t r2;
+    int n = 0;
+    int m;
+    int have = 0;
+    reach_m = reach_m < cfg->recover_m ? reach_m : cfg->recover_m;
+    reach_rad = reach_rad < cfg->recover_rad ? reach_rad : cfg->recover_rad;
+    reach_m = reach_m > 2.0f * cell ? reach_m : 2.0f * cell;
+    memset(wide, 0, sizeof wide);
+    wide[0] = wide[4] = reach_m * reach_m;
+    wide[8] = reach_rad * reach_rad;
+    if (reach_m > 2.0f * cell + NEAR_FROM_M) {
+        /* Carried far (odometry's drift past the descent's basin): look
+         * for it again around where odometry puts it. */
+        n = rsm_mapmatch_search(map, &cfg->mapmatch, loc->pts, npts, &start, reach_m, reach_rad, near, 2u);
+    }
+    if (n <= 0) {
+        near[0] = start;
+        n = 1;
+    }
+    for (m = 0; m < n; ++m) {
+        if (rsm_mapmatch(map, &cfg->mapmatch, loc->pts, npts, &start, wide, &near[m], NULL, &r2) == RSM_OK &&
+            (!have || r2.hit > res.hit)) {
+            res = r2;
+            have = 1;
+        }
+    }
+    /* This scan must fit as the verdict asked of the kept one: a winner
+     * that only the kept scan's share of readings bore out is no proof
+     * (measured on an Intel kidnap: a pose 9 m off fitted the share 0.80
+     * and this scan 0.69 of the map's own 0.93). */
+    if (!have || !(res.hit >= cfg->global_min_fit * bar_fit(loc))) {
+        return 0;
+    }
+    /* Its covariance says what the scan pins (under a prior at least two
+     * cells wide: as wide as the one it once had a descent of its own
+     * for, or wider). */
+    {
+        /* A pose the scan does not pin (along a bare corridor, its
+         * position is the search lattice's, not the scan's: measured on
+         * ACES, 0.3 to 0.6 m off) is no proof: its position's largest
+         * standard deviation must be within half a cell. */
+        const float a = res.cov[0];
+        const float d = res.cov[4];
+        const float b = res.cov[1];
+        const float largest = 0.5f * (a + d) + sqrtf(0.25f * (a - d) * (a - d) + b * b);
+        if (!(largest <= 0.25f * cell * cell)) {
+            return 0;
+        }
+    }
+    loc->ekf.x = res.pose;
+    memcpy(loc->ekf.p, res.cov, sizeof loc->ekf.p);
+    loc->ekf.updates++;
+    loc->state.persistent.fit = res.hit;
+    loc->state.persistent.written = res.pose;
+    return 1;
+}
+
+/* A scan while a global search is under way (RSM_METHOD_MAP). */
+static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    rsm_global_t *g = &loc->state.persistent.global;
+    const rsm_tmap_t *map = &loc->state.persistent.map;
+    const uint32_t budget = cfg->global_budget;
+    uint32_t used = 0;
+    if (g->phase == RSM_GLOBAL_PROVING && g->proved == 0u && g->rounds > 0u) {
+        /* A proof left in doubt is made again only from a new view: once
+         * the robot has moved on since (a stationary robot sees the same
+         * corridor, the same look-alike room). */
+        const rsm_pose_t d = rsm_pose_between(&g->seen_at, &loc->ekf.x);
+        uint32_t k;
+        if (sqrtf(d.x * d.x + d.y * d.y) < PROVE_AGAIN_M && fabsf(d.theta) < PROVE_AGAIN_RAD) {
+            return RSM_SCAN_SEARCHING;
+        }
+        /* The poses, carried by odometry to this scan, are descended with
+         * it. */
+        for (k = 0; k < g->found; ++k) {
+            g->cand[k].pose = rsm_pose_compose(&g->cand[k].pose, &d);
+        }
+        keep_seen(loc, npts);
+    }
+    if (g->phase == RSM_GLOBAL_PROVING) {
+        /* The kept poses first, as many a scan as global_budget pays for
+         * (at least one; all with no budget); the winner with a scan of
+         * its own unless the budget pays for it too. */
+        int verdict = 1;
+        uint32_t win = 0;
+        while (g->proved < g->found && (budget == 0u || used == 0u || used + PROVE_WORK <= budget)) {
+            prove_one(loc, g->proved++);
+            used += PROVE_WORK;
+        }
+        if (g->proved == g->found) {
+            verdict = prove_verdict(loc, &win);
+            if (verdict > 0 && (budget == 0u || used == 0u || used + WIN_WORK <= budget)) {
+                used += WIN_WORK;
+                if (prove_win(loc, win, npts)) {
+                    g->phase = RSM_GLOBAL_IDLE;
+                    loc->counters.global_found++;
+                    rep->recovered = 1u;
+                    rep->fit_ratio = 1.0f;
+                    rep->measured = loc->ekf.x;
+                    rep->search_work = used;
+                    loc->counters.global_work += used;
+                    return RSM_SCAN_ACCEPTED;
+                }
+                /* It fitted the kept scan, not this one, or this one does
+                 * not pin it: in doubt. */
+                verdict = 0;
+            } else if (verdict > 0) {
+                /* The winner's turn comes with the next scan. */
+                verdict = 2;
+            }
+        }
+        if (g->proved < g->found || verdict == 2) {
+            rep->search_work = used;
+            loc->counters.global_work += used;
+            return RSM_SCAN_SEARCHING;
+        }
+        if (verdict == 0 && g->rounds < PROVE_ROUNDS) {
+            /* Left in doubt, though the best fits: the same poses, as
+             * descended and carried here, are proven again with this scan
+             * (the robot moved on: a rival along a corridor or in a
+             * look-alike room falls behind), before any new search. */
+            uint32_t k;
+            for (k = 0; k < g->found; ++k) {
+                g->cand[k].pose = proved_now(loc, k);
+            }
+            /* The poses now stand for this scan; the next round's kept
+             * scan is taken once the robot has moved. */
+            g->seen_at = loc->ekf.x;
+            g->at = loc->ekf.x;
+            g->proved = 0;
+            g->rounds++;
+            rep->search_work = used;
+            loc->counters.global_work += used;
+            return RSM_SCAN_SEARCHING;
+        }
+        /* Not proven: another view may settle it, searched with what is
+         * left of this scan's budget (or from the next scan). */
+        loc->counters.global_ambiguous++;
+        g->unproven++;
+        g->phase = RSM_GLOBAL_PENDING;
+        if (budget > 0u && used + BEGIN_WORK >= budget) {
+            rep->search_work = used;
+            loc->counters.global_work += used;
+            return RSM_SCAN_SEARCHING;
+        }
+    }
+    if (g->phase == RSM_GLOBAL_PENDING) {
+        /* The bar falls with each search that proved nothing
+         * (rsm_global_share). */
+        const float share = rsm_global_share(map, g->radius_m, g->unproven, cfg->global_min_share);
+        /* The grids take the memory of the scan a map write reads: the
+         * write in progress, if any, ends first. */
+        (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world, 0u);
+        if (rsm_global_begin(g, loc->frame.global_grid, map, loc->pts, npts, &loc->ekf.x, share) != RSM_OK) {
+            /* The map no longer fits the search (written since it was
+             * asked for): the search is given up, counted as unproven. */
+            loc->counters.global_ambiguous++;
+            g->phase = RSM_GLOBAL_IDLE;
+            return RSM_SCAN_SEARCHING;
+        }
+        if (g->radius_m > 0.0f) {
+            /* Near the estimate, in a window that doubles with every
+             * second search that proved nothing, to the whole map. */
+            rsm_global_window(g, loc->frame.global_grid, map, loc->ekf.x.x, loc->ekf.x.y,
+                              rsm_global_radius(g->radius_m, g->unproven));
+        }
+        loc->counters.global_searches++;
+        g->phase = RSM_GLOBAL_RUNNING;
+        used += BEGIN_WORK;
+        if (budget > 0u && used >= budget) {
+            rep->search_work = used;
+            loc->counters.global_work += used;
+            return RSM_SCAN_SEARCHING;
+        }
+    }
+    if (rsm_global_run(g, loc->frame.global_grid, map, budget > 0u ? budget - used : 0u, &used) == 0) {
+        g->phase = RSM_GLOBAL_PROVING;
+        g->proved = 0;
+        g->rounds = 0;
+    }
+    rep->search_work = used;
+    loc->counters.global_work += used;
+    return RSM_SCAN_SEARCHING;
+}
+
+/* The tracking state after a scan: a scan tracks when it was fused and,
+ * matched against the persistent map, fitted about as well as recent scans
+ * (track_min_fit of their fit; a proven search's winner does) without its
+ * beams passing through the map's walls (conflict_max), or it started the
+ * map; odometry alone is not checked. Counts the scans in a row that did
+ * not; one that contradicts the map counts as lost_scans of them: the
+ * robot is elsewhere, and with global_when_lost the search should not
+ * wait (on Intel's kidnaps with the map written, found again after a
+ * median 73 scans instead of 104). */
+static rsm_track_t track_state(rsm_localizer_t *loc, rsm_outcome_t outcome, const rsm_localizer_report_t *rep,
+                               int contradicted)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    int tracks = outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_ODOMETRY || outcome == RSM_SCAN_ACCEPTED;
+    if (outcome == RSM_SCAN_ACCEPTED && cfg->method == RSM_METHOD_MAP) {
+        tracks = rep->fit_ratio >= cfg->track_min_fit && !contradicted;
+    }
+    if (tracks) {
+        loc->poor_run = 0u;
+        return RSM_TRACK_TRACKING;
+    }
+    if (contradicted && loc->poor_run < cfg->lost_scans) {
+        loc->poor_run = cfg->lost_scans - 1u;
+    }
+    if (loc->poor_run < UINT32_MAX) {
+        loc->poor_run++;
+    }
+    return loc->poor_run >= cfg->lost_scans ? RSM_TRACK_LOST : RSM_TRACK_UNCERTAIN;
+}
+
+int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep)
+{
+    rsm_localizer_report_t local;
+    stage_clock_t clk;
+    rsm_outcome_t outcome;
+    rsm_pose_t est;
+    size_t npts;
+    float prior_var;
+    int odometry_moved;
+    int global_taken = 0;
+    int contradicted = 0;
+    rsm_pose_t pred;
+    int n;
+    if (rep == NULL) {
+        rep = &local;
+    }
+    memset(rep, 0, sizeof *rep);
+    if (!ready(loc) || scan == NULL || scan->count > RSM_MAX_BEAMS) {
+        return RSM_ERR_INVAL;
+    }
+    stage_begin(&clk, loc->cfg, rep);
+    loc->counters.scans++;
+    if (loc->have_scan && scan->stamp_us < loc->last_stamp_us) {
+        loc->counters.outcome[RSM_SCAN_OUT_OF_ORDER]++;
+        rep->outcome = RSM_SCAN_OUT_OF_ORDER;
+        rep->track = loc->last.track;
+        rep->pose = loc->ekf.x;
+        memcpy(rep->cov, loc->ekf.p, sizeof rep->cov);
+        stage_end(&clk);
+        return RSM_ERR_ORDER;
+    }
+    if (loc->have_scan && loc->counters.motions == loc->motions_at_scan) {
+        /* No odometry since the last scan: the robot may still have moved. */
+        static const rsm_motion_t still = {0.0f, 0.0f, 0.0f};
+        (void)rsm_localizer_motion(loc, &still);
+    }
+    loc->motions_at_scan = loc->counters.motions;
+    odometry_moved = 0;
+    pred = loc->ekf.x;
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        odometry_moved = moved(&loc->state.persistent.anchor, &loc->ekf.x);
+        if (!odometry_moved && loc->have_scan && refuting(loc->cfg)) {
+            /* Odometry stands still: the robot may have stopped, or odometry
+             * stalled while it still moves (it will catch up: doubt_step),
+             * as fast as it last did (odometry's last step, or what the last
+             * scan found while odometry stood still). The prediction stays,
+             * but no surer than that step's size, so that the scan can show
+             * it; a robot that stopped soon shows no step. */
+            const rsm_pose_t *l = &loc->state.persistent.last_step;
+            const float d2 = l->x * l->x + l->y * l->y;
+            const float q[9] = {d2, 0.0f, 0.0f, 0.0f, d2, 0.0f, 0.0f, 0.0f, l->theta * l->theta};
+            static const rsm_motion_t none = {0.0f, 0.0f, 0.0f};
+            (void)rsm_ekf_predict(&loc->ekf, &none, q);
+        }
+    }
+    prior_var = loc->ekf.p[8];
+    n = rsm_scan_to_points_cached(scan, &loc->cfg->limits, &loc->trig, loc->pts, RSM_MAX_BEAMS, &loc->counters.drops);
+    npts = n > 0 ? (size_t)n : 0u;
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        npts = drop_occluded(loc, npts);
+    }
+    apply_mount(loc, npts);
+    rep->points = (uint32_t)npts;
+    if (npts < loc->cfg->min_points) {
+        outcome = RSM_SCAN_FEW_POINTS;
+    } else if (loc->cfg->method == RSM_METHOD_ODOMETRY) {
+        outcome = RSM_SCAN_ODOMETRY;
+    } else if (loc->cfg->method == RSM_METHOD_ICP) {
+        outcome = step_icp(loc, npts, rep, &clk);
+    } else if (global_running(loc)) {
+        stage_switch(&clk, RSM_STAGE_MAPMATCH);
+        outcome = step_global(loc, npts, rep);
+        global_taken = outcome == RSM_SCAN_ACCEPTED;
+    } else if (loc->cfg->method == RSM_METHOD_MAP) {
+        outcome = step_map(loc, npts, odometry_moved, rep, &clk, &contradicted);
+    } else {
+        outcome = step_rsm(loc, npts, rep, &clk);
+    }
+    if (calibrating(loc)) {
+        calibrate(loc, outcome, prior_var, rep->recovered || rep->odometry != RSM_ODOMETRY_TRUSTED);
+    }
+    stage_switch(&clk, RSM_STAGE_MAP);
+    est = loc->ekf.x;
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        /* Odometry is counted from the last scan that trusted it: through
+         * a stall (it stands still), past a step the scan refuted, past one
+         * the match had to correct by more than a doubt, and past one no
+         * match checked (a scan refused or unusable). */
+        const int agreed = outcome == RSM_SCAN_ACCEPTED && rep->odometry == RSM_ODOMETRY_TRUSTED &&
+                           odometry_moved && !beyond_doubt(loc->cfg, &pred, &est);
+        if (outcome == RSM_SCAN_FIRST || agreed || global_taken || rep->odometry == RSM_ODOMETRY_CAUGHT_UP ||
+            rep->odometry == RSM_ODOMETRY_RECOUNTED) {
+            static const rsm_pose_t none = {0.0f, 0.0f, 0.0f};
+            loc->state.persistent.trusted = est;
+            loc->state.persistent.since = none;
+        } else {
+            loc->state.persistent.held = !odometry_moved ? RSM_ODOMETRY_CAUGHT_UP
+                                         : rep->odometry == RSM_ODOMETRY_REFUTED ? RSM_ODOMETRY_REFUTED
+                                                                                 : RSM_ODOMETRY_RECOUNTED;
+        }
+        /* The robot's step: the estimate's, but odometry's where a search
+         * jumped (a jump is no speed). */
+        if (outcome == RSM_SCAN_FIRST || global_taken || outcome == RSM_SCAN_SEARCHING) {
+            static const rsm_pose_t none = {0.0f, 0.0f, 0.0f};
+            loc->state.persistent.last_step = none;
+        } else {
+            loc->state.persistent.last_step =
+                rsm_pose_between(&loc->state.persistent.anchor, rep->recovered ? &pred : &est);
+        }
+        loc->state.persistent.anchor = est;
+    }
+    if (npts >= loc->cfg->min_points) {
+        const int fused = outcome == RSM_SCAN_ACCEPTED || outcome == RSM_SCAN_FIRST || outcome == RSM_SCAN_ODOMETRY;
+        switch (loc->cfg->method) {
+        case RSM_METHOD_MAP:
+            /* A scan that found too little map to match (new ground, or the
+             * map there was evicted) is written at the prediction, or the
+             * map could never grow back; one that was refused, or whose beams
+             * pass through the map's walls (conflict_max), is not. */
+            if ((fused || outcome == RSM_SCAN_LOW_SUPPORT) && !contradicted && !loc->cfg->map_frozen) {
+                contradicted = write_tmap(loc, &est, npts, outcome == RSM_SCAN_FIRST,
+                                          outcome == RSM_SCAN_LOW_SUPPORT, rep);
+            }
+            break;
+        case RSM_METHOD_PAPER:
+            if (fused || loc->cfg->map_on_reject) {
+                (void)rsm_map_recenter(&loc->state.paper.map, est.x, est.y);
+                to_world(loc, &est, npts);
+                (void)rsm_map_add_points(&loc->state.paper.map, loc->frame.world, npts);
+            }
+            break;
+        case RSM_METHOD_ICP:
+            if (fused || loc->cfg->map_on_reject) {
+                to_world(loc, &est, npts);
+                (void)rsm_icp_set_reference(&loc->state.icp, loc->frame.world, npts);
+            }
+            break;
+        default:
+            break;
+        }
+        loc->have_scan = 1u;
+    }
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        /* The first scan matched nothing, so it has the time to write all
+         * of itself, and the second has a whole map to match. */
+        (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world,
+                                 outcome == RSM_SCAN_FIRST ? 0u : loc->cfg->tmap.write_cells);
+    }
+    if (contradicted) {
+        loc->counters.contradicted++;
+    }
+    rep->track = track_state(loc, outcome, rep, contradicted);
+    if (global_running(loc)) {
+        /* Searching, the estimate is unknown whatever the scans did. */
+        rep->track = RSM_TRACK_LOST;
+    } else if (rep->track == RSM_TRACK_LOST && loc->cfg->method == RSM_METHOD_MAP && loc->cfg->global_when_lost &&
+               rsm_global_check(&loc->state.persistent.map) == RSM_OK) {
+        /* Near where it was lost first (the recovery's reach), the window
+         * doubling with each search that proves nothing. */
+        begin_global(loc, loc->cfg->recover_m > 0.0f ? loc->cfg->recover_m : 0.0f);
+    }
+    loc->counters.track[rep->track]++;
+    loc->last_stamp_us = scan->stamp_us;
+    loc->counters.outcome[outcome]++;
+    rep->outcome = outcome;
+    rep->pose = est;
+    memcpy(rep->cov, loc->ekf.p, sizeof rep->cov);
+    stage_end(&clk);
+    loc->last = *rep;
+    return RSM_OK;
+}

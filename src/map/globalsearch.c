@@ -1,0 +1,1228 @@
+/* Branch and bound over the whole map: src/map/globalsearch.h has the method,
+ * docs/globalsearch.md the measurements. */
+#include "map/globalsearch.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "core/fmath.h"
+#include "rsm/status.h"
+#include "map/tmap_read.h"
+
+/* A pose is kept while it scores within this share of the best: its rivals
+ * must be descended too, or a wrong winner could not be told apart. */
+#define KEEP_SHARE 0.2f
+#define LEAF_SLACK 0.05f
+#define MAX_H ((uint32_t)RSM_GLOBAL_MAX_H)
+#define MAX_BASE_H ((uint32_t)RSM_GLOBAL_MAX_BASE_H)
+/* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart. */
+#define FINEST_BELOW 2u
+
+/* Floor division by 2^h for any sign. */
+static int32_t floor_shift(int32_t v, uint32_t h)
+{
+    return v >= 0 ? (int32_t)((uint32_t)v >> h) : -(int32_t)(((uint32_t)(-(v + 1)) >> h) + 1u);
+}
+
+/* The level scored: the second coarsest (0.2 m cells by default). The
+ * coarsest (0.4 m) is too full to tell places apart in a building:
+ * measured on the Intel log, dozens of wrong poses put every point of a
+ * scan on an occupied coarse cell. */
+static uint32_t search_level(const rsm_tmap_t *map)
+{
+    return map->cfg.levels >= 2u ? (uint32_t)map->cfg.levels - 2u : 0u;
+}
+
+/* The level whose walls give the map's directions: one finer. */
+static uint32_t direction_level(uint32_t level)
+{
+    return level > 0u ? level - 1u : 0u;
+}
+
+/* Blocks a side of grid h over w cells, its blocks 2^e cells apart: the
+ * windows [u, u + 2^h] that touch the map start at u = -2^h .. w - 1. */
+static uint32_t grid_blocks(uint32_t w, uint32_t h, uint32_t e)
+{
+    return ((w - 1u + (1u << h)) >> e) + 1u;
+}
+
+/* The bits of grids 1 .. top; more than any cap when a grid is wider than
+ * its block count's type holds. */
+static uint32_t grid_bits(uint32_t w, uint32_t hgt, uint32_t top, const uint8_t *e)
+{
+    uint32_t bits = 0;
+    uint32_t h;
+    for (h = 1; h <= top; ++h) {
+        const uint32_t nx = grid_blocks(w, h, e[h]);
+        const uint32_t ny = grid_blocks(hgt, h, e[h]);
+        if (nx > 0xFFFFu || ny > 0xFFFFu) {
+            return UINT32_MAX;
+        }
+        bits += nx * ny;
+    }
+    return bits;
+}
+
+/* The grids for a map of w x hgt cells on the search level: the boxes'
+ * sizes up to the whole map (*top; up to `fixed` instead, for a window,
+ * when not 0), and for each box size h the spacing
+ * 2^e[h] of its grid's blocks, each of which bounds the windows of 2^h + 1
+ * cells that start in it: 2^e[h] - 1 cells wider than a window, so the
+ * finer the spacing, the tighter the bound and the more bits. The coarsest
+ * that fits (blocks 2^(h + 1 + r) apart) is made finer a box size at a
+ * time, the smallest boxes first: they are the most numerous (measured on
+ * the Intel log, exact windows at 0.4 and 0.8 m read 2.5 times fewer
+ * blocks than windows twice as wide). RSM_ERR_NOMEM when even the coarsest
+ * does not fit. */
+static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t *top, uint8_t *e)
+{
+    const uint32_t cap = (uint32_t)RSM_GLOBAL_GRID_BYTES * 8u;
+    const uint32_t side = w > hgt ? w : hgt;
+    uint32_t r;
+    uint32_t h;
+    *top = fixed > 1u ? fixed : 1u;
+    while (fixed == 0u && *top <= MAX_H && (1u << *top) < side) {
+        ++*top;
+    }
+    if (*top > MAX_H) {
+        return RSM_ERR_NOMEM;
+    }
+    for (r = 0;; ++r) {
+        if (2u + r > MAX_BASE_H) {
+            return RSM_ERR_NOMEM;
+        }
+        for (h = 1; h <= *top; ++h) {
+            e[h] = (uint8_t)(h + 1u + r);
+        }
+        if (grid_bits(w, hgt, *top, e) <= cap) {
+            break;
+        }
+    }
+    for (h = 1; h <= *top; ++h) {
+        /* Blocks a quarter of the box apart at the finest: beyond that the
+         * bound hardly tightens (windows of 1.8 m and more hold walls
+         * anyway), and every bit costs its build. */
+        while (e[h] > 0u && e[h] + FINEST_BELOW > h) {
+            e[h]--;
+            if (grid_bits(w, hgt, *top, e) > cap) {
+                e[h]++;
+                break;
+            }
+        }
+    }
+    return RSM_OK;
+}
+
+/* Doublings of a window of radius_m before it is as wide as map's box on
+ * the search level (none for radius_m 0: the whole map). */
+static uint32_t widenings(const rsm_tmap_t *map, float radius_m)
+{
+    int32_t b[4];
+    uint32_t widen = 0;
+    if (radius_m > 0.0f && rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3])) {
+        const int32_t side = b[2] - b[0] > b[3] - b[1] ? b[2] - b[0] + 1 : b[3] - b[1] + 1;
+        float width = 2.0f * radius_m / rsm_tmap_cell(map, search_level(map));
+        while (widen < 16u && width < (float)side) {
+            width *= 2.0f;
+            widen++;
+        }
+    }
+    return widen;
+}
+
+float rsm_global_radius(float radius_m, uint32_t unproven)
+{
+    const uint32_t d = unproven / 2u;
+    return radius_m * (float)(1u << (d < 16u ? d : 16u));
+}
+
+float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven, float min_share)
+{
+    const uint32_t widen = widenings(map, radius_m);
+    /* Each window, the whole map's last, is searched at the first two
+     * bars before it doubles: one that holds the robot finds it at the
+     * second where a person hides a point (a look-alike further out could
+     * pass the first bar alone), and one that does not costs little, where
+     * a lower bar over a wide window reads ten times as much as the first
+     * (a robot carried away). The bar falls further only after searches of
+     * the whole map that proved nothing. */
+    const uint32_t lowered = unproven < 2u * widen + 2u ? unproven % 2u : unproven - 2u * widen;
+    /* Measured on the Intel and ACES logs (docs/globalsearch.md): a first
+     * search at 0.97, where a box whose window misses a single point is
+     * dropped, read about half of what one at 0.95 (a miss allowed) did,
+     * and still kept the true pose at most starts. */
+    const float share = lowered == 0u ? 0.97f : 1.0f - 0.05f * (float)(lowered < 20u ? lowered : 20u);
+    return share > min_share ? share : min_share;
+}
+
+int rsm_global_check(const rsm_tmap_t *map)
+{
+    int32_t b[4];
+    uint8_t e[RSM_GLOBAL_MAX_H + 1];
+    uint32_t top;
+    if (!rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3])) {
+        return RSM_ERR_DEGENERATE;
+    }
+    return layout((uint32_t)(b[2] - b[0] + 1), (uint32_t)(b[3] - b[1] + 1), 0u, &top, e);
+}
+
+static void set_bit(uint8_t *grid, uint32_t i)
+{
+    grid[i >> 3] = (uint8_t)(grid[i >> 3] | (1u << (i & 7u)));
+}
+
+static uint32_t get_bit(const uint8_t *grid, uint32_t i)
+{
+    return ((uint32_t)grid[i >> 3] >> (i & 7u)) & 1u;
+}
+
+/* Whether grid h holds a nonzero cell in the window [u, u + 2^h] x [v, v +
+ * 2^h] (cells of the search level): 1 when it may, 0 when it holds none. */
+static uint32_t grid_read(const rsm_global_t *g, const uint8_t *grid, uint32_t h, int32_t u, int32_t v)
+{
+    const int32_t x = u - g->ox + (int32_t)(1u << h);
+    const int32_t y = v - g->oy + (int32_t)(1u << h);
+    uint32_t a;
+    uint32_t b;
+    if (x < 0 || y < 0) {
+        return 0u;
+    }
+    a = (uint32_t)x >> g->grid_e[h];
+    b = (uint32_t)y >> g->grid_e[h];
+    if (a >= g->grid_nx[h] || b >= g->grid_ny[h]) {
+        return 0u;
+    }
+    return get_bit(grid, g->grid_at[h] + b * g->grid_nx[h] + a);
+}
+
+/* A tile of the search level into the finest grid: each nonzero cell of
+ * the grids' box (g->cache_box) sets the blocks whose windows hold it.
+ * Returns the cells looked at. */
+static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t *t)
+{
+    const uint32_t e = g->grid_e[1];
+    const uint32_t nx = g->grid_nx[1];
+    uint32_t c;
+    for (c = 0; c < (uint32_t)RSM_TMAP_TILE_CELLS; c += 2u) {
+        uint32_t k;
+        if (t->cell[c >> 1] == 0u) {
+            continue;
+        }
+        for (k = c; k < c + 2u; ++k) {
+            const int32_t cx = (int32_t)t->tx * RSM_TMAP_TILE_SIDE + (int32_t)(k & (RSM_TMAP_TILE_SIDE - 1u));
+            const int32_t cy = (int32_t)t->ty * RSM_TMAP_TILE_SIDE + (int32_t)(k >> RSM_TMAP_TILE_LOG2);
+            if (((((uint32_t)t->cell[k >> 1]) >> ((k & 1u) << 2)) & 15u) != 0u && cx >= g->cache_box[0] &&
+                cx <= g->cache_box[2] && cy >= g->cache_box[1] && cy <= g->cache_box[3]) {
+                const uint32_t x = (uint32_t)(cx - g->ox);
+                const uint32_t y = (uint32_t)(cy - g->oy);
+                uint32_t b;
+                for (b = y >> e; b <= (y + 2u) >> e; ++b) {
+                    uint32_t a;
+                    for (a = x >> e; a <= (x + 2u) >> e; ++a) {
+                        set_bit(grid, g->grid_at[1] + b * nx + a);
+                    }
+                }
+            }
+        }
+    }
+    return (uint32_t)RSM_TMAP_TILE_CELLS;
+}
+
+/* Block i of the grids (counted over all of them, from grid 2's first) from
+ * the grid below: the union of the finer blocks that cover its cells.
+ * Returns the blocks read. */
+static uint32_t grid_up(const rsm_global_t *g, uint8_t *grid, uint32_t i)
+{
+    uint32_t h = 2;
+    uint32_t e;
+    uint32_t f;
+    int32_t half;
+    uint32_t a;
+    uint32_t b;
+    int32_t c0;
+    int32_t c1;
+    int32_t d0;
+    int32_t d1;
+    int32_t c;
+    int32_t step;
+    uint32_t reads = 0;
+    while (h < g->top_h && i >= g->grid_at[h + 1u]) {
+        ++h;
+    }
+    e = g->grid_e[h];
+    f = g->grid_e[h - 1u];
+    half = (int32_t)(1u << (h - 1u));
+    b = (i - g->grid_at[h]) / g->grid_nx[h];
+    a = (i - g->grid_at[h]) - b * g->grid_nx[h];
+    /* Block a holds the cells a 2^e - 2^h .. a 2^e + 2^e - 1 from the map's
+     * first; finer block d those d 2^f - 2^(h-1) .. d 2^f + 2^f - 1. */
+    c0 = floor_shift((int32_t)(b << e) - half, f);
+    c1 = (int32_t)(((b << e) + (1u << e) - 1u) >> f);
+    d0 = floor_shift((int32_t)(a << e) - half, f);
+    d1 = (int32_t)(((a << e) + (1u << e) - 1u) >> f);
+    c0 = c0 > 0 ? c0 : 0;
+    d0 = d0 > 0 ? d0 : 0;
+    c1 = c1 < (int32_t)g->grid_ny[h - 1u] - 1 ? c1 : (int32_t)g->grid_ny[h - 1u] - 1;
+    d1 = d1 < (int32_t)g->grid_nx[h - 1u] - 1 ? d1 : (int32_t)g->grid_nx[h - 1u] - 1;
+    /* Finer blocks overlap: every step-th of them still covers the span
+     * (the last one always read). */
+    step = (int32_t)(((uint32_t)half >> f) + 1u);
+    for (c = c0; c <= c1; c = (c < c1 && c + step > c1) ? c1 : c + step) {
+        int32_t d;
+        for (d = d0; d <= d1; d = (d < d1 && d + step > d1) ? d1 : d + step) {
+            reads++;
+            if (get_bit(grid, g->grid_at[h - 1u] + (uint32_t)c * g->grid_nx[h - 1u] + (uint32_t)d) != 0u) {
+                set_bit(grid, i);
+                return reads;
+            }
+            if (d == d1) {
+                break;
+            }
+        }
+        if (c == c1) {
+            break;
+        }
+    }
+    return reads;
+}
+
+/* Lays the grids out over the map's box on the search level and clears
+ * them; they are filled by rsm_global_run, a tile at a time. */
+static int begin_grids(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1,
+                       uint32_t fixed)
+{
+    const uint32_t w = (uint32_t)(gx1 - gx0 + 1);
+    const uint32_t hgt = (uint32_t)(gy1 - gy0 + 1);
+    uint8_t e[RSM_GLOBAL_MAX_H + 1];
+    uint32_t at = 0;
+    uint32_t h;
+    int rc;
+    if ((rc = layout(w, hgt, fixed, &g->top_h, e)) != RSM_OK) {
+        return rc;
+    }
+    memset(g->grid_at, 0, sizeof g->grid_at);
+    memset(g->grid_nx, 0, sizeof g->grid_nx);
+    memset(g->grid_ny, 0, sizeof g->grid_ny);
+    memset(g->grid_e, 0, sizeof g->grid_e);
+    for (h = 1; h <= g->top_h; ++h) {
+        g->grid_e[h] = e[h];
+        g->grid_nx[h] = (uint16_t)grid_blocks(w, h, e[h]);
+        g->grid_ny[h] = (uint16_t)grid_blocks(hgt, h, e[h]);
+        g->grid_at[h] = at;
+        at += g->grid_nx[h] * g->grid_ny[h];
+    }
+    g->build_end = at;
+    memset(grid, 0, (at + 7u) >> 3);
+    g->ox = gx0;
+    g->oy = gy0;
+    g->root_i = gx0;
+    g->root_j = gy0;
+    g->root_h = g->top_h;
+    g->build_next = g->top_h >= 2u ? g->grid_at[2] : at;
+    return RSM_OK;
+}
+
+/* Wall directions, half a turn in RSM_GLOBAL_BINS bins, of the line from
+ * a to b, weighted by its length. */
+static void add_direction(float *hist, float dx, float dy, float w)
+{
+    float a = rsm_atan2f(dy, dx);
+    int32_t b;
+    if (a < 0.0f) {
+        a += RSM_PI;
+    }
+    b = (int32_t)(a * ((float)RSM_GLOBAL_BINS / RSM_PI));
+    if (b >= RSM_GLOBAL_BINS) {
+        b -= RSM_GLOBAL_BINS;
+    }
+    if (b >= 0) {
+        hist[b] += w;
+    }
+}
+
+/* The scan's wall directions: chords between readings four apart that lie
+ * 0.1 to 0.6 m apart (shorter ones are noise, longer ones span gaps). */
+static void scan_directions(rsm_global_t *g, const rsm_point_t *pts, size_t n)
+{
+    size_t k;
+    memset(g->dir_scan, 0, sizeof g->dir_scan);
+    for (k = 0; k + 4u < n; ++k) {
+        const float dx = pts[k + 4u].x - pts[k].x;
+        const float dy = pts[k + 4u].y - pts[k].y;
+        const float d2 = dx * dx + dy * dy;
+        if (d2 >= 0.01f && d2 <= 0.36f) {
+            add_direction(g->dir_scan, dx, dy, sqrtf(d2));
+        }
+    }
+}
+
+/* The grids and the map's directions over the whole map's box, cleared,
+ * to be built from its first tile (build). */
+static int begin_build(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1)
+{
+    int rc;
+    g->cached = 0u;
+    if ((rc = begin_grids(g, grid, gx0, gy0, gx1, gy1, 0u)) != RSM_OK) {
+        return rc;
+    }
+    memset(g->dir_map, 0, sizeof g->dir_map);
+    g->dir_next = 0;
+    g->cache_box[0] = gx0;
+    g->cache_box[1] = gy0;
+    g->cache_box[2] = gx1;
+    g->cache_box[3] = gy1;
+    return RSM_OK;
+}
+
+int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
+                     const rsm_pose_t *at, float min_share)
+{
+    const uint32_t level = search_level(map);
+    const float cell = rsm_tmap_cell(map, level);
+    float range[RSM_GLOBAL_POINTS];
+    int32_t gx0;
+    int32_t gy0;
+    int32_t gx1;
+    int32_t gy1;
+    float reach;
+    uint32_t stride;
+    uint32_t k;
+    int rc;
+    if (n < 8u) {
+        return RSM_ERR_DEGENERATE;
+    }
+    if ((rc = rsm_global_check(map)) != RSM_OK) {
+        return rc;
+    }
+    (void)rsm_tmap_bounds(map, level, &gx0, &gy0, &gx1, &gy1);
+    g->level = level;
+    g->npts = n < (size_t)RSM_GLOBAL_POINTS ? (uint32_t)n : (uint32_t)RSM_GLOBAL_POINTS;
+    /* Taken evenly over the scan, stored in an order that jumps across it
+     * (a stride coprime with their count), so that a pose's first points
+     * already sample the whole scan and a poor pose is given up early. */
+    stride = (g->npts * 5u) / 8u;
+    while (stride > 1u) {
+        uint32_t a = g->npts;
+        uint32_t b = stride;
+        while (b != 0u) {
+            const uint32_t t = a % b;
+            a = b;
+            b = t;
+        }
+        if (a == 1u) {
+            break;
+        }
+        --stride;
+    }
+    if (stride == 0u) {
+        stride = 1u;
+    }
+    for (k = 0; k < g->npts; ++k) {
+        const uint32_t pick = (k * stride) % g->npts;
+        rsm_point_t p = pts[(size_t)pick * n / g->npts];
+        uint32_t m = k;
+        /* A reading far beyond any map (max_range_m is the caller's) is
+         * pulled in to the map's reach: it lands on nothing either way,
+         * and its cell offset stays a small integer. */
+        const float far = (float)(RSM_TMAP_TILE_LIMIT * RSM_TMAP_TILE_SIDE) * rsm_tmap_cell(map, 0u);
+        const float r = sqrtf(p.x * p.x + p.y * p.y);
+        if (!(r <= far)) {
+            const float shrink = r > 0.0f ? far / r : 0.0f;
+            p.x *= shrink;
+            p.y *= shrink;
+        }
+        g->pts[k] = p;
+        range[k] = sqrtf(p.x * p.x + p.y * p.y);
+        /* Insertion sort of the ranges, for their upper decile. */
+        while (m > 0u && range[m - 1u] > range[m]) {
+            const float t = range[m - 1u];
+            range[m - 1u] = range[m];
+            range[m] = t;
+            --m;
+        }
+    }
+    /* For the proof, as many again: the readings halfway between those
+     * (when the scan has them). */
+    g->nseen = g->npts;
+    if (n >= 2u * (size_t)g->npts) {
+        for (k = 0; k < g->npts; ++k) {
+            g->pts[g->npts + k] = pts[(2u * (size_t)k + 1u) * n / (2u * (size_t)g->npts)];
+        }
+        g->nseen = 2u * g->npts;
+    }
+    g->seen_at = *at;
+    /* Headings so spaced that the scan's far points (its upper decile)
+     * move one cell from one heading to the next. */
+    reach = range[(g->npts * 9u) / 10u];
+    if (reach < cell) {
+        reach = cell;
+    }
+    {
+        /* Capped as a float, before it becomes a count. */
+        float h = ceilf(2.0f * RSM_PI * reach / cell);
+        h = h < (float)RSM_GLOBAL_MAX_HEADINGS ? h : (float)RSM_GLOBAL_MAX_HEADINGS;
+        g->headings = h > 8.0f ? (uint32_t)h : 8u;
+        /* Even: a pose and the one turned half round are both searched
+         * (a place that looks alike from there must be seen as a rival). */
+        g->headings += g->headings & 1u;
+    }
+    g->step_rad = 2.0f * RSM_PI / (float)g->headings;
+    if (g->cached != 0u && g->cache_stamp == map->stamp && g->cache_used == map->used && g->cache_box[0] == gx0 &&
+        g->cache_box[1] == gy0 && g->cache_box[2] == gx1 && g->cache_box[3] == gy1) {
+        /* The map as the last search built its grids and directions from:
+         * they stand (only the agreement with this scan is new). */
+        g->dir_next = map->used;
+        g->build_next = g->build_end;
+        g->root_i = g->ox;
+        g->root_j = g->oy;
+        g->root_h = g->top_h;
+    } else if ((rc = begin_build(g, grid, gx0, gy0, gx1, gy1)) != RSM_OK) {
+        return rc;
+    }
+    scan_directions(g, pts, n);
+    g->at = *at;
+    g->heading = 0;
+    g->pass = 0;
+    g->depth = 0;
+    g->found = 0;
+    g->best_score = 0.0f;
+    g->floor_score = min_share * (float)g->npts;
+    g->work = 0;
+    return RSM_OK;
+}
+
+/* The map's wall directions from one tile of the direction level: the
+ * gradient of its cell values (a 3 x 3 Sobel inside the tile) is normal to
+ * its walls. The tile's rows are unpacked once, three at a time. Returns
+ * the cells looked at. */
+static uint32_t tile_directions(rsm_global_t *g, const rsm_tile_t *t)
+{
+    const uint32_t side = (uint32_t)RSM_TMAP_TILE_SIDE;
+    uint8_t row[3][RSM_TMAP_TILE_SIDE];
+    uint32_t y;
+    for (y = 0; y < side; ++y) {
+        uint32_t x;
+        for (x = 0; x < side; ++x) {
+            const uint32_t c = y * side + x;
+            row[y % 3u][x] = (uint8_t)(((uint32_t)t->cell[c >> 1] >> ((c & 1u) << 2)) & 15u);
+        }
+        if (y < 2u) {
+            continue;
+        }
+        {
+            /* Rows y - 2, y - 1, y: the cells of row y - 1 have all their
+             * neighbours. */
+            const uint8_t *lo = row[(y - 2u) % 3u];
+            const uint8_t *mid = row[(y - 1u) % 3u];
+            const uint8_t *hi = row[y % 3u];
+            for (x = 1; x + 1u < side; ++x) {
+                const int32_t gx = ((int32_t)lo[x + 1u] + 2 * (int32_t)mid[x + 1u] + (int32_t)hi[x + 1u]) -
+                                   ((int32_t)lo[x - 1u] + 2 * (int32_t)mid[x - 1u] + (int32_t)hi[x - 1u]);
+                const int32_t gy = ((int32_t)hi[x - 1u] + 2 * (int32_t)hi[x] + (int32_t)hi[x + 1u]) -
+                                   ((int32_t)lo[x - 1u] + 2 * (int32_t)lo[x] + (int32_t)lo[x + 1u]);
+                if (gx != 0 || gy != 0) {
+                    const float fx = (float)gx;
+                    const float fy = (float)gy;
+                    /* The wall runs across its normal (gx, gy). */
+                    add_direction(g->dir_map, -fy, fx, sqrtf(fx * fx + fy * fy));
+                }
+            }
+        }
+    }
+    /* Two reads' worth a cell: the gradient's direction costs about as much
+     * as its cells (measured on the M4). */
+    return 2u * (side - 2u) * (side - 2u);
+}
+
+/* How well the scan's wall directions, turned by each heading, fall on the
+ * map's: the correlation of the two histograms, as a share of its best,
+ * and the best within a bin either side (the bins are 4 degrees). A room
+ * with no dominant direction agrees equally at every heading. */
+static void direction_agreement(rsm_global_t *g)
+{
+    float corr[RSM_GLOBAL_BINS];
+    float best = 0.0f;
+    uint32_t s;
+    for (s = 0; s < (uint32_t)RSM_GLOBAL_BINS; ++s) {
+        float c = 0.0f;
+        uint32_t b;
+        for (b = 0; b < (uint32_t)RSM_GLOBAL_BINS; ++b) {
+            c += g->dir_scan[b] * g->dir_map[(b + s) % (uint32_t)RSM_GLOBAL_BINS];
+        }
+        corr[s] = c;
+        if (c > best) {
+            best = c;
+        }
+    }
+    for (s = 0; s < (uint32_t)RSM_GLOBAL_BINS; ++s) {
+        const uint32_t l = (s + (uint32_t)RSM_GLOBAL_BINS - 1u) % (uint32_t)RSM_GLOBAL_BINS;
+        const uint32_t r = (s + 1u) % (uint32_t)RSM_GLOBAL_BINS;
+        float m = corr[s] > corr[l] ? corr[s] : corr[l];
+        m = corr[r] > m ? corr[r] : m;
+        g->agree[s] = best > 0.0f ? m / best : 1.0f;
+    }
+}
+
+/* The passes over the headings: the best agreeing first, so that the
+ * right pose is likely found early and raises the bar for the rest; below
+ * the last, a heading is not searched. */
+static const float pass_floor[] = {0.85f, 0.65f, 0.5f};
+#define PASSES (sizeof pass_floor / sizeof pass_floor[0])
+
+static int in_pass(const rsm_global_t *g, uint32_t a)
+{
+    float th = (float)a * g->step_rad;
+    int32_t bin;
+    float v;
+    while (th >= RSM_PI) {
+        th -= RSM_PI;
+    }
+    bin = (int32_t)(th * ((float)RSM_GLOBAL_BINS / RSM_PI) + 0.5f) % RSM_GLOBAL_BINS;
+    v = g->agree[bin];
+    return v >= pass_floor[g->pass] && (g->pass == 0u || v < pass_floor[g->pass - 1u]);
+}
+
+/* The points of heading a, as coarse-cell offsets from the pose's cell. */
+static void offsets(const rsm_global_t *g, float cell, uint32_t a, int32_t *fx, int32_t *fy)
+{
+    const float th = (float)a * g->step_rad;
+    const float c = rsm_cosf(th);
+    const float s = rsm_sinf(th);
+    const float inv = 1.0f / cell;
+    uint32_t k;
+    for (k = 0; k < g->npts; ++k) {
+        const rsm_point_t *p = &g->pts[k];
+        fx[k] = (int32_t)floorf((c * p->x - s * p->y) * inv);
+        fy[k] = (int32_t)floorf((s * p->x + c * p->y) * inv);
+    }
+}
+
+/* The largest cell value of the search level in the window [u, u + 1] x
+ * [v, v + 1]: one tile lookup when the four cells share a tile. */
+static uint32_t window4(const rsm_tmap_t *map, uint32_t level, int32_t u, int32_t v)
+{
+    const int32_t lim = RSM_TMAP_CELL_LIMIT - 2;
+    uint32_t best;
+    if ((u & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (v & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK &&
+        u > -lim && u < lim && v > -lim && v < lim) {
+        const uint32_t s = rsm_tmap_find_slot(map, level, u >> RSM_TMAP_TILE_LOG2, v >> RSM_TMAP_TILE_LOG2);
+        const rsm_tile_t *t;
+        uint32_t k;
+        uint32_t c;
+        if (s == RSM_TMAP_NONE) {
+            return 0u;
+        }
+        t = &map->tile[s];
+        k = rsm_tmap_cell_index(u, v);
+        best = rsm_tmap_get_cell(t, k);
+        c = rsm_tmap_get_cell(t, k + 1u);
+        best = c > best ? c : best;
+        c = rsm_tmap_get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE);
+        best = c > best ? c : best;
+        c = rsm_tmap_get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u);
+        return c > best ? c : best;
+    }
+    {
+        uint32_t c;
+        best = rsm_tmap_value(map, level, u, v);
+        c = rsm_tmap_value(map, level, u + 1, v);
+        best = c > best ? c : best;
+        c = rsm_tmap_value(map, level, u, v + 1);
+        best = c > best ? c : best;
+        c = rsm_tmap_value(map, level, u + 1, v + 1);
+        return c > best ? c : best;
+    }
+}
+
+/* The cells of the search level in the window [u, u + 2] x [v, v + 2],
+ * row by row into c[9]: one tile lookup when they share a tile. */
+static void window9(const rsm_tmap_t *map, uint32_t level, int32_t u, int32_t v, uint32_t *c)
+{
+    const int32_t lim = RSM_TMAP_CELL_LIMIT - 3;
+    const int32_t tx = u >> RSM_TMAP_TILE_LOG2;
+    const int32_t ty = v >> RSM_TMAP_TILE_LOG2;
+    uint32_t slot[4];
+    uint32_t r;
+    if (!(u > -lim && u < lim && v > -lim && v < lim)) {
+        for (r = 0; r < 9u; ++r) {
+            c[r] = rsm_tmap_value(map, level, u + (int32_t)(r % 3u), v + (int32_t)(r / 3u));
+        }
+        return;
+    }
+    /* The window spans one tile, or two or four at a tile's edge: each
+     * looked up once. */
+    slot[0] = rsm_tmap_find_slot(map, level, tx, ty);
+    slot[1] = ((u + 2) >> RSM_TMAP_TILE_LOG2) != tx ? rsm_tmap_find_slot(map, level, tx + 1, ty) : slot[0];
+    if (((v + 2) >> RSM_TMAP_TILE_LOG2) != ty) {
+        slot[2] = rsm_tmap_find_slot(map, level, tx, ty + 1);
+        slot[3] = ((u + 2) >> RSM_TMAP_TILE_LOG2) != tx ? rsm_tmap_find_slot(map, level, tx + 1, ty + 1) : slot[2];
+    } else {
+        slot[2] = slot[0];
+        slot[3] = slot[1];
+    }
+    for (r = 0; r < 9u; ++r) {
+        const int32_t x = u + (int32_t)(r % 3u);
+        const int32_t y = v + (int32_t)(r / 3u);
+        const uint32_t s = slot[(uint32_t)((x >> RSM_TMAP_TILE_LOG2) - tx) + 2u * (uint32_t)((y >> RSM_TMAP_TILE_LOG2) - ty)];
+        c[r] = s == RSM_TMAP_NONE ? 0u : rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(x, y));
+    }
+}
+
+static uint32_t max4(uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+    const uint32_t x = a > b ? a : b;
+    const uint32_t y = c > d ? c : d;
+    return x > y ? x : y;
+}
+
+/* The points a box of 2^h positions a side reads (the first of g->pts):
+ * all for leaves and the smallest boxes, fewer for large ones, where most
+ * boxes pass anyway and a point not read counts as on a wall. */
+static uint32_t points_read(const rsm_global_t *g, uint32_t h)
+{
+    const uint32_t n = h >= 3u ? g->npts / 4u : h == 2u ? g->npts / 2u : g->npts;
+    return n > 0u ? n : 1u;
+}
+
+/* The point at place q of the order, which ended a box's bound, moves up
+ * one place: points that fall off the map's walls where others do not are
+ * read first, and poor boxes are given up after fewer reads. */
+static void promote(rsm_global_t *g, int32_t *fx, int32_t *fy, uint32_t q)
+{
+    if (q > 0u) {
+        const rsm_point_t p = g->pts[q];
+        int32_t t = fx[q];
+        g->pts[q] = g->pts[q - 1u];
+        g->pts[q - 1u] = p;
+        fx[q] = fx[q - 1u];
+        fx[q - 1u] = t;
+        t = fy[q];
+        fy[q] = fy[q - 1u];
+        fy[q - 1u] = t;
+    }
+}
+
+/* The most a pose of box (i, j, h) scores at this heading: each point's
+ * largest cell value in the window of 2^h + 1 cells a side it can reach
+ * (for leaves, h = 0, the score itself, from the map; for larger boxes
+ * 1 where the grid of h holds a nonzero cell over the window, else 0;
+ * points not read count 1). Stops as soon as the points left could not
+ * lift the sum to thr (each adds 1 at most): what it returns is then below
+ * thr, which is all the caller asks. Adds the reads (a grid block, or the
+ * four cells of a leaf's window: 4) to *work. */
+static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, int32_t *fx, int32_t *fy,
+                       int32_t i, int32_t j, uint32_t h, float thr, uint32_t *work)
+{
+    uint32_t q;
+    if (h == 0u) {
+        float sum = 0.0f;
+        for (q = 0; q < g->npts; ++q) {
+            const uint32_t k = q;
+            const int32_t u = fx[k] + i;
+            const int32_t v = fy[k] + j;
+            /* Grid 1 bounds a wider window: nothing there, nothing here. */
+            if (grid_read(g, grid, 1u, u, v) != 0u) {
+                sum += map->occ[window4(map, g->level, u, v)];
+            }
+            if (sum + (float)(g->npts - q - 1u) < thr) {
+                *work += 4u * (q + 1u);
+                promote(g, fx, fy, q);
+                return sum;
+            }
+        }
+        *work += 4u * g->npts;
+        return sum;
+    } else {
+        /* Grid h's block of a window [u, u + 2^h] is (u - ox + 2^h) >>
+         * e: one read a point; a window left of the map wraps to a huge
+         * block index, which is past the grid like one right of it (the
+         * grids are far narrower than 2^(32 - e) blocks). */
+        const uint32_t n = points_read(g, h);
+        const uint32_t e = g->grid_e[h];
+        const uint32_t nx = g->grid_nx[h];
+        const uint32_t ny = g->grid_ny[h];
+        const uint32_t at = g->grid_at[h];
+        const int32_t x0 = i - g->ox + (int32_t)(1u << h);
+        const int32_t y0 = j - g->oy + (int32_t)(1u << h);
+        const float slack = (float)g->npts - thr;
+        uint32_t miss = 0;
+        for (q = 0; q < n; ++q) {
+            const uint32_t k = q;
+            const uint32_t a = (uint32_t)(fx[k] + x0) >> e;
+            const uint32_t b = (uint32_t)(fy[k] + y0) >> e;
+            uint32_t bit = 0;
+            if (a < nx && b < ny) {
+                const uint32_t at_bit = at + b * nx + a;
+                bit = ((uint32_t)grid[at_bit >> 3] >> (at_bit & 7u)) & 1u;
+            }
+            if (bit == 0u) {
+                ++miss;
+                if ((float)miss > slack) {
+                    *work += q + 1u;
+                    promote(g, fx, fy, q);
+                    return (float)(g->npts - miss);
+                }
+            }
+        }
+        *work += n;
+        return (float)(g->npts - miss);
+    }
+}
+
+/* The four leaves of box (i, j, 1), their scores into bound[] (child c at
+ * (i + (c & 1), j + (c >> 1))): each point's 3 x 3 window, read once,
+ * holds the four leaves' 2 x 2 ones. A leaf whose points left could not
+ * lift it to thr is given up (its sum so far, below thr); the reads stop
+ * when all four are. Adds 4 a point read to *work. */
+static void leaf_bounds(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, int32_t *fx,
+                        int32_t *fy, int32_t i, int32_t j, float thr, float *bound, uint32_t *work)
+{
+    uint32_t q;
+    uint32_t live = 15u;
+    bound[0] = bound[1] = bound[2] = bound[3] = 0.0f;
+    for (q = 0; q < g->npts && live != 0u; ++q) {
+        const uint32_t k = q;
+        const int32_t u = fx[k] + i;
+        const int32_t v = fy[k] + j;
+        const float rest = (float)(g->npts - q - 1u);
+        uint32_t c;
+        /* Grid 1 bounds the whole 3 x 3 window: nothing there, nothing here. */
+        if (grid_read(g, grid, 1u, u, v) != 0u) {
+            uint32_t w[9];
+            window9(map, g->level, u, v, w);
+            bound[0] += map->occ[max4(w[0], w[1], w[3], w[4])];
+            bound[1] += map->occ[max4(w[1], w[2], w[4], w[5])];
+            bound[2] += map->occ[max4(w[3], w[4], w[6], w[7])];
+            bound[3] += map->occ[max4(w[4], w[5], w[7], w[8])];
+        }
+        for (c = 0; c < 4u; ++c) {
+            if ((live & (1u << c)) != 0u && bound[c] + rest < thr) {
+                live &= ~(1u << c);
+                if (live == 0u) {
+                    promote(g, fx, fy, q);
+                }
+            }
+        }
+        *work += 4u;
+    }
+}
+
+/* The four children of box (i, j, h + 1), boxes of 2^h positions a side
+ * (h >= 1), their bounds into bound[] (child c at (i + (c & 1) 2^h, j +
+ * (c >> 1) 2^h)), as box_bound gives each, in one pass over the points: a
+ * child whose misses could no longer leave thr is given up, the reads stop
+ * when all four are. Adds the blocks read to *work. */
+static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int32_t *fy, int32_t i,
+                         int32_t j, uint32_t h, float thr, float *bound, uint32_t *work)
+{
+    /* Grid h's block of a window [u, u + 2^h] is (u - ox + 2^h) >> e: one
+     * read a point; a window left of the map wraps to a huge block index,
+     * which is past the grid like one right of it (the grids are far
+     * narrower than 2^(32 - e) blocks). */
+    const uint32_t n = points_read(g, h);
+    const uint32_t e = g->grid_e[h];
+    const uint32_t nx = g->grid_nx[h];
+    const uint32_t ny = g->grid_ny[h];
+    const uint32_t at = g->grid_at[h];
+    const int32_t half = (int32_t)(1u << h);
+    const int32_t x0 = i - g->ox + half;
+    const int32_t y0 = j - g->oy + half;
+    const float slack = (float)g->npts - thr;
+    /* A child is given up once its misses exceed this. */
+    const int32_t allowed = slack >= 0.0f ? (int32_t)slack : -1;
+    int32_t m0 = 0;
+    int32_t m1 = 0;
+    int32_t m2 = 0;
+    int32_t m3 = 0;
+    uint32_t q;
+    if (e > h) {
+        /* Blocks wider than the children: each child's own block (rare:
+         * the coarsest grids of a wide map). */
+        for (q = 0; q < n && (m0 <= allowed || m1 <= allowed || m2 <= allowed || m3 <= allowed); ++q) {
+            const uint32_t k = q;
+            uint32_t c;
+            for (c = 0; c < 4u; ++c) {
+                const uint32_t a = (uint32_t)(fx[k] + x0 + ((c & 1u) != 0u ? half : 0)) >> e;
+                const uint32_t b = (uint32_t)(fy[k] + y0 + ((c & 2u) != 0u ? half : 0)) >> e;
+                const uint32_t bit = a < nx && b < ny ? get_bit(grid, at + b * nx + a) : 0u;
+                int32_t *m = c == 0u ? &m0 : c == 1u ? &m1 : c == 2u ? &m2 : &m3;
+                *m += (int32_t)(1u - bit);
+            }
+            *work += 4u;
+        }
+    } else {
+        /* The children's blocks are d apart; where all four lie in the
+         * grid (most points: they fall on the map) no bound is tested. */
+        const uint32_t d = (uint32_t)half >> e;
+        const uint32_t row = d * nx;
+        const uint32_t nx_in = nx > d ? nx - d : 0u;
+        const uint32_t ny_in = ny > d ? ny - d : 0u;
+        uint32_t reads = 0;
+        for (q = 0; q < n && (m0 <= allowed || m1 <= allowed || m2 <= allowed || m3 <= allowed); ++q) {
+            const uint32_t a = (uint32_t)(fx[q] + x0) >> e;
+            const uint32_t b = (uint32_t)(fy[q] + y0) >> e;
+            const uint32_t first = at + b * nx + a;
+            if (a < nx_in && b < ny_in) {
+                if (m0 <= allowed) {
+                    m0 += (int32_t)(1u - get_bit(grid, first));
+                    reads++;
+                }
+                if (m1 <= allowed) {
+                    m1 += (int32_t)(1u - get_bit(grid, first + d));
+                    reads++;
+                }
+                if (m2 <= allowed) {
+                    m2 += (int32_t)(1u - get_bit(grid, first + row));
+                    reads++;
+                }
+                if (m3 <= allowed) {
+                    m3 += (int32_t)(1u - get_bit(grid, first + row + d));
+                    reads++;
+                }
+            } else {
+                /* At the grid's edge: each child's block from its own
+                 * window (a window left of the grid wraps to a huge index,
+                 * so the blocks are not d apart there). */
+                const uint32_t a1 = (uint32_t)(fx[q] + x0 + half) >> e;
+                const uint32_t b1 = (uint32_t)(fy[q] + y0 + half) >> e;
+                const uint32_t left = a < nx ? 1u : 0u;
+                const uint32_t right = a1 < nx ? 1u : 0u;
+                const uint32_t low = b < ny ? 1u : 0u;
+                const uint32_t high = b1 < ny ? 1u : 0u;
+                if (m0 <= allowed) {
+                    m0 += (left & low) != 0u ? (int32_t)(1u - get_bit(grid, at + b * nx + a)) : 1;
+                    reads++;
+                }
+                if (m1 <= allowed) {
+                    m1 += (right & low) != 0u ? (int32_t)(1u - get_bit(grid, at + b * nx + a1)) : 1;
+                    reads++;
+                }
+                if (m2 <= allowed) {
+                    m2 += (left & high) != 0u ? (int32_t)(1u - get_bit(grid, at + b1 * nx + a)) : 1;
+                    reads++;
+                }
+                if (m3 <= allowed) {
+                    m3 += (right & high) != 0u ? (int32_t)(1u - get_bit(grid, at + b1 * nx + a1)) : 1;
+                    reads++;
+                }
+            }
+        }
+        *work += reads;
+    }
+    if (q > 0u && m0 > allowed && m1 > allowed && m2 > allowed && m3 > allowed) {
+        /* The point that ended the last child's bound moves up. */
+        promote(g, fx, fy, q - 1u);
+    }
+    bound[0] = (float)((int32_t)g->npts - m0);
+    bound[1] = (float)((int32_t)g->npts - m1);
+    bound[2] = (float)((int32_t)g->npts - m2);
+    bound[3] = (float)((int32_t)g->npts - m3);
+}
+
+/* The score a box must reach to be split or kept. */
+static float threshold(const rsm_global_t *g)
+{
+    const float rel = (1.0f - KEEP_SHARE) * g->best_score;
+    return rel > g->floor_score ? rel : g->floor_score;
+}
+
+/* The score a leaf must reach to be kept, below the boxes' by LEAF_SLACK of
+ * the points: a leaf scores the lattice's heading, and a place that looks
+ * the same as the best one (a room's twin turned half round) can score a
+ * point or two less there than the best does at its own. Such a rival
+ * must be kept, or the proof would take the best unopposed; its box above
+ * reached the bar. */
+static float leaf_threshold(const rsm_global_t *g)
+{
+    return threshold(g) - LEAF_SLACK * (float)g->npts;
+}
+
+/* How well the kept points fit at pose x itself: their occupancy on the
+ * search level, interpolated, summed. Leaves that reach the bar often all
+ * score the most (every point's window of two cells a side on a wall), so
+ * this, not the leaf's score, ranks them. */
+static float fine_score(const rsm_global_t *g, const rsm_tmap_t *map, const rsm_pose_t *x)
+{
+    const float c = rsm_cosf(x->theta);
+    const float s = rsm_sinf(x->theta);
+    float sum = 0.0f;
+    uint32_t k;
+    for (k = 0; k < g->npts; ++k) {
+        const rsm_point_t *p = &g->pts[k];
+        float dx;
+        float dy;
+        sum += rsm_tmap_sample(map, g->level, x->x + c * p->x - s * p->y, x->y + s * p->x + c * p->y, &dx, &dy);
+    }
+    return sum;
+}
+
+/* Keeps a leaf among the best distinct poses, ranked by fine: one within
+ * two lattice steps and two heading steps of a better kept one is its
+ * basin, not a rival. */
+static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score, float fine)
+{
+    const float near_m = 2.0f * cell + 1e-3f;
+    const float near_rad = 2.0f * g->step_rad + 1e-4f;
+    uint32_t m;
+    uint32_t kept = 0;
+    uint32_t at;
+    if (score > g->best_score) {
+        g->best_score = score;
+    }
+    for (m = 0; m < g->found; ++m) {
+        const rsm_pose_t *o = &g->cand[m].pose;
+        if (fabsf(o->x - x->x) <= near_m && fabsf(o->y - x->y) <= near_m &&
+            fabsf(rsm_wrap_angle(o->theta - x->theta)) <= near_rad) {
+            if (g->cand[m].fine >= fine) {
+                return;
+            }
+        } else {
+            g->cand[kept++] = g->cand[m];
+        }
+    }
+    g->found = kept;
+    /* Those the best leaves behind by more than the share go. */
+    for (m = 0, kept = 0; m < g->found; ++m) {
+        if (!(g->cand[m].score < (1.0f - KEEP_SHARE) * g->best_score)) {
+            g->cand[kept++] = g->cand[m];
+        }
+    }
+    g->found = kept;
+    if (g->found == (uint32_t)RSM_GLOBAL_CANDIDATES) {
+        if (!(fine > g->cand[g->found - 1u].fine)) {
+            return;
+        }
+        g->found--;
+    }
+    for (at = g->found; at > 0u && g->cand[at - 1u].fine < fine; --at) {
+        g->cand[at] = g->cand[at - 1u];
+    }
+    g->cand[at].pose = *x;
+    g->cand[at].score = score;
+    g->cand[at].fine = fine;
+    g->found++;
+}
+
+/* Whether tile t (of a level `up` finer than the search level) overlaps
+ * the grids' box. */
+static int in_box(const rsm_global_t *g, const rsm_tile_t *t, uint32_t up)
+{
+    const int32_t x0 = floor_shift((int32_t)t->tx * RSM_TMAP_TILE_SIDE, up);
+    const int32_t y0 = floor_shift((int32_t)t->ty * RSM_TMAP_TILE_SIDE, up);
+    const int32_t x1 = floor_shift((int32_t)t->tx * RSM_TMAP_TILE_SIDE + RSM_TMAP_TILE_SIDE - 1, up);
+    const int32_t y1 = floor_shift((int32_t)t->ty * RSM_TMAP_TILE_SIDE + RSM_TMAP_TILE_SIDE - 1, up);
+    return x1 >= g->cache_box[0] && x0 <= g->cache_box[2] && y1 >= g->cache_box[1] && y0 <= g->cache_box[3];
+}
+
+/* Builds the grids and the map's wall directions for about budget reads
+ * more (0: to the end), into *work: a tile at a time, then the coarser
+ * grids a block at a time. 1 once they stand (then marked as cached, for
+ * the map as it is now; g->dir_next == map->used), 0 while work remains
+ * (or once the caller has taken them, g->dir_next past map->used). */
+static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *work)
+{
+    while (g->dir_next < map->used) {
+        const rsm_tile_t *t = &map->tile[g->dir_next];
+        const uint32_t level = t->stamp >> 30;
+        if (budget > 0u && *work >= budget) {
+            break;
+        }
+        if (level == g->level && in_box(g, t, 0u)) {
+            *work += grid_tile(g, grid, t);
+        }
+        if (level == direction_level(g->level) && in_box(g, t, g->level - level)) {
+            *work += tile_directions(g, t);
+        }
+        g->dir_next++;
+    }
+    while (g->dir_next == map->used && g->build_next < g->build_end) {
+        if (budget > 0u && *work >= budget) {
+            break;
+        }
+        *work += grid_up(g, grid, g->build_next);
+        g->build_next++;
+    }
+    if (g->dir_next == map->used && g->build_next == g->build_end) {
+        g->cached = 1u;
+        g->cache_stamp = map->stamp;
+        g->cache_used = map->used;
+        return 1;
+    }
+    return 0;
+}
+
+int rsm_global_prepare(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t *used)
+{
+    int32_t b[4];
+    uint32_t work = 0;
+    int rc;
+    if ((rc = rsm_global_check(map)) != RSM_OK) {
+        return rc;
+    }
+    (void)rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3]);
+    g->level = search_level(map);
+    if ((rc = begin_build(g, grid, b[0], b[1], b[2], b[3])) != RSM_OK) {
+        return rc;
+    }
+    (void)build(g, grid, map, 0u, &work);
+    if (used != NULL) {
+        *used += work;
+    }
+    return RSM_OK;
+}
+
+int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used)
+{
+    const float cell = rsm_tmap_cell(map, g->level);
+    int32_t fx[RSM_GLOBAL_POINTS];
+    int32_t fy[RSM_GLOBAL_POINTS];
+    uint32_t work = 0;
+    int more = 1;
+    if (g->depth > 0u) {
+        offsets(g, cell, g->heading - 1u, fx, fy);
+    }
+    if (build(g, grid, map, budget, &work)) {
+        direction_agreement(g);
+        g->dir_next++;
+    }
+    for (;;) {
+        rsm_global_box_t b;
+        if (budget > 0u && work >= budget) {
+            break;
+        }
+        if (g->depth == 0u) {
+            while (g->pass < PASSES && (g->heading == g->headings || !in_pass(g, g->heading))) {
+                if (g->heading == g->headings) {
+                    g->heading = 0;
+                    g->pass++;
+                } else {
+                    g->heading++;
+                }
+            }
+            if (g->pass == PASSES) {
+                more = 0;
+                break;
+            }
+            offsets(g, cell, g->heading, fx, fy);
+            g->heading++;
+            b.i = g->root_i;
+            b.j = g->root_j;
+            b.h = g->root_h;
+            b.bound = box_bound(g, grid, map, fx, fy, b.i, b.j, b.h, threshold(g), &work);
+            if (b.bound >= threshold(g)) {
+                g->stack[g->depth++] = b;
+            }
+            continue;
+        }
+        b = g->stack[--g->depth];
+        if (b.bound < (b.h == 0u ? leaf_threshold(g) : threshold(g))) {
+            continue;
+        }
+        if (b.h == 0u) {
+            rsm_pose_t x;
+            /* The leaf's positions span its cell: its centre stands for them. */
+            x.x = ((float)b.i + 0.5f) * cell;
+            x.y = ((float)b.j + 0.5f) * cell;
+            x.theta = rsm_wrap_angle((float)(g->heading - 1u) * g->step_rad);
+            keep(g, cell, &x, b.bound, fine_score(g, map, &x));
+            work += 4u * g->npts;
+            continue;
+        }
+        {
+            const uint32_t h = b.h - 1u;
+            const int32_t half = (int32_t)(1u << h);
+            rsm_global_box_t child[4];
+            float leaf[4];
+            uint32_t c;
+            uint32_t nc = 0;
+            if (h == 0u) {
+                leaf_bounds(g, grid, map, fx, fy, b.i, b.j, leaf_threshold(g), leaf, &work);
+            } else {
+                child_bounds(g, grid, fx, fy, b.i, b.j, h, threshold(g), leaf, &work);
+            }
+            for (c = 0; c < 4u; ++c) {
+                rsm_global_box_t ch;
+                uint32_t at;
+                ch.i = b.i + ((c & 1u) ? half : 0);
+                ch.j = b.j + ((c & 2u) ? half : 0);
+                ch.h = h;
+                ch.bound = leaf[c];
+                if (ch.bound < (h == 0u ? leaf_threshold(g) : threshold(g))) {
+                    continue;
+                }
+                /* Ascending, so that the best is pushed last, popped first. */
+                for (at = nc; at > 0u && child[at - 1u].bound > ch.bound; --at) {
+                    child[at] = child[at - 1u];
+                }
+                child[at] = ch;
+                nc++;
+            }
+            /* Three siblings wait per level at most: the stack holds them
+             * (RSM_GLOBAL_STACK). */
+            for (c = 0; c < nc && g->depth < (uint32_t)RSM_GLOBAL_STACK; ++c) {
+                g->stack[g->depth++] = child[c];
+            }
+        }
+    }
+    g->work += work;
+    if (used != NULL) {
+        *used += work;
+    }
+    return more;
+}
+
+void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, float x, float y, float radius_m)
+{
+    const float cell = rsm_tmap_cell(map, g->level);
+    const float inv = 1.0f / cell;
+    const float lim = (float)(RSM_TMAP_TILE_LIMIT * RSM_TMAP_TILE_SIDE);
+    float fx0 = rsm_floorf((x - radius_m) * inv);
+    float fy0 = rsm_floorf((y - radius_m) * inv);
+    float w = rsm_floorf((x + radius_m) * inv) - fx0 + 1.0f;
+    const float hgt = rsm_floorf((y + radius_m) * inv) - fy0 + 1.0f;
+    int32_t box[4];
+    float far = 0.0f;
+    int32_t reach;
+    uint32_t h = 0;
+    uint32_t k;
+    w = hgt > w ? hgt : w;
+    /* Far outside the map's range, or wider than the map: the whole map. */
+    if (!(fx0 > -lim && fx0 < lim && fy0 > -lim && fy0 < lim && w >= 1.0f && w < lim)) {
+        return;
+    }
+    while (h < g->top_h && (float)(1u << h) < w) {
+        ++h;
+    }
+    if (h >= g->top_h) {
+        return;
+    }
+    if (g->cached == 0u) {
+        /* The grids are yet to be built: only over what the window's
+         * points can reach (the window, twice over for the windows of its
+         * boxes, and the farthest point's range around it), so that the
+         * build and the map's directions cost what is near, and the grids'
+         * blocks come finer. */
+        for (k = 0; k < g->npts; ++k) {
+            const float r = sqrtf(g->pts[k].x * g->pts[k].x + g->pts[k].y * g->pts[k].y);
+            far = r > far ? r : far;
+        }
+        reach = (int32_t)(far * inv) + 2;
+        box[0] = (int32_t)fx0 - reach;
+        box[1] = (int32_t)fy0 - reach;
+        box[2] = (int32_t)fx0 + (int32_t)(2u << h) + reach;
+        box[3] = (int32_t)fy0 + (int32_t)(2u << h) + reach;
+        box[0] = box[0] > g->cache_box[0] ? box[0] : g->cache_box[0];
+        box[1] = box[1] > g->cache_box[1] ? box[1] : g->cache_box[1];
+        box[2] = box[2] < g->cache_box[2] ? box[2] : g->cache_box[2];
+        box[3] = box[3] < g->cache_box[3] ? box[3] : g->cache_box[3];
+        if (box[0] <= box[2] && box[1] <= box[3] &&
+            (box[0] != g->cache_box[0] || box[1] != g->cache_box[1] || box[2] != g->cache_box[2] ||
+             box[3] != g->cache_box[3]) &&
+            begin_grids(g, grid, box[0], box[1], box[2], box[3], h > 0u ? h : 1u) == RSM_OK) {
+            memcpy(g->cache_box, box, sizeof box);
+        }
+    }
+    g->root_i = (int32_t)fx0;
+    g->root_j = (int32_t)fy0;
+    g->root_h = h;
+}

@@ -1,0 +1,123 @@
+/* The global search: where in the whole persistent map does a scan fit,
+ * over every heading, with no prior (rsm_localizer_global; a robot
+ * switched on somewhere in a known building, or carried).
+ *
+ * Branch and bound (docs/globalsearch.md). A pose's score is the occupancy
+ * summed under the scan's points, each read at its cell of the second
+ * coarsest level (0.2 m by default: the coarsest is too full to tell places
+ * apart). The positions are that level's cells; the headings are spaced so
+ * that the scan's far points move about one cell from one to the next, and
+ * only those at which the scan's wall directions agree with the map's are
+ * searched, the best agreeing first. For one heading, a box of 2^h x 2^h
+ * cells of positions (a leaf, h = 0, is one cell: positions anywhere in it)
+ * scores at most the number of points whose window of 2^h + 1 cells a side
+ * holds a nonzero cell: one bit a point, read from a bit grid per box size
+ * whose blocks bound those windows (built from the map's tiles within the
+ * scan budget, laid out to fit the memory the caller lends, kept for the
+ * next search while the map is unchanged). Large boxes read a quarter or
+ * half of the points, the others counted as on a wall. A leaf's score is
+ * exact: each point's largest cell value in its window of two cells a side,
+ * read from the map; the four leaves of a box share each point's 3 x 3
+ * window. Boxes are split depth first, the best child first, and a box
+ * whose bound cannot reach the bar is dropped; a point sum that can no
+ * longer reach it stops early, and the point that ended it is read earlier
+ * from then on. The search keeps the RSM_GLOBAL_CANDIDATES best distinct
+ * leaves, ranked by their fit at the leaf's centre; the localizer then
+ * proves them (src/localizer/localizer.c, prove_one, prove_verdict, prove_win).
+ *
+ * The work is spread over scans: rsm_global_run stops after a budget of
+ * reads and resumes where it stopped. Everything lives in rsm_global_t
+ * (include/rsm/localizer_parts.h) and the grid memory the caller lends;
+ * no heap. */
+#ifndef RSM_GLOBALSEARCH_H
+#define RSM_GLOBALSEARCH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rsm/geom.h"
+#include "rsm/localizer_parts.h"
+#include "map/tilemap.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* rsm_global_t.phase */
+#define RSM_GLOBAL_IDLE 0u
+#define RSM_GLOBAL_PENDING 1u  /* the next usable scan begins it */
+#define RSM_GLOBAL_RUNNING 2u
+#define RSM_GLOBAL_PROVING 3u  /* done: the next usable scan tests what it kept */
+
+/* Whether map can be searched: RSM_OK; RSM_ERR_DEGENERATE when the level
+ * the search scores on holds nothing; RSM_ERR_NOMEM when it is too wide for
+ * the bound grids (more than 2^RSM_GLOBAL_MAX_H cells of that level a side,
+ * 13 km with the defaults, or more than RSM_GLOBAL_GRID_BYTES hold with
+ * blocks 2^RSM_GLOBAL_MAX_BASE_H cells apart). */
+int rsm_global_check(const rsm_tmap_t *map);
+
+/* Builds the bound grids and the map's wall directions over the whole of
+ * map into g and grid (RSM_GLOBAL_GRID_BYTES), at once, and marks them
+ * cached: the next rsm_global_begin on the same g and grid, with the map
+ * unchanged, reads none of it (a map load does this: nothing else runs
+ * then, while a search pays for the build out of its scans' budget). The
+ * reads it took (as rsm_global_run counts them) are added to *used (may
+ * be NULL). Returns as rsm_global_check, with g and grid untouched on an
+ * error. */
+int rsm_global_prepare(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t *used);
+
+/* The share of kept points a search in map asks for (rsm_global_begin's
+ * min_share) after `unproven` searches in a row that proved nothing: 0.97
+ * for the first (a box whose window misses a single point is dropped),
+ * then 0.95, 0.90, ... down to min_share (global_min_share). A search near
+ * the estimate (radius_m > 0; 0: the whole map) searches each window at
+ * 0.97 then 0.95 before it doubles (rsm_global_radius), and the bar falls
+ * further only once the window holds the whole map. */
+float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven, float min_share);
+
+/* The window's radius for a search near the estimate begun with radius_m,
+ * after `unproven` searches in a row that proved nothing: doubled every
+ * second one (rsm_global_share). */
+float rsm_global_radius(float radius_m, uint32_t unproven);
+
+/* Starts a search for the readings pts (robot frame, in beam order; up to
+ * RSM_GLOBAL_POINTS of them, taken evenly, are kept, and all give the
+ * scan's wall directions) over map, whose estimate from odometry at this
+ * scan is *at. grid (RSM_GLOBAL_GRID_BYTES) holds the bound grids until
+ * the search ends: the caller's, untouched by anything else meanwhile.
+ * The grids and the map's wall directions a search built on g are kept for
+ * the next search on g while g->cached is set and the map's write counter,
+ * tiles and box are as they were: the caller passes the same grid, and
+ * clears g->cached when it writes the map or the grid memory in between.
+ * A box is searched on only while it may score min_share of the kept
+ * points' count (and 0.8 of the best so far); a leaf is kept down to 0.05
+ * of the count below that. The proof's readings (twice as many, evenly)
+ * go to g->pts[0 .. g->nseen), *at to g->seen_at. Returns RSM_OK, or
+ * RSM_ERR_DEGENERATE when the map's coarsest level is empty or fewer than
+ * 8 readings are given, or RSM_ERR_NOMEM as rsm_global_check says. */
+int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
+                     const rsm_pose_t *at, float min_share);
+
+/* Narrows a search begun (rsm_global_begin, before any rsm_global_run) to
+ * the positions within radius_m of (x, y), in a square of a power of two
+ * cells; every heading still. A window as wide as the map, or one out of
+ * the map's range, leaves the whole map. Grids still to be built are laid
+ * out over what the window's points can reach only (grid: as given to
+ * rsm_global_begin). */
+void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, float x, float y, float radius_m);
+
+/* Goes on with the search for about budget reads (0 = to the end): bound
+ * grid blocks, map cells (four a point for a leaf), the grids' build (a
+ * tile's cells, two a direction tile's cell) and a kept leaf's fit (four a
+ * point). It stops before the next step once budget is reached, so a run
+ * reads at most one split beyond it (four boxes, at most 16 reads a kept
+ * point). Returns 1 while work remains, 0 once every heading is done
+ * (g->cand[0 .. g->found) then hold the kept poses, best ranked first).
+ * Adds the reads to g->work and to *used (may be NULL). */
+int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* RSM_GLOBALSEARCH_H */

@@ -1,0 +1,715 @@
+/* Coarse-to-fine Gauss-Newton of a scan against the tile map with the
+ * prediction as a prior; see src/map/mapmatch.h. */
+#include "core/hot.h" /* first: speed over size */
+#include "map/mapmatch.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "core/ekf.h"
+#include "rsm/status.h"
+#include "core/fmath.h"
+#include "map/tmap_read.h"
+
+/* Smallest prior variance used, so that a filter that starts with a zero
+ * covariance still has an invertible prior (m^2 and rad^2). */
+#define PRIOR_FLOOR 1.0e-8f
+
+rsm_mapmatch_config_t rsm_mapmatch_config_default(void)
+{
+    rsm_mapmatch_config_t c;
+    c.iterations = 6u;
+    c.sigma = 0.3f;
+    c.min_step_m = 0.002f;
+    c.min_step_rad = 0.001f;
+    c.search_rad = 0.1f;
+    c.search_step_rad = 0.02f;
+    c.fan = 0u;
+    c.gate_d2 = 0.0f;
+    c.basin = 3.0f;
+    c.unpin_lo = 0.02f;
+    c.unpin_hi = 0.06f;
+    return c;
+}
+
+int rsm_mapmatch_check(const rsm_mapmatch_config_t *cfg)
+{
+    if (cfg == NULL || cfg->iterations < 1u || !(cfg->sigma > 0.0f) || !(cfg->min_step_m >= 0.0f) ||
+        !(cfg->min_step_rad >= 0.0f) || !(cfg->search_rad >= 0.0f) || !(cfg->search_rad <= 1.0f) ||
+        !(cfg->gate_d2 >= 0.0f) || !(cfg->basin >= 0.0f) || !(cfg->unpin_lo >= 0.0f) ||
+        !(cfg->unpin_hi <= 1.0f) || !(cfg->unpin_hi == 0.0f || cfg->unpin_hi > cfg->unpin_lo) ||
+        (cfg->search_rad > 0.0f && !(cfg->search_step_rad > 0.0f && cfg->search_rad <= 64.0f * cfg->search_step_rad))) {
+        return RSM_ERR_INVAL;
+    }
+    return RSM_OK;
+}
+
+/* Sums of one level at pose x: h (upper triangle of J^T J, order 00 01 02 11
+ * 12 22), b = J^T r, cost = sum r^2 over all points, used = points with a
+ * gradient, hit = sum of M. */
+typedef struct sums {
+    float h[6];
+    float b[3];
+    float cost;
+    float cost_used;
+    float hit;
+    uint32_t used;
+} sums_t;
+
+/* The largest |x| + |y| of the points (a bound on how far from the pose
+ * any of them lands, whatever the heading); NaN if one is not finite. Their
+ * mean in *mean (0 for none). */
+static float points_reach(const rsm_point_t *pts, size_t n, float *mean)
+{
+    float reach = 0.0f;
+    float sum = 0.0f;
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        const float a = fabsf(pts[k].x) + fabsf(pts[k].y);
+        sum += a;
+        if (!(a <= reach)) {
+            reach = a;
+        }
+    }
+    *mean = n > 0u ? sum / (float)n : 0.0f;
+    return reach;
+}
+
+/* reach: points_reach of pts. The points are placed and read in the
+ * level's cells (gradients per cell, scaled to metres once at the end):
+ * that is four multiplications and two subtractions a point fewer than in
+ * metres. */
+static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, float reach,
+                       const rsm_pose_t *x, sums_t *s)
+{
+    const float inv_a = map->inv_cell[level];
+    const float c = rsm_cosf(x->theta) * inv_a;
+    const float sn = rsm_sinf(x->theta) * inv_a;
+    const float tu = x->x * inv_a - 0.5f;
+    const float tv = x->y * inv_a - 0.5f;
+    const float most = rsm_tmap_read_reach(map);
+    /* Every point within the map's range: no range test per point. */
+    const int inside = fabsf(x->x) + reach < most && fabsf(x->y) + reach < most;
+    /* Sums in locals: through s the compiler would store each one per
+     * point, not knowing that s does not alias the points. */
+    float h0 = 0.0f;
+    float h1 = 0.0f;
+    float h2 = 0.0f;
+    float h3 = 0.0f;
+    float h4 = 0.0f;
+    float h5 = 0.0f;
+    float b0 = 0.0f;
+    float b1 = 0.0f;
+    float b2 = 0.0f;
+    float cost = 0.0f;
+    float cost_used = 0.0f;
+    float hit = 0.0f;
+    size_t unused = 0; /* counted where it is rare: a register fewer in the loop */
+    rsm_tmap_cursor_t cur;
+    size_t k;
+    rsm_tmap_cursor_init(&cur, level);
+    for (k = 0; k < n; ++k) {
+        const float cx = c * pts[k].x;
+        const float sy = sn * pts[k].y;
+        const float sx = sn * pts[k].x;
+        const float cy = c * pts[k].y;
+        float gu;
+        float gv;
+        const float m = rsm_tmap_read_cells(map, &cur, tu + cx - sy, tv + sx + cy, inside, &gu, &gv);
+        const float r = 1.0f - m;
+        float gt;
+        int zu;
+        int zv;
+        cost += r * r;
+        hit += m;
+        if (rsm_tmap_flat(gu, gv)) {
+            ++unused;
+            continue;
+        }
+        /* Without an FPU each product is a call: a zero component of the
+         * gradient adds only zeros to its sums, which are never -0 (they
+         * start at +0, and a sum is -0 only of two), so those are left out
+         * with the same bits; gt's sign, when it is zero, matters nowhere.
+         * With an FPU the tests cost more than they save: zu and zv are 0. */
+        zu = RSM_SOFT_FLOAT && rsm_tmap_is_zero(gu);
+        zv = RSM_SOFT_FLOAT && rsm_tmap_is_zero(gv);
+        /* d(cell)/d(theta) = (-s px - c py, c px - s py) / cell. */
+        gt = zu ? gv * (cx - sy) : zv ? gu * (-sx - cy) : gu * (-sx - cy) + gv * (cx - sy);
+        if (!zu) {
+            h0 += gu * gu;
+            h2 += gu * gt;
+            b0 += gu * r;
+        }
+        if (!zv) {
+            h3 += gv * gv;
+            h4 += gv * gt;
+            b1 += gv * r;
+        }
+        if (!zu && !zv) {
+            h1 += gu * gv;
+        }
+        h5 += gt * gt;
+        b2 += gt * r;
+        cost_used += r * r;
+    }
+    s->h[0] = h0 * (inv_a * inv_a);
+    s->h[1] = h1 * (inv_a * inv_a);
+    s->h[2] = h2 * inv_a;
+    s->h[3] = h3 * (inv_a * inv_a);
+    s->h[4] = h4 * inv_a;
+    s->h[5] = h5;
+    s->b[0] = b0 * inv_a;
+    s->b[1] = b1 * inv_a;
+    s->b[2] = b2;
+    s->cost = cost;
+    s->cost_used = cost_used;
+    s->hit = hit;
+    s->used = (uint32_t)(n - unused);
+}
+
+/* Sum of (1 - M)^2 over every stride-th point at pose x on a level, each
+ * read at its nearest cell centre (no interpolation: a coarse score). */
+static float coarse_cost(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, size_t stride,
+                         const rsm_pose_t *x)
+{
+    const float c = rsm_cosf(x->theta);
+    const float sn = rsm_sinf(x->theta);
+    float cost = 0.0f;
+    rsm_tmap_cursor_t cur;
+    size_t k;
+    rsm_tmap_cursor_init(&cur, level);
+    for (k = 0; k < n; k += stride) {
+        const float wx = x->x + c * pts[k].x - sn * pts[k].y;
+        const float wy = x->y + sn * pts[k].x + c * pts[k].y;
+        const float r = 1.0f - rsm_tmap_occupancy_at(map, &cur, wx, wy);
+        cost += r * r;
+    }
+    return cost;
+}
+
+/* The heading of the fan around x0 with the lowest coarse cost plus the
+ * prior's heading term (lam_tt = P0^-1's heading entry). */
+static float best_heading(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                          const rsm_pose_t *x0, float w, float lam_tt)
+{
+    const uint32_t level = (uint32_t)map->cfg.levels - 1u;
+    const int32_t half = (int32_t)(cfg->search_rad / cfg->search_step_rad);
+    float best = x0->theta;
+    float best_cost = 0.0f;
+    int32_t k;
+    for (k = -half; k <= half; ++k) {
+        const float d = (float)k * cfg->search_step_rad;
+        rsm_pose_t x = *x0;
+        float f;
+        x.theta = rsm_wrap_angle(x0->theta + d);
+        f = coarse_cost(map, level, pts, n, 1u, &x) * w + d * d * lam_tt;
+        if (k == -half || f < best_cost) {
+            best_cost = f;
+            best = x.theta;
+        }
+    }
+    return best;
+}
+
+static void diff(const rsm_pose_t *x, const rsm_pose_t *x0, float e[3])
+{
+    e[0] = x->x - x0->x;
+    e[1] = x->y - x0->y;
+    e[2] = rsm_wrap_angle(x->theta - x0->theta);
+}
+
+static float quad(const float m[9], const float e[3])
+{
+    float q = 0.0f;
+    int i;
+    int j;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) {
+            q += e[i] * m[i * 3 + j] * e[j];
+        }
+    }
+    return q;
+}
+
+static void full(const float h[6], float w, float out[9])
+{
+    out[0] = h[0] * w;
+    out[1] = h[1] * w;
+    out[2] = h[2] * w;
+    out[3] = out[1];
+    out[4] = h[3] * w;
+    out[5] = h[4] * w;
+    out[6] = out[2];
+    out[7] = out[5];
+    out[8] = h[5] * w;
+}
+
+/* Puts a candidate into the list of the k best (ascending cost) unless a
+ * better one lies within one grid step of it; worse ones that close give
+ * up their places. No two kept ones are that close: the list holds k
+ * separate basins, not one basin's neighbours. */
+static void keep_candidate(rsm_pose_t *best, float *cost, int32_t *ij, size_t k, size_t *found, const rsm_pose_t *x,
+                           float c, int32_t i, int32_t j)
+{
+    size_t m;
+    size_t kept = 0;
+    size_t at;
+    for (m = 0; m < *found; ++m) {
+        const int32_t di = ij[2 * m] - i;
+        const int32_t dj = ij[2 * m + 1u] - j;
+        if (di >= -1 && di <= 1 && dj >= -1 && dj <= 1 && cost[m] <= c) {
+            return;
+        }
+    }
+    for (m = 0; m < *found; ++m) {
+        const int32_t di = ij[2 * m] - i;
+        const int32_t dj = ij[2 * m + 1u] - j;
+        if (!(di >= -1 && di <= 1 && dj >= -1 && dj <= 1)) {
+            best[kept] = best[m];
+            cost[kept] = cost[m];
+            ij[2 * kept] = ij[2 * m];
+            ij[2 * kept + 1u] = ij[2 * m + 1u];
+            ++kept;
+        }
+    }
+    if (kept == k) {
+        if (!(c < cost[k - 1u])) {
+            *found = kept;
+            return;
+        }
+        --kept;
+    }
+    for (at = kept; at > 0u && cost[at - 1u] > c; --at) {
+        best[at] = best[at - 1u];
+        cost[at] = cost[at - 1u];
+        ij[2 * at] = ij[2 * at - 2u];
+        ij[2 * at + 1u] = ij[2 * at - 1u];
+    }
+    best[at] = *x;
+    cost[at] = c;
+    ij[2 * at] = i;
+    ij[2 * at + 1u] = j;
+    *found = kept + 1u;
+}
+
+int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                        const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k)
+{
+    /* Every stride-th point: the score only ranks candidates. */
+    const size_t stride = n > 64u ? (n + 63u) / 64u : 1u;
+    float cost_of[RSM_MAPMATCH_MAX_CANDIDATES];
+    int32_t ij[2 * RSM_MAPMATCH_MAX_CANDIDATES];
+    size_t found = 0;
+    uint32_t level;
+    float step;
+    int32_t half;
+    int32_t fan;
+    int32_t a;
+    int32_t i;
+    int32_t j;
+    /* Everything is checked before map or cfg is read, and the radii before
+     * they are converted to counts. */
+    if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || best == NULL || k < 1u ||
+        k > RSM_MAPMATCH_MAX_CANDIDATES) {
+        return RSM_ERR_INVAL;
+    }
+    level = (uint32_t)map->cfg.levels - 1u;
+    step = rsm_tmap_cell(map, level);
+    if (!(radius_m >= 0.0f) || radius_m > 100.0f * step || !(radius_rad >= 0.0f) || radius_rad > 1.0f ||
+        (radius_rad > 0.0f && !(radius_rad <= 64.0f * cfg->search_step_rad))) {
+        return RSM_ERR_INVAL;
+    }
+    half = (int32_t)(radius_m / step);
+    fan = cfg->search_step_rad > 0.0f ? (int32_t)(radius_rad / cfg->search_step_rad) : 0;
+    for (a = -fan; a <= fan; ++a) {
+        rsm_pose_t x;
+        x.theta = rsm_wrap_angle(x0->theta + (float)a * cfg->search_step_rad);
+        for (j = -half; j <= half; ++j) {
+            for (i = -half; i <= half; ++i) {
+                x.x = x0->x + (float)i * step;
+                x.y = x0->y + (float)j * step;
+                keep_candidate(best, cost_of, ij, k, &found, &x, coarse_cost(map, level, pts, n, stride, &x), i, j);
+            }
+        }
+    }
+    return (int)found;
+}
+
+/* The prior of a descent: its mean, information and the residual weight;
+ * and how far the scan reaches. */
+typedef struct prior {
+    const rsm_pose_t *x0;
+    float lam[9];
+    float w;
+    float reach; /* points_reach of the scan */
+    int top;     /* the level the descent starts on */
+    const rsm_mapmatch_unpin_t *unpin; /* or NULL */
+} prior_t;
+
+/* m <- P m P for a symmetric 3 x 3 m (row-major), P = I - frac d d^T with
+ * d = (un->dir, 0): what is left of m once frac of it along the world
+ * direction d is taken out. */
+static void unpin_matrix(float m[9], const rsm_mapmatch_unpin_t *un)
+{
+    const float a = un->frac;
+    const float d[3] = {un->dir[0], un->dir[1], 0.0f};
+    float u[3]; /* m d */
+    float sd;
+    int i;
+    int j;
+    for (i = 0; i < 3; ++i) {
+        u[i] = m[i * 3] * d[0] + m[i * 3 + 1] * d[1];
+    }
+    sd = u[0] * d[0] + u[1] * d[1];
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) {
+            m[i * 3 + j] += a * (a * sd * d[i] * d[j] - d[i] * u[j] - u[i] * d[j]);
+        }
+    }
+}
+
+/* The larger of the prior's x and y variances. The descent does not look
+ * along an unpinned direction, however uncertain the prediction is there:
+ * with un, those of P p0 P (unpin_matrix). */
+static float position_variance(const float p0[9], const rsm_mapmatch_unpin_t *un)
+{
+    float p[9];
+    memcpy(p, p0, sizeof p);
+    if (un != NULL && un->frac > 0.0f) {
+        unpin_matrix(p, un);
+    }
+    return p[0] > p[4] ? p[0] : p[4];
+}
+
+/* The coarsest level the descent needs: the one whose cell is at least
+ * cfg->basin times how far the prior's one-sigma error moves a point at
+ * the scan's mean range (every level when basin is 0). */
+static int start_level(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const float p0[9], float mean,
+                       const rsm_mapmatch_unpin_t *un)
+{
+    const int coarsest = (int)map->cfg.levels - 1;
+    const float sp = sqrtf(position_variance(p0, un));
+    const float need = cfg->basin * (sp + sqrtf(p0[8]) * mean);
+    int level = 0;
+    if (!(cfg->basin > 0.0f) || !(need < rsm_tmap_cell(map, (uint32_t)coarsest))) {
+        return coarsest;
+    }
+    while (level < coarsest && rsm_tmap_cell(map, (uint32_t)level) < need) {
+        ++level;
+    }
+    return level;
+}
+
+/* Whether a step is too small to matter on a level: coarser levels only
+ * place the next one, so their thresholds grow with their cells. */
+static int small_step(const rsm_mapmatch_config_t *cfg, const float step[3], int level)
+{
+    const float scale = (float)(1u << (uint32_t)level);
+    return fabsf(step[0]) < cfg->min_step_m * scale && fabsf(step[1]) < cfg->min_step_m * scale &&
+           fabsf(step[2]) < cfg->min_step_rad * scale;
+}
+
+/* Takes the fraction un->frac of the sums' pull along the world direction
+ * d = (un->dir, 0) out: H <- P H P and b <- P b with P = I - frac d d^T.
+ * The heading keeps what the points' moves along d tell of it. */
+static void unpin_sums(sums_t *s, const rsm_mapmatch_unpin_t *un)
+{
+    float hf[9];
+    float bd;
+    int i;
+    if (un == NULL || !(un->frac > 0.0f)) {
+        return;
+    }
+    full(s->h, 1.0f, hf);
+    unpin_matrix(hf, un);
+    bd = s->b[0] * un->dir[0] + s->b[1] * un->dir[1];
+    for (i = 0; i < 2; ++i) {
+        s->b[i] -= un->frac * un->dir[i] * bd;
+    }
+    s->h[0] = hf[0];
+    s->h[1] = hf[1];
+    s->h[2] = hf[2];
+    s->h[3] = hf[4];
+    s->h[4] = hf[5];
+    s->h[5] = hf[8];
+}
+
+/* Gauss-Newton from x on every level, coarse to fine. On return x is the
+ * estimate, s the finest level's sums there and the result the objective
+ * (residuals plus prior) on the finest level. */
+static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                     const prior_t *pr, rsm_pose_t *x, sums_t *s, uint32_t *iterations)
+{
+    float f = 0.0f;
+    int level;
+    int k;
+    for (level = pr->top; level >= 0; --level) {
+        float e[3];
+        float scale = 1.0f; /* halved for good once a step overshoots */
+        uint32_t it;
+        level_sums(map, (uint32_t)level, pts, n, pr->reach, x, s);
+        unpin_sums(s, pr->unpin);
+        diff(x, pr->x0, e);
+        f = s->cost * pr->w + quad(pr->lam, e);
+        for (it = 0; it < cfg->iterations; ++it) {
+            float a[9];
+            float ai[9];
+            float g[3];
+            float step[3];
+            int halvings;
+            int accepted = 0;
+            if (s->used < 3u) {
+                break;
+            }
+            full(s->h, pr->w, a);
+            for (k = 0; k < 9; ++k) {
+                a[k] += pr->lam[k];
+            }
+            if (rsm_mat3_inverse(a, ai) != RSM_OK) {
+                break;
+            }
+            for (k = 0; k < 3; ++k) {
+                g[k] = s->b[k] * pr->w - (pr->lam[k * 3] * e[0] + pr->lam[k * 3 + 1] * e[1] + pr->lam[k * 3 + 2] * e[2]);
+            }
+            for (k = 0; k < 3; ++k) {
+                step[k] = ai[k * 3] * g[0] + ai[k * 3 + 1] * g[1] + ai[k * 3 + 2] * g[2];
+            }
+            ++*iterations;
+            /* A coarse level whose next step is below its threshold has
+             * placed the next level: trying the step would cost a pass over
+             * every point to move a few millimetres that the next level
+             * sets anyway. The finest level tries every step it computes. */
+            if (level > 0 && small_step(cfg, step, level)) {
+                break;
+            }
+            /* The interpolated occupancy has kinks at cell borders where a full
+             * step can overshoot: take it only where it lowers the cost. A
+             * coarse level that cannot lower it has placed the next level
+             * well enough; the finest tries half the step too, and keeps
+             * halving its steps from then on: past a kink the heading
+             * otherwise zigzags for the rest of the iterations. (Five
+             * halvings everywhere cost a tenth more per scan for the same
+             * accuracy: docs/map.md.) */
+            for (k = 0; k < 3; ++k) {
+                step[k] *= scale;
+            }
+            for (halvings = 0; halvings < (level > 0 ? 1 : 2) && !accepted; ++halvings) {
+                rsm_pose_t cand;
+                sums_t cs;
+                float ce[3];
+                float cf;
+                cand.x = x->x + step[0];
+                cand.y = x->y + step[1];
+                cand.theta = rsm_wrap_angle(x->theta + step[2]);
+                level_sums(map, (uint32_t)level, pts, n, pr->reach, &cand, &cs);
+                unpin_sums(&cs, pr->unpin);
+                diff(&cand, pr->x0, ce);
+                cf = cs.cost * pr->w + quad(pr->lam, ce);
+                if (cf < f) {
+                    *x = cand;
+                    *s = cs;
+                    memcpy(e, ce, sizeof e);
+                    f = cf;
+                    accepted = 1;
+                } else {
+                    step[0] *= 0.5f;
+                    step[1] *= 0.5f;
+                    step[2] *= 0.5f;
+                    scale *= 0.5f;
+                }
+            }
+            if (!accepted || small_step(cfg, step, level)) {
+                break;
+            }
+        }
+    }
+    return f;
+}
+
+int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                 const rsm_pose_t *x0, const float p0[9], const rsm_pose_t *start,
+                 const rsm_mapmatch_unpin_t *unpin, rsm_mapmatch_result_t *res)
+{
+    float pf[9];
+    prior_t pr;
+    rsm_pose_t x;
+    sums_t s;
+    int k;
+    if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || p0 == NULL || res == NULL ||
+        !(cfg->sigma > 0.0f)) {
+        return RSM_ERR_INVAL;
+    }
+    memset(res, 0, sizeof *res);
+    res->pose = *x0;
+    memcpy(res->cov, p0, sizeof res->cov);
+    memcpy(pf, p0, sizeof pf);
+    for (k = 0; k < 3; ++k) {
+        if (!(pf[k * 4] >= PRIOR_FLOOR)) {
+            pf[k * 4] = PRIOR_FLOOR;
+        }
+    }
+    if (rsm_mat3_inverse(pf, pr.lam) != RSM_OK) {
+        return RSM_ERR_DEGENERATE;
+    }
+    pr.x0 = x0;
+    pr.unpin = unpin;
+    pr.w = 1.0f / (cfg->sigma * cfg->sigma);
+    {
+        float mean;
+        pr.reach = points_reach(pts, n, &mean);
+        pr.top = start_level(map, cfg, pf, mean, unpin);
+    }
+    x = start != NULL ? *start : *x0;
+    {
+        const float f = descend(map, cfg, pts, n, &pr, &x, &s, &res->iterations);
+        if (start == NULL && cfg->fan && cfg->search_rad > 0.0f && cfg->search_step_rad > 0.0f) {
+            /* The fan's best heading is only a coarse guess: descend from it
+             * too and keep whichever ends lower on the finest level. */
+            rsm_pose_t alt = *x0;
+            alt.theta = best_heading(map, cfg, pts, n, x0, pr.w, pr.lam[8]);
+            if (fabsf(rsm_wrap_angle(alt.theta - x0->theta)) > 0.5f * cfg->search_step_rad) {
+                sums_t as;
+                const float af = descend(map, cfg, pts, n, &pr, &alt, &as, &res->iterations);
+                if (af < f && as.used >= 3u) {
+                    x = alt;
+                    s = as;
+                }
+            }
+        }
+    }
+    /* s holds the finest level's sums at x. */
+    if (s.used < 3u) {
+        return RSM_ERR_DEGENERATE;
+    }
+    {
+        float a[9];
+        float e[3];
+        full(s.h, pr.w, res->info);
+        for (k = 0; k < 9; ++k) {
+            a[k] = res->info[k] + pr.lam[k];
+        }
+        if (rsm_mat3_inverse(a, res->cov) != RSM_OK) {
+            memcpy(res->cov, p0, sizeof res->cov);
+            return RSM_ERR_DEGENERATE;
+        }
+        diff(&x, x0, e);
+        res->d2 = quad(pr.lam, e);
+    }
+    res->pose = x;
+    res->top = (uint32_t)pr.top;
+    res->used = s.used;
+    res->cost = s.cost_used / (float)s.used;
+    res->hit = n > 0u ? s.hit / (float)n : 0.0f;
+    return RSM_OK;
+}
+
+/* Chords shorter than this are left out of the spread: over a few
+ * centimetres the range noise turns a wall's chord by tens of degrees. */
+#define SPREAD_CHORD_M 0.3f
+/* Consecutive returns closer than this share a surface: a fraction of their
+ * range (a wall seen at a grazing angle has its returns far apart), at
+ * least SPREAD_GAP_M. */
+#define SPREAD_GAP_REL 0.15f
+#define SPREAD_GAP_M 0.1f
+
+float rsm_mapmatch_spread(const rsm_point_t *pts, size_t n, float dir[2])
+{
+    float a = 0.0f; /* sum of t t^T over the unit chords t: (a b; b c) */
+    float b = 0.0f;
+    float c = 0.0f;
+    size_t j = 1;
+    size_t joined = 0; /* points 1..joined are known to join the point before */
+    size_t k;
+    dir[0] = 1.0f;
+    dir[1] = 0.0f;
+    /* Each point's chord runs to the first point at least SPREAD_CHORD_M
+     * away on its surface; j only moves forward, so this is one pass (and
+     * each gap is tested once, though the chords of several points may
+     * reach it). */
+    for (k = 0; k + 1u < n; ++k) {
+        float dx = 0.0f;
+        float dy = 0.0f;
+        float d2 = 0.0f;
+        if (j <= k) {
+            j = k + 1u;
+        }
+        for (; j < n; ++j) {
+            if (j > joined) {
+                const float gx = pts[j].x - pts[j - 1u].x;
+                const float gy = pts[j].y - pts[j - 1u].y;
+                const float r = fabsf(pts[j].x) + fabsf(pts[j].y);
+                const float g = SPREAD_GAP_REL * r > SPREAD_GAP_M ? SPREAD_GAP_REL * r : SPREAD_GAP_M;
+                if (!(gx * gx + gy * gy <= g * g)) {
+                    break;
+                }
+                joined = j;
+            }
+            dx = pts[j].x - pts[k].x;
+            dy = pts[j].y - pts[k].y;
+            d2 = dx * dx + dy * dy;
+            if (d2 >= SPREAD_CHORD_M * SPREAD_CHORD_M) {
+                break;
+            }
+        }
+        if (j >= n) {
+            break;
+        }
+        if (d2 >= SPREAD_CHORD_M * SPREAD_CHORD_M) {
+            const float inv = 1.0f / d2;
+            a += dx * dx * inv;
+            b += dx * dy * inv;
+            c += dy * dy * inv;
+        } else {
+            /* k's surface ends before j, short of a chord from k or from
+             * any point after k: the next surface starts at j. */
+            k = j - 1u;
+        }
+    }
+    {
+        /* Eigenvalues of (a b; b c): m +- dd; the larger one's vector. */
+        const float h = 0.5f * (a - c);
+        const float dd = sqrtf(h * h + b * b);
+        const float m = 0.5f * (a + c);
+        float vx;
+        float vy;
+        float len;
+        if (!(m + dd > 0.0f)) {
+            return 1.0f; /* no chord: nothing says the scan is one-sided */
+        }
+        if (h >= 0.0f) {
+            vx = h + dd;
+            vy = b;
+        } else {
+            vx = b;
+            vy = dd - h;
+        }
+        len = sqrtf(vx * vx + vy * vy);
+        if (len > 0.0f) {
+            dir[0] = vx / len;
+            dir[1] = vy / len;
+        }
+        return (m - dd) / (m + dd);
+    }
+}
+
+void rsm_mapmatch_unpin_for(const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n, float theta,
+                            rsm_mapmatch_unpin_t *un)
+{
+    float dir[2];
+    float spread;
+    un->dir[0] = 1.0f;
+    un->dir[1] = 0.0f;
+    un->frac = 0.0f;
+    if (!(cfg->unpin_hi > cfg->unpin_lo)) {
+        return;
+    }
+    spread = rsm_mapmatch_spread(pts, n, dir);
+    if (spread < cfg->unpin_hi) {
+        const float c = rsm_cosf(theta);
+        const float s = rsm_sinf(theta);
+        const float f = (cfg->unpin_hi - spread) / (cfg->unpin_hi - cfg->unpin_lo);
+        un->dir[0] = c * dir[0] - s * dir[1];
+        un->dir[1] = s * dir[0] + c * dir[1];
+        un->frac = f < 1.0f ? f : 1.0f;
+    }
+}

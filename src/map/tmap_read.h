@@ -1,0 +1,302 @@
+/* Reads of the tile map, inline: the map matcher samples every point of a
+ * scan a dozen times per scan, and a call per read (plus one per tile
+ * lookup) was most of a scan's cost on a Cortex-M4. The public readers in
+ * tilemap.c are these same functions. Internal to the library. */
+#ifndef RSM_TMAP_READ_H
+#define RSM_TMAP_READ_H
+
+#include <stdint.h>
+#include <string.h>
+
+#include "core/compiler.h"
+#include "map/tilemap.h"
+
+#define RSM_TMAP_TILE_MASK ((int32_t)RSM_TMAP_TILE_SIDE - 1)
+/* Cells beyond this from the origin (at any level) are refused, so that tile
+ * coordinates fit int16 and cell arithmetic never overflows. */
+#define RSM_TMAP_CELL_LIMIT (RSM_TMAP_TILE_LIMIT * RSM_TMAP_TILE_SIDE)
+
+/* A pair of tile (or cell) coordinates as one word: the cursor's key, and
+ * what the index and the echo set hash. */
+static inline uint32_t rsm_tmap_pack(int32_t x, int32_t y)
+{
+    return (uint32_t)(uint16_t)x | ((uint32_t)(uint16_t)y << 16);
+}
+
+/* Slot of a tile, or RSM_TMAP_NONE (the index lookup, in tilemap.c). */
+uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty);
+
+/* Forgets every tile the cursor holds (after a write moved or freed one). */
+static inline void rsm_tmap_cursor_forget(rsm_tmap_cursor_t *c)
+{
+    uint32_t k;
+    for (k = 0; k < RSM_TMAP_CURSOR_WAYS * RSM_TMAP_CURSOR_WAYS; ++k) {
+        c->way[k].key = RSM_TMAP_NO_KEY;
+    }
+    /* No tile's first cell (those are multiples of the tile side). */
+    c->bx = INT32_MIN + 1;
+    c->by = INT32_MIN + 1;
+    c->last = NULL;
+}
+
+/* Slot of the tile holding cell (gx, gy) of the cursor's level. */
+static inline uint32_t rsm_tmap_cursor_slot(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy)
+{
+    const int32_t tx = gx >> RSM_TMAP_TILE_LOG2;
+    const int32_t ty = gy >> RSM_TMAP_TILE_LOG2;
+    const uint32_t key = rsm_tmap_pack(tx, ty);
+    const uint32_t m = (uint32_t)RSM_TMAP_CURSOR_WAYS - 1u;
+    rsm_tmap_way_t *w = &c->way[((uint32_t)tx & m) | (((uint32_t)ty & m) * (uint32_t)RSM_TMAP_CURSOR_WAYS)];
+    if (w->key != key) {
+        w->key = key;
+        w->slot = rsm_tmap_find_slot(map, c->level, tx, ty);
+    }
+    return w->slot;
+}
+
+static inline uint32_t rsm_tmap_cell_index(int32_t gx, int32_t gy)
+{
+    return ((uint32_t)(gy & RSM_TMAP_TILE_MASK) << RSM_TMAP_TILE_LOG2) | (uint32_t)(gx & RSM_TMAP_TILE_MASK);
+}
+
+static inline uint32_t rsm_tmap_get_cell(const rsm_tile_t *t, uint32_t i)
+{
+    return ((uint32_t)t->cell[i >> 1] >> ((i & 1u) << 2)) & 15u;
+}
+
+/* Value of cell (gx, gy) in the tile of slot s; 0 where no tile is held. */
+static inline uint32_t rsm_tmap_slot_value(const rsm_tmap_t *map, uint32_t s, int32_t gx, int32_t gy)
+{
+    return s == RSM_TMAP_NONE ? 0u : rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(gx, gy));
+}
+
+/* Value of a cell through a cursor; 0 where no tile is held. */
+static inline uint32_t rsm_tmap_cell_value(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy)
+{
+    return rsm_tmap_slot_value(map, rsm_tmap_cursor_slot(map, c, gx, gy), gx, gy);
+}
+
+/* The occupancy of two horizontal neighbours, cells k and k + 1 of a tile's
+ * row (k + 1 in the same row). */
+static inline void rsm_tmap_occ_pair(const rsm_tmap_t *map, const rsm_tile_t *t, uint32_t k, float *left,
+                                     float *right)
+{
+    const uint8_t *b = &t->cell[k >> 1];
+    if ((k & 1u) == 0u) {
+        *left = map->occ[b[0] & 15u];
+        *right = map->occ[b[0] >> 4];
+    } else {
+        *left = map->occ[b[0] >> 4];
+        *right = map->occ[b[1] & 15u];
+    }
+}
+
+/* Metres from the origin within which every read is inside the cells'
+ * range on every level (two finest cells short of it, for rounding). */
+static inline float rsm_tmap_read_reach(const rsm_tmap_t *map)
+{
+    return (float)(RSM_TMAP_CELL_LIMIT - 3) / map->inv_cell[0];
+}
+
+/* Without an FPU (RSM_SOFT_FLOAT) the reads split a coordinate into its
+ * floor and fraction on its bits, test a gradient for zero on its bits and
+ * skip the products a zero makes exact, with the same results as the float
+ * operations (the host replay equals the Cortex-M3's and the M0+'s bit for
+ * bit: m3.replay_matches_host, m0plus.replay_matches_host). */
+
+static inline uint32_t rsm_tmap_bits(float f)
+{
+    uint32_t b;
+    memcpy(&b, &f, sizeof b);
+    return b;
+}
+
+/* f == 0.0f (either zero), on the bits. */
+static inline int rsm_tmap_is_zero(float f)
+{
+    return (rsm_tmap_bits(f) << 1) == 0u;
+}
+
+/* No gradient: gu and gv both zero (on the bits without an FPU). */
+static inline int rsm_tmap_flat(float gu, float gv)
+{
+#if RSM_SOFT_FLOAT
+    return ((rsm_tmap_bits(gu) | rsm_tmap_bits(gv)) << 1) == 0u;
+#else
+    return gu == 0.0f && gv == 0.0f;
+#endif
+}
+
+/* floor(u) into *i and u - floor(u) into *frac, exactly as the float path
+ * of rsm_tmap_read_cells computes them, on u's bits: returns 0 (nothing
+ * written) where the difference would round, u in (-1, 0), or where u is
+ * 2^23 or more, which the caller's range test keeps out. */
+static inline int rsm_tmap_split(float u, int32_t *i, float *frac)
+{
+    const uint32_t b = rsm_tmap_bits(u);
+    const int32_t e = (int32_t)((b >> 23) & 0xFFu) - 127;
+    uint32_t shift;
+    uint32_t m;
+    uint32_t f;
+    uint32_t p;
+    if (e < 0) {
+        if ((b >> 31) != 0u && (b << 1) != 0u) {
+            return 0; /* u + 1 rounds for small negative u */
+        }
+        *i = 0;
+        *frac = u; /* u - 0 */
+        return 1;
+    }
+    if (e > 22) {
+        return 0;
+    }
+    shift = 23u - (uint32_t)e;
+    m = (b & 0x7FFFFFu) | 0x800000u;
+    f = m & ((1u << shift) - 1u);
+    if ((b >> 31) == 0u) {
+        *i = (int32_t)(m >> shift);
+    } else if (f == 0u) {
+        *i = -(int32_t)(m >> shift);
+    } else {
+        *i = -(int32_t)(m >> shift) - 1;
+        f = (1u << shift) - f;
+    }
+    if (f == 0u) {
+        *frac = 0.0f;
+        return 1;
+    }
+    /* f 2^-shift, f < 2^23: its leading bit p places the exponent. */
+    p = (uint32_t)rsm_top_bit(f);
+    f = ((f << (23u - p)) & 0x7FFFFFu) | ((p + 127u - shift) << 23);
+    memcpy(frac, &f, sizeof f);
+    return 1;
+}
+
+/* The occupancy at (u, v) in cells of the cursor's level, cell centres at
+ * whole numbers: bilinear between the four centres around it. Its
+ * gradient per cell goes to *du_out and *dv_out. inside: the caller knows
+ * (u, v) to be within rsm_tmap_read_reach of the origin on both axes, so
+ * the range test can go (the map matcher checks that once per pass, not
+ * once per point). */
+static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float u, float v, int inside,
+                                        float *du_out, float *dv_out)
+{
+    /* The floor by conversion: the range test comes first, so the
+     * conversion cannot overflow. u in [1 - L, L - 1) is exactly
+     * floor(u) > -L and floor(u) + 1 < L, the cells' range. */
+    const float lim = (float)(RSM_TMAP_CELL_LIMIT - 1);
+    int32_t i;
+    int32_t j;
+    float fu;
+    float fv;
+    float du;
+    float dv;
+    float m00;
+    float m10;
+    float m01;
+    float m11;
+    float a;
+    float b;
+    float top;
+    float bottom;
+    if (!inside && !(u >= -lim && u < lim && v >= -lim && v < lim)) {
+        *du_out = 0.0f;
+        *dv_out = 0.0f;
+        return 0.0f;
+    }
+    if (!RSM_SOFT_FLOAT || !rsm_tmap_split(u, &i, &du) || !rsm_tmap_split(v, &j, &dv)) {
+        i = (int32_t)u;
+        j = (int32_t)v;
+        fu = (float)i;
+        fv = (float)j;
+        if (fu > u) {
+            --i;
+            fu -= 1.0f;
+        }
+        if (fv > v) {
+            --j;
+            fv -= 1.0f;
+        }
+        du = u - fu;
+        dv = v - fv;
+    }
+    if ((i & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (j & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK) {
+        /* All four cells in one tile: looked up only when it is not the
+         * last such sample's tile. */
+        const uint32_t k = rsm_tmap_cell_index(i, j);
+        if ((i & ~RSM_TMAP_TILE_MASK) != c->bx || (j & ~RSM_TMAP_TILE_MASK) != c->by) {
+            const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
+            c->bx = i & ~RSM_TMAP_TILE_MASK;
+            c->by = j & ~RSM_TMAP_TILE_MASK;
+            c->last = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
+        }
+        if (c->last == NULL) {
+            *du_out = 0.0f;
+            *dv_out = 0.0f;
+            return 0.0f;
+        }
+#if RSM_SOFT_FLOAT
+        /* Four equal cells: the interpolation below gives their value and
+         * a zero gradient exactly (no occupancy is -0), at a dozen calls
+         * into libgcc. */
+        {
+            const uint32_t v00 = rsm_tmap_get_cell(c->last, k);
+            if (rsm_tmap_get_cell(c->last, k + 1u) == v00 &&
+                rsm_tmap_get_cell(c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE) == v00 &&
+                rsm_tmap_get_cell(c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u) == v00) {
+                *du_out = 0.0f;
+                *dv_out = 0.0f;
+                return map->occ[v00];
+            }
+        }
+#endif
+        rsm_tmap_occ_pair(map, c->last, k, &m00, &m10);
+        rsm_tmap_occ_pair(map, c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE, &m01, &m11);
+    } else {
+        /* The cells straddle a tile's last column or row: each tile they
+         * lie in is looked up once. */
+        const int edge_i = (i & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
+        const int edge_j = (j & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
+        const uint32_t s00 = rsm_tmap_cursor_slot(map, c, i, j);
+        const uint32_t s10 = edge_i ? rsm_tmap_cursor_slot(map, c, i + 1, j) : s00;
+        const uint32_t s01 = edge_j ? rsm_tmap_cursor_slot(map, c, i, j + 1) : s00;
+        const uint32_t s11 = !edge_j ? s10 : !edge_i ? s01 : rsm_tmap_cursor_slot(map, c, i + 1, j + 1);
+        m00 = map->occ[rsm_tmap_slot_value(map, s00, i, j)];
+        m10 = map->occ[rsm_tmap_slot_value(map, s10, i + 1, j)];
+        m01 = map->occ[rsm_tmap_slot_value(map, s01, i, j + 1)];
+        m11 = map->occ[rsm_tmap_slot_value(map, s11, i + 1, j + 1)];
+    }
+    a = m10 - m00;
+    b = m11 - m01;
+#if RSM_SOFT_FLOAT
+    /* A call saved for each zero difference (two equal cells), with the
+     * float path's bits: no occupancy, difference or corner value is -0,
+     * so x + 0 * t is x whatever the zero's sign. */
+    top = rsm_tmap_bits(a) == 0u ? m00 : m00 + a * du;
+    bottom = rsm_tmap_bits(b) == 0u ? m01 : m01 + b * du;
+    *du_out = rsm_tmap_bits(a) == rsm_tmap_bits(b) ? a : a + (b - a) * dv;
+    if (rsm_tmap_bits(top) == rsm_tmap_bits(bottom)) {
+        *dv_out = 0.0f;
+        return top;
+    }
+#else
+    top = m00 + a * du;
+    bottom = m01 + b * du;
+    *du_out = a + (b - a) * dv;
+#endif
+    *dv_out = bottom - top;
+    return top + (bottom - top) * dv;
+}
+
+/* rsm_tmap_sample_at (see tilemap.h); inside as for rsm_tmap_read_cells. */
+static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y, int inside,
+                                         float *dx, float *dy)
+{
+    const float inv_a = map->inv_cell[c->level];
+    const float m = rsm_tmap_read_cells(map, c, x * inv_a - 0.5f, y * inv_a - 0.5f, inside, dx, dy);
+    *dx *= inv_a;
+    *dy *= inv_a;
+    return m;
+}
+
+#endif /* RSM_TMAP_READ_H */
