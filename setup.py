@@ -5,6 +5,7 @@ one shared object rsm/_native*.so that rsm/__init__.py loads with ctypes.
 It is compiled as an extension so that the wheel is tagged for this
 platform, but it includes no Python header: the shim is plain C99."""
 
+import os
 import re
 from pathlib import Path
 
@@ -12,6 +13,7 @@ from setuptools import setup, Extension
 from setuptools.command.build_ext import build_ext
 
 ROOT = Path(__file__).resolve().parent
+BUILD_DIR = os.environ.get("RSM_PY_BUILD_DIR") or "build-python"
 
 
 def version() -> str:
@@ -63,6 +65,7 @@ setup(
     package_dir={"rsm": "port/python/rsm"},
     ext_modules=[native],
     cmdclass={"build_ext": BuildNoInit},
-    # Out of the CMake build folder build/ (the build* folders are ignored by git).
-    options={"build": {"build_base": "build-python"}, "egg_info": {"egg_base": "build-python"}},
+    # Out of the CMake build folder build/ (the build* folders are ignored
+    # by git), or where RSM_PY_BUILD_DIR says (the test builds afresh there).
+    options={"build": {"build_base": BUILD_DIR}, "egg_info": {"egg_base": BUILD_DIR}},
 )

@@ -25,7 +25,9 @@ def site(tmp_path_factory) -> Path:
     target = tmp_path_factory.mktemp("site")
     cmd = [sys.executable, "-m", "pip", "install", "--no-build-isolation", "--no-deps", "--no-index",
            "--no-cache-dir", "--disable-pip-version-check", "-q", "--target", str(target), str(REPO_ROOT)]
-    run = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    # Built afresh (no objects of an earlier build reused), outside the checkout.
+    env = dict(os.environ, RSM_PY_BUILD_DIR=str(tmp_path_factory.mktemp("build")))
+    run = subprocess.run(cmd, capture_output=True, text=True, timeout=600, env=env)
     assert run.returncode == 0, run.stdout + run.stderr
     return target
 
