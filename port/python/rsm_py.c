@@ -131,6 +131,47 @@ static double field_top(const rsmpy_field_t *f)
     return pow(2.0, (double)f->size * 8.0 - (f->kind == RSMPY_SIGNED ? 1.0 : 0.0)) - 1.0;
 }
 
+/* An integer field's bytes from and to a double: 1 and 2 bytes unsigned,
+ * 4 bytes signed (int32_t, or an enum's int) or unsigned. */
+static void int_put(unsigned char *at, const rsmpy_field_t *f, double v)
+{
+    if (f->size == 1u) {
+        const uint8_t x = (uint8_t)v;
+        memcpy(at, &x, sizeof x);
+    } else if (f->size == 2u) {
+        const uint16_t x = (uint16_t)v;
+        memcpy(at, &x, sizeof x);
+    } else if (f->kind != RSMPY_UNSIGNED) {
+        const int32_t x = (int32_t)v;
+        memcpy(at, &x, sizeof x);
+    } else {
+        const uint32_t x = (uint32_t)v;
+        memcpy(at, &x, sizeof x);
+    }
+}
+
+static double int_get(const unsigned char *at, const rsmpy_field_t *f)
+{
+    uint8_t u8;
+    uint16_t u16;
+    int32_t i32;
+    uint32_t u32;
+    if (f->size == 1u) {
+        memcpy(&u8, at, sizeof u8);
+        return (double)u8;
+    }
+    if (f->size == 2u) {
+        memcpy(&u16, at, sizeof u16);
+        return (double)u16;
+    }
+    if (f->kind != RSMPY_UNSIGNED) {
+        memcpy(&i32, at, sizeof i32);
+        return (double)i32;
+    }
+    memcpy(&u32, at, sizeof u32);
+    return (double)u32;
+}
+
 /* Sets field i to v: 0; -1 no field i; -2 v is not a value of its type (a
  * float beyond FLT_MAX or not finite; an integer not whole or outside its
  * type or enum). The config is untouched on error. */
@@ -155,60 +196,24 @@ int rsmpy_config_set(rsmpy_t *p, size_t i, double v)
     if (v != floor(v) || v > field_top(f) || v < (f->kind == RSMPY_SIGNED ? -field_top(f) - 1.0 : 0.0)) {
         return -2;
     }
-    if (f->kind == RSMPY_SIGNED) {
-        const int32_t x = (int32_t)v;
-        memcpy(at, &x, sizeof x);
-    } else if (f->size == 1u) {
-        const uint8_t x = (uint8_t)v;
-        memcpy(at, &x, sizeof x);
-    } else if (f->size == 2u) {
-        const uint16_t x = (uint16_t)v;
-        memcpy(at, &x, sizeof x);
-    } else if (f->kind == RSMPY_ENUM) {
-        /* An enum is stored as an int of the enum's size. */
-        const int x = (int)v;
-        memcpy(at, &x, f->size < sizeof x ? f->size : sizeof x);
-    } else {
-        const uint32_t x = (uint32_t)v;
-        memcpy(at, &x, sizeof x);
-    }
+    int_put(at, f, v);
     return 0;
 }
 
 /* Field i's value into *v: 0, or -1 (no field i). */
 int rsmpy_config_get(const rsmpy_t *p, size_t i, double *v)
 {
-    const rsmpy_field_t *f;
     const unsigned char *at;
     if (i >= NFIELDS) {
         return -1;
     }
-    f = &fields[i];
-    at = (const unsigned char *)&p->cfg + f->offset;
-    if (f->kind == RSMPY_FLOAT) {
+    at = (const unsigned char *)&p->cfg + fields[i].offset;
+    if (fields[i].kind == RSMPY_FLOAT) {
         float x;
         memcpy(&x, at, sizeof x);
         *v = (double)x;
-    } else if (f->kind == RSMPY_SIGNED) {
-        int32_t x;
-        memcpy(&x, at, sizeof x);
-        *v = (double)x;
-    } else if (f->size == 1u) {
-        uint8_t x;
-        memcpy(&x, at, sizeof x);
-        *v = (double)x;
-    } else if (f->size == 2u) {
-        uint16_t x;
-        memcpy(&x, at, sizeof x);
-        *v = (double)x;
-    } else if (f->kind == RSMPY_ENUM) {
-        int x = 0;
-        memcpy(&x, at, f->size < sizeof x ? f->size : sizeof x);
-        *v = (double)x;
     } else {
-        uint32_t x;
-        memcpy(&x, at, sizeof x);
-        *v = (double)x;
+        *v = int_get(at, &fields[i]);
     }
     return 0;
 }
@@ -273,13 +278,21 @@ int rsmpy_scan(rsmpy_t *p, uint64_t stamp_us, size_t n, const float *ranges, con
     return rsm_localizer_scan(&p->loc, &p->scan, &p->rep);
 }
 
-/* The report's entries, in this order (the enums as their values). */
-static const char *const report_names[] = {
-    "outcome", "track", "odometry", "fit_ratio", "recovered", "search_work", "x", "y", "theta",
-    "cov0", "cov1", "cov2", "cov3", "cov4", "cov5", "cov6", "cov7", "cov8",
-    "measured_x", "measured_y", "measured_theta", "points", "keypoints_cur", "keypoints_ref", "matches",
-    "inliers", "iterations", "residual_m", "mahalanobis_d2", "crossing", "unpinned",
-};
+/* The report's entries, each a name and its value (the enums as their
+ * values), listed once for both. */
+#define RSMPY_REPORT(X)                                                                                        \
+    X(outcome, r->outcome) X(track, r->track) X(odometry, r->odometry) X(fit_ratio, r->fit_ratio)              \
+    X(recovered, r->recovered) X(search_work, r->search_work) X(x, r->pose.x) X(y, r->pose.y)                  \
+    X(theta, r->pose.theta) X(cov0, r->cov[0]) X(cov1, r->cov[1]) X(cov2, r->cov[2]) X(cov3, r->cov[3])        \
+    X(cov4, r->cov[4]) X(cov5, r->cov[5]) X(cov6, r->cov[6]) X(cov7, r->cov[7]) X(cov8, r->cov[8])             \
+    X(measured_x, r->measured.x) X(measured_y, r->measured.y) X(measured_theta, r->measured.theta)             \
+    X(points, r->points) X(keypoints_cur, r->keypoints_cur) X(keypoints_ref, r->keypoints_ref)                 \
+    X(matches, r->matches) X(inliers, r->inliers) X(iterations, r->iterations) X(residual_m, r->residual_m)    \
+    X(mahalanobis_d2, r->mahalanobis_d2) X(crossing, r->crossing) X(unpinned, r->unpinned)
+
+#define REPORT_NAME(name, value) #name,
+static const char *const report_names[] = {RSMPY_REPORT(REPORT_NAME)};
+#undef REPORT_NAME
 
 #define NREPORT (sizeof report_names / sizeof report_names[0])
 
@@ -293,32 +306,9 @@ void rsmpy_report(const rsmpy_t *p, double *out)
 {
     const rsm_localizer_report_t *r = &p->rep;
     size_t k = 0;
-    size_t c;
-    out[k++] = (double)r->outcome;
-    out[k++] = (double)r->track;
-    out[k++] = (double)r->odometry;
-    out[k++] = (double)r->fit_ratio;
-    out[k++] = (double)r->recovered;
-    out[k++] = (double)r->search_work;
-    out[k++] = (double)r->pose.x;
-    out[k++] = (double)r->pose.y;
-    out[k++] = (double)r->pose.theta;
-    for (c = 0; c < 9u; ++c) {
-        out[k++] = (double)r->cov[c];
-    }
-    out[k++] = (double)r->measured.x;
-    out[k++] = (double)r->measured.y;
-    out[k++] = (double)r->measured.theta;
-    out[k++] = (double)r->points;
-    out[k++] = (double)r->keypoints_cur;
-    out[k++] = (double)r->keypoints_ref;
-    out[k++] = (double)r->matches;
-    out[k++] = (double)r->inliers;
-    out[k++] = (double)r->iterations;
-    out[k++] = (double)r->residual_m;
-    out[k++] = (double)r->mahalanobis_d2;
-    out[k++] = (double)r->crossing;
-    out[k] = (double)r->unpinned;
+#define REPORT_VALUE(name, value) out[k++] = (double)(value);
+    RSMPY_REPORT(REPORT_VALUE)
+#undef REPORT_VALUE
 }
 
 /* The counters, each a uint32_t: a name and how many follow it (the
