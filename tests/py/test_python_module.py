@@ -148,6 +148,8 @@ def test_map_is_a_numpy_array_of_the_map(run):
     # A coarser raster covers the same box.
     coarse = loc.map(cell=0.2)
     assert coarse.occupancy.shape == (round((y1 - y0) / 0.2), round((x1 - x0) / 0.2))
+    assert coarse.extent == pytest.approx((x0, x1, y0, y1), abs=1e-4)
+    assert m.world(0, 0) == pytest.approx((x0 + 0.025, y0 + 0.025))
 
 
 def test_nan_ranges_are_counted_as_drops(rsm, records):
@@ -171,6 +173,7 @@ def test_config_errors_name_the_field(rsm):
              ({"lost_scans": 2.5}, "lost_scans"),
              ({"method": 7}, "method"),
              ({"map_update_m": 1e39}, "map_update_m"),
+             ({"map_update_m": "0.3"}, "map_update_m"),
              ({"map_updates_m": 0.3}, "map_updates_m")]
     for config, field in cases:
         with pytest.raises(rsm.ConfigError) as err:

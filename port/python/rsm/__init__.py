@@ -187,6 +187,8 @@ class _State:
         if i is None:
             raise ConfigError(name, "does not exist (rsm.config_fields() lists them)")
         kind = _lib.rsmpy_field_kind(i)
+        if isinstance(value, (str, bytes)):
+            raise ConfigError(name, f"takes a number, not {value!r}")
         if kind != _FLOAT and isinstance(value, float) and not value.is_integer():
             raise ConfigError(name, f"is a whole number, not {value!r}")
         try:
@@ -239,6 +241,13 @@ class Map:
     occupancy: np.ndarray
     origin: Tuple[float, float]
     cell: float
+
+    @property
+    def extent(self) -> Tuple[float, float, float, float]:
+        """(x0, x1, y0, y1) of the raster's outer edges: matplotlib's
+        ``imshow(m.occupancy, origin="lower", extent=m.extent)`` draws it in metres."""
+        h, w = self.occupancy.shape
+        return (self.origin[0], self.origin[0] + w * self.cell, self.origin[1], self.origin[1] + h * self.cell)
 
     def world(self, i, j):
         """The centre of cell (i, j) (column, row), in metres."""
