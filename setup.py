@@ -36,7 +36,9 @@ def headers() -> list:
 
 
 def internal_include_dirs() -> list:
-    return sorted({p.parent.relative_to(ROOT).as_posix() for p in (ROOT / "src").rglob("*.h")})
+    # Internal headers are included by their layer's folder ("map/tilemap.h",
+    # docs/layering.md), so src/ itself is the one folder to search.
+    return ["src"]
 
 
 class BuildNoInit(build_ext):
