@@ -68,16 +68,14 @@ int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
     if (r->odom_n >= 2u) {
         /* A pose read right after the newest, far sooner than the newest
          * came after the one before, is a burst (a host reading its
-         * backlog): the newest was measured earlier than its stamp says, by
-         * an unknown time, so the burst counts as one reading, its last. */
+         * backlog): the newest was measured earlier than its stamp says.
+         * Odometry comes at a steady rate, so it is put halfway between
+         * the one before and this one; its pose is kept. */
         const size_t newest = (r->odom_head + r->odom_n - 1u) % RSM_REV_ODOM_DEPTH;
         const size_t before = (r->odom_head + r->odom_n - 2u) % RSM_REV_ODOM_DEPTH;
         if ((stamp_us - r->odom_us[newest]) * 8u < r->odom_us[newest] - r->odom_us[before]) {
-            r->odom_us[newest] = stamp_us;
-            r->odom[newest] = *pose;
-            r->stats.odometry++;
+            r->odom_us[newest] = r->odom_us[before] + (stamp_us - r->odom_us[before]) / 2u;
             r->stats.odometry_bursts++;
-            return RSM_OK;
         }
     }
     if (r->odom_n == RSM_REV_ODOM_DEPTH) {
@@ -141,11 +139,12 @@ static rsm_pose_t pose_at(rsm_rev_t *r, uint64_t t)
     if (t > tb) {
         /* Past the newest: the last motion goes on, measured over at least
          * REV_MIN_SPAN_US (samples read in a burst, microseconds apart,
-         * would make any tick a speed of metres a millisecond), and for no
-         * longer than it was measured over. */
+         * would make any tick a speed of metres a millisecond) and over as
+         * long as it is carried on, and for no longer than it was measured
+         * over. */
         size_t j = k - 1u; /* a's */
         r->stats.extrapolated++;
-        while (j > 0u && us_between(tb, ta) < (float)REV_MIN_SPAN_US) {
+        while (j > 0u && (us_between(tb, ta) < (float)REV_MIN_SPAN_US || us_between(tb, ta) < us_between(t, tb))) {
             a = odom_pose(r, --j, &ta);
         }
         if (us_between(tb, ta) < (float)REV_MIN_SPAN_US / 4.0f) {

@@ -223,6 +223,20 @@ int rsm_sync_encoder(rsm_sync_t *s, const rsm_odometry_sample_t *sample)
         s->counters.encoder_backwards++;
     }
     stamp_us = smp.stamp_us;
+    if (s->count > 0u && (s->count >= 2u || s->have_base)) {
+        /* A sample read right after the newest, far sooner than the newest
+         * came after the one before, is a burst (a host reading its
+         * backlog): the newest was measured earlier than its stamp says.
+         * Encoders report at a steady rate, so it is put halfway between
+         * the one before and this one (its counts are kept). */
+        rsm_odometry_sample_t *nw = &s->ring[(s->head + s->count - 1u) % RSM_SYNC_DEPTH];
+        const uint64_t before = s->count >= 2u ? s->ring[(s->head + s->count - 2u) % RSM_SYNC_DEPTH].stamp_us
+                                               : s->base.stamp_us;
+        if (nw->stamp_us >= before && stamp_us - nw->stamp_us < (nw->stamp_us - before) / 8u) {
+            nw->stamp_us = before + (stamp_us - before) / 2u;
+            s->counters.encoder_bursts++;
+        }
+    }
     if (s->count == RSM_SYNC_DEPTH) {
         apply_front(s);
         s->counters.encoder_overflow++;
