@@ -270,10 +270,13 @@ int rsm_sync_encoder_restart(rsm_sync_t *s)
     return RSM_OK;
 }
 
-int rsm_sync_scan(rsm_sync_t *s, const rsm_scan_t *scan)
+int rsm_sync_scan_checked(rsm_sync_t *s, const rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint)
 {
     const rsm_odometry_sample_t *last;
     uint64_t t;
+    if (!RSM_SAME_BUILD(rsm_scan_t, scan_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (!ready(s) || scan == NULL) {
         return RSM_ERR_INVAL;
     }
