@@ -164,6 +164,23 @@ static rsm_pose_t pose_at(rsm_rev_t *r, uint64_t t)
     return out;
 }
 
+/* The longest a turn may last: no spinning lidar turns slower than 0.5
+ * Hz; a longer one is a sensor angle that stopped moving. */
+#define REV_MAX_TURN_US 2000000u
+
+/* The fastest the robot may move: odometry that says more (a spike, a
+ * counter reset, absurd poses) is no motion to de-skew by. */
+#define REV_MAX_SPEED_M_S 5.0f
+#define REV_MAX_TURN_RAD_S (4.0f * RSM_PI)
+
+/* Whether motion over dt_s seconds is one a robot can make (and finite). */
+static int plausible(const rsm_pose_t *m, float dt_s)
+{
+    const float d = REV_MAX_SPEED_M_S * dt_s + 0.001f;
+    const float d2 = m->x * m->x + m->y * m->y;
+    return d2 <= d * d && fabsf(m->theta) <= REV_MAX_TURN_RAD_S * dt_s + 0.001f;
+}
+
 /* Bearing in the laser frame (CCW, radians, (-pi, pi]) of sensor angle a. */
 static float bearing(const rsm_rev_config_t *cfg, float a_deg)
 {
@@ -196,9 +213,14 @@ static void deliver(rsm_rev_t *r)
         } else if (deskew) {
             /* laser frame at the point's time -> robot frame -> robot frame
              * at the stamp -> laser frame at the stamp */
-            const rsm_pose_t then = pose_at(r, r->first_us + r->dt_us[i]);
+            const uint64_t t = r->first_us + r->dt_us[i];
+            const rsm_pose_t then = pose_at(r, t);
             const rsm_pose_t motion = rsm_pose_between(&at_stamp, &then);
             rsm_point_t p;
+            if (!plausible(&motion, fabsf(us_between(t, stamp)) * 1e-6f)) {
+                r->stats.implausible++; /* NaN fails too: left as measured */
+                continue;
+            }
             p.x = range * rsm_cosf(b);
             p.y = range * rsm_sinf(b);
             if (cfg->upside_down) {
@@ -260,6 +282,10 @@ int rsm_rev_push(rsm_rev_t *r, const rsm_lidar_point_t *pt)
     r->stats.points++;
     if (r->have_last && pt->stamp_us - r->last_us > cfg->max_gap_us) {
         r->stats.gaps++;
+        drop_turn(r);
+        r->whole = 0u;
+    } else if (r->seen > 0u && pt->stamp_us - r->first_us > REV_MAX_TURN_US) {
+        r->stats.long_turns++;
         drop_turn(r);
         r->whole = 0u;
     } else if (r->have_last && r->last_angle - pt->angle_deg > cfg->wrap_deg) {

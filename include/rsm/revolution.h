@@ -83,6 +83,12 @@ typedef struct rsm_rev_stats {
                                finite, or stamped before the previous point:
                                dropped */
     uint32_t gaps;          /* silences longer than max_gap_us */
+    uint32_t long_turns;    /* turns dropped for lasting over 2 s (a sensor
+                               angle stuck: no turn would ever end) */
+    uint32_t implausible;   /* points left as measured because odometry
+                               moved the robot faster than 5 m/s or 4 pi
+                               rad/s between the point and the stamp (a
+                               spike, a reset, absurd poses) */
     uint32_t odometry;      /* odometry poses taken */
     uint32_t odometry_bursts; /* odometry poses read right after the newest, far sooner than
                                * it came after the one before (a backlog read in a burst): the

@@ -355,6 +355,76 @@ void test_odometry_out_of_order_is_refused_and_without_any_no_deskew_is_counted(
     TEST_ASSERT_EQUAL_UINT32(2, rev.stats.odometry_bad);
 }
 
+void test_absurd_odometry_leaves_the_points_as_measured(void)
+{
+    /* Odometry of 1e30 m (finite, so taken) made NaN and infinite points
+     * (issue 30); a pose a robot cannot reach in the time between a point
+     * and the stamp is no motion to de-skew by: the point stays as
+     * measured, counted. */
+    const motion_t still = {0.0, 0.0};
+    const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+    const rsm_pose_t far = {1e30f, -1e30f, 0.5f};
+    rsm_rev_config_t cfg;
+    unsigned j;
+    unsigned scans = 0;
+    (void)rsm_rev_config_default(&cfg);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_init(&rev, &cfg));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_odometry(&rev, 1000000u, &zero));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_odometry(&rev, 1000000u + 3u * TURN_US / 2u, &far));
+    for (j = 0; j < 3u * PER_TURN + 1u; ++j) {
+        const rsm_lidar_point_t pt = measure(&still, j);
+        if (rsm_rev_push(&rev, &pt) == 1) {
+            size_t i;
+            scans++;
+            for (i = 0; i < rev.scan.count; ++i) {
+                TEST_ASSERT_TRUE(isfinite(rev.scan.range_m[i]) && isfinite(rev.scan.angle_rad[i]));
+                TEST_ASSERT_TRUE(rev.scan.range_m[i] < 3.0f); /* the room's walls, not 1e30 m away */
+            }
+        }
+    }
+    TEST_ASSERT_EQUAL_UINT(2, scans);
+    TEST_ASSERT_TRUE(rev.stats.implausible > PER_TURN / 2u);
+}
+
+void test_a_stuck_sensor_angle_drops_its_turn_after_two_seconds(void)
+{
+    /* An angle that stopped moving never wraps: the turn never ended and its
+     * points (all at one bearing) went out with the next real turn. Over 2
+     * s it is dropped, and turning again delivers whole turns. */
+    const motion_t still = {0.0, 0.0};
+    rsm_rev_config_t cfg;
+    rsm_lidar_point_t pt;
+    unsigned j;
+    unsigned scans = 0;
+    (void)rsm_rev_config_default(&cfg);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_init(&rev, &cfg));
+    for (j = 0; j < 2u * PER_TURN; ++j) {
+        pt = measure(&still, j);
+        scans += rsm_rev_push(&rev, &pt) == 1 ? 1u : 0u;
+    }
+    TEST_ASSERT_EQUAL_UINT(1, scans);
+    for (j = 0; j < 5000u; ++j) { /* 5 s stuck at 42 deg, a point a millisecond */
+        pt.angle_deg = 42.0f;
+        pt.range_m = 1.5f;
+        pt.stamp_us += 1000u;
+        TEST_ASSERT_EQUAL_INT(0, rsm_rev_push(&rev, &pt));
+    }
+    TEST_ASSERT_EQUAL_UINT32(2, rev.stats.long_turns);
+    for (j = 0; j < 3u * PER_TURN + 1u; ++j) {
+        rsm_lidar_point_t q = measure(&still, j);
+        q.stamp_us += pt.stamp_us + 1000u - 1000000u; /* on at once, no silence */
+        if (rsm_rev_push(&rev, &q) == 1) {
+            size_t i;
+            scans++;
+            TEST_ASSERT_EQUAL_size_t(PER_TURN < RSM_MAX_BEAMS ? PER_TURN : RSM_MAX_BEAMS, rev.scan.count);
+            for (i = 0; i < rev.scan.count; ++i) {
+                TEST_ASSERT_TRUE(rev.scan.range_m[i] != 1.5f);
+            }
+        }
+    }
+    TEST_ASSERT_EQUAL_UINT(3, scans);
+}
+
 void test_init_rejects_bad_settings(void)
 {
     rsm_rev_config_t cfg;
@@ -446,6 +516,8 @@ int main(void)
     RUN_TEST(test_scan_stamp_is_the_middle_of_the_turn_and_invalid_points_stay_zero);
     RUN_TEST(test_counters_for_overflow_gaps_bad_points_and_reset);
     RUN_TEST(test_odometry_out_of_order_is_refused_and_without_any_no_deskew_is_counted);
+    RUN_TEST(test_absurd_odometry_leaves_the_points_as_measured);
+    RUN_TEST(test_a_stuck_sensor_angle_drops_its_turn_after_two_seconds);
     RUN_TEST(test_init_rejects_bad_settings);
     RUN_TEST(test_init_refuses_a_caller_built_with_other_capacities);
     RUN_TEST(test_an_assembler_never_initialised_is_refused);
