@@ -849,7 +849,8 @@ def test_both_capture_readers_take_utf8_beyond_ascii(tmp_path):
 def test_a_run_that_makes_no_pose_says_so_and_fails(tmp_path, head_log):
     """A log or capture that yields no pose exits 1 with a one-line reason
     (issue 30: they exited 0 with nothing said): an empty or binary CARMEN
-    file, a capture whose laser channel is empty."""
+    file, a capture whose laser channel is empty, LD06 data tagged as
+    RPLIDAR, an empty LMS channel before the LD06 one."""
     empty = tmp_path / "empty.clf"
     empty.write_text("")
     binary = tmp_path / "binary.clf"
@@ -873,6 +874,24 @@ def test_a_run_that_makes_no_pose_says_so_and_fails(tmp_path, head_log):
     w.close()
     res = run_nav("--capture", only, "--trajectory", tmp_path / "t.txt", "--quiet")
     assert res.returncode == 1 and "rsm-nav: no pose: no scan came out of the capture" in res.stderr, res.stderr
+    # the excerpt as an LD06 stream tagged as an RPLIDAR one, and with an
+    # empty LMS channel before its own: the laser link read is not the LD06
+    ld = tmp_path / "ld06.cap"
+    convert.convert(str(head_log), str(ld), lidar="ld06")
+    h, recs, _ = cap.read_capture(ld)
+    lidar = next(c for c in h.channels if c.name != "robot")
+    tagged = [cap.Channel(c.id, c.name, "rplidar" if c is lidar else c.protocol, c.baud) for c in h.channels]
+    lms_first = ([c for c in h.channels if c is not lidar] + [cap.Channel(lidar.id + 1, "laser", "lms2xx", 38400)]
+                 + [lidar])
+    for name, chans, meta in (("tagged", tagged, {**h.metadata, "laser.model": "rplidar"}),
+                              ("lms_first", lms_first, h.metadata)):
+        path = tmp_path / f"{name}.cap"
+        with cap.CaptureWriter(path, chans, meta) as w:
+            for r in recs:
+                w.write(r.timestamp, r.channel, r.data, r.direction)
+        res = run_nav("--capture", path, "--trajectory", tmp_path / "t.txt", "--quiet")
+        assert res.returncode == 1 and "rsm-nav: no pose: no scan came out of the capture" in res.stderr, \
+            (name, res.stderr)
 
 
 # ---- rsm-replay ---------------------------------------------------------------------------
