@@ -335,6 +335,14 @@ void test_truncated_packet_is_skipped_and_the_next_one_found_inside_the_candidat
     }
 }
 
+/* One CRC-valid frame refused for its fields, and skipped bytes in all. */
+static void assert_one_frame_refused_for_its_fields(const rsm_ld06_parser_t *p, uint32_t skipped)
+{
+    TEST_ASSERT_EQUAL_UINT32(1, p->stats.bad_fields);
+    TEST_ASSERT_EQUAL_UINT32(0, p->stats.crc_errors);
+    TEST_ASSERT_EQUAL_UINT32(skipped, p->stats.bytes_skipped);
+}
+
 void test_a_false_header_with_a_valid_crc_but_implausible_fields_does_not_hide_the_packet_behind_it(void)
 {
     /* Issue 30: in a held-out LD06 stream a header inside a cut copy of a
@@ -368,9 +376,7 @@ void test_a_false_header_with_a_valid_crc_but_implausible_fields_does_not_hide_t
     TEST_ASSERT_EQUAL_size_t(2, feed_all(&p, s, sizeof s, 5u, got, 3));
     TEST_ASSERT_EQUAL_UINT16(800, got[0].start_cdeg);
     TEST_ASSERT_EQUAL_UINT16(1600, got[1].start_cdeg);
-    TEST_ASSERT_EQUAL_UINT32(1, p.stats.bad_fields);
-    TEST_ASSERT_EQUAL_UINT32(0, p.stats.crc_errors);
-    TEST_ASSERT_EQUAL_UINT32(AT, p.stats.bytes_skipped);
+    assert_one_frame_refused_for_its_fields(&p, AT);
 }
 
 void test_decode_refuses_a_timestamp_past_its_wrap_and_points_spread_too_wide(void)
@@ -398,9 +404,7 @@ void test_crc_valid_packet_with_bad_angle_is_counted_and_skipped(void)
     stream_packet(s + PK, 3);
     (void)rsm_ld06_parser_init(&p);
     TEST_ASSERT_EQUAL_size_t(1, feed_all(&p, s, sizeof s, 0, got, 2));
-    TEST_ASSERT_EQUAL_UINT32(1, p.stats.bad_fields);
-    TEST_ASSERT_EQUAL_UINT32(0, p.stats.crc_errors);
-    TEST_ASSERT_EQUAL_UINT32(PK, p.stats.bytes_skipped);
+    assert_one_frame_refused_for_its_fields(&p, PK);
 }
 
 void test_flush_drops_a_partial_packet(void)
