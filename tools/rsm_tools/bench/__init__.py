@@ -42,7 +42,9 @@ report (``docs/RESULTS.md`` by default) has these sections:
    with the checks that need the full logs (:mod:`rsm_tools.fullchecks`; the
    logs as LD06 and RPLIDAR streams, :mod:`rsm_tools.lidarbench`; rsm
    against odometry alone in simulated bare corridors,
-   :mod:`rsm_tools.corridors`).
+   :mod:`rsm_tools.corridors`; de-skew with encoder packets read in bursts,
+   :mod:`.deskew`). ``--only capture`` and ``--only deskew`` print the
+   capture path's and the bursts' lines alone.
 8. Where rsm loses: generated from the numbers above.
 
 Trajectories, summaries and a manifest (``bench.json``) are kept in the work
