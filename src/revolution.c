@@ -50,6 +50,11 @@ int rsm_rev_init_checked(rsm_rev_t *r, size_t r_size, unsigned long fingerprint,
     return RSM_OK;
 }
 
+/* Odometry poses this close were read from a backlog (as SYNC_BURST_US in
+ * src/sync.c): poses stamped apart unevenly but further, or at the same
+ * time, are taken as they come. */
+#define REV_BURST_US 2000u
+
 int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
 {
     size_t slot;
@@ -66,14 +71,15 @@ int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
         return RSM_ERR_ORDER;
     }
     if (r->odom_n >= 2u) {
-        /* A pose read right after the newest, far sooner than the newest
-         * came after the one before, is a burst (a host reading its
-         * backlog): the newest was measured earlier than its stamp says.
+        /* A pose read within REV_BURST_US of the newest, far sooner than
+         * the newest came after the one before, is a burst (a host reading
+         * its backlog): the newest was measured earlier than its stamp says.
          * Odometry comes at a steady rate, so it is put halfway between
          * the one before and this one; its pose is kept. */
         const size_t newest = (r->odom_head + r->odom_n - 1u) % RSM_REV_ODOM_DEPTH;
         const size_t before = (r->odom_head + r->odom_n - 2u) % RSM_REV_ODOM_DEPTH;
-        if ((stamp_us - r->odom_us[newest]) * 8u < r->odom_us[newest] - r->odom_us[before]) {
+        if (stamp_us > r->odom_us[newest] && stamp_us - r->odom_us[newest] <= REV_BURST_US &&
+            (stamp_us - r->odom_us[newest]) * 8u < r->odom_us[newest] - r->odom_us[before]) {
             r->odom_us[newest] = r->odom_us[before] + (stamp_us - r->odom_us[before]) / 2u;
             r->stats.odometry_bursts++;
         }
@@ -284,7 +290,9 @@ int rsm_rev_push(rsm_rev_t *r, const rsm_lidar_point_t *pt)
         r->stats.gaps++;
         drop_turn(r);
         r->whole = 0u;
-    } else if (r->seen > 0u && pt->stamp_us - r->first_us > REV_MAX_TURN_US) {
+    } else if (r->seen > 0u && r->last_us - r->first_us > REV_MAX_TURN_US) {
+        /* its points span over 2 s (a pause after them is not counted: a
+         * replayed log may pause between turns) */
         r->stats.long_turns++;
         drop_turn(r);
         r->whole = 0u;

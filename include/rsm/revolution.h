@@ -23,8 +23,8 @@
  * past the newest, extrapolated with the motion over at least the last 20 ms
  * of odometry, and over at least as long as it is carried on when the poses
  * reach that far back, for no longer than it was measured over, held when
- * the poses span under 5 ms; held before the oldest; a pose read right after
- * the newest, far sooner than the newest came after the one before, makes
+ * the poses span under 5 ms; held before the oldest; a pose read within 2 ms
+ * of the newest, far sooner than the newest came after the one before, makes
  * the newest the first of a burst, measured earlier than its stamp says: it
  * is put halfway between its neighbours),
  * the point taken through the mounting pose into the robot frame at its own
@@ -90,7 +90,7 @@ typedef struct rsm_rev_stats {
                                rad/s between the point and the stamp (a
                                spike, a reset, absurd poses) */
     uint32_t odometry;      /* odometry poses taken */
-    uint32_t odometry_bursts; /* odometry poses read right after the newest, far sooner than
+    uint32_t odometry_bursts; /* odometry poses read within 2 ms of the newest, far sooner than
                                * it came after the one before (a backlog read in a burst): the
                                * newest was re-stamped halfway between its neighbours */
     uint32_t odometry_bad;  /* odometry stamped before the newest, or not finite:

@@ -65,7 +65,7 @@ typedef struct rsm_sync_counters {
     uint32_t encoders;          /* encoder samples offered */
     uint32_t encoder_backwards; /* sample stamped before the previous one: taken in arrival order */
     uint32_t encoder_overflow;  /* held samples applied early because the buffer was full */
-    uint32_t encoder_bursts;    /* samples read right after the one before, far sooner than the
+    uint32_t encoder_bursts;    /* samples read within 2 ms of the one before, far sooner than the
                                    one before came after its own: that one is re-stamped halfway */
     uint32_t restarts;          /* rsm_sync_encoder_restart calls (new connections) */
     uint32_t blind_predictions; /* odometry predicted with no scan: max_travel_m, or a half turn */

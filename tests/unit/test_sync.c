@@ -140,15 +140,26 @@ void test_encoder_samples_read_in_a_burst_are_spread_at_the_steady_rate(void)
 
 void test_encoder_samples_at_an_uneven_rate_are_not_a_burst(void)
 {
-    /* Samples 30 ms after one that came 100 ms after its own are read as
-     * they came: only a far shorter step (under an eighth) is a burst. */
+    /* Read as they came: a sample 30 ms after one that came 100 ms after
+     * its own (not far sooner), one 10 ms after (far sooner, but no
+     * backlog puts packets that far apart: a log replayed with its own
+     * timing does), and two at the same time (a step sent in pieces). */
     const uint64_t t0 = 1000000u;
     enc(0u, t0);
     enc(1000u, t0 + 100000u);
     enc(1300u, t0 + 130000u);
     scan_at(t0 + 115000u);
-    TEST_ASSERT_EQUAL_size_t(1, res.n);
+    enc(2300u, t0 + 230000u);
+    enc(2400u, t0 + 240000u);
+    scan_at(t0 + 235000u);
+    enc(3000u, t0 + 300000u);
+    enc(3500u, t0 + 300000u);
+    enc(4500u, t0 + 400000u);
+    scan_at(t0 + 285000u);
+    TEST_ASSERT_EQUAL_size_t(3, res.n);
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(1150.0), res.x[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(2350.0), res.x[1]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(2850.0), res.x[2]);
     TEST_ASSERT_EQUAL_UINT32(0, sync.counters.encoder_bursts);
 }
 
