@@ -425,6 +425,29 @@ void test_a_stuck_sensor_angle_drops_its_turn_after_two_seconds(void)
     TEST_ASSERT_EQUAL_UINT(3, scans);
 }
 
+void test_a_pause_between_turns_is_no_stuck_angle(void)
+{
+    /* A replayed log pauses between turns (rsm-nav listens with an hour's
+     * patience): the turn before the pause is whole and delivered when the
+     * next begins, however long the pause (the stuck-angle rule once took
+     * it for a turn of 5 s). */
+    const motion_t still = {0.0, 0.0};
+    rsm_rev_config_t cfg;
+    unsigned j;
+    unsigned scans = 0;
+    (void)rsm_rev_config_default(&cfg);
+    cfg.max_gap_us = 3600000000u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_init(&rev, &cfg));
+    for (j = 0; j < 4u * PER_TURN; ++j) {
+        rsm_lidar_point_t pt = measure(&still, j);
+        pt.stamp_us += j >= 713u ? 5000000u : 0u; /* 5 s of silence before the third turn's first point */
+        scans += rsm_rev_push(&rev, &pt) == 1 ? 1u : 0u;
+    }
+    TEST_ASSERT_EQUAL_UINT(3, scans); /* the second (at the third's start), the third and the fourth */
+    TEST_ASSERT_EQUAL_UINT32(0, rev.stats.long_turns);
+    TEST_ASSERT_EQUAL_UINT32(1, rev.stats.partial); /* the first, joined mid-turn */
+}
+
 void test_init_rejects_bad_settings(void)
 {
     rsm_rev_config_t cfg;
@@ -518,6 +541,7 @@ int main(void)
     RUN_TEST(test_odometry_out_of_order_is_refused_and_without_any_no_deskew_is_counted);
     RUN_TEST(test_absurd_odometry_leaves_the_points_as_measured);
     RUN_TEST(test_a_stuck_sensor_angle_drops_its_turn_after_two_seconds);
+    RUN_TEST(test_a_pause_between_turns_is_no_stuck_angle);
     RUN_TEST(test_init_rejects_bad_settings);
     RUN_TEST(test_init_refuses_a_caller_built_with_other_capacities);
     RUN_TEST(test_an_assembler_never_initialised_is_refused);
