@@ -34,6 +34,10 @@ extern "C" {
 #define RSM_LD06_POINTS 12u
 #define RSM_LD06_PACKET 47u     /* bytes on the wire */
 #define RSM_LD06_MAX_CDEG 36000u /* angles are below this */
+#define RSM_LD06_MAX_TS_MS 30000u /* timestamps are below this (they wrap) */
+/* The most a packet's 12 points can span, 0.01 deg: a real one spans about
+ * 8 to 12 deg (4500 samples a second, 5 to 13 turns a second). */
+#define RSM_LD06_MAX_SPAN_CDEG 3000u
 
 /* CRC-8 of the LD06 packet (see above) over len bytes; 0 for len 0.
  * data may be NULL only when len is 0. Pure, reentrant. */
@@ -52,8 +56,10 @@ typedef struct rsm_ld06_packet {
 /* Checks and decodes one packet of RSM_LD06_PACKET bytes.
  * Returns RSM_OK; RSM_ERR_INVAL for NULL pointers; RSM_ERR_PROTO if the
  * header or VerLen byte is wrong; RSM_ERR_CHECKSUM if the CRC does not
- * verify; RSM_ERR_RANGE if an angle is 36000 or more. *out is written only
- * on RSM_OK. Pure, reentrant. */
+ * verify; RSM_ERR_RANGE for fields no real packet has (an angle of 36000 or
+ * more, a timestamp of RSM_LD06_MAX_TS_MS or more, points spread over more
+ * than RSM_LD06_MAX_SPAN_CDEG: a CRC-8 passes one false frame in 256). *out
+ * is written only on RSM_OK. Pure, reentrant. */
 int rsm_ld06_decode(const uint8_t *frame, rsm_ld06_packet_t *out);
 
 /* Writes pkt as RSM_LD06_PACKET bytes, CRC included (for simulators,
@@ -77,7 +83,8 @@ typedef struct rsm_ld06_stats {
                                every rejected candidate, bytes flushed */
     uint32_t packets_ok;    /* packets published */
     uint32_t crc_errors;    /* candidates whose CRC did not verify */
-    uint32_t bad_fields;    /* CRC-valid candidates with an angle >= 360 deg */
+    uint32_t bad_fields;    /* CRC-valid candidates with an angle >= 360 deg, a timestamp
+                               >= 30000 ms or points spread over more than 30 deg */
     uint32_t resyncs;       /* candidates rejected (bad VerLen, CRC, fields) */
     uint32_t truncated;     /* partial candidates dropped by a flush */
 } rsm_ld06_stats_t;

@@ -21,8 +21,12 @@
  * robot poses at the point's time and at the stamp are interpolated from the
  * odometry poses given with rsm_rev_odometry (linear in x, y and heading;
  * past the newest, extrapolated with the motion over at least the last 20 ms
- * of odometry and for no longer than that, held when the poses span under
- * 5 ms; held before the oldest),
+ * of odometry, and over at least as long as it is carried on when the poses
+ * reach that far back, for no longer than it was measured over, held when
+ * the poses span under 5 ms; held before the oldest; a pose read within 2 ms
+ * of the newest, far sooner than the newest came after the one before, makes
+ * the newest the first of a burst, measured earlier than its stamp says: it
+ * is put halfway between its neighbours),
  * the point taken through the mounting pose into the robot frame at its own
  * time, moved by the relative motion, and taken back into the laser frame.
  * Off, the points keep their bearings and ranges: a robot turning at w rad/s
@@ -79,10 +83,16 @@ typedef struct rsm_rev_stats {
                                finite, or stamped before the previous point:
                                dropped */
     uint32_t gaps;          /* silences longer than max_gap_us */
+    uint32_t long_turns;    /* turns dropped for lasting over 2 s (a sensor
+                               angle stuck: no turn would ever end) */
+    uint32_t implausible;   /* points left as measured because odometry
+                               moved the robot faster than 5 m/s or 4 pi
+                               rad/s between the point and the stamp (a
+                               spike, a reset, absurd poses) */
     uint32_t odometry;      /* odometry poses taken */
-    uint32_t odometry_bursts; /* odometry poses that replaced the newest: read right after it,
-                               * far sooner than it came after the one before (a backlog read
-                               * in a burst; the burst's last pose is kept) */
+    uint32_t odometry_bursts; /* odometry poses read within 2 ms of the newest, far sooner than
+                               * it came after the one before (a backlog read in a burst): the
+                               * newest was re-stamped halfway between its neighbours */
     uint32_t odometry_bad;  /* odometry stamped before the newest, or not finite:
                                dropped */
     uint32_t not_deskewed;  /* turns delivered without de-skew although it was

@@ -209,6 +209,13 @@ int rsm_rplidar_parser_expect(rsm_rplidar_parser_t *p);
  * unpaired). Returns the bytes dropped or RSM_ERR_INVAL (NULL). */
 int rsm_rplidar_parser_flush(rsm_rplidar_parser_t *p);
 
+/* Takes the bytes from here on as the stream of answer type `answer`
+ * (RSM_RPLIDAR_ANS_NODE, _CAPSULE or _DENSE) without its descriptor: for a
+ * listener that lost a stream another host still runs (its descriptor
+ * went by long ago). A partial candidate is dropped as in _flush. Returns
+ * the bytes dropped, or RSM_ERR_INVAL (NULL, another answer type). */
+int rsm_rplidar_parser_resume(rsm_rplidar_parser_t *p, uint8_t answer);
+
 /* Feeds bytes in chunks of any size and stops at the first event.
  * Awaiting a descriptor, the receiver hunts for A5 5A and accepts only the
  * descriptors listed above (type, length and send mode must agree); after

@@ -49,18 +49,32 @@ rsm_scan_limits_t rsm_scan_limits_default(void);
 int rsm_scan_set_uniform_checked(rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint, size_t count,
                                  float start_rad, float step_rad);
 
+/* The functions below that read a scan are macros too, passing the
+ * caller's sizeof(rsm_scan_t) and RSM_CONFIG_FINGERPRINT: a scan the caller
+ * filled itself, in a program compiled with other capacities, would be read
+ * with the library's layout, past the caller's object. */
+
 /* True if reading i is usable under the limits; otherwise counts why in
- * drops (which may be NULL). False, counting nothing, if scan or lim is NULL
- * or i >= scan->count. */
-int rsm_scan_reading_ok(const rsm_scan_t *scan, size_t i, const rsm_scan_limits_t *lim,
-                        rsm_scan_drops_t *drops);
+ * drops (which may be NULL). False, counting nothing, if scan or lim is NULL,
+ * i >= scan->count, or the caller was compiled with other capacities. */
+#define rsm_scan_reading_ok(scan, i, lim, drops)                                                              \
+    rsm_scan_reading_ok_checked((scan), sizeof(rsm_scan_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (i), (lim), \
+                                (drops))
+
+int rsm_scan_reading_ok_checked(const rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint, size_t i,
+                                const rsm_scan_limits_t *lim, rsm_scan_drops_t *drops);
 
 /* Converts the usable readings to points in the robot frame. Writes at most
  * cap points into out (overwritten, not appended) and returns how many, or a
- * negative status for bad arguments. Drops are counted into drops (may be
- * NULL). Reentrant. */
-int rsm_scan_to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_point_t *out,
-                       size_t cap, rsm_scan_drops_t *drops);
+ * negative status for bad arguments (RSM_ERR_CONFIG, nothing read, for a
+ * caller compiled with other capacities). Drops are counted into drops (may
+ * be NULL). Reentrant. */
+#define rsm_scan_to_points(scan, lim, out, cap, drops)                                                           \
+    rsm_scan_to_points_checked((scan), sizeof(rsm_scan_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (lim), (out), \
+                               (cap), (drops))
+
+int rsm_scan_to_points_checked(const rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint,
+                               const rsm_scan_limits_t *lim, rsm_point_t *out, size_t cap, rsm_scan_drops_t *drops);
 
 /* The cosines and sines of the beam angles of the last scan converted
  * through it: a sensor whose angles repeat from scan to scan (every one
@@ -83,9 +97,15 @@ int rsm_scan_trig_init_checked(rsm_scan_trig_t *trig, size_t trig_size, unsigned
 
 /* rsm_scan_to_points through a cache (not NULL): the same points bit for
  * bit, with the cosine and sine of each angle computed only when the angle
- * differs from the one of the same beam in the last scan. */
-int rsm_scan_to_points_cached(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_scan_trig_t *trig,
-                              rsm_point_t *out, size_t cap, rsm_scan_drops_t *drops);
+ * differs from the one of the same beam in the last scan. A macro as
+ * rsm_scan_to_points (the fingerprint covers the cache's size too). */
+#define rsm_scan_to_points_cached(scan, lim, trig, out, cap, drops)                                      \
+    rsm_scan_to_points_cached_checked((scan), sizeof(rsm_scan_t), (unsigned long)RSM_CONFIG_FINGERPRINT, \
+                                      (lim), (trig), (out), (cap), (drops))
+
+int rsm_scan_to_points_cached_checked(const rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint,
+                                      const rsm_scan_limits_t *lim, rsm_scan_trig_t *trig, rsm_point_t *out,
+                                      size_t cap, rsm_scan_drops_t *drops);
 
 /* Parameters of rsm_points_isolated. */
 #define RSM_ISOLATION_MAX_WINDOW 4u

@@ -178,6 +178,9 @@ typedef struct rsm_slamtec {
     uint8_t need_reset;
     uint8_t answer;           /* answer type of the stream */
     uint8_t listen;           /* 1: listen-only (nothing is sent) */
+    uint8_t resumed;          /* listen-only: the lost stream is tried again */
+    uint32_t listen_mark;     /* the parser's bytes skipped when the listener
+                                 last changed what it awaits */
     uint8_t req[16];
     size_t req_len;
     uint64_t deadline_us;

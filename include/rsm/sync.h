@@ -65,6 +65,8 @@ typedef struct rsm_sync_counters {
     uint32_t encoders;          /* encoder samples offered */
     uint32_t encoder_backwards; /* sample stamped before the previous one: taken in arrival order */
     uint32_t encoder_overflow;  /* held samples applied early because the buffer was full */
+    uint32_t encoder_bursts;    /* samples read within 2 ms of the one before, far sooner than the
+                                   one before came after its own: that one is re-stamped halfway */
     uint32_t restarts;          /* rsm_sync_encoder_restart calls (new connections) */
     uint32_t blind_predictions; /* odometry predicted with no scan: max_travel_m, or a half turn */
 } rsm_sync_counters_t;
@@ -128,9 +130,15 @@ int rsm_sync_encoder_restart(rsm_sync_t *s);
 /* A scan, stamped in scan->stamp_us (copied; the caller's buffer is free on
  * return). Fuses it now when odometry past its time is already held, or
  * when no encoder sample was ever seen; otherwise it waits. A scan already
- * waiting is fused first with the odometry there is. Returns RSM_OK or
- * RSM_ERR_INVAL (scan NULL, or more than RSM_MAX_BEAMS readings: dropped). */
-int rsm_sync_scan(rsm_sync_t *s, const rsm_scan_t *scan);
+ * waiting is fused first with the odometry there is. Returns RSM_OK,
+ * RSM_ERR_INVAL (scan NULL, or more than RSM_MAX_BEAMS readings: dropped) or
+ * RSM_ERR_CONFIG (the caller was compiled with other capacities: the scan is
+ * not read). A macro as rsm_sync_init, passing the caller's sizeof(rsm_scan_t)
+ * and RSM_CONFIG_FINGERPRINT. */
+#define rsm_sync_scan(s, scan) \
+    rsm_sync_scan_checked((s), (scan), sizeof(rsm_scan_t), (unsigned long)RSM_CONFIG_FINGERPRINT)
+
+int rsm_sync_scan_checked(rsm_sync_t *s, const rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint);
 
 /* Fuses a waiting scan whose wait has expired at now_us (call it from the
  * main loop). Returns 1 if a scan was fused, else 0; or RSM_ERR_INVAL. */

@@ -37,8 +37,8 @@ int rsm_scan_set_uniform_checked(rsm_scan_t *scan, size_t scan_size, unsigned lo
     return RSM_OK;
 }
 
-int rsm_scan_reading_ok(const rsm_scan_t *scan, size_t i, const rsm_scan_limits_t *lim,
-                        rsm_scan_drops_t *drops)
+/* rsm_scan_reading_ok for the library's own scans. */
+static int reading_ok(const rsm_scan_t *scan, size_t i, const rsm_scan_limits_t *lim, rsm_scan_drops_t *drops)
 {
     float r;
     /* Out-of-range indices and missing arguments are not readings: refused,
@@ -68,6 +68,12 @@ int rsm_scan_reading_ok(const rsm_scan_t *scan, size_t i, const rsm_scan_limits_
     return 1;
 }
 
+int rsm_scan_reading_ok_checked(const rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint, size_t i,
+                                const rsm_scan_limits_t *lim, rsm_scan_drops_t *drops)
+{
+    return RSM_SAME_BUILD(rsm_scan_t, scan_size, fingerprint) ? reading_ok(scan, i, lim, drops) : 0;
+}
+
 static int to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_scan_trig_t *trig, rsm_point_t *out,
                      size_t cap, rsm_scan_drops_t *drops)
 {
@@ -77,7 +83,7 @@ static int to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_s
         return RSM_ERR_INVAL;
     }
     for (i = 0; i < scan->count && n < cap; ++i) {
-        if (rsm_scan_reading_ok(scan, i, lim, drops)) {
+        if (reading_ok(scan, i, lim, drops)) {
             const float a = scan->angle_rad[i];
             float c;
             float s;
@@ -107,9 +113,12 @@ static int to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_s
     return (int)n;
 }
 
-int rsm_scan_to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_point_t *out,
-                       size_t cap, rsm_scan_drops_t *drops)
+int rsm_scan_to_points_checked(const rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint,
+                               const rsm_scan_limits_t *lim, rsm_point_t *out, size_t cap, rsm_scan_drops_t *drops)
 {
+    if (!RSM_SAME_BUILD(rsm_scan_t, scan_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     return to_points(scan, lim, NULL, out, cap, drops);
 }
 
@@ -128,9 +137,13 @@ int rsm_scan_trig_init_checked(rsm_scan_trig_t *trig, size_t trig_size, unsigned
     return RSM_OK;
 }
 
-int rsm_scan_to_points_cached(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_scan_trig_t *trig,
-                              rsm_point_t *out, size_t cap, rsm_scan_drops_t *drops)
+int rsm_scan_to_points_cached_checked(const rsm_scan_t *scan, size_t scan_size, unsigned long fingerprint,
+                                      const rsm_scan_limits_t *lim, rsm_scan_trig_t *trig, rsm_point_t *out,
+                                      size_t cap, rsm_scan_drops_t *drops)
 {
+    if (!RSM_SAME_BUILD(rsm_scan_t, scan_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (trig == NULL) {
         return RSM_ERR_INVAL;
     }

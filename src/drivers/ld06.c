@@ -45,7 +45,13 @@ int rsm_ld06_decode(const uint8_t *frame, rsm_ld06_packet_t *out)
     }
     pkt.end_cdeg = rsm_get_u16le(frame + 42);
     pkt.timestamp_ms = rsm_get_u16le(frame + 44);
-    if (pkt.start_cdeg >= RSM_LD06_MAX_CDEG || pkt.end_cdeg >= RSM_LD06_MAX_CDEG) {
+    /* A CRC-8 passes one false frame in 256 (a header inside a cut packet,
+     * the real one behind it): fields no real packet has refuse most of
+     * them, and the receiver looks for the real packet inside the refused
+     * frame. The speed is not judged: converted logs write any. */
+    if (pkt.start_cdeg >= RSM_LD06_MAX_CDEG || pkt.end_cdeg >= RSM_LD06_MAX_CDEG ||
+        pkt.timestamp_ms >= RSM_LD06_MAX_TS_MS ||
+        (pkt.end_cdeg + RSM_LD06_MAX_CDEG - pkt.start_cdeg) % RSM_LD06_MAX_CDEG > RSM_LD06_MAX_SPAN_CDEG) {
         return RSM_ERR_RANGE;
     }
     *out = pkt;

@@ -50,6 +50,11 @@ int rsm_rev_init_checked(rsm_rev_t *r, size_t r_size, unsigned long fingerprint,
     return RSM_OK;
 }
 
+/* Odometry poses this close were read from a backlog (as SYNC_BURST_US in
+ * src/sync.c): poses stamped apart unevenly but further, or at the same
+ * time, are taken as they come. */
+#define REV_BURST_US 2000u
+
 int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
 {
     size_t slot;
@@ -66,18 +71,17 @@ int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
         return RSM_ERR_ORDER;
     }
     if (r->odom_n >= 2u) {
-        /* A pose read right after the newest, far sooner than the newest
-         * came after the one before, is a burst (a host reading its
-         * backlog): the newest was measured earlier than its stamp says, by
-         * an unknown time, so the burst counts as one reading, its last. */
+        /* A pose read within REV_BURST_US of the newest, far sooner than
+         * the newest came after the one before, is a burst (a host reading
+         * its backlog): the newest was measured earlier than its stamp says.
+         * Odometry comes at a steady rate, so it is put halfway between
+         * the one before and this one; its pose is kept. */
         const size_t newest = (r->odom_head + r->odom_n - 1u) % RSM_REV_ODOM_DEPTH;
         const size_t before = (r->odom_head + r->odom_n - 2u) % RSM_REV_ODOM_DEPTH;
-        if ((stamp_us - r->odom_us[newest]) * 8u < r->odom_us[newest] - r->odom_us[before]) {
-            r->odom_us[newest] = stamp_us;
-            r->odom[newest] = *pose;
-            r->stats.odometry++;
+        if (stamp_us > r->odom_us[newest] && stamp_us - r->odom_us[newest] <= REV_BURST_US &&
+            (stamp_us - r->odom_us[newest]) * 8u < r->odom_us[newest] - r->odom_us[before]) {
+            r->odom_us[newest] = r->odom_us[before] + (stamp_us - r->odom_us[before]) / 2u;
             r->stats.odometry_bursts++;
-            return RSM_OK;
         }
     }
     if (r->odom_n == RSM_REV_ODOM_DEPTH) {
@@ -141,11 +145,12 @@ static rsm_pose_t pose_at(rsm_rev_t *r, uint64_t t)
     if (t > tb) {
         /* Past the newest: the last motion goes on, measured over at least
          * REV_MIN_SPAN_US (samples read in a burst, microseconds apart,
-         * would make any tick a speed of metres a millisecond), and for no
-         * longer than it was measured over. */
+         * would make any tick a speed of metres a millisecond) and over as
+         * long as it is carried on, and for no longer than it was measured
+         * over. */
         size_t j = k - 1u; /* a's */
         r->stats.extrapolated++;
-        while (j > 0u && us_between(tb, ta) < (float)REV_MIN_SPAN_US) {
+        while (j > 0u && (us_between(tb, ta) < (float)REV_MIN_SPAN_US || us_between(tb, ta) < us_between(t, tb))) {
             a = odom_pose(r, --j, &ta);
         }
         if (us_between(tb, ta) < (float)REV_MIN_SPAN_US / 4.0f) {
@@ -163,6 +168,23 @@ static rsm_pose_t pose_at(rsm_rev_t *r, uint64_t t)
     out.y = a->y + (b->y - a->y) * u;
     out.theta = rsm_wrap_angle(a->theta + rsm_wrap_angle(b->theta - a->theta) * u);
     return out;
+}
+
+/* The longest a turn may last: no spinning lidar turns slower than 0.5
+ * Hz; a longer one is a sensor angle that stopped moving. */
+#define REV_MAX_TURN_US 2000000u
+
+/* The fastest the robot may move: odometry that says more (a spike, a
+ * counter reset, absurd poses) is no motion to de-skew by. */
+#define REV_MAX_SPEED_M_S 5.0f
+#define REV_MAX_TURN_RAD_S (4.0f * RSM_PI)
+
+/* Whether motion over dt_s seconds is one a robot can make (and finite). */
+static int plausible(const rsm_pose_t *m, float dt_s)
+{
+    const float d = REV_MAX_SPEED_M_S * dt_s + 0.001f;
+    const float d2 = m->x * m->x + m->y * m->y;
+    return d2 <= d * d && fabsf(m->theta) <= REV_MAX_TURN_RAD_S * dt_s + 0.001f;
 }
 
 /* Bearing in the laser frame (CCW, radians, (-pi, pi]) of sensor angle a. */
@@ -197,9 +219,14 @@ static void deliver(rsm_rev_t *r)
         } else if (deskew) {
             /* laser frame at the point's time -> robot frame -> robot frame
              * at the stamp -> laser frame at the stamp */
-            const rsm_pose_t then = pose_at(r, r->first_us + r->dt_us[i]);
+            const uint64_t t = r->first_us + r->dt_us[i];
+            const rsm_pose_t then = pose_at(r, t);
             const rsm_pose_t motion = rsm_pose_between(&at_stamp, &then);
             rsm_point_t p;
+            if (!plausible(&motion, fabsf(us_between(t, stamp)) * 1e-6f)) {
+                r->stats.implausible++; /* NaN fails too: left as measured */
+                continue;
+            }
             p.x = range * rsm_cosf(b);
             p.y = range * rsm_sinf(b);
             if (cfg->upside_down) {
@@ -261,6 +288,12 @@ int rsm_rev_push(rsm_rev_t *r, const rsm_lidar_point_t *pt)
     r->stats.points++;
     if (r->have_last && pt->stamp_us - r->last_us > cfg->max_gap_us) {
         r->stats.gaps++;
+        drop_turn(r);
+        r->whole = 0u;
+    } else if (r->seen > 0u && r->last_us - r->first_us > REV_MAX_TURN_US) {
+        /* its points span over 2 s (a pause after them is not counted: a
+         * replayed log may pause between turns) */
+        r->stats.long_turns++;
         drop_turn(r);
         r->whole = 0u;
     } else if (r->have_last && r->last_angle - pt->angle_deg > cfg->wrap_deg) {

@@ -116,6 +116,20 @@ int rsm_rplidar_parser_expect(rsm_rplidar_parser_t *p)
     return dropped;
 }
 
+int rsm_rplidar_parser_resume(rsm_rplidar_parser_t *p, uint8_t answer)
+{
+    int dropped;
+    if (p == NULL || (answer != RSM_RPLIDAR_ANS_NODE && answer != RSM_RPLIDAR_ANS_CAPSULE &&
+                      answer != RSM_RPLIDAR_ANS_DENSE)) {
+        return RSM_ERR_INVAL;
+    }
+    dropped = rsm_rplidar_parser_flush(p);
+    p->answer = answer;
+    p->length = answer == RSM_RPLIDAR_ANS_NODE ? RSM_RPLIDAR_NODE : RSM_RPLIDAR_CAPSULE;
+    p->mode = answer == RSM_RPLIDAR_ANS_NODE ? MODE_NODES : MODE_CAPSULES;
+    return dropped;
+}
+
 size_t rsm_rplidar_parser_pending(const rsm_rplidar_parser_t *p)
 {
     return p == NULL ? 0u : p->n;

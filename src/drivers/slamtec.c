@@ -216,6 +216,30 @@ static void await_descriptor(rsm_slamtec_t *d)
     d->state = RSM_SLAMTEC_LISTENING;
     rsm_link_rx_drop(&d->io);
     (void)rsm_rplidar_parser_expect(&d->parser);
+    d->resumed = 0u;
+    d->listen_mark = d->parser.stats.bytes_skipped;
+}
+
+/* Listen-only, once a stream was heard and lost: the host that runs the
+ * sensor may never have stopped it, so no descriptor will come however
+ * long the silence was. Bytes that are no descriptor or answer for this
+ * long are tried as the lost stream, and bytes that are not that stream
+ * as descriptors again, in turn. */
+#define LISTEN_TRY_BYTES (2u * RSM_RPLIDAR_MAX_FRAME)
+
+static void listen_try(rsm_slamtec_t *d)
+{
+    if (d->state != RSM_SLAMTEC_LISTENING || d->stats.connects == 0u ||
+        d->parser.stats.bytes_skipped - d->listen_mark < LISTEN_TRY_BYTES) {
+        return;
+    }
+    if (d->resumed) {
+        (void)rsm_rplidar_parser_expect(&d->parser);
+    } else {
+        (void)rsm_rplidar_parser_resume(&d->parser, d->answer);
+    }
+    d->resumed = (uint8_t)!d->resumed;
+    d->listen_mark = d->parser.stats.bytes_skipped;
 }
 
 int rsm_slamtec_listen(rsm_slamtec_t *d)
@@ -278,6 +302,7 @@ static void take_points(rsm_slamtec_t *d, const rsm_rplidar_event_t *e)
 static void stream_started(rsm_slamtec_t *d, uint8_t answer, uint64_t now)
 {
     d->answer = answer;
+    d->resumed = 0u;
     d->state = RSM_SLAMTEC_STREAMING;
     d->last_data_us = now;
     d->stats.connects++;
@@ -365,6 +390,7 @@ static int drain_cb(void *drv, uint64_t now)
                                               d->io.len - d->io.off, &used, &d->ev);
         d->io.off += used;
         if (r != 1) {
+            listen_try(d);
             break;
         }
         if (d->state == RSM_SLAMTEC_STREAMING && d->ev.type == RSM_RPLIDAR_EVENT_POINTS) {
@@ -377,6 +403,8 @@ static int drain_cb(void *drv, uint64_t now)
             }
         } else if (d->state == RSM_SLAMTEC_STARTING) {
             startup_answer(d, &d->ev, now);
+        } else if (d->state == RSM_SLAMTEC_LISTENING && d->ev.type == RSM_RPLIDAR_EVENT_POINTS) {
+            stream_started(d, d->answer, now); /* the lost stream, taken up again */
         } else if (d->state == RSM_SLAMTEC_LISTENING) {
             overheard(d, &d->ev, now);
         } else if (d->ev.type != RSM_RPLIDAR_EVENT_DESCRIPTOR) {

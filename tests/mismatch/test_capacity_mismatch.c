@@ -5,7 +5,9 @@
  * library's. Every function that sets up or fills such an object must
  * refuse it with RSM_ERR_CONFIG and write nothing, neither into the object
  * nor past it: each object sits in front of a guard as large as what the
- * library's larger objects could write beyond it. */
+ * library's larger objects could write beyond it. The functions that read
+ * a scan the caller filled refuse it too, before reading it (rsm_localizer_scan
+ * is not one of them yet). */
 #include <string.h>
 
 #include "rsm/rsm.h"
@@ -89,6 +91,39 @@ void test_scan_trig_init_and_the_lms_conversion_are_refused(void)
     ASSERT_REFUSED(scan, rsm_sicklms_to_scan(&raw, 0u, &scan.obj));
 }
 
+void test_functions_that_read_a_scan_refuse_it(void)
+{
+    /* A scan the caller filled itself: the library would read it with its
+     * own layout, past this build's smaller object (its count and ranges
+     * lie beyond). Refused before a byte of it is read, and nothing
+     * written to the outputs. */
+    static rsm_scan_t scan;
+    static rsm_sync_t sync;
+    static rsm_scan_trig_t trig;
+    const rsm_scan_limits_t lim = rsm_scan_limits_default();
+    rsm_point_t pts[4];
+    rsm_point_t pts_was[4];
+    rsm_scan_drops_t drops;
+    rsm_scan_drops_t drops_was;
+    size_t i;
+    scan.count = 3u;
+    for (i = 0; i < 3u; ++i) {
+        scan.angle_rad[i] = 0.1f * (float)i;
+        scan.range_m[i] = 2.0f;
+    }
+    memset(pts, 0x5A, sizeof pts);
+    memcpy(pts_was, pts, sizeof pts);
+    memset(&drops, 0, sizeof drops);
+    drops.nan = 7u;
+    drops_was = drops;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_scan_to_points(&scan, &lim, pts, 4u, &drops));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_scan_to_points_cached(&scan, &lim, &trig, pts, 4u, &drops));
+    TEST_ASSERT_EQUAL_INT(0, rsm_scan_reading_ok(&scan, 0u, &lim, &drops));
+    TEST_ASSERT_EQUAL_MEMORY(pts_was, pts, sizeof pts);
+    TEST_ASSERT_EQUAL_MEMORY(&drops_was, &drops, sizeof drops);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_sync_scan(&sync, &scan));
+}
+
 void test_localizer_and_sync_init_are_refused(void)
 {
     /* rsm_sync_init refuses the caller before it looks at the localizer. */
@@ -170,6 +205,7 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(test_scan_set_uniform_is_refused);
     RUN_TEST(test_scan_trig_init_and_the_lms_conversion_are_refused);
+    RUN_TEST(test_functions_that_read_a_scan_refuse_it);
     RUN_TEST(test_localizer_and_sync_init_are_refused);
     RUN_TEST(test_revolution_init_is_refused);
     RUN_TEST(test_lms_codec_is_refused);

@@ -26,7 +26,7 @@ from pathlib import Path
 import pytest
 
 from conftest import REPO_ROOT, build_dir, rsm_nav_binary, subprocess_env
-from rsm_tools import bench, corridors, lidarbench
+from rsm_tools import bench, corridors, fullchecks, lidarbench
 from rsm_tools import evaluate as ev
 from rsm_tools import outliers
 
@@ -1144,12 +1144,28 @@ def test_full_log_checks_are_reported_with_the_floors(run):
         assert mine["baselines"]["status"] == ("PASS" if beaten else "MISS")
         capture = [f for f in full if f["log"] == label and f["kind"] == "capture"]
         assert len(capture) == 3
-        same, ratios = capture[0], capture[1:]
+        same, local, every = capture
         # the poses equal to the direct run's, against the scans before the robot first moves
         assert "poses equal to the direct run's" in same["line"] and same["limit"] >= 1
         assert same["status"] == ("PASS" if same["value"] >= same["limit"] else "MISS")
-        for f in ratios:
-            assert f["status"] == ("PASS" if f["value"] <= 1.02 else "MISS") and "readings past" in f["line"]
+        assert local["status"] == ("PASS" if local["value"] <= 1.02 else "MISS") and "readings past" in local["line"]
+        # all relations: against the worst of the quick run's jittered direct runs
+        assert f"the worst of {fullchecks.QUICK_JITTER_RUNS} direct runs" in every["line"]
+        assert every["status"] == ("PASS" if every["value"] <= every["limit"] else "MISS")
+
+
+def test_deskew_in_bursts_is_reported_with_the_floors(run):
+    """rsm_tools.bench.deskew in the quick run: three lines a lidar (the poses
+    against the clean capture's, local and all-relations error), and its
+    table under the floors."""
+    from rsm_tools.bench import deskew
+
+    man = run["manifest"]
+    mine = [f for f in man["floors"] if f["kind"] == "deskew-bursts"]
+    assert len(mine) == 3 * len(deskew.KINDS) and {f["log"] for f in mine} == set(deskew.KINDS)
+    assert all(f["line"] in floor_lines(run["report"]) for f in mine)
+    assert [r["seconds"] for r in man["deskew_bursts"]["runs"]] == [deskew.QUICK_SECONDS] * len(deskew.KINDS)
+    assert "De-skew with encoder packets read in pairs 10 us apart" in run["report"]
 
 
 def test_simulated_corridors_are_reported_with_the_floors(run):

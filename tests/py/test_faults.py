@@ -8,6 +8,7 @@ given number of bytes.
 """
 
 import gzip
+import math
 import os
 import re
 import signal
@@ -248,6 +249,66 @@ def test_both_carmen_readers_take_the_same_spellings_of_counts_and_numbers(tmp_p
     res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--quiet")
     assert res.returncode == 0, res.stderr
     assert re.search(rf"lines +40 \(scans {40 - bad}, .*malformed {bad},", res.stdout), res.stdout
+
+
+def test_both_carmen_readers_take_the_same_fields_and_separators(tmp_path, head_log):
+    """Fields are split at ASCII spaces, tabs, CRs and LFs, lines end at LF,
+    every record has exactly its fields and each of them is checked: where
+    the two readers differed (issue 30's remaining ones), rsm-nav's took a
+    FLASER or ODOM line with an extra field, an ODOM tv, a logger stamp or
+    a ROBOTLASER1 laser type, accuracy, remission mode, remission or safety
+    field that is no number, and split at neither a no-break space nor a
+    form feed, where rsm-convert's refused or split; and rsm-convert's
+    ended a line at a lone CR, where rsm-nav's splits a field."""
+    from rsm_tools import carmen as cm
+    text = gzip.decompress(head_log.read_bytes()).decode()
+    raw = [l for l in text.splitlines() if l.startswith(("FLASER", "ODOM"))][:60]
+    flaser = [l for l in raw if l.startswith("FLASER")]
+    odom = [l for l in raw if l.startswith("ODOM")]
+
+    def robotlaser(line, **changes):
+        rec = cm.parse_line(line)
+        rl = cm.RobotLaser1(0, -math.pi / 2, math.pi, math.pi / 180, 81.9, 0.01, 0, rec.ranges, [],
+                            rec.laser_pose, rec.odom_pose, 0.0, 0.0, 0.0, 0.0, 0.0, rec.timestamp, rec.host,
+                            rec.logger_timestamp)
+        f = cm.format_robotlaser1(rl).split(" ")
+        for k, v in changes.items():
+            f[int(k[1:]) if k[0] == "i" else len(f) - int(k[1:])] = v
+        return " ".join(f)
+
+    def odd(line, at, sep):
+        """line with the space before field at (from the end) made sep"""
+        f = line.split(" ")
+        return " ".join(f[:-at]) + sep + " ".join(f[-at:])
+
+    bad = [
+        flaser[0] + " 0",                         # an extra field
+        with_fields(flaser[1], p1="abc"),         # the logger stamp
+        odd(flaser[2], 3, "\u00a0"),              # no-break space: one field
+        odd(flaser[3], 3, "\f"),                  # form feed: one field
+        odom[0] + " 0",
+        " ".join(odom[1].split()[:4] + ["abc"] + odom[1].split()[5:]),   # tv
+        " ".join(odom[2].split()[:-1] + ["nan"]),                         # logger stamp
+        robotlaser(flaser[4], i1="1.5"),          # laser type
+        robotlaser(flaser[5], i6="abc"),          # accuracy
+        robotlaser(flaser[6], i7="x"),            # remission mode
+        robotlaser(flaser[7], p8="inf"),          # tv
+        robotlaser(flaser[8]) + " 0",
+        robotlaser(flaser[9], i189="1 abc"),      # one remission, not a number
+    ]
+    good = [robotlaser(flaser[10]), robotlaser(flaser[11]), odd(flaser[12], 3, "\r"), odd(odom[3], 2, "\t")]
+    lines = bad + good + raw[40:]
+    log = tmp_path / "fields.clf"
+    log.write_bytes(("\n".join(lines) + "\n").encode("utf-8"))
+    reader = cm.LogReader(log)
+    taken = list(reader)
+    assert (len(taken), reader.stats.malformed_total) == (len(good) + len(raw[40:]), len(bad)), \
+        reader.stats.summary()
+    scans = sum(1 for r in taken if r.kind != "ODOM")
+    res = run_nav("--carmen", log, "--trajectory", tmp_path / "t.txt", "--quiet")
+    assert res.returncode == 0, res.stderr
+    assert re.search(rf"lines +{len(lines)} \(scans {scans}, odometry {len(taken) - scans}, .*malformed {len(bad)},",
+                     res.stdout), res.stdout
 
 
 def test_carmen_line_longer_than_the_buffer_with_a_nul_is_one_line(tmp_path, head_log):
@@ -788,7 +849,8 @@ def test_both_capture_readers_take_utf8_beyond_ascii(tmp_path):
 def test_a_run_that_makes_no_pose_says_so_and_fails(tmp_path, head_log):
     """A log or capture that yields no pose exits 1 with a one-line reason
     (issue 30: they exited 0 with nothing said): an empty or binary CARMEN
-    file, a capture whose laser channel is empty."""
+    file, a capture whose laser channel is empty, LD06 data tagged as
+    RPLIDAR, an empty LMS channel before the LD06 one."""
     empty = tmp_path / "empty.clf"
     empty.write_text("")
     binary = tmp_path / "binary.clf"
@@ -812,6 +874,24 @@ def test_a_run_that_makes_no_pose_says_so_and_fails(tmp_path, head_log):
     w.close()
     res = run_nav("--capture", only, "--trajectory", tmp_path / "t.txt", "--quiet")
     assert res.returncode == 1 and "rsm-nav: no pose: no scan came out of the capture" in res.stderr, res.stderr
+    # the excerpt as an LD06 stream tagged as an RPLIDAR one, and with an
+    # empty LMS channel before its own: the laser link read is not the LD06
+    ld = tmp_path / "ld06.cap"
+    convert.convert(str(head_log), str(ld), lidar="ld06")
+    h, recs, _ = cap.read_capture(ld)
+    lidar = next(c for c in h.channels if c.name != "robot")
+    tagged = [cap.Channel(c.id, c.name, "rplidar" if c is lidar else c.protocol, c.baud) for c in h.channels]
+    lms_first = ([c for c in h.channels if c is not lidar] + [cap.Channel(lidar.id + 1, "laser", "lms2xx", 38400)]
+                 + [lidar])
+    for name, chans, meta in (("tagged", tagged, {**h.metadata, "laser.model": "rplidar"}),
+                              ("lms_first", lms_first, h.metadata)):
+        path = tmp_path / f"{name}.cap"
+        with cap.CaptureWriter(path, chans, meta) as w:
+            for r in recs:
+                w.write(r.timestamp, r.channel, r.data, r.direction)
+        res = run_nav("--capture", path, "--trajectory", tmp_path / "t.txt", "--quiet")
+        assert res.returncode == 1 and "rsm-nav: no pose: no scan came out of the capture" in res.stderr, \
+            (name, res.stderr)
 
 
 # ---- rsm-replay ---------------------------------------------------------------------------

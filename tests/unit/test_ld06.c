@@ -320,7 +320,8 @@ void test_truncated_packet_is_skipped_and_the_next_one_found_inside_the_candidat
         TEST_ASSERT_EQUAL_size_t(2, feed_all(&p, s, len, (uint32_t)keep * 7u, got, 3));
         if (keep >= 2u && table_crc(s + PK, 46) == s[PK + 46u]) {
             /* The cut packet and the next one's first bytes happen to carry
-             * a valid CRC (1 in 256): a CRC-8 cannot tell, the hybrid is
+             * a valid CRC (1 in 256; here keep 44, cut in the timestamp,
+             * every field plausible): a CRC-8 cannot tell, the hybrid is
              * published and the rest of packet 2 becomes garbage. */
             TEST_ASSERT_EQUAL_UINT16(800, got[1].start_cdeg);
             TEST_ASSERT_EQUAL_UINT32(keep, p.stats.bytes_skipped);
@@ -334,6 +335,66 @@ void test_truncated_packet_is_skipped_and_the_next_one_found_inside_the_candidat
     }
 }
 
+/* One CRC-valid frame refused for its fields, and skipped bytes in all. */
+static void assert_one_frame_refused_for_its_fields(const rsm_ld06_parser_t *p, uint32_t skipped)
+{
+    TEST_ASSERT_EQUAL_UINT32(1, p->stats.bad_fields);
+    TEST_ASSERT_EQUAL_UINT32(0, p->stats.crc_errors);
+    TEST_ASSERT_EQUAL_UINT32(skipped, p->stats.bytes_skipped);
+}
+
+void test_a_false_header_with_a_valid_crc_but_implausible_fields_does_not_hide_the_packet_behind_it(void)
+{
+    /* Issue 30: in a held-out LD06 stream a header inside a cut copy of a
+     * packet passed the CRC-8 (one in 256 does) with a speed of 21 520
+     * deg/s; taken, it swallowed the first 27 bytes of the real packet
+     * behind it, which was lost. Here the false frame's own bytes are
+     * chosen so that its CRC is valid; its end angle and timestamp are the
+     * real packet's bytes: its 12 points would span 259 deg. Refused for
+     * that, the receiver finds the real packet inside it. */
+    enum { AT = 20 }; /* the real packet starts this far into the false frame */
+    uint8_t s[AT + 2u * PK];
+    rsm_ld06_parser_t p;
+    rsm_ld06_packet_t got[3];
+    rsm_ld06_packet_t f;
+    unsigned v;
+    memset(s, 0, sizeof s);
+    s[0] = 0x54;
+    s[1] = 0x2C;
+    s[2] = (uint8_t)(21520u & 0xFFu);
+    s[3] = (uint8_t)(21520u >> 8);
+    s[4] = 0xE8; /* start 10 deg */
+    s[5] = 0x03;
+    stream_packet(s + AT, 1);
+    stream_packet(s + AT + PK, 2);
+    for (v = 0; v < 256u && table_crc(s, 46) != s[46]; ++v) {
+        s[6] = (uint8_t)v; /* a distance byte of the false frame */
+    }
+    TEST_ASSERT_EQUAL_HEX8(table_crc(s, 46), s[46]);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_ld06_decode(s, &f));
+    (void)rsm_ld06_parser_init(&p);
+    TEST_ASSERT_EQUAL_size_t(2, feed_all(&p, s, sizeof s, 5u, got, 3));
+    TEST_ASSERT_EQUAL_UINT16(800, got[0].start_cdeg);
+    TEST_ASSERT_EQUAL_UINT16(1600, got[1].start_cdeg);
+    assert_one_frame_refused_for_its_fields(&p, AT);
+}
+
+void test_decode_refuses_a_timestamp_past_its_wrap_and_points_spread_too_wide(void)
+{
+    uint8_t b[PK];
+    rsm_ld06_packet_t pkt;
+    layout(b, 3600, 100, 100 + RSM_LD06_MAX_SPAN_CDEG, 29999, 900);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ld06_decode(b, &pkt));
+    layout(b, 3600, 35000, (35000 + RSM_LD06_MAX_SPAN_CDEG) % 36000, 0, 900); /* across 0 deg */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_ld06_decode(b, &pkt));
+    layout(b, 3600, 100, 101 + RSM_LD06_MAX_SPAN_CDEG, 0, 900);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_ld06_decode(b, &pkt));
+    layout(b, 3600, 35000, (35001 + RSM_LD06_MAX_SPAN_CDEG) % 36000, 0, 900);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_ld06_decode(b, &pkt));
+    layout(b, 3600, 100, 900, 30000, 900);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, rsm_ld06_decode(b, &pkt));
+}
+
 void test_crc_valid_packet_with_bad_angle_is_counted_and_skipped(void)
 {
     uint8_t s[2u * PK];
@@ -343,9 +404,7 @@ void test_crc_valid_packet_with_bad_angle_is_counted_and_skipped(void)
     stream_packet(s + PK, 3);
     (void)rsm_ld06_parser_init(&p);
     TEST_ASSERT_EQUAL_size_t(1, feed_all(&p, s, sizeof s, 0, got, 2));
-    TEST_ASSERT_EQUAL_UINT32(1, p.stats.bad_fields);
-    TEST_ASSERT_EQUAL_UINT32(0, p.stats.crc_errors);
-    TEST_ASSERT_EQUAL_UINT32(PK, p.stats.bytes_skipped);
+    assert_one_frame_refused_for_its_fields(&p, PK);
 }
 
 void test_flush_drops_a_partial_packet(void)
@@ -395,6 +454,8 @@ int main(void)
     RUN_TEST(test_garbage_and_any_chunking_give_the_same_packets_and_counters);
     RUN_TEST(test_every_single_bit_flip_loses_exactly_its_packet);
     RUN_TEST(test_truncated_packet_is_skipped_and_the_next_one_found_inside_the_candidate);
+    RUN_TEST(test_a_false_header_with_a_valid_crc_but_implausible_fields_does_not_hide_the_packet_behind_it);
+    RUN_TEST(test_decode_refuses_a_timestamp_past_its_wrap_and_points_spread_too_wide);
     RUN_TEST(test_crc_valid_packet_with_bad_angle_is_counted_and_skipped);
     RUN_TEST(test_flush_drops_a_partial_packet);
     RUN_TEST(test_parser_rejects_bad_arguments);

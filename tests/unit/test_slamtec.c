@@ -462,6 +462,46 @@ void test_listen_decodes_a_scan_run_by_another_host_and_sends_nothing(void)
     TEST_ASSERT_EQUAL_UINT32(0, drv.stats.disconnects);
 }
 
+/* A listener whose stream went silent (a cable, a stalled hub) while the
+ * host that runs the sensor never stopped it: no descriptor comes again,
+ * and the stream is taken up again from its own bytes, however long the
+ * silence (before, the listener awaited a descriptor for ever). */
+static void listen_takes_up_a_stream_after_silence(int kind)
+{
+    rsm_slamtec_event_t ev;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_slamtec_listen(&drv));
+    if (kind == 2) {
+        answer(RSM_RPLIDAR_ANS_DENSE, 84u, 1u, NULL);
+    } else {
+        answer(RSM_RPLIDAR_ANS_NODE, 5u, 1u, NULL);
+    }
+    dev.streaming = kind;
+    dev.next_us = fl.now_us + 2000u;
+    TEST_ASSERT_TRUE(run_until(RSM_SLAMTEC_EVENT_CONNECTED, 100000u, &ev));
+    TEST_ASSERT_TRUE(run_until(RSM_SLAMTEC_EVENT_POINTS, 100000u, &ev));
+    dev.unplugged = 1;
+    TEST_ASSERT_TRUE(run_until(RSM_SLAMTEC_EVENT_LINK_LOST, cfg.stream_timeout_us + 100000u, &ev));
+    TEST_ASSERT_FALSE(run_until(RSM_SLAMTEC_EVENT_CONNECTED, 20000000u, &ev)); /* 20 s of silence */
+    dev.unplugged = 0;
+    dev.next_us = fl.now_us + 1234u; /* the stream as it runs: no descriptor */
+    TEST_ASSERT_TRUE(run_until(RSM_SLAMTEC_EVENT_CONNECTED, 1000000u, &ev));
+    TEST_ASSERT_TRUE(run_until(RSM_SLAMTEC_EVENT_POINTS, 200000u, &ev));
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 2.0f, ev.points[0].range_m);
+    TEST_ASSERT_EQUAL_UINT32(2, drv.stats.connects);
+    TEST_ASSERT_EQUAL_UINT32(1, drv.stats.reconnects);
+    TEST_ASSERT_EQUAL_size_t(0, fl.n_writes);
+}
+
+void test_listen_takes_up_a_node_stream_again_after_a_long_silence(void)
+{
+    listen_takes_up_a_stream_after_silence(1);
+}
+
+void test_listen_takes_up_a_capsule_stream_again_after_a_long_silence(void)
+{
+    listen_takes_up_a_stream_after_silence(2);
+}
+
 /* With a zero read timeout the driver never waits inside a poll; a host
  * that sleeps until bytes come or the next deadline runs the whole
  * start-up, the scan, and sees the link loss exactly when due. */
@@ -576,6 +616,8 @@ int main(void)
     RUN_TEST(test_a_silent_stream_is_a_link_loss_and_the_startup_runs_again);
     RUN_TEST(test_disconnect_stops_the_scan_and_the_motor);
     RUN_TEST(test_listen_decodes_a_scan_run_by_another_host_and_sends_nothing);
+    RUN_TEST(test_listen_takes_up_a_node_stream_again_after_a_long_silence);
+    RUN_TEST(test_listen_takes_up_a_capsule_stream_again_after_a_long_silence);
     RUN_TEST(test_init_rejects_bad_settings);
     RUN_TEST(test_init_refuses_a_caller_built_with_other_capacities);
     RUN_TEST(test_a_driver_never_initialised_is_refused);

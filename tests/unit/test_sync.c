@@ -115,6 +115,54 @@ void test_init_should_reject_bad_arguments(void)
     }
 }
 
+void test_encoder_samples_read_in_a_burst_are_spread_at_the_steady_rate(void)
+{
+    /* A host that stalled reads two packets 10 us apart: the first was
+     * measured a period (100 ms) before its stamp. The robot drives 1000
+     * ticks a period; a scan 150 ms in must see 1500 ticks. Taken at its
+     * stamp the late packet made it 750 (issue 30's bursts); put halfway
+     * between its neighbours, it is on time again. */
+    const uint64_t t0 = 1000000u;
+    enc(0u, t0);
+    enc(1000u, t0 + 200000u - 10u);
+    enc(2000u, t0 + 200000u);
+    scan_at(t0 + 150000u);
+    /* the second pair, after the first was applied */
+    enc(3000u, t0 + 400000u - 10u);
+    enc(4000u, t0 + 400000u);
+    scan_at(t0 + 350000u);
+    TEST_ASSERT_EQUAL_size_t(2, res.n);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(1500.0), res.x[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(3500.0), res.x[1]);
+    TEST_ASSERT_EQUAL_UINT32(2, sync.counters.encoder_bursts);
+    TEST_ASSERT_EQUAL_UINT32(2, sync.counters.interpolated);
+}
+
+void test_encoder_samples_at_an_uneven_rate_are_not_a_burst(void)
+{
+    /* Read as they came: a sample 30 ms after one that came 100 ms after
+     * its own (not far sooner), one 10 ms after (far sooner, but no
+     * backlog puts packets that far apart: a log replayed with its own
+     * timing does), and two at the same time (a step sent in pieces). */
+    const uint64_t t0 = 1000000u;
+    enc(0u, t0);
+    enc(1000u, t0 + 100000u);
+    enc(1300u, t0 + 130000u);
+    scan_at(t0 + 115000u);
+    enc(2300u, t0 + 230000u);
+    enc(2400u, t0 + 240000u);
+    scan_at(t0 + 235000u);
+    enc(3000u, t0 + 300000u);
+    enc(3500u, t0 + 300000u);
+    enc(4500u, t0 + 400000u);
+    scan_at(t0 + 285000u);
+    TEST_ASSERT_EQUAL_size_t(3, res.n);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(1150.0), res.x[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(2350.0), res.x[1]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(2850.0), res.x[2]);
+    TEST_ASSERT_EQUAL_UINT32(0, sync.counters.encoder_bursts);
+}
+
 void test_init_should_refuse_a_caller_built_with_other_capacities(void)
 {
     /* What rsm_sync_init passes for an application compiled with other
@@ -610,6 +658,8 @@ int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_init_should_reject_bad_arguments);
+    RUN_TEST(test_encoder_samples_read_in_a_burst_are_spread_at_the_steady_rate);
+    RUN_TEST(test_encoder_samples_at_an_uneven_rate_are_not_a_burst);
     RUN_TEST(test_init_should_refuse_a_caller_built_with_other_capacities);
     RUN_TEST(test_an_aligner_never_initialised_should_be_refused);
     RUN_TEST(test_init_should_refuse_a_localizer_never_initialised);

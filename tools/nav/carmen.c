@@ -81,6 +81,20 @@ static int num(const char *s, double *out)
     return end != s && *end == '\0' && errno == 0;
 }
 
+/* Fields f[0..n) all finite numbers (the fields the reader does not use,
+ * checked as the Python reader checks them). */
+static int finite_fields(char **f, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; ++i) {
+        double v;
+        if (!num(f[i], &v) || !isfinite(v)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
 /* Three numbers from f[0..2]: 1 finite, 0 not numbers, -1 NaN or infinite. */
 static int pose3(char **f, double v[3])
 {
@@ -151,10 +165,11 @@ static carmen_kind_t parse_flaser(carmen_reader_t *r, char **f, size_t nf, carme
     double v;
     size_t n;
     size_t i;
+    /* FLASER n r... lx ly lt ox oy ot ts host lts: exactly these fields */
     if (nf < 2 || !count_field(f[1], &n)) {
         return CARMEN_EOF;
     }
-    if (nf < 2 + n + 9) {
+    if (nf != 2 + n + 9 || !finite_fields(&f[2 + n + 8], 1)) {
         return CARMEN_EOF;
     }
     if (n > RSM_MAX_BEAMS) {
@@ -212,16 +227,23 @@ static carmen_kind_t parse_robotlaser(carmen_reader_t *r, char **f, size_t nf, c
     size_t m;
     size_t i;
     size_t base;
-    if (nf < 9 || !num(f[2], &start) || !num(f[3], &fov) || !num(f[4], &res) || !num(f[5], &maxr) ||
-        !isfinite(start) || !isfinite(fov) || !isfinite(res) || !isfinite(maxr) || !count_field(f[8], &n)) {
-        return CARMEN_EOF;
+    size_t code;
+    if (nf < 9 || !count_field(f[1], &code) || !num(f[2], &start) || !num(f[3], &fov) || !num(f[4], &res) ||
+        !num(f[5], &maxr) || !isfinite(start) || !isfinite(fov) || !isfinite(res) || !isfinite(maxr) ||
+        !finite_fields(&f[6], 1) || !count_field(f[7], &code) || !count_field(f[8], &n)) {
+        return CARMEN_EOF; /* the laser type (f[1]) and remission mode (f[7]) are counts too */
     }
     if (nf < 9 + n + 1 || !count_field(f[9 + n], &m)) {
         return CARMEN_EOF;
     }
     base = 10 + n + m;
-    if (nf < base + 14) {
+    if (nf != base + 14 || !finite_fields(&f[base + 6], 5) || !finite_fields(&f[base + 13], 1)) {
         return CARMEN_EOF;
+    }
+    for (i = 0; i < m; ++i) {
+        if (!num(f[10 + n + i], &v)) { /* remissions: numbers, NaN and inf as readings */
+            return CARMEN_EOF;
+        }
     }
     if (n > RSM_MAX_BEAMS) {
         r->counts.too_many_beams++;
@@ -264,7 +286,9 @@ static carmen_kind_t parse_odom(char **f, size_t nf, carmen_record_t *rec)
     double y;
     double t;
     double ts;
-    if (nf < 8 || !num(f[1], &x) || !num(f[2], &y) || !num(f[3], &t) || !num(f[7], &ts)) {
+    /* ODOM x y theta tv rv accel ts host lts: exactly these fields */
+    if (nf != 10 || !num(f[1], &x) || !num(f[2], &y) || !num(f[3], &t) || !num(f[7], &ts) ||
+        !finite_fields(&f[4], 3) || !finite_fields(&f[9], 1)) {
         return CARMEN_EOF;
     }
     if (!isfinite(x) || !isfinite(y) || !isfinite(t) || !isfinite(ts)) {

@@ -50,6 +50,7 @@ printed with those precisions is reproduced exactly by ``format_record``.
 """
 
 import math
+import re
 from collections import Counter
 from dataclasses import dataclass, field
 from typing import IO, Iterable, Iterator, List, Optional, Sequence, Tuple, Union
@@ -220,10 +221,23 @@ class MalformedLine(ValueError):
         self.reason = reason
 
 
+_FIELD_SEP = re.compile(r"[ \t\r\n]+")
+
+
+def split_fields(line: str) -> List[str]:
+    """The fields of a line, split at ASCII spaces, tabs, CRs and LFs only,
+    as rsm-nav's reader splits them: str.split() would also split at the
+    other Unicode whitespace (no-break space, form feed, ...), where rsm-nav
+    sees one field."""
+    body = line.strip(" \t\r\n")
+    return _FIELD_SEP.split(body) if body else []
+
+
 def _num(tok: str, finite: bool = True) -> float:
     # Decimal, as rsm-nav's reader takes it: float() alone would also take
-    # 1_000 and digits of other scripts.
-    if "_" in tok or not tok.isascii():
+    # 1_000, digits of other scripts and whitespace around the number (a
+    # form feed inside a field).
+    if "_" in tok or not tok.isascii() or not tok.isprintable():
         raise MalformedLine("non_numeric", repr(tok))
     try:
         v = float(tok)
@@ -318,7 +332,7 @@ def parse_line(line: str, lineno: int = 0) -> Optional[Record]:
     record type.  A malformed line of a known type raises
     :class:`MalformedLine` (whose ``reason`` is one of the documented ones).
     """
-    tokens = line.split()
+    tokens = split_fields(line)
     if not tokens or tokens[0].startswith("#") or tokens[0] not in _PARSERS:
         return None
     return parse_tokens(tokens, lineno)
@@ -352,7 +366,8 @@ class LogReader:
 
     def __iter__(self) -> Iterator[Record]:
         if isinstance(self.source, (str, bytes)) or hasattr(self.source, "__fspath__"):
-            with open_text(self.source) as fh:  # type: ignore[arg-type]
+            # lines end at LF alone, as rsm-nav reads them (a lone CR separates fields)
+            with open_text(self.source, newline="\n") as fh:  # type: ignore[arg-type]
                 yield from self._records(fh)
         else:
             yield from self._records(self.source)  # type: ignore[arg-type]
@@ -362,7 +377,7 @@ class LogReader:
         wanted = self.types
         for lineno, line in enumerate(lines, start=1):
             st.lines += 1
-            tokens = line.split()
+            tokens = split_fields(line)
             if not tokens:
                 st.blank += 1
                 continue

@@ -46,9 +46,11 @@ class _GzipOwning(gzip.GzipFile):
             self._owned_raw.close()
 
 
-def open_text(path: PathLike) -> IO[str]:
-    """Open a plain or gzip text file for reading (UTF-8, undecodable bytes replaced)."""
-    return io.TextIOWrapper(open_binary(path), encoding="utf-8", errors="replace", newline="")
+def open_text(path: PathLike, newline: str = "") -> IO[str]:
+    """Open a plain or gzip text file for reading (UTF-8, undecodable bytes
+    replaced); ``newline`` as io.TextIOWrapper's ("\n": lines end at LF
+    alone, a lone CR stays inside its line)."""
+    return io.TextIOWrapper(open_binary(path), encoding="utf-8", errors="replace", newline=newline)
 
 
 def open_binary_output(path: PathLike) -> IO[bytes]:

@@ -13,9 +13,12 @@ folder (``RSM_SHARED_DIR``, see docs/reference/README.md) is here, and
 * on every log, rsm is more accurate than the ICP baseline and odometry alone
   on every measure, and a second run is bit-identical;
 * the capture path (rsm-convert, then ``rsm-nav --capture``) gives the direct
-  run's poses (``rsm-nav --carmen``) until the robot first moves, and tracks
-  within 2 % of it, on all relations and on local ones (docs/capture.md says
-  why the all-relations figure can miss it on one run);
+  run's poses (``rsm-nav --carmen``) until the robot first moves; its local
+  error is within 2 % of the direct run's; and its all-relations error is
+  within the spread of JITTER_RUNS direct runs whose odometry is moved by up
+  to +-JITTER_M (the encoder counts carry the log's odometry only to about a
+  tick, and one flipped decision of the matcher moves a run's all-relations
+  error by more than 2 %, so one run's ratio is chance: docs/capture.md);
 * a figure that depends on the machine's speed and load, so it is no test: the
   shipped excerpt replayed over pseudo-terminals in real time (8x) into
   ``rsm-nav --listen``, its local error against the 0.03 m floor and how many
@@ -29,6 +32,7 @@ Each check is a dict ``{"status": PASS|MISS|SKIP, "kind", "log", "value",
 
 import argparse
 import os
+import random
 import subprocess
 import sys
 import tempfile
@@ -45,7 +49,10 @@ from .fileio import open_binary
 LOCAL_SPAN = 2.0
 LIVE_SPEED = "8"
 LIVE_FLOOR = 0.03          # local translation of the real-time live run on the excerpt, m
-CAPTURE_TOLERANCE = 1.02   # capture-path error over the direct run's, at most
+CAPTURE_TOLERANCE = 1.02   # capture-path local error over the direct run's, at most
+JITTER_RUNS = 10           # direct runs with jittered odometry: the all-relations spread
+QUICK_JITTER_RUNS = 2
+JITTER_M = 0.5e-6          # each odometry coordinate moved by up to this, m
 INTEL_LOCAL_FLOOR = 0.03   # rsm's local translation error on Intel, m
 # The Intel log as docs/reference/intel-SOURCE.md describes it.
 INTEL_FACTS = {"FLASER": 13631, "ODOM": 26915, "comments": 4, "readings": 180, "backwards": 631}
@@ -192,11 +199,56 @@ def capture_poses(capf: Path, traj: Path) -> List[Tuple[float, float, float, flo
     return [(stamps[i], r.x, r.y, r.theta) for i, r in enumerate(rows)]
 
 
+def jittered_log(log: Path, out: Path, seed: int, jitter_m: float = JITTER_M) -> None:
+    """The log with every ODOM and FLASER odometry x and y moved by a uniform
+    draw within +-jitter_m (seeded); a FLASER's two poses move together (they
+    differ only by a mount). Other lines and fields are as they were."""
+    rng = random.Random(seed)
+    with open_binary(log) as src, open(out, "w", encoding="utf-8") as dst:
+        for raw in src:
+            line = raw.decode("utf-8", errors="surrogateescape")
+            f = line.split()
+            at: List[int] = []
+            if f and f[0] == "ODOM" and len(f) >= 4:
+                at = [1]
+            elif f and f[0] == "FLASER" and len(f) >= 2 and f[1].isdigit():
+                n = int(f[1])
+                at = [2 + n, 5 + n] if len(f) >= 8 + n else []
+            if not at:
+                dst.write(line if line.endswith("\n") else line + "\n")
+                continue
+            dx, dy = rng.uniform(-jitter_m, jitter_m), rng.uniform(-jitter_m, jitter_m)
+            for i in at:
+                f[i] = f"{float(f[i]) + dx:.9f}"
+                f[i + 1] = f"{float(f[i + 1]) + dy:.9f}"
+            dst.write(" ".join(f) + "\n")
+
+
+def jitter_spread(nav: Path, label: str, log: Path, relations: List[ev.Relation], work: Path, runs: int,
+                  jobs: int = 2) -> List[float]:
+    """The all-relations mean translation error of ``runs`` direct runs on
+    copies of the log with jittered odometry (seeds 1..runs)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    def one(seed: int) -> float:
+        jl, traj = work / f"{label}-jitter{seed}.clf", work / f"{label}-jitter{seed}.txt"
+        jittered_log(log, jl, seed)
+        run_nav(nav, ["--carmen", str(jl)], traj)
+        jl.unlink()
+        return errors(ev.load_trajectory(traj), relations)["all"]["translation"]["mean"]
+
+    with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+        return list(pool.map(one, range(1, runs + 1)))
+
+
 def check_capture_path(label: str, nav: Path, log: Path, relations: List[ev.Relation],
-                       direct: Dict[str, dict], work: Path, direct_traj: Path) -> List[dict]:
+                       direct: Dict[str, dict], work: Path, direct_traj: Path, jitter_runs: int = JITTER_RUNS,
+                       jobs: int = 2) -> List[dict]:
     """The log as serial bytes (rsm-convert) through rsm-nav --capture, beside
     the direct run: the same poses until the robot first moves (the inputs
-    are the same bits until then), and the errors within CAPTURE_TOLERANCE."""
+    are the same bits until then), the local error within CAPTURE_TOLERANCE
+    of the direct run's, and the all-relations error within the spread of
+    ``jitter_runs`` direct runs with odometry jittered by +-JITTER_M."""
     capf = work / f"{label}.cap"
     st = convert.convert(log, capf)
     traj = work / f"{label}-capture.txt"
@@ -208,14 +260,25 @@ def check_capture_path(label: str, nav: Path, log: Path, relations: List[ev.Rela
     out = [check(same >= still, "capture", label, f"{label}: capture path: the first {same} poses equal to the "
                  f"direct run's ({'>=' if same >= still else '<'} {still}, the scans before the robot first moves)",
                  same, still)]
-    for scope in ("all", "local"):
-        mine, ref = got[scope]["translation"]["mean"], direct[scope]["translation"]["mean"]
-        r = mine / ref if ref > 0 else float("inf")
-        ok = r <= CAPTURE_TOLERANCE
-        out.append(check(ok, "capture", label, f"{label}: capture path ({st.units}, {st.too_far} readings past "
-                         f"{st.limit_m:.2f} m) {'all-relations' if scope == 'all' else 'local'} translation "
-                         f"{mine:.4f} m = x{r:.3f} of the direct run's {ref:.4f} m "
-                         f"({'<=' if ok else '>'} x{CAPTURE_TOLERANCE:.2f})", r, CAPTURE_TOLERANCE))
+    mine_l, ref_l = got["local"]["translation"]["mean"], direct["local"]["translation"]["mean"]
+    r = mine_l / ref_l if ref_l > 0 else float("inf")
+    ok = r <= CAPTURE_TOLERANCE
+    out.append(check(ok, "capture", label, f"{label}: capture path ({st.units}, {st.too_far} readings past "
+                     f"{st.limit_m:.2f} m) local translation {mine_l:.4f} m = x{r:.3f} of the direct run's "
+                     f"{ref_l:.4f} m ({'<=' if ok else '>'} x{CAPTURE_TOLERANCE:.2f})", r, CAPTURE_TOLERANCE))
+    mine_a, ref_a = got["all"]["translation"]["mean"], direct["all"]["translation"]["mean"]
+    spread = jitter_spread(nav, label, log, relations, work, jitter_runs, jobs) if jitter_runs > 0 else []
+    if not spread:
+        out.append(check(None, "capture", label, f"{label}: capture path all-relations translation {mine_a:.4f} m "
+                         f"(direct {ref_a:.4f} m): no jittered direct run to judge it by"))
+        return out
+    lo, hi = min(spread), max(spread)
+    ok = mine_a <= hi
+    out.append(check(ok, "capture", label, f"{label}: capture path all-relations translation {mine_a:.4f} m "
+                     f"{'<=' if ok else '>'} {hi:.4f} m, the worst of {len(spread)} direct runs with +-"
+                     f"{JITTER_M * 1e6:g} um of odometry jitter ({lo:.4f} to {hi:.4f} m, median "
+                     f"{sorted(spread)[len(spread) // 2]:.4f}; the direct run {ref_a:.4f} m; capture "
+                     f"x{mine_a / ref_a if ref_a > 0 else float('inf'):.3f} of it)", mine_a, hi))
     return out
 
 
@@ -258,11 +321,15 @@ def _tools_env() -> dict:
 
 def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, root: Path,
             accuracy: Optional[dict] = None, live: bool = True,
-            say: Callable[[str], None] = lambda s: None) -> List[dict]:
+            say: Callable[[str], None] = lambda s: None, jitter_runs: Optional[int] = None,
+            jobs: int = 2) -> List[dict]:
     """Every check on ``logs`` ((label, log, relations)); ``accuracy`` is the
     bench's accuracy section when it ran (its rsm, icp and odometry
     trajectories are reused), else they are run here; ``live`` False skips
-    the real-time replay."""
+    the real-time replay (and runs QUICK_JITTER_RUNS jittered direct runs
+    instead of JITTER_RUNS, unless ``jitter_runs`` says)."""
+    if jitter_runs is None:
+        jitter_runs = JITTER_RUNS if live else QUICK_JITTER_RUNS
     work.mkdir(parents=True, exist_ok=True)
     out: List[dict] = []
     intel = shared / "data" / "intel"
@@ -295,7 +362,7 @@ def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], wor
             errs[m] = errors(ev.load_trajectory(traj), relations)
         out += check_baselines(label, errs)
         out += check_rerun(label, nav, log, trajs["rsm"], work)
-        out += check_capture_path(label, nav, log, relations, errs["rsm"], work, trajs["rsm"])
+        out += check_capture_path(label, nav, log, relations, errs["rsm"], work, trajs["rsm"], jitter_runs, jobs)
     return out
 
 

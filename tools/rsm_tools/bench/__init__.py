@@ -45,7 +45,9 @@ report (``docs/RESULTS.md`` by default) has these sections:
    with the checks that need the full logs (:mod:`rsm_tools.fullchecks`; the
    logs as LD06 and RPLIDAR streams, :mod:`rsm_tools.lidarbench`; rsm
    against odometry alone in simulated bare corridors,
-   :mod:`rsm_tools.corridors`).
+   :mod:`rsm_tools.corridors`; de-skew with encoder packets read in bursts,
+   :mod:`.deskew`). ``--only capture`` and ``--only deskew`` print the
+   capture path's and the bursts' lines alone.
 8. Where rsm loses: generated from the numbers above.
 
 Trajectories, summaries and a manifest (``bench.json``) are kept in the work
@@ -83,6 +85,7 @@ from .measure import (build_small, cmake_cache, cpu_info, discover_logs, hash_lo
 from .faults import FAULT_RUNS, QUICK_FAULT_RUNS, fault_floors, run_faults
 from .knownmap import (KIDNAP_RUNS, QUICK_KIDNAP_RUNS, QUICK_STARTS, STARTS, START_SCANS, knownmap_floors,
     run_knownmap)
+from . import deskew as _deskew
 from . import knownmap as _knownmap
 from . import navmemory as _navmemory
 from . import figures as _figures
@@ -154,10 +157,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--kidnap-runs", type=int, help=f"runs per log of the section Known map's kidnapping, one "
                    f"kidnap each, frozen and with updates (default {KIDNAP_RUNS}; quick {QUICK_KIDNAP_RUNS}; 0: skip "
                    "that part)")
-    p.add_argument("--only", choices=("knownmap",), help="run one section alone and write it into the existing "
-                   "report and the work directory's manifest, the rest left as it is: knownmap (the section Known "
-                   "map; with --global-starts, --global-scans, --kidnap-runs, --quick, --jobs, --shared, --output, "
-                   "--work-dir)")
+    p.add_argument("--only", choices=("knownmap", "capture", "deskew"), help="run one section alone: knownmap (the "
+                   "section Known map, written into the existing report and the work directory's manifest, the rest "
+                   "left as it is; with --global-starts, --global-scans, --kidnap-runs, --quick, --jobs, --shared, "
+                   "--output, --work-dir); capture (the capture path against the direct run and its jittered runs, "
+                   "on every log; with --jitter-runs, --jobs, --shared, --work-dir) or deskew (de-skew with encoder "
+                   "packets in bursts; with --deskew-seconds, --work-dir): these two print their lines and write "
+                   "WORK/only-NAME.json, and leave the report as it is")
+    p.add_argument("--jitter-runs", type=int, help=f"direct runs with +-{fullchecks.JITTER_M * 1e6:g} um of odometry "
+                   f"jitter beside the capture path (default {fullchecks.JITTER_RUNS}; quick "
+                   f"{fullchecks.QUICK_JITTER_RUNS})")
+    p.add_argument("--deskew-seconds", type=float, help=f"simulated drive per lidar of the de-skew-in-bursts line "
+                   f"(default {_deskew.SECONDS:g}; quick {_deskew.QUICK_SECONDS:g})")
     p.add_argument("--speed-repeats", type=int, help=f"timed runs per method (default {SPEED_REPEATS}; quick 1)")
     p.add_argument("--callgrind-scans", type=int, default=CALLGRIND_SCANS,
                    help=f"scans from the start of every log counted by callgrind (default {CALLGRIND_SCANS})")
@@ -259,6 +270,9 @@ def run(args: argparse.Namespace) -> Path:
               f"{work / 'bench.json'}")
         return output
 
+    if args.only in ("capture", "deskew"):
+        return _run_only_line(args, nav, logs, work, root)
+
     def stage(name, fn, *a):
         print(f"rsm-bench: {name} ...", flush=True)
         t0 = time.monotonic()
@@ -297,7 +311,9 @@ def run(args: argparse.Namespace) -> Path:
     ctx["full_checks"] = ([check(None, "data", None, "full-log checks: not run (--no-full-checks)")]
                           if args.no_full_checks
                           else stage("full-log checks", fullchecks.run_all, shared, nav, logs, work / "full-checks",
-                                     root, ctx["accuracy"], not args.quick))
+                                     root, ctx["accuracy"], not args.quick, lambda s: None, _jitter_runs(args),
+                                     args.jobs))
+    ctx["deskew_bursts"] = stage("de-skew bursts", _deskew.run, nav, work, _deskew_seconds(args))
     ctx["lidar_streams"] = stage("lidar streams", lidarbench.run, nav, logs, work / "lidar-streams", ctx["accuracy"])
     ctx["corridors"] = stage("corridors", corridors.run, nav, work / "corridors", args.quick)
     ctx["speed"] = stage("speed", run_speed, nav, main_log, repeats, work)
@@ -390,6 +406,7 @@ def run(args: argparse.Namespace) -> Path:
     ctx["floors"] = (check_floors(**floor_inputs(ctx)) + m4_floors(ctx.get("m4")) +
                      spread_floors(ctx.get("spread")) + fault_floors(ctx.get("faults")) +
                      knownmap_floors(ctx.get("knownmap")) + _navmemory.floors(ctx.get("nav_memory")) +
+                     _deskew.floors(ctx.get("deskew_bursts")) +
                      ctx["full_checks"] +
                      ctx["lidar_streams"] + ctx["corridors"])
     ctx["losses"] = losses(ctx)
@@ -414,6 +431,52 @@ def run(args: argparse.Namespace) -> Path:
         print(f"  {f['line']}")
     print(f"rsm-bench: wrote {output} in {ctx['elapsed']:.0f} s (work files in {work})")
     return output
+
+
+def _jitter_runs(args: argparse.Namespace) -> int:
+    n = args.jitter_runs if args.jitter_runs is not None else (
+        fullchecks.QUICK_JITTER_RUNS if args.quick else fullchecks.JITTER_RUNS)
+    if n < 0:
+        raise BenchError("--jitter-runs must be at least 0")
+    return n
+
+
+def _deskew_seconds(args: argparse.Namespace) -> float:
+    sec = args.deskew_seconds if args.deskew_seconds is not None else (
+        _deskew.QUICK_SECONDS if args.quick else _deskew.SECONDS)
+    if not sec >= 5.0:
+        raise BenchError("--deskew-seconds must be at least 5")
+    return sec
+
+
+def _run_only_line(args: argparse.Namespace, nav: Path, logs, work: Path, root: Path) -> Path:
+    """--only capture or --only deskew: the lines alone, printed and kept in
+    WORK/only-NAME.json (the report is the whole bench's and is left as it is)."""
+    t0 = time.monotonic()
+    if args.only == "capture":
+        res: dict = {"checks": []}
+        for label, log, rel in logs:
+            print(f"rsm-bench: {label}: the capture path beside the direct run and its jittered runs", flush=True)
+            d = work / "capture-path"
+            d.mkdir(parents=True, exist_ok=True)
+            relations = fullchecks.ev.load_relations(rel)
+            direct = d / f"{label}-direct.txt"
+            fullchecks.run_nav(nav, ["--carmen", str(log)], direct)
+            errs = fullchecks.errors(fullchecks.ev.load_trajectory(direct), relations)
+            res["checks"] += fullchecks.check_capture_path(label, nav, log, relations, errs, d, direct,
+                                                           _jitter_runs(args), args.jobs)
+        lines = [c["line"] for c in res["checks"]]
+    else:
+        res = _deskew.run(nav, work, _deskew_seconds(args))
+        lines = _deskew.report(res) + [f["line"] for f in _deskew.floors(res)]
+    res["provenance"] = provenance(root, (args.build_dir or root / "build-release").resolve())
+    res["seconds"] = time.monotonic() - t0
+    out = work / f"only-{args.only}.json"
+    out.write_text(json.dumps(res, indent=1, default=_json_default, allow_nan=True))
+    for line in lines:
+        print(line)
+    print(f"rsm-bench: {args.only} in {res['seconds']:.0f} s; wrote {out}")
+    return out
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -1262,10 +1262,14 @@ def report_floors(ctx: dict) -> List[str]:
          f"p99 of the replay firmware, section 4. Then the checks that need "
          f"the full logs (`rsm_tools.fullchecks`): the logs against their description in docs/reference, rsm "
          f"against ICP and odometry, a bit-identical rerun, and the capture path (`rsm-convert`, then "
-         f"`rsm-nav --capture`) within x{fullchecks.CAPTURE_TOLERANCE:.2f} of the direct run.", "",
+         f"`rsm-nav --capture`): the direct run's poses until the robot first moves, local error within "
+         f"x{fullchecks.CAPTURE_TOLERANCE:.2f} of the direct run's, all-relations error within the spread of "
+         f"direct runs with +-{fullchecks.JITTER_M * 1e6:g} um of odometry jitter.", "",
          f"{n['PASS']} PASS, {n['MISS']} MISS" + (f", {n['SKIP']} SKIP" if n["SKIP"] else "") + ":", "", "```"]
     L += [f["line"] for f in floors]
     L += ["```", ""]
+    from .deskew import report as deskew_report
+    L += deskew_report(ctx.get("deskew_bursts"))
     return L
 
 
