@@ -416,8 +416,16 @@ int rsm_localizer_ticks(rsm_localizer_t *loc, uint32_t left, uint32_t right);
  * whatever the outcome; rejected scans leave the prediction in place and say
  * why in rep->outcome and the counters. Returns RSM_ERR_ORDER (scan ignored)
  * when its timestamp is older than the previous scan's, RSM_ERR_INVAL for
- * bad arguments or a count above RSM_MAX_BEAMS. */
-int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep);
+ * bad arguments or a count above RSM_MAX_BEAMS, RSM_ERR_CONFIG when the
+ * caller was compiled with other capacities (its rsm_scan_t is another
+ * size: the scan is not read, nothing is written, *rep included). A macro
+ * as rsm_sync_scan, passing the caller's sizeof(rsm_scan_t) and
+ * RSM_CONFIG_FINGERPRINT. */
+#define rsm_localizer_scan(loc, scan, rep)                                                                      \
+    rsm_localizer_scan_checked((loc), (scan), sizeof(rsm_scan_t), (unsigned long)RSM_CONFIG_FINGERPRINT, (rep))
+
+int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, size_t scan_size,
+                               unsigned long fingerprint, rsm_localizer_report_t *rep);
 
 /* Puts the estimate at x with covariance p (NULL: zero), as a caller that
  * knows where the robot is would (it was carried, or a map was loaded and

@@ -5,6 +5,7 @@
 
 #include "rsm/status.h"
 #include "core/bits.h"
+#include "core/check.h"
 #include "core/ekf.h"
 #include "core/fmath.h"
 #include "core/grid.h"
@@ -1562,7 +1563,8 @@ static rsm_track_t track_state(rsm_localizer_t *loc, rsm_outcome_t outcome, cons
     return loc->poor_run >= cfg->lost_scans ? RSM_TRACK_LOST : RSM_TRACK_UNCERTAIN;
 }
 
-int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localizer_report_t *rep)
+int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, size_t scan_size,
+                               unsigned long fingerprint, rsm_localizer_report_t *rep)
 {
     rsm_localizer_report_t local;
     stage_clock_t clk;
@@ -1575,6 +1577,9 @@ int rsm_localizer_scan(rsm_localizer_t *loc, const rsm_scan_t *scan, rsm_localiz
     int contradicted = 0;
     rsm_pose_t pred;
     int n;
+    if (!RSM_SAME_BUILD(rsm_scan_t, scan_size, fingerprint)) {
+        return RSM_ERR_CONFIG;
+    }
     if (rep == NULL) {
         rep = &local;
     }

@@ -122,6 +122,16 @@ void test_functions_that_read_a_scan_refuse_it(void)
     TEST_ASSERT_EQUAL_MEMORY(pts_was, pts, sizeof pts);
     TEST_ASSERT_EQUAL_MEMORY(&drops_was, &drops, sizeof drops);
     TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_sync_scan(&sync, &scan));
+    {
+        /* The localizer's too: its report untouched, as the rest. */
+        static rsm_localizer_t loc;
+        rsm_localizer_report_t rep;
+        rsm_localizer_report_t rep_was;
+        memset(&rep, 0x5A, sizeof rep);
+        memcpy(&rep_was, &rep, sizeof rep);
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_CONFIG, rsm_localizer_scan(&loc, &scan, &rep));
+        TEST_ASSERT_EQUAL_MEMORY(&rep_was, &rep, sizeof rep);
+    }
 }
 
 void test_localizer_and_sync_init_are_refused(void)
