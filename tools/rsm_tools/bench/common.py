@@ -249,6 +249,10 @@ STATE_SIZES = (
 
 
 # Entry points whose stack the report bounds (those the library has).
+# The functions behind the macros that pass the caller's capacities
+# (rsm_localizer_scan -> rsm_localizer_scan_checked): what a profiler or a
+# call graph sees; the report keeps the names the API gives.
+SCAN_SYMBOL = "rsm_localizer_scan_checked"
 STACK_ROOTS = ("rsm_localizer_scan", "rsm_localizer_motion", "rsm_sync_scan", "rsm_sync_encoder", "rsm_sync_poll")
 
 

@@ -19,7 +19,7 @@ from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 from .. import evaluate as ev
 from .. import m4, outliers
-from .common import (ARM_CONFIGS, ARM_CPU, BenchError, DEFAULT_MAP_LOG2, DEFAULT_MAP_UPDATE_M, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
+from .common import (ARM_CONFIGS, ARM_CPU, BenchError, SCAN_SYMBOL, DEFAULT_MAP_LOG2, DEFAULT_MAP_UPDATE_M, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
     DRIVER_OBJECTS, KIND_METHODS, LOCAL_SPAN, M4_TARGETS, MAIN_LOG, MEMORY_TILES, METHODS, QUANTITIES,
     ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS, SCALING_MAP_LOG2, SCALING_PRESETS, SCALING_TILES, SCOPES, SMALL,
     SMALL_HEADER, STAGES, STATE_SIZES, TIMING_STATS, TURNS, TURN_SEPARATION_SCANS, bin_label, ratio)
@@ -460,7 +460,7 @@ def run_callgrind(navs: Dict[str, Optional[Path]], logs: List[Tuple[str, Path, P
         out = work / "callgrind" / f"{label}-{config}-{m}.callgrind.out"
         traj = work / "callgrind" / f"{label}-{config}-{m}.txt"
         out.parent.mkdir(parents=True, exist_ok=True)
-        prefix = [valgrind, "--tool=callgrind", "--toggle-collect=rsm_localizer_scan",
+        prefix = [valgrind, "--tool=callgrind", f"--toggle-collect={SCAN_SYMBOL}",
                   f"--callgrind-out-file={out}"]
         r = run_nav(nav, Path(heads[label]["log"]), m, traj, prefix)
         sm = r["parsed"]
@@ -820,7 +820,7 @@ def run_m4(root: Path, work: Path, replay_host: Optional[Path], mapflash_host: O
         res_out["host"] = {"skipped": "valgrind is not installed"}
     else:
         cg_out = work / "m4-host.callgrind.out"
-        r = subprocess.run([valgrind, "--tool=callgrind", "--toggle-collect=rsm_localizer_scan",
+        r = subprocess.run([valgrind, "--tool=callgrind", f"--toggle-collect={SCAN_SYMBOL}",
                             f"--callgrind-out-file={cg_out}", str(replay_host)], capture_output=True, text=True)
         if r.returncode != 0:
             raise BenchError(f"callgrind of {replay_host} failed: {r.stderr[-2000:]}")

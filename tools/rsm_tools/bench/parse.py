@@ -6,7 +6,7 @@ import re
 from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
-from .common import BenchError, INDIRECT_TARGETS, PEER_COLUMNS, STACK_ROOTS
+from .common import BenchError, INDIRECT_TARGETS, PEER_COLUMNS, SCAN_SYMBOL, STACK_ROOTS
 
 
 def load_summary(path: Path) -> dict:
@@ -216,7 +216,7 @@ def static_functions(source: str) -> List[str]:
                       source, re.M | re.S)
 
 
-def localizer_breakdown(cg: dict, helpers: Iterable[str], root: str = "rsm_localizer_scan") -> dict:
+def localizer_breakdown(cg: dict, helpers: Iterable[str], root: str = SCAN_SYMBOL) -> dict:
     """Instructions of one rsm_localizer_scan call tree, split into the code of
     the localizer itself (root and the static helpers it calls directly, wherever
     the compiler left them out of line) and the inclusive cost of every other
@@ -294,7 +294,7 @@ def callgrind_stages(breakdown: dict, scans: int) -> Dict[str, dict]:
         row["ir"] += ir
         row["functions"].append(fn)
     out["localizer"] = {"ir": breakdown["own"], "functions": ["rsm_localizer_scan"] + [
-        g for g in breakdown["group"] if g != "rsm_localizer_scan"]}
+        g for g in breakdown["group"] if g != SCAN_SYMBOL]}
     for row in out.values():
         row["ir_per_scan"] = row["ir"] / scans if scans else float("nan")
         row["functions"] = sorted(set(row["functions"]))
@@ -423,7 +423,13 @@ def worst_stack_path(graph: dict, root: str, indirect: Optional[Dict[str, Sequen
 
 def stack_bounds(graph: dict) -> Dict[str, dict]:
     names = {nd["name"] for nd in graph["nodes"].values()}
-    return {fn: worst_stack_path(graph, fn, INDIRECT_TARGETS) for fn in STACK_ROOTS if fn in names}
+    out = {}
+    for fn in STACK_ROOTS:
+        # A root the API gives as a macro is the function it calls.
+        sym = fn + "_checked" if fn + "_checked" in names else fn
+        if sym in names:
+            out[fn] = worst_stack_path(graph, sym, INDIRECT_TARGETS)
+    return out
 
 
 def read_callgraph_dir(d: Path) -> dict:
