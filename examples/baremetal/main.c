@@ -13,7 +13,7 @@
 #define BEAMS 181u        /* 1 degree apart over 180 degrees */
 #define ROOM_RADIUS_M 3.0f
 
-/* About 122 KiB with the default capacities: in .bss, never on the stack,
+/* About 125 KiB with the default capacities: in .bss, never on the stack,
  * and one per robot (two localizers never share state). */
 static rsm_localizer_t loc;
 static rsm_localizer_config_t cfg; /* kept by pointer: must live as long as loc */
