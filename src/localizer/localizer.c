@@ -271,6 +271,16 @@ void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
     loc->state.persistent.fit = fit;
     loc->state.persistent.map_fit = fit;
     loc->state.persistent.global.cached = 0u;
+    /* The global search's grids, built now while nothing else runs (they
+     * take the memory of a map write's scan, idle after a load or an
+     * import): a search in the map as it came, frozen or before its first
+     * write, begins without paying for them out of its scans' budget. A
+     * map the search cannot take (RSM_ERR_NOMEM) is kept: tracking needs
+     * none. */
+    if (loc->cfg->method == RSM_METHOD_MAP) {
+        (void)rsm_global_prepare(&loc->state.persistent.global, loc->frame.global_grid,
+                                 &loc->state.persistent.map, NULL);
+    }
     if (global_running(loc)) {
         loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
     }
@@ -1404,6 +1414,14 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts)
 }
 
 /* A scan while a global search is under way (RSM_METHOD_MAP). */
+/* A scan the search took and placed nothing with: its reads counted. */
+static rsm_outcome_t searching(rsm_localizer_t *loc, rsm_localizer_report_t *rep, uint32_t used)
+{
+    rep->search_work = used;
+    loc->counters.global_work += used;
+    return RSM_SCAN_SEARCHING;
+}
+
 static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localizer_report_t *rep)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
@@ -1460,9 +1478,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
             }
         }
         if (g->proved < g->found || verdict == 2) {
-            rep->search_work = used;
-            loc->counters.global_work += used;
-            return RSM_SCAN_SEARCHING;
+            return searching(loc, rep, used);
         }
         if (verdict == 0 && g->rounds < PROVE_ROUNDS) {
             /* Left in doubt, though the best fits: the same poses, as
@@ -1479,9 +1495,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
             g->at = loc->ekf.x;
             g->proved = 0;
             g->rounds++;
-            rep->search_work = used;
-            loc->counters.global_work += used;
-            return RSM_SCAN_SEARCHING;
+            return searching(loc, rep, used);
         }
         /* Not proven: another view may settle it, searched with what is
          * left of this scan's budget (or from the next scan). */
@@ -1489,9 +1503,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         g->unproven++;
         g->phase = RSM_GLOBAL_PENDING;
         if (budget > 0u && used + BEGIN_WORK >= budget) {
-            rep->search_work = used;
-            loc->counters.global_work += used;
-            return RSM_SCAN_SEARCHING;
+            return searching(loc, rep, used);
         }
     }
     if (g->phase == RSM_GLOBAL_PENDING) {
@@ -1506,7 +1518,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
              * asked for): the search is given up, counted as unproven. */
             loc->counters.global_ambiguous++;
             g->phase = RSM_GLOBAL_IDLE;
-            return RSM_SCAN_SEARCHING;
+            return searching(loc, rep, used);
         }
         if (g->radius_m > 0.0f) {
             /* Near the estimate, in a window that doubles with every
@@ -1518,9 +1530,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         g->phase = RSM_GLOBAL_RUNNING;
         used += BEGIN_WORK;
         if (budget > 0u && used >= budget) {
-            rep->search_work = used;
-            loc->counters.global_work += used;
-            return RSM_SCAN_SEARCHING;
+            return searching(loc, rep, used);
         }
     }
     if (rsm_global_run(g, loc->frame.global_grid, map, budget > 0u ? budget - used : 0u, &used) == 0) {
@@ -1528,9 +1538,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         g->proved = 0;
         g->rounds = 0;
     }
-    rep->search_work = used;
-    loc->counters.global_work += used;
-    return RSM_SCAN_SEARCHING;
+    return searching(loc, rep, used);
 }
 
 /* The tracking state after a scan: a scan tracks when it was fused and,

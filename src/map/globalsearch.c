@@ -5,6 +5,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "core/bits.h"
 #include "core/fmath.h"
 #include "rsm/status.h"
 #include "map/tmap_read.h"
@@ -166,14 +167,10 @@ int rsm_global_check(const rsm_tmap_t *map)
     return layout((uint32_t)(b[2] - b[0] + 1), (uint32_t)(b[3] - b[1] + 1), 0u, &top, e);
 }
 
-static void set_bit(uint8_t *grid, uint32_t i)
-{
-    grid[i >> 3] = (uint8_t)(grid[i >> 3] | (1u << (i & 7u)));
-}
-
+/* One bit of a grid (rsm_bit_get's, unsigned for the counts below). */
 static uint32_t get_bit(const uint8_t *grid, uint32_t i)
 {
-    return ((uint32_t)grid[i >> 3] >> (i & 7u)) & 1u;
+    return (uint32_t)rsm_bit_get(grid, i);
 }
 
 /* Whether grid h holds a nonzero cell in the window [u, u + 2^h] x [v, v +
@@ -219,7 +216,7 @@ static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t
                 for (b = y >> e; b <= (y + 2u) >> e; ++b) {
                     uint32_t a;
                     for (a = x >> e; a <= (x + 2u) >> e; ++a) {
-                        set_bit(grid, g->grid_at[1] + b * nx + a);
+                        rsm_bit_set(grid, g->grid_at[1] + b * nx + a);
                     }
                 }
             }
@@ -272,7 +269,7 @@ static uint32_t grid_up(const rsm_global_t *g, uint8_t *grid, uint32_t i)
         for (d = d0; d <= d1; d = (d < d1 && d + step > d1) ? d1 : d + step) {
             reads++;
             if (get_bit(grid, g->grid_at[h - 1u] + (uint32_t)c * g->grid_nx[h - 1u] + (uint32_t)d) != 0u) {
-                set_bit(grid, i);
+                rsm_bit_set(grid, i);
                 return reads;
             }
             if (d == d1) {
@@ -947,11 +944,14 @@ static float fine_score(const rsm_global_t *g, const rsm_tmap_t *map, const rsm_
     const float s = rsm_sinf(x->theta);
     float sum = 0.0f;
     uint32_t k;
+    rsm_tmap_cursor_t cur;
+    /* One cursor for the scan's points, which lie near each other in turn. */
+    rsm_tmap_cursor_init(&cur, g->level);
     for (k = 0; k < g->npts; ++k) {
         const rsm_point_t *p = &g->pts[k];
         float dx;
         float dy;
-        sum += rsm_tmap_sample(map, g->level, x->x + c * p->x - s * p->y, x->y + s * p->x + c * p->y, &dx, &dy);
+        sum += rsm_tmap_sample_at(map, &cur, x->x + c * p->x - s * p->y, x->y + s * p->x + c * p->y, &dx, &dy);
     }
     return sum;
 }

@@ -6,7 +6,6 @@
 #include <string.h>
 
 #include "core/bytes.h"
-#include "map/globalsearch.h"
 #include "rsm/status.h"
 #include "map/mapstate.h"
 #include "map/tilemap.h"
@@ -259,12 +258,6 @@ int rsm_localizer_load_map(rsm_localizer_t *loc, rsm_mapfile_read_fn read, void 
         return rc;
     }
     rsm_localizer_map_replaced(loc, got.fit);
-    /* The global search's grids, built now while nothing else runs (they
-     * take the memory of a map write's scan, idle after a load): a search
-     * in the map as loaded, frozen or before its first write, begins
-     * without paying for them out of its scans' budget. A map the search
-     * cannot take (RSM_ERR_NOMEM) is still loaded: tracking needs none. */
-    (void)rsm_global_prepare(&loc->state.persistent.global, loc->frame.global_grid, map, NULL);
     if (info != NULL) {
         *info = got;
     }

@@ -10,8 +10,9 @@ int rsm_localizer_ready(const rsm_localizer_t *loc);
 
 /* The persistent map was replaced (loaded, imported): the next scan is
  * matched against it, not written as a first; writes count from the
- * estimate; fit (0: unknown) is the recent scans' and the map's own; a
- * global search under way starts over in the new map. */
+ * estimate; fit (0: unknown) is the recent scans' and the map's own; the
+ * global search's grids are built for it, and a search under way starts
+ * over in the new map. */
 void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit);
 
 #endif /* RSM_MAPSTATE_H */
