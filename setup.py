@@ -24,8 +24,8 @@ def version() -> str:
 
 
 def sources() -> list:
-    # Relative paths, as setuptools wants; src/ may hold subfolders.
-    found = sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / "src").rglob("*.c"))
+    # Relative paths, as setuptools wants; src/LAYER/*.c as CMake globs them.
+    found = sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / "src").glob("*/*.c"))
     return found + ["port/python/rsm_py.c"]
 
 
@@ -34,11 +34,6 @@ def headers() -> list:
     # sources and these only).
     return sorted(p.relative_to(ROOT).as_posix() for d in ("include", "src") for p in (ROOT / d).rglob("*.h"))
 
-
-def internal_include_dirs() -> list:
-    # Internal headers are included by their layer's folder ("map/tilemap.h",
-    # docs/layering.md), so src/ itself is the one folder to search.
-    return ["src"]
 
 
 class BuildNoInit(build_ext):
@@ -53,7 +48,9 @@ native = Extension(
     "rsm._native",
     sources=sources(),
     depends=headers(),
-    include_dirs=["include"] + internal_include_dirs(),
+    # Internal headers are included by their layer's folder ("map/tilemap.h",
+    # docs/layering.md): src/ is the one folder to search.
+    include_dirs=["include", "src"],
     define_macros=[("RSM_WITH_ICP", "1")],
     # As CMake builds the library (rsm_float_flags): the same float bits
     # as rsm-nav, so a trajectory from Python equals the C tool's.

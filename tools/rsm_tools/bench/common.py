@@ -44,6 +44,13 @@ SEEDS = 2
 # The many-run sections vary it around this value: one run's result depends
 # on where its writes fall, and a robot gets one run.
 DEFAULT_MAP_UPDATE_M = 0.4
+
+
+def update_sweep(count: int, step: float = 0.0125) -> List[float]:
+    """map_update_m of the many-run sections: 0.75, 0.75 + step, ... times
+    the default (count of them)."""
+    return [round(DEFAULT_MAP_UPDATE_M * (0.75 + step * k), 4) for k in range(count)]
+
 # The spread section: rsm once per map_update_m of 0.75, 0.7625, ... times
 # the default (this many values, up to 1.24 times) on the clean logs, and at every
 # other of them on the outlier copies of each of SPREAD_SEEDS seeds: which
@@ -252,7 +259,8 @@ STATE_SIZES = (
 # The functions behind the macros that pass the caller's capacities
 # (rsm_localizer_scan -> rsm_localizer_scan_checked): what a profiler or a
 # call graph sees; the report keeps the names the API gives.
-SCAN_SYMBOL = "rsm_localizer_scan_checked"
+CHECKED = "_checked"
+SCAN_SYMBOL = "rsm_localizer_scan" + CHECKED
 STACK_ROOTS = ("rsm_localizer_scan", "rsm_localizer_motion", "rsm_sync_scan", "rsm_sync_encoder", "rsm_sync_poll")
 
 

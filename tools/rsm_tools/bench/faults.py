@@ -44,7 +44,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 from .. import evaluate as ev
 from .. import faults as flt
 from ..carmen import Pose, pose_compose
-from .common import BenchError, DEFAULT_MAP_UPDATE_M, LOCAL_SPAN, fmt_q, ratio
+from .common import BenchError, LOCAL_SPAN, fmt_q, ratio, update_sweep
 
 FAULT_RUNS = 20
 QUICK_FAULT_RUNS = 2
@@ -100,13 +100,12 @@ RECOVERY_NOTE = ("a recovery is false when no relation across it (one end within
 
 def fault_update(k: int) -> float:
     """map_update_m of fault run k: 0.75 + 0.025 k times the default."""
-    return round(DEFAULT_MAP_UPDATE_M * (0.75 + 0.025 * k), 4)
+    return update_sweep(k + 1, 0.025)[k]
 
 
 def clean_updates(count: int) -> List[float]:
-    """map_update_m of the clean runs: 0.75, 0.7625, ... times the default
-    (the spread section's values)."""
-    return [round(DEFAULT_MAP_UPDATE_M * (0.75 + 0.0125 * k), 4) for k in range(count)]
+    """map_update_m of the clean runs: the spread section's values."""
+    return update_sweep(count)
 
 
 def _rng(*what) -> random.Random:

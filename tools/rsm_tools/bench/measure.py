@@ -19,7 +19,7 @@ from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 from .. import evaluate as ev
 from .. import m4, outliers
-from .common import (ARM_CONFIGS, ARM_CPU, BenchError, SCAN_SYMBOL, DEFAULT_MAP_LOG2, DEFAULT_MAP_UPDATE_M, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
+from .common import (update_sweep, ARM_CONFIGS, ARM_CPU, BenchError, SCAN_SYMBOL, DEFAULT_MAP_LOG2, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
     DRIVER_OBJECTS, KIND_METHODS, LOCAL_SPAN, M4_TARGETS, MAIN_LOG, MEMORY_TILES, METHODS, QUANTITIES,
     ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS, SCALING_MAP_LOG2, SCALING_PRESETS, SCALING_TILES, SCOPES, SMALL,
     SMALL_HEADER, STAGES, STATE_SIZES, TIMING_STATS, TURNS, TURN_SEPARATION_SCANS, bin_label, ratio)
@@ -349,9 +349,8 @@ def run_robustness(nav: Path, logs: List[Tuple[str, Path, Path]], acc: dict, lev
 
 
 def spread_updates(count: int) -> List[float]:
-    """map_update_m values of the spread section: 0.75, 0.7625, ... times the
-    default (count of them; 0.300, 0.305, ... m)."""
-    return [round(DEFAULT_MAP_UPDATE_M * (0.75 + 0.0125 * k), 4) for k in range(count)]
+    """map_update_m values of the spread section: 0.300, 0.305, ... m."""
+    return update_sweep(count)
 
 
 def run_spread(nav: Path, logs: List[Tuple[str, Path, Path]], level: int, seeds: Sequence[int],
@@ -749,8 +748,14 @@ def _cross_build(root: Path, b: Path, toolchain: str, opt: str, targets: Sequenc
 M4_VARIANTS = (("m4-Os", "toolchain-arm-none-eabi.cmake", "-Os", "rsm_replay_m4", m4.MACHINE),
                ("m3-O2", "toolchain-arm-cortex-m3.cmake", "-O2", "rsm_replay_m3", m4.MACHINE_M3),
                ("m0plus-O2", "toolchain-arm-cortex-m0plus.cmake", "-O2", "rsm_replay_m0plus", m4.MACHINE_M3))
-# The Cortex-M0+ build (RP2040), which only links: its LD06 example's size.
+# The Cortex-M0+ build (RP2040), which only links: its LD06 example's size
+# (built in the M0+ replay's tree).
 M0PLUS_IMAGE = "rsm_firmware_rp2040_ld06"
+
+
+def _poses(text: str) -> List[str]:
+    """The P lines of a replay's output (host or target): its trajectory."""
+    return [l for l in text.splitlines() if l.startswith("P ")]
 
 
 def run_m4_variants(root: Path, work: Path, host_out: Optional[str]) -> dict:
@@ -760,20 +765,19 @@ def run_m4_variants(root: Path, work: Path, host_out: Optional[str]) -> dict:
     when it was not built); and the Cortex-M0+ image's sizes."""
     out: Dict[str, dict] = {}
     for key, toolchain, opt, target, machine in M4_VARIANTS:
-        elf = _cross_build(root, work / key, toolchain, opt, [target]) / f"{target}.elf"
+        extra = [M0PLUS_IMAGE] if key.startswith("m0plus") else []
+        fw_dir = _cross_build(root, work / key, toolchain, opt, [target] + extra)
+        elf = fw_dir / f"{target}.elf"
         try:
             text = m4.run(elf, machine=machine)
             cost = m4.costs(text)
         except m4.M4Error as e:
             raise BenchError(str(e))
         (work / f"{key}-replay.out").write_text(text)
-        poses = [l for l in text.splitlines() if l.startswith("P ")]
         out[key] = {"machine": machine, "opt": opt, "cost": cost, "image": _arm_size(elf),
-                    "identical": None if host_out is None else
-                    poses == [l for l in host_out.splitlines() if l.startswith("P ")]}
-    elf = _cross_build(root, work / "m0plus-O2", "toolchain-arm-cortex-m0plus.cmake", "-O2",
-                       [M0PLUS_IMAGE]) / f"{M0PLUS_IMAGE}.elf"
-    out["m0plus"] = {"image": _arm_size(elf), "name": M0PLUS_IMAGE}
+                    "identical": None if host_out is None else _poses(text) == _poses(host_out)}
+        if extra:
+            out["m0plus"] = {"image": _arm_size(fw_dir / f"{M0PLUS_IMAGE}.elf"), "name": M0PLUS_IMAGE}
     return out
 
 
@@ -814,6 +818,7 @@ def run_m4(root: Path, work: Path, replay_host: Optional[Path], mapflash_host: O
                "icount_shift": m4.ICOUNT_SHIFT, "cost": cost, "images": images,
                "global": m4_global(fw_dir / "rsm_mapflash_m4.elf", mapflash_host, replay_host, work / "m4-mapflash")}
     valgrind = shutil.which("valgrind")
+    host_out = None
     if replay_host is None or not replay_host.is_file():
         res_out["host"] = {"skipped": "rsm-replay-host was not built"}
     elif valgrind is None:
@@ -824,13 +829,12 @@ def run_m4(root: Path, work: Path, replay_host: Optional[Path], mapflash_host: O
                             f"--callgrind-out-file={cg_out}", str(replay_host)], capture_output=True, text=True)
         if r.returncode != 0:
             raise BenchError(f"callgrind of {replay_host} failed: {r.stderr[-2000:]}")
-        host_p = [l for l in r.stdout.splitlines() if l.startswith("P ")]
-        target_p = [l for l in out.splitlines() if l.startswith("P ")]
+        host_out = r.stdout
         ir = callgrind_ir(cg_out)
-        res_out["host"] = {"ir": ir, "scans": len(host_p), "ir_per_scan": ir / max(1, len(host_p)),
-                           "identical": host_p == target_p}
-    host_out = None
-    if replay_host is not None and replay_host.is_file():
+        res_out["host"] = {"ir": ir, "scans": len(_poses(host_out)), "ir_per_scan": ir / max(1, len(_poses(host_out))),
+                           "identical": _poses(host_out) == _poses(out)}
+    if host_out is None and replay_host is not None and replay_host.is_file():
+        # No valgrind: the host's output for the other builds all the same.
         h = subprocess.run([str(replay_host)], capture_output=True, text=True)
         if h.returncode != 0:
             raise BenchError(f"{replay_host} failed: {h.stderr[-2000:]}")

@@ -6,7 +6,7 @@ import re
 from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
-from .common import BenchError, INDIRECT_TARGETS, PEER_COLUMNS, SCAN_SYMBOL, STACK_ROOTS
+from .common import BenchError, CHECKED, INDIRECT_TARGETS, PEER_COLUMNS, SCAN_SYMBOL, STACK_ROOTS
 
 
 def load_summary(path: Path) -> dict:
@@ -426,7 +426,7 @@ def stack_bounds(graph: dict) -> Dict[str, dict]:
     out = {}
     for fn in STACK_ROOTS:
         # A root the API gives as a macro is the function it calls.
-        sym = fn + "_checked" if fn + "_checked" in names else fn
+        sym = fn + CHECKED if fn + CHECKED in names else fn
         if sym in names:
             out[fn] = worst_stack_path(graph, sym, INDIRECT_TARGETS)
     return out
