@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "rsm/status.h"
+#include "core/burst.h"
 #include "core/check.h"
 #include "core/fmath.h"
 
@@ -50,11 +51,6 @@ int rsm_rev_init_checked(rsm_rev_t *r, size_t r_size, unsigned long fingerprint,
     return RSM_OK;
 }
 
-/* Odometry poses this close were read from a backlog (as SYNC_BURST_US in
- * src/sync.c): poses stamped apart unevenly but further, or at the same
- * time, are taken as they come. */
-#define REV_BURST_US 2000u
-
 int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
 {
     size_t slot;
@@ -71,16 +67,11 @@ int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
         return RSM_ERR_ORDER;
     }
     if (r->odom_n >= 2u) {
-        /* A pose read within REV_BURST_US of the newest, far sooner than
-         * the newest came after the one before, is a burst (a host reading
-         * its backlog): the newest was measured earlier than its stamp says.
-         * Odometry comes at a steady rate, so it is put halfway between
-         * the one before and this one; its pose is kept. */
+        /* A burst (core/burst.h): the newest is put halfway between the
+         * one before and this one; its pose is kept. */
         const size_t newest = (r->odom_head + r->odom_n - 1u) % RSM_REV_ODOM_DEPTH;
         const size_t before = (r->odom_head + r->odom_n - 2u) % RSM_REV_ODOM_DEPTH;
-        if (stamp_us > r->odom_us[newest] && stamp_us - r->odom_us[newest] <= REV_BURST_US &&
-            (stamp_us - r->odom_us[newest]) * 8u < r->odom_us[newest] - r->odom_us[before]) {
-            r->odom_us[newest] = r->odom_us[before] + (stamp_us - r->odom_us[before]) / 2u;
+        if (rsm_burst_restamp(r->odom_us[before], &r->odom_us[newest], stamp_us)) {
             r->stats.odometry_bursts++;
         }
     }

@@ -6,6 +6,7 @@
 
 #include "rsm/odometry.h"
 #include "rsm/status.h"
+#include "core/burst.h"
 #include "core/check.h"
 
 typedef enum fuse_class {
@@ -206,13 +207,6 @@ int rsm_sync_init_checked(rsm_sync_t *s, size_t s_size, unsigned long fingerprin
     return RSM_OK;
 }
 
-/* Two encoder packets this close were read from a backlog: sent one after
- * the other, a packet takes longer on the line (a 12-byte one takes 1 ms at
- * 115200 Bd), and a robot reports at 10 to 50 Hz. Samples stamped apart
- * unevenly but further, or at the same time (a log replayed with its own
- * timing, a step sent in pieces), are taken as they come. */
-#define SYNC_BURST_US 2000u
-
 int rsm_sync_encoder(rsm_sync_t *s, const rsm_odometry_sample_t *sample)
 {
     const rsm_odometry_sample_t *last;
@@ -231,17 +225,12 @@ int rsm_sync_encoder(rsm_sync_t *s, const rsm_odometry_sample_t *sample)
     }
     stamp_us = smp.stamp_us;
     if (s->count > 0u && (s->count >= 2u || s->have_base)) {
-        /* A sample read within SYNC_BURST_US of the newest, far sooner than
-         * the newest came after the one before, is a burst (a host reading
-         * its backlog): the newest was measured earlier than its stamp says.
-         * Encoders report at a steady rate, so it is put halfway between
-         * the one before and this one (its counts are kept). */
+        /* A burst (core/burst.h): the newest is put halfway between the
+         * one before and this one; its counts are kept. */
         rsm_odometry_sample_t *nw = &s->ring[(s->head + s->count - 1u) % RSM_SYNC_DEPTH];
         const uint64_t before = s->count >= 2u ? s->ring[(s->head + s->count - 2u) % RSM_SYNC_DEPTH].stamp_us
                                                : s->base.stamp_us;
-        if (nw->stamp_us >= before && stamp_us > nw->stamp_us && stamp_us - nw->stamp_us <= SYNC_BURST_US &&
-            stamp_us - nw->stamp_us < (nw->stamp_us - before) / 8u) {
-            nw->stamp_us = before + (stamp_us - before) / 2u;
+        if (rsm_burst_restamp(before, &nw->stamp_us, stamp_us)) {
             s->counters.encoder_bursts++;
         }
     }

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "rsm/localizer.h"
+#include "rsm/revolution.h"
 #include "rsm/status.h"
 #include "rsm/sync.h"
 #include "test_support.h"
@@ -161,6 +162,36 @@ void test_encoder_samples_at_an_uneven_rate_are_not_a_burst(void)
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(2350.0), res.x[1]);
     TEST_ASSERT_FLOAT_WITHIN(1e-6f, metres(2850.0), res.x[2]);
     TEST_ASSERT_EQUAL_UINT32(0, sync.counters.encoder_bursts);
+}
+
+void test_the_aligner_and_the_assembler_see_the_same_bursts(void)
+{
+    /* One rule for both (src/core/burst.h). The aligner tested the gap as
+     * d < gap / 8 in integers, the assembler as d * 8 < gap: a sample 1 us
+     * after one that came 15 us after its own was a burst to the assembler
+     * only, and 2 us after 23 us likewise. The others: a burst to both, and
+     * to neither (d = gap / 8 exactly; d over 2 ms). */
+    static const uint64_t gaps[][2] = {{15u, 1u}, {23u, 2u}, {100000u, 10u}, {16u, 2u}, {40000u, 2001u}};
+    static rsm_rev_t rev;
+    rsm_rev_config_t rcfg;
+    const rsm_pose_t p = {0.0f, 0.0f, 0.0f};
+    size_t k;
+    (void)rsm_rev_config_default(&rcfg);
+    for (k = 0; k < sizeof gaps / sizeof gaps[0]; ++k) {
+        const uint64_t t0 = 1000000u;
+        const uint64_t t1 = t0 + gaps[k][0];
+        const uint64_t t2 = t1 + gaps[k][1];
+        setUp();
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_init(&rev, &rcfg));
+        enc(0u, t0);
+        enc(10u, t1);
+        enc(20u, t2);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_odometry(&rev, t0, &p));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_odometry(&rev, t1, &p));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_rev_odometry(&rev, t2, &p));
+        TEST_ASSERT_EQUAL_UINT32_MESSAGE(k < 3u ? 1u : 0u, sync.counters.encoder_bursts, "aligner");
+        TEST_ASSERT_EQUAL_UINT32_MESSAGE(k < 3u ? 1u : 0u, rev.stats.odometry_bursts, "assembler");
+    }
 }
 
 void test_init_should_refuse_a_caller_built_with_other_capacities(void)
@@ -659,6 +690,7 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(test_init_should_reject_bad_arguments);
     RUN_TEST(test_encoder_samples_read_in_a_burst_are_spread_at_the_steady_rate);
+    RUN_TEST(test_the_aligner_and_the_assembler_see_the_same_bursts);
     RUN_TEST(test_encoder_samples_at_an_uneven_rate_are_not_a_burst);
     RUN_TEST(test_init_should_refuse_a_caller_built_with_other_capacities);
     RUN_TEST(test_an_aligner_never_initialised_should_be_refused);
