@@ -197,7 +197,10 @@
 
 /* Odometry poses the revolution assembler keeps to place every point of a
  * turn at the pose the robot had when it was measured (de-skew). 24 bytes
- * each; at 50 Hz odometry, 32 cover 0.64 s, three turns of a 5 Hz lidar. */
+ * each; at 50 Hz odometry, 32 cover 0.64 s, three turns of a 5 Hz lidar:
+ * enough for a turn and the wait for odometry after it (a turn whose first
+ * pose would be dropped while it waits is de-skewed then). The assembler
+ * also keeps two turns of points, 12 bytes per RSM_MAX_BEAMS each. */
 #ifndef RSM_REV_ODOM_DEPTH
 #define RSM_REV_ODOM_DEPTH 32
 #endif

@@ -32,9 +32,20 @@
  * Off, the points keep their bearings and ranges: a robot turning at w rad/s
  * with a lidar turning at f Hz smears each turn over w / f rad.
  *
- * All state is in the caller's rsm_rev_t (about 2 scans, 12 bytes per beam
- * plus 24 per odometry pose); cfg is kept by pointer. Pure computation, no
- * I/O; one assembler must not be used from two contexts at once. */
+ * Odometry late: with de-skew on and odom_wait_us set, a whole turn waits,
+ * kept as measured while the next one fills, until odometry covers it (a
+ * pose stamped at or after its last point, which no burst will re-stamp: the
+ * pose before the newest, or the newest once 2 ms of points passed without
+ * another); rsm_rev_push returns it with the next point. It goes out with
+ * the odometry there is (stats.uncovered) once the newest pose is
+ * odom_wait_us old, when the next turn ends, when the oldest odometry pose
+ * it starts from would be dropped for a new one (it is then de-skewed in
+ * rsm_rev_odometry, and the next push returns it), or on rsm_rev_flush.
+ *
+ * All state is in the caller's rsm_rev_t (a scan, two turns of 12 bytes per
+ * beam, 24 bytes per odometry pose: 12 360 bytes on a Cortex-M4 with the
+ * default configuration); cfg is kept by pointer. Pure computation, no I/O;
+ * one assembler must not be used from two contexts at once. */
 #ifndef RSM_REVOLUTION_H
 #define RSM_REVOLUTION_H
 
@@ -64,6 +75,9 @@ typedef struct rsm_rev_config {
                                a turn, in (0, 360) [180] */
     uint32_t max_gap_us;    /* a longer silence between two points drops the
                                turn in progress, > 0 [300 000] */
+    uint32_t odom_wait_us;  /* with de-skew, a whole turn waits at most this long
+                               past its last point for odometry stamped after
+                               it; 0: de-skewed at once [250 000] */
 } rsm_rev_config_t;
 
 /* Fills *cfg with the defaults. RSM_OK or RSM_ERR_INVAL (NULL). */
@@ -99,11 +113,29 @@ typedef struct rsm_rev_stats {
                                on: no odometry pose at all */
     uint32_t extrapolated;  /* points whose time lay past the newest odometry
                                pose (extrapolated) or before the oldest (held) */
+    uint32_t waited;        /* turns that waited for odometry past their last
+                               point */
+    uint32_t uncovered;     /* turns de-skewed without odometry past their last
+                               point: the wait ran out, odometry was silent for
+                               as long, the next turn ended, the odometry kept
+                               was about to lose the turn's start, or
+                               rsm_rev_flush */
 } rsm_rev_stats_t;
 
 /* What rsm_rev_init writes into rsm_rev_t.magic: the other functions
  * refuse an assembler without it (never initialised, or zeroed). */
 #define RSM_REV_MAGIC 0x52534d52UL
+
+/* A turn's points as measured (private to the assembler). 12 bytes per
+ * beam. */
+typedef struct rsm_rev_turn {
+    float angle_deg[RSM_MAX_BEAMS];
+    float range_m[RSM_MAX_BEAMS];
+    uint32_t dt_us[RSM_MAX_BEAMS]; /* after first_us */
+    size_t n;
+    uint64_t first_us;             /* its first point's stamp */
+    uint64_t last_us;              /* its last point's (kept or not) */
+} rsm_rev_turn_t;
 
 /* Assembler state, caller owned. stats and scan may be read at any time
  * (scan holds the last delivered turn); the rest is private. */
@@ -112,17 +144,16 @@ typedef struct rsm_rev {
     const rsm_rev_config_t *cfg;
     rsm_rev_stats_t stats;
     rsm_scan_t scan;
-    /* the turn in progress */
-    float angle_deg[RSM_MAX_BEAMS];
-    float range_m[RSM_MAX_BEAMS];
-    uint32_t dt_us[RSM_MAX_BEAMS]; /* after first_us */
-    size_t n;
+    rsm_rev_turn_t cur;            /* the turn in progress */
+    rsm_rev_turn_t held;           /* a whole turn waiting for odometry */
     size_t seen;                   /* points of this turn, kept or not */
-    uint64_t first_us;
-    uint64_t last_us;
+    uint64_t last_us;              /* the newest point's stamp */
     float last_angle;
     uint8_t have_last;
     uint8_t whole;                 /* this turn began at the sensor's zero */
+    uint8_t holding;               /* held is waiting */
+    uint8_t unsaid;                /* scan holds a turn rsm_rev_push has not
+                                      returned 1 for yet */
     /* odometry, oldest first */
     uint64_t odom_us[RSM_REV_ODOM_DEPTH];
     rsm_pose_t odom[RSM_REV_ODOM_DEPTH];
@@ -149,16 +180,26 @@ int rsm_rev_init_checked(rsm_rev_t *r, size_t r_size, unsigned long fingerprint,
  * pose that is not finite (dropped, counted). */
 int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose);
 
-/* One point, in measuring order. Returns 1 if it completed a turn (r->scan
- * holds it, valid until the next completed turn; the point itself starts the
- * next turn), 0 if not, RSM_ERR_INVAL for NULL pointers or r never
+/* One point, in measuring order. Returns 1 if a whole turn is delivered
+ * (r->scan holds it, valid until the next call of rsm_rev_push,
+ * rsm_rev_odometry or rsm_rev_flush; the point that ended a turn starts the
+ * next one), 0 if not, RSM_ERR_INVAL for NULL pointers or r never
  * initialised, RSM_ERR_RANGE or RSM_ERR_ORDER for a point counted in
- * bad_points and dropped. */
+ * bad_points and dropped. With de-skew and odom_wait_us set, the turn a
+ * point ends may come out with a later point: when odometry stamped after
+ * its last point has come (see the top of this header). */
 int rsm_rev_push(rsm_rev_t *r, const rsm_lidar_point_t *pt);
 
+/* Delivers a whole turn still waiting for odometry, de-skewed with the
+ * odometry there is: call it when no more points will come (the link was
+ * lost, the stream ended). Returns 1 if r->scan now holds it (as for
+ * rsm_rev_push), 0 if no turn was waiting, RSM_ERR_INVAL for NULL or r
+ * never initialised. */
+int rsm_rev_flush(rsm_rev_t *r);
+
 /* Drops the turn in progress (counted as partial if it held points): call
- * it when the link was lost. Odometry is kept. No-op for NULL or r never
- * initialised. */
+ * it when the link was lost, after rsm_rev_flush. Odometry, and a whole
+ * turn waiting for it, are kept. No-op for NULL or r never initialised. */
 void rsm_rev_reset(rsm_rev_t *r);
 
 #ifdef __cplusplus

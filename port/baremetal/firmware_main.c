@@ -219,6 +219,17 @@ static void fw_turn_points(const rsm_lidar_point_t *pts, size_t n)
         }
     }
 }
+
+/* The link was lost: a whole turn still waiting for odometry goes to the
+ * fusion with what there is; the turn in progress has a hole. */
+static void fw_turns_lost(void)
+{
+    if (rsm_rev_flush(&fw_rev) == 1) {
+        (void)rsm_sync_scan(&fw_sync, &fw_rev.scan);
+        fw_stats.scan_events++;
+    }
+    rsm_rev_reset(&fw_rev);
+}
 #endif
 
 #if RSM_FIRMWARE_LASER == RSM_FIRMWARE_LD06
@@ -242,7 +253,7 @@ static int fw_laser_poll(void)
         return 0;
     }
     if (ev.type == RSM_LDLIDAR_EVENT_LINK_LOST) {
-        rsm_rev_reset(&fw_rev); /* the turn in progress has a hole */
+        fw_turns_lost();
     } else if (ev.type == RSM_LDLIDAR_EVENT_POINTS) {
         fw_turn_points(ev.points, ev.count);
     }
@@ -273,7 +284,7 @@ static int fw_laser_poll(void)
         return 0;
     }
     if (fw_laser_ev.type == RSM_SLAMTEC_EVENT_LINK_LOST) {
-        rsm_rev_reset(&fw_rev); /* the turn in progress has a hole */
+        fw_turns_lost();
     } else if (fw_laser_ev.type == RSM_SLAMTEC_EVENT_POINTS) {
         fw_turn_points(fw_laser_ev.points, fw_laser_ev.count);
     }

@@ -20,6 +20,8 @@ int rsm_rev_config_default(rsm_rev_config_t *cfg)
     cfg->min_points = 30u;
     cfg->wrap_deg = 180.0f;
     cfg->max_gap_us = 300000u;
+    /* as the aligner's max_wait_us: odometry later than that is no help */
+    cfg->odom_wait_us = 250000u;
     return RSM_OK;
 }
 
@@ -48,42 +50,6 @@ int rsm_rev_init_checked(rsm_rev_t *r, size_t r_size, unsigned long fingerprint,
     memset(r, 0, sizeof *r);
     r->magic = (uint32_t)RSM_REV_MAGIC;
     r->cfg = cfg;
-    return RSM_OK;
-}
-
-int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
-{
-    size_t slot;
-    if (!ready(r) || pose == NULL) {
-        return RSM_ERR_INVAL;
-    }
-    if (!pose_finite(pose)) {
-        r->stats.odometry_bad++;
-        return RSM_ERR_RANGE;
-    }
-    if (r->odom_n > 0u &&
-        stamp_us < r->odom_us[(r->odom_head + r->odom_n - 1u) % RSM_REV_ODOM_DEPTH]) {
-        r->stats.odometry_bad++;
-        return RSM_ERR_ORDER;
-    }
-    if (r->odom_n >= 2u) {
-        /* A burst (core/burst.h): the newest is put halfway between the
-         * one before and this one; its pose is kept. */
-        const size_t newest = (r->odom_head + r->odom_n - 1u) % RSM_REV_ODOM_DEPTH;
-        const size_t before = (r->odom_head + r->odom_n - 2u) % RSM_REV_ODOM_DEPTH;
-        if (rsm_burst_restamp(r->odom_us[before], &r->odom_us[newest], stamp_us)) {
-            r->stats.odometry_bursts++;
-        }
-    }
-    if (r->odom_n == RSM_REV_ODOM_DEPTH) {
-        r->odom_head = (r->odom_head + 1u) % RSM_REV_ODOM_DEPTH;
-        r->odom_n--;
-    }
-    slot = (r->odom_head + r->odom_n) % RSM_REV_ODOM_DEPTH;
-    r->odom_us[slot] = stamp_us;
-    r->odom[slot] = *pose;
-    r->odom_n++;
-    r->stats.odometry++;
     return RSM_OK;
 }
 
@@ -185,11 +151,11 @@ static float bearing(const rsm_rev_config_t *cfg, float a_deg)
     return rsm_wrap_angle(cfg->clockwise ? -a : a);
 }
 
-/* Fills r->scan from the turn in progress. */
-static void deliver(rsm_rev_t *r)
+/* Fills r->scan from turn t; rsm_rev_push returns 1 for it next. */
+static void deliver(rsm_rev_t *r, const rsm_rev_turn_t *t)
 {
     const rsm_rev_config_t *cfg = r->cfg;
-    const uint64_t stamp = r->first_us + (r->last_us - r->first_us) / 2u;
+    const uint64_t stamp = t->first_us + (t->last_us - t->first_us) / 2u;
     const int deskew = cfg->deskew && r->odom_n > 0u;
     const rsm_pose_t inv_mount = rsm_pose_inverse(&cfg->mount);
     rsm_pose_t at_stamp = {0.0f, 0.0f, 0.0f};
@@ -200,9 +166,9 @@ static void deliver(rsm_rev_t *r)
     if (deskew) {
         at_stamp = pose_at(r, stamp);
     }
-    for (i = 0; i < r->n; ++i) {
-        const float b = bearing(cfg, r->angle_deg[i]);
-        const float range = r->range_m[i];
+    for (i = 0; i < t->n; ++i) {
+        const float b = bearing(cfg, t->angle_deg[i]);
+        const float range = t->range_m[i];
         r->scan.angle_rad[i] = b;
         r->scan.range_m[i] = range;
         if (range == 0.0f) {
@@ -210,11 +176,11 @@ static void deliver(rsm_rev_t *r)
         } else if (deskew) {
             /* laser frame at the point's time -> robot frame -> robot frame
              * at the stamp -> laser frame at the stamp */
-            const uint64_t t = r->first_us + r->dt_us[i];
-            const rsm_pose_t then = pose_at(r, t);
+            const uint64_t when = t->first_us + t->dt_us[i];
+            const rsm_pose_t then = pose_at(r, when);
             const rsm_pose_t motion = rsm_pose_between(&at_stamp, &then);
             rsm_point_t p;
-            if (!plausible(&motion, fabsf(us_between(t, stamp)) * 1e-6f)) {
+            if (!plausible(&motion, fabsf(us_between(when, stamp)) * 1e-6f)) {
                 r->stats.implausible++; /* NaN fails too: left as measured */
                 continue;
             }
@@ -233,9 +199,127 @@ static void deliver(rsm_rev_t *r)
             r->scan.angle_rad[i] = rsm_atan2f(p.y, p.x);
         }
     }
-    r->scan.count = r->n;
+    r->scan.count = t->n;
     r->scan.stamp_us = stamp;
     r->stats.scans++;
+    r->unsaid = 1u;
+}
+
+/* Whether odometry covers the turn that ended at last_us for good: a pose
+ * stamped at or after it that no burst will re-stamp any more (one before
+ * the newest, or the newest once RSM_BURST_US passed without a partner;
+ * now_us is the newest point's stamp). */
+static int covered(const rsm_rev_t *r, uint64_t last_us, uint64_t now_us)
+{
+    uint64_t t_new;
+    uint64_t t_prev;
+    if (r->odom_n == 0u) {
+        return 0;
+    }
+    (void)odom_pose(r, r->odom_n - 1u, &t_new);
+    if (t_new < last_us) {
+        return 0;
+    }
+    if (r->odom_n >= 2u) {
+        (void)odom_pose(r, r->odom_n - 2u, &t_prev);
+        if (t_prev >= last_us) {
+            return 1;
+        }
+    }
+    return now_us > t_new && now_us - t_new > RSM_BURST_US;
+}
+
+/* Whether the turn that ended at last_us should be de-skewed now, at now_us:
+ * odometry covers it, or waiting is no use (de-skew off, no wait set, no
+ * odometry, or none for odom_wait_us: the newest pose being older than the
+ * turn's end, a turn waits at most that long past it). */
+static int wait_over(const rsm_rev_t *r, uint64_t last_us, uint64_t now_us)
+{
+    const uint64_t wait = r->cfg->odom_wait_us;
+    uint64_t t_new;
+    if (!r->cfg->deskew || wait == 0u || r->odom_n == 0u || covered(r, last_us, now_us)) {
+        return 1;
+    }
+    (void)odom_pose(r, r->odom_n - 1u, &t_new);
+    return now_us > t_new && now_us - t_new >= wait;
+}
+
+/* De-skews the held turn now, with the odometry there is. */
+static void release(rsm_rev_t *r)
+{
+    uint64_t t_new = 0u;
+    if (r->odom_n > 0u) {
+        (void)odom_pose(r, r->odom_n - 1u, &t_new);
+    }
+    if (r->odom_n == 0u || t_new < r->held.last_us) {
+        r->stats.uncovered++;
+    }
+    r->holding = 0u;
+    deliver(r, &r->held);
+}
+
+/* A whole turn: de-skewed now, or held until odometry covers it. A turn
+ * held already goes first; only one turn a call is returned. */
+static void turn_ended(rsm_rev_t *r, uint64_t now_us)
+{
+    if (r->holding) {
+        release(r); /* the next turn ended first */
+    }
+    if (!r->unsaid && wait_over(r, r->cur.last_us, now_us)) {
+        deliver(r, &r->cur);
+        return;
+    }
+    r->held.n = r->cur.n;
+    r->held.first_us = r->cur.first_us;
+    r->held.last_us = r->cur.last_us;
+    memcpy(r->held.angle_deg, r->cur.angle_deg, r->cur.n * sizeof r->cur.angle_deg[0]);
+    memcpy(r->held.range_m, r->cur.range_m, r->cur.n * sizeof r->cur.range_m[0]);
+    memcpy(r->held.dt_us, r->cur.dt_us, r->cur.n * sizeof r->cur.dt_us[0]);
+    r->holding = 1u;
+    r->stats.waited++;
+}
+
+int rsm_rev_odometry(rsm_rev_t *r, uint64_t stamp_us, const rsm_pose_t *pose)
+{
+    size_t slot;
+    if (!ready(r) || pose == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    if (!pose_finite(pose)) {
+        r->stats.odometry_bad++;
+        return RSM_ERR_RANGE;
+    }
+    if (r->odom_n > 0u &&
+        stamp_us < r->odom_us[(r->odom_head + r->odom_n - 1u) % RSM_REV_ODOM_DEPTH]) {
+        r->stats.odometry_bad++;
+        return RSM_ERR_ORDER;
+    }
+    if (r->odom_n >= 2u) {
+        /* A burst (core/burst.h): the newest is put halfway between the
+         * one before and this one; its pose is kept. */
+        const size_t newest = (r->odom_head + r->odom_n - 1u) % RSM_REV_ODOM_DEPTH;
+        const size_t before = (r->odom_head + r->odom_n - 2u) % RSM_REV_ODOM_DEPTH;
+        if (rsm_burst_restamp(r->odom_us[before], &r->odom_us[newest], stamp_us)) {
+            r->stats.odometry_bursts++;
+        }
+    }
+    if (r->odom_n == RSM_REV_ODOM_DEPTH) {
+        uint64_t second;
+        (void)odom_pose(r, 1, &second);
+        if (r->holding && !r->unsaid && second > r->held.first_us) {
+            /* The oldest pose is the held turn's start: de-skewed with it
+             * now (rsm_rev_push returns the turn next), not without it. */
+            release(r);
+        }
+        r->odom_head = (r->odom_head + 1u) % RSM_REV_ODOM_DEPTH;
+        r->odom_n--;
+    }
+    slot = (r->odom_head + r->odom_n) % RSM_REV_ODOM_DEPTH;
+    r->odom_us[slot] = stamp_us;
+    r->odom[slot] = *pose;
+    r->odom_n++;
+    r->stats.odometry++;
+    return RSM_OK;
 }
 
 /* Ends the turn in progress without delivering it. */
@@ -243,9 +327,9 @@ static void drop_turn(rsm_rev_t *r)
 {
     if (r->seen > 0u) {
         r->stats.partial++;
-        r->stats.dropped += (uint32_t)r->n;
+        r->stats.dropped += (uint32_t)r->cur.n;
     }
-    r->n = 0;
+    r->cur.n = 0;
     r->seen = 0;
 }
 
@@ -259,10 +343,24 @@ void rsm_rev_reset(rsm_rev_t *r)
     r->whole = 0u;
 }
 
+int rsm_rev_flush(rsm_rev_t *r)
+{
+    if (!ready(r)) {
+        return RSM_ERR_INVAL;
+    }
+    if (!r->unsaid && r->holding) {
+        release(r);
+    }
+    if (r->unsaid) {
+        r->unsaid = 0u;
+        return 1;
+    }
+    return 0;
+}
+
 int rsm_rev_push(rsm_rev_t *r, const rsm_lidar_point_t *pt)
 {
     const rsm_rev_config_t *cfg;
-    int done = 0;
     if (!ready(r) || pt == NULL) {
         return RSM_ERR_INVAL;
     }
@@ -277,42 +375,49 @@ int rsm_rev_push(rsm_rev_t *r, const rsm_lidar_point_t *pt)
         return RSM_ERR_ORDER;
     }
     r->stats.points++;
+    if (r->holding && !r->unsaid && wait_over(r, r->held.last_us, pt->stamp_us)) {
+        release(r);
+    }
     if (r->have_last && pt->stamp_us - r->last_us > cfg->max_gap_us) {
         r->stats.gaps++;
         drop_turn(r);
         r->whole = 0u;
-    } else if (r->seen > 0u && r->last_us - r->first_us > REV_MAX_TURN_US) {
+    } else if (r->seen > 0u && r->last_us - r->cur.first_us > REV_MAX_TURN_US) {
         /* its points span over 2 s (a pause after them is not counted: a
          * replayed log may pause between turns) */
         r->stats.long_turns++;
         drop_turn(r);
         r->whole = 0u;
     } else if (r->have_last && r->last_angle - pt->angle_deg > cfg->wrap_deg) {
-        if (r->whole && r->n >= cfg->min_points) {
-            deliver(r);
-            r->n = 0;
+        if (r->whole && r->cur.n >= cfg->min_points) {
+            r->cur.last_us = r->last_us;
+            turn_ended(r, pt->stamp_us);
+            r->cur.n = 0;
             r->seen = 0;
-            done = 1;
         } else {
             drop_turn(r);
         }
         r->whole = 1u;
     }
     if (r->seen == 0u) {
-        r->first_us = pt->stamp_us;
+        r->cur.first_us = pt->stamp_us;
     }
     if (r->seen++ % cfg->keep_every != 0u) {
         r->stats.thinned++;
-    } else if (r->n == (size_t)RSM_MAX_BEAMS) {
+    } else if (r->cur.n == (size_t)RSM_MAX_BEAMS) {
         r->stats.overflow++;
     } else {
-        r->angle_deg[r->n] = pt->angle_deg;
-        r->range_m[r->n] = pt->range_m;
-        r->dt_us[r->n] = (uint32_t)(pt->stamp_us - r->first_us);
-        r->n++;
+        r->cur.angle_deg[r->cur.n] = pt->angle_deg;
+        r->cur.range_m[r->cur.n] = pt->range_m;
+        r->cur.dt_us[r->cur.n] = (uint32_t)(pt->stamp_us - r->cur.first_us);
+        r->cur.n++;
     }
     r->last_us = pt->stamp_us;
     r->last_angle = pt->angle_deg;
     r->have_last = 1u;
-    return done;
+    if (r->unsaid) {
+        r->unsaid = 0u;
+        return 1;
+    }
+    return 0;
 }

@@ -56,27 +56,39 @@ static void odometry(side_t *s, uint64_t t)
     }
 }
 
+/* A delivered turn (rc 1) holds finite points at bearings in [-pi, pi]. */
+static void check_turn(const side_t *s, int rc)
+{
+    size_t k;
+    CHECK(rc == 0 || rc == 1);
+    if (rc == 1) {
+        CHECK(s->rev.scan.count <= (size_t)RSM_MAX_BEAMS);
+        for (k = 0; k < s->rev.scan.count; ++k) {
+            CHECK(isfinite(s->rev.scan.range_m[k]) && s->rev.scan.range_m[k] >= 0.0f);
+            CHECK(s->rev.scan.angle_rad[k] >= -3.1416f && s->rev.scan.angle_rad[k] <= 3.1416f);
+        }
+    }
+}
+
 static void take_points(side_t *s, const rsm_lidar_point_t *pts, size_t n)
 {
     size_t i;
     for (i = 0; i < n; ++i) {
-        int rc;
         CHECK(pts[i].angle_deg >= 0.0f && pts[i].angle_deg < 360.0f);
         CHECK(pts[i].range_m >= 0.0f && isfinite(pts[i].range_m));
         CHECK(pts[i].stamp_us >= s->last_stamp);
         s->last_stamp = pts[i].stamp_us;
         odometry(s, pts[i].stamp_us);
-        rc = rsm_rev_push(&s->rev, &pts[i]);
-        CHECK(rc == 0 || rc == 1);
-        if (rc == 1) {
-            size_t k;
-            CHECK(s->rev.scan.count <= (size_t)RSM_MAX_BEAMS);
-            for (k = 0; k < s->rev.scan.count; ++k) {
-                CHECK(isfinite(s->rev.scan.range_m[k]) && s->rev.scan.range_m[k] >= 0.0f);
-                CHECK(s->rev.scan.angle_rad[k] >= -3.1416f && s->rev.scan.angle_rad[k] <= 3.1416f);
-            }
-        }
+        check_turn(s, rsm_rev_push(&s->rev, &pts[i]));
     }
+}
+
+/* The link was lost: a turn waiting for odometry comes out, the one in
+ * progress is dropped. */
+static void lost(side_t *s)
+{
+    check_turn(s, rsm_rev_flush(&s->rev));
+    rsm_rev_reset(&s->rev);
 }
 
 static void poll_ld(rsm_ldlidar_t *d, const rsm_ldlidar_config_t *cfg, side_t *s)
@@ -92,7 +104,7 @@ static void poll_ld(rsm_ldlidar_t *d, const rsm_ldlidar_config_t *cfg, side_t *s
     CHECK(s->fl.n_writes == 0u); /* the LD06 takes no commands */
     CHECK(d->state != RSM_LDLIDAR_IDLE || rsm_ldlidar_next_deadline_us(d) == UINT64_MAX);
     if (ev.type == RSM_LDLIDAR_EVENT_LINK_LOST) {
-        rsm_rev_reset(&s->rev);
+        lost(s);
     }
     take_points(s, ev.points, ev.count);
 }
@@ -116,7 +128,7 @@ static void poll_rp(rsm_slamtec_t *d, const rsm_slamtec_config_t *cfg, side_t *s
     CHECK(!d->listen || s->fl.n_writes == s->writes_at_listen); /* listening sends nothing */
     CHECK(d->state != RSM_SLAMTEC_IDLE || rsm_slamtec_next_deadline_us(d) == UINT64_MAX);
     if (ev.type == RSM_SLAMTEC_EVENT_LINK_LOST) {
-        rsm_rev_reset(&s->rev);
+        lost(s);
     }
     take_points(s, ev.points, ev.count);
 }

@@ -207,6 +207,24 @@ static void lidar_points(nav_devices_t *dv, const rsm_lidar_point_t *pts, size_t
     }
 }
 
+/* No more points for now (link lost, restarted, the stream ended): a whole
+ * turn still waiting for odometry goes to sink with what there is, then
+ * the turn in progress is dropped. */
+static void lidar_stop(nav_devices_t *dv, const nav_sink_t *sink)
+{
+    nav_devices_flush(dv, sink);
+    rsm_rev_reset(&dv->rev);
+}
+
+void nav_devices_flush(nav_devices_t *dv, const nav_sink_t *sink)
+{
+    /* The turn in progress is left as it is: a stream that ends in mid-turn
+     * counts no partial turn. */
+    if (dv->kind != NAV_LASER_LMS && rsm_rev_flush(&dv->rev) == 1 && sink != NULL) {
+        sink->scan(sink->ctx, &dv->rev.scan);
+    }
+}
+
 static int poll_ld06(nav_devices_t *dv, const nav_sink_t *sink)
 {
     rsm_ldlidar_event_t ev;
@@ -225,7 +243,7 @@ static int poll_ld06(nav_devices_t *dv, const nav_sink_t *sink)
         break;
     case RSM_LDLIDAR_EVENT_LINK_LOST:
         fprintf(stderr, "rsm-nav: LD06 link lost, listening again\n");
-        rsm_rev_reset(&dv->rev); /* the turn in progress has a hole */
+        lidar_stop(dv, sink); /* the turn in progress has a hole */
         break;
     default:
         break;
@@ -254,7 +272,7 @@ static int poll_rplidar(nav_devices_t *dv, const nav_sink_t *sink)
         break;
     case RSM_SLAMTEC_EVENT_LINK_LOST:
         fprintf(stderr, "rsm-nav: RPLIDAR link lost, starting again\n");
-        rsm_rev_reset(&dv->rev);
+        lidar_stop(dv, sink);
         break;
     case RSM_SLAMTEC_EVENT_ERROR:
         fprintf(stderr, "rsm-nav: RPLIDAR start-up step failed: %s\n", rsm_strerror(ev.status));
@@ -419,7 +437,7 @@ void nav_devices_feed(nav_devices_t *dv, int robot, nav_feed_t *feed, const uint
 
 /* ---- what live mode asks of either laser -------------------------------------- */
 
-void nav_devices_restart(nav_devices_t *dv, int robot)
+void nav_devices_restart(nav_devices_t *dv, int robot, const nav_sink_t *sink)
 {
     if (robot) {
         (void)rsm_p3dx_connect(&dv->robot);
@@ -427,11 +445,11 @@ void nav_devices_restart(nav_devices_t *dv, int robot)
     }
     switch (dv->kind) {
     case NAV_LASER_LD06:
-        rsm_rev_reset(&dv->rev);
+        lidar_stop(dv, sink);
         (void)rsm_ldlidar_connect(&dv->ld06);
         break;
     case NAV_LASER_RPLIDAR:
-        rsm_rev_reset(&dv->rev);
+        lidar_stop(dv, sink);
         (void)rsm_slamtec_connect(&dv->rplidar);
         break;
     default:

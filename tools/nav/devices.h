@@ -92,17 +92,23 @@ int nav_devices_poll(nav_devices_t *dv, int robot, const nav_sink_t *sink);
 long nav_devices_drain(nav_devices_t *dv, int robot, const nav_sink_t *sink, uint64_t max_bytes);
 
 /* Live mode's view of either driver: connect again (a reopened link; a
- * lidar's turn in progress is dropped), start the shutdown, whether it has
+ * lidar's whole turn still waiting for odometry goes to sink, its turn in
+ * progress is dropped), start the shutdown, whether it has
  * not yet reached IDLE, CONNECTED and LINK_LOST events so far, scans
  * delivered, and the next time its poll has something to do (UINT64_MAX:
  * only bytes). */
-void nav_devices_restart(nav_devices_t *dv, int robot);
+void nav_devices_restart(nav_devices_t *dv, int robot, const nav_sink_t *sink);
 void nav_devices_stop(nav_devices_t *dv, int robot);
 int nav_devices_busy(const nav_devices_t *dv, int robot);
 uint32_t nav_devices_connects(const nav_devices_t *dv, int robot);
 uint32_t nav_devices_losses(const nav_devices_t *dv, int robot);
 uint32_t nav_devices_scans(const nav_devices_t *dv);
 uint64_t nav_devices_next_deadline(const nav_devices_t *dv, int robot);
+
+/* The lidar's points have ended (the capture or the run is over): a whole
+ * turn still waiting for odometry goes to sink (may be NULL: dropped),
+ * de-skewed with the odometry there is. No-op for the LMS. */
+void nav_devices_flush(nav_devices_t *dv, const nav_sink_t *sink);
 
 /* Bytes one link delivered in all. */
 uint64_t nav_devices_bytes(const nav_devices_t *dv, int robot);

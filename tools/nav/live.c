@@ -305,7 +305,7 @@ static uint64_t live_cycle(live_t *lv)
         }
         if (e->down) {
             if (endpoint_retry(e, lv->opt->quiet, nav_devices_connects(&lv->dev, i == 0))) {
-                nav_devices_restart(&lv->dev, i == 0);
+                nav_devices_restart(&lv->dev, i == 0, lv->sink);
             }
             continue;
         }
@@ -359,6 +359,7 @@ static int live_shutdown(live_t *lv)
         }
         live_wait(lv);
     }
+    nav_devices_flush(&lv->dev, lv->sink); /* a turn may still wait for odometry */
     if (!lv->opt->quiet) {
         if (robot_open) {
             nav_devices_report(&lv->dev, 1);

@@ -1056,6 +1056,7 @@ static int run_capture(nav_t *nav, const char *path, const nav_sink_t *sink, con
             nav_devices_feed(&dev, 0, &feed[1], buf, rec.length, prev_clock_us, sink);
         }
     }
+    nav_devices_flush(&dev, sink); /* a turn may still wait for odometry */
     printf("rsm-nav summary\n");
     printf("  source          capture %s\n", path);
     printf("  records         %llu (corrupt %llu, truncated %llu, out of order %llu, unknown channel %llu;"
