@@ -364,11 +364,13 @@ void nav_devices_report(const nav_devices_t *dv, int robot)
         fprintf(stderr,
                 "rsm-nav: turns: %u scans, %u partial (%u points), %u points over the scan size, %u thinned,"
                 " %u without return, %u bad points, %u not de-skewed, %u over 2 s; %u points left as measured"
-                " (implausible odometry), %u odometry bursts; de-skew odometry %.0f ticks/m\n",
+                " (implausible odometry), %u odometry bursts, %u turns waited for odometry (%u de-skewed"
+                " without odometry past their end); de-skew odometry %.0f ticks/m\n",
                 (unsigned)rs->scans, (unsigned)rs->partial, (unsigned)rs->dropped, (unsigned)rs->overflow,
                 (unsigned)rs->thinned, (unsigned)rs->invalid, (unsigned)rs->bad_points,
                 (unsigned)rs->not_deskewed, (unsigned)rs->long_turns, (unsigned)rs->implausible,
-                (unsigned)rs->odometry_bursts, (double)dv->odo.cfg.ticks_per_m_left);
+                (unsigned)rs->odometry_bursts, (unsigned)rs->waited, (unsigned)rs->uncovered,
+                (double)dv->odo.cfg.ticks_per_m_left);
     } else {
         const rsm_sicklms_t *d = &dv->laser;
         const rsm_sicklms_stats_t *st = &d->stats;
