@@ -430,6 +430,10 @@ static int live_run(live_t *lv)
         if (opt->seconds > 0.0 && mono_s() - t0 >= opt->seconds) {
             break;
         }
+        if (opt->max_scans > 0u && nav_devices_scans(&lv->dev) >= opt->max_scans &&
+            (!lv->ep[0]->open || nav_devices_connects(&lv->dev, 1) > 0u)) {
+            break; /* and the robot too has connected: its part of the run is there */
+        }
         if (opt->idle_exit_s > 0.0 && lv->bytes > 0u && mono_s() - lv->last_data >= opt->idle_exit_s) {
             break;
         }

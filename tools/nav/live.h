@@ -27,6 +27,9 @@ typedef struct nav_live_options {
     uint32_t lms_baud;        /* 0: the laser driver's default (live), 38400 (LMS listen) */
     int listen_only;          /* 1: send nothing, decode the incoming streams */
     double seconds;           /* stop after this long (0: until the links end or a signal) */
+    uint64_t max_scans;       /* stop once the laser gave this many scans and the robot (if
+                                 any) connected (0: no limit): a run's length that does not
+                                 depend on the machine's speed */
     double idle_exit_s;       /* listen-only: stop after this long without bytes once data flowed (0: never) */
     int quiet;
 } nav_live_options_t;

@@ -190,7 +190,8 @@ static void usage(FILE *f)
             "                            the window doubling after each search that proves nothing\n"
             "  --skip-seconds S          --carmen: start S seconds into the log, as if the robot\n"
             "                            were switched on there\n"
-            "  --scans N                 --carmen: stop after N scans\n"
+            "  --scans N                 --carmen: stop after N scans; live: once the laser\n"
+            "                            gave N scans and the robot connected\n"
             "  --tum FILE                write the trajectory in TUM format too\n"
             "                            (timestamp x y z qx qy qz qw; what evo reads)\n"
             "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
@@ -1743,10 +1744,11 @@ int main(int argc, char **argv)
         fprintf(stderr, "rsm-nav: --global and --global-near search a known map: give it with --load-map\n");
         return 2;
     }
-    if ((nav.skip_s > 0.0 || nav.max_scans > 0u) && carmen == NULL) {
-        fprintf(stderr, "rsm-nav: --skip-seconds and --scans work with --carmen\n");
+    if ((nav.skip_s > 0.0 && carmen == NULL) || (nav.max_scans > 0u && capture != NULL)) {
+        fprintf(stderr, "rsm-nav: --skip-seconds works with --carmen, --scans with --carmen and live\n");
         return 2;
     }
+    live.max_scans = nav.max_scans;
     live.quiet = nav.quiet;
     /* Captures and live links carry no mount: the flags or zero (--carmen may take the log's). */
     nav.mount_source = nav.mount_flag ? "flag" : "default zero";
