@@ -174,7 +174,9 @@ int rsm_rev_init_checked(rsm_rev_t *r, size_t r_size, unsigned long fingerprint,
 
 /* An odometry pose (any fixed frame: only the motion between two times is
  * used) at stamp_us, on the clock the points are stamped with. The newest
- * RSM_REV_ODOM_DEPTH poses are kept. Returns RSM_OK, RSM_ERR_INVAL (NULL
+ * RSM_REV_ODOM_DEPTH poses are kept (a waiting turn that starts at the
+ * oldest is de-skewed into r->scan before that pose goes: the next
+ * rsm_rev_push returns it). Returns RSM_OK, RSM_ERR_INVAL (NULL
  * pointers, r never initialised: no RSM_REV_MAGIC), RSM_ERR_ORDER for a
  * stamp before the newest pose's (dropped, counted) or RSM_ERR_RANGE for a
  * pose that is not finite (dropped, counted). */
