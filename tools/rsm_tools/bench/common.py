@@ -303,6 +303,13 @@ KIND_METHODS = {"beams": ROBUST_METHODS, "map": ("paper",), "tiles": ("rsm",), "
 DRIVER_OBJECTS = ("aria", "lms", "p3dx", "sicklms", "hal", "link_poll")
 
 
+def floor(status: str, kind: str, log: Optional[str], value, limit, text: str) -> dict:
+    """One of the issue's floors (or a full-log check): PASS, MISS or SKIP,
+    the measure (``kind``, ``log``, ``value`` against ``limit``) for the
+    manifest, and the line the report and rsm-bench print."""
+    return {"status": status, "kind": kind, "log": log, "value": value, "limit": limit, "line": f"{status} {text}"}
+
+
 def cg_run(cg: Optional[dict], label: str, config: str, method: str) -> Optional[dict]:
     """One callgrind run of run_callgrind's result, or None."""
     if not cg or "skipped" in cg:
