@@ -46,7 +46,6 @@ from .carmen import LogStats, first_scan_after_motion, read_log, time_key
 from .excerpt import excerpt_log, excerpt_poses, excerpt_relations
 from .fileio import open_binary
 
-LOCAL_SPAN = 2.0
 LIVE_SPEED = "8"
 LIVE_FLOOR = 0.03          # local translation of the real-time live run on the excerpt, m
 CAPTURE_TOLERANCE = 1.02   # capture-path local error over the direct run's, at most
@@ -162,11 +161,6 @@ def run_nav(nav: Path, args: Sequence[str], traj: Path) -> str:
     return res.stdout
 
 
-def errors(poses, relations: List[ev.Relation]) -> Dict[str, dict]:
-    return {scope: ev.evaluate(poses, relations, max_span=span, tolerance=0.0)
-            for scope, span in (("all", None), ("local", LOCAL_SPAN))}
-
-
 def check_baselines(label: str, errs: Dict[str, Dict[str, dict]]) -> List[dict]:
     """errs: method -> scope -> evaluate() result, for rsm, icp and odometry."""
     lost = []
@@ -237,7 +231,7 @@ def jitter_spread(nav: Path, label: str, log: Path, relations: List[ev.Relation]
         jittered_log(log, jl, seed)
         run_nav(nav, ["--carmen", str(jl)], traj)
         jl.unlink()
-        return errors(ev.load_trajectory(traj), relations)["all"]["translation"]["mean"]
+        return ev.evaluate_scopes(ev.load_trajectory(traj), relations)["all"]["translation"]["mean"]
 
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         return list(pool.map(one, range(1, runs + 1)))
@@ -255,7 +249,7 @@ def check_capture_path(label: str, nav: Path, log: Path, relations: List[ev.Rela
     st = convert.convert(log, capf)
     traj = work / f"{label}-capture.txt"
     run_nav(nav, ["--capture", str(capf)], traj)
-    got = errors(capture_poses(capf, traj), relations)
+    got = ev.evaluate_scopes(capture_poses(capf, traj), relations)
     mine, theirs = ev.printed_poses(traj), ev.printed_poses(direct_traj)
     same = next((k for k, (a, b) in enumerate(zip(mine, theirs)) if a != b), min(len(mine), len(theirs)))
     still = first_scan_after_motion(log)
@@ -300,8 +294,8 @@ def check_live_replay(nav: Path, root: Path, work: Path) -> List[dict]:
     if res.returncode != 0:
         return [check(False, "live", "excerpt", f"excerpt: live replay failed: {res.stderr.strip()[-200:]}")]
     rels = ev.load_relations(data / "intel_head.relations")
-    got = errors(capture_poses(capf, live), rels)["local"]["translation"]["mean"]
-    want = errors(capture_poses(capf, ref), rels)["local"]["translation"]["mean"]
+    got = ev.evaluate_scopes(capture_poses(capf, live), rels)["local"]["translation"]["mean"]
+    want = ev.evaluate_scopes(capture_poses(capf, ref), rels)["local"]["translation"]["mean"]
     same = sum(a == b for a, b in zip(ev.printed_poses(live), ev.printed_poses(ref)))
     ok = got <= LIVE_FLOOR
     return [check(ok, "live", "excerpt", f"excerpt replayed in real time ({LIVE_SPEED}x) into rsm-nav --listen: "
@@ -361,7 +355,7 @@ def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], wor
             if not run:
                 run_nav(nav, ["--carmen", str(log), "--method", m], traj)
             trajs[m] = traj
-            errs[m] = errors(ev.load_trajectory(traj), relations)
+            errs[m] = ev.evaluate_scopes(ev.load_trajectory(traj), relations)
         out += check_baselines(label, errs)
         out += check_rerun(label, nav, log, trajs["rsm"], work)
         out += check_capture_path(label, nav, log, relations, errs["rsm"], work, trajs["rsm"], jitter_runs, jobs)

@@ -462,7 +462,7 @@ def _run_only_line(args: argparse.Namespace, nav: Path, logs, work: Path, root: 
             relations = fullchecks.ev.load_relations(rel)
             direct = d / f"{label}-direct.txt"
             fullchecks.run_nav(nav, ["--carmen", str(log)], direct)
-            errs = fullchecks.errors(fullchecks.ev.load_trajectory(direct), relations)
+            errs = fullchecks.ev.evaluate_scopes(fullchecks.ev.load_trajectory(direct), relations)
             res["checks"] += fullchecks.check_capture_path(label, nav, log, relations, errs, d, direct,
                                                            _jitter_runs(args), args.jobs)
         lines = [c["line"] for c in res["checks"]]

@@ -44,7 +44,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 from .. import evaluate as ev
 from .. import faults as flt
 from ..carmen import Pose, pose_compose
-from .common import BenchError, LOCAL_SPAN, floor, fmt_q, ratio, update_sweep
+from .common import BenchError, floor, fmt_q, ratio, update_sweep
 
 FAULT_RUNS = 20
 QUICK_FAULT_RUNS = 2
@@ -218,9 +218,9 @@ def odometry_alone(res: flt.FaultResult) -> List[Tuple[float, float, float, floa
 
 def errors(traj, relations) -> Dict[str, float]:
     """Mean translation error on all relations and on local ones, exact stamps."""
-    a = ev.evaluate(traj, relations, tolerance=0.0)
-    l_ = ev.evaluate(traj, relations, max_span=LOCAL_SPAN, tolerance=0.0)
-    return {"all": a["translation"]["mean"], "local": l_["translation"]["mean"], "matched": a["matched"]}
+    s = ev.evaluate_scopes(traj, relations)
+    return {"all": s["all"]["translation"]["mean"], "local": s["local"]["translation"]["mean"],
+            "matched": s["all"]["matched"]}
 
 
 def recovered_stamps(scan_log: Path) -> List[float]:

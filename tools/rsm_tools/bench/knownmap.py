@@ -374,9 +374,8 @@ def _nav(nav: Path, log: Path, traj: Path, extra: Sequence[str], no_pose_ok: boo
 
 
 def _errors(traj: Path, relations) -> dict:
-    t = ev.load_trajectory(traj)
-    a = ev.evaluate(t, relations, tolerance=0.0)
-    l_ = ev.evaluate(t, relations, max_span=LOCAL_SPAN, tolerance=0.0)
+    s = ev.evaluate_scopes(ev.load_trajectory(traj), relations)
+    a, l_ = s["all"], s["local"]
     return {"all": a["translation"]["mean"], "all_rotation": a["rotation"]["mean"],
             "local": l_["translation"]["mean"], "local_rotation": l_["rotation"]["mean"], "matched": a["matched"]}
 

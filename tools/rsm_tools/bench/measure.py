@@ -154,12 +154,8 @@ def parallel(fn, items: Iterable, jobs: int) -> list:
 
 
 def scoped_errors(traj: Path, relations: List[ev.Relation], details: bool = False) -> dict:
-    """evaluate() on all relations and on local ones, exact timestamps only."""
-    t = ev.load_trajectory(traj)
-    return {
-        "all": ev.evaluate(t, relations, tolerance=0.0, details=details),
-        "local": ev.evaluate(t, relations, max_span=LOCAL_SPAN, tolerance=0.0),
-    }
+    """evaluate_scopes() of a trajectory file."""
+    return ev.evaluate_scopes(ev.load_trajectory(traj), relations, details)
 
 
 def _strip_errors(res: dict) -> dict:
