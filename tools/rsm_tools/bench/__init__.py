@@ -88,9 +88,8 @@ from .knownmap import (KIDNAP_RUNS, QUICK_KIDNAP_RUNS, QUICK_STARTS, STARTS, STA
 from . import deskew as _deskew
 from . import knownmap as _knownmap
 from . import navmemory as _navmemory
-from . import figures as _figures
 from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors,
-    context_from_manifest, floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_report)
+    floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_from_manifest)
 
 
 def _levels(text: str) -> List[int]:
@@ -417,12 +416,9 @@ def run(args: argparse.Namespace) -> Path:
     manifest["logs"] = [{"label": l, "log": str(g), "relations": str(r)} for l, g, r in logs]
     manifest_text = json.dumps(_jsonable(manifest), indent=1, default=_json_default, allow_nan=True)
     (work / "bench.json").write_text(manifest_text)
-    # The report is written from the manifest, as rsm-bench-report does.
-    text = write_report(context_from_manifest(json.loads(manifest_text), root))
-    # The figures the README and the headers quote, committed beside the plots.
-    _figures.write(context_from_manifest(json.loads(manifest_text), root), plots / "figures.json")
-    output.parent.mkdir(parents=True, exist_ok=True)
-    output.write_text(text, encoding="utf-8")
+    # The report and the figures (committed beside the plots) are written from
+    # the manifest, as rsm-bench-report does.
+    write_from_manifest(json.loads(manifest_text), root, output, plots / "figures.json")
     print("rsm-bench: on the target:")
     for line in m4_lines(ctx.get("m4")):
         print(f"  {line}")

@@ -1424,6 +1424,17 @@ def context_from_manifest(manifest: dict, root: Path) -> dict:
     return ctx
 
 
+def write_from_manifest(manifest: dict, root: Path, output: Path, figures_path: Path) -> None:
+    """The report and the figures the README and the headers quote, from a
+    manifest (bench.json, parsed): what rsm-bench writes after measuring and
+    rsm-bench-report writes again. The figures first: the report reads its
+    context in place."""
+    ctx = context_from_manifest(manifest, root)
+    figures.write(ctx, figures_path)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    output.write_text(write_report(ctx), encoding="utf-8")
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="rsm-bench-report",
                                 description="Write rsm-bench's report again from its manifest (bench.json in the "
@@ -1444,9 +1455,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         manifest = json.loads(args.manifest.read_text(encoding="utf-8"))
         root = (args.root or find_root()).resolve()
         output = args.output or Path(manifest["report"])
-        ctx = context_from_manifest(manifest, root)
-        figures.write(ctx, args.figures or output.parent / "results" / "figures.json")  # before: the report reads ctx
-        output.write_text(write_report(ctx), encoding="utf-8")
+        write_from_manifest(manifest, root, output, args.figures or output.parent / "results" / "figures.json")
     except (OSError, ValueError, KeyError, BenchError) as exc:
         print(f"rsm-bench-report: error: {exc}", file=sys.stderr)
         return 1
