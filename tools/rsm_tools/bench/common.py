@@ -3,7 +3,7 @@
 import math
 import os
 from pathlib import Path
-from typing import List, Optional
+from typing import List, Optional, Sequence, Tuple
 
 from ..evaluate import LOCAL_SPAN  # noqa: F401 (the sections take it from here)
 
@@ -20,6 +20,22 @@ SMALL = "rsm-small"  # rsm built with SMALL_HEADER (a run label, not a method)
 
 
 SMALL_HEADER = "rsm/config_small.h"
+
+
+# The runs on a log, in the report's order (and under these names in
+# figures.json): each method with the default build, and rsm with the small one.
+RUNS = ("rsm", SMALL, "paper", "icp", "odometry")
+
+
+def run_build(run: str) -> Tuple[str, str]:
+    """A run's build ("default", or "small": SMALL_HEADER) and its rsm-nav --method."""
+    return ("small", "rsm") if run == SMALL else ("default", run)
+
+
+def measured_runs(methods: Sequence[str], small: bool) -> List[Tuple[str, str, str]]:
+    """(run, build, method) of the runs a section makes: ``methods`` with the
+    default build, then rsm with the small build when there is one."""
+    return [(run, *run_build(run)) for run in (*methods, *((SMALL,) if small else ()))]
 
 
 METHOD_LABEL = {"rsm": "rsm", SMALL: "rsm, config_small", "paper": "paper's method", "icp": "icp",
@@ -318,8 +334,7 @@ def cg_run(cg: Optional[dict], label: str, config: str, method: str) -> Optional
 
 def run_labels(acc_log: dict) -> List[str]:
     """The runs of one log in report order."""
-    order = ("rsm", SMALL, "paper", "icp", "odometry")
-    return [k for k in order if k in acc_log["runs"]]
+    return [k for k in RUNS if k in acc_log["runs"]]
 
 
 def provenance_line(p: dict) -> str:

@@ -13,8 +13,9 @@ from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 from .. import fullchecks, outliers
 from .common import (CG_STAGE_ORDER, DRIVER_OBJECTS, HOST_PARTS, LOCAL_SPAN, MEMORY_OTHER, METHODS, PEER_COLUMNS,
-    QUANTITIES, ROBUST_METHODS, SCOPES, SECTION_TITLES, SMALL, SMALL_HEADER, STAGES, STAGE_WHAT, UNITS, BenchError,
-    cg_run, find_root, floor, fmt_int, fmt_pct, fmt_q, fmt_ratio, provenance_line, ratio, run_labels, shown_path)
+    QUANTITIES, ROBUST_METHODS, RUNS, SCOPES, SECTION_TITLES, SMALL, SMALL_HEADER, STAGES, STAGE_WHAT, UNITS,
+    BenchError, cg_run, find_root, floor, fmt_int, fmt_pct, fmt_q, fmt_ratio, provenance_line, ratio, run_build,
+    run_labels, shown_path)
 from . import figures
 from .faults import report_faults
 from .knownmap import report_knownmap
@@ -742,10 +743,10 @@ def report_stage_speed(st: Optional[dict], speed: Optional[dict], main: str) -> 
 def _cg_columns(cg: dict, label: str) -> List[Tuple[str, dict]]:
     """The callgrind runs of one log in report order, with their column names."""
     out = []
-    for config, m in (("default", "rsm"), ("small", "rsm"), ("default", "paper"), ("default", "icp")):
-        r = cg_run(cg, label, config, m)
+    for run in RUNS:
+        r = cg_run(cg, label, *run_build(run))
         if r is not None:
-            out.append((SMALL if config == "small" else m, r))
+            out.append((run, r))
     return out
 
 
