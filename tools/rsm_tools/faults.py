@@ -604,8 +604,8 @@ def _num(v: float, decimals: int) -> bytes:
     return text.encode("ascii")
 
 
-def _pose_text(p: Pose, like: Sequence[bytes]) -> List[bytes]:
-    return [_num(v, max(6, _decimals(t))) for v, t in zip(p, like)]
+def _pose_text(p: Pose, like: Sequence[bytes], decimals: int = 6) -> List[bytes]:
+    return [_num(v, max(decimals, _decimals(t))) for v, t in zip(p, like)]
 
 
 def _splice(body: bytes, spans: Sequence[Tuple[int, int]], new: Dict[int, bytes]) -> bytes:
@@ -662,8 +662,9 @@ def _recast(vals: List[float], start_k: int, frac: float, step: float,
 
 
 class _Writer:
-    def __init__(self, res: FaultResult) -> None:
+    def __init__(self, res: FaultResult, pose_decimals: int = 6) -> None:
         self.res = res
+        self.pose_decimals = pose_decimals  # at least, for the poses it rewrites
         self.log = res.log
         self.max_range = res.spec.max_range if res.spec.max_range is not None else self.log.max_reading
         self.recast_dropped = 0
@@ -687,7 +688,7 @@ class _Writer:
             spans = [m.span() for m in _TOKEN.finditer(body)]
         new = {}
         if new_pose != self.log.poses[e]:
-            for k, v in enumerate(_pose_text(new_pose, toks[1:4])):
+            for k, v in enumerate(_pose_text(new_pose, toks[1:4], self.pose_decimals)):
                 new[1 + k] = v
         if zero:
             new[4] = _num(0.0, max(1, _decimals(toks[4])))
@@ -709,7 +710,7 @@ class _Writer:
         spans = _tail_spans(body, k)
         toks = [body[a:b] for a, b in spans]
         new = {}
-        odom_text = _pose_text(o.pose, toks[3:6])
+        odom_text = _pose_text(o.pose, toks[3:6], self.pose_decimals)
         for j, v in enumerate(odom_text):
             new[3 + j] = v
         laser_text = self.laser_text(o, sc, toks[0:3], odom_text)
@@ -722,7 +723,7 @@ class _Writer:
     def laser_text(self, o: OutScan, sc: ScanInfo, like: Sequence[bytes], odom_text: List[bytes]) -> List[bytes]:
         if self.res.spec.mount is None and sc.same:
             return list(odom_text)
-        return _pose_text(pose_compose(o.pose, self.res.laser_mount(o.src)), like)
+        return _pose_text(pose_compose(o.pose, self.res.laser_mount(o.src)), like, self.pose_decimals)
 
     def stamps(self, o: OutScan, sc: ScanInfo, toks: Sequence[bytes], new: Dict[int, bytes], i: int) -> None:
         t = o.stamp_us / 1e6
@@ -766,7 +767,7 @@ class _Writer:
         if nn < 2:
             raise FaultError(f"--start-offsets {o.offset_deg:g}: leaves scan {o.src} with {nn} readings")
         lt = tail_in[0:3]
-        odom_text = _pose_text(o.pose, tail_in[3:6])
+        odom_text = _pose_text(o.pose, tail_in[3:6], self.pose_decimals)
         laser_text = self.laser_text(o, sc, lt, odom_text)
         stamp_toks = list(tail_in[-3:])
         if o.stamp_us is not None:
@@ -834,6 +835,17 @@ def write_result(res: FaultResult, out: IO[bytes], comment: Optional[str] = None
     odometry of a CARMEN log from its scan lines only: the bench's runs)."""
     c = None if comment is None else ("# " + comment.replace("\n", " ") + "\n").encode("utf-8")
     return _Writer(res).write(out, c, odom_lines)
+
+
+def write_poses(log: LoadedLog, poses: Sequence[Pose], out: IO[bytes], decimals: int = 6) -> int:
+    """Writes ``log`` with every event's odometry pose replaced by ``poses``
+    (one per ``log.events``; a scan's laser pose moves with it), at least
+    ``decimals`` decimals, the rest of every line as it was; returns the scan
+    lines written. For odometry moved by less than the log prints
+    (fullchecks.jittered_log)."""
+    res = FaultResult(log, FaultSpec(), list(poses), set(),
+                      [OutScan(i, poses[e]) for i, e in enumerate(log.scan_event)], [])
+    return _Writer(res, decimals).write(out)
 
 
 def fault_file(src: PathLike, dst: PathLike, spec: FaultSpec, comment: Optional[str] = None) -> FaultResult:

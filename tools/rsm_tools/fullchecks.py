@@ -42,6 +42,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 from . import capture as cap
 from . import convert
 from . import evaluate as ev
+from . import faults as flt
 from .carmen import LogStats, first_scan_after_motion, read_log, time_key
 from .excerpt import excerpt_log, excerpt_poses, excerpt_relations
 from .fileio import open_binary
@@ -196,28 +197,18 @@ def capture_poses(capf: Path, traj: Path) -> List[Tuple[float, float, float, flo
 
 
 def jittered_log(log: Path, out: Path, seed: int, jitter_m: float = JITTER_M) -> None:
-    """The log with every ODOM and FLASER odometry x and y moved by a uniform
-    draw within +-jitter_m (seeded); a FLASER's two poses move together (they
-    differ only by a mount). Other lines and fields are as they were."""
+    """The log with every odometry x and y (ODOM and scan lines) moved by a
+    uniform draw within +-jitter_m (seeded); a scan's laser pose moves with
+    its odometry. Poses are written with 9 decimals, finer than the jitter;
+    other lines and fields are as they were."""
     rng = random.Random(seed)
-    with open_binary(log) as src, open(out, "w", encoding="utf-8") as dst:
-        for raw in src:
-            line = raw.decode("utf-8", errors="surrogateescape")
-            f = line.split()
-            at: List[int] = []
-            if f and f[0] == "ODOM" and len(f) >= 4:
-                at = [1]
-            elif f and f[0] == "FLASER" and len(f) >= 2 and f[1].isdigit():
-                n = int(f[1])
-                at = [2 + n, 5 + n] if len(f) >= 8 + n else []
-            if not at:
-                dst.write(line if line.endswith("\n") else line + "\n")
-                continue
-            dx, dy = rng.uniform(-jitter_m, jitter_m), rng.uniform(-jitter_m, jitter_m)
-            for i in at:
-                f[i] = f"{float(f[i]) + dx:.9f}"
-                f[i + 1] = f"{float(f[i + 1]) + dy:.9f}"
-            dst.write(" ".join(f) + "\n")
+    loaded = flt.load_log(log)
+    poses = []
+    for x, y, theta in loaded.poses:
+        dx, dy = rng.uniform(-jitter_m, jitter_m), rng.uniform(-jitter_m, jitter_m)
+        poses.append((x + dx, y + dy, theta))
+    with open(out, "wb") as dst:
+        flt.write_poses(loaded, poses, dst, decimals=9)
 
 
 def jitter_spread(nav: Path, label: str, log: Path, relations: List[ev.Relation], work: Path, runs: int,
