@@ -34,12 +34,8 @@ import sys
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence, Tuple
 
-from .carmen import MalformedLine, parse_tokens, time_key
+from .carmen import KNOWN_TYPES, SCAN_TYPES, MalformedLine, parse_tokens, time_key
 from .fileio import PathLike, open_binary, open_binary_output
-
-_SCAN_KEYS = ("FLASER", "ROBOTLASER1")
-_KNOWN = ("ODOM",) + _SCAN_KEYS
-
 
 @dataclass
 class ExcerptResult:
@@ -90,21 +86,21 @@ def excerpt_log(
             tokens = raw.decode("utf-8", errors="replace").split()
             kind = _line_kind(tokens)
             rec = None
-            if kind in _KNOWN:
+            if kind in KNOWN_TYPES:
                 try:
                     rec = parse_tokens(tokens)
                 except MalformedLine:
                     rec = None
             if first_scans is not None:
                 keep = True
-                if kind in _KNOWN and rec is None:
+                if kind in KNOWN_TYPES and rec is None:
                     res.malformed_kept += 1  # part of the cut: copied, not dropped
             else:
                 if kind == "blank":
                     keep = False
                 elif kind == "comment":
                     keep = True
-                elif kind in _KNOWN:
+                elif kind in KNOWN_TYPES:
                     keep = rec is not None and t0 <= rec.timestamp <= t1
                     if rec is None:
                         res.dropped_malformed += 1
@@ -118,7 +114,7 @@ def excerpt_log(
                 continue
             fout.write(raw)
             res.lines_out += 1
-            if rec is not None and kind in _SCAN_KEYS:
+            if rec is not None and kind in SCAN_TYPES:
                 res.scan_index[time_key(rec.timestamp)] = res.scans
                 res.scans += 1
                 res.t0 = min(res.t0, rec.timestamp)

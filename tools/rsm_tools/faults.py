@@ -63,20 +63,18 @@ import hashlib
 import io
 import math
 import random
-import re
 import sys
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import IO, Dict, List, Optional, Sequence, Tuple
 
-from .carmen import MalformedLine, Pose, parse_tokens, pose_compose, pose_in_frame
+from .carmen import (SCAN_KEYS, TOKEN, MalformedLine, Pose, parse_tokens, pose_compose, pose_in_frame,
+                     token_decimals)
 from .fileio import PathLike, open_binary, open_binary_output
 from .outliers import percent_argument
 
 PROG = "rsm-faults"
 
-_TOKEN = re.compile(rb"\S+")
-_SCAN_KEYS = (b"FLASER", b"ROBOTLASER1")
 # Tokens after the readings: laser pose, odometry pose, stamp, host, logger stamp
 # (FLASER); laser pose, robot pose, tv, rv, two safeties, turn axis, stamp, host,
 # logger stamp (ROBOTLASER1).
@@ -218,7 +216,7 @@ def load_lines(lines) -> LoadedLog:
         out.lines.append(raw)
         head = raw.lstrip()
         key = head.split(None, 1)[0] if head else b""
-        if key != b"ODOM" and key not in _SCAN_KEYS:
+        if key != b"ODOM" and key not in SCAN_KEYS:
             continue
         tokens = raw.split()
         try:
@@ -585,18 +583,6 @@ def _remove_span(out: List[OutScan], log: LoadedLog, lo: int, hi: int) -> int:
 # writing
 
 
-def _decimals(tok: bytes) -> int:
-    dot = tok.find(b".")
-    if dot < 0:
-        return 0
-    if tok[dot + 1:].isdigit():
-        return len(tok) - dot - 1
-    end = dot + 1
-    while end < len(tok) and tok[end:end + 1].isdigit():
-        end += 1
-    return end - dot - 1
-
-
 def _num(v: float, decimals: int) -> bytes:
     text = f"{v:.{decimals}f}"
     if text.startswith("-") and float(text) == 0.0:
@@ -605,7 +591,7 @@ def _num(v: float, decimals: int) -> bytes:
 
 
 def _pose_text(p: Pose, like: Sequence[bytes], decimals: int = 6) -> List[bytes]:
-    return [_num(v, max(decimals, _decimals(t))) for v, t in zip(p, like)]
+    return [_num(v, max(decimals, token_decimals(t))) for v, t in zip(p, like)]
 
 
 def _splice(body: bytes, spans: Sequence[Tuple[int, int]], new: Dict[int, bytes]) -> bytes:
@@ -630,7 +616,7 @@ def _tail_spans(body: bytes, k: int) -> List[Tuple[int, int]]:
     """Spans of the last k tokens of a line."""
     parts = body.rsplit(None, k)
     start = len(body) - len(body.lstrip()) if len(parts) == k else len(parts[0])
-    return [m.span() for m in _TOKEN.finditer(body, start)][-k:]
+    return [m.span() for m in TOKEN.finditer(body, start)][-k:]
 
 
 def _recast(vals: List[float], start_k: int, frac: float, step: float,
@@ -685,16 +671,16 @@ class _Writer:
                 spans.append((pos, pos + len(t)))
                 pos += len(t) + 1
         else:
-            spans = [m.span() for m in _TOKEN.finditer(body)]
+            spans = [m.span() for m in TOKEN.finditer(body)]
         new = {}
         if new_pose != self.log.poses[e]:
             for k, v in enumerate(_pose_text(new_pose, toks[1:4], self.pose_decimals)):
                 new[1 + k] = v
         if zero:
-            new[4] = _num(0.0, max(1, _decimals(toks[4])))
-            new[5] = _num(0.0, max(1, _decimals(toks[5])))
+            new[4] = _num(0.0, max(1, token_decimals(toks[4])))
+            new[5] = _num(0.0, max(1, token_decimals(toks[5])))
         elif scale is not None:
-            new[4] = _num(float(toks[4]) * scale, max(6, _decimals(toks[4])))
+            new[4] = _num(float(toks[4]) * scale, max(6, token_decimals(toks[4])))
         return _splice(body, spans, new) + end
 
     def scan_line(self, o: OutScan) -> bytes:
@@ -727,8 +713,8 @@ class _Writer:
 
     def stamps(self, o: OutScan, sc: ScanInfo, toks: Sequence[bytes], new: Dict[int, bytes], i: int) -> None:
         t = o.stamp_us / 1e6
-        new[i] = _num(t, max(6, _decimals(toks[i])))
-        new[i + 2] = _num(sc.logger + (t - sc.stamp), max(6, _decimals(toks[i + 2])))
+        new[i] = _num(t, max(6, token_decimals(toks[i])))
+        new[i + 2] = _num(sc.logger + (t - sc.stamp), max(6, token_decimals(toks[i + 2])))
 
     def robotlaser(self, o: OutScan, sc: ScanInfo, raw: bytes) -> bytes:
         body, end = _line_end(raw)
@@ -760,7 +746,7 @@ class _Writer:
             vals = [float(t) for t in readings]
             recast, bad = _recast(vals, k, frac, step, max_range)
             self.recast_dropped += bad
-            dec = max([2] + [_decimals(t) for t in readings[:1]])
+            dec = max([2] + [token_decimals(t) for t in readings[:1]])
             no_return = _num(max_range, dec)
             vals_text = [no_return if r is None else _num(r, dec) for r in recast]
         nn = len(vals_text)
