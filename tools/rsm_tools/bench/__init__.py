@@ -92,24 +92,23 @@ from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before
     floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_from_manifest)
 
 
-def _levels(text: str) -> List[int]:
+def _integers(text: str, lowest: int, highest: Optional[int], rule: str) -> List[int]:
+    """A comma-separated list of integers, sorted, each once, all within [lowest, highest]."""
     try:
         vals = sorted({int(v) for v in text.split(",") if v.strip()})
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a comma-separated list of integers: {text!r}") from None
-    if not vals or any(v < 0 or v > 100 for v in vals):
-        raise argparse.ArgumentTypeError(f"levels must be within 0..100: {text!r}")
+    if not vals or any(v < lowest or (highest is not None and v > highest) for v in vals):
+        raise argparse.ArgumentTypeError(f"{rule}: {text!r}")
     return vals
+
+
+def _levels(text: str) -> List[int]:
+    return _integers(text, 0, 100, "levels must be within 0..100")
 
 
 def _counts(text: str) -> List[int]:
-    try:
-        vals = sorted({int(v) for v in text.split(",") if v.strip()})
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a comma-separated list of integers: {text!r}") from None
-    if not vals or any(v < 1 for v in vals):
-        raise argparse.ArgumentTypeError(f"values must be positive: {text!r}")
-    return vals
+    return _integers(text, 1, None, "values must be positive")
 
 
 def _names(text: str) -> List[str]:

@@ -733,10 +733,7 @@ def report_stage_speed(st: Optional[dict], speed: Optional[dict], main: str) -> 
         L += ["With the hook the whole call's median is " + ", ".join(parts) + "; rsm-nav leaves the hook NULL. "
               "The clock readings cost little next to the stages, but two processes measured minutes apart "
               "differ by a few per cent anyway.", ""]
-    if st.get("plot"):
-        L += [f"![Time per stage, rsm, the paper's method and icp]({st['plot']})", ""]
-    elif st.get("plot_note"):
-        L += [f"No plot: {st['plot_note']}.", ""]
+    L += plot_lines(st.get("plot"), st.get("plot_note"), "Time per stage, rsm, the paper's method and icp")
     return L
 
 
@@ -998,11 +995,15 @@ def report_scaling(sc: Optional[dict], main: str) -> List[str]:
                      "the index)")
     if parts:
         L += ["Growth between the smallest and largest variant: " + "; ".join(parts) + ".", ""]
-    if sc.get("plot"):
-        L += [f"![Scaling of time per scan, error and state size]({sc['plot']})", ""]
-    elif sc.get("plot_note"):
-        L += [f"No plot: {sc['plot_note']}.", ""]
+    L += plot_lines(sc.get("plot"), sc.get("plot_note"), "Scaling of time per scan, error and state size")
     return L
+
+
+def plot_lines(plot: Optional[str], note: Optional[str], alt: str) -> List[str]:
+    """A section's picture, else why rsm-bench drew none (its plot_note), else nothing."""
+    if plot:
+        return [f"![{alt}]({plot})", ""]
+    return [f"No plot: {note}.", ""] if note else []
 
 
 def md_table(header: Sequence[str], rows: Iterable[Sequence[str]], anchor: str) -> List[str]:
@@ -1154,11 +1155,9 @@ def report_robustness(ctx: dict, root: Path) -> List[str]:
                     rows.append(cells)
             L += md_table(["outliers %", "method", "runs", "translation mean [m]", "min..max", "x clean",
                            "rotation mean [deg]", "min..max", "x clean", "fused %"], rows, f"robustness {label} {sc}")
-    if ctx.get("plot"):
-        L += [f"![Robustness curves on {main}: mean error against the share of outliers, rsm, the paper's method "
-              f"and icp, odometry as a reference line]({ctx['plot']})", ""]
-    elif ctx.get("plot_note"):
-        L += [f"No plot: {ctx['plot_note']}.", ""]
+    L += plot_lines(ctx.get("plot"), ctx.get("plot_note"),
+                    f"Robustness curves on {main}: mean error against the share of outliers, rsm, the paper's "
+                    "method and icp, odometry as a reference line")
     sp = ctx.get("spread")
     if sp and "skipped" not in sp:
         L += ["### Over many runs", "",
@@ -1365,10 +1364,9 @@ def write_report(ctx: dict) -> str:
     sections = (
         report_accuracy(ctx, root),
         report_robustness(ctx, root) + report_faults(ctx.get("faults")) + report_knownmap(ctx.get("knownmap")),
-        report_turns(ctx.get("turns"), main, root) + (
-            [f"![Residuals at the sharpest turns and by true rotation]({ctx['turns_plot']})", ""]
-            if ctx.get("turns") and ctx.get("turns_plot") else
-            [f"No plot: {ctx['turns_plot_note']}.", ""] if ctx.get("turns_plot_note") else []),
+        report_turns(ctx.get("turns"), main, root) + plot_lines(
+            ctx.get("turns") and ctx.get("turns_plot"), ctx.get("turns_plot_note"),
+            "Residuals at the sharpest turns and by true rotation"),
         report_speed(ctx, root),
         report_memory(ctx, root),
         report_scaling(ctx.get("scaling"), main),
