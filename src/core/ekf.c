@@ -316,14 +316,12 @@ int rsm_ekf_update(rsm_ekf_t *ekf, const rsm_pose_t *z, const float r[9], float 
     return RSM_OK;
 }
 
-int rsm_ekf_update_heading(rsm_ekf_t *ekf, float dtheta, float r)
+int rsm_ekf_pull_heading(rsm_ekf_t *ekf, float dtheta, float r)
 {
     float k[3];
-    float p[9];
     rsm_pose_t x;
     float s;
     int i;
-    int j;
     if (ekf == NULL) {
         return RSM_ERR_INVAL;
     }
@@ -339,22 +337,10 @@ int rsm_ekf_update_heading(rsm_ekf_t *ekf, float dtheta, float r)
     x.x = ekf->x.x + k[0] * dtheta;
     x.y = ekf->x.y + k[1] * dtheta;
     x.theta = rsm_wrap_angle(ekf->x.theta + k[2] * dtheta);
-    /* Joseph form, as rsm_ekf_update: (I-KH) P (I-KH)^T + K r K^T. */
-    for (i = 0; i < 3; ++i) {
-        for (j = 0; j < 3; ++j) {
-            p[3 * i + j] = ekf->p[3 * i + j] - k[i] * ekf->p[6 + j] - ekf->p[3 * i + 2] * k[j] +
-                           k[i] * k[j] * s;
-        }
-    }
-    mat3_symmetrise(p);
-    if (!pose_finite(&x) || !all_finite(p, 9)) {
+    if (!pose_finite(&x)) {
         ekf->rejected++;
         return RSM_ERR_DEGENERATE;
     }
     ekf->x = x;
-    for (i = 0; i < 9; ++i) {
-        ekf->p[i] = p[i];
-    }
-    ekf->updates++;
     return RSM_OK;
 }

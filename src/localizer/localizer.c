@@ -1162,7 +1162,7 @@ static void wall_heading(rsm_localizer_t *loc, size_t npts)
     delta = rsm_wallgrid_diff(loc->state.persistent.wall_ref, dir + theta);
     {
         const float scale = support < WALL_SIGMA_SUPPORT_M ? WALL_SIGMA_SUPPORT_M / support : 1.0f;
-        (void)rsm_ekf_update_heading(&loc->ekf, delta, cfg->wall_sigma_rad * cfg->wall_sigma_rad * scale);
+        (void)rsm_ekf_pull_heading(&loc->ekf, delta, cfg->wall_sigma_rad * cfg->wall_sigma_rad * scale);
     }
 }
 
