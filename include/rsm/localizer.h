@@ -141,6 +141,15 @@ typedef struct rsm_localizer_config {
                                      * (after a stall, motion reported again; after a refuted
                                      * spike, the step that takes it back); defaults 0.1 m and
                                      * 0.1 rad */
+    float wall_sigma_rad;           /* the walls' grid as a heading measurement (RSM_METHOD_MAP;
+                                     * docs/robustness.md, "Heading from the walls"): a scan's
+                                     * straight walls set against the two perpendicular directions
+                                     * the first scans' walls ran along, with this standard
+                                     * deviation for 5 m of wall seen (more for less); 0 = off;
+                                     * default 0.017 (1 degree) */
+    float wall_window_rad;          /* ... walls within this of the grid count (others are not
+                                     * the grid's, or the heading is off by more than a grid
+                                     * can tell); default 0.035 (2 degrees) */
     /* The global search (rsm_localizer_global; docs/globalsearch.md). */
     uint32_t global_budget;         /* the search's work a scan may take at most, in reads of its
                                      * bound grids and map cells (about 45 instructions each on a
@@ -344,6 +353,12 @@ typedef struct rsm_localizer {
             float map_fit;                        /* how well the map's own scans fitted it: the
                                                    * fit saved with a loaded map (0: none loaded),
                                                    * the bar of a global search's proof */
+            float wall_ref;                       /* the walls' grid direction in the world,
+                                                   * modulo a quarter turn, once learnt ... */
+            float wall_c;                         /* ... learnt from the first scans: their
+                                                   * directions at four times the angle, */
+            float wall_s;                         /* summed (cosines, sines) */
+            uint32_t wall_scans;                  /* scans summed so far */
             rsm_global_t global;                  /* the global search, when one runs */
         } persistent;                             /* RSM_METHOD_MAP */
     } state;

@@ -315,3 +315,32 @@ int rsm_ekf_update(rsm_ekf_t *ekf, const rsm_pose_t *z, const float r[9], float 
     ekf->updates++;
     return RSM_OK;
 }
+
+int rsm_ekf_pull_heading(rsm_ekf_t *ekf, float dtheta, float r)
+{
+    float k[3];
+    rsm_pose_t x;
+    float s;
+    int i;
+    if (ekf == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    s = ekf->p[8] + r;
+    if (!isfinite(dtheta) || !(r > 0.0f) || !isfinite(s)) {
+        ekf->rejected++;
+        return RSM_ERR_DEGENERATE;
+    }
+    /* H = (0 0 1): K is P's last column over S. */
+    for (i = 0; i < 3; ++i) {
+        k[i] = ekf->p[3 * i + 2] / s;
+    }
+    x.x = ekf->x.x + k[0] * dtheta;
+    x.y = ekf->x.y + k[1] * dtheta;
+    x.theta = rsm_wrap_angle(ekf->x.theta + k[2] * dtheta);
+    if (!pose_finite(&x)) {
+        ekf->rejected++;
+        return RSM_ERR_DEGENERATE;
+    }
+    ekf->x = x;
+    return RSM_OK;
+}

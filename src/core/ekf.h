@@ -47,6 +47,15 @@ int rsm_ekf_mahalanobis(const rsm_ekf_t *ekf, const rsm_pose_t *z, const float r
  * three outcomes count in `rejected`. RSM_ERR_INVAL for NULL arguments. */
 int rsm_ekf_update(rsm_ekf_t *ekf, const rsm_pose_t *z, const float r[9], float gate_d2);
 
+/* Moves the state as an update with a measurement of the heading alone
+ * would (its innovation dtheta, measured - estimated and wrapped, and
+ * variance r > 0; H = (0 0 1), no gate), and leaves P as it is: for a
+ * measurement repeated scan after scan whose error does not average out
+ * (the same walls seen again), which must not make the filter surer with
+ * each scan. RSM_ERR_DEGENERATE (counted in rejected, state unchanged) for
+ * non-finite input or result, RSM_ERR_INVAL for NULL. */
+int rsm_ekf_pull_heading(rsm_ekf_t *ekf, float dtheta, float r);
+
 /* Closed-form inverse of a 3x3 matrix; RSM_ERR_DEGENERATE if an entry is not
  * finite or |det| <= 1e-6 * (product of the row norms), out untouched;
  * RSM_ERR_INVAL for NULL. out may be m itself. */

@@ -18,6 +18,7 @@
 #include "paper/match.h"
 #include "paper/ransac.h"
 #include "map/tilemap.h"
+#include "localizer/wallgrid.h"
 
 rsm_localizer_config_t rsm_localizer_config_default(void)
 {
@@ -74,6 +75,8 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.conflict_max = 0.5f;
     c.doubt_m = 0.1f;
     c.doubt_rad = 0.1f;
+    c.wall_sigma_rad = 0.0015f;
+    c.wall_window_rad = 0.035f;
     c.isolation.tol_m = 0.0f;
     c.isolation.slope = 3.0f;
     c.isolation.window = 2u;
@@ -271,6 +274,10 @@ void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
     loc->state.persistent.fit = fit;
     loc->state.persistent.map_fit = fit;
     loc->state.persistent.global.cached = 0u;
+    /* Another map, another grid: learnt again from the scans tracking in it. */
+    loc->state.persistent.wall_c = 0.0f;
+    loc->state.persistent.wall_s = 0.0f;
+    loc->state.persistent.wall_scans = 0u;
     /* The global search's grids, built now while nothing else runs (they
      * take the memory of a map write's scan, idle after a load or an
      * import): a search in the map as it came, frozen or before its first
@@ -1099,6 +1106,66 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     return RSM_SCAN_ACCEPTED;
 }
 
+/* The walls' grid is learnt from this many scans with walls enough
+ * (WALL_MIN_SUPPORT_M of them), tracking from the start: their heading is
+ * the map's own then, before any drift. */
+#define WALL_REF_SCANS 20u
+#define WALL_MIN_SUPPORT_M 2.0f
+/* ... and only where that much of the scan's straight walls run along the
+ * grid: in a building without one, directions spread evenly put a few
+ * stretches in any window, whose mean would hold the heading where it is. */
+#define WALL_MIN_SHARE 0.25f
+/* wall_sigma_rad is for this much wall seen. */
+#define WALL_SIGMA_SUPPORT_M 5.0f
+
+/* The walls' grid (wallgrid.h): learnt from the first scans, then a
+ * heading measurement for every scan that tracks and sees walls enough
+ * along it. The grid's directions are found around the expected one, two
+ * steps narrowing to wall_window_rad from no window at all for the very
+ * first scan, which has nothing to expect. */
+static void wall_heading(rsm_localizer_t *loc, size_t npts)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const float theta = loc->ekf.x.theta;
+    float expect = 0.0f;
+    float window = cfg->wall_window_rad;
+    float dir;
+    float support;
+    float straight;
+    float delta;
+    if (cfg->wall_sigma_rad <= 0.0f) {
+        return;
+    }
+    if (loc->state.persistent.wall_scans == 0u) {
+        rsm_wallgrid_direction(loc->pts, npts, 0.0f, RSM_PI, &expect, &support, &straight);
+        rsm_wallgrid_direction(loc->pts, npts, expect, 4.0f * window, &expect, &support, &straight);
+    } else {
+        const float ref = loc->state.persistent.wall_scans >= WALL_REF_SCANS
+                              ? loc->state.persistent.wall_ref
+                              : 0.25f * rsm_atan2f(loc->state.persistent.wall_s, loc->state.persistent.wall_c);
+        expect = ref - theta;
+    }
+    rsm_wallgrid_direction(loc->pts, npts, expect, window, &dir, &support, &straight);
+    if (support < WALL_MIN_SUPPORT_M || support < WALL_MIN_SHARE * straight) {
+        return;
+    }
+    if (loc->state.persistent.wall_scans < WALL_REF_SCANS) {
+        const float world = 4.0f * (dir + theta);
+        loc->state.persistent.wall_c += support * rsm_cosf(world);
+        loc->state.persistent.wall_s += support * rsm_sinf(world);
+        if (++loc->state.persistent.wall_scans == WALL_REF_SCANS) {
+            loc->state.persistent.wall_ref =
+                0.25f * rsm_atan2f(loc->state.persistent.wall_s, loc->state.persistent.wall_c);
+        }
+        return;
+    }
+    delta = rsm_wallgrid_diff(loc->state.persistent.wall_ref, dir + theta);
+    {
+        const float scale = support < WALL_SIGMA_SUPPORT_M ? WALL_SIGMA_SUPPORT_M / support : 1.0f;
+        (void)rsm_ekf_pull_heading(&loc->ekf, delta, cfg->wall_sigma_rad * cfg->wall_sigma_rad * scale);
+    }
+}
+
 /* Starts writing the scan into the persistent map at est once the robot has
  * moved far enough since the last write (or for the first scan); the write
  * then runs over this and the next scans (tmap.write_cells), from loc->frame.world,
@@ -1652,6 +1719,10 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
         outcome = step_map(loc, npts, odometry_moved, rep, &clk, &contradicted);
     } else {
         outcome = step_rsm(loc, npts, rep, &clk);
+    }
+    if (loc->cfg->method == RSM_METHOD_MAP && (outcome == RSM_SCAN_FIRST || (outcome == RSM_SCAN_ACCEPTED &&
+        !contradicted && !rep->recovered && rep->fit_ratio >= loc->cfg->track_min_fit))) {
+        wall_heading(loc, npts);
     }
     if (calibrating(loc)) {
         calibrate(loc, outcome, prior_var, rep->recovered || rep->odometry != RSM_ODOMETRY_TRUSTED);

@@ -44,6 +44,8 @@ static int check_method_part(const rsm_localizer_config_t *cfg, const char **fie
         RSM_CHECK_FIELD(cfg->track_min_fit >= 0.0f && cfg->track_min_fit <= 10.0f, "track_min_fit");
         RSM_CHECK_FIELD(cfg->doubt_m > 0.0f && cfg->doubt_m <= 100.0f, "doubt_m");
         RSM_CHECK_FIELD(cfg->doubt_rad > 0.0f && cfg->doubt_rad <= RSM_TWO_PI, "doubt_rad");
+        RSM_CHECK_FIELD(cfg->wall_sigma_rad >= 0.0f && cfg->wall_sigma_rad <= 1.0f, "wall_sigma_rad");
+        RSM_CHECK_FIELD(cfg->wall_window_rad > 0.0f && cfg->wall_window_rad <= 0.25f * RSM_PI, "wall_window_rad");
         RSM_CHECK_FIELD(cfg->occlusion.window <= RSM_OCCLUSION_MAX_WINDOW, "occlusion.window");
         if (cfg->occlusion.window > 0u) {
             RSM_CHECK_FIELD(cfg->occlusion.span_m > 0.0f && cfg->occlusion.span_m < 100.0f, "occlusion.span_m");

@@ -48,7 +48,7 @@ def test_capture_path_is_judged_by_the_spread_of_jittered_direct_runs(head_log, 
     rels = ev.load_relations(head_relations)
     direct = tmp_path / "direct.txt"
     fc.run_nav(nav, ["--carmen", str(head_log)], direct)
-    errs = fc.errors(ev.load_trajectory(direct), rels)
+    errs = ev.evaluate_scopes(ev.load_trajectory(direct), rels)
     lines = fc.check_capture_path("head", nav, head_log, rels, errs, tmp_path, direct, jitter_runs=3)
     assert [c["kind"] for c in lines] == ["capture"] * 3
     same, local, every = lines
@@ -57,7 +57,7 @@ def test_capture_path_is_judged_by_the_spread_of_jittered_direct_runs(head_log, 
     assert local["status"] == ("PASS" if local["value"] <= fc.CAPTURE_TOLERANCE else "MISS")
     assert "the worst of 3 direct runs with +-0.5 um of odometry jitter" in every["line"]
     assert every["status"] == ("PASS" if every["value"] <= every["limit"] else "MISS")
-    spread = [fc.errors(ev.load_trajectory(tmp_path / f"head-jitter{k}.txt"), rels)["all"]["translation"]["mean"]
+    spread = [ev.evaluate_scopes(ev.load_trajectory(tmp_path / f"head-jitter{k}.txt"), rels)["all"]["translation"]["mean"]
               for k in (1, 2, 3)]
     assert every["limit"] == max(spread)
     # the jitter does what it is for: the direct runs part

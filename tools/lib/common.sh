@@ -42,15 +42,30 @@ rsm_on_exit() {
 trap rsm_on_exit EXIT
 
 # rsm_stage TITLE COMMAND [ARGS...]: prints a header, runs the command and
-# records how long it took.
+# records how long it took. With RSM_STAGE_LOG set to a file (tools/demo), the
+# header and the command's output go there and the stage prints one line,
+# "TITLE ... done (N s)", or on failure the file's last lines; the command then
+# runs as a condition (its status is checked), so set -e does not stop it early.
 rsm_stage() {
-    local title=$1 start end
+    local title=$1 start end rc=0
     shift
-    rsm_section "$title"
     RSM_STAGE=$title
     start=$(date +%s)
-    "$@"
+    if [ -z "${RSM_STAGE_LOG:-}" ]; then
+        rsm_section "$title"
+        "$@"
+    else
+        printf '%s ... ' "$title"
+        rsm_section "$title" >>"$RSM_STAGE_LOG"
+        "$@" >>"$RSM_STAGE_LOG" 2>&1 || rc=$?
+        if [ "$rc" -ne 0 ]; then
+            printf 'failed; the end of %s:\n' "$RSM_STAGE_LOG"
+            tail -n 15 "$RSM_STAGE_LOG"
+            exit "$rc"
+        fi
+    fi
     end=$(date +%s)
+    [ -z "${RSM_STAGE_LOG:-}" ] || printf 'done (%s s)\n' "$((end - start))"
     RSM_STAGE=""
     RSM_TIMINGS+=("$(printf '%5ss  %s' "$((end - start))" "$title")")
 }

@@ -105,6 +105,8 @@
     U("global_when_lost", global_when_lost, uint8_t) \
     F("doubt_m", doubt_m) \
     F("doubt_rad", doubt_rad) \
+    F("wall_sigma_rad", wall_sigma_rad) \
+    F("wall_window_rad", wall_window_rad) \
     F("mm_search_step", mapmatch.search_step_rad) \
     F("mm_min_step", mapmatch.min_step_m) \
     F("mm_min_rad", mapmatch.min_step_rad) \

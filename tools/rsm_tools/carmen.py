@@ -171,6 +171,25 @@ Record = Union[Odom, FLaser, RobotLaser1]
 SCAN_TYPES = ("FLASER", "ROBOTLASER1")
 KNOWN_TYPES = ("ODOM",) + SCAN_TYPES
 
+# For the tools that rewrite a log's lines as bytes and keep every field they
+# do not change as it was written (rsm-outliers, rsm-faults).
+SCAN_KEYS = tuple(t.encode("ascii") for t in SCAN_TYPES)
+TOKEN = re.compile(rb"\S+")
+
+
+def token_decimals(tok: bytes) -> int:
+    """The digits after a number's decimal point as written (0 without one):
+    a value written again keeps its field's precision."""
+    dot = tok.find(b".")
+    if dot < 0:
+        return 0
+    if tok[dot + 1:].isdigit():
+        return len(tok) - dot - 1
+    end = dot + 1
+    while end < len(tok) and tok[end:end + 1].isdigit():
+        end += 1
+    return end - dot - 1
+
 
 @dataclass
 class LogStats:

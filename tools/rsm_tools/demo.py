@@ -23,8 +23,6 @@ from typing import Dict, List, Optional, Sequence, Tuple
 from . import evaluate as ev
 from . import plot as rp
 
-LOCAL_SPAN = 2.0  # s: the "local" relations of docs/RESULTS.md
-
 
 class DemoError(Exception):
     pass
@@ -39,8 +37,7 @@ def score(traj_path: str, relations: List[ev.Relation]) -> Dict[str, dict]:
     """Mean errors of one trajectory on all relations and on the local ones."""
     traj = ev.load_trajectory(traj_path)
     out = {}
-    for scope, span in (("all", None), ("local", LOCAL_SPAN)):
-        res = ev.evaluate(traj, relations, max_span=span, tolerance=0.0)
+    for scope, res in ev.evaluate_scopes(traj, relations).items():
         out[scope] = {"translation_m": res["translation"]["mean"], "rotation_deg": res["rotation"]["mean"],
                       "matched": res["matched"], "in_span": res["in_span"]}
     out["poses"] = len(traj)
@@ -93,7 +90,7 @@ def picture(out: str, runs: Sequence[Tuple[str, str, Dict[str, dict]]], map_arg:
     ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
     colours = {first_label: "tab:orange"}
     for scope, row, heading in (("all", 0, f"every relation (up to {longest_s / 60:.0f} min apart)"),
-                                ("local", 1, f"local relations (up to {LOCAL_SPAN:g} s apart)")):
+                                ("local", 1, f"local relations (up to {ev.LOCAL_SPAN:g} s apart)")):
         bx = fig.add_subplot(grid[row, 1])
         labels = [label for label, _, _ in runs]
         values = [s[scope]["translation_m"] for _, _, s in runs]
@@ -158,10 +155,10 @@ def live(args) -> int:
     traj = ev.load_trajectory(args.trajectory)
     if args.scans is not None and len(traj) != args.scans:
         raise DemoError(f"{args.trajectory}: {len(traj)} poses, not one for each of the {args.scans} scans")
-    res = ev.evaluate(traj, relations, max_span=LOCAL_SPAN, tolerance=0.0)
+    res = ev.evaluate(traj, relations, max_span=ev.LOCAL_SPAN, tolerance=0.0)
     print(f"   live: {len(traj)} scans fused from the serial links; local error "
           f"{_fig(res['translation']['mean'])} m, {_fig(res['rotation']['mean'])} deg "
-          f"({res['matched']} relations up to {LOCAL_SPAN:g} s)")
+          f"({res['matched']} relations up to {ev.LOCAL_SPAN:g} s)")
     return 0
 
 

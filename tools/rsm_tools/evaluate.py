@@ -44,6 +44,10 @@ Pose = Tuple[float, float, float]
 
 DEFAULT_TOLERANCE = 1e-3
 
+# The "local" relations (docs/RESULTS.md, the demo, the full-log checks): those
+# spanning at most this long, s. Beside them, "all": every relation.
+LOCAL_SPAN = 2.0
+
 
 class Relation(NamedTuple):
     t1: float
@@ -403,6 +407,15 @@ def evaluate(
     if details:
         out["errors"] = errors
     return out
+
+
+def evaluate_scopes(traj, relations: Sequence[Relation], details: bool = False) -> Dict[str, dict]:
+    """:func:`evaluate` on every relation ("all", with ``details``) and on the
+    local ones (span up to LOCAL_SPAN), matching exact stamps only: a
+    trajectory of rsm-nav has a pose at every scan's stamp, and a near miss
+    would be another scan's pose."""
+    return {"all": evaluate(traj, relations, tolerance=0.0, details=details),
+            "local": evaluate(traj, relations, max_span=LOCAL_SPAN, tolerance=0.0)}
 
 
 def format_result(res: dict, label: str = "") -> str:

@@ -32,14 +32,10 @@ import argparse
 import math
 import sys
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
-from .carmen import MalformedLine, parse_tokens, time_key
+from .carmen import KNOWN_TYPES, SCAN_TYPES, MalformedLine, parse_tokens, time_key
 from .fileio import PathLike, open_binary, open_binary_output
-
-_SCAN_KEYS = ("FLASER", "ROBOTLASER1")
-_KNOWN = ("ODOM",) + _SCAN_KEYS
-
 
 @dataclass
 class ExcerptResult:
@@ -90,21 +86,21 @@ def excerpt_log(
             tokens = raw.decode("utf-8", errors="replace").split()
             kind = _line_kind(tokens)
             rec = None
-            if kind in _KNOWN:
+            if kind in KNOWN_TYPES:
                 try:
                     rec = parse_tokens(tokens)
                 except MalformedLine:
                     rec = None
             if first_scans is not None:
                 keep = True
-                if kind in _KNOWN and rec is None:
+                if kind in KNOWN_TYPES and rec is None:
                     res.malformed_kept += 1  # part of the cut: copied, not dropped
             else:
                 if kind == "blank":
                     keep = False
                 elif kind == "comment":
                     keep = True
-                elif kind in _KNOWN:
+                elif kind in KNOWN_TYPES:
                     keep = rec is not None and t0 <= rec.timestamp <= t1
                     if rec is None:
                         res.dropped_malformed += 1
@@ -118,7 +114,7 @@ def excerpt_log(
                 continue
             fout.write(raw)
             res.lines_out += 1
-            if rec is not None and kind in _SCAN_KEYS:
+            if rec is not None and kind in SCAN_TYPES:
                 res.scan_index[time_key(rec.timestamp)] = res.scans
                 res.scans += 1
                 res.t0 = min(res.t0, rec.timestamp)
@@ -130,60 +126,52 @@ def excerpt_log(
     return res
 
 
-def _text_lines(path: PathLike):
-    with open_binary(path) as fh:
-        for raw in fh:
-            yield raw, raw.decode("utf-8", errors="replace").split()
+def _filter_rows(src: PathLike, dst: PathLike, keep: Callable[[bytes, List[str]], Optional[bytes]]) -> Tuple[int, int]:
+    """Copies the text file ``src`` to ``dst``: comment lines as they are,
+    blank ones not, each other line as ``keep(line, fields)`` returns it
+    (None: left out); returns (kept, total) of those other lines."""
+    kept = total = 0
+    with open_binary_output(dst) as fout, open_binary(src) as fin:
+        for raw in fin:
+            tokens = raw.decode("utf-8", errors="replace").split()
+            if not tokens:
+                continue
+            if tokens[0].startswith("#"):
+                fout.write(raw)
+                continue
+            total += 1
+            out = keep(raw, tokens)
+            if out is not None:
+                fout.write(out)
+                kept += 1
+    return kept, total
 
 
 def excerpt_relations(src: PathLike, dst: PathLike, res: ExcerptResult) -> Tuple[int, int]:
     """Keep the relations whose two ends are kept scans; returns (kept, total)."""
-    kept = total = 0
-    with open_binary_output(dst) as fout:
-        for raw, tokens in _text_lines(src):
-            if not tokens:
-                continue
-            if tokens[0].startswith("#"):
-                fout.write(raw)
-                continue
-            total += 1
-            if len(tokens) != 8:
-                raise ValueError(f"{src}: a relation needs 8 fields, got {len(tokens)}")
-            k1, k2 = time_key(float(tokens[0])), time_key(float(tokens[1]))
-            if k1 in res.scan_index and k2 in res.scan_index:
-                fout.write(raw)
-                kept += 1
-    res.relations_kept, res.relations_total = kept, total
-    return kept, total
+    def keep(raw: bytes, tokens: List[str]) -> Optional[bytes]:
+        if len(tokens) != 8:
+            raise ValueError(f"{src}: a relation needs 8 fields, got {len(tokens)}")
+        k1, k2 = time_key(float(tokens[0])), time_key(float(tokens[1]))
+        return raw if k1 in res.scan_index and k2 in res.scan_index else None
+
+    res.relations_kept, res.relations_total = _filter_rows(src, dst, keep)
+    return res.relations_kept, res.relations_total
 
 
 def excerpt_poses(src: PathLike, dst: PathLike, res: ExcerptResult) -> Tuple[int, int]:
     """Cut a corrected-poses (or trajectory) file to the excerpt; returns (kept, total)."""
-    kept = total = 0
-    with open_binary_output(dst) as fout:
-        for raw, tokens in _text_lines(src):
-            if not tokens:
-                continue
-            if tokens[0].startswith("#"):
-                fout.write(raw)
-                continue
-            total += 1
-            t = float(tokens[0])
-            if len(tokens) == 5:
-                idx = res.scan_index.get(time_key(t))
-                if idx is None:
-                    continue
-                line = " ".join([tokens[0], str(idx)] + tokens[2:]) + "\n"
-                fout.write(line.encode("utf-8"))
-            elif len(tokens) == 4:
-                if not res.t0 <= t <= res.t1:
-                    continue
-                fout.write(raw)
-            else:
-                raise ValueError(f"{src}: expected 4 or 5 columns, got {len(tokens)}")
-            kept += 1
-    res.poses_kept, res.poses_total = kept, total
-    return kept, total
+    def keep(raw: bytes, tokens: List[str]) -> Optional[bytes]:
+        t = float(tokens[0])
+        if len(tokens) == 5:  # corrected poses: the scan index renumbered
+            idx = res.scan_index.get(time_key(t))
+            return None if idx is None else (" ".join([tokens[0], str(idx)] + tokens[2:]) + "\n").encode("utf-8")
+        if len(tokens) == 4:
+            return raw if res.t0 <= t <= res.t1 else None
+        raise ValueError(f"{src}: expected 4 or 5 columns, got {len(tokens)}")
+
+    res.poses_kept, res.poses_total = _filter_rows(src, dst, keep)
+    return res.poses_kept, res.poses_total
 
 
 def build_parser() -> argparse.ArgumentParser:

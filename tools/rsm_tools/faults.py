@@ -63,20 +63,18 @@ import hashlib
 import io
 import math
 import random
-import re
 import sys
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import IO, Dict, List, Optional, Sequence, Tuple
 
-from .carmen import MalformedLine, Pose, parse_tokens, pose_compose, pose_in_frame
+from .carmen import (SCAN_KEYS, TOKEN, MalformedLine, Pose, parse_tokens, pose_compose, pose_in_frame,
+                     token_decimals)
 from .fileio import PathLike, open_binary, open_binary_output
 from .outliers import percent_argument
 
 PROG = "rsm-faults"
 
-_TOKEN = re.compile(rb"\S+")
-_SCAN_KEYS = (b"FLASER", b"ROBOTLASER1")
 # Tokens after the readings: laser pose, odometry pose, stamp, host, logger stamp
 # (FLASER); laser pose, robot pose, tv, rv, two safeties, turn axis, stamp, host,
 # logger stamp (ROBOTLASER1).
@@ -218,7 +216,7 @@ def load_lines(lines) -> LoadedLog:
         out.lines.append(raw)
         head = raw.lstrip()
         key = head.split(None, 1)[0] if head else b""
-        if key != b"ODOM" and key not in _SCAN_KEYS:
+        if key != b"ODOM" and key not in SCAN_KEYS:
             continue
         tokens = raw.split()
         try:
@@ -585,18 +583,6 @@ def _remove_span(out: List[OutScan], log: LoadedLog, lo: int, hi: int) -> int:
 # writing
 
 
-def _decimals(tok: bytes) -> int:
-    dot = tok.find(b".")
-    if dot < 0:
-        return 0
-    if tok[dot + 1:].isdigit():
-        return len(tok) - dot - 1
-    end = dot + 1
-    while end < len(tok) and tok[end:end + 1].isdigit():
-        end += 1
-    return end - dot - 1
-
-
 def _num(v: float, decimals: int) -> bytes:
     text = f"{v:.{decimals}f}"
     if text.startswith("-") and float(text) == 0.0:
@@ -604,8 +590,8 @@ def _num(v: float, decimals: int) -> bytes:
     return text.encode("ascii")
 
 
-def _pose_text(p: Pose, like: Sequence[bytes]) -> List[bytes]:
-    return [_num(v, max(6, _decimals(t))) for v, t in zip(p, like)]
+def _pose_text(p: Pose, like: Sequence[bytes], decimals: int = 6) -> List[bytes]:
+    return [_num(v, max(decimals, token_decimals(t))) for v, t in zip(p, like)]
 
 
 def _splice(body: bytes, spans: Sequence[Tuple[int, int]], new: Dict[int, bytes]) -> bytes:
@@ -630,7 +616,7 @@ def _tail_spans(body: bytes, k: int) -> List[Tuple[int, int]]:
     """Spans of the last k tokens of a line."""
     parts = body.rsplit(None, k)
     start = len(body) - len(body.lstrip()) if len(parts) == k else len(parts[0])
-    return [m.span() for m in _TOKEN.finditer(body, start)][-k:]
+    return [m.span() for m in TOKEN.finditer(body, start)][-k:]
 
 
 def _recast(vals: List[float], start_k: int, frac: float, step: float,
@@ -662,8 +648,9 @@ def _recast(vals: List[float], start_k: int, frac: float, step: float,
 
 
 class _Writer:
-    def __init__(self, res: FaultResult) -> None:
+    def __init__(self, res: FaultResult, pose_decimals: int = 6) -> None:
         self.res = res
+        self.pose_decimals = pose_decimals  # at least, for the poses it rewrites
         self.log = res.log
         self.max_range = res.spec.max_range if res.spec.max_range is not None else self.log.max_reading
         self.recast_dropped = 0
@@ -684,16 +671,16 @@ class _Writer:
                 spans.append((pos, pos + len(t)))
                 pos += len(t) + 1
         else:
-            spans = [m.span() for m in _TOKEN.finditer(body)]
+            spans = [m.span() for m in TOKEN.finditer(body)]
         new = {}
         if new_pose != self.log.poses[e]:
-            for k, v in enumerate(_pose_text(new_pose, toks[1:4])):
+            for k, v in enumerate(_pose_text(new_pose, toks[1:4], self.pose_decimals)):
                 new[1 + k] = v
         if zero:
-            new[4] = _num(0.0, max(1, _decimals(toks[4])))
-            new[5] = _num(0.0, max(1, _decimals(toks[5])))
+            new[4] = _num(0.0, max(1, token_decimals(toks[4])))
+            new[5] = _num(0.0, max(1, token_decimals(toks[5])))
         elif scale is not None:
-            new[4] = _num(float(toks[4]) * scale, max(6, _decimals(toks[4])))
+            new[4] = _num(float(toks[4]) * scale, max(6, token_decimals(toks[4])))
         return _splice(body, spans, new) + end
 
     def scan_line(self, o: OutScan) -> bytes:
@@ -709,7 +696,7 @@ class _Writer:
         spans = _tail_spans(body, k)
         toks = [body[a:b] for a, b in spans]
         new = {}
-        odom_text = _pose_text(o.pose, toks[3:6])
+        odom_text = _pose_text(o.pose, toks[3:6], self.pose_decimals)
         for j, v in enumerate(odom_text):
             new[3 + j] = v
         laser_text = self.laser_text(o, sc, toks[0:3], odom_text)
@@ -722,12 +709,12 @@ class _Writer:
     def laser_text(self, o: OutScan, sc: ScanInfo, like: Sequence[bytes], odom_text: List[bytes]) -> List[bytes]:
         if self.res.spec.mount is None and sc.same:
             return list(odom_text)
-        return _pose_text(pose_compose(o.pose, self.res.laser_mount(o.src)), like)
+        return _pose_text(pose_compose(o.pose, self.res.laser_mount(o.src)), like, self.pose_decimals)
 
     def stamps(self, o: OutScan, sc: ScanInfo, toks: Sequence[bytes], new: Dict[int, bytes], i: int) -> None:
         t = o.stamp_us / 1e6
-        new[i] = _num(t, max(6, _decimals(toks[i])))
-        new[i + 2] = _num(sc.logger + (t - sc.stamp), max(6, _decimals(toks[i + 2])))
+        new[i] = _num(t, max(6, token_decimals(toks[i])))
+        new[i + 2] = _num(sc.logger + (t - sc.stamp), max(6, token_decimals(toks[i + 2])))
 
     def robotlaser(self, o: OutScan, sc: ScanInfo, raw: bytes) -> bytes:
         body, end = _line_end(raw)
@@ -759,14 +746,14 @@ class _Writer:
             vals = [float(t) for t in readings]
             recast, bad = _recast(vals, k, frac, step, max_range)
             self.recast_dropped += bad
-            dec = max([2] + [_decimals(t) for t in readings[:1]])
+            dec = max([2] + [token_decimals(t) for t in readings[:1]])
             no_return = _num(max_range, dec)
             vals_text = [no_return if r is None else _num(r, dec) for r in recast]
         nn = len(vals_text)
         if nn < 2:
             raise FaultError(f"--start-offsets {o.offset_deg:g}: leaves scan {o.src} with {nn} readings")
         lt = tail_in[0:3]
-        odom_text = _pose_text(o.pose, tail_in[3:6])
+        odom_text = _pose_text(o.pose, tail_in[3:6], self.pose_decimals)
         laser_text = self.laser_text(o, sc, lt, odom_text)
         stamp_toks = list(tail_in[-3:])
         if o.stamp_us is not None:
@@ -834,6 +821,17 @@ def write_result(res: FaultResult, out: IO[bytes], comment: Optional[str] = None
     odometry of a CARMEN log from its scan lines only: the bench's runs)."""
     c = None if comment is None else ("# " + comment.replace("\n", " ") + "\n").encode("utf-8")
     return _Writer(res).write(out, c, odom_lines)
+
+
+def write_poses(log: LoadedLog, poses: Sequence[Pose], out: IO[bytes], decimals: int = 6) -> int:
+    """Writes ``log`` with every event's odometry pose replaced by ``poses``
+    (one per ``log.events``; a scan's laser pose moves with it), at least
+    ``decimals`` decimals, the rest of every line as it was; returns the scan
+    lines written. For odometry moved by less than the log prints
+    (fullchecks.jittered_log)."""
+    res = FaultResult(log, FaultSpec(), list(poses), set(),
+                      [OutScan(i, poses[e]) for i, e in enumerate(log.scan_event)], [])
+    return _Writer(res, decimals).write(out)
 
 
 def fault_file(src: PathLike, dst: PathLike, spec: FaultSpec, comment: Optional[str] = None) -> FaultResult:

@@ -28,15 +28,15 @@ def open_binary(path: PathLike) -> IO[bytes]:
     raw = open(path, "rb")  # a BufferedReader, so peek() does not consume
     head = raw.peek(2)[:2]
     if head == GZIP_MAGIC:
-        return _GzipOwning(raw)
+        return _GzipOwning(raw, mode="rb")
     return raw
 
 
 class _GzipOwning(gzip.GzipFile):
-    """A GzipFile that also closes the underlying raw file."""
+    """A GzipFile (reading or writing) that also closes the underlying raw file."""
 
-    def __init__(self, raw: IO[bytes]) -> None:
-        super().__init__(fileobj=raw, mode="rb")
+    def __init__(self, raw: IO[bytes], **kwargs) -> None:
+        super().__init__(fileobj=raw, **kwargs)
         self._owned_raw = raw
 
     def close(self) -> None:
@@ -57,22 +57,8 @@ def open_binary_output(path: PathLike) -> IO[bytes]:
     """Open an output file for bytes; gzip (mtime 0, no name) if it ends in ``.gz``."""
     if str(path).endswith(".gz"):
         raw = open(path, "wb")
-        return _GzipWriterOwning(raw)
+        return _GzipOwning(raw, filename="", mode="wb", compresslevel=9, mtime=0)
     return open(path, "wb")
-
-
-class _GzipWriterOwning(gzip.GzipFile):
-    """Deterministic gzip writer that closes the file it writes to."""
-
-    def __init__(self, raw: IO[bytes]) -> None:
-        super().__init__(filename="", fileobj=raw, mode="wb", compresslevel=9, mtime=0)
-        self._owned_raw = raw
-
-    def close(self) -> None:
-        try:
-            super().close()
-        finally:
-            self._owned_raw.close()
 
 
 def open_text_output(path: PathLike) -> IO[str]:

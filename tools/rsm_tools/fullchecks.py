@@ -42,11 +42,11 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 from . import capture as cap
 from . import convert
 from . import evaluate as ev
+from . import faults as flt
 from .carmen import LogStats, first_scan_after_motion, read_log, time_key
 from .excerpt import excerpt_log, excerpt_poses, excerpt_relations
 from .fileio import open_binary
 
-LOCAL_SPAN = 2.0
 LIVE_SPEED = "8"
 LIVE_FLOOR = 0.03          # local translation of the real-time live run on the excerpt, m
 CAPTURE_TOLERANCE = 1.02   # capture-path local error over the direct run's, at most
@@ -64,8 +64,10 @@ def unpacked(path: Path) -> bytes:
 
 
 def check(ok: Optional[bool], kind: str, log: Optional[str], text: str, value=None, limit=None) -> dict:
-    status = "SKIP" if ok is None else ("PASS" if ok else "MISS")
-    return {"status": status, "kind": kind, "log": log, "value": value, "limit": limit, "line": f"{status} {text}"}
+    """A check as the bench's floors are (SKIP when ``ok`` is None)."""
+    from .bench.common import floor  # imported here: the bench imports this module
+
+    return floor("SKIP" if ok is None else ("PASS" if ok else "MISS"), kind, log, value, limit, text)
 
 
 # ---------------------------------------------------------------------------
@@ -160,11 +162,6 @@ def run_nav(nav: Path, args: Sequence[str], traj: Path) -> str:
     return res.stdout
 
 
-def errors(poses, relations: List[ev.Relation]) -> Dict[str, dict]:
-    return {scope: ev.evaluate(poses, relations, max_span=span, tolerance=0.0)
-            for scope, span in (("all", None), ("local", LOCAL_SPAN))}
-
-
 def check_baselines(label: str, errs: Dict[str, Dict[str, dict]]) -> List[dict]:
     """errs: method -> scope -> evaluate() result, for rsm, icp and odometry."""
     lost = []
@@ -200,28 +197,18 @@ def capture_poses(capf: Path, traj: Path) -> List[Tuple[float, float, float, flo
 
 
 def jittered_log(log: Path, out: Path, seed: int, jitter_m: float = JITTER_M) -> None:
-    """The log with every ODOM and FLASER odometry x and y moved by a uniform
-    draw within +-jitter_m (seeded); a FLASER's two poses move together (they
-    differ only by a mount). Other lines and fields are as they were."""
+    """The log with every odometry x and y (ODOM and scan lines) moved by a
+    uniform draw within +-jitter_m (seeded); a scan's laser pose moves with
+    its odometry. Poses are written with 9 decimals, finer than the jitter;
+    other lines and fields are as they were."""
     rng = random.Random(seed)
-    with open_binary(log) as src, open(out, "w", encoding="utf-8") as dst:
-        for raw in src:
-            line = raw.decode("utf-8", errors="surrogateescape")
-            f = line.split()
-            at: List[int] = []
-            if f and f[0] == "ODOM" and len(f) >= 4:
-                at = [1]
-            elif f and f[0] == "FLASER" and len(f) >= 2 and f[1].isdigit():
-                n = int(f[1])
-                at = [2 + n, 5 + n] if len(f) >= 8 + n else []
-            if not at:
-                dst.write(line if line.endswith("\n") else line + "\n")
-                continue
-            dx, dy = rng.uniform(-jitter_m, jitter_m), rng.uniform(-jitter_m, jitter_m)
-            for i in at:
-                f[i] = f"{float(f[i]) + dx:.9f}"
-                f[i + 1] = f"{float(f[i + 1]) + dy:.9f}"
-            dst.write(" ".join(f) + "\n")
+    loaded = flt.load_log(log)
+    poses = []
+    for x, y, theta in loaded.poses:
+        dx, dy = rng.uniform(-jitter_m, jitter_m), rng.uniform(-jitter_m, jitter_m)
+        poses.append((x + dx, y + dy, theta))
+    with open(out, "wb") as dst:
+        flt.write_poses(loaded, poses, dst, decimals=9)
 
 
 def jitter_spread(nav: Path, label: str, log: Path, relations: List[ev.Relation], work: Path, runs: int,
@@ -235,7 +222,7 @@ def jitter_spread(nav: Path, label: str, log: Path, relations: List[ev.Relation]
         jittered_log(log, jl, seed)
         run_nav(nav, ["--carmen", str(jl)], traj)
         jl.unlink()
-        return errors(ev.load_trajectory(traj), relations)["all"]["translation"]["mean"]
+        return ev.evaluate_scopes(ev.load_trajectory(traj), relations)["all"]["translation"]["mean"]
 
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         return list(pool.map(one, range(1, runs + 1)))
@@ -253,7 +240,7 @@ def check_capture_path(label: str, nav: Path, log: Path, relations: List[ev.Rela
     st = convert.convert(log, capf)
     traj = work / f"{label}-capture.txt"
     run_nav(nav, ["--capture", str(capf)], traj)
-    got = errors(capture_poses(capf, traj), relations)
+    got = ev.evaluate_scopes(capture_poses(capf, traj), relations)
     mine, theirs = ev.printed_poses(traj), ev.printed_poses(direct_traj)
     same = next((k for k, (a, b) in enumerate(zip(mine, theirs)) if a != b), min(len(mine), len(theirs)))
     still = first_scan_after_motion(log)
@@ -298,8 +285,8 @@ def check_live_replay(nav: Path, root: Path, work: Path) -> List[dict]:
     if res.returncode != 0:
         return [check(False, "live", "excerpt", f"excerpt: live replay failed: {res.stderr.strip()[-200:]}")]
     rels = ev.load_relations(data / "intel_head.relations")
-    got = errors(capture_poses(capf, live), rels)["local"]["translation"]["mean"]
-    want = errors(capture_poses(capf, ref), rels)["local"]["translation"]["mean"]
+    got = ev.evaluate_scopes(capture_poses(capf, live), rels)["local"]["translation"]["mean"]
+    want = ev.evaluate_scopes(capture_poses(capf, ref), rels)["local"]["translation"]["mean"]
     same = sum(a == b for a, b in zip(ev.printed_poses(live), ev.printed_poses(ref)))
     ok = got <= LIVE_FLOOR
     return [check(ok, "live", "excerpt", f"excerpt replayed in real time ({LIVE_SPEED}x) into rsm-nav --listen: "
@@ -359,7 +346,7 @@ def run_all(shared: Path, nav: Path, logs: Sequence[Tuple[str, Path, Path]], wor
             if not run:
                 run_nav(nav, ["--carmen", str(log), "--method", m], traj)
             trajs[m] = traj
-            errs[m] = errors(ev.load_trajectory(traj), relations)
+            errs[m] = ev.evaluate_scopes(ev.load_trajectory(traj), relations)
         out += check_baselines(label, errs)
         out += check_rerun(label, nav, log, trajs["rsm"], work)
         out += check_capture_path(label, nav, log, relations, errs["rsm"], work, trajs["rsm"], jitter_runs, jobs)

@@ -31,7 +31,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 from . import convert
 from . import evaluate as ev
 from .carmen import FLaser, read_log
-from .fullchecks import LOCAL_SPAN, check, cli_logs
+from .fullchecks import check, cli_logs
 
 KINDS = ("ld06", "rplidar")
 TOLERANCE = 1.10  # the floor: within 10 % of the direct run
@@ -50,11 +50,6 @@ def lidar_poses(traj: Path, stamps: Sequence[float]) -> List[Tuple[float, float,
     return [(stamps[k + 1], float(r[1]), float(r[2]), float(r[3])) for k, r in enumerate(rows)]
 
 
-def errors(traj, relations: Sequence[ev.Relation]) -> Dict[str, dict]:
-    return {"all": ev.evaluate(traj, relations, tolerance=0.0),
-            "local": ev.evaluate(traj, relations, max_span=LOCAL_SPAN, tolerance=0.0)}
-
-
 def run_capture(nav: Path, capf: Path, traj: Path) -> None:
     res = subprocess.run([str(nav), "--capture", str(capf), "--no-deskew", "--trajectory", str(traj), "--quiet"],
                          capture_output=True, text=True)
@@ -71,7 +66,7 @@ def run_log(nav: Path, label: str, log: Path, relations: Sequence[ev.Relation], 
         capf, traj = work / f"{label}-{kind}.cap", work / f"{label}-{kind}.txt"
         convert.convert(log, capf, lidar=kind)
         run_capture(nav, capf, traj)
-        got = errors(lidar_poses(traj, stamps), relations)
+        got = ev.evaluate_scopes(lidar_poses(traj, stamps), relations)
         for scope in ("local", "all"):
             parts, worst = [], 0.0
             for q, unit in (("translation", "m"), ("rotation", "deg")):
@@ -101,7 +96,7 @@ def run(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, accuracy:
                                  capture_output=True, text=True)
             if res.returncode != 0:
                 raise RuntimeError(f"rsm-nav --carmen {log} failed: {res.stderr.strip()[-300:]}")
-        out += run_log(nav, label, log, relations, errors(ev.load_trajectory(traj), relations), work)
+        out += run_log(nav, label, log, relations, ev.evaluate_scopes(ev.load_trajectory(traj), relations), work)
     return out
 
 

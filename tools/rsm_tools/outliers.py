@@ -26,20 +26,17 @@ import argparse
 import hashlib
 import math
 import random
-import re
 import sys
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import IO, Iterable, List, Optional, Sequence, Tuple, Union
 
-from .carmen import MalformedLine, parse_tokens
+from .carmen import SCAN_KEYS, TOKEN, MalformedLine, parse_tokens, token_decimals
 from .fileio import PathLike, open_binary, open_binary_output
 
 DEFAULT_MIN_RANGE = 0.2
 DEFAULT_MAX_RANGE = 8.0
 
-_TOKEN = re.compile(rb"\S+")
-_SCAN_KEYS = (b"FLASER", b"ROBOTLASER1")
 
 
 @dataclass
@@ -65,16 +62,6 @@ def scan_rng(seed: int, scan_index: int) -> random.Random:
     """The PRNG of one scan, derived from the user seed and the scan index."""
     digest = hashlib.sha256(f"rsm-outliers:{seed}:{scan_index}".encode("ascii")).digest()
     return random.Random(int.from_bytes(digest[:16], "big"))
-
-
-def _decimals(tok: bytes) -> int:
-    dot = tok.find(b".")
-    if dot < 0:
-        return 0
-    end = dot + 1
-    while end < len(tok) and tok[end:end + 1].isdigit():
-        end += 1
-    return end - dot - 1
 
 
 def _format_range(v: float, decimals: int, lo: float, hi: float) -> bytes:
@@ -104,7 +91,7 @@ def inject_line(
 
     Raises :class:`MalformedLine` if the line is not a well-formed scan.
     """
-    spans = [m.span() for m in _TOKEN.finditer(line)]
+    spans = [m.span() for m in TOKEN.finditer(line)]
     tokens = [line[a:b] for a, b in spans]
     try:
         text_tokens = [t.decode("utf-8") for t in tokens]
@@ -122,7 +109,7 @@ def inject_line(
         a, b = spans[first + i]
         value = rng.uniform(min_range, max_range)
         out += line[pos:a]
-        out += _format_range(value, max(2, _decimals(tokens[first + i])), min_range, max_range)
+        out += _format_range(value, max(2, token_decimals(tokens[first + i])), min_range, max_range)
         pos = b
     out += line[pos:]
     return bytes(out), chosen, n
@@ -146,7 +133,7 @@ def inject_lines(
         st.lines += 1
         head = line.lstrip()
         key = head.split(None, 1)[0] if head else b""
-        if key not in _SCAN_KEYS:
+        if key not in SCAN_KEYS:
             out.write(line)
             continue
         try:

@@ -84,7 +84,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 continue
             traj = ev.load_trajectory(out)
             whole = ev.evaluate(traj, rels)
-            local = ev.evaluate(traj, rels, max_span=2.0)
+            local = ev.evaluate(traj, rels, max_span=ev.LOCAL_SPAN)
             kind = "clean" if variant == "clean" else "43%"
             rows.setdefault((name, kind), []).append(
                 (whole["translation"]["mean"], local["translation"]["mean"], local["rotation"]["mean"]))

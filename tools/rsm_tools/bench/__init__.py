@@ -88,29 +88,27 @@ from .knownmap import (KIDNAP_RUNS, QUICK_KIDNAP_RUNS, QUICK_STARTS, STARTS, STA
 from . import deskew as _deskew
 from . import knownmap as _knownmap
 from . import navmemory as _navmemory
-from . import figures as _figures
 from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors,
-    context_from_manifest, floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_report)
+    floor_inputs, losses, m4_floors, m4_lines, spread_floors, write_from_manifest)
+
+
+def _integers(text: str, lowest: int, highest: Optional[int], rule: str) -> List[int]:
+    """A comma-separated list of integers, sorted, each once, all within [lowest, highest]."""
+    try:
+        vals = sorted({int(v) for v in text.split(",") if v.strip()})
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a comma-separated list of integers: {text!r}") from None
+    if not vals or any(v < lowest or (highest is not None and v > highest) for v in vals):
+        raise argparse.ArgumentTypeError(f"{rule}: {text!r}")
+    return vals
 
 
 def _levels(text: str) -> List[int]:
-    try:
-        vals = sorted({int(v) for v in text.split(",") if v.strip()})
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a comma-separated list of integers: {text!r}") from None
-    if not vals or any(v < 0 or v > 100 for v in vals):
-        raise argparse.ArgumentTypeError(f"levels must be within 0..100: {text!r}")
-    return vals
+    return _integers(text, 0, 100, "levels must be within 0..100")
 
 
 def _counts(text: str) -> List[int]:
-    try:
-        vals = sorted({int(v) for v in text.split(",") if v.strip()})
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a comma-separated list of integers: {text!r}") from None
-    if not vals or any(v < 1 for v in vals):
-        raise argparse.ArgumentTypeError(f"values must be positive: {text!r}")
-    return vals
+    return _integers(text, 1, None, "values must be positive")
 
 
 def _names(text: str) -> List[str]:
@@ -417,12 +415,9 @@ def run(args: argparse.Namespace) -> Path:
     manifest["logs"] = [{"label": l, "log": str(g), "relations": str(r)} for l, g, r in logs]
     manifest_text = json.dumps(_jsonable(manifest), indent=1, default=_json_default, allow_nan=True)
     (work / "bench.json").write_text(manifest_text)
-    # The report is written from the manifest, as rsm-bench-report does.
-    text = write_report(context_from_manifest(json.loads(manifest_text), root))
-    # The figures the README and the headers quote, committed beside the plots.
-    _figures.write(context_from_manifest(json.loads(manifest_text), root), plots / "figures.json")
-    output.parent.mkdir(parents=True, exist_ok=True)
-    output.write_text(text, encoding="utf-8")
+    # The report and the figures (committed beside the plots) are written from
+    # the manifest, as rsm-bench-report does.
+    write_from_manifest(json.loads(manifest_text), root, output, plots / "figures.json")
     print("rsm-bench: on the target:")
     for line in m4_lines(ctx.get("m4")):
         print(f"  {line}")
@@ -462,7 +457,7 @@ def _run_only_line(args: argparse.Namespace, nav: Path, logs, work: Path, root: 
             relations = fullchecks.ev.load_relations(rel)
             direct = d / f"{label}-direct.txt"
             fullchecks.run_nav(nav, ["--carmen", str(log)], direct)
-            errs = fullchecks.errors(fullchecks.ev.load_trajectory(direct), relations)
+            errs = fullchecks.ev.evaluate_scopes(fullchecks.ev.load_trajectory(direct), relations)
             res["checks"] += fullchecks.check_capture_path(label, nav, log, relations, errs, d, direct,
                                                            _jitter_runs(args), args.jobs)
         lines = [c["line"] for c in res["checks"]]

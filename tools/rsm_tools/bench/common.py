@@ -3,7 +3,9 @@
 import math
 import os
 from pathlib import Path
-from typing import List, Optional
+from typing import List, Optional, Sequence, Tuple
+
+from ..evaluate import LOCAL_SPAN  # noqa: F401 (the sections take it from here)
 
 
 # rsm-nav --method names: rsm is the default method (scan to persistent map),
@@ -18,6 +20,22 @@ SMALL = "rsm-small"  # rsm built with SMALL_HEADER (a run label, not a method)
 
 
 SMALL_HEADER = "rsm/config_small.h"
+
+
+# The runs on a log, in the report's order (and under these names in
+# figures.json): each method with the default build, and rsm with the small one.
+RUNS = ("rsm", SMALL, "paper", "icp", "odometry")
+
+
+def run_build(run: str) -> Tuple[str, str]:
+    """A run's build ("default", or "small": SMALL_HEADER) and its rsm-nav --method."""
+    return ("small", "rsm") if run == SMALL else ("default", run)
+
+
+def measured_runs(methods: Sequence[str], small: bool) -> List[Tuple[str, str, str]]:
+    """(run, build, method) of the runs a section makes: ``methods`` with the
+    default build, then rsm with the small build when there is one."""
+    return [(run, *run_build(run)) for run in (*methods, *((SMALL,) if small else ()))]
 
 
 METHOD_LABEL = {"rsm": "rsm", SMALL: "rsm, config_small", "paper": "paper's method", "icp": "icp",
@@ -65,9 +83,6 @@ SPEED_REPEATS = 3
 
 
 CALLGRIND_SCANS = 1000
-
-
-LOCAL_SPAN = 2.0
 
 
 SCOPES = ("local", "all")
@@ -303,6 +318,13 @@ KIND_METHODS = {"beams": ROBUST_METHODS, "map": ("paper",), "tiles": ("rsm",), "
 DRIVER_OBJECTS = ("aria", "lms", "p3dx", "sicklms", "hal", "link_poll")
 
 
+def floor(status: str, kind: str, log: Optional[str], value, limit, text: str) -> dict:
+    """One of the issue's floors (or a full-log check): PASS, MISS or SKIP,
+    the measure (``kind``, ``log``, ``value`` against ``limit``) for the
+    manifest, and the line the report and rsm-bench print."""
+    return {"status": status, "kind": kind, "log": log, "value": value, "limit": limit, "line": f"{status} {text}"}
+
+
 def cg_run(cg: Optional[dict], label: str, config: str, method: str) -> Optional[dict]:
     """One callgrind run of run_callgrind's result, or None."""
     if not cg or "skipped" in cg:
@@ -312,8 +334,7 @@ def cg_run(cg: Optional[dict], label: str, config: str, method: str) -> Optional
 
 def run_labels(acc_log: dict) -> List[str]:
     """The runs of one log in report order."""
-    order = ("rsm", SMALL, "paper", "icp", "odometry")
-    return [k for k in order if k in acc_log["runs"]]
+    return [k for k in RUNS if k in acc_log["runs"]]
 
 
 def provenance_line(p: dict) -> str:

@@ -160,7 +160,7 @@ def _ratio(a: float, b: float) -> float:
 
 def floors(res: Optional[dict]) -> List[dict]:
     """PASS, MISS or SKIP lines: per lidar, the poses' deviation and the error ratios."""
-    from .report import _floor
+    from .common import floor as _floor
 
     what = "de-skew with encoder packets in bursts"
     if not res or "skipped" in res or not res.get("runs"):

@@ -44,7 +44,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 from .. import evaluate as ev
 from .. import faults as flt
 from ..carmen import Pose, pose_compose
-from .common import BenchError, LOCAL_SPAN, fmt_q, ratio, update_sweep
+from .common import BenchError, floor, fmt_q, ratio, update_sweep
 
 FAULT_RUNS = 20
 QUICK_FAULT_RUNS = 2
@@ -218,9 +218,9 @@ def odometry_alone(res: flt.FaultResult) -> List[Tuple[float, float, float, floa
 
 def errors(traj, relations) -> Dict[str, float]:
     """Mean translation error on all relations and on local ones, exact stamps."""
-    a = ev.evaluate(traj, relations, tolerance=0.0)
-    l_ = ev.evaluate(traj, relations, max_span=LOCAL_SPAN, tolerance=0.0)
-    return {"all": a["translation"]["mean"], "local": l_["translation"]["mean"], "matched": a["matched"]}
+    s = ev.evaluate_scopes(traj, relations)
+    return {"all": s["all"]["translation"]["mean"], "local": s["local"]["translation"]["mean"],
+            "matched": s["all"]["matched"]}
 
 
 def recovered_stamps(scan_log: Path) -> List[float]:
@@ -444,10 +444,6 @@ def _judged_alike(f: dict) -> str:
             f"{fmt_q('translation', cj['median'])} m, the fault's median x{f['x_median_judged']:.2f} that)")
 
 
-def _floor(status: str, kind: str, log: Optional[str], value, limit, text: str) -> dict:
-    return {"status": status, "kind": kind, "log": log, "value": value, "limit": limit, "line": f"{status} {text}"}
-
-
 def fault_floors(fa: Optional[dict]) -> List[dict]:
     """The section's floors, each PASS, MISS or SKIP, from run_faults' result."""
     out: List[dict] = []
@@ -460,18 +456,18 @@ def fault_floors(fa: Optional[dict]) -> List[dict]:
         ups = fa["clean_updates"]
         what = f"{label}: clean, worst of {c['n']} runs" + (f" (map_update_m {ups[0]:g} to {ups[-1]:g})" if ups else "")
         if c["n"] == 0:
-            out.append(_floor("SKIP", "faults-clean", label, None, FLOOR_CLEAN_WORST_X, f"{what}: not measured"))
+            out.append(floor("SKIP", "faults-clean", label, None, FLOOR_CLEAN_WORST_X, f"{what}: not measured"))
         else:
             x = ratio(c["max"], cm)
             ok = math.isfinite(x) and x <= FLOOR_CLEAN_WORST_X + FLOOR_EPS
-            out.append(_floor("PASS" if ok else "MISS", "faults-clean", label, x, FLOOR_CLEAN_WORST_X,
-                              f"{what} {fmt_q('translation', c['max'])} m = x{x:.2f} the clean median "
-                              f"{fmt_q('translation', cm)} m {'<=' if ok else '>'} x{FLOOR_CLEAN_WORST_X:g}, "
-                              "all-relations translation"))
+            out.append(floor("PASS" if ok else "MISS", "faults-clean", label, x, FLOOR_CLEAN_WORST_X,
+                             f"{what} {fmt_q('translation', c['max'])} m = x{x:.2f} the clean median "
+                             f"{fmt_q('translation', cm)} m {'<=' if ok else '>'} x{FLOOR_CLEAN_WORST_X:g}, "
+                             "all-relations translation"))
         for name, f in e["faults"].items():
             head = f"{label}: {name} fault"
             if f["n"] == 0 or c["n"] == 0:
-                out.append(_floor("SKIP", "faults", label, None, FLOOR_WORST_X, f"{head}: not measured"))
+                out.append(floor("SKIP", "faults", label, None, FLOOR_WORST_X, f"{head}: not measured"))
                 continue
             n_runs = f["n"] + f["missing"]
             xw = f["x_worst"]
@@ -480,30 +476,30 @@ def fault_floors(fa: Optional[dict]) -> List[dict]:
             same = ("" if f.get("worst_clean") is None else
                     f" (the clean run at its map_update_m {f['worst_update']:g}: "
                     f"{fmt_q('translation', f['worst_clean'])} m)")
-            out.append(_floor("PASS" if ok else "MISS", "faults", label, xw, FLOOR_WORST_X,
-                              f"{head}, worst of {n_runs} runs {fmt_q('translation', f['max'])} m{same} = x{xw:.2f} "
-                              f"the clean median {fmt_q('translation', cm)} m {'<=' if under else '>'} "
-                              f"x{FLOOR_WORST_X:g}, {'<' if f['max'] < odo else '>='} odometry alone "
-                              f"{fmt_q('translation', odo)} m, all-relations translation"))
+            out.append(floor("PASS" if ok else "MISS", "faults", label, xw, FLOOR_WORST_X,
+                             f"{head}, worst of {n_runs} runs {fmt_q('translation', f['max'])} m{same} = x{xw:.2f} "
+                             f"the clean median {fmt_q('translation', cm)} m {'<=' if under else '>'} "
+                             f"x{FLOOR_WORST_X:g}, {'<' if f['max'] < odo else '>='} odometry alone "
+                             f"{fmt_q('translation', odo)} m, all-relations translation"))
             xm = f["x_median"]
             ok = math.isfinite(xm) and xm <= FLOOR_MEDIAN_X + FLOOR_EPS
-            out.append(_floor("PASS" if ok else "MISS", "faults", label, xm, FLOOR_MEDIAN_X,
-                              f"{head}, median of {n_runs} runs {fmt_q('translation', f['median'])} m = x{xm:.2f} "
-                              f"the clean median {'<=' if ok else '>'} x{FLOOR_MEDIAN_X:g}" + _judged_alike(f)))
+            out.append(floor("PASS" if ok else "MISS", "faults", label, xm, FLOOR_MEDIAN_X,
+                             f"{head}, median of {n_runs} runs {fmt_q('translation', f['median'])} m = x{xm:.2f} "
+                             f"the clean median {'<=' if ok else '>'} x{FLOOR_MEDIAN_X:g}" + _judged_alike(f)))
     for label, e in fa["logs"].items():
         fr = [f for f in e["faults"].values() if f.get("runs_judged")]
         if not fr:
-            out.append(_floor("SKIP", "faults-recovery", label, None, 0,
-                              f"{label}: false recoveries: no fault run was judged"))
+            out.append(floor("SKIP", "faults-recovery", label, None, 0,
+                             f"{label}: false recoveries: no fault run was judged"))
             continue
         false = sum(f["false_recoveries"] for f in fr)
         judged = sum(f["recoveries_judged"] for f in fr)
         runs = sum(f["runs_judged"] for f in fr)
         unjudged = sum(f.get("recoveries_unjudged") or 0 for f in fr)
-        out.append(_floor("PASS" if false == 0 else "MISS", "faults-recovery", label, false, 0,
-                          f"{label}: false recoveries {false} of {judged} judged in {runs} fault runs "
-                          f"({unjudged} more not judged: no relation near) "
-                          f"{'==' if false == 0 else '>'} 0 ({RECOVERY_NOTE})"))
+        out.append(floor("PASS" if false == 0 else "MISS", "faults-recovery", label, false, 0,
+                         f"{label}: false recoveries {false} of {judged} judged in {runs} fault runs "
+                         f"({unjudged} more not judged: no relation near) "
+                         f"{'==' if false == 0 else '>'} 0 ({RECOVERY_NOTE})"))
     return out
 
 

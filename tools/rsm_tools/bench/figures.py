@@ -12,11 +12,8 @@ import json
 from pathlib import Path
 from typing import Optional
 
-from .common import PEER_COLUMNS, SMALL
+from .common import PEER_COLUMNS, RUNS
 from .parse import best_peers
-
-# The runs of the accuracy section kept, under the names the README uses.
-RUNS = {"rsm": "rsm", SMALL: "rsm-small", "paper": "paper", "icp": "icp", "odometry": "odometry"}
 
 
 def _q(scope: str, quantity: str) -> str:
@@ -27,10 +24,10 @@ def _accuracy(ctx: dict) -> dict:
     out = {}
     for log, acc in (ctx.get("accuracy") or {}).items():
         runs = {}
-        for run, name in RUNS.items():
+        for run in RUNS:  # the accuracy section's runs, under their names
             if run in acc.get("runs", {}):
                 e = acc["runs"][run]["errors"]
-                runs[name] = {_q(sc, q): e[sc][q]["mean"] for sc, q in PEER_COLUMNS}
+                runs[run] = {_q(sc, q): e[sc][q]["mean"] for sc, q in PEER_COLUMNS}
         peers = ((ctx.get("peers") or {}).get("accuracy") or {}).get(log) or []
         best = best_peers(peers) if peers else {}
         runs["best peer"] = {_q(sc, q): {"value": v[0], "method": v[1]}

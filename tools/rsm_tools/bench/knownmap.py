@@ -65,7 +65,7 @@ from typing import List, Optional, Sequence, Tuple
 
 from .. import evaluate as ev
 from .. import faults as flt
-from .common import BenchError, LOCAL_SPAN, fmt_int, fmt_q, provenance_line, ratio
+from .common import BenchError, LOCAL_SPAN, floor, fmt_int, fmt_q, provenance_line, ratio
 
 STARTS = 100          # global starts per log
 QUICK_STARTS = 10
@@ -374,9 +374,8 @@ def _nav(nav: Path, log: Path, traj: Path, extra: Sequence[str], no_pose_ok: boo
 
 
 def _errors(traj: Path, relations) -> dict:
-    t = ev.load_trajectory(traj)
-    a = ev.evaluate(t, relations, tolerance=0.0)
-    l_ = ev.evaluate(t, relations, max_span=LOCAL_SPAN, tolerance=0.0)
+    s = ev.evaluate_scopes(ev.load_trajectory(traj), relations)
+    a, l_ = s["all"], s["local"]
     return {"all": a["translation"]["mean"], "all_rotation": a["rotation"]["mean"],
             "local": l_["translation"]["mean"], "local_rotation": l_["rotation"]["mean"], "matched": a["matched"]}
 
@@ -580,10 +579,6 @@ def run_kidnaps(nav: Path, logs: Sequence[Tuple[str, Path, Path]], d: Path, jobs
 # floors and report
 
 
-def _floor(status: str, kind: str, log: Optional[str], value, limit, text: str) -> dict:
-    return {"status": status, "kind": kind, "log": log, "value": value, "limit": limit, "line": f"{status} {text}"}
-
-
 def _n(v) -> str:
     return "n/a" if v is None else fmt_int(round(v))
 
@@ -597,39 +592,39 @@ def knownmap_floors(km: Optional[dict]) -> List[dict]:
         head = f"{label}: {MARK}, "
         rt = e["round_trip"]
         ok = rt["identical"] and rt["trajectory_same"] and rt["tiles"] == rt["tiles_again"]
-        out.append(_floor("PASS" if ok else "MISS", "knownmap-roundtrip", label, int(ok), 1,
-                          f"{head}round trip: saved ({fmt_int(rt['bytes'])} bytes, {fmt_int(rt['tiles'])} tiles), "
-                          f"loaded frozen and saved again: the tiles {'identical' if rt['identical'] else 'DIFFER'} "
-                          "bit for bit, a frozen run on the map saved again "
-                          + ("the same trajectory as on the saved map" if rt["trajectory_same"] else
-                             "ANOTHER trajectory than on the saved map (the headers differ: the fit at the save "
-                             f"{rt['fit']:.4f} and {rt['fit_again']:.4f}, the bar of a recovery)")))
+        out.append(floor("PASS" if ok else "MISS", "knownmap-roundtrip", label, int(ok), 1,
+                         f"{head}round trip: saved ({fmt_int(rt['bytes'])} bytes, {fmt_int(rt['tiles'])} tiles), "
+                         f"loaded frozen and saved again: the tiles {'identical' if rt['identical'] else 'DIFFER'} "
+                         "bit for bit, a frozen run on the map saved again "
+                         + ("the same trajectory as on the saved map" if rt["trajectory_same"] else
+                            "ANOTHER trajectory than on the saved map (the headers differ: the fit at the save "
+                            f"{rt['fit']:.4f} and {rt['fit_again']:.4f}, the bar of a recovery)")))
         mp = e["runs"]["mapping"]["all"]
         for mode, what in (("frozen", "frozen"), ("updates", "with updates")):
             v = e["runs"][mode]["all"]
             ok = v is not None and mp is not None and math.isfinite(v) and v <= mp
-            out.append(_floor("PASS" if ok else "MISS", "knownmap-localization", label, v, mp,
-                              f"{head}localization mode {what}, whole log: all-relations translation "
-                              f"{fmt_q('translation', v)} m {'<=' if ok else '>'} the mapping run's "
-                              f"{fmt_q('translation', mp)} m (x{ratio(v, mp):.2f})"))
+            out.append(floor("PASS" if ok else "MISS", "knownmap-localization", label, v, mp,
+                             f"{head}localization mode {what}, whole log: all-relations translation "
+                             f"{fmt_q('translation', v)} m {'<=' if ok else '>'} the mapping run's "
+                             f"{fmt_q('translation', mp)} m (x{ratio(v, mp):.2f})"))
         s = e["summary"]
         need = right_needed(s["held"])
         ok = s["held"] > 0 and s["right_within"] >= need
         sp = s["scans_to_pose"]
         timing = (f"first trusted pose after median {_n(sp['median'])}, worst {_n(sp['max'])} scans of the "
                   f"{sp['n']} held starts that gave one" if sp["n"] else "no held start gave a trusted pose")
-        out.append(_floor("PASS" if ok else "MISS", "knownmap-global", label, s["right_within"], need,
-                          f"{head}global localization, {s['starts']} starts ({s['not_held']} not held by the map, "
-                          f"counted apart): {s['right_within']} of {s['held']} held starts right (within "
-                          f"{RIGHT_M:g} m and {RIGHT_DEG:g} deg of the mapping run) within {s['within']} scans "
-                          f"{'>=' if ok else '<'} {need} ({FLOOR_RIGHT_SHARE * 100:g} %); "
-                          f"{s['counts']['none']} gave none within {km['cap']} scans; {timing}"))
+        out.append(floor("PASS" if ok else "MISS", "knownmap-global", label, s["right_within"], need,
+                         f"{head}global localization, {s['starts']} starts ({s['not_held']} not held by the map, "
+                         f"counted apart): {s['right_within']} of {s['held']} held starts right (within "
+                         f"{RIGHT_M:g} m and {RIGHT_DEG:g} deg of the mapping run) within {s['within']} scans "
+                         f"{'>=' if ok else '<'} {need} ({FLOOR_RIGHT_SHARE * 100:g} %); "
+                         f"{s['counts']['none']} gave none within {km['cap']} scans; {timing}"))
         ok = s["wrong_all"] == 0
-        out.append(_floor("PASS" if ok else "MISS", "knownmap-wrong", label, s["wrong_all"], 0,
-                          f"{head}global localization, {s['starts']} starts: {s['wrong_all']} gave a trusted pose "
-                          f"more than {WRONG_M:g} m or {WRONG_DEG:g} deg off "
-                          + (f"({s['wrong_not_held']} of them not held) " if s["wrong_not_held"] else "")
-                          + f"{'==' if ok else '>'} 0"))
+        out.append(floor("PASS" if ok else "MISS", "knownmap-wrong", label, s["wrong_all"], 0,
+                         f"{head}global localization, {s['starts']} starts: {s['wrong_all']} gave a trusted pose "
+                         f"more than {WRONG_M:g} m or {WRONG_DEG:g} deg off "
+                         + (f"({s['wrong_not_held']} of them not held) " if s["wrong_not_held"] else "")
+                         + f"{'==' if ok else '>'} 0"))
         out += kidnap_floors(km.get("kidnap"), label)
     out.append(m4_global_floor(km.get("m4_global")))
     return out
@@ -648,20 +643,20 @@ def m4_global_floor(g: Optional[dict]) -> dict:
     (m4_global_entry) against FLOOR_GLOBAL_M4; SKIP without its figures."""
     what = f"Cortex-M4F: {MARK}, global search, instructions per scan on the M4"
     if not g or "skipped" in g:
-        return _floor("SKIP", "knownmap-cost", None, None, FLOOR_GLOBAL_M4,
-                      f"{what} <= {fmt_int(FLOOR_GLOBAL_M4)}: not measured ({(g or {}).get('skipped', 'not run')})")
+        return floor("SKIP", "knownmap-cost", None, None, FLOOR_GLOBAL_M4,
+                     f"{what} <= {fmt_int(FLOOR_GLOBAL_M4)}: not measured ({(g or {}).get('skipped', 'not run')})")
     ok = g["max"] <= FLOOR_GLOBAL_M4
     found = (f"first proven pose after {g['scans_to_pose']} scans" if g["proven"] else
              f"no pose proven within {g['scans']} scans")
     kept = (f" (kept from the whole bench at `{g['kept_from']}`: --only knownmap runs no firmware)"
             if g.get("kept_from") else "")
-    return _floor("PASS" if ok else "MISS", "knownmap-cost", None, g["max"], FLOOR_GLOBAL_M4,
-                  f"{what}{kept}, the excerpt's map (small: {fmt_int(g['map_tiles'])} tiles, {fmt_int(g['map_bytes'])} "
-                  f"bytes, mapped from its first {g['mapped_scans']} scans; the map-in-flash firmware, -O2, QEMU) at "
-                  f"the default global_budget ({fmt_int(g['budget'])} reads a scan): worst "
-                  f"{fmt_int(round(g['max']))} {'<=' if ok else '>'} {fmt_int(FLOOR_GLOBAL_M4)}, mean "
-                  f"{fmt_int(round(g['mean']))} over {g['scans']} scans (at most {fmt_int(g['max_work'])} reads in "
-                  f"one); {found}")
+    return floor("PASS" if ok else "MISS", "knownmap-cost", None, g["max"], FLOOR_GLOBAL_M4,
+                 f"{what}{kept}, the excerpt's map (small: {fmt_int(g['map_tiles'])} tiles, {fmt_int(g['map_bytes'])} "
+                 f"bytes, mapped from its first {g['mapped_scans']} scans; the map-in-flash firmware, -O2, QEMU) at "
+                 f"the default global_budget ({fmt_int(g['budget'])} reads a scan): worst "
+                 f"{fmt_int(round(g['max']))} {'<=' if ok else '>'} {fmt_int(FLOOR_GLOBAL_M4)}, mean "
+                 f"{fmt_int(round(g['mean']))} over {g['scans']} scans (at most {fmt_int(g['max_work'])} reads in "
+                 f"one); {found}")
 
 
 MODE_WHAT = {"frozen": "frozen", "updates": "with updates"}
@@ -685,24 +680,24 @@ def kidnap_floors(kd: Optional[dict], label: str) -> List[dict]:
         n = s["runs"]
         what = f"{head} {MODE_WHAT.get(mode, mode)}, {n} runs"
         if n == 0:
-            out.append(_floor("SKIP", "knownmap-kidnap", label, None, None,
-                              f"{what}: not measured (the log has no room for a {kd['length_s']:g} s cut)"))
+            out.append(floor("SKIP", "knownmap-kidnap", label, None, None,
+                             f"{what}: not measured (the log has no room for a {kd['length_s']:g} s cut)"))
             continue
         sp = s["scans_to_found"]
         ok = s["found_within"] == n
-        out.append(_floor("PASS" if ok else "MISS", "knownmap-kidnap", label, s["found_within"], n,
-                          f"{what} with a {kd['length_s']:g} s cut: {s['found_within']} found again (a trusted pose "
-                          f"within {RIGHT_M:g} m and {RIGHT_DEG:g} deg of the mapping run's) within {s['within']} "
-                          f"scans of the cut {'==' if ok else '<'} {n}; scans to it median "
-                          f"{_scans_text(sp['median'], s['never'])}, worst {_scans_text(sp['max'], s['never'])}"
-                          + (f" ({s['never']} never)" if s["never"] else "")))
+        out.append(floor("PASS" if ok else "MISS", "knownmap-kidnap", label, s["found_within"], n,
+                         f"{what} with a {kd['length_s']:g} s cut: {s['found_within']} found again (a trusted pose "
+                         f"within {RIGHT_M:g} m and {RIGHT_DEG:g} deg of the mapping run's) within {s['within']} "
+                         f"scans of the cut {'==' if ok else '<'} {n}; scans to it median "
+                         f"{_scans_text(sp['median'], s['never'])}, worst {_scans_text(sp['max'], s['never'])}"
+                         + (f" ({s['never']} never)" if s["never"] else "")))
         ok = s["wrong_runs"] == 0
-        out.append(_floor("PASS" if ok else "MISS", "knownmap-kidnap-wrong", label, s["wrong_runs"], 0,
-                          f"{what}: {s['wrong_runs']} gave a trusted pose more than {WRONG_M:g} m or "
-                          f"{WRONG_DEG:g} deg off after the cut "
-                          + (f"({_n(s['wrong_scans'])} such scans in all, the earliest at scan "
-                             f"{_n(s['earliest_wrong'])} after the cut) " if s["wrong_runs"] else "")
-                          + f"{'==' if ok else '>'} 0"))
+        out.append(floor("PASS" if ok else "MISS", "knownmap-kidnap-wrong", label, s["wrong_runs"], 0,
+                         f"{what}: {s['wrong_runs']} gave a trusted pose more than {WRONG_M:g} m or "
+                         f"{WRONG_DEG:g} deg off after the cut "
+                         + (f"({_n(s['wrong_scans'])} such scans in all, the earliest at scan "
+                            f"{_n(s['earliest_wrong'])} after the cut) " if s["wrong_runs"] else "")
+                         + f"{'==' if ok else '>'} 0"))
     return out
 
 

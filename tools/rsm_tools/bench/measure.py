@@ -21,8 +21,8 @@ from .. import evaluate as ev
 from .. import m4, outliers
 from .common import (update_sweep, ARM_CONFIGS, ARM_CPU, BenchError, SCAN_SYMBOL, DEFAULT_MAP_LOG2, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
     DRIVER_OBJECTS, KIND_METHODS, LOCAL_SPAN, M4_TARGETS, MAIN_LOG, MEMORY_TILES, METHODS, QUANTITIES,
-    ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS, SCALING_MAP_LOG2, SCALING_PRESETS, SCALING_TILES, SCOPES, SMALL,
-    SMALL_HEADER, STAGES, STATE_SIZES, TIMING_STATS, TURNS, TURN_SEPARATION_SCANS, bin_label, ratio)
+    ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS, SCALING_MAP_LOG2, SCALING_PRESETS, SCALING_TILES, SCOPES,
+    SMALL_HEADER, STAGES, STATE_SIZES, TIMING_STATS, TURNS, TURN_SEPARATION_SCANS, bin_label, measured_runs, ratio)
 from .parse import (callee_costs, callgrind_ir, callgrind_stages, fused_percent, load_summary, localizer_breakdown,
     parse_callgrind, parse_cross_check, parse_nm_sizes, parse_size_archive, read_callgraph_dir, stack_bounds,
     static_functions)
@@ -154,12 +154,8 @@ def parallel(fn, items: Iterable, jobs: int) -> list:
 
 
 def scoped_errors(traj: Path, relations: List[ev.Relation], details: bool = False) -> dict:
-    """evaluate() on all relations and on local ones, exact timestamps only."""
-    t = ev.load_trajectory(traj)
-    return {
-        "all": ev.evaluate(t, relations, tolerance=0.0, details=details),
-        "local": ev.evaluate(t, relations, max_span=LOCAL_SPAN, tolerance=0.0),
-    }
+    """evaluate_scopes() of a trajectory file."""
+    return ev.evaluate_scopes(ev.load_trajectory(traj), relations, details)
 
 
 def _strip_errors(res: dict) -> dict:
@@ -205,11 +201,8 @@ def discover_logs(data: Path) -> List[Tuple[str, Path, Path]]:
 def run_accuracy(navs: Dict[str, Optional[Path]], logs: List[Tuple[str, Path, Path]], work: Path,
                  jobs: int) -> dict:
     """Every method of the default build and rsm of the small build on every log."""
-    tasks = []
-    for label, log, _ in logs:
-        tasks += [(label, log, m, m, navs["default"]) for m in METHODS]
-        if navs.get("small") is not None:
-            tasks.append((label, log, SMALL, "rsm", navs["small"]))
+    runs = measured_runs(METHODS, navs.get("small") is not None)
+    tasks = [(label, log, run, m, navs[build]) for label, log, _ in logs for run, build, m in runs]
 
     def one(task):
         label, log, run_label, m, nav = task
@@ -450,9 +443,10 @@ def run_callgrind(navs: Dict[str, Optional[Path]], logs: List[Tuple[str, Path, P
     for label, log, _ in logs:
         head = work / "callgrind" / f"{label}-head{scans}.clf.gz"
         heads[label] = {"log": str(head), "source": str(log), "scans": write_head(log, head, scans)}
-    tasks = [(label, "default", m, navs["default"]) for label, _, _ in logs for m in methods]
-    if navs.get("small") is not None:
-        tasks += [(label, "small", "rsm", navs["small"]) for label, _, _ in logs]
+    runs = measured_runs(methods, navs.get("small") is not None)
+    # every log's runs of the default build, then the small build's (the manifest's order)
+    tasks = sorted(((label, build, m, navs[build]) for label, _, _ in logs for _, build, m in runs),
+                   key=lambda t: t[1] != "default")
 
     def one(task):
         label, config, m, nav = task

@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence
 
-from .common import BenchError, fmt_int
+from .common import BenchError, floor, fmt_int
 
 SCANS = (10_000, 400_000)
 QUICK_SCANS = (2_000, 20_000)  # --quick: the same line, a shorter run
@@ -133,19 +133,17 @@ def run(nav: Path, log: Path, work: Path, counts: Sequence[int] = SCANS) -> dict
 
 def floors(mem: Optional[dict]) -> List[dict]:
     """PASS, MISS or SKIP: the longest run's peak against the shortest's."""
-    from .report import _floor
-
     what = "rsm-nav memory: peak resident set"
     if not mem or "skipped" in mem or len(mem.get("runs") or []) < 2:
         why = (mem or {}).get("skipped", "not run")
-        return [_floor("SKIP", "memory-nav", None, None, FLOOR_X, f"{what}: not measured ({why})")]
+        return [floor("SKIP", "memory-nav", None, None, FLOOR_X, f"{what}: not measured ({why})")]
     short, long_ = mem["runs"][0], mem["runs"][-1]
     x = long_["peak_kib"] / short["peak_kib"]
     ok = x <= FLOOR_X
-    return [_floor("PASS" if ok else "MISS", "memory-nav", None, x, FLOOR_X,
-                   f"{what} over {fmt_int(long_['scans'])} scans {fmt_int(long_['peak_kib'])} KiB = x{x:.3f} of "
-                   f"{fmt_int(short['scans'])} scans' {fmt_int(short['peak_kib'])} KiB "
-                   f"{'<=' if ok else '>'} x{FLOOR_X:g}")]
+    return [floor("PASS" if ok else "MISS", "memory-nav", None, x, FLOOR_X,
+                  f"{what} over {fmt_int(long_['scans'])} scans {fmt_int(long_['peak_kib'])} KiB = x{x:.3f} of "
+                  f"{fmt_int(short['scans'])} scans' {fmt_int(short['peak_kib'])} KiB "
+                  f"{'<=' if ok else '>'} x{FLOOR_X:g}")]
 
 
 def report(mem: Optional[dict]) -> List[str]:

@@ -13,8 +13,9 @@ from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 from .. import fullchecks, outliers
 from .common import (CG_STAGE_ORDER, DRIVER_OBJECTS, HOST_PARTS, LOCAL_SPAN, MEMORY_OTHER, METHODS, PEER_COLUMNS,
-    QUANTITIES, ROBUST_METHODS, SCOPES, SECTION_TITLES, SMALL, SMALL_HEADER, STAGES, STAGE_WHAT, UNITS, BenchError,
-    cg_run, find_root, fmt_int, fmt_pct, fmt_q, fmt_ratio, provenance_line, ratio, run_labels, shown_path)
+    QUANTITIES, ROBUST_METHODS, RUNS, SCOPES, SECTION_TITLES, SMALL, SMALL_HEADER, STAGES, STAGE_WHAT, UNITS,
+    BenchError, cg_run, find_root, floor, fmt_int, fmt_pct, fmt_q, fmt_ratio, provenance_line, ratio, run_build,
+    run_labels, shown_path)
 from . import figures
 from .faults import report_faults
 from .knownmap import report_knownmap
@@ -198,11 +199,6 @@ def _scope_name(scope: str) -> str:
     return "all-relations" if scope == "all" else "local"
 
 
-def _floor(status: str, kind: str, log: Optional[str], value, limit, text: str) -> dict:
-    return {"status": status, "kind": kind, "log": log, "value": value, "limit": limit,
-            "line": f"{status} {text}"}
-
-
 def check_floors(rsm: Dict[str, dict], peers: Optional[Dict[str, List[dict]]], robust: Dict[str, dict],
                  arm_bytes: Dict[str, Optional[int]], ir: dict) -> List[dict]:
     """The floors of the issue, each PASS, MISS or SKIP (not measured) with its line.
@@ -224,20 +220,20 @@ def check_floors(rsm: Dict[str, dict], peers: Optional[Dict[str, List[dict]]], r
             what = f"{log}: {_scope_name(scope)} {q} {fmt_q(q, mine)} {u}"
             b = best.get((scope, q))
             if peers is None:
-                out.append(_floor("SKIP", "peers", log, mine, None, f"{what}: no peer figures (peers.md is not "
-                                                                      "on this machine)"))
+                out.append(floor("SKIP", "peers", log, mine, None, f"{what}: no peer figures (peers.md is not "
+                                                                     "on this machine)"))
             elif b is None:
-                out.append(_floor("SKIP", "peers", log, mine, None, f"{what}: peers.md has no peer figure "
-                                                                      "for this log"))
+                out.append(floor("SKIP", "peers", log, mine, None, f"{what}: peers.md has no peer figure "
+                                                                     "for this log"))
             else:
                 ok = mine <= b[0]
-                out.append(_floor("PASS" if ok else "MISS", "peers", log, mine, b[0],
-                                  f"{what} {'<=' if ok else '>'} {fmt_q(q, b[0])} {u}, the best peer's ({b[1]})"))
+                out.append(floor("PASS" if ok else "MISS", "peers", log, mine, b[0],
+                                 f"{what} {'<=' if ok else '>'} {fmt_q(q, b[0])} {u}, the best peer's ({b[1]})"))
             lim = ISSUE_FLOORS.get(log, {}).get((scope, q))
             if lim is not None:
                 ok = mine <= lim
-                out.append(_floor("PASS" if ok else "MISS", "issue", log, mine, lim,
-                                  f"{what} {'<=' if ok else '>'} {fmt_q(q, lim)} {u}, the issue's floor"))
+                out.append(floor("PASS" if ok else "MISS", "issue", log, mine, lim,
+                                 f"{what} {'<=' if ok else '>'} {fmt_q(q, lim)} {u}, the issue's floor"))
     for log, r in robust.items():
         seeds = sorted(r["noisy"])
         for scope in SCOPES:
@@ -245,36 +241,36 @@ def check_floors(rsm: Dict[str, dict], peers: Optional[Dict[str, List[dict]]], r
             clean = r["clean"][scope]
             what = f"{log}: {FLOOR_LEVEL} % outliers, {_scope_name(scope)} translation"
             if not seeds:
-                out.append(_floor("SKIP", "robustness", log, None, lim, f"{what}: not measured"))
+                out.append(floor("SKIP", "robustness", log, None, lim, f"{what}: not measured"))
                 continue
             ratios = [ratio(r["noisy"][sd][scope], clean) for sd in seeds]
             ok = all(math.isfinite(x) and x <= lim for x in ratios)
             shown = ", ".join(f"{fmt_q('translation', r['noisy'][sd][scope])} m = x{x:.3f} (seed {sd})"
                               for sd, x in zip(seeds, ratios))
-            out.append(_floor("PASS" if ok else "MISS", "robustness", log, max(ratios), lim,
-                              f"{what} {shown} of the clean {fmt_q('translation', clean)} m; "
-                              f"{'every' if ok else 'not every'} seed <= x{lim:.2f}"))
+            out.append(floor("PASS" if ok else "MISS", "robustness", log, max(ratios), lim,
+                             f"{what} {shown} of the clean {fmt_q('translation', clean)} m; "
+                             f"{'every' if ok else 'not every'} seed <= x{lim:.2f}"))
     for name, lim in FLOOR_ARM_BYTES.items():
         b = arm_bytes.get(name)
         cfg = "the default config.h" if name == "default" else SMALL_HEADER
         what = f"Cortex-M4F: sizeof(rsm_localizer_t) with {cfg}"
         if b is None:
-            out.append(_floor("SKIP", "memory", None, None, lim, f"{what}: not measured"))
+            out.append(floor("SKIP", "memory", None, None, lim, f"{what}: not measured"))
         else:
             ok = b <= lim
-            out.append(_floor("PASS" if ok else "MISS", "memory", None, b, lim,
-                              f"{what} {fmt_int(b)} bytes ({b / 1024:.1f} KiB) {'<=' if ok else '>'} "
-                              f"{lim // 1024} KiB"))
+            out.append(floor("PASS" if ok else "MISS", "memory", None, b, lim,
+                             f"{what} {fmt_int(b)} bytes ({b / 1024:.1f} KiB) {'<=' if ok else '>'} "
+                             f"{lim // 1024} KiB"))
     if "skipped" in ir:
-        out.append(_floor("SKIP", "instructions", ir.get("log"), None, FLOOR_IR_PER_SCAN,
-                          f"instructions per scan: not measured ({ir['skipped']})"))
+        out.append(floor("SKIP", "instructions", ir.get("log"), None, FLOOR_IR_PER_SCAN,
+                         f"instructions per scan: not measured ({ir['skipped']})"))
     else:
         v = ir["ir_per_scan"]
         ok = v <= FLOOR_IR_PER_SCAN
-        out.append(_floor("PASS" if ok else "MISS", "instructions", ir["log"], v, FLOOR_IR_PER_SCAN,
-                          f"{ir['log']}: {fmt_int(round(v))} instructions per scan (callgrind, first "
-                          f"{ir['scans']} scans, default config.h) {'<=' if ok else '>'} "
-                          f"{fmt_int(round(FLOOR_IR_PER_SCAN))}"))
+        out.append(floor("PASS" if ok else "MISS", "instructions", ir["log"], v, FLOOR_IR_PER_SCAN,
+                         f"{ir['log']}: {fmt_int(round(v))} instructions per scan (callgrind, first "
+                         f"{ir['scans']} scans, default config.h) {'<=' if ok else '>'} "
+                         f"{fmt_int(round(FLOOR_IR_PER_SCAN))}"))
     return out
 
 
@@ -293,30 +289,30 @@ def m4_floors(m4: Optional[dict]) -> List[dict]:
             what = (f"{core}: {stat} instructions per scan of the replay firmware (the excerpt, {opt}, QEMU, "
                     "encoder steps included)")
             if not cost:
-                out.append(_floor("SKIP", kind, None, None, lim, f"{what}: not measured ({why})"))
+                out.append(floor("SKIP", kind, None, None, lim, f"{what}: not measured ({why})"))
                 continue
             v = cost[stat]
             ok = v <= lim
-            out.append(_floor("PASS" if ok else "MISS", kind, None, v, lim,
-                              f"{what} {fmt_int(round(v))} {'<=' if ok else '>'} {fmt_int(lim)} "
-                              f"(over {cost['scans']} scans)"))
+            out.append(floor("PASS" if ok else "MISS", kind, None, v, lim,
+                             f"{what} {fmt_int(round(v))} {'<=' if ok else '>'} {fmt_int(lim)} "
+                             f"(over {cost['scans']} scans)"))
     m3 = variants.get("m3-O2")
     what = "Cortex-M3 soft float: the replay's trajectory bit-identical to the host's"
     if not m3 or m3["identical"] is None:
-        out.append(_floor("SKIP", "m3", None, None, None, f"{what}: not measured ({why if not m3 else 'no host run'})"))
+        out.append(floor("SKIP", "m3", None, None, None, f"{what}: not measured ({why if not m3 else 'no host run'})"))
     else:
-        out.append(_floor("PASS" if m3["identical"] else "MISS", "m3", None, m3["identical"], True,
-                          f"{what}: {'yes' if m3['identical'] else 'no'} (over {m3['cost']['scans']} scans)"))
+        out.append(floor("PASS" if m3["identical"] else "MISS", "m3", None, m3["identical"], True,
+                         f"{what}: {'yes' if m3['identical'] else 'no'} (over {m3['cost']['scans']} scans)"))
     m0 = variants.get("m0plus")
     what = f"Cortex-M0+: RAM of the RP2040 LD06 example, stack and lidar buffers included"
     if not m0:
-        out.append(_floor("SKIP", "m0plus", None, None, FLOOR_M0PLUS_RAM, f"{what}: not measured ({why})"))
+        out.append(floor("SKIP", "m0plus", None, None, FLOOR_M0PLUS_RAM, f"{what}: not measured ({why})"))
     else:
         ram = m0["image"]["ram"]
         ok = ram <= FLOOR_M0PLUS_RAM
-        out.append(_floor("PASS" if ok else "MISS", "m0plus", None, ram, FLOOR_M0PLUS_RAM,
-                          f"{what} {fmt_int(ram)} {'<=' if ok else '>'} {fmt_int(FLOOR_M0PLUS_RAM)} bytes (flash "
-                          f"{fmt_int(m0['image']['flash'])})"))
+        out.append(floor("PASS" if ok else "MISS", "m0plus", None, ram, FLOOR_M0PLUS_RAM,
+                         f"{what} {fmt_int(ram)} {'<=' if ok else '>'} {fmt_int(FLOOR_M0PLUS_RAM)} bytes (flash "
+                         f"{fmt_int(m0['image']['flash'])})"))
     return out
 
 
@@ -342,14 +338,14 @@ def spread_floors(sp: Optional[dict]) -> List[dict]:
                     f"{' '.join(str(s) for s in sp['seeds'])}, map_update_m {sp['updates'][0]:g} to "
                     f"{sp['updates'][-1]:g}), {_scope_name(scope)} translation")
             if nz["n"] == 0 or c["n"] == 0:
-                out.append(_floor("SKIP", "robustness-runs", log, None, lim, f"{what}: not measured"))
+                out.append(floor("SKIP", "robustness-runs", log, None, lim, f"{what}: not measured"))
                 continue
             x, se = spread_ratio(nz, c)
             ok = math.isfinite(x) and x <= lim
-            out.append(_floor("PASS" if ok else "MISS", "robustness-runs", log, x, lim,
-                              f"{what}, mean {fmt_q('translation', nz['mean'])} m = x{x:.3f} (+-{se:.3f}) of the "
-                              f"clean runs' mean {fmt_q('translation', c['mean'])} m ({c['n']} runs) "
-                              f"{'<=' if ok else '>'} x{lim:.2f}"))
+            out.append(floor("PASS" if ok else "MISS", "robustness-runs", log, x, lim,
+                             f"{what}, mean {fmt_q('translation', nz['mean'])} m = x{x:.3f} (+-{se:.3f}) of the "
+                             f"clean runs' mean {fmt_q('translation', c['mean'])} m ({c['n']} runs) "
+                             f"{'<=' if ok else '>'} x{lim:.2f}"))
     return out
 
 
@@ -737,20 +733,17 @@ def report_stage_speed(st: Optional[dict], speed: Optional[dict], main: str) -> 
         L += ["With the hook the whole call's median is " + ", ".join(parts) + "; rsm-nav leaves the hook NULL. "
               "The clock readings cost little next to the stages, but two processes measured minutes apart "
               "differ by a few per cent anyway.", ""]
-    if st.get("plot"):
-        L += [f"![Time per stage, rsm, the paper's method and icp]({st['plot']})", ""]
-    elif st.get("plot_note"):
-        L += [f"No plot: {st['plot_note']}.", ""]
+    L += plot_lines(st.get("plot"), st.get("plot_note"), "Time per stage, rsm, the paper's method and icp")
     return L
 
 
 def _cg_columns(cg: dict, label: str) -> List[Tuple[str, dict]]:
     """The callgrind runs of one log in report order, with their column names."""
     out = []
-    for config, m in (("default", "rsm"), ("small", "rsm"), ("default", "paper"), ("default", "icp")):
-        r = cg_run(cg, label, config, m)
+    for run in RUNS:
+        r = cg_run(cg, label, *run_build(run))
         if r is not None:
-            out.append((SMALL if config == "small" else m, r))
+            out.append((run, r))
     return out
 
 
@@ -1002,11 +995,15 @@ def report_scaling(sc: Optional[dict], main: str) -> List[str]:
                      "the index)")
     if parts:
         L += ["Growth between the smallest and largest variant: " + "; ".join(parts) + ".", ""]
-    if sc.get("plot"):
-        L += [f"![Scaling of time per scan, error and state size]({sc['plot']})", ""]
-    elif sc.get("plot_note"):
-        L += [f"No plot: {sc['plot_note']}.", ""]
+    L += plot_lines(sc.get("plot"), sc.get("plot_note"), "Scaling of time per scan, error and state size")
     return L
+
+
+def plot_lines(plot: Optional[str], note: Optional[str], alt: str) -> List[str]:
+    """A section's picture, else why rsm-bench drew none (its plot_note), else nothing."""
+    if plot:
+        return [f"![{alt}]({plot})", ""]
+    return [f"No plot: {note}.", ""] if note else []
 
 
 def md_table(header: Sequence[str], rows: Iterable[Sequence[str]], anchor: str) -> List[str]:
@@ -1158,11 +1155,9 @@ def report_robustness(ctx: dict, root: Path) -> List[str]:
                     rows.append(cells)
             L += md_table(["outliers %", "method", "runs", "translation mean [m]", "min..max", "x clean",
                            "rotation mean [deg]", "min..max", "x clean", "fused %"], rows, f"robustness {label} {sc}")
-    if ctx.get("plot"):
-        L += [f"![Robustness curves on {main}: mean error against the share of outliers, rsm, the paper's method "
-              f"and icp, odometry as a reference line]({ctx['plot']})", ""]
-    elif ctx.get("plot_note"):
-        L += [f"No plot: {ctx['plot_note']}.", ""]
+    L += plot_lines(ctx.get("plot"), ctx.get("plot_note"),
+                    f"Robustness curves on {main}: mean error against the share of outliers, rsm, the paper's "
+                    "method and icp, odometry as a reference line")
     sp = ctx.get("spread")
     if sp and "skipped" not in sp:
         L += ["### Over many runs", "",
@@ -1369,10 +1364,9 @@ def write_report(ctx: dict) -> str:
     sections = (
         report_accuracy(ctx, root),
         report_robustness(ctx, root) + report_faults(ctx.get("faults")) + report_knownmap(ctx.get("knownmap")),
-        report_turns(ctx.get("turns"), main, root) + (
-            [f"![Residuals at the sharpest turns and by true rotation]({ctx['turns_plot']})", ""]
-            if ctx.get("turns") and ctx.get("turns_plot") else
-            [f"No plot: {ctx['turns_plot_note']}.", ""] if ctx.get("turns_plot_note") else []),
+        report_turns(ctx.get("turns"), main, root) + plot_lines(
+            ctx.get("turns") and ctx.get("turns_plot"), ctx.get("turns_plot_note"),
+            "Residuals at the sharpest turns and by true rotation"),
         report_speed(ctx, root),
         report_memory(ctx, root),
         report_scaling(ctx.get("scaling"), main),
@@ -1429,6 +1423,17 @@ def context_from_manifest(manifest: dict, root: Path) -> dict:
     return ctx
 
 
+def write_from_manifest(manifest: dict, root: Path, output: Path, figures_path: Path) -> None:
+    """The report and the figures the README and the headers quote, from a
+    manifest (bench.json, parsed): what rsm-bench writes after measuring and
+    rsm-bench-report writes again. The figures first: the report reads its
+    context in place."""
+    ctx = context_from_manifest(manifest, root)
+    figures.write(ctx, figures_path)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    output.write_text(write_report(ctx), encoding="utf-8")
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="rsm-bench-report",
                                 description="Write rsm-bench's report again from its manifest (bench.json in the "
@@ -1449,9 +1454,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         manifest = json.loads(args.manifest.read_text(encoding="utf-8"))
         root = (args.root or find_root()).resolve()
         output = args.output or Path(manifest["report"])
-        ctx = context_from_manifest(manifest, root)
-        figures.write(ctx, args.figures or output.parent / "results" / "figures.json")  # before: the report reads ctx
-        output.write_text(write_report(ctx), encoding="utf-8")
+        write_from_manifest(manifest, root, output, args.figures or output.parent / "results" / "figures.json")
     except (OSError, ValueError, KeyError, BenchError) as exc:
         print(f"rsm-bench-report: error: {exc}", file=sys.stderr)
         return 1
