@@ -307,3 +307,28 @@ def test_rplidar_answers_requests_and_scans_the_simulated_world(tmp_path):
     assert summary["bad_requests"] == 1 and summary["motor"] == 660
     assert summary["scans_started"] == 1 and summary["stops"] == 1 and not summary["scanning"]
     assert [e["cmd"] for e in log if e["ev"] == "request"] == [0x52, 0x50, 0x59, 0xF0, 0x20, 0x25]
+
+
+def test_a_patient_port_keeps_every_byte_for_a_host_that_stalls():
+    """--patient: a host that stops reading for longer than the 0.2 s a
+    device waits loses nothing (without it the rest of the frame goes, so a
+    loaded machine changed what a test's host got)."""
+    import threading
+
+    port = fakedev.PtyPort("t", patient=True)
+    got = bytearray()
+    frame = bytes(range(256)) * 256  # 64 KiB: many times a pty's buffer
+
+    def host():
+        time.sleep(0.5)  # stalled
+        while len(got) < len(frame):
+            got.extend(os.read(port.slave, 65536))
+
+    reader = threading.Thread(target=host)
+    reader.start()
+    try:
+        port.write(frame, port.host_baud())
+    finally:
+        reader.join(timeout=60)
+        port.close()
+    assert bytes(got) == frame and port.overflows == 0

@@ -227,12 +227,15 @@ def test_rplidar_driver_runs_a_fake_rplidar_and_gets_every_turn_unchanged(tmp_pa
     taken by the de-skew's odometry as by the localizer's; every turn
     rsm-nav fuses is one of the capture-mode run's turns, in order, byte for
     byte. The run stops once 20 turns came and the robot connected
-    (--scans), not after a time: under load, 8 s held fewer turns. Its
+    (--scans), not after a time: under load, 8 s held fewer turns; and the
+    fake waits for rsm-nav however long it stalls (--patient), where it
+    dropped the rest of a frame after 0.2 s and so changed a turn. Its
     trajectory depends on the timing, so it is only printed."""
     capture = tmp_path / "rplidar.cap"
     convert.convert(str(head_log), str(capture), lidar="rplidar")
     _, cap_events, _ = run_capture_mode(capture, tmp_path)
-    fake = FakeDevices(tmp_path, "--robot", "--rplidar", "--capture", str(capture), "--ticks-mm", "64", "--quiet")
+    fake = FakeDevices(tmp_path, "--robot", "--rplidar", "--capture", str(capture), "--ticks-mm", "64", "--patient",
+                       "--quiet")
     try:
         traj, events = tmp_path / "active.txt", tmp_path / "active.events"
         res = subprocess.run([str(nav_binary()), "--robot", fake.paths["robot"], "--lidar", "rplidar",

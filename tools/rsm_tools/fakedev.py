@@ -3,7 +3,7 @@
     rsm-fakedev [--robot] [--lms] [--ld06] [--rplidar] [--capture CAP] [--log FILE] [--seconds S]
                 [--robot-drop AFTER:FOR] [--lms-drop AFTER:FOR]
                 [--watchdog-ms MS] [--ticks-mm N] [--no-autobaud] [--units mm|cm]
-                [--quiet]
+                [--patient] [--quiet]
 
 Creates one pseudo-terminal per device (the robot and the LMS when none of
 ``--robot``, ``--lms``, ``--ld06``, ``--rplidar`` is given) and prints one
@@ -88,6 +88,12 @@ AFTER seconds after its first session opened (nothing is received or sent;
 the robot itself carries on, so its watchdog stops it and its session
 stays open); ``--lms-drop`` likewise, counted from its first stream start.
 
+Load: a device whose host stops reading for 0.2 s drops the rest of the
+frame it was sending (as a UART's receive buffer overruns).  With
+``--patient`` it waits for the host however long, so that what a host
+gets is the same on a loaded machine (a test's verdict then does not
+depend on the load); SIGINT and SIGTERM still end the run.
+
 ``--log FILE`` writes one JSON object per line for everything the devices
 do (handshake steps, commands with their argument and the host's rate at
 that moment, rate changes, watchdog stops, requests, ACK/NAK, stream
@@ -166,8 +172,9 @@ class PtyPort:
     """The device end of a pseudo-terminal; the slave stays open here too, so
     the host may open and close it at will without hang-ups."""
 
-    def __init__(self, name: str) -> None:
+    def __init__(self, name: str, patient: bool = False) -> None:
         self.name = name
+        self.patient = patient  # never drop a frame for a host that stopped reading
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)
         os.set_blocking(self.master, False)
@@ -201,7 +208,7 @@ class PtyPort:
                 n = os.write(self.master, view)
                 view = view[n:]
             except (BlockingIOError, InterruptedError):
-                if time.monotonic() >= deadline:
+                if not self.patient and time.monotonic() >= deadline:
                     self.overflows += 1   # the host stopped reading: drop the rest
                     return
                 select.select([], [self.master], [], 0.02)
@@ -1029,6 +1036,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--no-autobaud", action="store_true",
                     help="CONFIGpac says AutoBaud 0 (the host should not send HOSTBAUD)")
     ap.add_argument("--units", choices=("mm", "cm"), default="mm", help="laser units (default mm)")
+    ap.add_argument("--patient", action="store_true",
+                    help="wait for a host that stops reading however long, dropping nothing (tests)")
     ap.add_argument("--quiet", action="store_true", help="print only the port paths and errors")
     a = ap.parse_args(argv)
     if not 100 <= a.watchdog_ms <= 65535 or not 1 <= a.ticks_mm <= 65535:
@@ -1052,17 +1061,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     body = Body()
     devices: List[Device] = []
     try:
-        robot = FakeRobot(PtyPort("robot"), log, body, playback, a) if want_robot else None
-        laser = FakeLaser(PtyPort("laser"), log, body, playback, a) if want_lms else None
+        robot = FakeRobot(PtyPort("robot", a.patient), log, body, playback, a) if want_robot else None
+        laser = FakeLaser(PtyPort("laser", a.patient), log, body, playback, a) if want_lms else None
         if robot is not None:
             robot.laser = laser
             devices.append(robot)
         if laser is not None:
             devices.append(laser)
         if a.ld06:
-            devices.append(FakeLD06(PtyPort("ld06"), log, body, playback, a))
+            devices.append(FakeLD06(PtyPort("ld06", a.patient), log, body, playback, a))
         if a.rplidar:
-            rplidar = FakeRPLIDAR(PtyPort("rplidar"), log, body, playback, a)
+            rplidar = FakeRPLIDAR(PtyPort("rplidar", a.patient), log, body, playback, a)
             rplidar.robot = robot
             devices.append(rplidar)
         for d in devices:
