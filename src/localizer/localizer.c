@@ -1720,8 +1720,9 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
     } else {
         outcome = step_rsm(loc, npts, rep, &clk);
     }
+    /* A robot standing still sees the same walls again: nothing new. */
     if (loc->cfg->method == RSM_METHOD_MAP && (outcome == RSM_SCAN_FIRST || (outcome == RSM_SCAN_ACCEPTED &&
-        !contradicted && !rep->recovered && rep->fit_ratio >= loc->cfg->track_min_fit))) {
+        odometry_moved && !contradicted && !rep->recovered && rep->fit_ratio >= loc->cfg->track_min_fit))) {
         wall_heading(loc, npts);
     }
     if (calibrating(loc)) {

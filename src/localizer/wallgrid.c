@@ -20,62 +20,63 @@
 
 float rsm_wallgrid_diff(float a, float b)
 {
-    float d = fmodf(a - b + 0.5f * QUARTER, QUARTER);
-    if (d < 0.0f) {
-        d += QUARTER;
-    }
-    return d - 0.5f * QUARTER;
+    /* floor, not fmodf: one division and a rounding on any target. */
+    const float d = a - b;
+    return d - QUARTER * rsm_floorf(d / QUARTER + 0.5f);
 }
 
 void rsm_wallgrid_direction(const rsm_point_t *pts, size_t n, float expect, float window_rad, float *dir,
                             float *support, float *straight)
 {
-    /* The expected direction at four times its angle, and the cosine of
-     * four times the window: a stretch passes when its quadrupled angle
-     * lies within that of the expected one. */
-    const float ec = rsm_cosf(4.0f * expect);
-    const float es = rsm_sinf(4.0f * expect);
+    /* Each stretch is turned by -expect and its angle quadrupled there
+     * (complex squaring twice: no trigonometry, no division), so that the
+     * window is a bound on the quadrupled angle's cosine; the factor of
+     * its length's fourth power is divided out only for the stretches
+     * that count. */
+    const float ce = rsm_cosf(expect);
+    const float se = rsm_sinf(expect);
     const float min_cos = window_rad >= 0.25f * RSM_PI ? -2.0f : rsm_cosf(4.0f * window_rad);
     float c_sum = 0.0f;
     float s_sum = 0.0f;
     float length = 0.0f;
     float all = 0.0f;
+    float ax;
+    float ay;
     size_t i;
-    for (i = 0; i + 2u < n; ++i) {
-        const float dx = pts[i + 2u].x - pts[i].x;
-        const float dy = pts[i + 2u].y - pts[i].y;
+    if (n < 3u) {
+        *support = 0.0f;
+        *straight = 0.0f;
+        *dir = expect;
+        return;
+    }
+    ax = pts[1].x - pts[0].x;
+    ay = pts[1].y - pts[0].y;
+    for (i = 2; i < n; ++i) {
+        /* The stretch from point i-2 to i, in two steps a and b. */
+        const float bx = pts[i].x - pts[i - 1u].x;
+        const float by = pts[i].y - pts[i - 1u].y;
+        const float dx = ax + bx;
+        const float dy = ay + by;
         const float d2 = dx * dx + dy * dy;
-        float off;
-        float d;
-        float c2;
-        float s2;
-        float c4;
-        float s4;
-        float rc;
-        float rs;
-        if (!(d2 >= WALL_MIN_M * WALL_MIN_M && d2 <= WALL_MAX_M * WALL_MAX_M)) {
-            continue;
+        const float off = ax * by - ay * bx; /* its length times the middle point's distance off it */
+        ax = bx;
+        ay = by;
+        if (d2 >= WALL_MIN_M * WALL_MIN_M && d2 <= WALL_MAX_M * WALL_MAX_M &&
+            off * off <= WALL_STRAIGHT * WALL_STRAIGHT * d2 * d2) {
+            const float xr = dx * ce + dy * se;
+            const float yr = dy * ce - dx * se;
+            const float c2 = xr * xr - yr * yr;
+            const float s2 = 2.0f * xr * yr;
+            const float c4 = c2 * c2 - s2 * s2; /* d2^2 cos(4 (angle - expect)) */
+            const float d = sqrtf(d2);
+            all += d;
+            if (c4 >= min_cos * d2 * d2) {
+                const float w = d / (d2 * d2);
+                c_sum += w * c4;
+                s_sum += w * (2.0f * c2 * s2);
+                length += d;
+            }
         }
-        off = (pts[i + 1u].x - pts[i].x) * dy - (pts[i + 1u].y - pts[i].y) * dx; /* length times distance */
-        if (off * off > WALL_STRAIGHT * WALL_STRAIGHT * d2 * d2) {
-            continue;
-        }
-        /* cos and sin of twice, then four times, the angle, from the
-         * squared components: no trigonometry per stretch. */
-        c2 = (dx * dx - dy * dy) / d2;
-        s2 = 2.0f * dx * dy / d2;
-        c4 = c2 * c2 - s2 * s2;
-        s4 = 2.0f * c2 * s2;
-        rc = c4 * ec + s4 * es; /* relative to the expected direction */
-        rs = s4 * ec - c4 * es;
-        d = sqrtf(d2);
-        all += d;
-        if (rc < min_cos) {
-            continue;
-        }
-        c_sum += d * rc;
-        s_sum += d * rs;
-        length += d;
     }
     *support = length;
     *straight = all;

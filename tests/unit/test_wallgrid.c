@@ -155,10 +155,11 @@ void test_ekf_heading_pull_should_move_as_an_update_and_keep_p(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_ekf_pull_heading(NULL, 0.1f, 0.01f));
 }
 
-/* The localizer learns the grid from its first scans: a robot standing in
- * a room turned by 0.2 rad has the room's direction after 20 scans, and
- * none with the measurement off. */
-static void learn(float sigma, uint32_t *scans, float *ref)
+/* The localizer learns the grid from its first scans: a robot driving
+ * slowly through a room turned by 0.2 rad has the room's direction after
+ * 20 scans, and none with the measurement off or standing still (the same
+ * walls seen again say nothing new). */
+static void learn(float sigma, float step_m, uint32_t *scans, float *ref)
 {
     static rsm_localizer_t loc;
     static rsm_scan_t scan;
@@ -168,7 +169,7 @@ static void learn(float sigma, uint32_t *scans, float *ref)
     rsm_synth_scan_config_t scan_cfg = rsm_synth_scan_config_default();
     const float p0[9] = {1.0e-4f, 0.0f, 0.0f, 0.0f, 1.0e-4f, 0.0f, 0.0f, 0.0f, 1.0e-4f};
     const float rot = 0.2f;
-    const rsm_pose_t truth = {0.3f, -0.2f, 0.05f};
+    rsm_pose_t truth = {0.3f, -0.2f, 0.05f};
     const float co = cosf(rot);
     const float si = sinf(rot);
     size_t k;
@@ -186,9 +187,17 @@ static void learn(float sigma, uint32_t *scans, float *ref)
     cfg.wall_sigma_rad = sigma;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &truth, p0));
     scan_cfg.beams = RSM_MAX_BEAMS < 361 ? (size_t)RSM_MAX_BEAMS : 361u;
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&room, &truth, &scan_cfg, NULL, 0u, &scan));
     for (s = 0; s < 25u; ++s) {
         rsm_localizer_report_t rep;
+        if (s > 0u) {
+            const rsm_pose_t before = truth;
+            rsm_motion_t u;
+            truth.x += step_m * cosf(truth.theta);
+            truth.y += step_m * sinf(truth.theta);
+            u = rsm_synth_motion(&before, &truth, NULL);
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&room, &truth, &scan_cfg, NULL, 0u, &scan));
         scan.stamp_us = (uint64_t)(s + 1u) * 200000u;
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
         TEST_ASSERT_EQUAL_INT(s == 0u ? RSM_SCAN_FIRST : RSM_SCAN_ACCEPTED, rep.outcome);
@@ -201,11 +210,14 @@ void test_localizer_should_learn_the_walls_grid_from_its_first_scans(void)
 {
     uint32_t scans;
     float ref;
-    learn(0.0015f, &scans, &ref);
+    learn(0.0015f, 0.01f, &scans, &ref);
     TEST_ASSERT_EQUAL_UINT32(20u, scans);
     TEST_ASSERT_FLOAT_WITHIN(0.05f * DEG, 0.0f, rsm_wallgrid_diff(ref, 0.2f));
-    learn(0.0f, &scans, &ref);
+    learn(0.0f, 0.01f, &scans, &ref);
     TEST_ASSERT_EQUAL_UINT32(0u, scans);
+    /* Standing still: the first scan only. */
+    learn(0.0015f, 0.0f, &scans, &ref);
+    TEST_ASSERT_EQUAL_UINT32(1u, scans);
 }
 
 int main(void)
