@@ -71,6 +71,7 @@ static const rsmpy_field_t fields[] = {
     FLT(mapmatch.basin), FLT(mapmatch.unpin_lo), FLT(mapmatch.unpin_hi),
     FLT(map_update_m), FLT(map_update_rad), FLT(recover_ratio), FLT(recover_m), FLT(recover_rad),
     FLT(recover_margin), FLT(refute_margin), FLT(conflict_max), FLT(doubt_m), FLT(doubt_rad),
+    FLT(wall_sigma_rad), FLT(wall_window_rad),
     UNS(global_budget), FLT(global_min_share), FLT(global_min_fit), UNS(global_when_lost),
     UNS(map_frozen), UNS(map_min_hits), UNS(map_on_reject), UNS(min_points), UNS(refuse_poor),
     FLT(track_min_fit), UNS(lost_scans), UNS(min_keypoints), FLT(match_window_m), FLT(search_sigmas),
