@@ -836,6 +836,34 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
     return sqrtf(d.x * d.x + d.y * d.y) >= cfg->doubt_m || fabsf(d.theta) >= cfg->doubt_rad;
 }
 
+/* Whether odometry since the last scan left its prediction too uncertain
+ * for a match from it alone (a long gap in the scans): it added more than
+ * (twice doubt_m)^2 to the position's variance, or more than recover_rad^2
+ * to the heading's. A plain match then lands in whichever basin lies
+ * nearest, and one that fits fairly (a corridor a metre along) is not poor
+ * enough to search by its fit; the search around the prediction compares
+ * the basins. What odometry added, not the variance itself: along a
+ * corridor the matches leave the position to odometry (unpinned) and its
+ * variance stays large for many scans, and a search on each of them is a
+ * chance on each for a look-alike to win. Never on the clean Intel and
+ * ACES logs (the variances themselves stay below 0.08 m and 0.13 rad
+ * there); 0.23 m and 0.67 rad after 15 s without a scan. */
+static int unsure(const rsm_localizer_t *loc)
+{
+    const float *p = loc->ekf.p;
+    const float *q = loc->last.cov;
+    const float m = 2.0f * loc->cfg->doubt_m;
+    return (p[0] + p[4]) - (q[0] + q[4]) > m * m || p[8] - q[8] > loc->cfg->recover_rad * loc->cfg->recover_rad;
+}
+
+/* Whether odometry's step to pred could be the robot's own over dt_s
+ * seconds: no farther than the fastest plausible wheel goes. */
+static int plausible_step(const rsm_localizer_t *loc, const rsm_pose_t *pred, float dt_s)
+{
+    const rsm_pose_t d = rsm_pose_between(&loc->state.persistent.anchor, pred);
+    return sqrtf(d.x * d.x + d.y * d.y) <= loc->cfg->odometry.max_wheel_speed_mps * dt_s;
+}
+
 /* Odometry's step from the last scan's estimate to pred, checked against the
  * scan (res: the match from pred, rc its status). Two other predictions are
  * matched when there is cause:
@@ -845,7 +873,12 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  *   again, and after a refuted spike the step takes the spike back;
  * - the last estimate without the step, when the match from pred fits
  *   poorly or moved pred by more than a doubt: the step may be false (a
- *   spike, a counter reset, wheels that slipped).
+ *   spike, a counter reset, wheels that slipped). Not after a gap that
+ *   left the prediction unsure when the step is one the robot could have
+ *   driven in the time (dt_s): odometry is then the only evidence of
+ *   where it went, the ground there may not be mapped yet, and the place
+ *   it left fits as well as any stretch of corridor alike (ACES, 10 m in
+ *   15 s, "refuted" into a 10 m error); the search around pred decides.
  * One replaces the match from pred only when it fits as well as recent
  * scans (recover_ratio of their fit: with many outliers in the scans a
  * poor fit beating a poorer one drops true steps) and beats pred's fit by
@@ -863,7 +896,8 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  * story; such a weaker case sets *doubted instead, and the caller searches
  * around pred. Returns what was made of the step. */
 static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred,
-                                         int odometry_moved, int *rc, rsm_mapmatch_result_t *res, int *doubted)
+                                         int odometry_moved, float dt_s, int *rc, rsm_mapmatch_result_t *res,
+                                         int *doubted)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t *anchor = &loc->state.persistent.anchor;
@@ -891,7 +925,9 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
         stall_lead = held == RSM_ODOMETRY_CAUGHT_UP && beyond_doubt(cfg, &loc->state.persistent.trusted, anchor);
         counted_first = held == RSM_ODOMETRY_REFUTED || stall_lead;
     }
-    if (*rc != RSM_OK || res->hit < cfg->recover_ratio * loc->state.persistent.fit || beyond_doubt(cfg, pred, &res->pose)) {
+    if ((*rc != RSM_OK || res->hit < cfg->recover_ratio * loc->state.persistent.fit ||
+         beyond_doubt(cfg, pred, &res->pose)) &&
+        !(unsure(loc) && plausible_step(loc, pred, dt_s))) {
         /* After a stall in which matching found the robot move, the step
          * repeated that motion; else it was false. */
         alt_pred[n] = *anchor;
@@ -998,8 +1034,8 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
     return RECOVERY_TAKEN;
 }
 
-static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_moved, rsm_localizer_report_t *rep,
-                              stage_clock_t *clk, int *contradicted)
+static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_moved, float dt_s,
+                              rsm_localizer_report_t *rep, stage_clock_t *clk, int *contradicted)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t pred = loc->ekf.x;
@@ -1020,7 +1056,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     }
     rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
                       &res);
-    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, &rc, &res, &doubted);
+    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, dt_s, &rc, &res, &doubted);
     if (rep->odometry == RSM_ODOMETRY_CAUGHT_UP) {
         loc->counters.caught_up++;
     } else if (rep->odometry == RSM_ODOMETRY_REFUTED) {
@@ -1029,7 +1065,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
         loc->counters.recounted++;
     }
     poor = rc == RSM_OK && res.hit < cfg->recover_ratio * loc->state.persistent.fit;
-    if ((poor || doubted) && cfg->recover_m > 0.0f) {
+    if ((poor || doubted || unsure(loc)) && cfg->recover_m > 0.0f) {
         /* Far worse than recent scans, or odometry's step doubted with no
          * prediction fitting well: odometry may be off by more than any
          * basin. The smallest correction that explains the scan first: a
@@ -1716,7 +1752,8 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
         outcome = step_global(loc, npts, rep);
         global_taken = outcome == RSM_SCAN_ACCEPTED;
     } else if (loc->cfg->method == RSM_METHOD_MAP) {
-        outcome = step_map(loc, npts, odometry_moved, rep, &clk, &contradicted);
+        outcome = step_map(loc, npts, odometry_moved,
+                           (float)(scan->stamp_us - loc->last_stamp_us) * 1.0e-6f, rep, &clk, &contradicted);
     } else {
         outcome = step_rsm(loc, npts, rep, &clk);
     }
