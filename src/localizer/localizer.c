@@ -1768,8 +1768,12 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
     } else {
         outcome = step_rsm(loc, npts, rep, &clk);
     }
-    /* A robot standing still sees the same walls again: nothing new. */
-    if (loc->cfg->method == RSM_METHOD_MAP && (outcome == RSM_SCAN_FIRST || (outcome == RSM_SCAN_ACCEPTED &&
+    /* A robot standing still sees the same walls again: nothing new. On a
+     * frozen map the map is the frame, drift cannot build up in it, and a
+     * pull towards walls a map holds a little turned (an imported map's
+     * cells) would only argue with every match. */
+    if (loc->cfg->method == RSM_METHOD_MAP && !loc->cfg->map_frozen &&
+        (outcome == RSM_SCAN_FIRST || (outcome == RSM_SCAN_ACCEPTED &&
         odometry_moved && !contradicted && !rep->recovered && rep->fit_ratio >= loc->cfg->track_min_fit))) {
         wall_heading(loc, npts);
     }
