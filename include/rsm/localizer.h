@@ -141,12 +141,13 @@ typedef struct rsm_localizer_config {
                                      * (after a stall, motion reported again; after a refuted
                                      * spike, the step that takes it back); defaults 0.1 m and
                                      * 0.1 rad */
-    float wall_sigma_rad;           /* the walls' grid as a heading measurement (RSM_METHOD_MAP;
-                                     * docs/robustness.md, "Heading from the walls"): a scan's
-                                     * straight walls set against the two perpendicular directions
-                                     * the first scans' walls ran along, with this standard
-                                     * deviation for 5 m of wall seen (more for less); 0 = off;
-                                     * default 0.017 (1 degree) */
+    float wall_sigma_rad;           /* the walls' grid as a pull on the heading (RSM_METHOD_MAP,
+                                     * while the map is written; docs/robustness.md, "Heading
+                                     * from the walls"): a scan's straight walls set against the
+                                     * two perpendicular directions the first scans' walls ran
+                                     * along, as a measurement of this standard deviation for
+                                     * 5 m of wall (more for less, and softly less within the
+                                     * window) would pull it; 0 = off; default 0.0015 */
     float wall_window_rad;          /* ... walls within this of the grid count (others are not
                                      * the grid's, or the heading is off by more than a grid
                                      * can tell); default 0.035 (2 degrees) */
