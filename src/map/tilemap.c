@@ -823,6 +823,20 @@ float rsm_tmap_occupancy_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x
     return in_range(gx, gy) ? map->occ[rsm_tmap_cell_value(map, c, gx, gy)] : 0.0f;
 }
 
+void rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t i, int32_t j, float m[4])
+{
+    const int edge_i = (i & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
+    const int edge_j = (j & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
+    const uint32_t s00 = rsm_tmap_cursor_slot(map, c, i, j);
+    const uint32_t s10 = edge_i ? rsm_tmap_cursor_slot(map, c, i + 1, j) : s00;
+    const uint32_t s01 = edge_j ? rsm_tmap_cursor_slot(map, c, i, j + 1) : s00;
+    const uint32_t s11 = !edge_j ? s10 : !edge_i ? s01 : rsm_tmap_cursor_slot(map, c, i + 1, j + 1);
+    m[0] = map->occ[rsm_tmap_slot_value(map, s00, i, j)];
+    m[1] = map->occ[rsm_tmap_slot_value(map, s10, i + 1, j)];
+    m[2] = map->occ[rsm_tmap_slot_value(map, s01, i, j + 1)];
+    m[3] = map->occ[rsm_tmap_slot_value(map, s11, i + 1, j + 1)];
+}
+
 float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy)
 {
     rsm_tmap_cursor_t c;
