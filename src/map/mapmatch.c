@@ -171,11 +171,14 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
                        const rsm_pose_t *x, sums_t *s)
 {
     const float inv_a = map->inv_cell[level];
-    const float c = rsm_cosf(x->theta) * inv_a;
-    const float sn = rsm_sinf(x->theta) * inv_a;
     const float tu = x->x * inv_a - 0.5f;
     const float tv = x->y * inv_a - 0.5f;
     const float most = rsm_tmap_read_reach(map);
+    float c;
+    float sn;
+    rsm_sincosf(x->theta, &sn, &c);
+    c *= inv_a;
+    sn *= inv_a;
     /* Every point within the map's range: no range test per point. */
     if (fabsf(x->x) + reach < most && fabsf(x->y) + reach < most) {
         sums_pass(map, level, pts, n, c, sn, tu, tv, 1, s);
@@ -196,11 +199,12 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
 static float coarse_cost(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, size_t stride,
                          const rsm_pose_t *x)
 {
-    const float c = rsm_cosf(x->theta);
-    const float sn = rsm_sinf(x->theta);
+    float c;
+    float sn;
     float cost = 0.0f;
     rsm_tmap_cursor_t cur;
     size_t k;
+    rsm_sincosf(x->theta, &sn, &c);
     rsm_tmap_cursor_init(&cur, level);
     for (k = 0; k < n; k += stride) {
         const float wx = x->x + c * pts[k].x - sn * pts[k].y;
@@ -729,9 +733,10 @@ void rsm_mapmatch_unpin_for(const rsm_mapmatch_config_t *cfg, const rsm_point_t 
     }
     spread = rsm_mapmatch_spread(pts, n, dir);
     if (spread < cfg->unpin_hi) {
-        const float c = rsm_cosf(theta);
-        const float s = rsm_sinf(theta);
         const float f = (cfg->unpin_hi - spread) / (cfg->unpin_hi - cfg->unpin_lo);
+        float c;
+        float s;
+        rsm_sincosf(theta, &s, &c);
         un->dir[0] = c * dir[0] - s * dir[1];
         un->dir[1] = s * dir[0] + c * dir[1];
         un->frac = f < 1.0f ? f : 1.0f;
