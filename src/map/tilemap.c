@@ -823,18 +823,33 @@ float rsm_tmap_occupancy_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x
     return in_range(gx, gy) ? map->occ[rsm_tmap_cell_value(map, c, gx, gy)] : 0.0f;
 }
 
-void rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t i, int32_t j, float m[4])
+/* The tile holding cell (gx, gy) of the cursor's level, or NULL. */
+static const rsm_tile_t *tile_of(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy)
+{
+    const uint32_t s = rsm_tmap_cursor_slot(map, c, gx, gy);
+    return s == RSM_TMAP_NONE ? NULL : &map->tile[s];
+}
+
+/* The occupancy of cell (gx, gy) in tile t (NULL: none held, 0). */
+static float occ_in(const rsm_tmap_t *map, const rsm_tile_t *t, int32_t gx, int32_t gy)
+{
+    return map->occ[t == NULL ? 0u : rsm_tmap_get_cell(t, rsm_tmap_cell_index(gx, gy))];
+}
+
+const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
+                                    int32_t i, int32_t j, float m[4])
 {
     const int edge_i = (i & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
     const int edge_j = (j & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
-    const uint32_t s00 = rsm_tmap_cursor_slot(map, c, i, j);
-    const uint32_t s10 = edge_i ? rsm_tmap_cursor_slot(map, c, i + 1, j) : s00;
-    const uint32_t s01 = edge_j ? rsm_tmap_cursor_slot(map, c, i, j + 1) : s00;
-    const uint32_t s11 = !edge_j ? s10 : !edge_i ? s01 : rsm_tmap_cursor_slot(map, c, i + 1, j + 1);
-    m[0] = map->occ[rsm_tmap_slot_value(map, s00, i, j)];
-    m[1] = map->occ[rsm_tmap_slot_value(map, s10, i + 1, j)];
-    m[2] = map->occ[rsm_tmap_slot_value(map, s01, i, j + 1)];
-    m[3] = map->occ[rsm_tmap_slot_value(map, s11, i + 1, j + 1)];
+    const rsm_tile_t *t00 = own ? t : tile_of(map, c, i, j);
+    const rsm_tile_t *t10 = edge_i ? tile_of(map, c, i + 1, j) : t00;
+    const rsm_tile_t *t01 = edge_j ? tile_of(map, c, i, j + 1) : t00;
+    const rsm_tile_t *t11 = !edge_j ? t10 : !edge_i ? t01 : tile_of(map, c, i + 1, j + 1);
+    m[0] = occ_in(map, t00, i, j);
+    m[1] = occ_in(map, t10, i + 1, j);
+    m[2] = occ_in(map, t01, i, j + 1);
+    m[3] = occ_in(map, t11, i + 1, j + 1);
+    return t00;
 }
 
 float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy)

@@ -180,10 +180,13 @@ static inline int rsm_tmap_split(float u, int32_t *i, float *frac)
 
 /* The occupancies of cells (i, j), (i + 1, j), (i, j + 1) and (i + 1, j + 1)
  * into m[0..3], where they straddle a tile's last column or row (i or j
- * the last of its tile): each tile they lie in is looked up once. Out of
- * line, in tilemap.c: a fifth of the map matcher's reads, whose registers
- * the other four fifths need. */
-void rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t i, int32_t j, float m[4]);
+ * the last of its tile): each tile they lie in is looked up once, but
+ * (i, j)'s when own says it is t (the caller's window). Returns (i, j)'s
+ * tile (NULL: none held), where the window moves: the next reads are
+ * likely in it. Out of line, in tilemap.c: a fifth of the map matcher's
+ * reads, whose registers the other four fifths need. */
+const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
+                                    int32_t i, int32_t j, float m[4]);
 
 /* The occupancy at (u, v) in cells of the cursor's level, cell centres at
  * whole numbers: bilinear between the four centres around it. Its
@@ -277,7 +280,9 @@ static RSM_ALWAYS_INLINE float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tm
         rsm_tmap_occ_pair(map, w->tile, k + (uint32_t)RSM_TMAP_TILE_SIDE, &m01, &m11);
     } else {
         float m[4];
-        rsm_tmap_straddle(map, c, i, j, m);
+        w->tile = rsm_tmap_straddle(map, c, ci <= mask && cj <= mask, w->tile, i, j, m);
+        w->bx = (int32_t)((uint32_t)i & ~mask);
+        w->by = (int32_t)((uint32_t)j & ~mask);
         m00 = m[0];
         m10 = m[1];
         m01 = m[2];
