@@ -107,6 +107,11 @@ static RSM_ALWAYS_INLINE void sums_pass(const rsm_tmap_t *map, uint32_t level, c
         const float sy = sn * p->y;
         const float sx = sn * p->x;
         const float cy = c * p->y;
+        /* With an FPU, gt's factors before the read: two values live across
+         * its calls (the rare lookups), not four. Without, each is a call,
+         * made only where the tests below do not skip it. */
+        const float dtu = RSM_SOFT_FLOAT ? 0.0f : cx - sy;
+        const float dtv = RSM_SOFT_FLOAT ? 0.0f : sx + cy;
         float gu;
         float gv;
         const float m = rsm_tmap_read_cells(map, &cur, &win, tu + cx - sy, tv + sx + cy, inside, &gu, &gv);
@@ -127,10 +132,14 @@ static RSM_ALWAYS_INLINE void sums_pass(const rsm_tmap_t *map, uint32_t level, c
          * With an FPU the tests cost more than they save: zu and zv are 0. */
         zu = RSM_SOFT_FLOAT && rsm_tmap_is_zero(gu);
         zv = RSM_SOFT_FLOAT && rsm_tmap_is_zero(gv);
-        /* d(cell)/d(theta) = (-s px - c py, c px - s py) / cell. The last
-         * form is gu (-sx - cy) + gv (cx - sy) without the negation: the
-         * same rounding of the same value (but a zero's sign). */
-        gt = zu ? gv * (cx - sy) : zv ? gu * (-sx - cy) : gv * (cx - sy) - gu * (sx + cy);
+        /* d(cell)/d(theta) = (-s px - c py, c px - s py) / cell. With an
+         * FPU, gu (-sx - cy) + gv (cx - sy) with the negation moved out:
+         * the same rounding of the same value (but a zero's sign). */
+        if (RSM_SOFT_FLOAT) {
+            gt = zu ? gv * (cx - sy) : zv ? gu * (-sx - cy) : gu * (-sx - cy) + gv * (cx - sy);
+        } else {
+            gt = gv * dtu - gu * dtv;
+        }
         if (!zu) {
             h0 += gu * gu;
             h2 += gu * gt;
