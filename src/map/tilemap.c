@@ -304,9 +304,15 @@ static int tile_empty(const rsm_tile_t *t)
 
 void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level)
 {
-    memset(c, 0, sizeof *c);
+    uint32_t k;
+    /* Every field set once (a memset first and then the keys was most of
+     * this, which the map matcher runs on each of its passes). */
     c->level = level;
-    rsm_tmap_cursor_forget(c);
+    for (k = 0; k < RSM_TMAP_CURSOR_WAYS * RSM_TMAP_CURSOR_WAYS; ++k) {
+        c->way[k].key = RSM_TMAP_NO_KEY;
+        c->way[k].slot = 0u;
+    }
+    rsm_tmap_window_forget(&c->win);
 }
 
 static void set_cell(rsm_tile_t *t, uint32_t i, uint32_t v)
