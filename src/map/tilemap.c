@@ -91,6 +91,10 @@ float rsm_tmap_cell(const rsm_tmap_t *map, uint32_t level)
 
 uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
 {
+    /* Tile coordinates fit int16 (RSM_TMAP_TILE_LIMIT), so the packed
+     * pair compares both at once (one load where the compiler merges the
+     * two halves). */
+    const uint32_t key = rsm_tmap_pack(tx, ty);
     uint32_t h = hash_key(level, tx, ty);
     for (;;) {
         const uint32_t s = map->hash[h];
@@ -99,7 +103,7 @@ uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, i
             return RSM_TMAP_NONE;
         }
         t = &map->tile[s];
-        if (t->tx == tx && t->ty == ty && tile_level(t) == level) {
+        if (rsm_tmap_pack(t->tx, t->ty) == key && tile_level(t) == level) {
             return s;
         }
         h = (h + 1u) & (RSM_TMAP_HASH - 1u);
