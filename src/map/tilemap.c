@@ -840,10 +840,12 @@ static const rsm_tile_t *tile_of(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, in
     return s == RSM_TMAP_NONE ? NULL : &map->tile[s];
 }
 
-/* The occupancy of cell (gx, gy) in tile t (NULL: none held, 0). */
-static float occ_in(const rsm_tmap_t *map, const rsm_tile_t *t, int32_t gx, int32_t gy)
+/* The occupancy of the cell in nibble sh (0 or 4) of byte b of tile t
+ * (NULL: none held, 0): rsm_tmap_get_cell, its index split once for the
+ * four cells. */
+static float occ_at(const rsm_tmap_t *map, const rsm_tile_t *t, uint32_t b, uint32_t sh)
 {
-    return map->occ[t == NULL ? 0u : rsm_tmap_get_cell(t, rsm_tmap_cell_index(gx, gy))];
+    return map->occ[t == NULL ? 0u : ((uint32_t)t->cell[b] >> sh) & 15u];
 }
 
 const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
@@ -855,10 +857,16 @@ const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c,
     const rsm_tile_t *t10 = edge_i ? tile_of(map, c, i + 1, j) : t00;
     const rsm_tile_t *t01 = edge_j ? tile_of(map, c, i, j + 1) : t00;
     const rsm_tile_t *t11 = !edge_j ? t10 : !edge_i ? t01 : tile_of(map, c, i + 1, j + 1);
-    m[0] = occ_in(map, t00, i, j);
-    m[1] = occ_in(map, t10, i + 1, j);
-    m[2] = occ_in(map, t01, i, j + 1);
-    m[3] = occ_in(map, t11, i + 1, j + 1);
+    /* Bytes of the two rows, byte and nibble of the two columns. */
+    const uint32_t mask = (uint32_t)RSM_TMAP_TILE_MASK;
+    const uint32_t r0 = ((uint32_t)j & mask) << (RSM_TMAP_TILE_LOG2 - 1);
+    const uint32_t r1 = ((uint32_t)(j + 1) & mask) << (RSM_TMAP_TILE_LOG2 - 1);
+    const uint32_t x0 = (uint32_t)i & mask;
+    const uint32_t x1 = (uint32_t)(i + 1) & mask;
+    m[0] = occ_at(map, t00, r0 + (x0 >> 1), (x0 & 1u) << 2);
+    m[1] = occ_at(map, t10, r0 + (x1 >> 1), (x1 & 1u) << 2);
+    m[2] = occ_at(map, t01, r1 + (x0 >> 1), (x0 & 1u) << 2);
+    m[3] = occ_at(map, t11, r1 + (x1 >> 1), (x1 & 1u) << 2);
     return t00;
 }
 
