@@ -377,10 +377,17 @@ int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t
 /* Cell of a world coordinate at a level: floor, not truncation. */
 static int32_t cell_of(float v, float inv_a)
 {
-    const float u = rsm_floorf(v * inv_a);
-    /* Far beyond the map's range (or NaN): a cell in_range refuses, and no
-     * float-to-int conversion that overflows. */
-    return u > -(float)RSM_TMAP_CELL_LIMIT && u < (float)RSM_TMAP_CELL_LIMIT ? (int32_t)u : RSM_TMAP_CELL_LIMIT;
+    const float u = v * inv_a;
+    int32_t i;
+    /* floor(u) lies in (-L, L) exactly for u in [1 - L, L). Beyond (or
+     * NaN): a cell in_range refuses, and no float-to-int conversion that
+     * overflows. Within, the truncation stepped down where it rounded up
+     * is the floor, without rsm_floorf's tests for the range it knows. */
+    if (!(u >= (float)(1 - RSM_TMAP_CELL_LIMIT) && u < (float)RSM_TMAP_CELL_LIMIT)) {
+        return RSM_TMAP_CELL_LIMIT;
+    }
+    i = (int32_t)u;
+    return (float)i > u ? i - 1 : i;
 }
 
 /* Lowers the cells from (x0, y0) towards (x1, y1), stopping margin + 1
