@@ -840,19 +840,22 @@ float rsm_tmap_occupancy_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x
     return in_range(gx, gy) ? map->occ[rsm_tmap_cell_value(map, c, gx, gy)] : 0.0f;
 }
 
-/* The tile holding cell (gx, gy) of the cursor's level, or NULL. */
+/* Read where the pool holds no tile: its cells are 0, as such a place
+ * reads (occupancy +0), so the straddle's reads need no test for it. */
+static const rsm_tile_t empty_tile = {0, 0, 0u, {0u}};
+
+/* The tile holding cell (gx, gy) of the cursor's level, or empty_tile. */
 static const rsm_tile_t *tile_of(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy)
 {
     const uint32_t s = rsm_tmap_cursor_slot(map, c, gx, gy);
-    return s == RSM_TMAP_NONE ? NULL : &map->tile[s];
+    return s == RSM_TMAP_NONE ? &empty_tile : &map->tile[s];
 }
 
-/* The occupancy of the cell in nibble sh (0 or 4) of byte b of tile t
- * (NULL: none held, 0): rsm_tmap_get_cell, its index split once for the
- * four cells. */
+/* The occupancy of the cell in nibble sh (0 or 4) of byte b of tile t:
+ * rsm_tmap_get_cell, its index split once for the four cells. */
 static float occ_at(const rsm_tmap_t *map, const rsm_tile_t *t, uint32_t b, uint32_t sh)
 {
-    return map->occ[t == NULL ? 0u : ((uint32_t)t->cell[b] >> sh) & 15u];
+    return map->occ[((uint32_t)t->cell[b] >> sh) & 15u];
 }
 
 const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
@@ -860,7 +863,7 @@ const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c,
 {
     const int edge_i = (i & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
     const int edge_j = (j & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
-    const rsm_tile_t *t00 = own ? t : tile_of(map, c, i, j);
+    const rsm_tile_t *t00 = !own ? tile_of(map, c, i, j) : t != NULL ? t : &empty_tile;
     const rsm_tile_t *t10 = edge_i ? tile_of(map, c, i + 1, j) : t00;
     const rsm_tile_t *t01 = edge_j ? tile_of(map, c, i, j + 1) : t00;
     const rsm_tile_t *t11 = !edge_j ? t10 : !edge_i ? t01 : tile_of(map, c, i + 1, j + 1);

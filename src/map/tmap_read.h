@@ -182,9 +182,10 @@ static inline int rsm_tmap_split(float u, int32_t *i, float *frac)
  * into m[0..3], where they straddle a tile's last column or row (i or j
  * the last of its tile): each tile they lie in is looked up once, but
  * (i, j)'s when own says it is t (the caller's window). Returns (i, j)'s
- * tile (NULL: none held), where the window moves: the next reads are
- * likely in it. Out of line, in tilemap.c: a fifth of the map matcher's
- * reads, whose registers the other four fifths need. */
+ * tile (one of zeros where none is held, which reads as no tile does),
+ * where the window moves: the next reads are likely in it. Out of line, in
+ * tilemap.c: a fifth of the map matcher's reads, whose registers the other
+ * four fifths need. */
 const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
                                     int32_t i, int32_t j, float m[4]);
 
