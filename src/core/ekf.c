@@ -189,9 +189,13 @@ int rsm_ekf_predict(rsm_ekf_t *ekf, const rsm_motion_t *u, const float q[9])
     if (!isfinite(u->dx) || !isfinite(u->dy) || !isfinite(u->dtheta) || (q != NULL && !all_finite(q, 9))) {
         return RSM_ERR_INVAL;
     }
-    /* Jacobians at the prior state, before it moves. */
+    /* Jacobians at the prior state, before it moves. The move is
+     * rsm_odometry_apply's, with the heading's cosine and sine taken from
+     * Ju (its first column) instead of computed again on every step. */
     rsm_odometry_jacobians(&ekf->x, u, jv, ju);
-    x = rsm_odometry_apply(&ekf->x, u);
+    x.x = ekf->x.x + ju[0] * u->dx - ju[3] * u->dy;
+    x.y = ekf->x.y + ju[3] * u->dx + ju[0] * u->dy;
+    x.theta = rsm_wrap_angle(ekf->x.theta + u->dtheta);
     mat3_sandwich(jv, ekf->p, a);
     if (q != NULL) {
         mat3_sandwich(ju, q, b);
