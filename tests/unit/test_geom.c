@@ -110,20 +110,11 @@ void test_wrap_angle_should_pass_non_finite_values_through(void)
     TEST_ASSERT_FLOAT_IS_NEG_INF(rsm_wrap_angle(-INFINITY));
 }
 
-/* rsm_wrap_angle as it was before it skipped fmodf below one turn. */
+/* rsm_wrap_angle with fmodf always first, as it was before it skipped
+ * fmodf below one turn (fmodf's result is below one turn: no second). */
 static float wrap_by_fmodf(float a)
 {
-    if (!isfinite(a)) {
-        return a;
-    }
-    a = fmodf(a, RSM_TWO_PI);
-    while (a > RSM_PI) {
-        a -= RSM_TWO_PI;
-    }
-    while (a <= -RSM_PI) {
-        a += RSM_TWO_PI;
-    }
-    return a;
+    return rsm_wrap_angle(fmodf(a, RSM_TWO_PI));
 }
 
 void test_wrap_angle_should_equal_fmodf_first_bit_for_bit(void)
