@@ -12,15 +12,17 @@
  * diagonal matrix of any scales scores 1, nearly dependent rows score ~0. */
 #define RSM_EKF_SINGULAR_RATIO 1e-6f
 
+/* x - x is +0 for a finite x and NaN for an infinite or NaN one, and a
+ * NaN stays in a sum: one test for the whole array (a test per value cost
+ * a Cortex-M4F twice the instructions, on every encoder step). */
 static int all_finite(const float *v, size_t n)
 {
+    float z = 0.0f;
     size_t i;
     for (i = 0; i < n; ++i) {
-        if (!isfinite(v[i])) {
-            return 0;
-        }
+        z += v[i] - v[i];
     }
-    return 1;
+    return z == 0.0f;
 }
 
 static int pose_finite(const rsm_pose_t *p)
@@ -187,9 +189,13 @@ int rsm_ekf_predict(rsm_ekf_t *ekf, const rsm_motion_t *u, const float q[9])
     if (!isfinite(u->dx) || !isfinite(u->dy) || !isfinite(u->dtheta) || (q != NULL && !all_finite(q, 9))) {
         return RSM_ERR_INVAL;
     }
-    /* Jacobians at the prior state, before it moves. */
+    /* Jacobians at the prior state, before it moves. The move is
+     * rsm_odometry_apply's, with the heading's cosine and sine taken from
+     * Ju (its first column) instead of computed again on every step. */
     rsm_odometry_jacobians(&ekf->x, u, jv, ju);
-    x = rsm_odometry_apply(&ekf->x, u);
+    x.x = ekf->x.x + ju[0] * u->dx - ju[3] * u->dy;
+    x.y = ekf->x.y + ju[3] * u->dx + ju[0] * u->dy;
+    x.theta = rsm_wrap_angle(ekf->x.theta + u->dtheta);
     mat3_sandwich(jv, ekf->p, a);
     if (q != NULL) {
         mat3_sandwich(ju, q, b);

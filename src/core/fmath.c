@@ -132,6 +132,44 @@ float rsm_cosf(float x)
     }
 }
 
+void rsm_sincosf(float x, float *s, float *c)
+{
+    float r;
+    float rlo;
+    float sp;
+    float cp;
+    uint32_t q;
+    if (!isfinite(x)) {
+        *s = x - x;
+        *c = x - x;
+        return;
+    }
+    q = reduce(x, &r, &rlo);
+    sp = sin_poly(r, rlo);
+    cp = cos_poly(r, rlo);
+    switch (q) {
+    case 0u:
+        *s = sp;
+        *c = cp;
+        break;
+    case 1u:
+        *s = cp;
+        *c = -sp;
+        break;
+    case 2u:
+        *s = -sp;
+        *c = -cp;
+        break;
+    default:
+        *s = -cp;
+        *c = sp;
+        break;
+    }
+    if (fabsf(x) < 0x1p-12f) {
+        *s = x; /* as rsm_sinf */
+    }
+}
+
 /* atan t for 0 <= t <= 1: atan t = pi/4 + atan((t - 1) / (t + 1)) moves t
  * above tan(pi/8) to |u| <= tan(pi/8), where the series to u^19 leaves an
  * error below u^21 / 21 < 5e-10. */

@@ -37,6 +37,10 @@
 float rsm_sinf(float x);
 float rsm_cosf(float x);
 
+/* *s = rsm_sinf(x) and *c = rsm_cosf(x), the same bits, for one argument
+ * reduction: most callers want both. */
+void rsm_sincosf(float x, float *s, float *c);
+
 /* The angle of (x, y) in [-pi, pi], with C99's atan2 rules for zeros and
  * infinities; NaN if either is NaN. */
 float rsm_atan2f(float y, float x);

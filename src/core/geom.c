@@ -8,8 +8,11 @@ float rsm_wrap_angle(float a)
     if (!isfinite(a)) {
         return a;
     }
-    /* fmodf keeps large inputs exact enough; the loop only fixes the edges. */
-    a = fmodf(a, RSM_TWO_PI);
+    /* fmodf keeps large inputs exact enough; the loop only fixes the edges.
+     * Below one turn fmodf returns a itself: no call for the usual angle. */
+    if (!(fabsf(a) < RSM_TWO_PI)) {
+        a = fmodf(a, RSM_TWO_PI);
+    }
     while (a > RSM_PI) {
         a -= RSM_TWO_PI;
     }
@@ -21,9 +24,10 @@ float rsm_wrap_angle(float a)
 
 rsm_pose_t rsm_pose_compose(const rsm_pose_t *a, const rsm_pose_t *b)
 {
-    const float c = rsm_cosf(a->theta);
-    const float s = rsm_sinf(a->theta);
+    float c;
+    float s;
     rsm_pose_t r;
+    rsm_sincosf(a->theta, &s, &c);
     r.x = a->x + c * b->x - s * b->y;
     r.y = a->y + s * b->x + c * b->y;
     r.theta = rsm_wrap_angle(a->theta + b->theta);
@@ -32,9 +36,10 @@ rsm_pose_t rsm_pose_compose(const rsm_pose_t *a, const rsm_pose_t *b)
 
 rsm_pose_t rsm_pose_inverse(const rsm_pose_t *a)
 {
-    const float c = rsm_cosf(a->theta);
-    const float s = rsm_sinf(a->theta);
+    float c;
+    float s;
     rsm_pose_t r;
+    rsm_sincosf(a->theta, &s, &c);
     r.x = -c * a->x - s * a->y;
     r.y = s * a->x - c * a->y;
     r.theta = rsm_wrap_angle(-a->theta);
@@ -49,9 +54,10 @@ rsm_pose_t rsm_pose_between(const rsm_pose_t *a, const rsm_pose_t *b)
 
 rsm_point_t rsm_pose_apply(const rsm_pose_t *a, const rsm_point_t *p)
 {
-    const float c = rsm_cosf(a->theta);
-    const float s = rsm_sinf(a->theta);
+    float c;
+    float s;
     rsm_point_t r;
+    rsm_sincosf(a->theta, &s, &c);
     r.x = a->x + c * p->x - s * p->y;
     r.y = a->y + s * p->x + c * p->y;
     return r;

@@ -88,8 +88,7 @@ static int to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_s
             float c;
             float s;
             if (trig == NULL) {
-                c = rsm_cosf(a);
-                s = rsm_sinf(a);
+                rsm_sincosf(a, &s, &c);
             } else {
                 /* Compared as bits: -0 and 0 have sines of opposite sign
                  * (copies, not memcmp, which is a call per beam on the M4). */
@@ -99,8 +98,7 @@ static int to_points(const rsm_scan_t *scan, const rsm_scan_limits_t *lim, rsm_s
                 memcpy(&was, &trig->angle[i], sizeof was);
                 if (now != was) {
                     trig->angle[i] = a;
-                    trig->cos[i] = rsm_cosf(a);
-                    trig->sin[i] = rsm_sinf(a);
+                    rsm_sincosf(a, &trig->sin[i], &trig->cos[i]);
                 }
                 c = trig->cos[i];
                 s = trig->sin[i];

@@ -184,8 +184,9 @@ static void deliver(rsm_rev_t *r, const rsm_rev_turn_t *t)
                 r->stats.implausible++; /* NaN fails too: left as measured */
                 continue;
             }
-            p.x = range * rsm_cosf(b);
-            p.y = range * rsm_sinf(b);
+            rsm_sincosf(b, &p.y, &p.x);
+            p.x *= range;
+            p.y *= range;
             if (cfg->upside_down) {
                 p.y = -p.y;
             }

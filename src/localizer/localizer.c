@@ -437,9 +437,10 @@ rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc)
 
 static void to_world(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t n)
 {
-    const float c = rsm_cosf(pose->theta);
-    const float s = rsm_sinf(pose->theta);
+    float c;
+    float s;
     size_t k;
+    rsm_sincosf(pose->theta, &s, &c);
     for (k = 0; k < n; ++k) {
         loc->frame.world[k].x = pose->x + c * loc->pts[k].x - s * loc->pts[k].y;
         loc->frame.world[k].y = pose->y + s * loc->pts[k].x + c * loc->pts[k].y;
@@ -771,8 +772,9 @@ static void apply_mount(rsm_localizer_t *loc, size_t n)
         return;
     }
     {
-        const float c = rsm_cosf(m->theta);
-        const float s = rsm_sinf(m->theta);
+        float c;
+        float s;
+        rsm_sincosf(m->theta, &s, &c);
         for (k = 0; k < n; ++k) {
             const float lx = loc->pts[k].x;
             const float ly = cfg->laser_upside_down ? -loc->pts[k].y : loc->pts[k].y;

@@ -250,8 +250,9 @@ rsm_motion_t rsm_odometry_from_ticks(const rsm_odometry_config_t *cfg, int32_t d
     dth = (dr - dl) / cfg->wheel_base_m;
     /* Chord at the mid heading: exact direction of the chord of a circular
      * arc, and a length error of only dS*dth^2/24. */
-    u.dx = ds * rsm_cosf(0.5f * dth);
-    u.dy = ds * rsm_sinf(0.5f * dth);
+    rsm_sincosf(0.5f * dth, &u.dy, &u.dx);
+    u.dx *= ds;
+    u.dy *= ds;
     u.dtheta = rsm_wrap_angle(dth);
     return u;
 }
@@ -298,8 +299,7 @@ void rsm_odometry_jacobians(const rsm_pose_t *pose, const rsm_motion_t *u, float
     if (pose == NULL || u == NULL) {
         return;
     }
-    c = rsm_cosf(pose->theta);
-    s = rsm_sinf(pose->theta);
+    rsm_sincosf(pose->theta, &s, &c);
     /* x' = x + c dx - s dy, y' = y + s dx + c dy, theta' = theta + dtheta. */
     if (jv != NULL) {
         jv[0] = 1.0f;
@@ -425,8 +425,9 @@ void rsm_odometry_cal_count(rsm_odometry_cal_t *cal, const rsm_odometry_cal_conf
         /* The step in the distance's reference frame, at odometry's
          * heading since then as corrected: over a corridor's span the raw
          * heading's drift would shorten the chord and turn it aside. */
-        const float c = rsm_cosf(cal->disp_turn);
-        const float s = rsm_sinf(cal->disp_turn);
+        float c;
+        float s;
+        rsm_sincosf(cal->disp_turn, &s, &c);
         cal->disp[0] += c * u->dx - s * u->dy;
         cal->disp[1] += s * u->dx + c * u->dy;
         cal->disp_turn = rsm_wrap_angle(cal->disp_turn + u->dtheta * (1.0f + cal->k_turn) + cal->k_drift * u->dx);
@@ -481,10 +482,13 @@ static float span(const rsm_odometry_cal_t *cal, float dir[2])
     const float s = sqrtf(cal->disp[0] * cal->disp[0] + cal->disp[1] * cal->disp[1]);
     dir[0] = NAN;
     if (s >= CAL_MIN_DISP_M) {
-        const float c = rsm_cosf(cal->sref.theta);
-        const float sn = rsm_sinf(cal->sref.theta);
-        const float x = (c * cal->disp[0] - sn * cal->disp[1]) / s;
-        const float y = (sn * cal->disp[0] + c * cal->disp[1]) / s;
+        float c;
+        float sn;
+        float x;
+        float y;
+        rsm_sincosf(cal->sref.theta, &sn, &c);
+        x = (c * cal->disp[0] - sn * cal->disp[1]) / s;
+        y = (sn * cal->disp[0] + c * cal->disp[1]) / s;
         if (isfinite(x) && isfinite(y)) {
             dir[0] = x;
             dir[1] = y;

@@ -582,11 +582,11 @@ static int in_pass(const rsm_global_t *g, uint32_t a)
 /* The points of heading a, as coarse-cell offsets from the pose's cell. */
 static void offsets(const rsm_global_t *g, float cell, uint32_t a, int32_t *fx, int32_t *fy)
 {
-    const float th = (float)a * g->step_rad;
-    const float c = rsm_cosf(th);
-    const float s = rsm_sinf(th);
     const float inv = 1.0f / cell;
+    float c;
+    float s;
     uint32_t k;
+    rsm_sincosf((float)a * g->step_rad, &s, &c);
     for (k = 0; k < g->npts; ++k) {
         const rsm_point_t *p = &g->pts[k];
         fx[k] = (int32_t)floorf((c * p->x - s * p->y) * inv);
@@ -940,11 +940,12 @@ static float leaf_threshold(const rsm_global_t *g)
  * this, not the leaf's score, ranks them. */
 static float fine_score(const rsm_global_t *g, const rsm_tmap_t *map, const rsm_pose_t *x)
 {
-    const float c = rsm_cosf(x->theta);
-    const float s = rsm_sinf(x->theta);
+    float c;
+    float s;
     float sum = 0.0f;
     uint32_t k;
     rsm_tmap_cursor_t cur;
+    rsm_sincosf(x->theta, &s, &c);
     /* One cursor for the scan's points, which lie near each other in turn. */
     rsm_tmap_cursor_init(&cur, g->level);
     for (k = 0; k < g->npts; ++k) {

@@ -161,8 +161,7 @@ int rsm_localizer_import_row(rsm_localizer_t *loc, const rsm_import_grid_t *grid
     /* A write spread over the coming scans ends first: it holds the map's
      * current write counter, which the import writes with too. */
     (void)rsm_tmap_write_run(map, loc->frame.world, 0u);
-    c = rsm_cosf(grid->yaw_rad);
-    s = rsm_sinf(grid->yaw_rad);
+    rsm_sincosf(grid->yaw_rad, &s, &c);
     for (k = 0; k < grid->width; ++k) {
         occ += occupied[k] != 0u ? 1u : 0u;
     }

@@ -8,6 +8,7 @@
 
 #include "core/ekf.h"
 #include "rsm/status.h"
+#include "core/compiler.h"
 #include "core/fmath.h"
 #include "map/tmap_read.h"
 
@@ -75,21 +76,12 @@ static float points_reach(const rsm_point_t *pts, size_t n, float *mean)
     return reach;
 }
 
-/* reach: points_reach of pts. The points are placed and read in the
- * level's cells (gradients per cell, scaled to metres once at the end):
- * that is four multiplications and two subtractions a point fewer than in
- * metres. */
-static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, float reach,
-                       const rsm_pose_t *x, sums_t *s)
+/* The pass of level_sums over the points at the pose (c, sn, tu, tv) in
+ * the level's cells: the sums per cell into s. Copied into each of its two
+ * calls, so that inside is a constant in each loop, not a test per point. */
+static RSM_ALWAYS_INLINE void sums_pass(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n,
+                                        float c, float sn, float tu, float tv, int inside, sums_t *s)
 {
-    const float inv_a = map->inv_cell[level];
-    const float c = rsm_cosf(x->theta) * inv_a;
-    const float sn = rsm_sinf(x->theta) * inv_a;
-    const float tu = x->x * inv_a - 0.5f;
-    const float tv = x->y * inv_a - 0.5f;
-    const float most = rsm_tmap_read_reach(map);
-    /* Every point within the map's range: no range test per point. */
-    const int inside = fabsf(x->x) + reach < most && fabsf(x->y) + reach < most;
     /* Sums in locals: through s the compiler would store each one per
      * point, not knowing that s does not alias the points. */
     float h0 = 0.0f;
@@ -106,16 +98,23 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
     float hit = 0.0f;
     size_t unused = 0; /* counted where it is rare: a register fewer in the loop */
     rsm_tmap_cursor_t cur;
-    size_t k;
+    rsm_tmap_window_t win; /* the cursor's, but never seen outside: kept in registers */
+    const rsm_point_t *p;
     rsm_tmap_cursor_init(&cur, level);
-    for (k = 0; k < n; ++k) {
-        const float cx = c * pts[k].x;
-        const float sy = sn * pts[k].y;
-        const float sx = sn * pts[k].x;
-        const float cy = c * pts[k].y;
+    rsm_tmap_window_forget(&win);
+    for (p = pts; p != pts + n; ++p) {
+        const float cx = c * p->x;
+        const float sy = sn * p->y;
+        const float sx = sn * p->x;
+        const float cy = c * p->y;
+        /* With an FPU, gt's factors before the read: two values live across
+         * its calls (the rare lookups), not four. Without, each is a call,
+         * made only where the tests below do not skip it. */
+        const float dtu = RSM_SOFT_FLOAT ? 0.0f : cx - sy;
+        const float dtv = RSM_SOFT_FLOAT ? 0.0f : sx + cy;
         float gu;
         float gv;
-        const float m = rsm_tmap_read_cells(map, &cur, tu + cx - sy, tv + sx + cy, inside, &gu, &gv);
+        const float m = rsm_tmap_read_cells(map, &cur, &win, tu + cx - sy, tv + sx + cy, inside, &gu, &gv);
         const float r = 1.0f - m;
         float gt;
         int zu;
@@ -133,8 +132,14 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
          * With an FPU the tests cost more than they save: zu and zv are 0. */
         zu = RSM_SOFT_FLOAT && rsm_tmap_is_zero(gu);
         zv = RSM_SOFT_FLOAT && rsm_tmap_is_zero(gv);
-        /* d(cell)/d(theta) = (-s px - c py, c px - s py) / cell. */
-        gt = zu ? gv * (cx - sy) : zv ? gu * (-sx - cy) : gu * (-sx - cy) + gv * (cx - sy);
+        /* d(cell)/d(theta) = (-s px - c py, c px - s py) / cell. With an
+         * FPU, gu (-sx - cy) + gv (cx - sy) with the negation moved out:
+         * the same rounding of the same value (but a zero's sign). */
+        if (RSM_SOFT_FLOAT) {
+            gt = zu ? gv * (cx - sy) : zv ? gu * (-sx - cy) : gu * (-sx - cy) + gv * (cx - sy);
+        } else {
+            gt = gv * dtu - gu * dtv;
+        }
         if (!zu) {
             h0 += gu * gu;
             h2 += gu * gt;
@@ -152,14 +157,14 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
         b2 += gt * r;
         cost_used += r * r;
     }
-    s->h[0] = h0 * (inv_a * inv_a);
-    s->h[1] = h1 * (inv_a * inv_a);
-    s->h[2] = h2 * inv_a;
-    s->h[3] = h3 * (inv_a * inv_a);
-    s->h[4] = h4 * inv_a;
+    s->h[0] = h0;
+    s->h[1] = h1;
+    s->h[2] = h2;
+    s->h[3] = h3;
+    s->h[4] = h4;
     s->h[5] = h5;
-    s->b[0] = b0 * inv_a;
-    s->b[1] = b1 * inv_a;
+    s->b[0] = b0;
+    s->b[1] = b1;
     s->b[2] = b2;
     s->cost = cost;
     s->cost_used = cost_used;
@@ -167,16 +172,48 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
     s->used = (uint32_t)(n - unused);
 }
 
+/* reach: points_reach of pts. The points are placed and read in the
+ * level's cells (gradients per cell, scaled to metres once at the end):
+ * that is four multiplications and two subtractions a point fewer than in
+ * metres. */
+static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, float reach,
+                       const rsm_pose_t *x, sums_t *s)
+{
+    const float inv_a = map->inv_cell[level];
+    const float tu = x->x * inv_a - 0.5f;
+    const float tv = x->y * inv_a - 0.5f;
+    const float most = rsm_tmap_read_reach(map);
+    float c;
+    float sn;
+    rsm_sincosf(x->theta, &sn, &c);
+    c *= inv_a;
+    sn *= inv_a;
+    /* Every point within the map's range: no range test per point. */
+    if (fabsf(x->x) + reach < most && fabsf(x->y) + reach < most) {
+        sums_pass(map, level, pts, n, c, sn, tu, tv, 1, s);
+    } else {
+        sums_pass(map, level, pts, n, c, sn, tu, tv, 0, s);
+    }
+    s->h[0] *= inv_a * inv_a;
+    s->h[1] *= inv_a * inv_a;
+    s->h[2] *= inv_a;
+    s->h[3] *= inv_a * inv_a;
+    s->h[4] *= inv_a;
+    s->b[0] *= inv_a;
+    s->b[1] *= inv_a;
+}
+
 /* Sum of (1 - M)^2 over every stride-th point at pose x on a level, each
  * read at its nearest cell centre (no interpolation: a coarse score). */
 static float coarse_cost(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, size_t stride,
                          const rsm_pose_t *x)
 {
-    const float c = rsm_cosf(x->theta);
-    const float sn = rsm_sinf(x->theta);
+    float c;
+    float sn;
     float cost = 0.0f;
     rsm_tmap_cursor_t cur;
     size_t k;
+    rsm_sincosf(x->theta, &sn, &c);
     rsm_tmap_cursor_init(&cur, level);
     for (k = 0; k < n; k += stride) {
         const float wx = x->x + c * pts[k].x - sn * pts[k].y;
@@ -705,9 +742,10 @@ void rsm_mapmatch_unpin_for(const rsm_mapmatch_config_t *cfg, const rsm_point_t 
     }
     spread = rsm_mapmatch_spread(pts, n, dir);
     if (spread < cfg->unpin_hi) {
-        const float c = rsm_cosf(theta);
-        const float s = rsm_sinf(theta);
         const float f = (cfg->unpin_hi - spread) / (cfg->unpin_hi - cfg->unpin_lo);
+        float c;
+        float s;
+        rsm_sincosf(theta, &s, &c);
         un->dir[0] = c * dir[0] - s * dir[1];
         un->dir[1] = s * dir[0] + c * dir[1];
         un->frac = f < 1.0f ? f : 1.0f;

@@ -91,6 +91,10 @@ float rsm_tmap_cell(const rsm_tmap_t *map, uint32_t level)
 
 uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
 {
+    /* Tile coordinates fit int16 (RSM_TMAP_TILE_LIMIT), so the packed
+     * pair compares both at once (one load where the compiler merges the
+     * two halves). */
+    const uint32_t key = rsm_tmap_pack(tx, ty);
     uint32_t h = hash_key(level, tx, ty);
     for (;;) {
         const uint32_t s = map->hash[h];
@@ -99,7 +103,7 @@ uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, i
             return RSM_TMAP_NONE;
         }
         t = &map->tile[s];
-        if (t->tx == tx && t->ty == ty && tile_level(t) == level) {
+        if (rsm_tmap_pack(t->tx, t->ty) == key && tile_level(t) == level) {
             return s;
         }
         h = (h + 1u) & (RSM_TMAP_HASH - 1u);
@@ -304,9 +308,15 @@ static int tile_empty(const rsm_tile_t *t)
 
 void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level)
 {
-    memset(c, 0, sizeof *c);
+    uint32_t k;
+    /* Every field set once (a memset first and then the keys was most of
+     * this, which the map matcher runs on each of its passes). */
     c->level = level;
-    rsm_tmap_cursor_forget(c);
+    for (k = 0; k < RSM_TMAP_CURSOR_WAYS * RSM_TMAP_CURSOR_WAYS; ++k) {
+        c->way[k].key = RSM_TMAP_NO_KEY;
+        c->way[k].slot = 0u;
+    }
+    rsm_tmap_window_forget(&c->win);
 }
 
 static void set_cell(rsm_tile_t *t, uint32_t i, uint32_t v)
@@ -367,10 +377,17 @@ int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t
 /* Cell of a world coordinate at a level: floor, not truncation. */
 static int32_t cell_of(float v, float inv_a)
 {
-    const float u = rsm_floorf(v * inv_a);
-    /* Far beyond the map's range (or NaN): a cell in_range refuses, and no
-     * float-to-int conversion that overflows. */
-    return u > -(float)RSM_TMAP_CELL_LIMIT && u < (float)RSM_TMAP_CELL_LIMIT ? (int32_t)u : RSM_TMAP_CELL_LIMIT;
+    const float u = v * inv_a;
+    int32_t i;
+    /* floor(u) lies in (-L, L) exactly for u in [1 - L, L). Beyond (or
+     * NaN): a cell in_range refuses, and no float-to-int conversion that
+     * overflows. Within, the truncation stepped down where it rounded up
+     * is the floor, without rsm_floorf's tests for the range it knows. */
+    if (!(u >= (float)(1 - RSM_TMAP_CELL_LIMIT) && u < (float)RSM_TMAP_CELL_LIMIT)) {
+        return RSM_TMAP_CELL_LIMIT;
+    }
+    i = (int32_t)u;
+    return (float)i > u ? i - 1 : i;
 }
 
 /* Lowers the cells from (x0, y0) towards (x1, y1), stopping margin + 1
@@ -821,6 +838,46 @@ float rsm_tmap_occupancy_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x
     const int32_t gx = cell_of(x, inv_a);
     const int32_t gy = cell_of(y, inv_a);
     return in_range(gx, gy) ? map->occ[rsm_tmap_cell_value(map, c, gx, gy)] : 0.0f;
+}
+
+/* Read where the pool holds no tile: its cells are 0, as such a place
+ * reads (occupancy +0), so the straddle's reads need no test for it. */
+static const rsm_tile_t empty_tile = {0, 0, 0u, {0u}};
+
+/* The tile holding cell (gx, gy) of the cursor's level, or empty_tile. */
+static const rsm_tile_t *tile_of(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy)
+{
+    const uint32_t s = rsm_tmap_cursor_slot(map, c, gx, gy);
+    return s == RSM_TMAP_NONE ? &empty_tile : &map->tile[s];
+}
+
+/* The occupancy of the cell in nibble sh (0 or 4) of byte b of tile t:
+ * rsm_tmap_get_cell, its index split once for the four cells. */
+static float occ_at(const rsm_tmap_t *map, const rsm_tile_t *t, uint32_t b, uint32_t sh)
+{
+    return map->occ[((uint32_t)t->cell[b] >> sh) & 15u];
+}
+
+const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
+                                    int32_t i, int32_t j, float m[4])
+{
+    const int edge_i = (i & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
+    const int edge_j = (j & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
+    const rsm_tile_t *t00 = !own ? tile_of(map, c, i, j) : t != NULL ? t : &empty_tile;
+    const rsm_tile_t *t10 = edge_i ? tile_of(map, c, i + 1, j) : t00;
+    const rsm_tile_t *t01 = edge_j ? tile_of(map, c, i, j + 1) : t00;
+    const rsm_tile_t *t11 = !edge_j ? t10 : !edge_i ? t01 : tile_of(map, c, i + 1, j + 1);
+    /* Bytes of the two rows, byte and nibble of the two columns. */
+    const uint32_t mask = (uint32_t)RSM_TMAP_TILE_MASK;
+    const uint32_t r0 = ((uint32_t)j & mask) << (RSM_TMAP_TILE_LOG2 - 1);
+    const uint32_t r1 = ((uint32_t)(j + 1) & mask) << (RSM_TMAP_TILE_LOG2 - 1);
+    const uint32_t x0 = (uint32_t)i & mask;
+    const uint32_t x1 = (uint32_t)(i + 1) & mask;
+    m[0] = occ_at(map, t00, r0 + (x0 >> 1), (x0 & 1u) << 2);
+    m[1] = occ_at(map, t10, r0 + (x1 >> 1), (x1 & 1u) << 2);
+    m[2] = occ_at(map, t01, r1 + (x0 >> 1), (x0 & 1u) << 2);
+    m[3] = occ_at(map, t11, r1 + (x1 >> 1), (x1 & 1u) << 2);
+    return t00;
 }
 
 float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy)

@@ -111,15 +111,20 @@ typedef struct rsm_tmap_way {
 /* A key no tile has (tile coordinates stay within +-32000). */
 #define RSM_TMAP_NO_KEY 0x80008000u
 
-/* last, bx, by: the tile of the last sample whose four cells lay in one
- * tile (NULL if none is held there) and that tile's first cell; the next
- * such sample in the same tile needs no lookup at all. */
+/* The tile of the last sample whose four cells lay in one tile (NULL or a
+ * tile of zeros if none is held there) and that tile's first cell: the
+ * next such sample in the same tile needs no lookup at all. Apart from the
+ * ways, so that the map matcher's loop can keep its own in registers. */
+typedef struct rsm_tmap_window {
+    const rsm_tile_t *tile;
+    int32_t bx;
+    int32_t by;
+} rsm_tmap_window_t;
+
 typedef struct rsm_tmap_cursor {
     uint32_t level;
     rsm_tmap_way_t way[RSM_TMAP_CURSOR_WAYS * RSM_TMAP_CURSOR_WAYS];
-    const rsm_tile_t *last;
-    int32_t bx;
-    int32_t by;
+    rsm_tmap_window_t win;
 } rsm_tmap_cursor_t;
 
 void rsm_tmap_cursor_init(rsm_tmap_cursor_t *c, uint32_t level);

@@ -26,6 +26,15 @@ static inline uint32_t rsm_tmap_pack(int32_t x, int32_t y)
 /* Slot of a tile, or RSM_TMAP_NONE (the index lookup, in tilemap.c). */
 uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty);
 
+/* A window that holds no tile. */
+static inline void rsm_tmap_window_forget(rsm_tmap_window_t *w)
+{
+    /* No tile's first cell (those are multiples of the tile side). */
+    w->bx = INT32_MIN + 1;
+    w->by = INT32_MIN + 1;
+    w->tile = NULL;
+}
+
 /* Forgets every tile the cursor holds (after a write moved or freed one). */
 static inline void rsm_tmap_cursor_forget(rsm_tmap_cursor_t *c)
 {
@@ -33,10 +42,7 @@ static inline void rsm_tmap_cursor_forget(rsm_tmap_cursor_t *c)
     for (k = 0; k < RSM_TMAP_CURSOR_WAYS * RSM_TMAP_CURSOR_WAYS; ++k) {
         c->way[k].key = RSM_TMAP_NO_KEY;
     }
-    /* No tile's first cell (those are multiples of the tile side). */
-    c->bx = INT32_MIN + 1;
-    c->by = INT32_MIN + 1;
-    c->last = NULL;
+    rsm_tmap_window_forget(&c->win);
 }
 
 /* Slot of the tile holding cell (gx, gy) of the cursor's level. */
@@ -172,23 +178,37 @@ static inline int rsm_tmap_split(float u, int32_t *i, float *frac)
     return 1;
 }
 
+/* The occupancies of cells (i, j), (i + 1, j), (i, j + 1) and (i + 1, j + 1)
+ * into m[0..3], where they straddle a tile's last column or row (i or j
+ * the last of its tile): each tile they lie in is looked up once, but
+ * (i, j)'s when own says it is t (the caller's window). Returns (i, j)'s
+ * tile (one of zeros where none is held, which reads as no tile does),
+ * where the window moves: the next reads are likely in it. Out of line, in
+ * tilemap.c: a fifth of the map matcher's reads, whose registers the other
+ * four fifths need. */
+const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
+                                    int32_t i, int32_t j, float m[4]);
+
 /* The occupancy at (u, v) in cells of the cursor's level, cell centres at
  * whole numbers: bilinear between the four centres around it. Its
  * gradient per cell goes to *du_out and *dv_out. inside: the caller knows
  * (u, v) to be within rsm_tmap_read_reach of the origin on both axes, so
  * the range test can go (the map matcher checks that once per pass, not
- * once per point). */
-static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float u, float v, int inside,
-                                        float *du_out, float *dv_out)
+ * once per point). w: the cursor's window, or one of the caller's own
+ * (the map matcher's, which then stays in registers). Always inline: the
+ * map matcher has two copies of its loop. */
+static RSM_ALWAYS_INLINE float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, rsm_tmap_window_t *w, float u,
+                                        float v, int inside, float *du_out, float *dv_out)
 {
     /* The floor by conversion: the range test comes first, so the
      * conversion cannot overflow. u in [1 - L, L - 1) is exactly
      * floor(u) > -L and floor(u) + 1 < L, the cells' range. */
     const float lim = (float)(RSM_TMAP_CELL_LIMIT - 1);
+    const uint32_t mask = (uint32_t)RSM_TMAP_TILE_MASK;
     int32_t i;
     int32_t j;
-    float fu;
-    float fv;
+    uint32_t ci;
+    uint32_t cj;
     float du;
     float dv;
     float m00;
@@ -205,32 +225,39 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
         return 0.0f;
     }
     if (!RSM_SOFT_FLOAT || !rsm_tmap_split(u, &i, &du) || !rsm_tmap_split(v, &j, &dv)) {
+        /* u - trunc(u) is exact, and so is its sum with 1 rounded once
+         * as u - (trunc(u) - 1) is: the same bits as the difference from
+         * floor(u), for fewer instructions. */
         i = (int32_t)u;
         j = (int32_t)v;
-        fu = (float)i;
-        fv = (float)j;
-        if (fu > u) {
+        du = u - (float)i;
+        dv = v - (float)j;
+        if (du < 0.0f) {
             --i;
-            fu -= 1.0f;
+            du += 1.0f;
         }
-        if (fv > v) {
+        if (dv < 0.0f) {
             --j;
-            fv -= 1.0f;
+            dv += 1.0f;
         }
-        du = u - fu;
-        dv = v - fv;
     }
-    if ((i & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (j & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK) {
-        /* All four cells in one tile: looked up only when it is not the
-         * last such sample's tile. */
-        const uint32_t k = rsm_tmap_cell_index(i, j);
-        if ((i & ~RSM_TMAP_TILE_MASK) != c->bx || (j & ~RSM_TMAP_TILE_MASK) != c->by) {
-            const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
-            c->bx = i & ~RSM_TMAP_TILE_MASK;
-            c->by = j & ~RSM_TMAP_TILE_MASK;
-            c->last = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
-        }
-        if (c->last == NULL) {
+    /* The cell's column and row in the window's tile: both below the
+     * tile's last when the four cells lie in it (one compare each, the
+     * window's tile and its edge at once). */
+    ci = (uint32_t)i - (uint32_t)w->bx;
+    cj = (uint32_t)j - (uint32_t)w->by;
+    if ((ci >= mask || cj >= mask) && ((uint32_t)i & mask) != mask && ((uint32_t)j & mask) != mask) {
+        /* All four cells in another tile: the window moves there. */
+        const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
+        w->bx = (int32_t)((uint32_t)i & ~mask);
+        w->by = (int32_t)((uint32_t)j & ~mask);
+        w->tile = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
+        ci = (uint32_t)i & mask;
+        cj = (uint32_t)j & mask;
+    }
+    if (ci < mask && cj < mask) {
+        const uint32_t k = (cj << RSM_TMAP_TILE_LOG2) | ci;
+        if (w->tile == NULL) {
             *du_out = 0.0f;
             *dv_out = 0.0f;
             return 0.0f;
@@ -240,31 +267,27 @@ static inline float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tmap_cursor_t
          * a zero gradient exactly (no occupancy is -0), at a dozen calls
          * into libgcc. */
         {
-            const uint32_t v00 = rsm_tmap_get_cell(c->last, k);
-            if (rsm_tmap_get_cell(c->last, k + 1u) == v00 &&
-                rsm_tmap_get_cell(c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE) == v00 &&
-                rsm_tmap_get_cell(c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u) == v00) {
+            const uint32_t v00 = rsm_tmap_get_cell(w->tile, k);
+            if (rsm_tmap_get_cell(w->tile, k + 1u) == v00 &&
+                rsm_tmap_get_cell(w->tile, k + (uint32_t)RSM_TMAP_TILE_SIDE) == v00 &&
+                rsm_tmap_get_cell(w->tile, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u) == v00) {
                 *du_out = 0.0f;
                 *dv_out = 0.0f;
                 return map->occ[v00];
             }
         }
 #endif
-        rsm_tmap_occ_pair(map, c->last, k, &m00, &m10);
-        rsm_tmap_occ_pair(map, c->last, k + (uint32_t)RSM_TMAP_TILE_SIDE, &m01, &m11);
+        rsm_tmap_occ_pair(map, w->tile, k, &m00, &m10);
+        rsm_tmap_occ_pair(map, w->tile, k + (uint32_t)RSM_TMAP_TILE_SIDE, &m01, &m11);
     } else {
-        /* The cells straddle a tile's last column or row: each tile they
-         * lie in is looked up once. */
-        const int edge_i = (i & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
-        const int edge_j = (j & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
-        const uint32_t s00 = rsm_tmap_cursor_slot(map, c, i, j);
-        const uint32_t s10 = edge_i ? rsm_tmap_cursor_slot(map, c, i + 1, j) : s00;
-        const uint32_t s01 = edge_j ? rsm_tmap_cursor_slot(map, c, i, j + 1) : s00;
-        const uint32_t s11 = !edge_j ? s10 : !edge_i ? s01 : rsm_tmap_cursor_slot(map, c, i + 1, j + 1);
-        m00 = map->occ[rsm_tmap_slot_value(map, s00, i, j)];
-        m10 = map->occ[rsm_tmap_slot_value(map, s10, i + 1, j)];
-        m01 = map->occ[rsm_tmap_slot_value(map, s01, i, j + 1)];
-        m11 = map->occ[rsm_tmap_slot_value(map, s11, i + 1, j + 1)];
+        float m[4];
+        w->tile = rsm_tmap_straddle(map, c, ci <= mask && cj <= mask, w->tile, i, j, m);
+        w->bx = (int32_t)((uint32_t)i & ~mask);
+        w->by = (int32_t)((uint32_t)j & ~mask);
+        m00 = m[0];
+        m10 = m[1];
+        m01 = m[2];
+        m11 = m[3];
     }
     a = m10 - m00;
     b = m11 - m01;
@@ -293,7 +316,7 @@ static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_
                                          float *dx, float *dy)
 {
     const float inv_a = map->inv_cell[c->level];
-    const float m = rsm_tmap_read_cells(map, c, x * inv_a - 0.5f, y * inv_a - 0.5f, inside, dx, dy);
+    const float m = rsm_tmap_read_cells(map, c, &c->win, x * inv_a - 0.5f, y * inv_a - 0.5f, inside, dx, dy);
     *dx *= inv_a;
     *dy *= inv_a;
     return m;

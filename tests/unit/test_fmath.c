@@ -103,6 +103,35 @@ void test_sinf_cosf_should_keep_sign_of_zero_and_reject_non_finite(void)
     TEST_ASSERT_TRUE(fabsf(rsm_sinf(1.0e7f)) <= 1.0f);
 }
 
+void test_sincosf_should_give_sinf_and_cosf_bit_for_bit(void)
+{
+    static const float special[] = {0.0f, -0.0f, 1.0e-30f, -1.0e-30f, 0x1p-12f, -0x1p-12f, 0x1.fffffep-13f,
+                                    0.785398f, 1.5707964f, -3.1415927f, 3.1415927f, 24999.0f, -25001.0f,
+                                    1.0e7f, -1.0e20f};
+    uint32_t seed = 5u;
+    uint32_t mismatches = 0u;
+    float s;
+    float c;
+    size_t k;
+    int32_t i;
+    for (k = 0; k < sizeof special / sizeof special[0]; ++k) {
+        rsm_sincosf(special[k], &s, &c);
+        TEST_ASSERT_EQUAL_HEX32(bits_of(rsm_sinf(special[k])), bits_of(s));
+        TEST_ASSERT_EQUAL_HEX32(bits_of(rsm_cosf(special[k])), bits_of(c));
+    }
+    for (i = 0; i < 200000; ++i) {
+        const float x = rsm_test_rng_uniform(&seed, -40.0f, 40.0f);
+        rsm_sincosf(x, &s, &c);
+        mismatches += bits_of(rsm_sinf(x)) != bits_of(s) ? 1u : 0u;
+        mismatches += bits_of(rsm_cosf(x)) != bits_of(c) ? 1u : 0u;
+    }
+    TEST_ASSERT_EQUAL_UINT32(0u, mismatches);
+    rsm_sincosf(INFINITY, &s, &c);
+    TEST_ASSERT_TRUE(isnan(s) && isnan(c));
+    rsm_sincosf(NAN, &s, &c);
+    TEST_ASSERT_TRUE(isnan(s) && isnan(c));
+}
+
 void test_atan2f_should_be_within_3_ulp_all_around(void)
 {
     err_max_t a = {0.0, 0.0};
@@ -188,6 +217,7 @@ int main(void)
     RUN_TEST(test_sinf_cosf_should_be_within_6e8_up_to_8192);
     RUN_TEST(test_sinf_cosf_should_be_within_1_ulp_near_the_angles_used);
     RUN_TEST(test_sinf_cosf_should_keep_sign_of_zero_and_reject_non_finite);
+    RUN_TEST(test_sincosf_should_give_sinf_and_cosf_bit_for_bit);
     RUN_TEST(test_atan2f_should_be_within_3_ulp_all_around);
     RUN_TEST(test_atan2f_should_follow_c99_on_zeros_and_infinities);
     RUN_TEST(test_logf_should_be_within_2_ulp_over_the_exponent_range);

@@ -1,6 +1,7 @@
 /* Unit tests for src/core/geom.c: angle wrapping and the pose algebra. */
 #include <math.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "rsm/geom.h"
 #include "test_support.h"
@@ -107,6 +108,37 @@ void test_wrap_angle_should_pass_non_finite_values_through(void)
     TEST_ASSERT_FLOAT_IS_NAN(rsm_wrap_angle(NAN));
     TEST_ASSERT_FLOAT_IS_INF(rsm_wrap_angle(INFINITY));
     TEST_ASSERT_FLOAT_IS_NEG_INF(rsm_wrap_angle(-INFINITY));
+}
+
+/* rsm_wrap_angle with fmodf always first, as it was before it skipped
+ * fmodf below one turn (fmodf's result is below one turn: no second). */
+static float wrap_by_fmodf(float a)
+{
+    return rsm_wrap_angle(fmodf(a, RSM_TWO_PI));
+}
+
+void test_wrap_angle_should_equal_fmodf_first_bit_for_bit(void)
+{
+    /* fmodf returns a itself below one turn, so skipping it there changes
+     * no bit; the turn's edges and beyond go through it. */
+    static const float special[] = {0.0f, -0.0f, RSM_PI, -RSM_PI, RSM_TWO_PI, -RSM_TWO_PI, 6.2831850f, -6.2831850f,
+                                    6.2831860f, 1.0e-38f, 25.0f, -1.0e6f};
+    uint32_t seed = 11u;
+    uint32_t mismatches = 0u;
+    size_t k;
+    int32_t i;
+    for (k = 0; k < sizeof special / sizeof special[0]; ++k) {
+        const float a = wrap_by_fmodf(special[k]);
+        const float b = rsm_wrap_angle(special[k]);
+        TEST_ASSERT_EQUAL_MEMORY(&a, &b, sizeof a);
+    }
+    for (i = 0; i < 200000; ++i) {
+        const float x = rsm_test_rng_uniform(&seed, -20.0f, 20.0f);
+        const float a = wrap_by_fmodf(x);
+        const float b = rsm_wrap_angle(x);
+        mismatches += memcmp(&a, &b, sizeof a) != 0 ? 1u : 0u;
+    }
+    TEST_ASSERT_EQUAL_UINT32(0u, mismatches);
 }
 
 void test_pose_compose_should_rotate_then_translate(void)
@@ -220,6 +252,7 @@ int main(void)
     RUN_TEST(test_wrap_angle_should_leave_the_interval_alone);
     RUN_TEST(test_wrap_angle_should_reduce_large_values_to_input_precision);
     RUN_TEST(test_wrap_angle_should_pass_non_finite_values_through);
+    RUN_TEST(test_wrap_angle_should_equal_fmodf_first_bit_for_bit);
     RUN_TEST(test_pose_compose_should_rotate_then_translate);
     RUN_TEST(test_pose_inverse_should_undo_compose_on_random_poses);
     RUN_TEST(test_pose_between_should_be_the_relative_pose_on_random_poses);
