@@ -146,7 +146,8 @@ typedef struct rsm_localizer_config {
                                      * from the walls"): a scan's straight walls set against the
                                      * two perpendicular directions the first scans' walls ran
                                      * along, as a measurement of this standard deviation for
-                                     * 5 m of wall (more for less, and softly less within the
+                                     * 5 m of straight stretches, about 2.5 m of wall (more for
+                                     * less, and softly less within the
                                      * window) would pull it; 0 = off; default 0.0015 */
     float wall_window_rad;          /* ... walls within this of the grid count (others are not
                                      * the grid's, or the heading is off by more than a grid

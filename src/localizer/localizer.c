@@ -1159,7 +1159,8 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
  * grid: in a building without one, directions spread evenly put a few
  * stretches in any window, whose mean would hold the heading where it is. */
 #define WALL_MIN_SHARE 0.25f
-/* wall_sigma_rad is for this much wall seen. */
+/* wall_sigma_rad is for this much of the stretches seen (they overlap:
+ * about half as much wall). */
 #define WALL_SIGMA_SUPPORT_M 5.0f
 
 /* The walls' grid (wallgrid.h): learnt from the first scans, then a
