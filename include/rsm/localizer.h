@@ -356,7 +356,8 @@ typedef struct rsm_localizer {
                                                    * fit saved with a loaded map (0: none loaded),
                                                    * the bar of a global search's proof */
             float wall_ref;                       /* the walls' grid direction in the world,
-                                                   * modulo a quarter turn, once learnt ... */
+                                                   * modulo a quarter turn, as learnt so far
+                                                   * (fixed after the first 20 scans) ... */
             float wall_c;                         /* ... learnt from the first scans: their
                                                    * directions at four times the angle, */
             float wall_s;                         /* summed (cosines, sines) */

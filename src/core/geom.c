@@ -24,12 +24,11 @@ float rsm_wrap_angle(float a)
 
 rsm_pose_t rsm_pose_compose(const rsm_pose_t *a, const rsm_pose_t *b)
 {
-    float c;
-    float s;
+    const rsm_point_t p = {b->x, b->y};
+    const rsm_point_t q = rsm_pose_apply(a, &p);
     rsm_pose_t r;
-    rsm_sincosf(a->theta, &s, &c);
-    r.x = a->x + c * b->x - s * b->y;
-    r.y = a->y + s * b->x + c * b->y;
+    r.x = q.x;
+    r.y = q.y;
     r.theta = rsm_wrap_angle(a->theta + b->theta);
     return r;
 }

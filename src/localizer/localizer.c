@@ -883,7 +883,7 @@ static int plausible_step(const rsm_localizer_t *loc, const rsm_pose_t *pred, fl
  *   poorly or moved pred by more than a doubt: the step may be false (a
  *   spike, a counter reset, wheels that slipped). Not after a gap that
  *   left the prediction unsure when the step is one the robot could have
- *   driven in the time (dt_s): odometry is then the only evidence of
+ *   driven in the time (driven): odometry is then the only evidence of
  *   where it went, the ground there may not be mapped yet, and the place
  *   it left fits as well as any stretch of corridor alike (ACES, 10 m in
  *   15 s, "refuted" into a 10 m error); the search around pred decides.
@@ -904,7 +904,7 @@ static int plausible_step(const rsm_localizer_t *loc, const rsm_pose_t *pred, fl
  * story; such a weaker case sets *doubted instead, and the caller searches
  * around pred. Returns what was made of the step. */
 static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred,
-                                         int odometry_moved, float dt_s, int *rc, rsm_mapmatch_result_t *res,
+                                         int odometry_moved, int driven, int *rc, rsm_mapmatch_result_t *res,
                                          int *doubted)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
@@ -935,7 +935,7 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
     }
     if ((*rc != RSM_OK || res->hit < cfg->recover_ratio * loc->state.persistent.fit ||
          beyond_doubt(cfg, pred, &res->pose)) &&
-        !(unsure(loc, dt_s) && plausible_step(loc, pred, dt_s))) {
+        !driven) {
         /* After a stall in which matching found the robot move, the step
          * repeated that motion; else it was false. */
         alt_pred[n] = *anchor;
@@ -1047,6 +1047,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t pred = loc->ekf.x;
+    const int gap = unsure(loc, dt_s); /* of the prediction, before any match moves it */
     rsm_mapmatch_result_t res;
     rsm_mapmatch_unpin_t unpin;
     int ambiguous = 0;
@@ -1064,7 +1065,8 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     }
     rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
                       &res);
-    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, dt_s, &rc, &res, &doubted);
+    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, gap && plausible_step(loc, &pred, dt_s), &rc, &res,
+                               &doubted);
     if (rep->odometry == RSM_ODOMETRY_CAUGHT_UP) {
         loc->counters.caught_up++;
     } else if (rep->odometry == RSM_ODOMETRY_REFUTED) {
@@ -1073,7 +1075,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
         loc->counters.recounted++;
     }
     poor = rc == RSM_OK && res.hit < cfg->recover_ratio * loc->state.persistent.fit;
-    if ((poor || doubted || unsure(loc, dt_s)) && cfg->recover_m > 0.0f) {
+    if ((poor || doubted || gap) && cfg->recover_m > 0.0f) {
         /* Far worse than recent scans, or odometry's step doubted with no
          * prediction fitting well: odometry may be off by more than any
          * basin. The smallest correction that explains the scan first: a
@@ -1172,8 +1174,8 @@ static void wall_heading(rsm_localizer_t *loc, size_t npts)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const float theta = loc->ekf.x.theta;
-    float expect = 0.0f;
-    float window = cfg->wall_window_rad;
+    const float window = cfg->wall_window_rad;
+    float expect;
     float dir;
     float support;
     float straight;
@@ -1185,10 +1187,7 @@ static void wall_heading(rsm_localizer_t *loc, size_t npts)
         rsm_wallgrid_direction(loc->pts, npts, 0.0f, RSM_PI, &expect, &support, &straight);
         rsm_wallgrid_direction(loc->pts, npts, expect, 4.0f * window, &expect, &support, &straight);
     } else {
-        const float ref = loc->state.persistent.wall_scans >= WALL_REF_SCANS
-                              ? loc->state.persistent.wall_ref
-                              : 0.25f * rsm_atan2f(loc->state.persistent.wall_s, loc->state.persistent.wall_c);
-        expect = ref - theta;
+        expect = loc->state.persistent.wall_ref - theta;
     }
     rsm_wallgrid_direction(loc->pts, npts, expect, window, &dir, &support, &straight);
     if (support < WALL_MIN_SUPPORT_M || support < WALL_MIN_SHARE * straight) {
@@ -1198,10 +1197,9 @@ static void wall_heading(rsm_localizer_t *loc, size_t npts)
         const float world = 4.0f * (dir + theta);
         loc->state.persistent.wall_c += support * rsm_cosf(world);
         loc->state.persistent.wall_s += support * rsm_sinf(world);
-        if (++loc->state.persistent.wall_scans == WALL_REF_SCANS) {
-            loc->state.persistent.wall_ref =
-                0.25f * rsm_atan2f(loc->state.persistent.wall_s, loc->state.persistent.wall_c);
-        }
+        loc->state.persistent.wall_ref =
+            0.25f * rsm_atan2f(loc->state.persistent.wall_s, loc->state.persistent.wall_c);
+        loc->state.persistent.wall_scans++;
         return;
     }
     delta = rsm_wallgrid_diff(loc->state.persistent.wall_ref, dir + theta);
