@@ -1043,7 +1043,7 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
 }
 
 static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_moved, float dt_s,
-                              rsm_localizer_report_t *rep, stage_clock_t *clk, int *contradicted)
+                              rsm_localizer_report_t *rep, stage_clock_t *clk, int *contradicted, int *carried)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t pred = loc->ekf.x;
@@ -1065,6 +1065,20 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     }
     rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
                       &res);
+    if (dt_s > UNSURE_GAP_S && !odometry_moved && cfg->recover_m > 0.0f &&
+        (rc != RSM_OK || res.used < cfg->min_points / 2u || res.hit < cfg->track_min_fit * loc->state.persistent.fit)) {
+        /* No scan for a while, odometry still, and the scan no longer
+         * fits where the robot stood: it was carried (or the building
+         * changed around it), as far as the time allowed. A search near
+         * the old pose would find a look-alike within its reach and
+         * "prove" it against rivals there only (Intel's kidnaps: a room
+         * 7 m off the truth, fitting as well as the map's own); the
+         * caller reports lost at once, and the global search, if on,
+         * covers the whole map. Kept at the prediction, not written. */
+        rep->fit_ratio = rc == RSM_OK && loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 0.0f;
+        *carried = 1;
+        return RSM_SCAN_POOR_FIT;
+    }
     rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, gap && plausible_step(loc, &pred, dt_s), &rc, &res,
                                &doubted);
     if (rep->odometry == RSM_ODOMETRY_CAUGHT_UP) {
@@ -1698,6 +1712,7 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
     int odometry_moved;
     int global_taken = 0;
     int contradicted = 0;
+    int carried = 0;
     rsm_pose_t pred;
     int n;
     if (!RSM_SAME_BUILD(rsm_scan_t, scan_size, fingerprint)) {
@@ -1765,7 +1780,7 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
         global_taken = outcome == RSM_SCAN_ACCEPTED;
     } else if (loc->cfg->method == RSM_METHOD_MAP) {
         outcome = step_map(loc, npts, odometry_moved,
-                           (float)(scan->stamp_us - loc->last_stamp_us) * 1.0e-6f, rep, &clk, &contradicted);
+                           (float)(scan->stamp_us - loc->last_stamp_us) * 1.0e-6f, rep, &clk, &contradicted, &carried);
     } else {
         outcome = step_rsm(loc, npts, rep, &clk);
     }
@@ -1851,7 +1866,7 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
     if (contradicted) {
         loc->counters.contradicted++;
     }
-    rep->track = track_state(loc, outcome, rep, contradicted);
+    rep->track = track_state(loc, outcome, rep, contradicted || carried);
     if (global_running(loc)) {
         /* Searching, the estimate is unknown whatever the scans did. */
         rep->track = RSM_TRACK_LOST;
@@ -1859,7 +1874,7 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
                rsm_global_check(&loc->state.persistent.map) == RSM_OK) {
         /* Near where it was lost first (the recovery's reach), the window
          * doubling with each search that proves nothing. */
-        begin_global(loc, loc->cfg->recover_m > 0.0f ? loc->cfg->recover_m : 0.0f);
+        begin_global(loc, loc->cfg->recover_m > 0.0f && !carried ? loc->cfg->recover_m : 0.0f);
     }
     loc->counters.track[rep->track]++;
     loc->last_stamp_us = scan->stamp_us;

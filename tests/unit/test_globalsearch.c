@@ -446,6 +446,31 @@ static void test_a_window_that_misses_grows(void)
     TEST_ASSERT_TRUE(loc.counters.global_ambiguous >= 1u);
 }
 
+/* Maps the path's first `at` scans, then freezes the map (cfg is kept by
+ * pointer: from now on). */
+static void map_then_freeze(const rsm_synth_world_t *world, size_t at)
+{
+    cfg.map_frozen = 0u;
+    map_path(world, at);
+    cfg.map_frozen = 1u;
+}
+
+/* Scan k after the map was made up to scan `at`, the robot at
+ * path[from + k] with odometry from path[from + k - 1] (none for k = 0:
+ * whatever moved it there, odometry did not see), stamped pause_us after
+ * the path's own time. */
+static void step_elsewhere(const rsm_synth_world_t *world, size_t from, size_t at, size_t k, uint64_t pause_us,
+                           rsm_localizer_report_t *rep)
+{
+    if (k > 0u) {
+        const rsm_motion_t u = rsm_synth_motion(&path[from + k - 1u], &path[from + k], NULL);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(world, &path[from + k], &scan_cfg, NULL,
+                                                 (uint64_t)(at + k) * STEP_US + pause_us, &scan));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, rep));
+}
+
 /* Carried, in localization mode (issue 31's kidnapping): the scans come
  * from another place while odometry shows no jump. With global_when_lost
  * the localizer reports lost after lost_scans poor scans, searches by
@@ -466,19 +491,11 @@ static void test_lost_then_found_by_itself(void)
         int lost = 0;
         size_t found = 0;
         cfg.global_when_lost = (uint8_t)(pass == 0);
-        cfg.map_frozen = 0u;
-        map_path(&world, at);
-        cfg.map_frozen = 1u; /* kept by pointer: from now on */
+        map_then_freeze(&world, at);
         /* From here on the robot is at path[to + k]; odometry reports the
          * path's steps there, not the jump. */
         for (k = 0; to + k < path_len && found == 0u; ++k) {
-            if (k > 0u) {
-                const rsm_motion_t u = rsm_synth_motion(&path[to + k - 1u], &path[to + k], NULL);
-                TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
-            }
-            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &path[to + k], &scan_cfg, NULL,
-                                                         (uint64_t)(at + k) * STEP_US, &scan));
-            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+            step_elsewhere(&world, to, at, k, 0u, &rep);
             lost |= rep.track == RSM_TRACK_LOST;
             if (lost && rep.recovered && rep.track == RSM_TRACK_TRACKING) {
                 found = to + k;
@@ -492,6 +509,53 @@ static void test_lost_then_found_by_itself(void)
         } else {
             TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.global_searches);
         }
+    }
+}
+
+/* Carried during a pause (Intel's kidnaps, issue 31): no scan for 30 s,
+ * odometry still, and the first scan after it from 80 scans further on.
+ * It no longer fits where the robot stood, so it is lost at once, not
+ * after lost_scans scans in which a search near the old pose could take a
+ * look-alike within its reach, and the global search covers the whole map
+ * from its first round (radius 0). No scan tracks until the pose is
+ * proven, and that pose is the true one. A pause with the robot left
+ * where it stood tracks on. */
+static void test_carried_during_a_pause(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_localizer_report_t rep;
+    const uint64_t pause_us = 30000000u;
+    size_t at;
+    size_t to;
+    size_t k;
+    int pass;
+    make_path();
+    at = path_len - 120u;
+    to = path_len - 40u;
+    cfg.global_when_lost = 1u;
+    for (pass = 0; pass < 2; ++pass) {
+        const size_t from = pass == 0 ? to : at - 1u;
+        size_t found = 0;
+        map_then_freeze(&world, at);
+        for (k = 0; from + k < path_len && found == 0u; ++k) {
+            step_elsewhere(&world, from, at, k, pause_us, &rep);
+            if (pass == 1) {
+                TEST_ASSERT_EQUAL_INT(RSM_TRACK_TRACKING, rep.track);
+                TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &path[from + k]) < 0.1f);
+                found = from + k;
+            } else if (k == 0u) {
+                TEST_ASSERT_EQUAL_INT(RSM_SCAN_POOR_FIT, rep.outcome);
+                TEST_ASSERT_EQUAL_INT(RSM_TRACK_LOST, rep.track);
+                TEST_ASSERT_TRUE(rsm_localizer_searching(&loc));
+                TEST_ASSERT_EQUAL_FLOAT(0.0f, loc.state.persistent.global.radius_m);
+            } else if (rep.track == RSM_TRACK_TRACKING) {
+                TEST_ASSERT_EQUAL_UINT8(1u, rep.recovered);
+                found = from + k;
+            }
+        }
+        TEST_ASSERT_TRUE_MESSAGE(found > 0u, "never found again");
+        TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &path[found]) < 0.1f);
+        TEST_ASSERT_EQUAL_UINT32(pass == 0 ? 1u : 0u, loc.counters.global_searches > 0u ? 1u : 0u);
     }
 }
 
@@ -660,6 +724,7 @@ int main(void)
     RUN_TEST(test_a_search_near_the_estimate);
     RUN_TEST(test_a_window_that_misses_grows);
     RUN_TEST(test_lost_then_found_by_itself);
+    RUN_TEST(test_carried_during_a_pause);
     RUN_TEST(test_scans_that_contradict_the_map_are_not_written);
     RUN_TEST(test_few_points_wait);
     RUN_TEST(test_far_readings);
