@@ -1065,11 +1065,15 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     }
     rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
                       &res);
-    if (dt_s > UNSURE_GAP_S && !odometry_moved && cfg->recover_m > 0.0f &&
+    if (dt_s > UNSURE_GAP_S && !odometry_moved && cfg->recover_m > 0.0f && loc->counters.scans > 1u &&
+        loc->last.track == RSM_TRACK_TRACKING &&
         (rc != RSM_OK || res.used < cfg->min_points / 2u || res.hit < cfg->track_min_fit * loc->state.persistent.fit)) {
         /* No scan for a while, odometry still, and the scan no longer
-         * fits where the robot stood: it was carried (or the building
-         * changed around it), as far as the time allowed. A search near
+         * fits where the robot stood and tracked: it was carried (or the
+         * building changed around it), as far as the time allowed. (Not
+         * tracking before, the pause says nothing new: a map that does
+         * not hold the place fits no better before than after; nor the
+         * first scan on a loaded map.) A search near
          * the old pose would find a look-alike within its reach and
          * "prove" it against rivals there only (Intel's kidnaps: a room
          * 7 m off the truth, fitting as well as the map's own); the
