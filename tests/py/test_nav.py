@@ -486,8 +486,13 @@ def test_a_stall_and_its_catch_up_are_counted_once_and_reported(tmp_path, head_l
     traj, slog, js = tmp_path / "t.txt", tmp_path / "scans.txt", tmp_path / "s.json"
     summary = run_nav(log, traj, "rsm", "--scan-log", str(slog), "--summary-json", str(js))
     rows = scan_log(slog)
-    assert len(rows) == 600 and all(len(r) == 6 for r in rows)
+    assert len(rows) == 600 and all(len(r) == 12 for r in rows)
     assert {r[2] for r in rows} <= {"tracking", "uncertain", "lost"}
+    # each line ends with the pose's covariance (xx xy xt yy yt tt): a
+    # variance on the diagonal, positive from the first match on
+    for r in rows[1:]:
+        xx, xy, xt, yy, yt, tt = (float(v) for v in r[6:12])
+        assert xx > 0.0 and yy > 0.0 and tt > 0.0 and xy * xy < xx * yy and xt * xt < xx * tt, r
     caught = [k for k, r in enumerate(rows) if r[3] == "caught_up"]
     assert caught == [210], caught
     s = json.loads(js.read_text())

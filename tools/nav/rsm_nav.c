@@ -182,7 +182,8 @@ static void usage(FILE *f)
             "  --summary-json FILE       write the summary as JSON too (scans, outcomes, times, map)\n"
             "  --scan-log FILE           one line per scan: stamp, outcome, tracking state,\n"
             "                            what odometry's step was judged, 1 if a search placed it,\n"
-            "                            the fit over recent scans'\n"
+            "                            the fit over recent scans', the pose's covariance\n"
+            "                            (xx xy xt yy yt tt: m^2, m rad, rad^2)\n"
             "  --save-map FILE           save the persistent map at the end (docs/mapfile.md)\n"
             "  --load-map FILE|MAP.yaml  start in a saved map, or a ROS map_server map\n"
             "  --freeze-map              localization mode: the map is read, never written\n"
@@ -548,10 +549,12 @@ static void nav_result(nav_t *nav, int rc, const rsm_localizer_report_t *rep, do
     nav->time_bins[time_bin(elapsed_s)]++;
     nav->ntimes++;
     if (nav->scan_log != NULL) {
-        fprintf(nav->scan_log, "%.6f %s %s %s %u %.4f\n", file_stamp_s,
+        const float *c = rep->cov;
+        fprintf(nav->scan_log, "%.6f %s %s %s %u %.4f %.4e %.4e %.4e %.4e %.4e %.4e\n", file_stamp_s,
                 rc == RSM_OK || rc == RSM_ERR_ORDER ? rsm_outcome_name(rep->outcome) : "error",
                 rsm_track_name(rep->track),
-                rsm_odometry_verdict_name(rep->odometry), (unsigned)rep->recovered, (double)rep->fit_ratio);
+                rsm_odometry_verdict_name(rep->odometry), (unsigned)rep->recovered, (double)rep->fit_ratio,
+                (double)c[0], (double)c[1], (double)c[2], (double)c[4], (double)c[5], (double)c[8]);
     }
     if (rc != RSM_OK) {
         fprintf(stderr, "rsm-nav: scan at %.6f: %s\n", file_stamp_s, rsm_strerror(rc));
@@ -1623,7 +1626,8 @@ int main(int argc, char **argv)
             if ((nav.scan_log = open_output(optarg)) == NULL) {
                 return 1;
             }
-            fprintf(nav.scan_log, "# rsm-nav scan log: timestamp[s] outcome tracking odometry recovered fit_ratio\n");
+            fprintf(nav.scan_log, "# rsm-nav scan log: timestamp[s] outcome tracking odometry recovered fit_ratio "
+                                  "cov_xx cov_xy cov_xt cov_yy cov_yt cov_tt\n");
             break;
         case OPT_EVENTS:
             if ((nav.events = open_output(optarg)) == NULL) {

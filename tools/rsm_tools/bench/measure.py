@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 from .. import evaluate as ev
-from .. import m4, outliers
+from .. import consistency, m4, outliers
 from .common import (update_sweep, ARM_CONFIGS, ARM_CPU, BenchError, SCAN_SYMBOL, DEFAULT_MAP_LOG2, DEFAULT_MAX_BEAMS, DEFAULT_TILES,
     DRIVER_OBJECTS, KIND_METHODS, LOCAL_SPAN, M4_TARGETS, MAIN_LOG, MEMORY_TILES, METHODS, QUANTITIES,
     ROBUST_METHODS, ROTATION_BINS, SCALING_BEAMS, SCALING_MAP_LOG2, SCALING_PRESETS, SCALING_TILES, SCOPES,
@@ -207,7 +207,9 @@ def run_accuracy(navs: Dict[str, Optional[Path]], logs: List[Tuple[str, Path, Pa
     def one(task):
         label, log, run_label, m, nav = task
         traj = work / "accuracy" / label / f"{run_label}.txt"
-        return task, traj, run_nav(nav, log, m, traj)
+        # rsm's runs log each scan's covariance, checked against the error below
+        extra = ["--scan-log", str(traj.with_suffix(".scans"))] if m == "rsm" else []
+        return task, traj, run_nav(nav, log, m, traj, extra=extra)
 
     done = parallel(one, tasks, jobs)
     out = {}
@@ -226,6 +228,9 @@ def run_accuracy(navs: Dict[str, Optional[Path]], logs: List[Tuple[str, Path, Pa
                 "errors": _strip_errors(errs),
                 "per_relation": errs["all"]["errors"],
             }
+            if m == "rsm":
+                runs[run_label]["covariance"] = consistency.nees(
+                    ev.load_trajectory(traj), relations, consistency.read_covariances(traj.with_suffix(".scans")))
         out[label] = {"log": str(log), "relations": str(rel), "relation_count": len(relations), "runs": runs}
     return out
 

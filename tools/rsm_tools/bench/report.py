@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
-from .. import fullchecks, outliers
+from .. import consistency, fullchecks, outliers
 from .common import (CG_STAGE_ORDER, DRIVER_OBJECTS, HOST_PARTS, LOCAL_SPAN, MEMORY_OTHER, METHODS, PEER_COLUMNS,
     QUANTITIES, ROBUST_METHODS, RUNS, SCOPES, SECTION_TITLES, SMALL, SMALL_HEADER, STAGES, STAGE_WHAT, UNITS,
     BenchError, cg_run, find_root, floor, fmt_int, fmt_pct, fmt_q, fmt_ratio, provenance_line, ratio, run_build,
@@ -1121,6 +1121,12 @@ def report_accuracy(ctx: dict, root: Path) -> List[str]:
                           f"{fmt_int(s.get('unpinned', 0))} matches unpinned along a corridor")
         if tm:
             L += ["Persistent map at the end of the log (rsm-nav summary): " + "; ".join(tm) + ".", ""]
+        cv = [f"{run}: {consistency.describe(a['runs'][run]['covariance'])}" for run in ("rsm", SMALL)
+              if "covariance" in a["runs"].get(run, {})]
+        if cv:
+            L += [f"The covariance rsm reports against its error (`rsm_tools.consistency`, relations spanning at most "
+                  f"{LOCAL_SPAN:g} s, the covariance of `--scan-log`; docs/robustness.md, \"The covariance\"): "
+                  + "; ".join(cv) + ".", ""]
     return L
 
 
