@@ -152,6 +152,15 @@ typedef struct rsm_localizer_config {
     float wall_window_rad;          /* ... walls within this of the grid count (others are not
                                      * the grid's, or the heading is off by more than a grid
                                      * can tell); default 0.035 (2 degrees) */
+    /* What the reported covariance adds to the filter's own (docs/robustness.md, "The
+     * covariance"): the error a match cannot see because a scan's readings share it (the
+     * map's cells, a wall's texture, a beam's width), which the filter's sum over readings
+     * taken as independent leaves out. Only the report and rsm_localizer_covariance see
+     * it; the filter weighs matches with its own. */
+    float cov_floor_m;              /* standard deviation added in x and in y (as variances);
+                                     * 0 = none; default 0.008: about the median per-pose error
+                                     * on Intel's relations whatever the filter's own said */
+    float cov_floor_rad;            /* ... and in heading; default 0.002 */
     /* The global search (rsm_localizer_global; docs/globalsearch.md). */
     uint32_t global_budget;         /* the search's work a scan may take at most, in reads of its
                                      * bound grids and map cells (about 45 instructions each on a
@@ -529,6 +538,12 @@ int rsm_localizer_map_bounds(const rsm_localizer_t *loc, float *x0, float *y0, f
 
 /* Current estimate; NaN in every field for loc NULL or never initialised. */
 rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc);
+
+/* Its covariance as the last report gave it, row-major into out[9]: the
+ * filter's own plus cov_floor_m and cov_floor_rad squared on the
+ * diagonal. RSM_OK, or RSM_ERR_INVAL for NULL pointers or loc never
+ * initialised (out untouched). Reads only. */
+int rsm_localizer_covariance(const rsm_localizer_t *loc, float out[9]);
 
 /* How far the current estimate can be trusted, as the last scan left it
  * (RSM_TRACK_TRACKING before any scan: the start pose is the caller's).

@@ -71,7 +71,7 @@ static const rsmpy_field_t fields[] = {
     FLT(mapmatch.basin), FLT(mapmatch.unpin_lo), FLT(mapmatch.unpin_hi),
     FLT(map_update_m), FLT(map_update_rad), FLT(recover_ratio), FLT(recover_m), FLT(recover_rad),
     FLT(recover_margin), FLT(refute_margin), FLT(conflict_max), FLT(doubt_m), FLT(doubt_rad),
-    FLT(wall_sigma_rad), FLT(wall_window_rad),
+    FLT(wall_sigma_rad), FLT(wall_window_rad), FLT(cov_floor_m), FLT(cov_floor_rad),
     UNS(global_budget), FLT(global_min_share), FLT(global_min_fit), UNS(global_when_lost),
     UNS(map_frozen), UNS(map_min_hits), UNS(map_on_reject), UNS(min_points), UNS(refuse_poor),
     FLT(track_min_fit), UNS(lost_scans), UNS(min_keypoints), FLT(match_window_m), FLT(search_sigmas),
@@ -360,12 +360,14 @@ void rsmpy_counters(const rsmpy_t *p, uint32_t *out)
 void rsmpy_pose(const rsmpy_t *p, double *pose, double *cov)
 {
     const rsm_pose_t x = rsm_localizer_pose(&p->loc);
+    float f[9];
     size_t c;
     pose[0] = (double)x.x;
     pose[1] = (double)x.y;
     pose[2] = (double)x.theta;
+    (void)rsm_localizer_covariance(&p->loc, f);
     for (c = 0; c < 9u; ++c) {
-        cov[c] = (double)p->loc.ekf.p[c];
+        cov[c] = (double)f[c];
     }
 }
 

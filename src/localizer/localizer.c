@@ -77,6 +77,8 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.doubt_rad = 0.1f;
     c.wall_sigma_rad = 0.0015f;
     c.wall_window_rad = 0.035f;
+    c.cov_floor_m = 0.008f;
+    c.cov_floor_rad = 0.002f;
     c.isolation.tol_m = 0.0f;
     c.isolation.slope = 3.0f;
     c.isolation.window = 2u;
@@ -433,6 +435,25 @@ rsm_pose_t rsm_localizer_pose(const rsm_localizer_t *loc)
         return none;
     }
     return loc->ekf.x;
+}
+
+/* The filter's covariance as reported: with the floors of what matching
+ * cannot see on the diagonal. */
+static void reported_cov(const rsm_localizer_t *loc, float out[9])
+{
+    memcpy(out, loc->ekf.p, 9u * sizeof out[0]);
+    out[0] += loc->cfg->cov_floor_m * loc->cfg->cov_floor_m;
+    out[4] += loc->cfg->cov_floor_m * loc->cfg->cov_floor_m;
+    out[8] += loc->cfg->cov_floor_rad * loc->cfg->cov_floor_rad;
+}
+
+int rsm_localizer_covariance(const rsm_localizer_t *loc, float out[9])
+{
+    if (!ready(loc) || out == NULL) {
+        return RSM_ERR_INVAL;
+    }
+    reported_cov(loc, out);
+    return RSM_OK;
 }
 
 static void to_world(rsm_localizer_t *loc, const rsm_pose_t *pose, size_t n)
@@ -1736,7 +1757,7 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
         rep->outcome = RSM_SCAN_OUT_OF_ORDER;
         rep->track = loc->last.track;
         rep->pose = loc->ekf.x;
-        memcpy(rep->cov, loc->ekf.p, sizeof rep->cov);
+        reported_cov(loc, rep->cov);
         stage_end(&clk);
         return RSM_ERR_ORDER;
     }
@@ -1887,6 +1908,9 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
     rep->pose = est;
     memcpy(rep->cov, loc->ekf.p, sizeof rep->cov);
     stage_end(&clk);
+    /* The filter's own kept (unsure() weighs what odometry added to it),
+     * the caller's with the floors. */
     loc->last = *rep;
+    reported_cov(loc, rep->cov);
     return RSM_OK;
 }

@@ -82,6 +82,8 @@ int rsm_localizer_config_check(const rsm_localizer_config_t *cfg, const char **f
     RSM_CHECK_FIELD(cfg->noise <= RSM_NOISE_FIXED, "noise");
     RSM_CHECK_FIELD(cfg->refine_saturation >= 1u, "refine_saturation");
     RSM_CHECK_FIELD(cfg->refine_noise_scale > 0.0f, "refine_noise_scale");
+    RSM_CHECK_FIELD(cfg->cov_floor_m >= 0.0f && cfg->cov_floor_m <= 1.0e3f, "cov_floor_m");
+    RSM_CHECK_FIELD(cfg->cov_floor_rad >= 0.0f && cfg->cov_floor_rad <= RSM_PI, "cov_floor_rad");
     /* The Harris part has no init of its own: a bad one would make every
      * detection fail with RSM_ERR_INVAL, read as no key points. */
     RSM_CHECK_FIELD(cfg->harris.k_den > 0, "harris.k_den");

@@ -1497,6 +1497,7 @@ void test_localizer_accessors_should_refuse_a_localizer_never_initialised(void)
     rsm_point_t pts[4];
     float occ = -1.0f;
     float b[4] = {-1.0f, -1.0f, -1.0f, -1.0f};
+    float cov[9] = {-1.0f, -1.0f, -1.0f, -1.0f, -1.0f, -1.0f, -1.0f, -1.0f, -1.0f};
     size_t k;
     for (k = 0; k < 2u; ++k) {
         memset(&loc2, fills[k], sizeof loc2);
@@ -1506,11 +1507,55 @@ void test_localizer_accessors_should_refuse_a_localizer_never_initialised(void)
         TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_map_occupancy(&loc2, 0.0f, 0.0f, &occ));
         TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_map_bounds(&loc2, &b[0], &b[1], &b[2], &b[3]));
         TEST_ASSERT_EQUAL_INT(0, rsm_localizer_searching(&loc2));
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_covariance(&loc2, cov));
         TEST_ASSERT_EQUAL_MEMORY(&snapshot, &loc2, sizeof loc2);
     }
     TEST_ASSERT_EQUAL_FLOAT(-1.0f, occ);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_covariance(NULL, cov));
+    TEST_ASSERT_EQUAL_FLOAT(-1.0f, cov[8]);
     TEST_ASSERT_EQUAL_FLOAT(-1.0f, b[0]);
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_map_occupancy(NULL, 0.0f, 0.0f, &occ));
+}
+
+/* The reported covariance is the filter's own plus the floors of what
+ * matching cannot see (cov_floor_m, cov_floor_rad) on the diagonal, in the
+ * report and from rsm_localizer_covariance alike; the filter keeps its own,
+ * so the floors change no estimate. */
+void test_localizer_reported_covariance_should_add_the_floors_and_change_no_estimate(void)
+{
+    rsm_localizer_report_t ra;
+    rsm_localizer_report_t rb;
+    float got[9];
+    size_t k;
+    size_t c;
+    rsm_localizer_config_t none = cfg;
+    none.cov_floor_m = 0.0f;
+    none.cov_floor_rad = 0.0f;
+    cfg.cov_floor_m = 0.01f;
+    cfg.cov_floor_rad = 0.003f;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &path[0], p0_track));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc2, &none, &path[0], p0_track));
+    for (k = 0; k < 40u && k < path_len; ++k) {
+        if (k > 0u) {
+            const rsm_motion_t u = rsm_synth_motion(&path[k - 1u], &path[k], NULL);
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc2, &u));
+        }
+        make_scan(&path[k], NULL, (uint64_t)k * 100000u);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &ra));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc2, &scan, &rb));
+        TEST_ASSERT_EQUAL_MEMORY(&rb.pose, &ra.pose, sizeof ra.pose);
+        TEST_ASSERT_EQUAL_MEMORY(loc2.ekf.p, loc.ekf.p, sizeof loc.ekf.p);
+        TEST_ASSERT_EQUAL_MEMORY(loc.ekf.p, rb.cov, sizeof rb.cov);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_covariance(&loc, got));
+        for (c = 0; c < 9u; ++c) {
+            const float floor2 = c == 0u || c == 4u ? 1.0e-4f : c == 8u ? 9.0e-6f : 0.0f;
+            TEST_ASSERT_EQUAL_FLOAT(loc.ekf.p[c] + floor2, ra.cov[c]);
+            TEST_ASSERT_EQUAL_FLOAT(ra.cov[c], got[c]);
+        }
+    }
+    cfg.cov_floor_m = -0.1f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(&loc3, &cfg, &path[0], NULL));
 }
 
 /* ---- determinism and independence ------------------------------------------------ */
@@ -1722,7 +1767,13 @@ static uint32_t run_timed(rsm_method_t m, uint32_t start)
         /* Readings 1 + 2 + ... + n after the start. */
         TEST_ASSERT_EQUAL_UINT32_MESSAGE((uint32_t)((n + 1u) * (n + 2u) / 2u - 1u), ra.step_time, msg);
         TEST_ASSERT_TRUE_MESSAGE(stage_sum(&ra) <= ra.step_time, msg);
-        TEST_ASSERT_EQUAL_MEMORY(&ra, &loc.last, sizeof ra);
+        {
+            /* The last report is kept, with the filter's own covariance
+             * (the caller's has the floors: test_localizer_reported_covariance_...). */
+            rsm_localizer_report_t kept = ra;
+            memcpy(kept.cov, loc.ekf.p, sizeof kept.cov);
+            TEST_ASSERT_EQUAL_MEMORY(&kept, &loc.last, sizeof kept);
+        }
         accepted += ra.outcome == RSM_SCAN_ACCEPTED ? 1u : 0u;
         first += ra.outcome == RSM_SCAN_FIRST ? 1u : 0u;
     }
@@ -1848,5 +1899,6 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_time_an_out_of_order_scan_as_a_whole);
     RUN_TEST(test_localizer_stage_names_should_be_distinct);
     RUN_TEST(test_localizer_scan_without_motion_calls_should_still_follow_the_scans);
+    RUN_TEST(test_localizer_reported_covariance_should_add_the_floors_and_change_no_estimate);
     return UNITY_END();
 }

@@ -107,6 +107,8 @@
     F("doubt_rad", doubt_rad) \
     F("wall_sigma_rad", wall_sigma_rad) \
     F("wall_window_rad", wall_window_rad) \
+    F("cov_floor_m", cov_floor_m) \
+    F("cov_floor_rad", cov_floor_rad) \
     F("mm_search_step", mapmatch.search_step_rad) \
     F("mm_min_step", mapmatch.min_step_m) \
     F("mm_min_rad", mapmatch.min_step_rad) \
