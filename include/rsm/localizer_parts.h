@@ -304,7 +304,6 @@ typedef struct rsm_global {
     uint32_t npts;
     uint32_t nseen;
     rsm_pose_t seen_at;            /* the estimate at the scan of pts[0 .. nseen) */
-    rsm_pose_t at;                 /* the estimate (odometry's) at the scan searched */
     /* The bound grids (the caller's memory, RSM_GLOBAL_GRID_BYTES), one
      * bit a block: grid h (boxes of 2^h positions a side, h >= 1) has
      * grid_nx[h] x grid_ny[h] blocks from bit grid_at[h]; block (a, b)

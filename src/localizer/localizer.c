@@ -1646,7 +1646,6 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
             /* The poses now stand for this scan; the next round's kept
              * scan is taken once the robot has moved. */
             g->seen_at = loc->ekf.x;
-            g->at = loc->ekf.x;
             g->proved = 0;
             g->rounds++;
             return searching(loc, rep, used);

@@ -477,7 +477,6 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
         return rc;
     }
     scan_directions(g, pts, n);
-    g->at = *at;
     g->heading = 0;
     g->pass = 0;
     g->depth = 0;
