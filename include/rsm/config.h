@@ -205,6 +205,27 @@
 #define RSM_REV_ODOM_DEPTH 32
 #endif
 
+/* ---- arithmetic of the map matcher ------------------------------------ */
+
+/* 1: the map matcher's reads and sums in fixed point (32-bit integers,
+ * 64-bit sums) instead of float. Without an FPU every float operation is a
+ * call into the compiler's library, and the matcher's ~45 of them per map
+ * read were most of a scan; in fixed point a Cortex-M3's scan costs about
+ * 40 % of the instructions. The results differ from the float build's in the last
+ * bits, so the trajectory is this build's own (within the float build's
+ * accuracy: docs/fpu-less.md), and the host replay a soft-float image is
+ * compared with must be built with the same value. Defaults to 1 exactly
+ * where the library's soft-float shortcuts are on (an Arm core without an
+ * FPU: src/core/compiler.h's RSM_SOFT_FLOAT), 0 with an FPU. Part of the
+ * fingerprint below. */
+#ifndef RSM_FIXED_MATCH
+#if defined(__arm__) && !defined(__ARM_FP)
+#define RSM_FIXED_MATCH 1
+#else
+#define RSM_FIXED_MATCH 0
+#endif
+#endif
+
 /* ---- derived values and compile-time checks ---------------------------- */
 
 #define RSM_MAP_SIZE (1 << RSM_MAP_SIZE_LOG2)
@@ -238,14 +259,19 @@ RSM_STATIC_ASSERT(lms_telegram_size, RSM_LMS_MAX_TELEGRAM >= 812);
 RSM_STATIC_ASSERT(link_rx_chunk_range, RSM_LINK_RX_CHUNK >= 1 && RSM_LINK_RX_CHUNK <= 65536);
 RSM_STATIC_ASSERT(sync_depth_range, RSM_SYNC_DEPTH >= 2 && RSM_SYNC_DEPTH <= 1024);
 RSM_STATIC_ASSERT(rev_odom_depth_range, RSM_REV_ODOM_DEPTH >= 2 && RSM_REV_ODOM_DEPTH <= 1024);
+RSM_STATIC_ASSERT(fixed_match_bool, RSM_FIXED_MATCH == 0 || RSM_FIXED_MATCH == 1);
 
 /* A digest of every capacity above (FNV-1a over their values), as the code
  * including this header sees them. The library compares the caller's with
  * its own (rsm_localizer_init), so that an application compiled with other
  * capacities than the library gets RSM_ERR_CONFIG instead of a state object
- * of the wrong size. */
+ * of the wrong size. RSM_CONFIG_FINGERPRINT mixes RSM_FIXED_MATCH in too, but
+ * only when it is 1 (the float build's digest is the one it always was): a
+ * caller that expects the other arithmetic's trajectories is told so. Map
+ * files carry the capacities' digest alone: the fixed-point and the float
+ * builds read and write the same maps. */
 #define RSM_CONFIG_MIX_(h, v) ((((unsigned long)(h) ^ (unsigned long)(v)) * 16777619ul) & 0xFFFFFFFFul)
-#define RSM_CONFIG_FINGERPRINT                                                                                      \
+#define RSM_CONFIG_CAPACITY_FINGERPRINT                                                                             \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_( \
     RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(RSM_CONFIG_MIX_(2166136261ul, RSM_MAX_BEAMS), RSM_MAP_SIZE_LOG2),                  \
@@ -253,5 +279,10 @@ RSM_STATIC_ASSERT(rev_odom_depth_range, RSM_REV_ODOM_DEPTH >= 2 && RSM_REV_ODOM_
     RSM_MAX_KEYPOINTS), RSM_MAX_CANDIDATES), RSM_MAX_MATCHES), RSM_ICP_MAX_POINTS), RSM_ARIA_MAX_PACKET),             \
     RSM_ARIA_MAX_SONAR), RSM_ARIA_STR_SIZE), RSM_LMS_MAX_TELEGRAM), RSM_LINK_RX_CHUNK), RSM_SYNC_DEPTH),          \
     RSM_REV_ODOM_DEPTH), RSM_TMAP_VICTIMS), RSM_GLOBAL_SIDE), RSM_GLOBAL_POINTS), RSM_GLOBAL_CANDIDATES)
+#if RSM_FIXED_MATCH
+#define RSM_CONFIG_FINGERPRINT RSM_CONFIG_MIX_(RSM_CONFIG_CAPACITY_FINGERPRINT, 0x46495844ul) /* "FIXD" */
+#else
+#define RSM_CONFIG_FINGERPRINT RSM_CONFIG_CAPACITY_FINGERPRINT
+#endif
 
 #endif /* RSM_CONFIG_H */

@@ -75,7 +75,7 @@ static void encode_header(uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tmap_t 
     h[3] = (uint8_t)MAGIC3;
     rsm_put_u16le(h + 4, (uint16_t)RSM_MAPFILE_VERSION);
     rsm_put_u16le(h + 6, (uint16_t)RSM_MAPFILE_HEADER_BYTES);
-    put_u32(h + 8, (uint32_t)(RSM_CONFIG_FINGERPRINT & 0xFFFFFFFFul));
+    put_u32(h + 8, (uint32_t)(RSM_CONFIG_CAPACITY_FINGERPRINT & 0xFFFFFFFFul));
     put_f32(h + 12, map->cfg.cell_m);
     h[16] = map->cfg.levels;
     h[17] = (uint8_t)RSM_TMAP_TILE_LOG2;
@@ -167,7 +167,7 @@ static int check_header(const uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tma
     const float cell = get_f32(h + 12);
     if (h[0] != (uint8_t)MAGIC0 || h[1] != (uint8_t)MAGIC1 || h[2] != (uint8_t)MAGIC2 || h[3] != (uint8_t)MAGIC3 ||
         rsm_get_u16le(h + 4) != RSM_MAPFILE_VERSION || rsm_get_u16le(h + 6) != RSM_MAPFILE_HEADER_BYTES ||
-        rsm_get_u32le(h + 8) != (uint32_t)(RSM_CONFIG_FINGERPRINT & 0xFFFFFFFFul)) {
+        rsm_get_u32le(h + 8) != (uint32_t)(RSM_CONFIG_CAPACITY_FINGERPRINT & 0xFFFFFFFFul)) {
         return RSM_ERR_FORMAT;
     }
     /* Exactly the cell size in use: a map of other cells would be read at

@@ -11,6 +11,7 @@
 #include "core/compiler.h"
 #include "core/fmath.h"
 #include "map/tmap_read.h"
+#include "map/mapmatch_fixed.h"
 
 /* Smallest prior variance used, so that a filter that starts with a zero
  * covariance still has an invertible prior (m^2 and rad^2). */
@@ -47,7 +48,10 @@ int rsm_mapmatch_check(const rsm_mapmatch_config_t *cfg)
 
 /* Sums of one level at pose x: h (upper triangle of J^T J, order 00 01 02 11
  * 12 22), b = J^T r, cost = sum r^2 over all points, used = points with a
- * gradient, hit = sum of M. */
+ * gradient, hit = sum of M. The fixed-point pass's struct where it runs. */
+#if RSM_FIXED_MATCH
+typedef rsm_fixed_sums_t sums_t;
+#else
 typedef struct sums {
     float h[6];
     float b[3];
@@ -56,6 +60,7 @@ typedef struct sums {
     float hit;
     uint32_t used;
 } sums_t;
+#endif
 
 /* The largest |x| + |y| of the points (a bound on how far from the pose
  * any of them lands, whatever the heading); NaN if one is not finite. Their
@@ -172,6 +177,15 @@ static RSM_ALWAYS_INLINE void sums_pass(const rsm_tmap_t *map, uint32_t level, c
     s->used = (uint32_t)(n - unused);
 }
 
+/* The fixed-point pass where it is built (RSM_FIXED_MATCH): 1 when it ran;
+ * 0 in the float build, where the compiler drops the test. */
+#if RSM_FIXED_MATCH
+#define FIXED_PASS(map, level, pts, n, reach, inv_a, c, sn, tu, tv, inside, s) \
+    rsm_matchfix_pass(map, level, pts, n, reach, inv_a, c, sn, tu, tv, inside, s)
+#else
+#define FIXED_PASS(map, level, pts, n, reach, inv_a, c, sn, tu, tv, inside, s) 0
+#endif
+
 /* reach: points_reach of pts. The points are placed and read in the
  * level's cells (gradients per cell, scaled to metres once at the end):
  * that is four multiplications and two subtractions a point fewer than in
@@ -188,8 +202,12 @@ static void level_sums(const rsm_tmap_t *map, uint32_t level, const rsm_point_t 
     rsm_sincosf(x->theta, &sn, &c);
     c *= inv_a;
     sn *= inv_a;
-    /* Every point within the map's range: no range test per point. */
-    if (fabsf(x->x) + reach < most && fabsf(x->y) + reach < most) {
+    if (FIXED_PASS(map, level, pts, n, reach, inv_a, c, sn, tu, tv,
+                   fabsf(x->x) + reach < most && fabsf(x->y) + reach < most, s)) {
+        /* In fixed point (RSM_FIXED_MATCH): the float pass only where the
+         * points or the pose are out of the integers' range. */
+    } else if (fabsf(x->x) + reach < most && fabsf(x->y) + reach < most) {
+        /* Every point within the map's range: no range test per point. */
         sums_pass(map, level, pts, n, c, sn, tu, tv, 1, s);
     } else {
         sums_pass(map, level, pts, n, c, sn, tu, tv, 0, s);

@@ -880,6 +880,27 @@ const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c,
     return t00;
 }
 
+#if RSM_FIXED_MATCH
+/* rsm_tmap_straddle with the four cells' values instead of their
+ * occupancies, for the fixed-point reads (RSM_FIXED_MATCH); only there, so
+ * that the float build's code stays as it was. */
+const rsm_tile_t *rsm_tmap_straddle_values(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
+                                           int32_t i, int32_t j, uint32_t v[4])
+{
+    const int edge_i = (i & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
+    const int edge_j = (j & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
+    const rsm_tile_t *t00 = !own ? tile_of(map, c, i, j) : t != NULL ? t : &empty_tile;
+    const rsm_tile_t *t10 = edge_i ? tile_of(map, c, i + 1, j) : t00;
+    const rsm_tile_t *t01 = edge_j ? tile_of(map, c, i, j + 1) : t00;
+    const rsm_tile_t *t11 = !edge_j ? t10 : !edge_i ? t01 : tile_of(map, c, i + 1, j + 1);
+    v[0] = rsm_tmap_get_cell(t00, rsm_tmap_cell_index(i, j));
+    v[1] = rsm_tmap_get_cell(t10, rsm_tmap_cell_index(i + 1, j));
+    v[2] = rsm_tmap_get_cell(t01, rsm_tmap_cell_index(i, j + 1));
+    v[3] = rsm_tmap_get_cell(t11, rsm_tmap_cell_index(i + 1, j + 1));
+    return t00;
+}
+#endif
+
 float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, float *dx, float *dy)
 {
     rsm_tmap_cursor_t c;

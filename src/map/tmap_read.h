@@ -322,4 +322,127 @@ static inline float rsm_tmap_read_sample(const rsm_tmap_t *map, rsm_tmap_cursor_
     return m;
 }
 
+#if RSM_FIXED_MATCH
+/* ---- fixed-point reads (RSM_FIXED_MATCH) ---------------------------------
+ * The map matcher's reads without a float operation: a cell coordinate is
+ * its floor and a fraction of RSM_TMAP_FIX_BITS bits, an occupancy and a
+ * gradient per cell are in units of 2^-RSM_TMAP_FIX_BITS. With 15 bits
+ * every product of the interpolation fits 32 bits (differences of two
+ * occupancies up to 2^16, times a fraction below 2^15). */
+#define RSM_TMAP_FIX_BITS 15
+#define RSM_TMAP_FIX_ONE ((int32_t)1 << RSM_TMAP_FIX_BITS)
+#define RSM_TMAP_FIX_HALF ((int32_t)1 << (RSM_TMAP_FIX_BITS - 1))
+
+/* f 2^q rounded to the nearest integer, on f's bits (a few integer
+ * instructions instead of a multiplication and a conversion, two calls
+ * without an FPU): for |f| 2^q below 2^30, which the caller ensures; zeros
+ * and subnormal numbers give 0. */
+static inline int32_t rsm_tmap_fix(float f, uint32_t q)
+{
+    const uint32_t b = rsm_tmap_bits(f);
+    const int32_t e = (int32_t)((b >> 23) & 0xFFu);
+    const int32_t sh = e - 150 + (int32_t)q; /* |f| 2^q = m 2^sh */
+    uint32_t m = (b & 0x7FFFFFu) | 0x800000u;
+    if (e == 0) {
+        return 0;
+    }
+    if (sh >= 0) {
+        m <<= (uint32_t)sh;
+    } else if (sh < -24) {
+        return 0; /* below a half */
+    } else {
+        m = (m + (1u << (uint32_t)(-sh - 1))) >> (uint32_t)(-sh);
+    }
+    return (b >> 31) != 0u ? -(int32_t)m : (int32_t)m;
+}
+
+/* The occupancy of every cell value in units of 2^-RSM_TMAP_FIX_BITS
+ * (the float table rounded: the same values as min(v, sat) 2^15 / sat). */
+static inline void rsm_tmap_fix_occ(const rsm_tmap_t *map, int32_t occ[RSM_TMAP_MAX_VALUE + 1u])
+{
+    uint32_t v;
+    for (v = 0; v <= RSM_TMAP_MAX_VALUE; ++v) {
+        occ[v] = rsm_tmap_fix(map->occ[v], (uint32_t)RSM_TMAP_FIX_BITS);
+    }
+}
+
+/* rsm_tmap_straddle with the cells' values, not their occupancies. */
+const rsm_tile_t *rsm_tmap_straddle_values(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
+                                           int32_t i, int32_t j, uint32_t v[4]);
+
+/* rsm_tmap_read_cells in fixed point at (i + du 2^-15, j + dv 2^-15), du
+ * and dv in [0, 2^15): the occupancy (0 to 2^15) and its gradient per cell
+ * into *gu and *gv (each within +-2^15), rounded to the nearest unit. The
+ * caller has checked that i, j, i + 1 and j + 1 are in the cells' range.
+ * occ: rsm_tmap_fix_occ's table. The window logic is rsm_tmap_read_cells'
+ * (kept apart so that the float build's code stays as it was). */
+static RSM_ALWAYS_INLINE int32_t rsm_tmap_read_fixed(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, rsm_tmap_window_t *w,
+                                                     const int32_t *occ, int32_t i, int32_t j, int32_t du, int32_t dv,
+                                                     int32_t *gu, int32_t *gv)
+{
+    const uint32_t mask = (uint32_t)RSM_TMAP_TILE_MASK;
+    uint32_t ci = (uint32_t)i - (uint32_t)w->bx;
+    uint32_t cj = (uint32_t)j - (uint32_t)w->by;
+    int32_t m00;
+    int32_t m10;
+    int32_t m01;
+    int32_t m11;
+    int32_t a;
+    int32_t b;
+    int32_t top;
+    int32_t bottom;
+    if ((ci >= mask || cj >= mask) && ((uint32_t)i & mask) != mask && ((uint32_t)j & mask) != mask) {
+        const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
+        w->bx = (int32_t)((uint32_t)i & ~mask);
+        w->by = (int32_t)((uint32_t)j & ~mask);
+        w->tile = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
+        ci = (uint32_t)i & mask;
+        cj = (uint32_t)j & mask;
+    }
+    if (ci < mask && cj < mask) {
+        const uint32_t k = (cj << RSM_TMAP_TILE_LOG2) | ci;
+        uint32_t v00;
+        uint32_t v10;
+        uint32_t v01;
+        uint32_t v11;
+        if (w->tile == NULL) {
+            *gu = 0;
+            *gv = 0;
+            return 0;
+        }
+        v00 = rsm_tmap_get_cell(w->tile, k);
+        v10 = rsm_tmap_get_cell(w->tile, k + 1u);
+        v01 = rsm_tmap_get_cell(w->tile, k + (uint32_t)RSM_TMAP_TILE_SIDE);
+        v11 = rsm_tmap_get_cell(w->tile, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u);
+        if (v00 == v10 && v00 == v01 && v00 == v11) {
+            *gu = 0; /* most reads: four equal cells */
+            *gv = 0;
+            return occ[v00];
+        }
+        m00 = occ[v00];
+        m10 = occ[v10];
+        m01 = occ[v01];
+        m11 = occ[v11];
+    } else {
+        uint32_t v[4];
+        w->tile = rsm_tmap_straddle_values(map, c, ci <= mask && cj <= mask, w->tile, i, j, v);
+        w->bx = (int32_t)((uint32_t)i & ~mask);
+        w->by = (int32_t)((uint32_t)j & ~mask);
+        m00 = occ[v[0]];
+        m10 = occ[v[1]];
+        m01 = occ[v[2]];
+        m11 = occ[v[3]];
+    }
+    /* Right shifts of negative products: arithmetic on every compiler rsm
+     * supports (as the tile coordinates' shifts above assume). */
+    a = m10 - m00;
+    b = m11 - m01;
+    top = m00 + ((a * du + RSM_TMAP_FIX_HALF) >> RSM_TMAP_FIX_BITS);
+    bottom = m01 + ((b * du + RSM_TMAP_FIX_HALF) >> RSM_TMAP_FIX_BITS);
+    *gu = a + (((b - a) * dv + RSM_TMAP_FIX_HALF) >> RSM_TMAP_FIX_BITS);
+    *gv = bottom - top;
+    return top + (((bottom - top) * dv + RSM_TMAP_FIX_HALF) >> RSM_TMAP_FIX_BITS);
+}
+#endif /* RSM_FIXED_MATCH */
+
 #endif /* RSM_TMAP_READ_H */

@@ -757,11 +757,13 @@ def _poses(text: str) -> List[str]:
     return [l for l in text.splitlines() if l.startswith("P ")]
 
 
-def run_m4_variants(root: Path, work: Path, host_out: Optional[str]) -> dict:
+def run_m4_variants(root: Path, work: Path, host_out: Optional[str], fixed_out: Optional[str] = None) -> dict:
     """The replay built as M4_VARIANTS says, each run under QEMU: its
     instructions per scan (m4.costs), its image's sizes and whether its
     trajectory equals the host's (host_out, rsm-replay-host's output; None
-    when it was not built); and the Cortex-M0+ image's sizes."""
+    when it was not built); and the Cortex-M0+ image's sizes. The soft-float
+    builds (M3, M0+) run the fixed-point map matcher (RSM_FIXED_MATCH, their
+    default): theirs is compared with fixed_out, rsm-replay-host-fixed's."""
     out: Dict[str, dict] = {}
     for key, toolchain, opt, target, machine in M4_VARIANTS:
         extra = [M0PLUS_IMAGE] if key.startswith("m0plus") else []
@@ -773,8 +775,9 @@ def run_m4_variants(root: Path, work: Path, host_out: Optional[str]) -> dict:
         except m4.M4Error as e:
             raise BenchError(str(e))
         (work / f"{key}-replay.out").write_text(text)
+        ref = fixed_out if key.startswith(("m3", "m0plus")) else host_out
         out[key] = {"machine": machine, "opt": opt, "cost": cost, "image": _arm_size(elf),
-                    "identical": None if host_out is None else _poses(text) == _poses(host_out)}
+                    "identical": None if ref is None else _poses(text) == _poses(ref)}
         if extra:
             out["m0plus"] = {"image": _arm_size(fw_dir / f"{M0PLUS_IMAGE}.elf"), "name": M0PLUS_IMAGE}
     return out
@@ -838,7 +841,14 @@ def run_m4(root: Path, work: Path, replay_host: Optional[Path], mapflash_host: O
         if h.returncode != 0:
             raise BenchError(f"{replay_host} failed: {h.stderr[-2000:]}")
         host_out = h.stdout
-    res_out["variants"] = run_m4_variants(root, work, host_out)
+    fixed_out = None
+    fixed_host = None if replay_host is None else replay_host.with_name("rsm-replay-host-fixed")
+    if fixed_host is not None and fixed_host.is_file():
+        h = subprocess.run([str(fixed_host)], capture_output=True, text=True)
+        if h.returncode != 0:
+            raise BenchError(f"{fixed_host} failed: {h.stderr[-2000:]}")
+        fixed_out = h.stdout
+    res_out["variants"] = run_m4_variants(root, work, host_out, fixed_out)
     return res_out
 
 

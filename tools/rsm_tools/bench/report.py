@@ -297,7 +297,7 @@ def m4_floors(m4: Optional[dict]) -> List[dict]:
                              f"{what} {fmt_int(round(v))} {'<=' if ok else '>'} {fmt_int(lim)} "
                              f"(over {cost['scans']} scans)"))
     m3 = variants.get("m3-O2")
-    what = "Cortex-M3 soft float: the replay's trajectory bit-identical to the host's"
+    what = "Cortex-M3 soft float: the replay's trajectory bit-identical to the host's (both fixed-point matcher)"
     if not m3 or m3["identical"] is None:
         out.append(floor("SKIP", "m3", None, None, None, f"{what}: not measured ({why if not m3 else 'no host run'})"))
     else:
