@@ -573,7 +573,7 @@ class FakeRobot(Device):
         self.encoder_on = False
         self.motion = ("vel", 0.0, 0.0)
         self.n["closes"] += 1
-        self.log(self.dev, "close", sips=self.n["sips"])
+        self.log(self.dev, "close", sips=self.n["sips"], encoders=self.n["encoders"])
 
     # -- time -------------------------------------------------------------------------
     def wheel_speeds(self) -> Tuple[float, float]:
