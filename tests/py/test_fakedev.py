@@ -3,7 +3,9 @@ host that talks to their pseudo-terminals directly, as the real devices
 would (protocols.md, lidars.md), and they notice a host at the wrong rate.
 
 Waits are generous and never the thing being measured: every check is on
-what came back, not on how fast."""
+what came back, not on how fast. The fakes are --patient, so a test that
+stalls for a while (a loaded machine) loses no byte of a stream, and what
+must have happened before a check is waited for in the fake's log."""
 
 import argparse
 import math
@@ -111,7 +113,7 @@ def read_all_sent_before(host, entry):
 
 
 def test_robot_handshake_config_sip_stream_motion_and_watchdog(tmp_path):
-    fake = FakeDevices(tmp_path, "--robot", "--watchdog-ms", "1500", "--ticks-mm", "131")
+    fake = FakeDevices(tmp_path, "--robot", "--watchdog-ms", "1500", "--ticks-mm", "131", "--patient")
     host = Host(fake.paths["robot"])
     try:
         # Before OPEN nothing streams.
@@ -168,7 +170,7 @@ def test_robot_handshake_config_sip_stream_motion_and_watchdog(tmp_path):
 
 
 def test_robot_hostbaud_moves_the_robot_and_a_host_left_behind_hears_noise(tmp_path):
-    fake = FakeDevices(tmp_path, "--robot")
+    fake = FakeDevices(tmp_path, "--robot", "--patient")
     host = Host(fake.paths["robot"])
     try:
         handshake(host)
@@ -206,7 +208,7 @@ def test_robot_hostbaud_moves_the_robot_and_a_host_left_behind_hears_noise(tmp_p
 
 
 def test_laser_acks_naks_switches_rate_streams_and_answers_status(tmp_path):
-    fake = FakeDevices(tmp_path, "--lms", "--units", "cm")
+    fake = FakeDevices(tmp_path, "--lms", "--units", "cm", "--patient")
     host = Host(fake.paths["laser"])
     try:
         # A request whose CRC is wrong gets a NAK and is not carried out.
@@ -302,7 +304,7 @@ def test_rplidar_answers_requests_and_scans_the_simulated_world(tmp_path):
     vec = rplidar_vectors()
     stop, _reset, scan, get_info, get_health = vec["request"][:5]
     pwm_660 = vec["request"][7]
-    fake = FakeDevices(tmp_path, "--rplidar", "--quiet")
+    fake = FakeDevices(tmp_path, "--rplidar", "--quiet", "--patient")
     host = Host(fake.paths["rplidar"], 115200)
     try:
         host.send(get_health)

@@ -164,8 +164,9 @@ def test_active_mode_connects_switches_rates_streams_and_shuts_down(tmp_path, ex
     fake = FakeDevices(tmp_path, "--capture", str(excerpt_capture), "--watchdog-ms", "4000",
                        "--ticks-mm", "131", "--patient")
     try:
-        # 30 encoder packets: the robot was connected for 3 s of its own SIP
-        # cycle, time for several keep-alives however slowly rsm-nav ran.
+        # 30 encoder packets: the robot was connected for at least 3 s of its
+        # own SIP cycle, time for six keep-alives at one per 0.5 s (three
+        # are asked for below).
         stderr, rows, (live_enc, live_scans) = run_nav(tmp_path, fake.paths, 60, 30)
     finally:
         log = fake.stop()
