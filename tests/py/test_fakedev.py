@@ -392,6 +392,6 @@ def test_drop_specs_cut_on_a_count_and_mend_on_a_signal():
     counted = fakedev.Cut(fakedev.parse_drop("5f:1.5"))
     counted.sent(5, 2.0)
     assert counted.active(3.4) and not counted.active(3.5)
-    for bad in ("2", "x:1", "2:0", "-1:2", "-3f:1", "2f:forever", "2:3:4"):
+    for bad in ("2", "x:1", "2:0", "-1:2", "0f:1", "-3f:1", "2f:forever", "2:3:4"):
         with pytest.raises(argparse.ArgumentTypeError):
             fakedev.parse_drop(bad)

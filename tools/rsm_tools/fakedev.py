@@ -1045,8 +1045,8 @@ def parse_drop(text: str) -> DropSpec:
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"want AFTER:FOR (AFTER seconds or Nf frames, FOR seconds or signal), got {text!r}") from None
-    if after < 0 or (frames is not None and frames < 0) or (dur is not None and dur <= 0):
-        raise argparse.ArgumentTypeError("AFTER must be >= 0 and FOR > 0")
+    if after < 0 or (frames is not None and frames < 1) or (dur is not None and dur <= 0):
+        raise argparse.ArgumentTypeError("AFTER must be >= 0 (Nf: N >= 1) and FOR > 0")
     return DropSpec(after, frames, dur)
 
 
