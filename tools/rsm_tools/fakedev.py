@@ -216,6 +216,7 @@ class PtyPort:
                 if not self.patient and time.monotonic() >= deadline:
                     self.overflows += 1   # the host stopped reading: drop the rest
                     return
+                check_stop()              # a patient wait still ends at a signal
                 select.select([], [self.master], [], 0.02)
 
     def close(self) -> None:
@@ -1054,8 +1055,19 @@ class Stop(Exception):
     pass
 
 
-def _raise_stop(signum, frame):  # noqa: ARG001
-    raise Stop(signal.Signals(signum).name)
+_stopping: List[str] = []
+
+
+def _note_stop(signum, frame):  # noqa: ARG001
+    # Raised where the loop may stop (check_stop), never between a frame's
+    # write and its count: a summary then counts every frame the host got.
+    _stopping.append(signal.Signals(signum).name)
+
+
+def check_stop() -> None:
+    """Stop if SIGINT or SIGTERM came."""
+    if _stopping:
+        raise Stop(_stopping[0])
 
 
 # The device whose ``signal`` cut each signal ends.
@@ -1110,8 +1122,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(f"rsm-fakedev: cannot play {a.capture}: {exc}", file=sys.stderr)
             return 1
 
-    signal.signal(signal.SIGTERM, _raise_stop)
-    signal.signal(signal.SIGINT, _raise_stop)
+    signal.signal(signal.SIGTERM, _note_stop)
+    signal.signal(signal.SIGINT, _note_stop)
     for sig in RELEASE_SIGNALS:
         signal.signal(sig, _note_release)
     log = Log(a.log)
@@ -1167,6 +1179,7 @@ def run(devices: Sequence[Device], log: Log, end: float) -> None:
     device's timers, until ``end`` (monotonic seconds) or a Stop."""
     by_fd = {d.port.master: d for d in devices}
     while True:
+        check_stop()
         now = time.monotonic()
         if now >= end:
             return
