@@ -100,6 +100,19 @@ def sips(host, data):
     return [p.decode_sip(f) for f in host.frames("aria", data) if f[3] in (0x32, 0x33)]
 
 
+def read_alive(host, done, timeout=TIMEOUT):
+    """host.read_until(done), with a PULSE to the robot every 0.2 s: its
+    watchdog cannot stop it while this waits, however long the fake is held
+    up (each turn of its loop takes what the host sent before it looks at
+    the time)."""
+    got = b""
+    end = time.monotonic() + timeout
+    while not done(got) and time.monotonic() < end:
+        host.send(p.aria_command(p.CMD_PULSE))
+        got += host.read_until(lambda d: done(got + d), timeout=0.2)
+    return got
+
+
 def read_all_sent_before(host, entry):
     """Reads until every SIP and ENCODER packet the robot had sent when it
     logged entry (its ``sips``/``encoders`` then) has arrived: what comes
@@ -134,7 +147,7 @@ def test_robot_handshake_config_sip_stream_motion_and_watchdog(tmp_path):
         host.send(p.aria_command(p.CMD_ENABLE, 1))
         host.send(p.aria_command(p.CMD_ENCODER, 2))
         host.send(p.aria_command(p.CMD_VEL, 200))
-        data = host.read_until(until_aria(0x33, 3))
+        data = read_alive(host, until_aria(0x33, 3))
         moving = [s for s in sips(host, data) if s.moving]
         assert moving[-1].lvel == 200 and moving[-1].rvel == 200 and moving[-1].flags & 1
         encs = [p.decode_encoder(f) for f in host.frames("aria", data) if f[3] == p.ARIA_ENCODER]
@@ -144,13 +157,12 @@ def test_robot_handshake_config_sip_stream_motion_and_watchdog(tmp_path):
         data = host.read_until(lambda d: any(not s.moving for s in sips(host, d)))
         assert any(not s.moving for s in sips(host, data))
         # ... and drives again once commands come back (motion resumes).
-        host.send(p.aria_command(p.CMD_PULSE))
-        data = host.read_until(until_aria(0x33, 1))
+        data = read_alive(host, until_aria(0x33, 1))
         assert any(s.moving for s in sips(host, data))
 
         # VEL2 -5/+5 turns on the spot; STOP stops; CLOSE ends the stream.
         host.send(p.aria_vel2(-5, 5))
-        data = host.read_until(lambda d: any(s.lvel == -100 for s in sips(host, d)))
+        data = read_alive(host, lambda d: any(s.lvel == -100 for s in sips(host, d)))
         assert any(s.lvel == -100 and s.rvel == 100 for s in sips(host, data))
         host.send(p.aria_command(p.CMD_STOP))
         host.read_until(lambda d: any(not s.moving for s in sips(host, d)))
