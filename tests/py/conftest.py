@@ -15,6 +15,7 @@ import select
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -110,6 +111,101 @@ def rsm_nav_binary() -> Path:
 
 FAKEDEV_TIMEOUT = 30.0
 
+# How long a test waits for an event (a line, a log entry) before calling the
+# run hung: a safety net only, never what a verdict rests on.
+EVENT_LIMIT = 120.0
+
+
+def wait_until(check, what: str, limit: float = EVENT_LIMIT, poll: float = 0.05):
+    """Polls check() until it returns something true, and returns that; a
+    run that never gets there within limit seconds is hung: fail."""
+    end = time.monotonic() + limit
+    while True:
+        got = check()
+        if got:
+            return got
+        if time.monotonic() >= end:
+            pytest.fail(f"waited {limit:.0f} s for {what}", pytrace=False)
+        time.sleep(poll)
+
+
+class Lines:
+    """A running program's output, read line by line by a thread, so that a
+    test can wait for a line (an event: what the program said) without
+    blocking on the pipe."""
+
+    def __init__(self, stream):
+        self.lines = []
+        self.closed = False
+        self._lock = threading.Lock()
+        self._thread = threading.Thread(target=self._read, args=(stream,), daemon=True)
+        self._thread.start()
+
+    def _read(self, stream):
+        for line in stream:
+            with self._lock:
+                self.lines.append(line)
+        with self._lock:
+            self.closed = True
+
+    def text(self) -> str:
+        with self._lock:
+            return "".join(self.lines)
+
+    def wait_for(self, needle: str, limit: float = EVENT_LIMIT) -> None:
+        """Until a line holds needle (fails if the program ends first)."""
+        def seen():
+            text = self.text()
+            if needle in text:
+                return True
+            if self.closed:
+                pytest.fail(f"the program ended without saying {needle!r}:\n{text}", pytrace=False)
+            return False
+        wait_until(seen, repr(needle), limit)
+
+    def finish(self) -> str:
+        """Everything, once the program has closed its end."""
+        self._thread.join(timeout=EVENT_LIMIT)
+        return self.text()
+
+
+class LiveNav:
+    """rsm-nav running live (``args`` after the program), its stderr followed
+    line by line (``err``, a Lines), its stdout into a file."""
+
+    def __init__(self, tmp_path, *args):
+        self.out_path = tmp_path / "nav.out"
+        with open(self.out_path, "w", encoding="utf-8") as out:
+            self.proc = subprocess.Popen([str(rsm_nav_binary()), *map(str, args)], stdout=out,
+                                         stderr=subprocess.PIPE, text=True)
+        self.err = Lines(self.proc.stderr)
+
+    def finish(self, stop: bool = False, limit: float = EVENT_LIMIT):
+        """Waits for the end (after SIGTERM if stop); returns (stderr, stdout).
+        A run that does not end within limit seconds is hung: killed, fail."""
+        if stop and self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+        try:
+            self.proc.wait(timeout=limit)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            pytest.fail(f"rsm-nav still running after {limit:.0f} s:\n{self.err.text()}", pytrace=False)
+        return self.err.finish(), self.out_path.read_text()
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+
+
+def events_so_far(path) -> list:
+    """The complete lines of an events file being written (rsm-nav flushes
+    each line in a live run)."""
+    if not path.is_file():
+        return []
+    text = path.read_text()
+    return text[:text.rfind("\n") + 1].splitlines()
+
 
 class FakeDevices:
     """rsm-fakedev in a subprocess: ``paths`` maps ``robot``/``laser``/``ld06``/``rplidar`` to its
@@ -139,6 +235,26 @@ class FakeDevices:
             self.proc.wait()
             pytest.fail(f"rsm-fakedev printed no paths: {self.proc.stderr.read().decode()}")
         self.paths = dict(line.split() for line in lines[:want])
+
+    def log(self):
+        """The log so far (flushed line by line; a line being written is left out)."""
+        out = []
+        for line in self.log_path.read_text().splitlines():
+            try:
+                out.append(json.loads(line))
+            except json.JSONDecodeError:
+                break
+        return out
+
+    def wait_log(self, match, what: str, count: int = 1, limit: float = EVENT_LIMIT):
+        """Until count log entries satisfy match(entry); returns them."""
+        def found():
+            got = [e for e in self.log() if match(e)]
+            return got if len(got) >= count else None
+        return wait_until(found, what, limit)
+
+    def signal(self, sig) -> None:
+        self.proc.send_signal(sig)
 
     def stop(self):
         if self.proc.poll() is None:

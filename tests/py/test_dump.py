@@ -8,7 +8,6 @@ import json
 import os
 import pty
 import subprocess
-import time
 import tty
 from pathlib import Path
 
@@ -301,11 +300,13 @@ def test_dump_through_a_pty_matches_the_file(tmp_path, protocol, stream):
     master, slave = pty.openpty()
     try:
         tty.setraw(slave)  # bytes written before rsm-dump sets raw mode must pass untouched
+        # The whole stream waits in the pty (it fits its buffer) before
+        # rsm-dump starts: the silence that ends the run can only come after
+        # it, however slowly rsm-dump starts.
+        os.write(master, data)
         proc = subprocess.Popen([str(built_tool("tools/dump/rsm-dump")), "--protocol", protocol, "--baud", "38400",
                                  "--timeout-ms", "700", os.ttyname(slave)],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        time.sleep(0.2)
-        os.write(master, data)
         out, err = proc.communicate(timeout=60)
     finally:
         os.close(master)
@@ -314,6 +315,26 @@ def test_dump_through_a_pty_matches_the_file(tmp_path, protocol, stream):
     live = parse_lines(out.decode())
     assert live[-1]["end"] == "silence"
     assert strip_end(live) == strip_end(parse_lines(ref.stdout.decode()))
+
+
+def test_dump_count_stops_after_that_many_objects_and_counts_only_what_it_decoded(tmp_path):
+    """--count N: N objects, then the summary; the bytes after the N-th
+    frame are not decoded, so the byte counts still add up."""
+    data = aria_fault_stream()
+    f = tmp_path / "in.bin"
+    f.write_bytes(data)
+    res = run_dump(["--protocol", "aria", "--count", "2", str(f)])
+    assert res.returncode == 0, res.stderr.decode()
+    objs = parse_lines(res.stdout.decode())
+    frames, s = objs[:-1], objs[-1]
+    assert [o["type"] for o in frames] == ["encoder", "sync2"]
+    assert s["end"] == "count" and s["frames"] == 2 and s["truncated"] == 0
+    enc, sync2 = vbytes(vector("aria_encoder_packet")), vbytes(vector("aria_sync2_reply_example"))
+    assert s["bytes"] == 5 + 2 * len(enc) + len(sync2)  # up to the end of the SYNC2 reply
+    published = sum(o["length"] for o in frames)
+    assert published + s["bytes_skipped"] + s["bad_length"] + s["checksum_errors"] + s["truncated"] == s["bytes"]
+    full = run_dump(["--protocol", "aria", "--count", "99", str(f)])
+    assert parse_lines(full.stdout.decode())[-1]["end"] == "eof"  # fewer frames than asked for
 
 
 def test_dump_reads_stdin_like_the_file(tmp_path):
@@ -357,7 +378,9 @@ def test_dump_exits_1_with_a_clear_message_for_a_missing_input(tmp_path):
 @pytest.mark.parametrize("args", [[], ["--protocol", "aria"], ["--protocol", "can", "x"],
                                   ["--protocol", "lms", "--baud", "fast", "x"],
                                   ["--protocol", "lms", "--bogus", "x"],
-                                  ["--protocol", "lms", "a", "b"]])
+                                  ["--protocol", "lms", "a", "b"],
+                                  ["--protocol", "lms", "--count", "0", "x"],
+                                  ["--protocol", "lms", "--count", "many", "x"]])
 def test_dump_exits_2_for_bad_arguments(args):
     res = run_dump(args)
     assert res.returncode == 2, (args, res.stderr)

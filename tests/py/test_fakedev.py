@@ -3,8 +3,11 @@ host that talks to their pseudo-terminals directly, as the real devices
 would (protocols.md, lidars.md), and they notice a host at the wrong rate.
 
 Waits are generous and never the thing being measured: every check is on
-what came back, not on how fast."""
+what came back, not on how fast. The fakes are --patient, so a test that
+stalls for a while (a loaded machine) loses no byte of a stream, and what
+must have happened before a check is waited for in the fake's log."""
 
+import argparse
 import math
 import os
 import select
@@ -12,6 +15,8 @@ import struct
 import termios
 import time
 import tty
+
+import pytest
 
 from conftest import FakeDevices, load_vectors
 from rsm_tools import fakedev, lidarstream, sim
@@ -28,6 +33,7 @@ class Host:
         tty.setraw(self.fd)
         self.set_baud(baud)
         self.buf = bytearray()
+        self.all = bytearray()   # every byte read, to count frames across reads
 
     def set_baud(self, baud):
         attrs = termios.tcgetattr(self.fd)
@@ -43,7 +49,9 @@ class Host:
         while not done(bytes(self.buf)) and time.monotonic() < end:
             r, _, _ = select.select([self.fd], [], [], 0.1)
             if r:
-                self.buf += os.read(self.fd, 4096)
+                data = os.read(self.fd, 4096)
+                self.buf += data
+                self.all += data
         out = bytes(self.buf)
         self.buf.clear()
         return out
@@ -92,8 +100,33 @@ def sips(host, data):
     return [p.decode_sip(f) for f in host.frames("aria", data) if f[3] in (0x32, 0x33)]
 
 
+def read_alive(host, done, timeout=TIMEOUT):
+    """host.read_until(done), with a PULSE to the robot every 0.2 s: its
+    watchdog cannot stop it while this waits, however long the fake is held
+    up (each turn of its loop takes what the host sent before it looks at
+    the time)."""
+    got = b""
+    end = time.monotonic() + timeout
+    while not done(got) and time.monotonic() < end:
+        host.send(p.aria_command(p.CMD_PULSE))
+        got += host.read_until(lambda d: done(got + d), timeout=0.2)
+    return got
+
+
+def read_all_sent_before(host, entry):
+    """Reads until every SIP and ENCODER packet the robot had sent when it
+    logged entry (its ``sips``/``encoders`` then) has arrived: what comes
+    after that was sent after the logged event."""
+    def done(_):
+        fc = p.FrameCounter("aria")
+        fc.feed(bytes(host.all))
+        return (fc.types.get(0x32, 0) + fc.types.get(0x33, 0) >= entry["sips"]
+                and fc.types.get(p.ARIA_ENCODER, 0) >= entry.get("encoders", 0))
+    host.read_until(done)
+
+
 def test_robot_handshake_config_sip_stream_motion_and_watchdog(tmp_path):
-    fake = FakeDevices(tmp_path, "--robot", "--watchdog-ms", "1500", "--ticks-mm", "131")
+    fake = FakeDevices(tmp_path, "--robot", "--watchdog-ms", "1500", "--ticks-mm", "131", "--patient")
     host = Host(fake.paths["robot"])
     try:
         # Before OPEN nothing streams.
@@ -114,7 +147,7 @@ def test_robot_handshake_config_sip_stream_motion_and_watchdog(tmp_path):
         host.send(p.aria_command(p.CMD_ENABLE, 1))
         host.send(p.aria_command(p.CMD_ENCODER, 2))
         host.send(p.aria_command(p.CMD_VEL, 200))
-        data = host.read_until(until_aria(0x33, 3))
+        data = read_alive(host, until_aria(0x33, 3))
         moving = [s for s in sips(host, data) if s.moving]
         assert moving[-1].lvel == 200 and moving[-1].rvel == 200 and moving[-1].flags & 1
         encs = [p.decode_encoder(f) for f in host.frames("aria", data) if f[3] == p.ARIA_ENCODER]
@@ -124,18 +157,19 @@ def test_robot_handshake_config_sip_stream_motion_and_watchdog(tmp_path):
         data = host.read_until(lambda d: any(not s.moving for s in sips(host, d)))
         assert any(not s.moving for s in sips(host, data))
         # ... and drives again once commands come back (motion resumes).
-        host.send(p.aria_command(p.CMD_PULSE))
-        data = host.read_until(until_aria(0x33, 1))
+        data = read_alive(host, until_aria(0x33, 1))
         assert any(s.moving for s in sips(host, data))
 
         # VEL2 -5/+5 turns on the spot; STOP stops; CLOSE ends the stream.
         host.send(p.aria_vel2(-5, 5))
-        data = host.read_until(lambda d: any(s.lvel == -100 for s in sips(host, d)))
+        data = read_alive(host, lambda d: any(s.lvel == -100 for s in sips(host, d)))
         assert any(s.lvel == -100 and s.rvel == 100 for s in sips(host, data))
         host.send(p.aria_command(p.CMD_STOP))
         host.read_until(lambda d: any(not s.moving for s in sips(host, d)))
         host.send(p.aria_command(p.CMD_CLOSE, 1))
-        host.read_until(lambda d: False, timeout=0.3)
+        # Once what was sent before the CLOSE has come, nothing more does
+        # (waiting for the fake's own record of it, not for some time).
+        read_all_sent_before(host, fake.wait_log(lambda e: e["ev"] == "close", "the CLOSE")[0])
         assert host.read_until(lambda d: False, timeout=0.5) == b""
     finally:
         host.close()
@@ -148,17 +182,32 @@ def test_robot_handshake_config_sip_stream_motion_and_watchdog(tmp_path):
 
 
 def test_robot_hostbaud_moves_the_robot_and_a_host_left_behind_hears_noise(tmp_path):
-    fake = FakeDevices(tmp_path, "--robot")
+    fake = FakeDevices(tmp_path, "--robot", "--patient")
     host = Host(fake.paths["robot"])
     try:
         handshake(host)
         host.send(p.aria_command(p.CMD_OPEN, 1))
         host.read_until(until_aria(0x32, 1))
         host.send(p.aria_command(p.CMD_HOSTBAUD, 2))      # 38400, host stays at 9600
-        host.read_until(lambda d: False, timeout=0.3)
-        noise = host.read_until(lambda d: len(d) >= 200)
-        assert len(noise) >= 200 and host.frames("aria", noise) == []
-        assert all(0xE0 <= b <= 0xEF for b in noise)
+        # Everything from before the switch (the handshake's replies, the
+        # SIPs it had sent, whole and in order), then only noise: never a
+        # frame again, every byte garbled.
+        switch = fake.wait_log(lambda e: e["ev"] == "baud", "the rate change")[0]
+        read_all_sent_before(host, switch)
+
+        def garbled_tail(_):
+            tail = 0
+            while tail < len(host.all) and 0xE0 <= host.all[-1 - tail] <= 0xEF:
+                tail += 1
+            return tail >= 200
+        host.read_until(garbled_tail)
+        heard = bytes(host.all)
+        frames = host.frames("aria", heard)
+        before = sum(len(f) for f in frames)
+        assert heard[:before] == b"".join(frames)
+        assert sum(1 for f in frames if f[3] in (0x32, 0x33)) == switch["sips"]
+        noise = heard[before:]
+        assert len(noise) >= 200 and all(0xE0 <= b <= 0xEF for b in noise)
         host.set_baud(38400)                                # now follow the robot
         host.read_until(lambda d: False, timeout=0.3)
         data = host.read_until(until_aria(0x32, 2))
@@ -171,7 +220,7 @@ def test_robot_hostbaud_moves_the_robot_and_a_host_left_behind_hears_noise(tmp_p
 
 
 def test_laser_acks_naks_switches_rate_streams_and_answers_status(tmp_path):
-    fake = FakeDevices(tmp_path, "--lms", "--units", "cm")
+    fake = FakeDevices(tmp_path, "--lms", "--units", "cm", "--patient")
     host = Host(fake.paths["laser"])
     try:
         # A request whose CRC is wrong gets a NAK and is not carried out.
@@ -267,7 +316,7 @@ def test_rplidar_answers_requests_and_scans_the_simulated_world(tmp_path):
     vec = rplidar_vectors()
     stop, _reset, scan, get_info, get_health = vec["request"][:5]
     pwm_660 = vec["request"][7]
-    fake = FakeDevices(tmp_path, "--rplidar", "--quiet")
+    fake = FakeDevices(tmp_path, "--rplidar", "--quiet", "--patient")
     host = Host(fake.paths["rplidar"], 115200)
     try:
         host.send(get_health)
@@ -332,3 +381,29 @@ def test_a_patient_port_keeps_every_byte_for_a_host_that_stalls():
         reader.join(timeout=60)
         port.close()
     assert bytes(got) == frame and port.overflows == 0
+
+
+def test_drop_specs_cut_on_a_count_and_mend_on_a_signal():
+    """--robot-drop/--lms-drop AFTER:FOR: seconds as before, or AFTER Nf (a
+    count of frames sent) and FOR signal (until the device's signal)."""
+    timed = fakedev.Cut(fakedev.parse_drop("2:3"))
+    timed.sent(1000, 0.0)                      # frames do not start a timed cut
+    assert timed.start is None
+    timed.arm(10.0)
+    assert not timed.active(11.9) and timed.active(12.0) and timed.active(14.9) and not timed.active(15.0)
+    assert not timed.release(13.0) and timed.active(13.0)   # the signal ends only a cut held for it
+
+    held = fakedev.Cut(fakedev.parse_drop("20f:signal"))
+    held.arm(0.0)                              # nor does the clock start a counted one
+    held.sent(19, 5.0)
+    assert held.start is None and not held.active(5.0)
+    held.sent(20, 6.0)
+    assert held.active(6.0) and held.active(1e6)
+    assert held.release(7.0) and not held.active(7.0) and not held.release(8.0)
+
+    counted = fakedev.Cut(fakedev.parse_drop("5f:1.5"))
+    counted.sent(5, 2.0)
+    assert counted.active(3.4) and not counted.active(3.5)
+    for bad in ("2", "x:1", "2:0", "-1:2", "0f:1", "-3f:1", "2f:forever", "2:3:4"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            fakedev.parse_drop(bad)

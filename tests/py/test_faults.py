@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REPO_ROOT, FakeDevices, build_dir, rsm_nav_binary
+from conftest import REPO_ROOT, FakeDevices, LiveNav, build_dir, events_so_far, rsm_nav_binary, wait_until
 from rsm_tools import capture as cap
 from rsm_tools import evaluate as ev
 
@@ -132,34 +132,40 @@ def test_active_mode_reopens_a_robot_that_vanished_and_came_back(tmp_path, excer
     """The fake robot is killed (an adapter pulled out) and started again
     behind the same name (plugged back in, as a udev symlink does): rsm-nav
     neither spins nor floods the dead line, reopens it with back-off, and
-    takes the restarted counters as a new connection."""
-    seconds = 14
+    takes the restarted counters as a new connection. Each step waits for
+    what rsm-nav decoded or said, so none depends on the machine's speed."""
     robot = tmp_path / "robot"
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
-    first = FakeDevices(tmp_path / "a", "--robot", "--capture", str(excerpt_capture))
+    first = FakeDevices(tmp_path / "a", "--robot", "--capture", str(excerpt_capture), "--patient")
     point_link(robot, first.paths["robot"])
     traj, events = tmp_path / "t.txt", tmp_path / "e.txt"
-    nav = subprocess.Popen([str(rsm_nav_binary()), "--robot", str(robot), "--seconds", str(seconds),
-                            "--trajectory", str(traj), "--events", str(events)],
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+    def encoders():
+        return sum(1 for l in events_so_far(events) if l.startswith("E "))
+
+    t0 = time.monotonic()
+    nav = LiveNav(tmp_path, "--robot", robot, "--trajectory", traj, "--events", events)
     second = None
     try:
-        time.sleep(4)
+        wait_until(lambda: encoders() > 20 or nav.proc.poll() is not None, "21 encoder packets")
         first.proc.send_signal(signal.SIGKILL)  # gone without a word
         first.proc.wait()
         robot.unlink()
-        time.sleep(3)
-        second = FakeDevices(tmp_path / "b", "--robot", "--capture", str(excerpt_capture))
+        nav.err.wait_for("robot link " + str(robot) + " failed")
+        before = encoders()
+        second = FakeDevices(tmp_path / "b", "--robot", "--capture", str(excerpt_capture), "--patient")
         point_link(robot, second.paths["robot"])
-        out, err = nav.communicate(timeout=NAV_TIMEOUT)
+        nav.err.wait_for("reopened")
+        wait_until(lambda: encoders() > before or nav.proc.poll() is not None,
+                   "an encoder packet from the robot plugged back in")
+        err, out = nav.finish(stop=True)
+        seconds = time.monotonic() - t0   # at least as long as rsm-nav ran
     finally:
-        if nav.poll() is None:
-            nav.kill()
-            nav.wait()
+        nav.kill()
         if second is not None:
             second.stop()
-    assert nav.returncode == 0, err
+    assert nav.proc.returncode == 0, err
     assert "robot link " + str(robot) + " failed" in err, err
     assert "reopened" in err, err
     assert number(r"(\d+) connects \(", err) >= 2, err
@@ -450,11 +456,21 @@ def test_listen_mode_on_a_source_that_never_runs_dry_keeps_its_time_limit(tmp_pa
 
 
 def test_listen_mode_on_a_source_that_never_runs_dry_stops_at_a_signal(tmp_path):
+    # Started with SIGTERM ignored (kept across exec until rsm-nav installs
+    # its handler), and sent SIGTERM until it ends: a signal that came before
+    # the handler is lost rather than fatal, so how fast rsm-nav starts does
+    # not matter; one that never ends the run leaves it hung (failed).
     nav = subprocess.Popen([str(rsm_nav_binary()), "--robot", "/dev/zero", "--listen", "--trajectory",
-                            str(tmp_path / "t.txt")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(1.0)
-    nav.send_signal(signal.SIGTERM)
+                            str(tmp_path / "t.txt")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGTERM, signal.SIG_IGN))
     try:
+        end = time.monotonic() + 60
+        while nav.poll() is None and time.monotonic() < end:
+            nav.send_signal(signal.SIGTERM)
+            try:
+                nav.wait(timeout=0.5)
+            except subprocess.TimeoutExpired:
+                pass
         _, err = nav.communicate(timeout=30)
     finally:
         if nav.poll() is None:
@@ -490,7 +506,11 @@ def test_active_mode_backs_off_from_a_device_that_opens_and_fails_at_once(tmp_pa
     enumerates and dies does: the back-off (0.1 s doubling to 2 s) starts
     again only after a connection, not after every open (issue 30: thirty
     reopens in 3 s). The schedule allows four in 3 s; a slower machine
-    makes fewer."""
+    makes fewer. Back-off is about real time, but the bounds hold on any
+    machine: rsm-nav's own clock cannot run faster than the schedule, and the
+    first reopen, due 0.1 s after the first poll, is made by the cycle that
+    follows it, which comes before the time limit is checked (only a 2.9 s
+    stall at the very start of the loop could leave none)."""
     dead = tmp_path / "dead"
     dead.write_bytes(b"")
     res = run_nav("--robot", dead, "--seconds", "3", "--trajectory", tmp_path / "t.txt", timeout=60)
@@ -511,19 +531,28 @@ def wait_for_rows(path: Path, n: int, proc, limit: float = 60.0) -> None:
 @pytest.mark.parametrize("how", ["silent", "vanished"])
 def test_active_mode_run_whose_device_never_came_back_fails(tmp_path, excerpt_capture, how):
     """The laser goes quiet for good (its line cut) or both devices vanish
-    (the fake killed) while the run goes on to its time limit: rsm-nav
-    keeps and sums up what it got, says in one line which device was lost
-    and did not come back, and exits 1 (issue 30: exit 0)."""
-    extra = ["--lms-drop", "2:1000"] if how == "silent" else []
-    fake = FakeDevices(tmp_path, "--capture", str(excerpt_capture), *extra)
+    (the fake killed) while the run goes on to its end: rsm-nav keeps and
+    sums up what it got, says in one line which device was lost and did not
+    come back, and exits 1 (issue 30: exit 0).
+
+    The laser's line goes after 10 scans (a count), so the 5 poses waited
+    for always come. That a device never came back can only be said of a
+    run that ended on its own: the vanished run ends after 3 s with no byte
+    on either link (--idle-exit, counted from the loss whenever it came);
+    the silent one, whose robot still talks, on its time limit, 10 s, which
+    is several times what a handshake, 10 scans and the 1 s laser timeout
+    take."""
+    extra = ["--lms-drop", "10f:1000"] if how == "silent" else []
+    fake = FakeDevices(tmp_path, "--capture", str(excerpt_capture), "--patient", *extra)
     # Named as udev names them: a pseudo-terminal's number may be taken
     # again by another test's, which the reopening must not find.
     links = {dev: tmp_path / dev for dev in ("robot", "laser")}
     for dev, link in links.items():
         point_link(link, fake.paths[dev])
     traj = tmp_path / "t.txt"
+    end = ["--seconds", "10"] if how == "silent" else ["--idle-exit", "3"]
     nav = subprocess.Popen([str(rsm_nav_binary()), "--robot", str(links["robot"]), "--lms", str(links["laser"]),
-                            "--seconds", "10", "--trajectory", str(traj)],
+                            *end, "--trajectory", str(traj)],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         wait_for_rows(traj, 5, nav)

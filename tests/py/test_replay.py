@@ -87,18 +87,24 @@ def test_replay_fast_into_ptys_delivers_every_byte(head_cap):
 
 def test_replay_timed_stops_cleanly_on_sigint_and_sigterm(head_cap):
     for sig in (signal.SIGINT, signal.SIGTERM):
-        proc = start("replay", head_cap, "--pty", "--speed", "1")
+        # --wait-open: nothing is sent before both ptys are open, so the
+        # time measured from before the opens bounds the replay's own pacing
+        # from below, however late the test got to open them.
+        proc = start("replay", head_cap, "--pty", "--speed", "1", "--wait-open")
         try:
             paths = read_pty_lines(proc, 2)
+            t0 = time.monotonic()
             fd = os.open(paths["robot"], os.O_RDWR | os.O_NOCTTY)
             tty.setraw(fd)
-            t0 = time.monotonic()
-            got = drain([fd], {fd: 200}, timeout=10)
+            laser = os.open(paths["laser"], os.O_RDWR | os.O_NOCTTY)
+            tty.setraw(laser)
+            got = drain([fd, laser], {fd: 200, laser: 0}, timeout=60)
             assert len(got[fd]) >= 200
             elapsed = time.monotonic() - t0
             proc.send_signal(sig)
             _, err = proc.communicate(timeout=10)
             os.close(fd)
+            os.close(laser)
             assert proc.returncode == 0, err
             assert f"stopped by {sig.name}" in err
             assert elapsed > 0.5  # recorded timing: 200 bytes of 14-byte packets at ~10 Hz
@@ -281,7 +287,7 @@ def test_record_port_vanishes_and_missing_port(tmp_path):
     try:
         wait_recording(proc, 1)
         os.write(m, p.encode_encoder(1, 2))
-        time.sleep(0.5)
+        wait_for_bytes(out, len(p.encode_encoder(1, 2)))  # recorded, however slowly rsm-record runs
         os.close(s)
         os.close(m)   # the device goes away
         _, err = proc.communicate(timeout=10)

@@ -34,6 +34,7 @@ typedef struct dump_opts {
     const char *input;
     uint32_t baud;
     uint32_t timeout_ms; /* 0: no silence timeout */
+    uint32_t count;      /* 0: no limit; else stop after this many objects */
     int pretty;
     int distance_bits; /* 0: from the format default or a config reply */
 } dump_opts_t;
@@ -57,6 +58,13 @@ typedef struct dump_ctx {
 
 static volatile sig_atomic_t stop_requested = 0;
 
+/* --count reached: nothing more is decoded (an exact count for a test on a
+ * stream that goes on). */
+static int count_reached(const dump_ctx_t *d)
+{
+    return d->opt.count != 0u && d->seq >= d->opt.count;
+}
+
 static void on_signal(int sig)
 {
     (void)sig;
@@ -65,11 +73,13 @@ static void on_signal(int sig)
 
 static void usage(FILE *f)
 {
-    fputs("usage: rsm-dump --protocol aria|lms|ld06|rplidar [--baud N] [--timeout-ms N] [--pretty]\n"
-          "                [--distance-bits 13..16] INPUT\n"
+    fputs("usage: rsm-dump --protocol aria|lms|ld06|rplidar [--baud N] [--timeout-ms N] [--count N]\n"
+          "                [--pretty] [--distance-bits 13..16] INPUT\n"
           "  INPUT         a capture file, a FIFO, a serial port, a pseudo-terminal, or - for stdin\n"
           "  --baud N      line rate for a serial port or pty (default: leave as is)\n"
           "  --timeout-ms  stop after this much silence on a live link (default: never)\n"
+          "  --count N     stop once N objects (frames, events) are printed, decoding nothing\n"
+          "                after the N-th (default: no limit)\n"
           "  --pretty      indented JSON instead of one object per line\n"
           "  --distance-bits  LMS 0xB0 distance field width (default 13, or from a 0xF4 reply)\n",
           f);
@@ -91,12 +101,13 @@ static int parse_u32(const char *s, uint32_t *out)
     return 1;
 }
 
-enum { OPT_PROTOCOL = 256, OPT_BAUD, OPT_TIMEOUT_MS, OPT_PRETTY, OPT_DISTANCE_BITS };
+enum { OPT_PROTOCOL = 256, OPT_BAUD, OPT_TIMEOUT_MS, OPT_COUNT, OPT_PRETTY, OPT_DISTANCE_BITS };
 
 static const struct option dump_options[] = {
     {"protocol", required_argument, NULL, OPT_PROTOCOL},
     {"baud", required_argument, NULL, OPT_BAUD},
     {"timeout-ms", required_argument, NULL, OPT_TIMEOUT_MS},
+    {"count", required_argument, NULL, OPT_COUNT},
     {"pretty", no_argument, NULL, OPT_PRETTY},
     {"distance-bits", required_argument, NULL, OPT_DISTANCE_BITS},
     {"help", no_argument, NULL, 'h'},
@@ -140,6 +151,12 @@ static int parse_args(int argc, char **argv, dump_opts_t *o)
         case OPT_TIMEOUT_MS:
             if (!parse_u32(optarg, &o->timeout_ms)) {
                 fprintf(stderr, "rsm-dump: --timeout-ms needs a non-negative integer\n");
+                return 2;
+            }
+            break;
+        case OPT_COUNT:
+            if (!parse_u32(optarg, &o->count) || o->count == 0u) {
+                fprintf(stderr, "rsm-dump: --count needs a positive integer\n");
                 return 2;
             }
             break;
@@ -443,10 +460,12 @@ static void emit_aria_packet(dump_ctx_t *d)
 }
 
 /* Feeds bytes (len may be 0 to drain) and prints every packet. */
-static void aria_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
+/* The *_feed functions return the bytes they decoded (all of buf unless
+ * --count was reached). */
+static size_t aria_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
 {
     size_t off = 0;
-    for (;;) {
+    while (!count_reached(d)) {
         size_t used = 0;
         const int r = rsm_aria_parser_feed(&d->aria, buf + off, len - off, &used, &d->pkt);
         off += used;
@@ -456,6 +475,7 @@ static void aria_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
         }
         break;
     }
+    return off;
 }
 
 static void aria_gap(dump_ctx_t *d)
@@ -464,7 +484,7 @@ static void aria_gap(dump_ctx_t *d)
     /* Each timeout abandons one candidate; drain until nothing is held. */
     while (rsm_aria_parser_pending(&d->aria) > 0u && guard++ < 1000) {
         (void)rsm_aria_parser_timeout(&d->aria);
-        aria_feed(d, NULL, 0);
+        (void)aria_feed(d, NULL, 0);
     }
 }
 
@@ -710,10 +730,10 @@ static void emit_lms_event(dump_ctx_t *d, const rsm_lms_event_t *ev)
     json_end_obj(&d->out);
 }
 
-static void lms_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
+static size_t lms_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
 {
     size_t off = 0;
-    for (;;) {
+    while (!count_reached(d)) {
         size_t used = 0;
         rsm_lms_event_t ev;
         const int r = rsm_lms_parser_feed(&d->lms, buf + off, len - off, &used, &ev);
@@ -724,6 +744,7 @@ static void lms_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
         }
         break;
     }
+    return off;
 }
 
 static void lms_gap(dump_ctx_t *d)
@@ -754,12 +775,12 @@ static void lidar_points(json_out_t *w, const rsm_lidar_point_t *p, size_t n)
     json_end_arr(w);
 }
 
-static void ld06_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
+static size_t ld06_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
 {
     size_t off = 0;
     rsm_ld06_packet_t pkt;
     rsm_lidar_point_t pts[RSM_LD06_POINTS];
-    while (off < len) {
+    while (off < len && !count_reached(d)) {
         size_t used = 0;
         const int r = rsm_ld06_parser_feed(&d->ld06, buf + off, len - off, &used, &pkt);
         off += used;
@@ -778,6 +799,7 @@ static void ld06_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
         lidar_points(&d->out, pts, RSM_LD06_POINTS);
         json_end_obj(&d->out);
     }
+    return off;
 }
 
 static void emit_rplidar_event(dump_ctx_t *d, const rsm_rplidar_event_t *e)
@@ -816,10 +838,10 @@ static void emit_rplidar_event(dump_ctx_t *d, const rsm_rplidar_event_t *e)
     json_end_obj(w);
 }
 
-static void rplidar_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
+static size_t rplidar_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
 {
     size_t off = 0;
-    while (off < len) {
+    while (off < len && !count_reached(d)) {
         size_t used = 0;
         const int r = rsm_rplidar_parser_feed(&d->rplidar, buf + off, len - off, &used, &d->rp_event);
         off += used;
@@ -828,25 +850,23 @@ static void rplidar_feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
         }
         emit_rplidar_event(d, &d->rp_event);
     }
+    return off;
 }
 
 /* ---- run ---------------------------------------------------------------------------- */
 
-static void feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
+/* Returns the bytes decoded (fewer than len once --count is reached). */
+static size_t feed(dump_ctx_t *d, const uint8_t *buf, size_t len)
 {
     switch (d->opt.proto) {
     case PROTO_ARIA:
-        aria_feed(d, buf, len);
-        break;
+        return aria_feed(d, buf, len);
     case PROTO_LMS:
-        lms_feed(d, buf, len);
-        break;
+        return lms_feed(d, buf, len);
     case PROTO_LD06:
-        ld06_feed(d, buf, len);
-        break;
+        return ld06_feed(d, buf, len);
     default:
-        rplidar_feed(d, buf, len);
-        break;
+        return rplidar_feed(d, buf, len);
     }
 }
 
@@ -947,11 +967,16 @@ static int run(dump_ctx_t *d)
         n = rsm_link_read(&link, buf, sizeof buf, wait_ms * 1000u);
         now_ms = rsm_posix_clock_now_us(NULL) / 1000u;
         if (n > 0) {
-            d->bytes += (uint64_t)n;
-            feed(d, buf, (size_t)n);
+            /* Only what was decoded counts: the summary's bytes stay the sum
+             * of the frames and the bytes skipped. */
+            d->bytes += (uint64_t)feed(d, buf, (size_t)n);
             last_rx_ms = now_ms;
             gap_done = 0;
             fflush(stdout);
+            if (count_reached(d)) {
+                end = "count";
+                break;
+            }
             continue;
         }
         if (n < 0) {
@@ -968,6 +993,10 @@ static int run(dump_ctx_t *d)
         if (!gap_done && now_ms - last_rx_ms >= DUMP_GAP_MS) {
             gap(d);
             gap_done = 1;
+            if (count_reached(d)) {
+                end = "count"; /* the count's last frame came out of the gap */
+                break;
+            }
         }
         if (d->opt.timeout_ms != 0u && now_ms - last_rx_ms >= d->opt.timeout_ms) {
             end = "silence";

@@ -180,7 +180,8 @@ static void usage(FILE *f)
             "  --no-deskew               lidar: place every point of a turn at the turn's pose\n"
             "  --ticks-per-m N --wheel-base M   odometry geometry for encoder packets\n"
             "                            (default: the capture's, else the P3-DX defaults)\n"
-            "  --events FILE             write every decoded input (E left right / S count hash)\n"
+            "  --events FILE             write every decoded input (E left right / S count hash;\n"
+            "                            live, each line as it comes)\n"
             "  --summary-json FILE       write the summary as JSON too (scans, outcomes, times, map)\n"
             "  --scan-log FILE           one line per scan: stamp, outcome, tracking state,\n"
             "                            what odometry's step was judged, 1 if a search placed it,\n"
@@ -630,6 +631,9 @@ static void sink_encoder(void *ctx, const rsm_odometry_sample_t *sample, int res
         /* Printed as the packet's signed 32-bit values. */
         fprintf(nav->events, "E %ld %ld\n", (long)rsm_odometry_count_delta(sample->left, 0u, 32u),
                 (long)rsm_odometry_count_delta(sample->right, 0u, 32u));
+        if (nav->live) {
+            (void)fflush(nav->events); /* as the poses: on disk as it comes */
+        }
     }
     nav->call_t0 = now_s();
     (void)rsm_sync_encoder(&nav->sync, sample);
@@ -691,6 +695,9 @@ static void sink_scan(void *ctx, const rsm_scan_t *scan)
             h = (h ^ mm) * 16777619u;
         }
         fprintf(nav->events, "S %zu %08lx\n", scan->count, (unsigned long)h);
+        if (nav->live) {
+            (void)fflush(nav->events);
+        }
     }
     if (nav_start(nav, NULL, "the default") != 0) {
         return;

@@ -87,6 +87,11 @@ Faults: ``--robot-drop AFTER:FOR`` cuts the robot's line FOR seconds,
 AFTER seconds after its first session opened (nothing is received or sent;
 the robot itself carries on, so its watchdog stops it and its session
 stays open); ``--lms-drop`` likewise, counted from its first stream start.
+AFTER may instead be a count of data frames, ``Nf``: the line goes once
+the device has sent N (SIPs for the robot, 0xB0 scans for the laser); and
+FOR may be ``signal``: the line stays cut until SIGUSR1 (the robot's) or
+SIGUSR2 (the laser's) comes.  A test then cuts and mends the line on
+events (what the host said, what the fake logged), not on the clock.
 
 Load: a device whose host stops reading for 0.2 s drops the rest of the
 frame it was sending (as a UART's receive buffer overruns).  With
@@ -211,6 +216,7 @@ class PtyPort:
                 if not self.patient and time.monotonic() >= deadline:
                     self.overflows += 1   # the host stopped reading: drop the rest
                     return
+                check_stop()              # a patient wait still ends at a signal
                 select.select([], [self.master], [], 0.02)
 
     def close(self) -> None:
@@ -221,21 +227,53 @@ class PtyPort:
                 pass
 
 
-class Cut:
-    """A window during which a device's line is cut (``AFTER:FOR`` seconds)."""
+class DropSpec:
+    """``--robot-drop``/``--lms-drop AFTER:FOR``: AFTER seconds, or ``Nf``
+    (once the device has sent N data frames); FOR seconds, or ``signal``
+    (until the device's signal)."""
 
-    def __init__(self, spec: Optional[Tuple[float, float]]) -> None:
+    def __init__(self, after: float, frames: Optional[int], dur: Optional[float]) -> None:
+        self.after = after          # seconds (frames is None)
+        self.frames = frames        # data frames sent, or None
+        self.dur = dur              # seconds, or None: until the signal
+
+
+class Cut:
+    """A window during which a device's line is cut.  A cut that begins on
+    a frame count or ends on a signal follows events, not the clock, so a
+    test's verdict does not depend on how fast the host and the fake run."""
+
+    def __init__(self, spec: Optional[DropSpec]) -> None:
         self.spec = spec
         self.start: Optional[float] = None
+        self.end = math.inf
         self.state = False
 
     def arm(self, now: float) -> None:
-        if self.spec is not None and self.start is None:
-            self.start = now + self.spec[0]
+        """The device's first session or stream: a cut in seconds counts from here."""
+        if self.spec is not None and self.spec.frames is None and self.start is None:
+            self.begin(now + self.spec.after)
+
+    def sent(self, frames: int, now: float) -> None:
+        """The device has sent this many data frames so far."""
+        if self.spec is not None and self.spec.frames is not None and self.start is None \
+                and frames >= self.spec.frames:
+            self.begin(now)
+
+    def begin(self, at: float) -> None:
+        self.start = at
+        if self.spec is not None and self.spec.dur is not None:
+            self.end = at + self.spec.dur
+
+    def release(self, now: float) -> bool:
+        """The signal: a cut held until it ends now. False if none was on."""
+        if self.spec is None or self.spec.dur is not None or not self.active(now):
+            return False
+        self.end = now
+        return True
 
     def active(self, now: float) -> bool:
-        return (self.start is not None and self.spec is not None
-                and self.start <= now < self.start + self.spec[1])
+        return self.start is not None and self.start <= now < self.end
 
 
 def scale_counts(counts: Tuple[int, int], ticks_mm: int) -> Tuple[int, int]:
@@ -495,7 +533,7 @@ class FakeRobot(Device):
         elif cmd == proto.CMD_HOSTBAUD:
             if arg is not None and 0 <= arg < len(proto.ARIA_BAUD_RATES):
                 old, self.baud = self.baud, proto.ARIA_BAUD_RATES[arg]
-                self.log(self.dev, "baud", old=old, new=self.baud)
+                self.log(self.dev, "baud", old=old, new=self.baud, sips=self.n["sips"])
 
     def handshake(self, cmd: int, now: float) -> None:
         if cmd == 0:
@@ -536,7 +574,7 @@ class FakeRobot(Device):
         self.encoder_on = False
         self.motion = ("vel", 0.0, 0.0)
         self.n["closes"] += 1
-        self.log(self.dev, "close")
+        self.log(self.dev, "close", sips=self.n["sips"], encoders=self.n["encoders"])
 
     # -- time -------------------------------------------------------------------------
     def wheel_speeds(self) -> Tuple[float, float]:
@@ -587,6 +625,7 @@ class FakeRobot(Device):
         self.n["sips"] += self.send(proto.encode_sip(sip), now)
         if self.encoder_on:
             self.n["encoders"] += self.send(proto.encode_encoder(*self.counts()), now)
+        self.cut.sent(self.n["sips"], now)
 
     def due(self) -> float:
         return self.next_sip if self.session else math.inf
@@ -763,6 +802,7 @@ class FakeLaser(Device):
         frame = self.scan_frame(now)
         if frame:
             self.n["scans"] += self.send(frame, now)
+            self.cut.sent(self.n["scans"], now)
         # The next one as soon as this one has left at the current rate.
         self.next_scan = now + max(MIRROR_PERIOD_S, len(frame) * 10.0 / self.baud)
 
@@ -996,22 +1036,47 @@ class FakeRPLIDAR(Device):
         return {"scanning": self.scanning, "motor": self.motor, "record": self.record, "angle": self.angle}
 
 
-def parse_drop(text: str) -> Tuple[float, float]:
+def parse_drop(text: str) -> DropSpec:
+    """AFTER:FOR: AFTER seconds or Nf frames, FOR seconds or ``signal``."""
     try:
-        after, dur = (float(v) for v in text.split(":"))
+        after_text, dur_text = text.split(":")
+        frames = int(after_text[:-1]) if after_text.endswith("f") else None
+        after = 0.0 if frames is not None else float(after_text)
+        dur = None if dur_text == "signal" else float(dur_text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"want AFTER:FOR in seconds, got {text!r}") from None
-    if after < 0 or dur <= 0:
-        raise argparse.ArgumentTypeError("AFTER must be >= 0 and FOR > 0")
-    return after, dur
+        raise argparse.ArgumentTypeError(
+            f"want AFTER:FOR (AFTER seconds or Nf frames, FOR seconds or signal), got {text!r}") from None
+    if after < 0 or (frames is not None and frames < 1) or (dur is not None and dur <= 0):
+        raise argparse.ArgumentTypeError("AFTER must be >= 0 (Nf: N >= 1) and FOR > 0")
+    return DropSpec(after, frames, dur)
 
 
 class Stop(Exception):
     pass
 
 
-def _raise_stop(signum, frame):  # noqa: ARG001
-    raise Stop(signal.Signals(signum).name)
+_stopping: List[str] = []
+
+
+def _note_stop(signum, frame):  # noqa: ARG001
+    # Raised where the loop may stop (check_stop), never between a frame's
+    # write and its count: a summary then counts every frame the host got.
+    _stopping.append(signal.Signals(signum).name)
+
+
+def check_stop() -> None:
+    """Stop if SIGINT or SIGTERM came."""
+    if _stopping:
+        raise Stop(_stopping[0])
+
+
+# The device whose ``signal`` cut each signal ends.
+RELEASE_SIGNALS = {signal.SIGUSR1: "robot", signal.SIGUSR2: "laser"}
+_released: List[str] = []
+
+
+def _note_release(signum, frame):  # noqa: ARG001
+    _released.append(RELEASE_SIGNALS[signal.Signals(signum)])
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -1026,9 +1091,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--log", help="write what the devices do, one JSON object per line")
     ap.add_argument("--seconds", type=float, default=0.0, help="stop after this long (0: at a signal)")
     ap.add_argument("--robot-drop", type=parse_drop, metavar="AFTER:FOR",
-                    help="cut the robot's line FOR s, AFTER s after its first session opened")
+                    help="cut the robot's line FOR s, AFTER s after its first session opened "
+                         "(AFTER Nf: once it has sent N SIPs; FOR signal: until SIGUSR1)")
     ap.add_argument("--lms-drop", type=parse_drop, metavar="AFTER:FOR",
-                    help="cut the laser's line FOR s, AFTER s after its first stream started")
+                    help="cut the laser's line FOR s, AFTER s after its first stream started "
+                         "(AFTER Nf: once it has sent N scans; FOR signal: until SIGUSR2)")
     ap.add_argument("--watchdog-ms", type=int, default=2000,
                     help="robot watchdog: stop after this long without a command (default 2000)")
     ap.add_argument("--ticks-mm", type=int, default=128,
@@ -1055,8 +1122,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(f"rsm-fakedev: cannot play {a.capture}: {exc}", file=sys.stderr)
             return 1
 
-    signal.signal(signal.SIGTERM, _raise_stop)
-    signal.signal(signal.SIGINT, _raise_stop)
+    signal.signal(signal.SIGTERM, _note_stop)
+    signal.signal(signal.SIGINT, _note_stop)
+    for sig in RELEASE_SIGNALS:
+        signal.signal(sig, _note_release)
     log = Log(a.log)
     body = Body()
     devices: List[Device] = []
@@ -1110,6 +1179,7 @@ def run(devices: Sequence[Device], log: Log, end: float) -> None:
     device's timers, until ``end`` (monotonic seconds) or a Stop."""
     by_fd = {d.port.master: d for d in devices}
     while True:
+        check_stop()
         now = time.monotonic()
         if now >= end:
             return
@@ -1120,6 +1190,11 @@ def run(devices: Sequence[Device], log: Log, end: float) -> None:
             data = by_fd[fd].port.read()
             if data:
                 by_fd[fd].receive(data, now)
+        while _released:
+            dev = _released.pop(0)
+            for d in devices:
+                if d.dev == dev:
+                    log(dev, "release", cut=d.cut.release(now))
         for d in devices:
             cut = d.cut.active(now)
             if cut != d.cut.state:
