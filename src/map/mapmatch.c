@@ -49,18 +49,7 @@ int rsm_mapmatch_check(const rsm_mapmatch_config_t *cfg)
 /* Sums of one level at pose x: h (upper triangle of J^T J, order 00 01 02 11
  * 12 22), b = J^T r, cost = sum r^2 over all points, used = points with a
  * gradient, hit = sum of M. The fixed-point pass's struct where it runs. */
-#if RSM_FIXED_MATCH
 typedef rsm_fixed_sums_t sums_t;
-#else
-typedef struct sums {
-    float h[6];
-    float b[3];
-    float cost;
-    float cost_used;
-    float hit;
-    uint32_t used;
-} sums_t;
-#endif
 
 /* The largest |x| + |y| of the points (a bound on how far from the pose
  * any of them lands, whatever the heading); NaN if one is not finite. Their

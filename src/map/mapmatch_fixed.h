@@ -14,13 +14,7 @@
 
 #include "rsm/config.h"
 
-#if RSM_FIXED_MATCH
-
-#include "rsm/geom.h"
-#include "map/tilemap.h"
-#include "map/tmap_read.h"
-
-/* The sums of one pass, per cell of the level (as the float pass leaves
+/* The sums of one pass (the float pass's too), per cell of the level (as the float pass leaves
  * them, before level_sums scales them to metres): h the upper triangle of
  * J^T J (00 01 02 11 12 22), b = J^T r, cost the sum of r^2 over every
  * point, cost_used over those with a gradient, hit the sum of M, used the
@@ -33,6 +27,13 @@ typedef struct rsm_fixed_sums {
     float hit;
     uint32_t used;
 } rsm_fixed_sums_t;
+
+#if RSM_FIXED_MATCH
+
+#include "rsm/geom.h"
+#include "map/tilemap.h"
+#include "map/tmap_read.h"
+
 
 /* Fractional bits of the points (metres: |x| < 2^11 m) and of the
  * rotation's terms (cells per metre: below 2^10); the heading's derivative
