@@ -18,8 +18,9 @@ report (``docs/RESULTS.md`` by default) has these sections:
    the main log, 43 % and 60 % on every log; and rsm over many runs (the map
    update distance varied) clean and at 43 %, whose means the floors compare
    too; and rsm on copies of every log with odometry and sampling faults
-   (:mod:`rsm_tools.faults`; the subsection "Faults", :mod:`.faults`); and rsm
-   on a map it saved: the round trip, localization mode, the global
+   (:mod:`rsm_tools.faults`; the subsection "Faults", :mod:`.faults`); the
+   Faults section's clean runs again with the fixed-point matcher the cores
+   without an FPU build (:mod:`.fixedmatch`); and rsm on a map it saved: the round trip, localization mode, the global
    search from starts spread over every log and kidnaps (the subsection "Known map",
    :mod:`.knownmap`; ``--only knownmap`` runs it alone).
 3. Sharp turns, the paper's Fig. 8: residuals at the local relations with the
@@ -78,7 +79,7 @@ from .parse import (_peer_table, base_name, best_peers, callee_costs, callgrind_
     load_summary, localizer_breakdown, parse_callgraph_info, parse_callgrind, parse_cross_check, parse_nm_sizes,
     parse_peers, parse_size_archive, peer_speed, static_functions, worst_stack_path)
 from .plots import plot_robustness, plot_scaling, plot_stages, plot_turns
-from .measure import (build_small, cmake_cache, cpu_info, discover_logs, hash_log2_for, memory_growth, provenance,
+from .measure import (build_fixed, build_small, cmake_cache, cpu_info, discover_logs, hash_log2_for, memory_growth, provenance,
     run_accuracy, run_arm_memory, run_callgrind, run_cross_check, run_host_stack, run_m4, run_memory, run_nav,
     run_robustness, run_scaling, run_speed, run_spread, run_stage_speed, run_stages, run_turns, scaling_variants,
     shared_dir, source_digest, spread_updates, stages_exe, variant_header, write_head)
@@ -86,6 +87,7 @@ from .faults import FAULT_RUNS, QUICK_FAULT_RUNS, fault_floors, run_faults
 from .knownmap import (KIDNAP_RUNS, QUICK_KIDNAP_RUNS, QUICK_STARTS, STARTS, START_SCANS, knownmap_floors,
     run_knownmap)
 from . import deskew as _deskew
+from . import fixedmatch as _fixedmatch
 from . import knownmap as _knownmap
 from . import navmemory as _navmemory
 from .report import (FLOOR_LEVEL, FLOOR_ROBUST, PEER_FLOORS, _scope_name, before_label, check_floors,
@@ -333,6 +335,9 @@ def run(args: argparse.Namespace) -> Path:
     reuse = None if "skipped" in ctx["spread"] else (work / "spread", ctx["spread"]["updates"])
     ctx["faults"] = ({"skipped": "--faults 0"} if nfaults <= 0 else
                      stage("faults", run_faults, nav, logs, nfaults, work, args.jobs, reuse))
+    ctx["fixed_match"] = ({"skipped": "--faults 0"} if "skipped" in ctx["faults"] else
+                          stage("fixed-point matcher", _fixed_match_runs, root, build, logs, work, args.jobs,
+                                ctx["faults"]))
     ctx["knownmap"] = ({"skipped": "--global-starts 0"} if nstarts <= 0 else
                        stage("known map", run_knownmap, nav, logs, work, km_jobs, nstarts, args.global_scans,
                              stages_bin, nkidnap))
@@ -403,6 +408,7 @@ def run(args: argparse.Namespace) -> Path:
         print(f"rsm-bench: WARNING: {ctx['sources_changed']}", flush=True)
     ctx["floors"] = (check_floors(**floor_inputs(ctx)) + m4_floors(ctx.get("m4")) +
                      spread_floors(ctx.get("spread")) + fault_floors(ctx.get("faults")) +
+                     _fixedmatch.floors(ctx.get("fixed_match")) +
                      knownmap_floors(ctx.get("knownmap")) + _navmemory.floors(ctx.get("nav_memory")) +
                      _deskew.floors(ctx.get("deskew_bursts")) +
                      ctx["full_checks"] +
@@ -426,6 +432,13 @@ def run(args: argparse.Namespace) -> Path:
         print(f"  {f['line']}")
     print(f"rsm-bench: wrote {output} in {ctx['elapsed']:.0f} s (work files in {work})")
     return output
+
+
+def _fixed_match_runs(root: Path, build: Path, logs, work: Path, jobs: int, faults: dict) -> dict:
+    """The fixed-point matcher's rsm-nav built beside the main build, then the
+    Faults section's clean runs with it (bench/fixedmatch.py)."""
+    nav_fixed = build_fixed(root, build, build / "bench-fixed")
+    return _fixedmatch.run(nav_fixed, logs, work, jobs, faults)
 
 
 def _jitter_runs(args: argparse.Namespace) -> int:

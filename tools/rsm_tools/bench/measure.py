@@ -981,12 +981,14 @@ def variant_header(macros: Dict[str, int]) -> str:
     return "\n".join(lines)
 
 
-def configure_build(root: Path, b: Path, main_build: Path, header, targets: Sequence[str]) -> None:
-    """A Release build of ``targets`` in ``b`` with RSM_USER_CONFIG=header, with
-    the main build's compiler and warning settings."""
+def configure_build(root: Path, b: Path, main_build: Path, header, targets: Sequence[str],
+                    options: Sequence[str] = ()) -> None:
+    """A Release build of ``targets`` in ``b`` with RSM_USER_CONFIG=header (None:
+    the default config.h) and the CMake ``options``, with the main build's
+    compiler and warning settings."""
     cache = cmake_cache(main_build)
     cmd = ["cmake", "-S", str(root), "-B", str(b), "-G", "Ninja", "-DCMAKE_BUILD_TYPE=Release",
-           "-DRSM_BUILD_TESTS=OFF", f"-DRSM_USER_CONFIG={header}"]
+           "-DRSM_BUILD_TESTS=OFF", *([f"-DRSM_USER_CONFIG={header}"] if header is not None else []), *options]
     if cache.get("CMAKE_C_COMPILER"):
         cmd.append(f"-DCMAKE_C_COMPILER={cache['CMAKE_C_COMPILER']}")
     if cache.get("RSM_WERROR"):
@@ -995,6 +997,13 @@ def configure_build(root: Path, b: Path, main_build: Path, header, targets: Sequ
         res = subprocess.run(c, capture_output=True, text=True)
         if res.returncode != 0:
             raise BenchError(f"{' '.join(c)} failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}")
+
+
+def build_fixed(root: Path, main_build: Path, d: Path) -> Path:
+    """rsm-nav with the fixed-point map matcher (RSM_FIXED_MATCH, what the
+    cores without an FPU build) on this host, in ``d``."""
+    configure_build(root, d, main_build, None, ("rsm-nav",), ("-DRSM_FIXED_MATCH=ON",))
+    return d / "tools" / "nav" / "rsm-nav"
 
 
 def build_small(root: Path, main_build: Path, d: Path) -> Dict[str, Path]:

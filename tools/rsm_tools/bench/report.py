@@ -18,6 +18,7 @@ from .common import (CG_STAGE_ORDER, DRIVER_OBJECTS, HOST_PARTS, LOCAL_SPAN, MEM
     run_labels, shown_path)
 from . import figures
 from .faults import report_faults
+from . import fixedmatch as _fixedmatch
 from .knownmap import report_knownmap
 from .parse import best_peers, fused_percent
 
@@ -1369,7 +1370,8 @@ def write_report(ctx: dict) -> str:
 
     sections = (
         report_accuracy(ctx, root),
-        report_robustness(ctx, root) + report_faults(ctx.get("faults")) + report_knownmap(ctx.get("knownmap")),
+        report_robustness(ctx, root) + report_faults(ctx.get("faults")) +
+        _fixedmatch.report(ctx.get("fixed_match")) + report_knownmap(ctx.get("knownmap")),
         report_turns(ctx.get("turns"), main, root) + plot_lines(
             ctx.get("turns") and ctx.get("turns_plot"), ctx.get("turns_plot_note"),
             "Residuals at the sharpest turns and by true rotation"),
