@@ -189,6 +189,27 @@ static inline int rsm_tmap_split(float u, int32_t *i, float *frac)
 const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
                                     int32_t i, int32_t j, float m[4]);
 
+/* Cell (i, j)'s column and row in the window's tile (*ci, *cj): both below
+ * the tile's last when the four cells from it lie in that tile (one compare
+ * each, the window's tile and its edge at once). When all four lie in
+ * another tile, the window moves there first. */
+static RSM_ALWAYS_INLINE void rsm_tmap_window_place(const rsm_tmap_t *map, rsm_tmap_cursor_t *c,
+                                                    rsm_tmap_window_t *w, int32_t i, int32_t j, uint32_t *ci,
+                                                    uint32_t *cj)
+{
+    const uint32_t mask = (uint32_t)RSM_TMAP_TILE_MASK;
+    *ci = (uint32_t)i - (uint32_t)w->bx;
+    *cj = (uint32_t)j - (uint32_t)w->by;
+    if ((*ci >= mask || *cj >= mask) && ((uint32_t)i & mask) != mask && ((uint32_t)j & mask) != mask) {
+        const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
+        w->bx = (int32_t)((uint32_t)i & ~mask);
+        w->by = (int32_t)((uint32_t)j & ~mask);
+        w->tile = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
+        *ci = (uint32_t)i & mask;
+        *cj = (uint32_t)j & mask;
+    }
+}
+
 /* The occupancy at (u, v) in cells of the cursor's level, cell centres at
  * whole numbers: bilinear between the four centres around it. Its
  * gradient per cell goes to *du_out and *dv_out. inside: the caller knows
@@ -241,20 +262,7 @@ static RSM_ALWAYS_INLINE float rsm_tmap_read_cells(const rsm_tmap_t *map, rsm_tm
             dv += 1.0f;
         }
     }
-    /* The cell's column and row in the window's tile: both below the
-     * tile's last when the four cells lie in it (one compare each, the
-     * window's tile and its edge at once). */
-    ci = (uint32_t)i - (uint32_t)w->bx;
-    cj = (uint32_t)j - (uint32_t)w->by;
-    if ((ci >= mask || cj >= mask) && ((uint32_t)i & mask) != mask && ((uint32_t)j & mask) != mask) {
-        /* All four cells in another tile: the window moves there. */
-        const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
-        w->bx = (int32_t)((uint32_t)i & ~mask);
-        w->by = (int32_t)((uint32_t)j & ~mask);
-        w->tile = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
-        ci = (uint32_t)i & mask;
-        cj = (uint32_t)j & mask;
-    }
+    rsm_tmap_window_place(map, c, w, i, j, &ci, &cj);
     if (ci < mask && cj < mask) {
         const uint32_t k = (cj << RSM_TMAP_TILE_LOG2) | ci;
         if (w->tile == NULL) {
@@ -381,8 +389,8 @@ static RSM_ALWAYS_INLINE int32_t rsm_tmap_read_fixed(const rsm_tmap_t *map, rsm_
                                                      int32_t *gu, int32_t *gv)
 {
     const uint32_t mask = (uint32_t)RSM_TMAP_TILE_MASK;
-    uint32_t ci = (uint32_t)i - (uint32_t)w->bx;
-    uint32_t cj = (uint32_t)j - (uint32_t)w->by;
+    uint32_t ci;
+    uint32_t cj;
     int32_t m00;
     int32_t m10;
     int32_t m01;
@@ -391,14 +399,7 @@ static RSM_ALWAYS_INLINE int32_t rsm_tmap_read_fixed(const rsm_tmap_t *map, rsm_
     int32_t b;
     int32_t top;
     int32_t bottom;
-    if ((ci >= mask || cj >= mask) && ((uint32_t)i & mask) != mask && ((uint32_t)j & mask) != mask) {
-        const uint32_t s = rsm_tmap_cursor_slot(map, c, i, j);
-        w->bx = (int32_t)((uint32_t)i & ~mask);
-        w->by = (int32_t)((uint32_t)j & ~mask);
-        w->tile = s == RSM_TMAP_NONE ? NULL : &map->tile[s];
-        ci = (uint32_t)i & mask;
-        cj = (uint32_t)j & mask;
-    }
+    rsm_tmap_window_place(map, c, w, i, j, &ci, &cj);
     if (ci < mask && cj < mask) {
         const uint32_t k = (cj << RSM_TMAP_TILE_LOG2) | ci;
         uint32_t v00;
