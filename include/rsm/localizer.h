@@ -358,6 +358,10 @@ typedef struct rsm_localizer {
             rsm_pose_t last_step;                 /* the robot's last step between two scans, as
                                                    * estimated (odometry's where a search
                                                    * jumped) */
+            float walk_p[9];                      /* the covariance odometry's steps since the
+                                                   * last scan give as a walk of ordinary steps
+                                                   * (rsm_odometry_noise_walk): the prior after
+                                                   * a gap in the scans */
             rsm_odometry_verdict_t held;          /* why it is held there: a stall (CAUGHT_UP),
                                                    * a refuted step, a large correction
                                                    * (RECOUNTED) */

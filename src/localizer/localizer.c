@@ -323,9 +323,28 @@ static int calibrating(const rsm_localizer_t *loc)
     return loc->cfg->method == RSM_METHOD_MAP && loc->cfg->odometry_cal.memory > 0.0f;
 }
 
+/* The walk's covariance (walk_p) carried over step v from before (the
+ * filter before the step), from the filter's own at the first step after
+ * a scan. */
+static void walk(rsm_localizer_t *loc, const rsm_motion_t *v, rsm_ekf_t *before)
+{
+    float qw[9];
+    if (loc->counters.motions == loc->motions_at_scan || !loc->have_scan) {
+        memcpy(loc->state.persistent.walk_p, before->p, sizeof loc->state.persistent.walk_p);
+    }
+    memcpy(before->p, loc->state.persistent.walk_p, sizeof before->p);
+    rsm_odometry_noise_walk(&loc->odo.cfg, v, qw);
+    if (rsm_ekf_predict(before, v, loc->have_scan ? qw : NULL) == RSM_OK) {
+        memcpy(loc->state.persistent.walk_p, before->p, sizeof loc->state.persistent.walk_p);
+    } else {
+        memcpy(loc->state.persistent.walk_p, loc->ekf.p, sizeof loc->state.persistent.walk_p);
+    }
+}
+
 int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
 {
     float q[9];
+    rsm_ekf_t before;
     rsm_motion_t v;
     if (!ready(loc) || u == NULL) {
         return RSM_ERR_INVAL;
@@ -337,6 +356,7 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
     /* Odometry's systematic errors, as matching has found them. */
     v = calibrating(loc) ? rsm_odometry_cal_apply(&loc->odo_cal, u) : *u;
     rsm_odometry_noise(&loc->odo.cfg, &v, q);
+    before = loc->ekf;
     /* No process noise before the first scan (see localizer.h). */
     if (rsm_ekf_predict(&loc->ekf, &v, loc->have_scan ? q : NULL) != RSM_OK) {
         loc->counters.bad_motions++;
@@ -347,6 +367,7 @@ int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
     }
     if (loc->cfg->method == RSM_METHOD_MAP) {
         const rsm_pose_t step = {v.dx, v.dy, v.dtheta};
+        walk(loc, &v, &before);
         loc->state.persistent.since = rsm_pose_compose(&loc->state.persistent.since, &step);
     }
     loc->counters.motions++;
@@ -870,7 +891,9 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  * variance stays large for many scans, and a search on each of them is a
  * chance on each for a look-alike to win. Never on the clean Intel and
  * ACES logs (the variances themselves stay below 0.08 m and 0.13 rad
- * there); 0.23 m and 0.67 rad after 15 s without a scan. Only after a
+ * there); after 15 s without a scan, from odometry reported in one step
+ * (step_map takes the walk's prior, rsm_odometry_noise_walk), only when
+ * the robot drove more than 8 m or turned a lot meanwhile. Only after a
  * gap of UNSURE_GAP_S: a large step in a scan's time is a stall's
  * catch-up, a spike or a reset, which doubt_step weighs (searched as well,
  * a stall's catch-up took 8 poses off by the ground truth in 20 ACES
@@ -902,9 +925,9 @@ static int plausible_step(const rsm_localizer_t *loc, const rsm_pose_t *pred, fl
  *   again, and after a refuted spike the step takes the spike back;
  * - the last estimate without the step, when the match from pred fits
  *   poorly or moved pred by more than a doubt: the step may be false (a
- *   spike, a counter reset, wheels that slipped). Not after a gap that
- *   left the prediction unsure when the step is one the robot could have
- *   driven in the time (driven): odometry is then the only evidence of
+ *   spike, a counter reset, wheels that slipped). Not after a gap in the
+ *   scans when the step is one the robot could have driven in the time
+ *   (driven): odometry is then the only evidence of
  *   where it went, the ground there may not be mapped yet, and the place
  *   it left fits as well as any stretch of corridor alike (ACES, 10 m in
  *   15 s, "refuted" into a 10 m error); the search around pred decides.
@@ -1068,7 +1091,8 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t pred = loc->ekf.x;
-    const int gap = unsure(loc, dt_s); /* of the prediction, before any match moves it */
+    const int driven = dt_s > UNSURE_GAP_S && odometry_moved && plausible_step(loc, &pred, dt_s);
+    int gap;
     rsm_mapmatch_result_t res;
     rsm_mapmatch_unpin_t unpin;
     int ambiguous = 0;
@@ -1078,6 +1102,19 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     if (!loc->have_scan) {
         return RSM_SCAN_FIRST;
     }
+    if (driven) {
+        /* Scans missing for a while, and odometry's motion over them one
+         * the robot could have driven: it may have come in one piece, and
+         * one step's noise stretched over metres is no prior at all (a
+         * heading error of 0.2 rad per metre driven, squared: 1.3 rad
+         * after 6.5 m; measured, 1 to 14 degrees). Intel and ACES with 15 s
+         * gaps: a match with nothing to hold it slid 1.5 m along a
+         * corridor, or turned 28 degrees on 22 points. A step no robot
+         * drives in the time (a counter reset, a spike) keeps the wide
+         * prior: doubt_step weighs it. */
+        memcpy(loc->ekf.p, loc->state.persistent.walk_p, sizeof loc->ekf.p);
+    }
+    gap = unsure(loc, dt_s); /* of the prediction, before any match moves it */
     stage_switch(clk, RSM_STAGE_MAPMATCH);
     rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, pred.theta, &unpin);
     rep->unpinned = unpin.frac;
@@ -1104,8 +1141,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
         *carried = 1;
         return RSM_SCAN_POOR_FIT;
     }
-    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, gap && plausible_step(loc, &pred, dt_s), &rc, &res,
-                               &doubted);
+    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, driven, &rc, &res, &doubted);
     if (rep->odometry == RSM_ODOMETRY_CAUGHT_UP) {
         loc->counters.caught_up++;
     } else if (rep->odometry == RSM_ODOMETRY_REFUTED) {

@@ -325,7 +325,9 @@ void rsm_odometry_jacobians(const rsm_pose_t *pose, const rsm_motion_t *u, float
     }
 }
 
-void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float q[9])
+/* The noise of one step, with the distance terms' variance growing
+ * linearly beyond a step of walk_m (0: never). */
+static void step_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float walk_m, float q[9])
 {
     float ds;
     float dth;
@@ -334,6 +336,7 @@ void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u,
     float sr_drift;
     float var_t;
     float var_r;
+    float walked = 1.0f;
     int i;
     if (cfg == NULL || u == NULL || q == NULL) {
         return;
@@ -342,11 +345,14 @@ void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u,
      * negligible dS*dtheta^2/24 per step. */
     ds = sqrtf(u->dx * u->dx + u->dy * u->dy);
     dth = fabsf(u->dtheta);
+    if (walk_m > 0.0f && ds > walk_m) {
+        walked = walk_m / ds;
+    }
     st = cfg->sigma_trans_per_m * ds;
     sr_turn = cfg->sigma_rot_per_rad * dth;
     sr_drift = cfg->sigma_rot_per_m * ds;
-    var_t = st * st + cfg->sigma_trans_min_m * cfg->sigma_trans_min_m;
-    var_r = sr_turn * sr_turn + sr_drift * sr_drift + cfg->sigma_rot_min_rad * cfg->sigma_rot_min_rad;
+    var_t = st * st * walked + cfg->sigma_trans_min_m * cfg->sigma_trans_min_m;
+    var_r = sr_turn * sr_turn + sr_drift * sr_drift * walked + cfg->sigma_rot_min_rad * cfg->sigma_rot_min_rad;
     for (i = 0; i < 9; ++i) {
         q[i] = 0.0f;
     }
@@ -358,6 +364,16 @@ void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u,
     q[0] = var_t;
     q[4] = var_t;
     q[8] = var_r;
+}
+
+void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float q[9])
+{
+    step_noise(cfg, u, 0.0f, q);
+}
+
+void rsm_odometry_noise_walk(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float q[9])
+{
+    step_noise(cfg, u, RSM_ODOMETRY_WALK_STEP_M, q);
 }
 
 rsm_odometry_cal_config_t rsm_odometry_cal_config_default(void)

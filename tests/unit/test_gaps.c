@@ -117,10 +117,61 @@ void test_a_step_faster_than_the_wheels_should_be_dropped(void)
     TEST_ASSERT_TRUE_MESSAGE(refuted >= 1u, msg);
 }
 
+/* Two rooms 3 m square, 10 m apart: the robot scans in the first, then
+ * odometry reports the drive to the second in one step, 20 s later
+ * (0.5 m/s), with no scan in between. The map holds nothing the second room's scan could
+ * touch, so the scan is not matched and the heading's variance after it is
+ * the prior the match had. */
+static float heading_var_after_one_step(void)
+{
+    static rsm_synth_segment_t rooms[8];
+    const float p0[9] = {1.0e-4f, 0.0f, 0.0f, 0.0f, 1.0e-4f, 0.0f, 0.0f, 0.0f, 1.0e-4f};
+    const rsm_pose_t start = {0.0f, 0.0f, 0.0f};
+    const rsm_pose_t there = {10.0f, 0.0f, 0.0f};
+    rsm_localizer_report_t rep;
+    rsm_motion_t u;
+    size_t k;
+    for (k = 0; k < 2u; ++k) {
+        const float c = 10.0f * (float)k;
+        rooms[4u * k + 0u] = (rsm_synth_segment_t){c - 1.5f, -1.5f, c + 1.5f, -1.5f};
+        rooms[4u * k + 1u] = (rsm_synth_segment_t){c + 1.5f, -1.5f, c + 1.5f, 1.5f};
+        rooms[4u * k + 2u] = (rsm_synth_segment_t){c + 1.5f, 1.5f, c - 1.5f, 1.5f};
+        rooms[4u * k + 3u] = (rsm_synth_segment_t){c - 1.5f, 1.5f, c - 1.5f, -1.5f};
+    }
+    world.seg = rooms;
+    world.count = 8u;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &start, p0));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &start, &scan_cfg, NULL, 0u, &scan));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    u = rsm_synth_motion(&start, &there, NULL);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &there, &scan_cfg, NULL, 20000000u, &scan));
+    (void)rsm_localizer_scan(&loc, &scan, &rep);
+    TEST_ASSERT_EQUAL_INT(RSM_SCAN_LOW_SUPPORT, rep.outcome);
+    return loc.ekf.p[8];
+}
+
+void test_odometry_over_a_gap_should_be_as_sure_as_ordinary_steps(void)
+{
+    /* 10 m in 20 s, reported at once: the heading's variance that 10 m
+     * driven in steps of RSM_ODOMETRY_WALK_STEP_M adds up to
+     * (sigma_rot_per_m^2 * 10 * 0.4 = 0.16 rad^2 at the defaults), not one
+     * 10 m step's (0.2 * 10)^2 = 4 rad^2, which lets the first match after
+     * a gap turn the scan anywhere (issue 29: Intel and ACES with 15 s
+     * gaps). */
+    const float walked = cfg.odometry.sigma_rot_per_m * cfg.odometry.sigma_rot_per_m * 10.0f * RSM_ODOMETRY_WALK_STEP_M;
+    const float var = heading_var_after_one_step();
+    char msg[120];
+    snprintf(msg, sizeof msg, "heading variance %.4f rad^2, the walk's %.4f", (double)var, (double)walked);
+    TEST_MESSAGE(msg);
+    TEST_ASSERT_FLOAT_WITHIN_MESSAGE(0.01f * walked, walked + 1.0e-4f, var, msg);
+}
+
 int main(void)
 {
     UNITY_BEGIN();
     RUN_TEST(test_a_step_driven_through_a_gap_should_be_kept);
     RUN_TEST(test_a_step_faster_than_the_wheels_should_be_dropped);
+    RUN_TEST(test_odometry_over_a_gap_should_be_as_sure_as_ordinary_steps);
     return UNITY_END();
 }

@@ -552,6 +552,46 @@ void test_noise_should_grow_with_travel_and_turn(void)
     TEST_ASSERT_EQUAL_FLOAT(42.0f, q[0]);
 }
 
+void test_noise_walk_should_grow_linearly_beyond_an_ordinary_step(void)
+{
+    float q[9];
+    float w[9];
+    rsm_motion_t u = { 0.3f, 0.0f, 0.2f };
+    const float f2 = 0.002f * 0.002f;
+    const float ref = RSM_ODOMETRY_WALK_STEP_M;
+    int i;
+
+    /* Up to an ordinary step it is the ordinary noise. */
+    rsm_odometry_noise(&cfg, &u, q);
+    rsm_odometry_noise_walk(&cfg, &u, w);
+    for (i = 0; i < 9; ++i) {
+        TEST_ASSERT_EQUAL_FLOAT(q[i], w[i]);
+    }
+
+    /* 10 m and 1 rad in one step: the distance terms as ten-metre walks of
+     * ordinary steps (variance per metre times ref), the turn's as before. */
+    u.dx = 6.0f;
+    u.dy = 8.0f;
+    u.dtheta = 1.0f;
+    rsm_odometry_noise_walk(&cfg, &u, w);
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.05f * 0.05f * 10.0f * ref + f2, w[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.05f * 0.05f * 10.0f * ref + f2, w[4]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.05f * 0.05f + 0.02f * 0.02f * 10.0f * ref + f2, w[8]);
+    /* Twice as far, twice the variance (not four times). */
+    u.dx = 12.0f;
+    u.dy = 16.0f;
+    u.dtheta = 0.0f;
+    rsm_odometry_noise_walk(&cfg, &u, w);
+    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.05f * 0.05f * 20.0f * ref + f2, w[0]);
+
+    /* NULL arguments leave q alone. */
+    w[0] = 42.0f;
+    rsm_odometry_noise_walk(NULL, &u, w);
+    rsm_odometry_noise_walk(&cfg, NULL, w);
+    rsm_odometry_noise_walk(&cfg, &u, NULL);
+    TEST_ASSERT_EQUAL_FLOAT(42.0f, w[0]);
+}
+
 /* ---- calibration of the heading error ------------------------------------ */
 
 /* A robot whose odometry turns (1 + over) times the truth and drifts
@@ -998,6 +1038,7 @@ int main(void)
     RUN_TEST(test_apply_should_chain_with_ticks);
     RUN_TEST(test_jacobians_should_match_finite_differences);
     RUN_TEST(test_noise_should_grow_with_travel_and_turn);
+    RUN_TEST(test_noise_walk_should_grow_linearly_beyond_an_ordinary_step);
     RUN_TEST(test_odometry_cal_should_learn_a_turn_scale_and_a_drift);
     RUN_TEST(test_odometry_cal_should_stay_near_zero_for_true_odometry_and_weigh_scans);
     RUN_TEST(test_odometry_cal_should_gate_jumps_and_bound_the_correction);
