@@ -361,7 +361,10 @@ typedef struct rsm_localizer {
             float walk_p[9];                      /* the covariance odometry's steps since the
                                                    * last scan give as a walk of ordinary steps
                                                    * (rsm_odometry_noise_walk): the prior after
-                                                   * a gap in the scans */
+                                                   * a gap in the scans ... */
+            uint8_t walk_apart;                   /* ... when a step since then was longer
+                                                   * than RSM_ODOMETRY_WALK_STEP_M (else the
+                                                   * filter's own) */
             rsm_odometry_verdict_t held;          /* why it is held there: a stall (CAUGHT_UP),
                                                    * a refuted step, a large correction
                                                    * (RECOUNTED) */

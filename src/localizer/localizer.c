@@ -324,21 +324,27 @@ static int calibrating(const rsm_localizer_t *loc)
 }
 
 /* The walk's covariance (walk_p) carried over step v from before (the
- * filter before the step), from the filter's own at the first step after
- * a scan. */
+ * filter before the step). It is the filter's own until a step since the
+ * last scan is longer than RSM_ODOMETRY_WALK_STEP_M (walk_apart), and is
+ * only kept from then on: ordinary steps cost nothing more. */
 static void walk(rsm_localizer_t *loc, const rsm_motion_t *v, rsm_ekf_t *before)
 {
     float qw[9];
     if (loc->counters.motions == loc->motions_at_scan || !loc->have_scan) {
-        memcpy(loc->state.persistent.walk_p, before->p, sizeof loc->state.persistent.walk_p);
+        loc->state.persistent.walk_apart = 0u;
     }
-    memcpy(before->p, loc->state.persistent.walk_p, sizeof before->p);
+    if (loc->state.persistent.walk_apart) {
+        memcpy(before->p, loc->state.persistent.walk_p, sizeof before->p);
+    } else if (v->dx * v->dx + v->dy * v->dy <= RSM_ODOMETRY_WALK_STEP_M * RSM_ODOMETRY_WALK_STEP_M) {
+        return;
+    }
     rsm_odometry_noise_walk(&loc->odo.cfg, v, qw);
     if (rsm_ekf_predict(before, v, loc->have_scan ? qw : NULL) == RSM_OK) {
         memcpy(loc->state.persistent.walk_p, before->p, sizeof loc->state.persistent.walk_p);
     } else {
         memcpy(loc->state.persistent.walk_p, loc->ekf.p, sizeof loc->state.persistent.walk_p);
     }
+    loc->state.persistent.walk_apart = 1u;
 }
 
 int rsm_localizer_motion(rsm_localizer_t *loc, const rsm_motion_t *u)
@@ -1102,7 +1108,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     if (!loc->have_scan) {
         return RSM_SCAN_FIRST;
     }
-    if (driven) {
+    if (driven && loc->state.persistent.walk_apart) {
         /* Scans missing for a while, and odometry's motion over them one
          * the robot could have driven: it may have come in one piece, and
          * one step's noise stretched over metres is no prior at all (a
