@@ -899,7 +899,8 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  * ACES logs (the variances themselves stay below 0.08 m and 0.13 rad
  * there); after 15 s without a scan, from odometry reported in one step
  * (step_map takes the walk's prior, rsm_odometry_noise_walk), only when
- * the robot drove more than 8 m or turned a lot meanwhile. Only after a
+ * the robot drove more than about 6 m (the heading's share) or turned
+ * a lot meanwhile. Only after a
  * gap of UNSURE_GAP_S: a large step in a scan's time is a stall's
  * catch-up, a spike or a reset, which doubt_step weighs (searched as well,
  * a stall's catch-up took 8 poses off by the ground truth in 20 ACES
