@@ -161,13 +161,17 @@ void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u,
  * missing for seconds, the motion since the last one counted at once): its
  * distance was driven as ordinary steps of at most RSM_ODOMETRY_WALK_STEP_M,
  * whose errors add up as a walk, so beyond that length the distance terms'
- * variance grows linearly with |dS|, not as its square:
- *   var_dx = var_dy = sigma_trans_per_m^2 |dS| w + sigma_trans_min_m^2
+ * variance grows linearly with |dS|, not as its square, and the heading's
+ * walk along the step moves the position across it:
+ *   along the chord: sigma_trans_per_m^2 |dS| w + sigma_trans_min_m^2
+ *   across it: the same + sigma_rot_per_m^2 w |dS|^3 / 3
  *   var_dtheta = (sigma_rot_per_rad |dtheta|)^2 + sigma_rot_per_m^2 |dS| w
  *                + sigma_rot_min_rad^2,    w = min(|dS|, RSM_ODOMETRY_WALK_STEP_M)
- * The turn's term stays a square: a wheel base off its nominal misjudges
- * every turn by the same share. Up to that length it equals
- * rsm_odometry_noise. */
+ *   across with dtheta: sigma_rot_per_m^2 w |dS|^2 / 2
+ * (what the filter carries from step to step when the same drive comes in
+ * steps of w). The turn's term stays a square: a wheel base off its
+ * nominal misjudges every turn by the same share. Up to that length it
+ * equals rsm_odometry_noise. */
 #define RSM_ODOMETRY_WALK_STEP_M 0.4f
 void rsm_odometry_noise_walk(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float q[9]);
 

@@ -364,6 +364,27 @@ static void step_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, 
     q[0] = var_t;
     q[4] = var_t;
     q[8] = var_r;
+    if (walked < 1.0f) {
+        /* A walk of steps of walk_m: the heading's error grows along it
+         * (variance sigma_rot_per_m^2 walk_m s after s metres), and the
+         * position across the chord integrates it: variance
+         * sigma_rot_per_m^2 walk_m dS^3 / 3, and dS^2 / 2 with the
+         * heading's at the end (what the filter's Jacobians carry from
+         * step to step when the same drive comes in ordinary steps). */
+        const float k = cfg->sigma_rot_per_m * cfg->sigma_rot_per_m * walk_m;
+        const float nx = -u->dy / ds;
+        const float ny = u->dx / ds;
+        const float across = k * ds * ds * ds / 3.0f;
+        const float with_heading = k * ds * ds / 2.0f;
+        q[0] += across * nx * nx;
+        q[1] = across * nx * ny;
+        q[3] = q[1];
+        q[4] += across * ny * ny;
+        q[2] = with_heading * nx;
+        q[6] = q[2];
+        q[5] = with_heading * ny;
+        q[7] = q[5];
+    }
 }
 
 void rsm_odometry_noise(const rsm_odometry_config_t *cfg, const rsm_motion_t *u, float q[9])

@@ -568,21 +568,37 @@ void test_noise_walk_should_grow_linearly_beyond_an_ordinary_step(void)
         TEST_ASSERT_EQUAL_FLOAT(q[i], w[i]);
     }
 
-    /* 10 m and 1 rad in one step: the distance terms as ten-metre walks of
-     * ordinary steps (variance per metre times ref), the turn's as before. */
+    /* 10 m and 1 rad in one step, along (0.6, 0.8): along the chord and in
+     * heading the distance terms as a ten-metre walk of ordinary steps
+     * (variance per metre times ref), the turn's as before; across the
+     * chord the walk's heading error integrated (dS^3 / 3), and with the
+     * heading dS^2 / 2. */
     u.dx = 6.0f;
     u.dy = 8.0f;
     u.dtheta = 1.0f;
     rsm_odometry_noise_walk(&cfg, &u, w);
-    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.05f * 0.05f * 10.0f * ref + f2, w[0]);
-    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.05f * 0.05f * 10.0f * ref + f2, w[4]);
-    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.05f * 0.05f + 0.02f * 0.02f * 10.0f * ref + f2, w[8]);
-    /* Twice as far, twice the variance (not four times). */
+    {
+        const float along = 0.05f * 0.05f * 10.0f * ref + f2;
+        const float k = 0.02f * 0.02f * ref;
+        const float across = along + k * 1000.0f / 3.0f;
+        const float c[2] = {0.6f, 0.8f};
+        const float n[2] = {-0.8f, 0.6f};
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, along, w[0] * c[0] * c[0] + 2.0f * w[1] * c[0] * c[1] + w[4] * c[1] * c[1]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-5f, across, w[0] * n[0] * n[0] + 2.0f * w[1] * n[0] * n[1] + w[4] * n[1] * n[1]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.0f, w[2] * c[0] + w[5] * c[1]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, k * 100.0f / 2.0f, w[2] * n[0] + w[5] * n[1]);
+        TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.05f * 0.05f + 0.02f * 0.02f * 10.0f * ref + f2, w[8]);
+        TEST_ASSERT_EQUAL_FLOAT(w[1], w[3]);
+        TEST_ASSERT_EQUAL_FLOAT(w[2], w[6]);
+        TEST_ASSERT_EQUAL_FLOAT(w[5], w[7]);
+    }
+    /* Twice as far, twice the variance along the chord (not four times). */
     u.dx = 12.0f;
     u.dy = 16.0f;
     u.dtheta = 0.0f;
     rsm_odometry_noise_walk(&cfg, &u, w);
-    TEST_ASSERT_FLOAT_WITHIN(1e-7f, 0.05f * 0.05f * 20.0f * ref + f2, w[0]);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, 0.05f * 0.05f * 20.0f * ref + f2,
+                             w[0] * 0.36f + 2.0f * w[1] * 0.48f + w[4] * 0.64f);
 
     /* NULL arguments leave q alone. */
     w[0] = 42.0f;
