@@ -537,11 +537,10 @@ def test_active_mode_run_whose_device_never_came_back_fails(tmp_path, excerpt_ca
 
     The laser's line goes after 10 scans (a count), so the 5 poses waited
     for always come. That a device never came back can only be said of a
-    run that ended on its own: the vanished run ends after 3 s with no byte
-    on either link (--idle-exit, counted from the loss whenever it came);
-    the silent one, whose robot still talks, on its time limit, 10 s, which
-    is several times what a handshake, 10 scans and the 1 s laser timeout
-    take."""
+    run that ended on its own, and both end on the loss, however long the
+    start took: the vanished run after 3 s with no byte on either link
+    (--idle-exit), the silent one, whose robot still talks, 3 s after the
+    laser was lost (--lost-exit)."""
     extra = ["--lms-drop", "10f:1000"] if how == "silent" else []
     fake = FakeDevices(tmp_path, "--capture", str(excerpt_capture), "--patient", *extra)
     # Named as udev names them: a pseudo-terminal's number may be taken
@@ -550,7 +549,7 @@ def test_active_mode_run_whose_device_never_came_back_fails(tmp_path, excerpt_ca
     for dev, link in links.items():
         point_link(link, fake.paths[dev])
     traj = tmp_path / "t.txt"
-    end = ["--seconds", "10"] if how == "silent" else ["--idle-exit", "3"]
+    end = ["--lost-exit", "3"] if how == "silent" else ["--idle-exit", "3"]
     nav = subprocess.Popen([str(rsm_nav_binary()), "--robot", str(links["robot"]), "--lms", str(links["laser"]),
                             *end, "--trajectory", str(traj)],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -266,6 +266,22 @@ static void live_note_losses(live_t *lv)
     }
 }
 
+/* Active mode: how long the device lost longest ago and not back since has
+ * been gone, in seconds (0 when none is). */
+static double live_lost_for(const live_t *lv)
+{
+    double most = 0.0;
+    int i;
+    for (i = 0; i < 2; ++i) {
+        const endpoint_t *e = lv->ep[i];
+        if (e->open && e->losses > 0u && came_back_count(lv, i) == e->back_mark) {
+            const double gone = mono_s() - lv->t0 - e->lost_at;
+            most = gone > most ? gone : most;
+        }
+    }
+    return most;
+}
+
 /* Active mode, at the end of a run: a device lost and not back since (the
  * laser with no scan after the loss, the robot not connected again) is
  * said in one line into why. Returns 1 if any was. */
@@ -435,6 +451,9 @@ static int live_run(live_t *lv)
             break; /* and the robot too has connected: its part of the run is there */
         }
         if (opt->idle_exit_s > 0.0 && lv->bytes > 0u && mono_s() - lv->last_data >= opt->idle_exit_s) {
+            break;
+        }
+        if (opt->lost_exit_s > 0.0 && !lv->dev.listen && live_lost_for(lv) >= opt->lost_exit_s) {
             break;
         }
         live_wait(lv);

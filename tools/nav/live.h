@@ -31,11 +31,14 @@ typedef struct nav_live_options {
                                  any) connected (0: no limit): a run's length that does not
                                  depend on the machine's speed */
     double idle_exit_s;       /* listen-only: stop after this long without bytes once data flowed (0: never) */
+    double lost_exit_s;       /* active: stop once a device has been lost this long and is not
+                                 back (0: never): a run that ends on the loss, however long its
+                                 start took */
     int quiet;
 } nav_live_options_t;
 
-/* nav_live_run's status for a run that went to its end (the time limit or
- * --idle-exit) with a device lost and not back since: the laser gave no scan
+/* nav_live_run's status for a run that went to its end (the time limit,
+ * --idle-exit or --lost-exit) with a device lost and not back since: the laser gave no scan
  * after its loss, or the robot never connected again (active mode; one line
  * on stderr says which). What ran is valid: the caller sums it up, then
  * fails. */

@@ -172,7 +172,9 @@ static void usage(FILE *f)
             "                            rsm-convert --lidar ld06|rplidar stream) links\n"
             "  --robot DEV --lms DEV     live serial links (devices or pseudo-terminals), with\n"
             "     [--robot-baud N] [--lms-baud N] [--listen] [--seconds S] [--idle-exit S]\n"
-            "                            --listen sends nothing and decodes what arrives (replays)\n"
+            "     [--lost-exit S]       --listen sends nothing and decodes what arrives (replays);\n"
+            "                            --idle-exit S stops S s after the last byte on any link,\n"
+            "                            --lost-exit S once a device lost S s ago is not back\n"
             "  --robot DEV --lidar ld06|rplidar DEV   the same with a spinning lidar instead of\n"
             "                            the LMS (--lms-baud sets its rate); its turns become scans,\n"
             "                            de-skewed with the encoder packets' odometry\n"
@@ -1400,7 +1402,7 @@ static void print_summary(nav_t *nav)
 
 enum {
     OPT_CARMEN = 256, OPT_CAPTURE, OPT_ROBOT, OPT_LMS, OPT_LIDAR, OPT_LIDAR_KEEP, OPT_NO_DESKEW,
-    OPT_ROBOT_BAUD, OPT_LMS_BAUD, OPT_LISTEN, OPT_SECONDS, OPT_IDLE_EXIT, OPT_TICKS_PER_M, OPT_WHEEL_BASE,
+    OPT_ROBOT_BAUD, OPT_LMS_BAUD, OPT_LISTEN, OPT_SECONDS, OPT_IDLE_EXIT, OPT_LOST_EXIT, OPT_TICKS_PER_M, OPT_WHEEL_BASE,
     OPT_INITIAL_POSE, OPT_LASER_POSE, OPT_UPSIDE_DOWN, OPT_TRAJECTORY, OPT_SUMMARY_JSON, OPT_TUM, OPT_SCAN_LOG, OPT_EVENTS,
     OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_QUIET, OPT_SAVE_MAP, OPT_LOAD_MAP, OPT_GLOBAL, OPT_FREEZE_MAP,
     OPT_SKIP_SECONDS, OPT_SCANS, OPT_GLOBAL_NEAR
@@ -1423,6 +1425,7 @@ static const struct option nav_options[] = {
     {"listen", no_argument, NULL, OPT_LISTEN},
     {"seconds", required_argument, NULL, OPT_SECONDS},
     {"idle-exit", required_argument, NULL, OPT_IDLE_EXIT},
+    {"lost-exit", required_argument, NULL, OPT_LOST_EXIT},
     {"ticks-per-m", required_argument, NULL, OPT_TICKS_PER_M},
     {"wheel-base", required_argument, NULL, OPT_WHEEL_BASE},
     {"initial-pose", no_argument, NULL, OPT_INITIAL_POSE},
@@ -1565,7 +1568,8 @@ int main(int argc, char **argv)
             live.listen_only = 1;
             break;
         case OPT_SECONDS:
-        case OPT_IDLE_EXIT: {
+        case OPT_IDLE_EXIT:
+        case OPT_LOST_EXIT: {
             const double v = strtod(optarg, NULL);
             if (!(v > 0.0)) {
                 fprintf(stderr, "rsm-nav: bad duration '%s'\n", optarg);
@@ -1573,8 +1577,10 @@ int main(int argc, char **argv)
             }
             if (opt == OPT_SECONDS) {
                 live.seconds = v;
-            } else {
+            } else if (opt == OPT_IDLE_EXIT) {
                 live.idle_exit_s = v;
+            } else {
+                live.lost_exit_s = v;
             }
             break;
         }
