@@ -858,15 +858,30 @@ static float occ_at(const rsm_tmap_t *map, const rsm_tile_t *t, uint32_t b, uint
     return map->occ[((uint32_t)t->cell[b] >> sh) & 15u];
 }
 
-const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
-                                    int32_t i, int32_t j, float m[4])
+/* The tile of cell (i, j) (t when own: the caller's, NULL for none held;
+ * looked up otherwise), and those of (i + 1, j), (i, j + 1) and
+ * (i + 1, j + 1) into t10, t01 and t11, looked up only past a tile's edge. */
+static RSM_ALWAYS_INLINE const rsm_tile_t *straddle_tiles(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own,
+                                                          const rsm_tile_t *t, int32_t i, int32_t j,
+                                                          const rsm_tile_t **t10, const rsm_tile_t **t01,
+                                                          const rsm_tile_t **t11)
 {
     const int edge_i = (i & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
     const int edge_j = (j & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
     const rsm_tile_t *t00 = !own ? tile_of(map, c, i, j) : t != NULL ? t : &empty_tile;
-    const rsm_tile_t *t10 = edge_i ? tile_of(map, c, i + 1, j) : t00;
-    const rsm_tile_t *t01 = edge_j ? tile_of(map, c, i, j + 1) : t00;
-    const rsm_tile_t *t11 = !edge_j ? t10 : !edge_i ? t01 : tile_of(map, c, i + 1, j + 1);
+    *t10 = edge_i ? tile_of(map, c, i + 1, j) : t00;
+    *t01 = edge_j ? tile_of(map, c, i, j + 1) : t00;
+    *t11 = !edge_j ? *t10 : !edge_i ? *t01 : tile_of(map, c, i + 1, j + 1);
+    return t00;
+}
+
+const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
+                                    int32_t i, int32_t j, float m[4])
+{
+    const rsm_tile_t *t10;
+    const rsm_tile_t *t01;
+    const rsm_tile_t *t11;
+    const rsm_tile_t *t00 = straddle_tiles(map, c, own, t, i, j, &t10, &t01, &t11);
     /* Bytes of the two rows, byte and nibble of the two columns. */
     const uint32_t mask = (uint32_t)RSM_TMAP_TILE_MASK;
     const uint32_t r0 = ((uint32_t)j & mask) << (RSM_TMAP_TILE_LOG2 - 1);
@@ -887,12 +902,10 @@ const rsm_tile_t *rsm_tmap_straddle(const rsm_tmap_t *map, rsm_tmap_cursor_t *c,
 const rsm_tile_t *rsm_tmap_straddle_values(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int own, const rsm_tile_t *t,
                                            int32_t i, int32_t j, uint32_t v[4])
 {
-    const int edge_i = (i & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
-    const int edge_j = (j & RSM_TMAP_TILE_MASK) == RSM_TMAP_TILE_MASK;
-    const rsm_tile_t *t00 = !own ? tile_of(map, c, i, j) : t != NULL ? t : &empty_tile;
-    const rsm_tile_t *t10 = edge_i ? tile_of(map, c, i + 1, j) : t00;
-    const rsm_tile_t *t01 = edge_j ? tile_of(map, c, i, j + 1) : t00;
-    const rsm_tile_t *t11 = !edge_j ? t10 : !edge_i ? t01 : tile_of(map, c, i + 1, j + 1);
+    const rsm_tile_t *t10;
+    const rsm_tile_t *t01;
+    const rsm_tile_t *t11;
+    const rsm_tile_t *t00 = straddle_tiles(map, c, own, t, i, j, &t10, &t01, &t11);
     v[0] = rsm_tmap_get_cell(t00, rsm_tmap_cell_index(i, j));
     v[1] = rsm_tmap_get_cell(t10, rsm_tmap_cell_index(i + 1, j));
     v[2] = rsm_tmap_get_cell(t01, rsm_tmap_cell_index(i, j + 1));
