@@ -211,6 +211,9 @@ typedef struct rsm_tmap_counters {
                              * wall_echo, the last write saw nothing there) */
     uint32_t dropped;       /* returns lost because every slot was in use by the update */
     uint32_t outside;       /* returns beyond the tile coordinate range */
+    uint32_t stored;        /* tiles the pool let go into the store (rsm/tilestore.h) */
+    uint32_t fetched;       /* tiles taken back from the store */
+    uint32_t unstored;      /* tiles let go that the store refused (full): forgotten */
 } rsm_tmap_counters_t;
 
 /* The write in progress: the level it is on (in write order: the finest
@@ -226,8 +229,11 @@ typedef struct rsm_tmap_job {
     uint8_t lone[(RSM_MAX_BEAMS + 7) / 8];    /* returns no echo confirmed (wall_echo) */
 } rsm_tmap_job_t;
 
+struct rsm_tile_store;
+
 typedef struct rsm_tmap {
     rsm_tmap_config_t cfg;             /* copied at init */
+    const struct rsm_tile_store *store;  /* where let-go tiles go (rsm/tilestore.h); NULL: none */
     float occ[RSM_TMAP_MAX_VALUE + 1u];  /* occupancy in [0, 1] of each cell value */
     float inv_cell[RSM_TMAP_LEVELS];   /* 1 / cell side of each level */
     uint32_t stamp;                    /* update counter (29 bits used) */
@@ -326,6 +332,7 @@ typedef struct rsm_global {
     uint32_t cached;
     uint32_t cache_stamp;
     uint32_t cache_used;
+    uint32_t cache_fetched;
     int32_t cache_box[4];
     int32_t root_i;                /* the root box: 2^root_h positions a side from here */
     int32_t root_j;

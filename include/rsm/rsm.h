@@ -24,6 +24,7 @@
 #include "rsm/slamtec.h"
 #include "rsm/status.h"
 #include "rsm/sync.h"
+#include "rsm/tilestore.h"
 #include "rsm/version.h"
 
 #endif /* RSM_RSM_H */

@@ -1767,6 +1767,12 @@ static rsm_track_t track_state(rsm_localizer_t *loc, rsm_outcome_t outcome, cons
     return loc->poor_run >= cfg->lost_scans ? RSM_TRACK_LOST : RSM_TRACK_UNCERTAIN;
 }
 
+/* Cells around each point, on every level, whose tiles come back from
+ * the store before a match: what a converging match reads beside the
+ * cell it starts in (its bilinear neighbours, and a few cells of motion
+ * the prediction missed). */
+#define FETCH_MARGIN_CELLS 3u
+
 int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, size_t scan_size,
                                unsigned long fingerprint, rsm_localizer_report_t *rep)
 {
@@ -1835,6 +1841,11 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
     }
     apply_mount(loc, npts);
     rep->points = (uint32_t)npts;
+    if (loc->cfg->method == RSM_METHOD_MAP && loc->have_scan && !global_running(loc)) {
+        /* Places the pool let go come back from the store before the
+         * match reads them (none: nothing to do). */
+        (void)rsm_tmap_fetch(&loc->state.persistent.map, &loc->ekf.x, loc->pts, npts, FETCH_MARGIN_CELLS);
+    }
     if (npts < loc->cfg->min_points) {
         outcome = RSM_SCAN_FEW_POINTS;
     } else if (loc->cfg->method == RSM_METHOD_ODOMETRY) {

@@ -464,7 +464,8 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
         g->headings += g->headings & 1u;
     }
     g->step_rad = 2.0f * RSM_PI / (float)g->headings;
-    if (g->cached != 0u && g->cache_stamp == map->stamp && g->cache_used == map->used && g->cache_box[0] == gx0 &&
+    if (g->cached != 0u && g->cache_stamp == map->stamp && g->cache_used == map->used &&
+        g->cache_fetched == map->counters.fetched && g->cache_box[0] == gx0 &&
         g->cache_box[1] == gy0 && g->cache_box[2] == gx1 && g->cache_box[3] == gy1) {
         /* The map as the last search built its grids and directions from:
          * they stand (only the agreement with this scan is new). */
@@ -1046,6 +1047,7 @@ static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t
         g->cached = 1u;
         g->cache_stamp = map->stamp;
         g->cache_used = map->used;
+        g->cache_fetched = map->counters.fetched;
         return 1;
     }
     return 0;

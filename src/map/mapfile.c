@@ -9,6 +9,8 @@
 #include "rsm/status.h"
 #include "map/mapstate.h"
 #include "map/tilemap.h"
+#include "map/tmap_read.h"
+#include "rsm/tilestore.h"
 
 #define MAGIC0 'R'
 #define MAGIC1 'S'
@@ -57,12 +59,18 @@ static uint32_t file_bytes(uint32_t tiles)
     return RSM_MAPFILE_HEADER_BYTES + tiles * RSM_MAPFILE_TILE_BYTES + 4u;
 }
 
+/* Tiles of the map: the pool's and its store's. */
+static uint32_t held(const rsm_tmap_t *map)
+{
+    return map->used + (map->store != NULL ? map->store->count(map->store->ctx) : 0u);
+}
+
 uint32_t rsm_localizer_map_bytes(const rsm_localizer_t *loc)
 {
     if (!rsm_localizer_ready(loc) || loc->cfg->method != RSM_METHOD_MAP) {
         return 0u;
     }
-    return file_bytes(loc->state.persistent.map.used);
+    return file_bytes(held(&loc->state.persistent.map));
 }
 
 static void encode_header(uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tmap_t *map, const rsm_pose_t *pose,
@@ -83,7 +91,7 @@ static void encode_header(uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tmap_t 
     h[19] = map->cfg.hit_inc;
     h[20] = map->cfg.miss_dec;
     h[21] = map->cfg.splat_from;
-    put_u32(h + 24, map->used);
+    put_u32(h + 24, held(map));
     put_u32(h + 28, map->stamp);
     put_f32(h + 32, pose->x);
     put_f32(h + 36, pose->y);
@@ -125,6 +133,7 @@ int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn writ
     uint32_t crc;
     uint32_t at;
     uint32_t s;
+    uint32_t tiles;
     if (!rsm_localizer_ready(loc) || write == NULL) {
         return RSM_ERR_INVAL;
     }
@@ -138,8 +147,17 @@ int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn writ
     }
     crc = rsm_crc32(0u, buf, RSM_MAPFILE_HEADER_BYTES);
     at = RSM_MAPFILE_HEADER_BYTES;
-    for (s = 0; s < map->used; ++s) {
-        encode_tile(buf, &map->tile[s]);
+    tiles = held(map);
+    /* The pool's tiles first: a load fills the pool with them. */
+    for (s = 0; s < tiles; ++s) {
+        rsm_tile_t stored;
+        const rsm_tile_t *t = &stored;
+        if (s < map->used) {
+            t = &map->tile[s];
+        } else if (map->store->at(map->store->ctx, s - map->used, &stored) != RSM_OK) {
+            return RSM_ERR_IO;
+        }
+        encode_tile(buf, t);
         if (write(ctx, at, buf, RSM_MAPFILE_TILE_BYTES) != 0) {
             return RSM_ERR_IO;
         }
@@ -152,7 +170,7 @@ int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn writ
     }
     if (info != NULL) {
         info->bytes = at + 4u;
-        info->tiles = map->used;
+        info->tiles = tiles;
         info->stamp = map->stamp;
         info->pose = loc->ekf.x;
         info->fit = saved_fit(loc);
@@ -160,8 +178,9 @@ int rsm_localizer_save_map(const rsm_localizer_t *loc, rsm_mapfile_write_fn writ
     return RSM_OK;
 }
 
-/* The header's verdict against loc's configuration; fills *info. */
-static int check_header(const uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tmap_config_t *cfg,
+/* The header's verdict against loc's configuration and room (tiles the
+ * pool and its store hold at most); fills *info. */
+static int check_header(const uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tmap_config_t *cfg, uint32_t room,
                         rsm_mapfile_info_t *info)
 {
     const float cell = get_f32(h + 12);
@@ -182,7 +201,8 @@ static int check_header(const uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tma
     info->pose.y = get_f32(h + 36);
     info->pose.theta = get_f32(h + 40);
     info->fit = get_f32(h + 44);
-    if (info->tiles > (uint32_t)RSM_TMAP_TILES || info->stamp > RSM_TMAP_STAMP_MASK ||
+    if (info->tiles > room ||
+        info->tiles > (0xFFFFFFFFu - RSM_MAPFILE_HEADER_BYTES - 4u) / RSM_MAPFILE_TILE_BYTES || info->stamp > RSM_TMAP_STAMP_MASK ||
         !(info->fit >= 0.0f && info->fit <= 1.0f) || !isfinite(info->pose.x) || !isfinite(info->pose.y) ||
         !isfinite(info->pose.theta)) {
         return RSM_ERR_FORMAT;
@@ -191,10 +211,30 @@ static int check_header(const uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tma
     return RSM_OK;
 }
 
-/* One pass over a stored map: checks it, and with into != NULL restores its
- * tiles there (into already emptied, its stamp set). RSM_OK or the first
- * fault found. */
-static int read_pass(rsm_mapfile_read_fn read, void *ctx, const rsm_tmap_config_t *cfg, rsm_tmap_t *into,
+/* A tile into the pool while it has room, then into the store; a place
+ * held twice is RSM_ERR_FORMAT. */
+static int restore(rsm_tmap_t *map, const rsm_tile_t *t)
+{
+    if (map->used < (uint32_t)RSM_TMAP_TILES || map->store == NULL) {
+        return rsm_tmap_restore(map, t);
+    }
+    if (rsm_tmap_find_slot(map, t->stamp >> 30, t->tx, t->ty) != RSM_TMAP_NONE) {
+        return RSM_ERR_FORMAT;
+    }
+    switch (map->store->put(map->store->ctx, t)) {
+    case RSM_OK:
+        return RSM_OK;
+    case RSM_ERR_NOMEM:
+        return RSM_ERR_NOMEM;
+    default:
+        return RSM_ERR_FORMAT;
+    }
+}
+
+/* One pass over a stored map: checks it against map, and with into != NULL
+ * (map itself, emptied, its stamp set) restores its tiles there, those the
+ * pool cannot hold into its store. RSM_OK or the first fault found. */
+static int read_pass(rsm_mapfile_read_fn read, void *ctx, const rsm_tmap_t *map, rsm_tmap_t *into,
                      rsm_mapfile_info_t *info)
 {
     uint8_t buf[RSM_MAPFILE_TILE_BYTES > RSM_MAPFILE_HEADER_BYTES ? RSM_MAPFILE_TILE_BYTES
@@ -203,10 +243,12 @@ static int read_pass(rsm_mapfile_read_fn read, void *ctx, const rsm_tmap_config_
     uint32_t at;
     uint32_t k;
     int rc;
+    const rsm_tmap_config_t *cfg = &map->cfg;
+    const uint32_t room = (uint32_t)RSM_TMAP_TILES + (map->store != NULL ? map->store->capacity : 0u);
     if (read(ctx, 0u, buf, RSM_MAPFILE_HEADER_BYTES) != 0) {
         return RSM_ERR_IO;
     }
-    if ((rc = check_header(buf, cfg, info)) != RSM_OK) {
+    if ((rc = check_header(buf, cfg, room, info)) != RSM_OK) {
         return rc;
     }
     crc = rsm_crc32(0u, buf, RSM_MAPFILE_HEADER_BYTES);
@@ -226,7 +268,7 @@ static int read_pass(rsm_mapfile_read_fn read, void *ctx, const rsm_tmap_config_
             t.ty >= RSM_TMAP_TILE_LIMIT) {
             return RSM_ERR_FORMAT;
         }
-        if (into != NULL && (rc = rsm_tmap_restore(into, &t)) != RSM_OK) {
+        if (into != NULL && (rc = restore(into, &t)) != RSM_OK) {
             return rc;
         }
     }
@@ -247,14 +289,14 @@ int rsm_localizer_load_map(rsm_localizer_t *loc, rsm_mapfile_read_fn read, void 
     if (loc->cfg->method != RSM_METHOD_MAP) {
         return RSM_ERR_NOSYS;
     }
-    if ((rc = read_pass(read, ctx, &loc->cfg->tmap, NULL, &got)) != RSM_OK) {
+    map = &loc->state.persistent.map;
+    if ((rc = read_pass(read, ctx, map, NULL, &got)) != RSM_OK) {
         return rc;
     }
-    map = &loc->state.persistent.map;
-    (void)rsm_tmap_init(map, &loc->cfg->tmap);
+    rsm_tmap_reset(map);
     map->stamp = got.stamp;
-    if ((rc = read_pass(read, ctx, &loc->cfg->tmap, map, &got)) != RSM_OK) {
-        (void)rsm_tmap_init(map, &loc->cfg->tmap);
+    if ((rc = read_pass(read, ctx, map, map, &got)) != RSM_OK) {
+        rsm_tmap_reset(map);
         return rc;
     }
     rsm_localizer_map_replaced(loc, got.fit);

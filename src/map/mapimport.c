@@ -47,7 +47,7 @@ int rsm_localizer_import_begin(rsm_localizer_t *loc, rsm_import_report_t *report
     if (!map_localizer(loc, &rc)) {
         return rc;
     }
-    (void)rsm_tmap_init(&loc->state.persistent.map, &loc->cfg->tmap);
+    rsm_tmap_reset(&loc->state.persistent.map);
     if (report != NULL) {
         memset(report, 0, sizeof *report);
     }

@@ -13,6 +13,7 @@
 #include "core/compiler.h"
 #include "core/fmath.h"
 #include "map/tmap_read.h"
+#include "rsm/tilestore.h"
 
 #define STAMP_MASK RSM_TMAP_STAMP_MASK
 /* Set in a tile's stamp once one of its cells has reached saturation. */
@@ -82,6 +83,17 @@ int rsm_tmap_init(rsm_tmap_t *map, const rsm_tmap_config_t *cfg)
     }
     memset(map->hash, 0xFF, sizeof map->hash);
     return RSM_OK;
+}
+
+void rsm_tmap_reset(rsm_tmap_t *map)
+{
+    const rsm_tile_store_t *store = map->store;
+    const rsm_tmap_config_t cfg = map->cfg;
+    (void)rsm_tmap_init(map, &cfg);
+    map->store = store;
+    if (store != NULL) {
+        store->clear(store->ctx);
+    }
 }
 
 float rsm_tmap_cell(const rsm_tmap_t *map, uint32_t level)
@@ -216,9 +228,22 @@ static uint32_t oldest_slot(rsm_tmap_t *map)
     return RSM_TMAP_NONE; /* every slot was written by this update */
 }
 
-/* Slot for a tile that is not held: a free one, else oldest_slot's.
+/* The tile in slot s is let go: into the store, if there is one. */
+static void let_go(rsm_tmap_t *map, uint32_t s)
+{
+    if (map->store != NULL) {
+        if (map->store->put(map->store->ctx, &map->tile[s]) == RSM_OK) {
+            map->counters.stored++;
+        } else {
+            map->counters.unstored++;
+        }
+    }
+}
+
+/* Slot for a tile that is not held: a free one, else oldest_slot's (its
+ * tile let go); placed and indexed, its cells and stamp the caller's.
  * RSM_TMAP_NONE if none. */
-static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
+static uint32_t claim_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
 {
     uint32_t s;
     uint32_t h;
@@ -231,6 +256,7 @@ static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t t
         if (s == RSM_TMAP_NONE) {
             return RSM_TMAP_NONE;
         }
+        let_go(map, s);
         hash_remove(map, s);
         map->level_used[tile_level(&map->tile[s])]--;
         map->counters.evicted++;
@@ -239,13 +265,51 @@ static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t t
     t = &map->tile[s];
     t->tx = (int16_t)tx;
     t->ty = (int16_t)ty;
-    t->stamp = (level << 30) | map->stamp;
-    memset(t->cell, 0, sizeof t->cell);
     h = hash_key(level, tx, ty);
     while (map->hash[h] != RSM_TMAP_NONE) {
         h = (h + 1u) & (RSM_TMAP_HASH - 1u);
     }
     map->hash[h] = (uint16_t)s;
+    return s;
+}
+
+/* A tile back from the store into slot s (placed by claim_slot): its
+ * cells, and the current write counter, so that it is not the first to go
+ * again while the robot is there. */
+static void put_back(rsm_tmap_t *map, uint32_t s, uint32_t level, const rsm_tile_t *from)
+{
+    rsm_tile_t *t = &map->tile[s];
+    memcpy(t->cell, from->cell, sizeof t->cell);
+    t->stamp = (level << 30) | (from->stamp & CONFIRMED) | map->stamp;
+    map->counters.fetched++;
+}
+
+/* Takes the tile of (level, tx, ty) from the store into *t: 1 if it held
+ * it (a tile for another place, which no sound store gives, is dropped). */
+static int from_store(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty, rsm_tile_t *t)
+{
+    if (map->store == NULL || map->store->take(map->store->ctx, level, tx, ty, t) != 1) {
+        return 0;
+    }
+    return t->tx == tx && t->ty == ty && tile_level(t) == level;
+}
+
+/* Slot for a tile that is not held, with the store's copy of it if there
+ * is one, else empty. RSM_TMAP_NONE if no slot. */
+static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty)
+{
+    const uint32_t s = claim_slot(map, level, tx, ty);
+    rsm_tile_t stored;
+    if (s == RSM_TMAP_NONE) {
+        return s;
+    }
+    if (from_store(map, level, tx, ty, &stored)) {
+        put_back(map, s, level, &stored);
+    } else {
+        rsm_tile_t *t = &map->tile[s];
+        t->stamp = (level << 30) | map->stamp;
+        memset(t->cell, 0, sizeof t->cell);
+    }
     return s;
 }
 
@@ -950,4 +1014,71 @@ int rsm_tmap_raise(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy
     t->stamp = (level << 30) | (t->stamp & CONFIRMED) | (v >= map->cfg.saturation ? CONFIRMED : 0u) | map->stamp;
     set_cell(t, i, v);
     return RSM_OK;
+}
+
+uint32_t rsm_tmap_fetch(rsm_tmap_t *map, const rsm_pose_t *pose, const rsm_point_t *pts, size_t n, uint32_t margin)
+{
+    uint32_t got = 0;
+    uint32_t level;
+    float c;
+    float sn;
+    if (map->store == NULL || map->store->count(map->store->ctx) == 0u) {
+        return 0u;
+    }
+    rsm_sincosf(pose->theta, &sn, &c);
+    for (level = 0; level < (uint32_t)map->cfg.levels; ++level) {
+        const float inv = map->inv_cell[level];
+        /* The last tiles looked at: a scan's points come in beam order, so
+         * most fall in a tile a neighbour already asked for. */
+        uint32_t seen[4] = {RSM_TMAP_NO_KEY, RSM_TMAP_NO_KEY, RSM_TMAP_NO_KEY, RSM_TMAP_NO_KEY};
+        uint32_t next = 0;
+        size_t k;
+        for (k = 0; k < n; ++k) {
+            const float x = pose->x + c * pts[k].x - sn * pts[k].y;
+            const float y = pose->y + sn * pts[k].x + c * pts[k].y;
+            const int32_t gx = cell_of(x, inv);
+            const int32_t gy = cell_of(y, inv);
+            uint32_t corner;
+            if (!in_range(gx - (int32_t)margin, gy - (int32_t)margin) ||
+                !in_range(gx + (int32_t)margin, gy + (int32_t)margin)) {
+                continue;
+            }
+            for (corner = 0; corner < 4u; ++corner) {
+                const int32_t tx = (gx + ((corner & 1u) ? (int32_t)margin : -(int32_t)margin)) >> RSM_TMAP_TILE_LOG2;
+                const int32_t ty = (gy + ((corner & 2u) ? (int32_t)margin : -(int32_t)margin)) >> RSM_TMAP_TILE_LOG2;
+                const uint32_t key = rsm_tmap_pack(tx, ty);
+                rsm_tile_t stored;
+                uint32_t s;
+                if (key == seen[0] || key == seen[1] || key == seen[2] || key == seen[3]) {
+                    continue;
+                }
+                seen[next] = key;
+                next = (next + 1u) & 3u;
+                if (rsm_tmap_find_slot(map, level, tx, ty) != RSM_TMAP_NONE ||
+                    !from_store(map, level, tx, ty, &stored)) {
+                    continue;
+                }
+                if (got == 0u) {
+                    /* A tick of the write counter: the tiles this scan
+                     * needs are the newest, and those the last ones
+                     * needed can go. Without it a frozen map, never
+                     * written, would keep every tile it took back as
+                     * "written now" and soon have no slot to reuse. */
+                    map->stamp = (map->stamp + 1u) & STAMP_MASK;
+                    map->victims = 0;
+                }
+                s = claim_slot(map, level, tx, ty);
+                if (s == RSM_TMAP_NONE) {
+                    /* Every slot is this write's: the tile stays stored. */
+                    if (map->store->put(map->store->ctx, &stored) != RSM_OK) {
+                        map->counters.unstored++;
+                    }
+                    return got;
+                }
+                put_back(map, s, level, &stored);
+                got++;
+            }
+        }
+    }
+    return got;
 }

@@ -151,6 +151,21 @@ float rsm_tmap_sample(const rsm_tmap_t *map, uint32_t level, float x, float y, f
  * RSM_ERR_NOMEM with the pool full. Nothing is written on error. */
 int rsm_tmap_restore(rsm_tmap_t *map, const rsm_tile_t *t);
 
+/* Empties the map as rsm_tmap_init does, keeping its configuration and
+ * store, and empties the store too. */
+void rsm_tmap_reset(rsm_tmap_t *map);
+
+/* Takes back from the map's store (rsm/tilestore.h; none: does nothing)
+ * the tiles under pts (robot frame, metres) placed at pose, on every
+ * level, and those within margin cells of each point, so that a match
+ * from about pose reads the map the store holds. A tile comes back into
+ * a free slot, else the one a return's hit would take (its tile let go
+ * into the store in turn), stamped with the map's write counter. Returns
+ * the tiles taken back. Cursors on the map may hold a slot it reused:
+ * forget them. */
+uint32_t rsm_tmap_fetch(rsm_tmap_t *map, const rsm_pose_t *pose, const rsm_point_t *pts, size_t n,
+                        uint32_t margin);
+
 /* Raises cell (gx, gy) of the cursor's level to at least v (at most 15),
  * taking a tile for it when none is held there (a free slot, else the one
  * a return's hit would take: never one written at the map's current write

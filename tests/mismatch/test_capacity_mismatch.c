@@ -157,6 +157,16 @@ void test_revolution_init_is_refused(void)
     ASSERT_REFUSED(rev, rsm_rev_init(&rev.obj, &cfg));
 }
 
+void test_tile_store_init_is_refused(void)
+{
+    static rsm_tile_t tiles[4];
+    static uint32_t index[8];
+    GUARDED(rsm_tilestore_mem_t, mem);
+    GUARDED(rsm_tile_store_t, store);
+    ASSERT_REFUSED(mem, rsm_tilestore_mem_init(&mem.obj, tiles, 4u, index, 3u, &store_was.obj));
+    ASSERT_REFUSED(store, rsm_tilestore_mem_init(&mem_was.obj, tiles, 4u, index, 3u, &store.obj));
+}
+
 void test_lms_codec_is_refused(void)
 {
     static const rsm_lms_telegram_t t; /* the check comes before the telegram is read */
@@ -218,6 +228,7 @@ int main(void)
     RUN_TEST(test_functions_that_read_a_scan_refuse_it);
     RUN_TEST(test_localizer_and_sync_init_are_refused);
     RUN_TEST(test_revolution_init_is_refused);
+    RUN_TEST(test_tile_store_init_is_refused);
     RUN_TEST(test_lms_codec_is_refused);
     RUN_TEST(test_aria_codec_is_refused);
     RUN_TEST(test_drivers_are_refused);

@@ -26,6 +26,7 @@
 #include "devices.h"
 #include "rsm/localizer.h"
 #include "rsm/mapfile.h"
+#include "rsm/tilestore.h"
 #include "rsm/status.h"
 #include "rsm/sync.h"
 #include "map/tilemap.h" /* internal (src/): tiles held per level, for the summary */
@@ -192,6 +193,10 @@ static void usage(FILE *f)
             "  --save-map FILE           save the persistent map at the end (docs/mapfile.md)\n"
             "  --load-map FILE|MAP.yaml  start in a saved map, or a ROS map_server map\n"
             "  --freeze-map              localization mode: the map is read, never written\n"
+            "  --tile-store N            keep up to N tiles the map's pool lets go in memory and\n"
+            "                            take them back when the robot returns, so that a building\n"
+            "                            larger than the pool is kept whole (saved with --save-map;\n"
+            "                            40 bytes a tile; 0: none, the default)\n"
             "  --global                  no start pose: search the loaded map for the robot; no\n"
             "                            trajectory line until a pose is proven\n"
             "  --global-near R           the same within R m of the start pose (--initial-pose),\n"
@@ -199,7 +204,8 @@ static void usage(FILE *f)
             "  --skip-seconds S          --carmen: start S seconds into the log, as if the robot\n"
             "                            were switched on there\n"
             "  --scans N                 --carmen: stop after N scans; live: once the laser\n"
-            "                            gave N scans and the robot connected\n"
+            "                            gave N scans and the robot connected\n");
+    fprintf(f,
             "  --tum FILE                write the trajectory in TUM format too\n"
             "                            (timestamp x y z qx qy qz qw; what evo reads)\n"
             "  --initial-pose X Y THETA  start pose (default: the log's first odometry pose,\n"
@@ -370,6 +376,12 @@ typedef struct nav {
     double first_trusted_s;
     uint32_t max_search_work;  /* the most cells and blocks the global search read in one scan */
     rsm_mapfile_info_t loaded; /* what --load-map read */
+    /* --tile-store: the tiles the map's pool lets go, kept in memory. */
+    uint32_t store_tiles;
+    rsm_tile_t *store_tile;
+    uint32_t *store_index;
+    rsm_tilestore_mem_t store_mem;
+    rsm_tile_store_t store;
 } nav_t;
 
 static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep);
@@ -511,6 +523,18 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
             fprintf(stderr, "rsm-nav: invalid configuration (the start pose is out of range)\n");
         }
         return -1;
+    }
+    if (nav->store_tiles > 0u && nav->cfg.method == RSM_METHOD_MAP) {
+        const uint32_t ilog = rsm_tilestore_mem_index_log2(nav->store_tiles);
+        nav->store_tile = (rsm_tile_t *)calloc(nav->store_tiles, sizeof *nav->store_tile);
+        nav->store_index = (uint32_t *)calloc((size_t)1u << ilog, sizeof *nav->store_index);
+        if (nav->store_tile == NULL || nav->store_index == NULL ||
+            rsm_tilestore_mem_init(&nav->store_mem, nav->store_tile, nav->store_tiles, nav->store_index, ilog,
+                                   &nav->store) != RSM_OK ||
+            rsm_localizer_set_store(&nav->loc, &nav->store) != RSM_OK) {
+            fprintf(stderr, "rsm-nav: cannot set up a tile store of %u tiles\n", (unsigned)nav->store_tiles);
+            return -1;
+        }
     }
     if (nav->load_map != NULL && nav_load_map(nav) != 0) {
         return -1;
@@ -1270,11 +1294,12 @@ static int write_summary_json(nav_t *nav, const char *path)
             fprintf(f, "%s%u", level > 0u ? ", " : "", (unsigned)rsm_tmap_tiles(m, level));
         }
         fprintf(f, "], \"taken\": %u, \"evicted\": %u, \"dropped\": %u, \"freed\": %u, \"behind\": %u, "
-                   "\"unconfirmed\": %u},\n  \"recovery\": {\"searches\": %u, \"taken\": %u, \"ambiguous\": %u},\n"
+                   "\"unconfirmed\": %u, \"stored\": %u, \"fetched\": %u, \"unstored\": %u, \"store_tiles\": %u},\n  \"recovery\": {\"searches\": %u, \"taken\": %u, \"ambiguous\": %u},\n"
                    "  \"unpinned\": %u,\n  \"contradicted\": %u",
                 (unsigned)m->counters.allocated, (unsigned)m->counters.evicted, (unsigned)m->counters.dropped,
                 (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed,
-                (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->ambiguous, (unsigned)c->unpinned,
+                (unsigned)m->counters.stored, (unsigned)m->counters.fetched, (unsigned)m->counters.unstored,
+                m->store != NULL ? (unsigned)m->store->count(m->store->ctx) : 0u, (unsigned)c->searches, (unsigned)c->recovered, (unsigned)c->ambiguous, (unsigned)c->unpinned,
                 (unsigned)c->contradicted);
         fprintf(f, ",\n  \"fit\": %.4f", (double)nav->loc.state.persistent.fit);
         fprintf(f, ",\n  \"global\": {\"searches\": %u, \"found\": %u, \"not_proven\": %u, \"work\": %u, "
@@ -1317,6 +1342,11 @@ static void print_summary(nav_t *nav)
                (unsigned)m->counters.evicted, (unsigned)m->counters.dropped);
         printf("  map writes      %u tiles cleared and freed, %u returns behind walls, %u unconfirmed\n",
                (unsigned)m->counters.freed, (unsigned)m->counters.behind, (unsigned)c->unconfirmed);
+        if (m->store != NULL) {
+            printf("  tile store      %u tiles held, %u let go into it, %u taken back, %u lost (full)\n",
+                   (unsigned)m->store->count(m->store->ctx), (unsigned)m->counters.stored,
+                   (unsigned)m->counters.fetched, (unsigned)m->counters.unstored);
+        }
         printf("  recovery        %u searches, %u taken, %u refused as ambiguous\n", (unsigned)c->searches,
                (unsigned)c->recovered, (unsigned)c->ambiguous);
         if (nav->load_map != NULL) {
@@ -1405,7 +1435,7 @@ enum {
     OPT_ROBOT_BAUD, OPT_LMS_BAUD, OPT_LISTEN, OPT_SECONDS, OPT_IDLE_EXIT, OPT_LOST_EXIT, OPT_TICKS_PER_M, OPT_WHEEL_BASE,
     OPT_INITIAL_POSE, OPT_LASER_POSE, OPT_UPSIDE_DOWN, OPT_TRAJECTORY, OPT_SUMMARY_JSON, OPT_TUM, OPT_SCAN_LOG, OPT_EVENTS,
     OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_QUIET, OPT_SAVE_MAP, OPT_LOAD_MAP, OPT_GLOBAL, OPT_FREEZE_MAP,
-    OPT_SKIP_SECONDS, OPT_SCANS, OPT_GLOBAL_NEAR
+    OPT_SKIP_SECONDS, OPT_SCANS, OPT_GLOBAL_NEAR, OPT_TILE_STORE
 };
 
 /* --lidar, --initial-pose and --laser-pose take more than one value: the
@@ -1448,6 +1478,7 @@ static const struct option nav_options[] = {
     {"skip-seconds", required_argument, NULL, OPT_SKIP_SECONDS},
     {"scans", required_argument, NULL, OPT_SCANS},
     {"global-near", required_argument, NULL, OPT_GLOBAL_NEAR},
+    {"tile-store", required_argument, NULL, OPT_TILE_STORE},
     {"help", no_argument, NULL, 'h'},
     {NULL, 0, NULL, 0}
 };
@@ -1719,6 +1750,16 @@ int main(int argc, char **argv)
             nav.skip_s = v;
             break;
         }
+        case OPT_TILE_STORE: {
+            char *end = NULL;
+            const unsigned long v = strtoul(optarg, &end, 10);
+            if (end == optarg || *end != '\0' || optarg[0] == '-' || v > (1ul << 28)) {
+                fprintf(stderr, "rsm-nav: bad --tile-store '%s' (tiles, 0 to %lu)\n", optarg, 1ul << 28);
+                return 2;
+            }
+            nav.store_tiles = (uint32_t)v;
+            break;
+        }
         case OPT_GLOBAL_NEAR: {
             char *end = NULL;
             const double v = strtod(optarg, &end);
@@ -1906,6 +1947,8 @@ int main(int argc, char **argv)
         rc = 1;
     }
     hitmap_free(&nav.hits);
+    free(nav.store_tile);
+    free(nav.store_index);
     free(nav.restore_idx);
     free(nav.restore_us);
     return rc;

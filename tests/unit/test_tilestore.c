@@ -1,0 +1,461 @@
+/* A store behind the map's pool (rsm/tilestore.h): the memory store keeps
+ * what it is given and gives each tile back once; a map with a store lets
+ * its oldest tiles go into it and takes them back when a scan needs them,
+ * so that a map larger than the pool is kept whole; a saved map holds the
+ * pool and the store, and loads back into both or is refused whole. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "rsm/config.h"
+#include "rsm/localizer.h"
+#include "rsm/mapfile.h"
+#include "rsm/status.h"
+#include "rsm/tilestore.h"
+#include "synth.h"
+#include "map/tilemap.h"
+#include "map/tmap_read.h"
+#include "unity.h"
+
+/* Room for the pool's worth twice over, and the store's index. */
+#define STORE_TILES (2u * (uint32_t)RSM_TMAP_TILES + 64u > 4096u ? 2u * (uint32_t)RSM_TMAP_TILES + 64u : 4096u)
+#define INDEX_LOG2 16u
+#define STEP_US 100000u
+#define PATH_CAP 400u
+
+static rsm_tile_t tiles[STORE_TILES];
+static uint32_t index_[1u << INDEX_LOG2];
+static rsm_tilestore_mem_t mem;
+static rsm_tile_store_t store;
+
+static rsm_tile_t tiles2[STORE_TILES];
+static uint32_t index2[1u << INDEX_LOG2];
+static rsm_tilestore_mem_t mem2;
+static rsm_tile_store_t store2;
+
+static rsm_tmap_t map;
+static rsm_localizer_t loc;
+static rsm_localizer_t other;
+static rsm_localizer_config_t cfg;
+static rsm_scan_t scan;
+static rsm_pose_t path[PATH_CAP];
+
+/* A saved map in RAM. */
+static uint8_t saved[RSM_MAPFILE_HEADER_BYTES + (3u * (uint32_t)RSM_TMAP_TILES + 64u) * RSM_MAPFILE_TILE_BYTES + 4u];
+static uint32_t saved_len;
+
+static int ram_write(void *ctx, uint32_t offset, const uint8_t *buf, size_t len)
+{
+    (void)ctx;
+    if (offset > sizeof saved || len > sizeof saved - offset) {
+        return -1;
+    }
+    memcpy(saved + offset, buf, len);
+    if (offset + len > saved_len) {
+        saved_len = (uint32_t)(offset + len);
+    }
+    return 0;
+}
+
+static int ram_read(void *ctx, uint32_t offset, uint8_t *buf, size_t len)
+{
+    (void)ctx;
+    if (offset > saved_len || len > saved_len - offset) {
+        return -1;
+    }
+    memcpy(buf, saved + offset, len);
+    return 0;
+}
+
+void setUp(void)
+{
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tilestore_mem_init(&mem, tiles, STORE_TILES, index_, INDEX_LOG2, &store));
+    cfg = rsm_localizer_config_default();
+    saved_len = 0u;
+}
+
+void tearDown(void)
+{
+}
+
+static rsm_tile_t tile_at(uint32_t level, int32_t tx, int32_t ty, uint8_t fill)
+{
+    rsm_tile_t t;
+    memset(&t, 0, sizeof t);
+    t.tx = (int16_t)tx;
+    t.ty = (int16_t)ty;
+    t.stamp = (level << 30) | 7u;
+    memset(t.cell, fill, sizeof t.cell);
+    return t;
+}
+
+static void test_mem_store_should_refuse_bad_set_ups(void)
+{
+    rsm_tilestore_mem_t m;
+    rsm_tile_store_t s;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tilestore_mem_init(NULL, tiles, 4u, index_, 4u, &s));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tilestore_mem_init(&m, NULL, 4u, index_, 4u, &s));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tilestore_mem_init(&m, tiles, 4u, NULL, 4u, &s));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tilestore_mem_init(&m, tiles, 4u, index_, 4u, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tilestore_mem_init(&m, tiles, 0u, index_, 4u, &s));
+    /* An index too small for short probes. */
+    TEST_ASSERT_EQUAL_UINT32(3u, rsm_tilestore_mem_index_log2(5u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tilestore_mem_init(&m, tiles, 7u, index_, 2u, &s));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tilestore_mem_init(&m, tiles, 7u, index_, 4u, &s));
+    TEST_ASSERT_EQUAL_UINT32(7u, s.capacity);
+}
+
+static void test_mem_store_should_give_each_tile_back_once(void)
+{
+    rsm_tile_t a = tile_at(0u, 3, -4, 0x11u);
+    rsm_tile_t b = tile_at(2u, 3, -4, 0x22u); /* the same place on another level */
+    rsm_tile_t got;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &a));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &b));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT, store.put(store.ctx, &a));
+    TEST_ASSERT_EQUAL_UINT32(2u, store.count(store.ctx));
+    TEST_ASSERT_EQUAL_INT(0, store.take(store.ctx, 1u, 3, -4, &got));
+    TEST_ASSERT_EQUAL_INT(1, store.take(store.ctx, 2u, 3, -4, &got));
+    TEST_ASSERT_EQUAL_MEMORY(&b, &got, sizeof got);
+    TEST_ASSERT_EQUAL_INT(0, store.take(store.ctx, 2u, 3, -4, &got));
+    TEST_ASSERT_EQUAL_UINT32(1u, store.count(store.ctx));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, store.at(store.ctx, 0u, &got));
+    TEST_ASSERT_EQUAL_MEMORY(&a, &got, sizeof got);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_RANGE, store.at(store.ctx, 1u, &got));
+    store.clear(store.ctx);
+    TEST_ASSERT_EQUAL_UINT32(0u, store.count(store.ctx));
+    TEST_ASSERT_EQUAL_INT(0, store.take(store.ctx, 0u, 3, -4, &got));
+}
+
+static void test_mem_store_should_refuse_a_tile_when_full(void)
+{
+    rsm_tilestore_mem_t m;
+    rsm_tile_store_t s;
+    rsm_tile_t t = tile_at(0u, 0, 0, 1u);
+    int32_t k;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tilestore_mem_init(&m, tiles, 5u, index_, 4u, &s));
+    for (k = 0; k < 5; ++k) {
+        t.tx = (int16_t)k;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, s.put(s.ctx, &t));
+    }
+    t.tx = 5;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_NOMEM, s.put(s.ctx, &t));
+    TEST_ASSERT_EQUAL_UINT32(5u, s.count(s.ctx));
+}
+
+/* Thousands of puts and takes against a model (a flag per place): every
+ * answer as the model says, and the tile given back the one put. */
+static void test_mem_store_should_match_a_model_through_many_puts_and_takes(void)
+{
+    static uint8_t held[4][32][32];
+    uint32_t rng = 12345u;
+    uint32_t n = 0;
+    uint32_t k;
+    memset(held, 0, sizeof held);
+    for (k = 0; k < 40000u; ++k) {
+        uint32_t level;
+        int32_t tx;
+        int32_t ty;
+        rsm_tile_t t;
+        rsm_tile_t got;
+        rng = rng * 1664525u + 1013904223u;
+        level = (rng >> 8) & 3u;
+        tx = (int32_t)((rng >> 12) & 31u) - 16;
+        ty = (int32_t)((rng >> 20) & 31u) - 16;
+        t = tile_at(level, tx, ty, (uint8_t)(tx * 7 + ty * 3 + (int32_t)level));
+        if ((rng >> 30) & 1u) {
+            const int rc = store.put(store.ctx, &t);
+            TEST_ASSERT_EQUAL_INT(held[level][tx + 16][ty + 16] ? RSM_ERR_FORMAT : RSM_OK, rc);
+            n += held[level][tx + 16][ty + 16] ? 0u : 1u;
+            held[level][tx + 16][ty + 16] = 1u;
+        } else {
+            const int r = store.take(store.ctx, level, tx, ty, &got);
+            TEST_ASSERT_EQUAL_INT(held[level][tx + 16][ty + 16], r);
+            if (r == 1) {
+                TEST_ASSERT_EQUAL_MEMORY(&t, &got, sizeof got);
+                --n;
+            }
+            held[level][tx + 16][ty + 16] = 0u;
+        }
+        TEST_ASSERT_EQUAL_UINT32(n, store.count(store.ctx));
+    }
+    TEST_ASSERT_TRUE(n > 100u);
+}
+
+/* Writes value v into cell (gx, gy) of level 0 as a newer write than
+ * anything before it. */
+static void raise_newer(rsm_tmap_t *m, int32_t gx, int32_t gy, uint32_t v)
+{
+    rsm_tmap_cursor_t c;
+    rsm_tmap_cursor_init(&c, 0u);
+    m->stamp++;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_raise(m, &c, gx, gy, v));
+}
+
+/* The cell at the middle of tile k of a row far from the origin. */
+static int32_t cell_x(uint32_t k)
+{
+    return (int32_t)(k * (uint32_t)RSM_TMAP_TILE_SIDE) + 3;
+}
+
+/* A pool filled twice over: without a store the first places are
+ * forgotten; with one, they are kept, each in the pool or the store (never
+ * both), and come back with their cells when a scan's points fall in them. */
+static void test_map_should_keep_what_its_pool_lets_go_in_the_store(void)
+{
+    const uint32_t n = (uint32_t)RSM_TMAP_TILES + 40u;
+    const rsm_tmap_config_t tc = rsm_tmap_config_default();
+    const rsm_pose_t at = {0.0f, 0.0f, 0.0f};
+    rsm_point_t pts[8];
+    uint32_t k;
+    int with;
+    for (with = 0; with < 2; ++with) {
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &tc));
+        map.store = with ? &store : NULL;
+        store.clear(store.ctx);
+        for (k = 0; k < n; ++k) {
+            raise_newer(&map, cell_x(k), 5, 9u + (k & 3u));
+        }
+        TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_TILES, map.used);
+        TEST_ASSERT_EQUAL_UINT32(40u, map.counters.evicted);
+        TEST_ASSERT_EQUAL_UINT32(with ? 40u : 0u, map.counters.stored);
+        TEST_ASSERT_EQUAL_UINT32(with ? 40u : 0u, store.count(store.ctx));
+        /* The oldest went, the newest stayed. */
+        TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell_x(0), 5));
+        TEST_ASSERT_EQUAL_UINT8(9u + ((n - 1u) & 3u), rsm_tmap_value(&map, 0u, cell_x(n - 1u), 5));
+        /* A scan whose points fall in the first eight tiles. */
+        for (k = 0; k < 8u; ++k) {
+            pts[k].x = ((float)cell_x(k) + 0.5f) * tc.cell_m;
+            pts[k].y = 5.5f * tc.cell_m;
+        }
+        TEST_ASSERT_EQUAL_UINT32(with ? 8u : 0u, rsm_tmap_fetch(&map, &at, pts, 8u, 0u));
+        for (k = 0; k < 8u; ++k) {
+            TEST_ASSERT_EQUAL_UINT8(with ? 9u + (k & 3u) : 0u, rsm_tmap_value(&map, 0u, cell_x(k), 5));
+        }
+        TEST_ASSERT_EQUAL_UINT32(with ? 8u : 0u, map.counters.fetched);
+        if (with) {
+            /* Eight others made room, into the store; each place once. */
+            TEST_ASSERT_EQUAL_UINT32(48u, map.counters.stored);
+            TEST_ASSERT_EQUAL_UINT32(40u, store.count(store.ctx));
+            for (k = 0; k < store.count(store.ctx); ++k) {
+                rsm_tile_t t;
+                TEST_ASSERT_EQUAL_INT(RSM_OK, store.at(store.ctx, k, &t));
+                TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_NONE, rsm_tmap_find_slot(&map, t.stamp >> 30, t.tx, t.ty));
+            }
+            for (k = 0; k < n; ++k) {
+                const int32_t tx = cell_x(k) >> RSM_TMAP_TILE_LOG2;
+                rsm_tile_t t;
+                const int in_pool = rsm_tmap_find_slot(&map, 0u, tx, 0) != RSM_TMAP_NONE;
+                const int in_store = store.take(store.ctx, 0u, tx, 0, &t);
+                TEST_ASSERT_TRUE(in_pool != in_store);
+                if (in_store) {
+                    TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
+                }
+            }
+        }
+    }
+}
+
+/* A return written into a place the store holds starts from the stored
+ * tile, not from an empty one. */
+static void test_map_write_should_start_from_the_stored_tile(void)
+{
+    const rsm_tmap_config_t tc = rsm_tmap_config_default();
+    const uint32_t n = (uint32_t)RSM_TMAP_TILES + 1u;
+    uint32_t k;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &tc));
+    map.store = &store;
+    for (k = 0; k < n; ++k) {
+        raise_newer(&map, cell_x(k), 5, 6u);
+    }
+    TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell_x(0), 5));
+    /* Another cell of the first tile. */
+    raise_newer(&map, cell_x(0) + 1, 5, 2u);
+    TEST_ASSERT_EQUAL_UINT8(6u, rsm_tmap_value(&map, 0u, cell_x(0), 5));
+    TEST_ASSERT_EQUAL_UINT8(2u, rsm_tmap_value(&map, 0u, cell_x(0) + 1, 5));
+    TEST_ASSERT_EQUAL_UINT32(1u, map.counters.fetched);
+}
+
+/* Maps the synthetic room along a short tour (exact odometry). */
+static size_t map_room(rsm_localizer_t *l)
+{
+    static const rsm_synth_leg_t legs[] = {{1.0f, 0.0f}, {0.0f, 1.2f}, {0.6f, 0.0f}};
+    const rsm_pose_t start = {-1.2f, -0.8f, 0.0f};
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_synth_scan_config_t sc = rsm_synth_scan_config_default();
+    const size_t len = rsm_synth_path(&start, legs, sizeof legs / sizeof legs[0], 0.05f, 0.05f, path, PATH_CAP);
+    size_t k;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(l, &cfg, &path[0], NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_store(l, &store));
+    for (k = 0; k < len; ++k) {
+        if (k > 0u) {
+            const rsm_motion_t u = rsm_synth_motion(&path[k - 1u], &path[k], NULL);
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(l, &u));
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &path[k], &sc, NULL, (uint64_t)k * STEP_US, &scan));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(l, &scan, NULL));
+    }
+    while (rsm_tmap_write_run(&l->state.persistent.map, l->frame.world, 0u) != 0) {
+    }
+    return len;
+}
+
+/* Fills the rest of a localizer's pool, and more, with newer places far
+ * away: the room goes into the store (with one). */
+static void flood(rsm_localizer_t *l)
+{
+    uint32_t k;
+    for (k = 0; k < (uint32_t)RSM_TMAP_TILES; ++k) {
+        raise_newer(&l->state.persistent.map, 4000 + cell_x(k), 4000, 12u);
+    }
+}
+
+/* The robot comes back to a room its pool let go: with the store the room
+ * comes back before the match, which finds the robot where it is and the
+ * room's walls as mapped; without, the room is forgotten. */
+static void test_localizer_should_take_the_room_back_from_the_store(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_synth_scan_config_t sc = rsm_synth_scan_config_default();
+    rsm_localizer_report_t rep;
+    size_t len;
+    rsm_pose_t p;
+    rsm_pose_t pose;
+    int32_t gx;
+    int32_t gy;
+    uint8_t mapped;
+    rsm_tmap_t *m;
+    int with;
+    for (with = 0; with < 2; ++with) {
+        store.clear(store.ctx);
+        len = map_room(&loc);
+        m = &loc.state.persistent.map;
+        if (!with) {
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_store(&loc, NULL));
+        }
+        /* The wall cell straight ahead of the last pose. */
+        p = path[len - 1u];
+        pose = rsm_localizer_pose(&loc);
+        {
+            /* The beam's end may fall on a cell's edge: the wall's cell is
+             * the fullest beside it. */
+            const float r = rsm_synth_cast(&world, p.x, p.y, p.theta, 20.0f);
+            const int32_t cx = (int32_t)floorf((p.x + r * cosf(p.theta)) / m->cfg.cell_m);
+            const int32_t cy = (int32_t)floorf((p.y + r * sinf(p.theta)) / m->cfg.cell_m);
+            int32_t dx;
+            int32_t dy;
+            mapped = 0u;
+            gx = cx;
+            gy = cy;
+            for (dy = -1; dy <= 1; ++dy) {
+                for (dx = -1; dx <= 1; ++dx) {
+                    const uint8_t v = rsm_tmap_value(m, 0u, cx + dx, cy + dy);
+                    if (v > mapped) {
+                        mapped = v;
+                        gx = cx + dx;
+                        gy = cy + dy;
+                    }
+                }
+            }
+        }
+        TEST_ASSERT_TRUE(mapped >= m->cfg.saturation);
+        flood(&loc);
+        TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(m, 0u, gx, gy));
+        TEST_ASSERT_EQUAL_UINT32(with ? m->counters.evicted : 0u, m->counters.stored);
+        /* The same place again, a second later. */
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &p, &sc, NULL, (uint64_t)(len + 10u) * STEP_US, &scan));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+        if (with) {
+            TEST_ASSERT_TRUE(m->counters.fetched > 10u);
+            TEST_ASSERT_EQUAL_UINT8(mapped, rsm_tmap_value(m, 0u, gx, gy));
+            TEST_ASSERT_EQUAL_INT(RSM_SCAN_ACCEPTED, rep.outcome);
+            TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &pose) < 0.01f);
+        } else {
+            TEST_ASSERT_EQUAL_UINT32(0u, m->counters.fetched);
+            TEST_ASSERT_TRUE(rsm_tmap_value(m, 0u, gx, gy) < mapped);
+        }
+    }
+}
+
+/* A map with tiles in the store saves whole and loads back into a pool
+ * and a store: the same tiles; without a store, or with one too small,
+ * it is refused and the localizer keeps its map. */
+static void test_saved_map_should_hold_the_pool_and_the_store(void)
+{
+    rsm_mapfile_info_t info;
+    rsm_mapfile_info_t got;
+    uint32_t pool_then;
+    uint32_t k;
+    rsm_tilestore_mem_t small;
+    rsm_tile_store_t small_store;
+    store.clear(store.ctx);
+    (void)map_room(&loc);
+    flood(&loc);
+    TEST_ASSERT_TRUE(store.count(store.ctx) > 20u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_save_map(&loc, ram_write, NULL, &info));
+    TEST_ASSERT_EQUAL_UINT32(loc.state.persistent.map.used + store.count(store.ctx), info.tiles);
+    TEST_ASSERT_EQUAL_UINT32(rsm_localizer_map_bytes(&loc), info.bytes);
+    TEST_ASSERT_EQUAL_UINT32(saved_len, info.bytes);
+
+    /* Without a store: more tiles than the pool holds. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&other, &cfg, &path[0], NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT, rsm_localizer_load_map(&other, ram_read, NULL, &got));
+    TEST_ASSERT_EQUAL_UINT32(0u, other.state.persistent.map.used);
+    /* With one too small. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tilestore_mem_init(&small, tiles2, 4u, index2, 4u, &small_store));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_store(&other, &small_store));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT, rsm_localizer_load_map(&other, ram_read, NULL, &got));
+    TEST_ASSERT_EQUAL_UINT32(0u, small_store.count(small_store.ctx));
+
+    /* With room: the pool full, the rest in the store, every tile as saved. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tilestore_mem_init(&mem2, tiles2, STORE_TILES, index2, INDEX_LOG2, &store2));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_store(&other, &store2));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_load_map(&other, ram_read, NULL, &got));
+    TEST_ASSERT_EQUAL_UINT32(info.tiles, got.tiles);
+    pool_then = other.state.persistent.map.used;
+    TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_TILES, pool_then);
+    TEST_ASSERT_EQUAL_UINT32(info.tiles - pool_then, store2.count(store2.ctx));
+    TEST_ASSERT_EQUAL_MEMORY(loc.state.persistent.map.tile, other.state.persistent.map.tile,
+                             (size_t)pool_then * sizeof(rsm_tile_t));
+    for (k = 0; k < store.count(store.ctx); ++k) {
+        rsm_tile_t a;
+        rsm_tile_t b;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, store.at(store.ctx, k, &a));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, store2.at(store2.ctx, k, &b));
+        TEST_ASSERT_EQUAL_MEMORY(&a, &b, sizeof a);
+    }
+    /* Loading again empties the store first: the same count, no place twice. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_load_map(&other, ram_read, NULL, &got));
+    TEST_ASSERT_EQUAL_UINT32(info.tiles - pool_then, store2.count(store2.ctx));
+}
+
+static void test_set_store_should_refuse_what_it_cannot_use(void)
+{
+    rsm_tile_store_t broken = store;
+    rsm_localizer_config_t icp = rsm_localizer_config_default();
+    const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+    memset(&loc, 0, sizeof loc);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_store(&loc, &store));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &zero, NULL));
+    broken.take = NULL;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_store(&loc, &broken));
+    TEST_ASSERT_NULL(loc.state.persistent.map.store);
+    icp.method = RSM_METHOD_ODOMETRY;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&other, &icp, &zero, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_NOSYS, rsm_localizer_set_store(&other, &store));
+}
+
+int main(void)
+{
+    UNITY_BEGIN();
+    RUN_TEST(test_mem_store_should_refuse_bad_set_ups);
+    RUN_TEST(test_mem_store_should_give_each_tile_back_once);
+    RUN_TEST(test_mem_store_should_refuse_a_tile_when_full);
+    RUN_TEST(test_mem_store_should_match_a_model_through_many_puts_and_takes);
+    RUN_TEST(test_map_should_keep_what_its_pool_lets_go_in_the_store);
+    RUN_TEST(test_map_write_should_start_from_the_stored_tile);
+    RUN_TEST(test_localizer_should_take_the_room_back_from_the_store);
+    RUN_TEST(test_saved_map_should_hold_the_pool_and_the_store);
+    RUN_TEST(test_set_store_should_refuse_what_it_cannot_use);
+    return UNITY_END();
+}
