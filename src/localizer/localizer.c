@@ -906,6 +906,11 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  * a stall's catch-up took 8 poses off by the ground truth in 20 ACES
  * runs). */
 #define UNSURE_GAP_S 1.0f
+
+/* Around each point, the tiles within this of it come back from the store
+ * before a match (and two cells more on every level): a few centimetres
+ * of motion the prediction missed. */
+#define FETCH_MARGIN_M 0.05f
 static int unsure(const rsm_localizer_t *loc, float dt_s)
 {
     const float *p = loc->ekf.p;
@@ -1477,6 +1482,7 @@ static void prove_one(rsm_localizer_t *loc, uint32_t k)
     wide[8] = 4.0f * g->step_rad * g->step_rad;
     g->hit[k] = -1.0f;
     g->end[k] = g->cand[k].pose;
+    (void)rsm_tmap_fetch(&loc->state.persistent.map, &g->cand[k].pose, g->pts, g->nseen, 2.0f * cell);
     if (rsm_mapmatch(map, &cfg->mapmatch, g->pts, g->nseen, &g->cand[k].pose, wide, &g->cand[k].pose, NULL, &res) ==
         RSM_OK) {
         g->hit[k] = res.hit;
@@ -1563,6 +1569,7 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts)
     memset(wide, 0, sizeof wide);
     wide[0] = wide[4] = reach_m * reach_m;
     wide[8] = reach_rad * reach_rad;
+    (void)rsm_tmap_fetch(&loc->state.persistent.map, &start, loc->pts, npts, reach_m);
     if (reach_m > 2.0f * cell + NEAR_FROM_M) {
         /* Carried far (odometry's drift past the descent's basin): look
          * for it again around where odometry puts it. */
@@ -1767,11 +1774,6 @@ static rsm_track_t track_state(rsm_localizer_t *loc, rsm_outcome_t outcome, cons
     return loc->poor_run >= cfg->lost_scans ? RSM_TRACK_LOST : RSM_TRACK_UNCERTAIN;
 }
 
-/* Cells around each point, on every level, whose tiles come back from
- * the store before a match: what a converging match reads beside the
- * cell it starts in (its bilinear neighbours, and a few cells of motion
- * the prediction missed). */
-#define FETCH_MARGIN_CELLS 3u
 
 int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, size_t scan_size,
                                unsigned long fingerprint, rsm_localizer_report_t *rep)
@@ -1844,7 +1846,7 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
     if (loc->cfg->method == RSM_METHOD_MAP && loc->have_scan && !global_running(loc)) {
         /* Places the pool let go come back from the store before the
          * match reads them (none: nothing to do). */
-        (void)rsm_tmap_fetch(&loc->state.persistent.map, &loc->ekf.x, loc->pts, npts, FETCH_MARGIN_CELLS);
+        (void)rsm_tmap_fetch(&loc->state.persistent.map, &loc->ekf.x, loc->pts, npts, FETCH_MARGIN_M);
     }
     if (npts < loc->cfg->min_points) {
         outcome = RSM_SCAN_FEW_POINTS;

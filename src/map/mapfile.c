@@ -211,6 +211,8 @@ static int check_header(const uint8_t h[RSM_MAPFILE_HEADER_BYTES], const rsm_tma
     return RSM_OK;
 }
 
+#define ALL_LEVELS 0xFFu
+
 /* A tile into the pool while it has room, then into the store; a place
  * held twice is RSM_ERR_FORMAT. */
 static int restore(rsm_tmap_t *map, const rsm_tile_t *t)
@@ -232,10 +234,11 @@ static int restore(rsm_tmap_t *map, const rsm_tile_t *t)
 }
 
 /* One pass over a stored map: checks it against map, and with into != NULL
- * (map itself, emptied, its stamp set) restores its tiles there, those the
- * pool cannot hold into its store. RSM_OK or the first fault found. */
+ * (map itself, emptied, its stamp set) restores its tiles of the given level
+ * (ALL_LEVELS: every one) there, those the pool cannot hold into its
+ * store. RSM_OK or the first fault found. */
 static int read_pass(rsm_mapfile_read_fn read, void *ctx, const rsm_tmap_t *map, rsm_tmap_t *into,
-                     rsm_mapfile_info_t *info)
+                     uint32_t level, rsm_mapfile_info_t *info)
 {
     uint8_t buf[RSM_MAPFILE_TILE_BYTES > RSM_MAPFILE_HEADER_BYTES ? RSM_MAPFILE_TILE_BYTES
                                                                    : RSM_MAPFILE_HEADER_BYTES];
@@ -268,7 +271,7 @@ static int read_pass(rsm_mapfile_read_fn read, void *ctx, const rsm_tmap_t *map,
             t.ty >= RSM_TMAP_TILE_LIMIT) {
             return RSM_ERR_FORMAT;
         }
-        if (into != NULL && (rc = restore(into, &t)) != RSM_OK) {
+        if (into != NULL && (level == ALL_LEVELS || (t.stamp >> 30) == level) && (rc = restore(into, &t)) != RSM_OK) {
             return rc;
         }
     }
@@ -290,12 +293,25 @@ int rsm_localizer_load_map(rsm_localizer_t *loc, rsm_mapfile_read_fn read, void 
         return RSM_ERR_NOSYS;
     }
     map = &loc->state.persistent.map;
-    if ((rc = read_pass(read, ctx, map, NULL, &got)) != RSM_OK) {
+    if ((rc = read_pass(read, ctx, map, NULL, ALL_LEVELS, &got)) != RSM_OK) {
         return rc;
     }
     rsm_tmap_reset(map);
     map->stamp = got.stamp;
-    if ((rc = read_pass(read, ctx, map, map, &got)) != RSM_OK) {
+    if (got.tiles <= (uint32_t)RSM_TMAP_TILES) {
+        rc = read_pass(read, ctx, map, map, ALL_LEVELS, &got);
+    } else {
+        /* More than the pool holds (the rest goes to the store): the
+         * coarse levels first, a pass each, so that the pool holds the
+         * whole building's outline, which the global search reads, and
+         * the fine detail comes back from the store where the robot is. */
+        uint32_t level = map->cfg.levels;
+        rc = RSM_OK;
+        while (rc == RSM_OK && level-- > 0u) {
+            rc = read_pass(read, ctx, map, map, level, &got);
+        }
+    }
+    if (rc != RSM_OK) {
         rsm_tmap_reset(map);
         return rc;
     }

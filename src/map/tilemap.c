@@ -1016,67 +1016,95 @@ int rsm_tmap_raise(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy
     return RSM_OK;
 }
 
-uint32_t rsm_tmap_fetch(rsm_tmap_t *map, const rsm_pose_t *pose, const rsm_point_t *pts, size_t n, uint32_t margin)
+/* Takes the tile of (level, tx, ty) back from the store into the pool if
+ * the store holds it and the pool does not: 1 when it came back, 0 when
+ * there was nothing to take, -1 when no slot was left (it stays stored).
+ * *ticked: whether this call already ticked the write counter. */
+static int fetch_tile(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty, int *ticked)
+{
+    rsm_tile_t stored;
+    uint32_t s;
+    if (rsm_tmap_find_slot(map, level, tx, ty) != RSM_TMAP_NONE || !from_store(map, level, tx, ty, &stored)) {
+        return 0;
+    }
+    if (!*ticked) {
+        /* A tick of the write counter: the tiles this scan needs are the
+         * newest, and those the last ones needed can go. Without it a
+         * frozen map, never written, would keep every tile it took back as
+         * "written now" and soon have no slot to reuse. */
+        map->stamp = (map->stamp + 1u) & STAMP_MASK;
+        map->victims = 0;
+        *ticked = 1;
+    }
+    s = claim_slot(map, level, tx, ty);
+    if (s == RSM_TMAP_NONE) {
+        /* Every slot is this write's. */
+        if (map->store->put(map->store->ctx, &stored) != RSM_OK) {
+            map->counters.unstored++;
+        }
+        return -1;
+    }
+    put_back(map, s, level, &stored);
+    return 1;
+}
+
+/* Cells beyond the margin that a read may touch: its bilinear neighbour,
+ * and one more for a match that moves by a cell on the coarsest level. */
+#define FETCH_READ_CELLS 2
+
+uint32_t rsm_tmap_fetch(rsm_tmap_t *map, const rsm_pose_t *pose, const rsm_point_t *pts, size_t n, float margin_m)
 {
     uint32_t got = 0;
     uint32_t level;
+    int ticked = 0;
     float c;
     float sn;
-    if (map->store == NULL || map->store->count(map->store->ctx) == 0u) {
+    if (map->store == NULL || map->store->count(map->store->ctx) == 0u || !(margin_m >= 0.0f)) {
         return 0u;
     }
     rsm_sincosf(pose->theta, &sn, &c);
     for (level = 0; level < (uint32_t)map->cfg.levels; ++level) {
         const float inv = map->inv_cell[level];
+        /* Cells the margin spans, rounded up; less a hair, so that 5 cm
+         * of 5 cm cells is one cell, not two by the product's rounding. */
+        const float mc = margin_m * inv - 1.0e-3f;
+        const int32_t m = (mc < 4096.0f ? (mc > 0.0f ? (int32_t)ceilf(mc) : 0) : 4096) + FETCH_READ_CELLS;
         /* The last tiles looked at: a scan's points come in beam order, so
          * most fall in a tile a neighbour already asked for. */
-        uint32_t seen[4] = {RSM_TMAP_NO_KEY, RSM_TMAP_NO_KEY, RSM_TMAP_NO_KEY, RSM_TMAP_NO_KEY};
+        uint32_t seen[8];
         uint32_t next = 0;
         size_t k;
+        for (k = 0; k < 8u; ++k) {
+            seen[k] = RSM_TMAP_NO_KEY;
+        }
         for (k = 0; k < n; ++k) {
             const float x = pose->x + c * pts[k].x - sn * pts[k].y;
             const float y = pose->y + sn * pts[k].x + c * pts[k].y;
             const int32_t gx = cell_of(x, inv);
             const int32_t gy = cell_of(y, inv);
-            uint32_t corner;
-            if (!in_range(gx - (int32_t)margin, gy - (int32_t)margin) ||
-                !in_range(gx + (int32_t)margin, gy + (int32_t)margin)) {
+            int32_t tx;
+            int32_t ty;
+            if (!in_range(gx - m, gy - m) || !in_range(gx + m, gy + m)) {
                 continue;
             }
-            for (corner = 0; corner < 4u; ++corner) {
-                const int32_t tx = (gx + ((corner & 1u) ? (int32_t)margin : -(int32_t)margin)) >> RSM_TMAP_TILE_LOG2;
-                const int32_t ty = (gy + ((corner & 2u) ? (int32_t)margin : -(int32_t)margin)) >> RSM_TMAP_TILE_LOG2;
-                const uint32_t key = rsm_tmap_pack(tx, ty);
-                rsm_tile_t stored;
-                uint32_t s;
-                if (key == seen[0] || key == seen[1] || key == seen[2] || key == seen[3]) {
-                    continue;
-                }
-                seen[next] = key;
-                next = (next + 1u) & 3u;
-                if (rsm_tmap_find_slot(map, level, tx, ty) != RSM_TMAP_NONE ||
-                    !from_store(map, level, tx, ty, &stored)) {
-                    continue;
-                }
-                if (got == 0u) {
-                    /* A tick of the write counter: the tiles this scan
-                     * needs are the newest, and those the last ones
-                     * needed can go. Without it a frozen map, never
-                     * written, would keep every tile it took back as
-                     * "written now" and soon have no slot to reuse. */
-                    map->stamp = (map->stamp + 1u) & STAMP_MASK;
-                    map->victims = 0;
-                }
-                s = claim_slot(map, level, tx, ty);
-                if (s == RSM_TMAP_NONE) {
-                    /* Every slot is this write's: the tile stays stored. */
-                    if (map->store->put(map->store->ctx, &stored) != RSM_OK) {
-                        map->counters.unstored++;
+            for (ty = (gy - m) >> RSM_TMAP_TILE_LOG2; ty <= (gy + m) >> RSM_TMAP_TILE_LOG2; ++ty) {
+                for (tx = (gx - m) >> RSM_TMAP_TILE_LOG2; tx <= (gx + m) >> RSM_TMAP_TILE_LOG2; ++tx) {
+                    const uint32_t key = rsm_tmap_pack(tx, ty);
+                    uint32_t j;
+                    int r;
+                    for (j = 0; j < 8u && seen[j] != key; ++j) {
                     }
-                    return got;
+                    if (j < 8u) {
+                        continue;
+                    }
+                    seen[next] = key;
+                    next = (next + 1u) & 7u;
+                    r = fetch_tile(map, level, tx, ty, &ticked);
+                    if (r < 0) {
+                        return got;
+                    }
+                    got += (uint32_t)r;
                 }
-                put_back(map, s, level, &stored);
-                got++;
             }
         }
     }

@@ -157,14 +157,15 @@ void rsm_tmap_reset(rsm_tmap_t *map);
 
 /* Takes back from the map's store (rsm/tilestore.h; none: does nothing)
  * the tiles under pts (robot frame, metres) placed at pose, on every
- * level, and those within margin cells of each point, so that a match
- * from about pose reads the map the store holds. A tile comes back into
- * a free slot, else the one a return's hit would take (its tile let go
- * into the store in turn), stamped with the map's write counter. Returns
- * the tiles taken back. Cursors on the map may hold a slot it reused:
- * forget them. */
+ * level, and those within margin_m of each point (and two cells more: what
+ * a read beside a cell touches), so that a match from about pose reads the
+ * map the store holds. A tile comes back into a free slot, else the one a
+ * return's hit would take (its tile let go into the store in turn),
+ * stamped with the map's write counter, which a call that takes any back
+ * ticks first. Returns the tiles taken back. Cursors on the map may hold
+ * a slot it reused: forget them. */
 uint32_t rsm_tmap_fetch(rsm_tmap_t *map, const rsm_pose_t *pose, const rsm_point_t *pts, size_t n,
-                        uint32_t margin);
+                        float margin_m);
 
 /* Raises cell (gx, gy) of the cursor's level to at least v (at most 15),
  * taking a tile for it when none is held there (a free slot, else the one

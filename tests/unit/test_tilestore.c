@@ -228,7 +228,7 @@ static void test_map_should_keep_what_its_pool_lets_go_in_the_store(void)
             pts[k].x = ((float)cell_x(k) + 0.5f) * tc.cell_m;
             pts[k].y = 5.5f * tc.cell_m;
         }
-        TEST_ASSERT_EQUAL_UINT32(with ? 8u : 0u, rsm_tmap_fetch(&map, &at, pts, 8u, 0u));
+        TEST_ASSERT_EQUAL_UINT32(with ? 8u : 0u, rsm_tmap_fetch(&map, &at, pts, 8u, 0.0f));
         for (k = 0; k < 8u; ++k) {
             TEST_ASSERT_EQUAL_UINT8(with ? 9u + (k & 3u) : 0u, rsm_tmap_value(&map, 0u, cell_x(k), 5));
         }
@@ -407,7 +407,8 @@ static void test_saved_map_should_hold_the_pool_and_the_store(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT, rsm_localizer_load_map(&other, ram_read, NULL, &got));
     TEST_ASSERT_EQUAL_UINT32(0u, small_store.count(small_store.ctx));
 
-    /* With room: the pool full, the rest in the store, every tile as saved. */
+    /* With room: the pool full, the rest in the store, every tile as saved,
+     * in one of them; the coarsest level whole in the pool. */
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tilestore_mem_init(&mem2, tiles2, STORE_TILES, index2, INDEX_LOG2, &store2));
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_store(&other, &store2));
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_load_map(&other, ram_read, NULL, &got));
@@ -415,14 +416,45 @@ static void test_saved_map_should_hold_the_pool_and_the_store(void)
     pool_then = other.state.persistent.map.used;
     TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_TILES, pool_then);
     TEST_ASSERT_EQUAL_UINT32(info.tiles - pool_then, store2.count(store2.ctx));
-    TEST_ASSERT_EQUAL_MEMORY(loc.state.persistent.map.tile, other.state.persistent.map.tile,
-                             (size_t)pool_then * sizeof(rsm_tile_t));
-    for (k = 0; k < store.count(store.ctx); ++k) {
-        rsm_tile_t a;
-        rsm_tile_t b;
-        TEST_ASSERT_EQUAL_INT(RSM_OK, store.at(store.ctx, k, &a));
-        TEST_ASSERT_EQUAL_INT(RSM_OK, store2.at(store2.ctx, k, &b));
-        TEST_ASSERT_EQUAL_MEMORY(&a, &b, sizeof a);
+    {
+        const rsm_tmap_t *a = &loc.state.persistent.map;
+        const rsm_tmap_t *b = &other.state.persistent.map;
+        const uint32_t top = (uint32_t)a->cfg.levels - 1u;
+        uint32_t coarsest = 0;
+        for (k = 0; k < info.tiles; ++k) {
+            rsm_tile_t t;
+            rsm_tile_t u;
+            uint32_t s;
+            if (k < a->used) {
+                t = a->tile[k];
+            } else {
+                TEST_ASSERT_EQUAL_INT(RSM_OK, store.at(store.ctx, k - a->used, &t));
+            }
+            coarsest += (t.stamp >> 30) == top ? 1u : 0u;
+            s = rsm_tmap_find_slot(b, t.stamp >> 30, t.tx, t.ty);
+            if (s != RSM_TMAP_NONE) {
+                TEST_ASSERT_EQUAL_MEMORY(&t, &b->tile[s], sizeof t);
+                TEST_ASSERT_EQUAL_INT(0, store2.take(store2.ctx, t.stamp >> 30, t.tx, t.ty, &u));
+            } else {
+                TEST_ASSERT_EQUAL_INT(1, store2.take(store2.ctx, t.stamp >> 30, t.tx, t.ty, &u));
+                TEST_ASSERT_EQUAL_MEMORY(&t, &u, sizeof t);
+                TEST_ASSERT_EQUAL_INT(RSM_OK, store2.put(store2.ctx, &u));
+            }
+        }
+        TEST_ASSERT_TRUE(coarsest > 0u);
+        TEST_ASSERT_EQUAL_UINT32(coarsest < (uint32_t)RSM_TMAP_TILES ? coarsest : RSM_TMAP_TILES,
+                                 rsm_tmap_tiles(b, top));
+    }
+    /* Saved again at once: the same tiles (a load only moves them). */
+    {
+        static uint8_t first[sizeof saved];
+        const uint32_t first_len = saved_len;
+        memcpy(first, saved, saved_len);
+        saved_len = 0u;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_pose(&other, &info.pose, NULL));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_save_map(&other, ram_write, NULL, NULL));
+        TEST_ASSERT_EQUAL_UINT32(first_len, saved_len);
+        TEST_ASSERT_EQUAL_MEMORY(first, saved, RSM_MAPFILE_HEADER_BYTES);
     }
     /* Loading again empties the store first: the same count, no place twice. */
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_load_map(&other, ram_read, NULL, &got));

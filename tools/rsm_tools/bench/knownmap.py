@@ -2,14 +2,18 @@
 
 For every log:
 
-1. *Round trip*: the whole log with ``rsm-nav --save-map`` (the mapping
-   run); then the whole log again with ``--load-map MAP --freeze-map
-   --save-map AGAIN``: the tiles of AGAIN (every byte between the 48-byte
+1. *Round trip*: the whole log with ``rsm-nav --save-map`` (the pool's map
+   alone, the default memory); then the whole log again with ``--load-map
+   MAP --freeze-map --save-map AGAIN``: the tiles of AGAIN (every byte between the 48-byte
    header and the 4-byte CRC, docs/mapfile.md) must be those of MAP, and a
    frozen run on AGAIN must write the same trajectory as the one on MAP
    (the header differs: it holds the pose and the fit at the save). The
    saved size and tiles are shown beside the map's part of the localizer
    state (rsm-stages' ``sizeof``).
+   Then the whole log mapped again with a tile store behind the pool
+   (``--tile-store STORE_TILES``, rsm/tilestore.h), so that the saved map
+   holds the whole building (the mapping run): every run below loads it with
+   such a store.
 2. *Localization mode*: the whole log on the saved map, frozen
    (``--freeze-map``) and with updates (``--load-map`` alone), from the log's
    first pose as the mapping run; the error of the bench
@@ -86,6 +90,12 @@ REF_TOLERANCE = 0.1   # s: the mapping run's pose at a stamp it lacks exactly, t
 HEADER_BYTES = 48
 CRC_BYTES = 4
 MARK = "known map"    # every floor line of the section holds ": known map, " (the report's splice finds them)
+# The map the section localizes in is kept whole by a tile store behind the
+# pool (rsm/tilestore.h): what the pool lets go goes there, and comes back
+# where the robot is. In rsm-nav it is memory (40 bytes a tile); on a robot,
+# flash or external RAM. The round trip is of the pool's map alone.
+STORE_TILES = 65536
+STORE = ("--tile-store", str(STORE_TILES))
 FLOOR_GLOBAL_M4 = 1000000  # instructions per scan of the global search on the M4, at most (issue 31)
 ONLY_M4 = ("--only knownmap runs no firmware image: the whole bench measures it in its m4 stage, on the "
            "map-in-flash firmware")
@@ -93,7 +103,8 @@ ONLY_M4 = ("--only knownmap runs no firmware image: the whole bench measures it 
 HELD_NOTE = (f"a start's surroundings count as held by the saved map when rsm-nav, started in localization mode on "
              f"it from the mapping run's pose at the start's first scan (`--load-map MAP --freeze-map --initial-pose "
              f"POSE --skip-seconds S --scans 1 --scan-log`), gives that scan a fit_ratio (its fit over the fit saved "
-             f"with the map) of at least {HELD_FIT:g}; below, the pool evicted them and the start is counted apart")
+             f"with the map) of at least {HELD_FIT:g}; below, the saved map does not hold the place as the mapping run "
+             f"then saw it (it holds an older version of it, placed elsewhere) and the start is counted apart")
 
 VERDICTS = ("right", "between", "wrong", "none", "no reference")
 
@@ -412,18 +423,26 @@ def run_knownmap(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, 
         for f in (m, again):
             if f.exists():
                 f.unlink()
-        s_map = _nav(nav, log, o / "mapping.txt", ["--save-map", str(m)])
-        s_frozen = _nav(nav, log, o / "frozen.txt", ["--load-map", str(m), "--freeze-map", "--save-map", str(again)])
-        _nav(nav, log, o / "frozen-again.txt", ["--load-map", str(again), "--freeze-map"])
-        s_upd = _nav(nav, log, o / "updates.txt", ["--load-map", str(m)])
-        return task, s_map, s_frozen, s_upd
+        pool = o / "map-pool.rsmm"
+        if pool.exists():
+            pool.unlink()
+        # the round trip: the map of the pool alone (the default memory)
+        s_pool = _nav(nav, log, o / "mapping-pool.txt", ["--save-map", str(pool)])
+        s_rt = _nav(nav, log, o / "roundtrip.txt", ["--load-map", str(pool), "--freeze-map", "--save-map",
+                                                    str(again)])
+        _nav(nav, log, o / "roundtrip-again.txt", ["--load-map", str(again), "--freeze-map"])
+        # the rest on the map of the pool and its store: the whole building
+        s_map = _nav(nav, log, o / "mapping.txt", [*STORE, "--save-map", str(m)])
+        s_frozen = _nav(nav, log, o / "frozen.txt", [*STORE, "--load-map", str(m), "--freeze-map"])
+        s_upd = _nav(nav, log, o / "updates.txt", [*STORE, "--load-map", str(m)])
+        return task, s_pool, s_rt, s_map, s_frozen, s_upd
 
     out = {"starts": starts, "cap": cap, "jobs": jobs, "within": WITHIN_SCANS, "right_m": RIGHT_M,
            "right_deg": RIGHT_DEG, "wrong_m": WRONG_M, "wrong_deg": WRONG_DEG, "held_fit": HELD_FIT,
            "held_note": HELD_NOTE, "share": FLOOR_RIGHT_SHARE, "logs": {}}
     maps = parallel(mapping, list(logs), jobs)
     tasks = []
-    for (label, log, rel), s_map, s_frozen, s_upd in maps:
+    for (label, log, rel), s_pool, s_rt, s_map, s_frozen, s_upd in maps:
         o = d / label
 
         def figures(name: str, summary: dict) -> dict:
@@ -431,7 +450,8 @@ def run_knownmap(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, 
                     "fit": summary.get("fit"), "seconds": summary["seconds"]}
 
         relations = ev.load_relations(rel)
-        data, again = (o / "map.rsmm").read_bytes(), (o / "map-again.rsmm").read_bytes()
+        data, again = (o / "map-pool.rsmm").read_bytes(), (o / "map-again.rsmm").read_bytes()
+        stored = (o / "map.rsmm").read_bytes()
         traj = ev.read_poses(o / "mapping.txt")[0]
         span = traj[-1].t - traj[0].t if traj else 0.0
         entry = {
@@ -439,10 +459,17 @@ def run_knownmap(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, 
             "round_trip": {"bytes": len(data), "tiles": map_tile_count(data), "bytes_again": len(again),
                            "tiles_again": map_tile_count(again), "identical": map_tiles(data) == map_tiles(again),
                            "header_identical": data[:HEADER_BYTES] == again[:HEADER_BYTES],
-                           "trajectory_same": _data_lines(o / "frozen.txt") == _data_lines(o / "frozen-again.txt"),
-                           "loaded": s_frozen.get("loaded_map"), "fit": map_fit(data), "fit_again": map_fit(again)},
+                           "trajectory_same": (_data_lines(o / "roundtrip.txt")
+                                               == _data_lines(o / "roundtrip-again.txt")),
+                           "loaded": s_rt.get("loaded_map"), "fit": map_fit(data), "fit_again": map_fit(again)},
+            "stored_map": {"bytes": len(stored), "tiles": map_tile_count(stored), "store_tiles": STORE_TILES,
+                           "held_in_store": (s_map["tmap"] or {}).get("store_tiles"),
+                           "let_go": (s_map["tmap"] or {}).get("stored"),
+                           "taken_back": (s_map["tmap"] or {}).get("fetched"),
+                           "taken_back_frozen": (s_frozen["tmap"] or {}).get("fetched")},
             "state": map_state_bytes(stages, log),
-            "runs": {"mapping": figures("mapping", s_map), "frozen": figures("frozen", s_frozen),
+            "runs": {"pool": figures("mapping-pool", s_pool), "mapping": figures("mapping", s_map),
+                     "frozen": figures("frozen", s_frozen),
                      "updates": figures("updates", s_upd)},
             "offsets": start_offsets(span, starts)}
         out["logs"][label] = entry
@@ -454,7 +481,8 @@ def run_knownmap(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, 
         o = d / label / "starts"
         m = str(d / label / "map.rsmm")
         g_traj, g_scans = o / f"global-{k}.txt", o / f"global-{k}.scans"
-        summ = _nav(nav, log, g_traj, ["--load-map", m, "--freeze-map", "--global", "--skip-seconds", f"{s:.3f}",
+        summ = _nav(nav, log, g_traj, [*STORE, "--load-map", m, "--freeze-map", "--global", "--skip-seconds",
+                                       f"{s:.3f}",
                                        "--scans", str(cap), "--scan-log", str(g_scans)], no_pose_ok=True)
         found = first_pose(g_traj)
         ref = None
@@ -466,7 +494,7 @@ def run_knownmap(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, 
         start_ref = refs[label].lookup(first[0], tolerance=REF_TOLERANCE) if first else None
         if start_ref is not None:
             h_traj, h_scans = o / f"held-{k}.txt", o / f"held-{k}.scans"
-            _nav(nav, log, h_traj, ["--load-map", m, "--freeze-map", "--initial-pose",
+            _nav(nav, log, h_traj, [*STORE, "--load-map", m, "--freeze-map", "--initial-pose",
                                     *(f"{v:.6f}" for v in start_ref), "--skip-seconds", f"{s:.3f}", "--scans", "1",
                                     "--scan-log", str(h_scans)])
             h = first_scan(h_scans)
@@ -478,7 +506,8 @@ def run_knownmap(nav: Path, logs: Sequence[Tuple[str, Path, Path]], work: Path, 
         if start_ref is not None:
             n_traj = o / f"near-{k}.txt"
             rough = [v + dv for v, dv in zip(start_ref, NEAR_OFFSET)]
-            n_summ = _nav(nav, log, n_traj, ["--load-map", m, "--freeze-map", "--global-near", f"{NEAR_RADIUS_M:g}",
+            n_summ = _nav(nav, log, n_traj, [*STORE, "--load-map", m, "--freeze-map", "--global-near",
+                                             f"{NEAR_RADIUS_M:g}",
                                              "--initial-pose", *(f"{v:.6f}" for v in rough), "--skip-seconds",
                                              f"{s:.3f}", "--scans", str(cap)], no_pose_ok=True)
             n_found = first_pose(n_traj)
@@ -521,7 +550,7 @@ def run_kidnaps(nav: Path, logs: Sequence[Tuple[str, Path, Path]], d: Path, jobs
 
     def nav_kidnap(label, path, mode, flags, name):
         traj, slog = d / label / "kidnap" / f"{name}.txt", d / label / "kidnap" / f"{name}.scans"
-        summ = _nav(nav, path, traj, ["--load-map", str(d / label / "map.rsmm"), *flags,
+        summ = _nav(nav, path, traj, [*STORE, "--load-map", str(d / label / "map.rsmm"), *flags,
                                       "--set", "global_when_lost=1", "--scan-log", str(slog)])
         return summ, read_scan_log(slog), ev.load_trajectory(traj)
 
@@ -774,11 +803,15 @@ def report_knownmap(km: Optional[dict]) -> List[str]:
         L += [provenance_line(km["provenance"]), ""]
     L += ["rsm on a map it saved (issue 31), every log, the default configuration; "
           f"this section took {km['seconds']:.0f} s with {km['jobs']} rsm-nav process(es) at a time. "
-          "*Round trip*: the whole log with `rsm-nav --save-map` (the mapping run), then again with `--load-map "
-          "MAP --freeze-map --save-map AGAIN`; the tiles of the two files (every byte between the 48-byte header "
+          "*Round trip*: the whole log with `rsm-nav --save-map` (the pool's map alone: the default memory), "
+          "then again with `--load-map MAP --freeze-map --save-map AGAIN`; the tiles of the two files (every byte between the 48-byte header "
           "and the CRC, docs/mapfile.md; the header holds the pose and the fit at the save) compared, and a frozen "
           "run on AGAIN compared line by line with the one on MAP. The map's part of the localizer state is "
           "rsm-stages' `sizeof(state.persistent.map)` on this host. "
+          f"*The map localized in*: the whole log mapped again with a tile store behind the pool (`--tile-store "
+          f"{STORE_TILES}`, rsm/tilestore.h, docs/map.md: what the pool lets go is kept there and comes back where "
+          "the robot is, so that the saved map holds the whole building); every run below loads it with such a "
+          "store. "
           "*Localization mode*: the whole log on the saved map, frozen (`--freeze-map`) and with updates "
           "(`--load-map` alone), from the log's first pose as the mapping run; mean relative-pose error "
           f"(all relations and local ones, span <= {LOCAL_SPAN:g} s) beside the mapping run's. "
@@ -806,10 +839,23 @@ def report_knownmap(km: Optional[dict]) -> List[str]:
                   rows, "knownmap round trip")
     rows = []
     for label, e in km["logs"].items():
+        sm = e.get("stored_map")
+        if sm:
+            rows.append([label, fmt_int(sm["bytes"]), fmt_int(sm["tiles"]), _n(sm["held_in_store"]),
+                         _n(sm["let_go"]), _n(sm["taken_back"]), _n(sm["taken_back_frozen"])])
+    if rows:
+        L += md_table(["log", "saved with the store [B]", "tiles", "of them in the store at the save",
+                       "let go into the store while mapping", "taken back while mapping",
+                       "taken back by the frozen run"], rows, "knownmap store")
+    rows = []
+    for label, e in km["logs"].items():
         mp = e["runs"]["mapping"]["all"]
-        for name, what in (("mapping", "mapping run (--save-map)"), ("frozen", "localization, frozen"),
+        for name, what in (("pool", "mapping run, the pool alone (not a floor)"),
+                           ("mapping", "mapping run with the store (--save-map)"), ("frozen", "localization, frozen"),
                            ("updates", "localization, with updates")):
-            r = e["runs"][name]
+            r = e["runs"].get(name)
+            if r is None:
+                continue
             rows.append([label, what, fmt_q("translation", r["all"]), fmt_q("rotation", r["all_rotation"]),
                          fmt_q("translation", r["local"]), fmt_q("rotation", r["local_rotation"]),
                          _f(ratio(r["all"], mp)), _n(r["writes"]), _f(r["fit"], "{:.4f}")])
