@@ -15,8 +15,10 @@
  *
  * What differs from a pool without a limit: beams passing through a place
  * only the store holds do not clear it (a stored tile comes back only
- * under a scan's returns), and the whole-map search (rsm_localizer_global)
- * searches the pool alone.
+ * under a scan's returns); the whole-map search (rsm_localizer_global)
+ * searches the pool alone (after a load, the coarse levels of the whole
+ * map, rsm/mapfile.h), and rsm_localizer_map_occupancy and
+ * rsm_localizer_map_bounds read the pool alone.
  *
  * The store is the caller's: rsm_tile_store_t is a table of callbacks.
  * rsm_tilestore_mem_t below is one in caller-supplied memory (no heap). */

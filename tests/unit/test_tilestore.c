@@ -461,6 +461,73 @@ static void test_saved_map_should_hold_the_pool_and_the_store(void)
     TEST_ASSERT_EQUAL_UINT32(info.tiles - pool_then, store2.count(store2.ctx));
 }
 
+/* A saved map whose tiles reach into the store, damaged: a bit flipped in
+ * its header, in a tile the pool takes, in one the store takes, or in its
+ * CRC, or the map cut short, is refused, and the localizer and its store
+ * stay as they were (a store already holding another map's tiles). */
+static void test_damaged_map_with_store_tiles_should_be_refused_whole(void)
+{
+    static rsm_localizer_t was;
+    static uint8_t good[sizeof saved];
+    rsm_mapfile_info_t info;
+    uint32_t good_len;
+    uint32_t bits[3][2];
+    uint32_t r;
+    uint32_t k;
+    uint32_t refused = 0;
+    store.clear(store.ctx);
+    (void)map_room(&loc);
+    flood(&loc);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_save_map(&loc, ram_write, NULL, &info));
+    TEST_ASSERT_TRUE(info.tiles > (uint32_t)RSM_TMAP_TILES + 2u);
+    memcpy(good, saved, saved_len);
+    good_len = saved_len;
+    /* The loading localizer holds a map of its own, part in its store. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tilestore_mem_init(&mem2, tiles2, STORE_TILES, index2, INDEX_LOG2, &store2));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&other, &cfg, &path[0], NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_store(&other, &store2));
+    for (k = 0; k < (uint32_t)RSM_TMAP_TILES + 5u; ++k) {
+        raise_newer(&other.state.persistent.map, cell_x(k), -77, 9u);
+    }
+    TEST_ASSERT_EQUAL_UINT32(5u, store2.count(store2.ctx));
+    was = other;
+    memcpy(tiles, tiles2, 5u * sizeof tiles[0]); /* the store's tiles as they were */
+    /* Bit ranges: the header, the first tile past the pool's (the
+     * store's first), the CRC (test_mapfile.c flips every bit of a map the
+     * pool holds whole). */
+    bits[0][0] = 0u;
+    bits[0][1] = RSM_MAPFILE_HEADER_BYTES * 8u;
+    bits[1][0] = (RSM_MAPFILE_HEADER_BYTES + (uint32_t)RSM_TMAP_TILES * RSM_MAPFILE_TILE_BYTES) * 8u;
+    bits[1][1] = bits[1][0] + RSM_MAPFILE_TILE_BYTES * 8u;
+    bits[2][0] = (good_len - 4u) * 8u;
+    bits[2][1] = good_len * 8u;
+    for (r = 0; r < 3u; ++r) {
+        uint32_t b;
+        for (b = bits[r][0]; b < bits[r][1]; ++b) {
+            memcpy(saved, good, good_len);
+            saved_len = good_len;
+            saved[b / 8u] = (uint8_t)(saved[b / 8u] ^ (1u << (b % 8u)));
+            TEST_ASSERT_TRUE(rsm_localizer_load_map(&other, ram_read, NULL, NULL) != RSM_OK);
+            refused++;
+        }
+    }
+    for (k = 0; k < 64u; ++k) {
+        memcpy(saved, good, good_len);
+        saved_len = (uint32_t)((uint64_t)good_len * k / 64u);
+        TEST_ASSERT_TRUE(rsm_localizer_load_map(&other, ram_read, NULL, NULL) != RSM_OK);
+        refused++;
+    }
+    TEST_ASSERT_EQUAL_UINT32((RSM_MAPFILE_HEADER_BYTES + RSM_MAPFILE_TILE_BYTES + 4u) * 8u + 64u, refused);
+    TEST_ASSERT_EQUAL_MEMORY(&was.state.persistent.map, &other.state.persistent.map, sizeof was.state.persistent.map);
+    TEST_ASSERT_EQUAL_UINT32(5u, store2.count(store2.ctx));
+    TEST_ASSERT_EQUAL_MEMORY(tiles, tiles2, 5u * sizeof tiles[0]);
+    /* And the map undamaged is taken. */
+    memcpy(saved, good, good_len);
+    saved_len = good_len;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_load_map(&other, ram_read, NULL, NULL));
+    TEST_ASSERT_EQUAL_UINT32(info.tiles - (uint32_t)RSM_TMAP_TILES, store2.count(store2.ctx));
+}
+
 static void test_set_store_should_refuse_what_it_cannot_use(void)
 {
     rsm_tile_store_t broken = store;
@@ -488,6 +555,7 @@ int main(void)
     RUN_TEST(test_map_write_should_start_from_the_stored_tile);
     RUN_TEST(test_localizer_should_take_the_room_back_from_the_store);
     RUN_TEST(test_saved_map_should_hold_the_pool_and_the_store);
+    RUN_TEST(test_damaged_map_with_store_tiles_should_be_refused_whole);
     RUN_TEST(test_set_store_should_refuse_what_it_cannot_use);
     return UNITY_END();
 }
