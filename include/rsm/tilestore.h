@@ -21,7 +21,8 @@
  * rsm_localizer_map_bounds read the pool alone.
  *
  * The store is the caller's: rsm_tile_store_t is a table of callbacks.
- * rsm_tilestore_mem_t below is one in caller-supplied memory (no heap). */
+ * rsm_tilestore_mem_t below is one in caller-supplied memory (no heap),
+ * rsm_tilestore_rom_t one over a saved map in memory-mapped flash. */
 #ifndef RSM_TILESTORE_H
 #define RSM_TILESTORE_H
 
@@ -91,6 +92,54 @@ uint32_t rsm_tilestore_mem_index_log2(uint32_t capacity);
 int rsm_tilestore_mem_init_checked(rsm_tilestore_mem_t *m, rsm_tile_t *tiles, uint32_t capacity, uint32_t *index,
                                    uint32_t index_log2, rsm_tile_store_t *store, size_t tile_size,
                                    unsigned long fingerprint);
+
+/* A store over a saved map kept in memory-mapped flash (rsm/mapfile.h),
+ * for localization mode on a target whose RAM holds only the pool: the
+ * tiles stay in the map's bytes, an index of 2^index_log2 words, in flash
+ * too, finds them, and a bitmap in RAM, one bit a tile, says which are out
+ * in the pool. A map mapped once (on a host with rsm-nav --tile-store, or
+ * on the robot) is written into flash, its index built there once
+ * (rsm_tilestore_rom_build_index), and each boot loads it
+ * (rsm_localizer_load_map over the same bytes: the pool takes the coarse
+ * levels, and every other tile is "put" here, which only marks it held).
+ * A tile let go comes back here only as it was in the map: one a map
+ * update changed is refused (RSM_ERR_NOMEM, counted in the map's
+ * counters.unstored), so with map_frozen = 0 such places are forgotten
+ * once the pool lets them go. */
+typedef struct rsm_tilestore_rom {
+    const uint8_t *map;         /* the saved map's bytes, as rsm_localizer_save_map wrote them */
+    uint32_t tiles;             /* its tiles */
+    const uint32_t *index;      /* 2^index_log2 words: a tile's number, 0xFFFFFFFF empty (erased) */
+    uint32_t index_log2;
+    uint8_t *out;               /* (tiles + 7) / 8 bytes: bit k set while tile k is not held here */
+    uint32_t held;
+} rsm_tilestore_rom_t;
+
+/* Index words for a map of `tiles` tiles, as a log2: the smallest power of
+ * two at least 4/3 of it (at least 2). */
+uint32_t rsm_tilestore_rom_index_log2(uint32_t tiles);
+
+/* Programs one 32-bit word of the index (word number `at`, erased before:
+ * every word is programmed at most once); 0 on success. */
+typedef int (*rsm_tilestore_program_fn)(void *ctx, uint32_t at, uint32_t value);
+
+/* Builds the index of the map's bytes (len of them) into an erased region
+ * of 2^index_log2 words that `index` reads (memory-mapped) and `program`
+ * writes. RSM_OK; RSM_ERR_INVAL for NULL pointers or an index smaller than
+ * rsm_tilestore_rom_index_log2 asks; RSM_ERR_FORMAT for bytes that are no
+ * map (magic, length), or a place held twice; RSM_ERR_IO when program
+ * failed, or the region was not erased. The map's CRC is the load's to
+ * check. */
+int rsm_tilestore_rom_build_index(const uint8_t *map, uint32_t len, const uint32_t *index, uint32_t index_log2,
+                                  rsm_tilestore_program_fn program, void *ctx);
+
+/* Sets m up over a map's bytes, its index (built as above) and out
+ * ((tiles + 7) / 8 bytes of RAM), holding nothing until a load puts the
+ * tiles the pool cannot hold, and *store to its callbacks. RSM_OK;
+ * RSM_ERR_INVAL for NULL pointers, an index too small or out too short;
+ * RSM_ERR_FORMAT for bytes that are no map. */
+int rsm_tilestore_rom_init(rsm_tilestore_rom_t *m, const uint8_t *map, uint32_t len, const uint32_t *index,
+                           uint32_t index_log2, uint8_t *out, uint32_t out_bytes, rsm_tile_store_t *store);
 
 #ifdef __cplusplus
 }

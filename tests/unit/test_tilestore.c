@@ -528,6 +528,103 @@ static void test_damaged_map_with_store_tiles_should_be_refused_whole(void)
     TEST_ASSERT_EQUAL_UINT32(info.tiles - (uint32_t)RSM_TMAP_TILES, store2.count(store2.ctx));
 }
 
+/* Flash for the store over a saved map: index words, erased to all ones,
+ * each programmed once at most. */
+static uint32_t flash_index[1u << INDEX_LOG2];
+static uint32_t programmed_twice;
+static uint8_t out_bits[(STORE_TILES + 3u * (uint32_t)RSM_TMAP_TILES + 64u + 7u) / 8u];
+
+static int program_word(void *ctx, uint32_t at, uint32_t value)
+{
+    (void)ctx;
+    if (flash_index[at] != 0xFFFFFFFFu) {
+        programmed_twice++;
+    }
+    flash_index[at] &= value; /* NOR flash only clears bits */
+    return 0;
+}
+
+/* A map larger than the pool, saved and put in "flash" with its index:
+ * a localizer in localization mode loads it with the store over those
+ * bytes, keeps only the bitmap in RAM, and takes a room the pool lacks
+ * back from flash to match the robot there. */
+static void test_rom_store_should_serve_a_saved_map_from_flash(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_synth_scan_config_t sc = rsm_synth_scan_config_default();
+    rsm_localizer_config_t frozen;
+    rsm_tilestore_rom_t rom;
+    rsm_tile_store_t rs;
+    rsm_mapfile_info_t info;
+    rsm_localizer_report_t rep;
+    rsm_tile_t t;
+    rsm_pose_t p;
+    rsm_pose_t mapped_at;
+    uint32_t ilog;
+    size_t len;
+    store.clear(store.ctx);
+    len = map_room(&loc);
+    mapped_at = rsm_localizer_pose(&loc);
+    flood(&loc);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_save_map(&loc, ram_write, NULL, &info));
+    ilog = rsm_tilestore_rom_index_log2(info.tiles);
+    TEST_ASSERT_TRUE(ilog <= INDEX_LOG2);
+    memset(flash_index, 0xFF, sizeof flash_index);
+    programmed_twice = 0u;
+    /* Not a map; an index too small. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT,
+                          rsm_tilestore_rom_build_index(saved, saved_len - 1u, flash_index, ilog, program_word, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL,
+                          rsm_tilestore_rom_build_index(saved, saved_len, flash_index, ilog - 1u, program_word, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK,
+                          rsm_tilestore_rom_build_index(saved, saved_len, flash_index, ilog, program_word, NULL));
+    TEST_ASSERT_EQUAL_UINT32(0u, programmed_twice);
+    /* Built once only: the region is no longer erased. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_IO,
+                          rsm_tilestore_rom_build_index(saved, saved_len, flash_index, ilog, program_word, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tilestore_rom_init(&rom, saved, saved_len, flash_index, ilog, out_bits,
+                                                                (info.tiles + 7u) / 8u - 1u, &rs));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tilestore_rom_init(&rom, saved, saved_len, flash_index, ilog, out_bits,
+                                                         (uint32_t)sizeof out_bits, &rs));
+    TEST_ASSERT_EQUAL_UINT32(0u, rs.count(rs.ctx));
+
+    frozen = cfg;
+    frozen.map_frozen = 1u;
+    p = path[len - 1u];
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&other, &frozen, &p, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_store(&other, &rs));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_load_map(&other, ram_read, NULL, NULL));
+    TEST_ASSERT_EQUAL_UINT32(info.tiles - (uint32_t)RSM_TMAP_TILES, rs.count(rs.ctx));
+    /* The tiles held are the map's, each once: the pool's are out. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rs.at(rs.ctx, 0u, &t));
+    TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_NONE, rsm_tmap_find_slot(&other.state.persistent.map, t.stamp >> 30, t.tx, t.ty));
+    /* Only a tile as the map has it comes back to flash. */
+    {
+        rsm_tile_t changed;
+        TEST_ASSERT_EQUAL_INT(1, rs.take(rs.ctx, t.stamp >> 30, t.tx, t.ty, &changed));
+        TEST_ASSERT_EQUAL_INT(0, rs.take(rs.ctx, t.stamp >> 30, t.tx, t.ty, &changed));
+        changed.cell[0] = (uint8_t)(changed.cell[0] ^ 0x11u);
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_NOMEM, rs.put(rs.ctx, &changed));
+        changed.cell[0] = (uint8_t)(changed.cell[0] ^ 0x11u);
+        changed.stamp = (changed.stamp & 0xC0000000u) | 1u; /* restamped, as the pool does */
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rs.put(rs.ctx, &changed));
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_FORMAT, rs.put(rs.ctx, &changed));
+        changed.tx = (int16_t)(changed.tx + 1000);
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_NOMEM, rs.put(rs.ctx, &changed));
+    }
+    /* The robot in the room, which the pool does not hold: it comes back
+     * from flash and the scan is matched where the mapper was. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &p, &sc, NULL, (uint64_t)(len + 10u) * STEP_US, &scan));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&other, &scan, &rep));
+    TEST_ASSERT_TRUE(other.state.persistent.map.counters.fetched > 10u);
+    TEST_ASSERT_EQUAL_INT(RSM_SCAN_ACCEPTED, rep.outcome);
+    /* Started from the truth, one scan moves it towards the map's frame
+     * (the mapper's estimate, a centimetre or two off the truth). */
+    TEST_ASSERT_TRUE(rep.fit_ratio > 0.6f);
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &p) < 0.03f);
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &mapped_at) < 0.06f);
+}
+
 static void test_set_store_should_refuse_what_it_cannot_use(void)
 {
     rsm_tile_store_t broken = store;
@@ -556,6 +653,7 @@ int main(void)
     RUN_TEST(test_localizer_should_take_the_room_back_from_the_store);
     RUN_TEST(test_saved_map_should_hold_the_pool_and_the_store);
     RUN_TEST(test_damaged_map_with_store_tiles_should_be_refused_whole);
+    RUN_TEST(test_rom_store_should_serve_a_saved_map_from_flash);
     RUN_TEST(test_set_store_should_refuse_what_it_cannot_use);
     return UNITY_END();
 }
