@@ -276,7 +276,7 @@ int rsm_tilestore_rom_build_index(const uint8_t *map, uint32_t len, const uint32
 
 static int is_out(const rsm_tilestore_rom_t *m, uint32_t k)
 {
-    return (m->out[k >> 3] >> (k & 7u)) & 1u;
+    return (int)(((uint32_t)m->out[k >> 3] >> (k & 7u)) & 1u);
 }
 
 static void set_out(rsm_tilestore_rom_t *m, uint32_t k, int out)
