@@ -122,6 +122,9 @@ static void mem_clear(void *ctx)
     m->used = 0u;
 }
 
+/* The memory store's callbacks (ctx and capacity set by its init). */
+static const rsm_tile_store_t mem_ops = {NULL, 0u, mem_put, mem_take, mem_count, mem_at, mem_clear};
+
 uint32_t rsm_tilestore_mem_index_log2(uint32_t capacity)
 {
     uint32_t k = 2u;
@@ -147,13 +150,9 @@ int rsm_tilestore_mem_init_checked(rsm_tilestore_mem_t *m, rsm_tile_t *tiles, ui
     m->capacity = capacity;
     m->index_log2 = index_log2;
     mem_clear(m);
+    *store = mem_ops;
     store->ctx = m;
     store->capacity = capacity;
-    store->put = mem_put;
-    store->take = mem_take;
-    store->count = mem_count;
-    store->at = mem_at;
-    store->clear = mem_clear;
     return RSM_OK;
 }
 
@@ -345,6 +344,9 @@ static void rom_clear(void *ctx)
     m->held = 0u;
 }
 
+/* The flash store's callbacks (ctx and capacity set by its init). */
+static const rsm_tile_store_t rom_ops = {NULL, 0u, rom_put, rom_take, rom_count, rom_at, rom_clear};
+
 int rsm_tilestore_rom_init(rsm_tilestore_rom_t *m, const uint8_t *map, uint32_t len, const uint32_t *index,
                            uint32_t index_log2, uint8_t *out, uint32_t out_bytes, rsm_tile_store_t *store)
 {
@@ -365,12 +367,8 @@ int rsm_tilestore_rom_init(rsm_tilestore_rom_t *m, const uint8_t *map, uint32_t 
     m->index_log2 = index_log2;
     m->out = out;
     rom_clear(m);
+    *store = rom_ops;
     store->ctx = m;
     store->capacity = tiles;
-    store->put = rom_put;
-    store->take = rom_take;
-    store->count = rom_count;
-    store->at = rom_at;
-    store->clear = rom_clear;
     return RSM_OK;
 }
