@@ -107,7 +107,7 @@ static void encode_tile(uint8_t b[RSM_MAPFILE_TILE_BYTES], const rsm_tile_t *t)
     memcpy(b + 8, t->cell, sizeof t->cell);
 }
 
-static void decode_tile(rsm_tile_t *t, const uint8_t b[RSM_MAPFILE_TILE_BYTES])
+void rsm_mapfile_decode_tile(rsm_tile_t *t, const uint8_t *b)
 {
     t->tx = (int16_t)rsm_get_u16le(b);
     t->ty = (int16_t)rsm_get_u16le(b + 2);
@@ -263,7 +263,7 @@ static int read_pass(rsm_mapfile_read_fn read, void *ctx, const rsm_tmap_t *map,
         }
         crc = rsm_crc32(crc, buf, RSM_MAPFILE_TILE_BYTES);
         at += RSM_MAPFILE_TILE_BYTES;
-        decode_tile(&t, buf);
+        rsm_mapfile_decode_tile(&t, buf);
         /* What can be checked of a tile alone is checked in both passes;
          * a place held twice only shows in the second. */
         if ((t.stamp >> 30) >= (uint32_t)cfg->levels || (t.stamp & RSM_TMAP_STAMP_MASK) > info->stamp ||

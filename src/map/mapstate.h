@@ -1,5 +1,6 @@
 /* What the modules that replace the localizer's persistent map (mapfile.c,
- * mapimport.c) share with the localizer (localizer.c). Internal. */
+ * mapimport.c, tilestore.c) share with the localizer (localizer.c) and
+ * with each other. Internal. */
 #ifndef RSM_MAPSTATE_H
 #define RSM_MAPSTATE_H
 
@@ -14,5 +15,10 @@ int rsm_localizer_ready(const rsm_localizer_t *loc);
  * global search's grids are built for it, and a search under way starts
  * over in the new map. */
 void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit);
+
+/* One tile of a saved map's bytes (docs/mapfile.md: 40 bytes with the
+ * default tile side), as mapfile.c reads it and the store over a saved map
+ * in flash (tilestore.c) does. */
+void rsm_mapfile_decode_tile(rsm_tile_t *t, const uint8_t *b);
 
 #endif /* RSM_MAPSTATE_H */

@@ -43,15 +43,9 @@ static uint32_t tile_level(const rsm_tile_t *t)
     return t->stamp >> 30;
 }
 
-/* Multiplicative mixing of a packed key; the top bits are the result. */
-static uint32_t mix_bits(uint32_t k, unsigned bits)
-{
-    return (k * 2654435761u) >> (32u - bits);
-}
-
 static uint32_t hash_key(uint32_t level, int32_t tx, int32_t ty)
 {
-    return mix_bits(rsm_tmap_pack(tx, ty) ^ (level * 0x9E3779B9u), RSM_TMAP_HASH_LOG2);
+    return rsm_tmap_place_hash(level, tx, ty, RSM_TMAP_HASH_LOG2);
 }
 
 int rsm_tmap_config_check(const rsm_tmap_config_t *cfg, const char **field)
@@ -670,7 +664,7 @@ static void add_hit(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t level, int32
  * cell; a collision only lets a phantom through now and then). */
 static uint32_t echo_bit(int32_t gx, int32_t gy)
 {
-    return mix_bits(rsm_tmap_pack(gx, gy), RSM_TMAP_ECHO_LOG2);
+    return rsm_tmap_mix(rsm_tmap_pack(gx, gy), RSM_TMAP_ECHO_LOG2);
 }
 
 /* rsm_tmap_config_t.wall_echo: marks in lone the returns that land neither

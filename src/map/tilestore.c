@@ -13,6 +13,7 @@
 #include "core/bytes.h"
 #include "core/check.h"
 #include "map/mapstate.h"
+#include "map/tmap_read.h"
 
 static uint32_t level_of(const rsm_tile_t *t)
 {
@@ -21,8 +22,7 @@ static uint32_t level_of(const rsm_tile_t *t)
 
 static uint32_t home(const rsm_tilestore_mem_t *m, uint32_t level, int32_t tx, int32_t ty)
 {
-    const uint32_t key = ((uint32_t)(uint16_t)tx | ((uint32_t)(uint16_t)ty << 16)) ^ (level * 0x9E3779B9u);
-    return (key * 2654435761u) >> (32u - m->index_log2);
+    return rsm_tmap_place_hash(level, tx, ty, m->index_log2);
 }
 
 static int same_place(const rsm_tile_t *t, uint32_t level, int32_t tx, int32_t ty)
@@ -175,17 +175,7 @@ int rsm_localizer_set_store(rsm_localizer_t *loc, const rsm_tile_store_t *store)
 /* Tile k of a saved map's bytes (docs/mapfile.md). */
 static void rom_tile(const uint8_t *map, uint32_t k, rsm_tile_t *t)
 {
-    const uint8_t *b = map + RSM_MAPFILE_HEADER_BYTES + (size_t)k * RSM_MAPFILE_TILE_BYTES;
-    t->tx = (int16_t)rsm_get_u16le(b);
-    t->ty = (int16_t)rsm_get_u16le(b + 2);
-    t->stamp = rsm_get_u32le(b + 4);
-    memcpy(t->cell, b + 8, sizeof t->cell);
-}
-
-static uint32_t rom_home(uint32_t index_log2, uint32_t level, int32_t tx, int32_t ty)
-{
-    const uint32_t key = ((uint32_t)(uint16_t)tx | ((uint32_t)(uint16_t)ty << 16)) ^ (level * 0x9E3779B9u);
-    return (key * 2654435761u) >> (32u - index_log2);
+    rsm_mapfile_decode_tile(t, map + RSM_MAPFILE_HEADER_BYTES + (size_t)k * RSM_MAPFILE_TILE_BYTES);
 }
 
 /* The saved map's tile count, if its bytes are a map's (magic, header
@@ -214,7 +204,7 @@ uint32_t rsm_tilestore_rom_index_log2(uint32_t tiles)
 static uint32_t rom_find(const rsm_tilestore_rom_t *m, uint32_t level, int32_t tx, int32_t ty)
 {
     const uint32_t mask = (1u << m->index_log2) - 1u;
-    uint32_t h = rom_home(m->index_log2, level, tx, ty);
+    uint32_t h = rsm_tmap_place_hash(level, tx, ty, m->index_log2);
     uint32_t probes;
     for (probes = 0; probes <= mask; ++probes) {
         const uint32_t k = m->index[h];
@@ -262,7 +252,7 @@ int rsm_tilestore_rom_build_index(const uint8_t *map, uint32_t len, const uint32
         if (rom_find(&m, t.stamp >> 30, t.tx, t.ty) != 0xFFFFFFFFu) {
             return RSM_ERR_FORMAT;
         }
-        h = rom_home(index_log2, t.stamp >> 30, t.tx, t.ty);
+        h = rsm_tmap_place_hash(t.stamp >> 30, t.tx, t.ty, index_log2);
         while (index[h] != 0xFFFFFFFFu) {
             h = (h + 1u) & mask;
         }

@@ -23,6 +23,20 @@ static inline uint32_t rsm_tmap_pack(int32_t x, int32_t y)
     return (uint32_t)(uint16_t)x | ((uint32_t)(uint16_t)y << 16);
 }
 
+/* Multiplicative mixing of a packed key; its top `bits` bits. */
+static inline uint32_t rsm_tmap_mix(uint32_t k, unsigned bits)
+{
+    return (k * 2654435761u) >> (32u - bits);
+}
+
+/* Where a tile's place (level, column, row) starts its probe in an index
+ * of 2^bits entries: the pool's (tilemap.c) and the tile stores'
+ * (tilestore.c). */
+static inline uint32_t rsm_tmap_place_hash(uint32_t level, int32_t tx, int32_t ty, unsigned bits)
+{
+    return rsm_tmap_mix(rsm_tmap_pack(tx, ty) ^ (level * 0x9E3779B9u), bits);
+}
+
 /* Slot of a tile, or RSM_TMAP_NONE (the index lookup, in tilemap.c). */
 uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty);
 
