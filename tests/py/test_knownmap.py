@@ -161,6 +161,27 @@ def test_known_map_options_are_checked(tmp_path, head_log):
         assert res.returncode == 2 and "--skip-seconds" in res.stderr, bad
     res = nav(head_log, tmp_path / "t.txt", "--method", "icp", "--save-map", str(tmp_path / "m"), ok=False)
     assert res.returncode == 2 and "--method rsm" in res.stderr
+    res = nav(head_log, tmp_path / "t.txt", "--method", "icp", "--tile-store", "100", ok=False)
+    assert res.returncode == 2 and "--method rsm" in res.stderr
+    for bad in ("-1", "x", "1e3", str((1 << 28) + 1)):
+        res = nav(head_log, tmp_path / "t.txt", "--tile-store", bad, ok=False)
+        assert res.returncode == 2 and "--tile-store" in res.stderr, bad
+
+
+def test_a_tile_store_the_pool_never_needs_changes_nothing(tmp_path, head_log):
+    """The excerpt's map fits the pool: with a store behind it (rsm-nav
+    --tile-store) nothing is let go, and the run and the saved map are the
+    same bytes as without (tests/unit/test_tilestore.c tests a pool that
+    overflows)."""
+    plain, stored = tmp_path / "plain.txt", tmp_path / "stored.txt"
+    nav(head_log, plain, "--save-map", str(tmp_path / "plain.rsmm"))
+    js = tmp_path / "s.json"
+    nav(head_log, stored, "--tile-store", "1000", "--save-map", str(tmp_path / "stored.rsmm"), "--summary-json",
+        str(js))
+    assert plain.read_bytes() == stored.read_bytes()
+    assert (tmp_path / "plain.rsmm").read_bytes() == (tmp_path / "stored.rsmm").read_bytes()
+    tmap = json.loads(js.read_text())["tmap"]
+    assert tmap["stored"] == 0 and tmap["fetched"] == 0 and tmap["store_tiles"] == 0
 
 
 def test_skip_seconds_starts_later_in_the_log(tmp_path, head_log):

@@ -524,7 +524,7 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
         }
         return -1;
     }
-    if (nav->store_tiles > 0u && nav->cfg.method == RSM_METHOD_MAP) {
+    if (nav->store_tiles > 0u) {
         const uint32_t ilog = rsm_tilestore_mem_index_log2(nav->store_tiles);
         nav->store_tile = (rsm_tile_t *)calloc(nav->store_tiles, sizeof *nav->store_tile);
         nav->store_index = (uint32_t *)calloc((size_t)1u << ilog, sizeof *nav->store_index);
@@ -1797,9 +1797,9 @@ int main(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    if ((nav.global || nav.save_map != NULL || nav.load_map != NULL || nav.cfg.map_frozen) &&
+    if ((nav.global || nav.save_map != NULL || nav.load_map != NULL || nav.cfg.map_frozen || nav.store_tiles > 0u) &&
         nav.cfg.method != RSM_METHOD_MAP) {
-        fprintf(stderr, "rsm-nav: --save-map, --load-map, --global and --freeze-map need --method rsm\n");
+        fprintf(stderr, "rsm-nav: --save-map, --load-map, --global, --freeze-map and --tile-store need --method rsm\n");
         return 2;
     }
     if (nav.global && nav.load_map == NULL) {
