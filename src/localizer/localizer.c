@@ -906,11 +906,6 @@ static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, 
  * a stall's catch-up took 8 poses off by the ground truth in 20 ACES
  * runs). */
 #define UNSURE_GAP_S 1.0f
-
-/* Around each point, the tiles within this of it come back from the store
- * before a match (and two cells more on every level): a few centimetres
- * of motion the prediction missed. */
-#define FETCH_MARGIN_M 0.05f
 static int unsure(const rsm_localizer_t *loc, float dt_s)
 {
     const float *p = loc->ekf.p;
@@ -1451,6 +1446,11 @@ static float bar_fit(const rsm_localizer_t *loc)
  * beyond two cells: within it, the descent from the wide prior finds it. */
 #define NEAR_FROM_M 0.1f
 
+/* Around each point, the tiles within this of it come back from the store
+ * before a match (and two cells more on every level): a few centimetres
+ * of motion the prediction missed. */
+#define FETCH_MARGIN_M 0.05f
+
 /* Keeps a share of this scan's readings (taken evenly) for the proof, with
  * the estimate now: every kept pose is descended with the same scan. */
 static void keep_seen(rsm_localizer_t *loc, size_t npts)
@@ -1774,7 +1774,6 @@ static rsm_track_t track_state(rsm_localizer_t *loc, rsm_outcome_t outcome, cons
     return loc->poor_run >= cfg->lost_scans ? RSM_TRACK_LOST : RSM_TRACK_UNCERTAIN;
 }
 
-
 int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, size_t scan_size,
                                unsigned long fingerprint, rsm_localizer_report_t *rep)
 {
@@ -1843,7 +1842,8 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
     }
     apply_mount(loc, npts);
     rep->points = (uint32_t)npts;
-    if (loc->cfg->method == RSM_METHOD_MAP && loc->have_scan && !global_running(loc)) {
+    if (loc->cfg->method == RSM_METHOD_MAP && loc->have_scan && npts >= loc->cfg->min_points &&
+        !global_running(loc)) {
         /* Places the pool let go come back from the store before the
          * match reads them (none: nothing to do). */
         (void)rsm_tmap_fetch(&loc->state.persistent.map, &loc->ekf.x, loc->pts, npts, FETCH_MARGIN_M);
