@@ -8,6 +8,7 @@
     python3 tools/rsm_tools/m4.py costs ELF [--machine mps2-an385]
     python3 tools/rsm_tools/m4.py size ELF --ram-max BYTES
     python3 tools/rsm_tools/m4.py mapflash ELF HOST_EXE REPLAY_HOST_EXE WORKDIR
+    python3 tools/rsm_tools/m4.py mapstore ELF HOST_EXE REPLAY_HOST_EXE WORKDIR
     python3 tools/rsm_tools/m4.py profile ELF [--top N]
 
 ``example`` boots the example firmware with its two device ports on files and
@@ -66,6 +67,12 @@ proven, within MAPFLASH_MAPPER_TOL of the uninterrupted run's; the check
 prints the search's worst and mean instructions per scan on the M4 (the
 target's clock ticks around each ``rsm_localizer_scan``, converted as the
 replay's after the same calibration) and the scans to the proven pose.
+``mapstore`` does the same with the image whose core has a pool smaller than
+the excerpt's map (rsm_mapstore_m4.elf, rsm-mapstore-host): its mapping is
+compared with the uninterrupted run within MAPFLASH_MAPPER_TOL (a pool that
+lets tiles go clears less), and its ``T`` lines must show the map outgrowing
+the pool while mapping, tiles taken back from flash while localizing, none
+lost, the same on host and target.
 
 QEMU runs with ``-icount shift=ICOUNT_SHIFT,sleep=off``: the virtual clock
 advances exactly 2^shift ns per executed instruction, so the board's 25 MHz
@@ -377,6 +384,9 @@ MAPFLASH_HOST_TOL = (1e-3, 1e-3)   # m, rad
 # the host): about 5 cm and 0.03 rad at worst on the excerpt's corridor.
 MAPFLASH_MAPPER_TOL = (0.15, 0.08)  # m, rad
 MAPFLASH_MAX_BOOTS = 2
+# The map larger than the pool (rsm_mapstore_m4.elf, mapflash.h's
+# RSM_MAPFLASH_STORE): its own banner and T lines.
+MAPSTORE_BANNER = "rsm mapstore on mps2-an386"
 
 
 def run_rebooting(elf: Path, banner: str, max_boots: int, timeout: float = 60.0) -> str:
@@ -509,28 +519,40 @@ def global_costs(search: Dict[str, object], per_tick: float = INSNS_PER_TICK) ->
             "last_scan": search["rows"][-1][0], "pose": list(search["pose"])}
 
 
-def check_mapflash(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path) -> str:
-    return mapflash_run(elf, host_exe, replay_host_exe, work)[0]
+def check_mapflash(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path, store: bool = False) -> str:
+    return mapflash_run(elf, host_exe, replay_host_exe, work, store)[0]
 
 
-def mapflash_run(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path) -> Tuple[str, Dict[str, object]]:
+def store_line(boot: str) -> Dict[str, int]:
+    """The T line of a mapstore boot: the store's tiles and the map's counters."""
+    m = re.search(r"^T store held (\d+) let_go (\d+) taken (\d+) lost (\d+)$", boot, re.M)
+    if m is None:
+        raise M4Error(f"no T line:\n{boot[-2000:]}")
+    return dict(zip(("held", "let_go", "taken", "lost"), (int(v) for v in m.groups())))
+
+
+def mapflash_run(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path,
+                 store: bool = False) -> Tuple[str, Dict[str, object]]:
     """check_mapflash's checks; returns its summary and the global search's
-    figures on the M4 (global_costs)."""
+    figures on the M4 (global_costs). ``store``: the image whose map is
+    larger than its pool (mapstore), checked as mapflash and for its T lines."""
+    name = "mapstore" if store else "mapflash"
+    banner = MAPSTORE_BANNER if store else MAPFLASH_BANNER
     work.mkdir(parents=True, exist_ok=True)
-    out = run_rebooting(elf, MAPFLASH_BANNER, MAPFLASH_MAX_BOOTS)
-    (work / "mapflash-m4.out").write_text(out)
+    out = run_rebooting(elf, banner, MAPFLASH_MAX_BOOTS)
+    (work / f"{name}-m4.out").write_text(out)
     host = subprocess.run([str(host_exe)], capture_output=True, text=True, timeout=TIMEOUT_S)
     if host.returncode != 0:
         raise M4Error(f"{host_exe.name}: exit status {host.returncode}: {host.stderr}")
-    (work / "mapflash-host.out").write_text(host.stdout)
+    (work / f"{name}-host.out").write_text(host.stdout)
     ref = subprocess.run([str(replay_host_exe)], capture_output=True, text=True, timeout=TIMEOUT_S)
     if ref.returncode != 0:
         raise M4Error(f"{replay_host_exe.name}: exit status {ref.returncode}: {ref.stderr}")
-    boots = split_boots(out, MAPFLASH_BANNER)
+    boots = split_boots(out, banner)
     if len(boots) != 2:
         raise M4Error(f"expected two boots (a reset in between), got {len(boots)}:\n{out[-2000:]}")
     first, second = boots
-    host_boots = split_boots(host.stdout, "rsm mapflash on host")
+    host_boots = split_boots(host.stdout, f"rsm {name} on host")
     if len(host_boots) != 2:
         raise M4Error(f"{host_exe.name}: expected two boots, got {len(host_boots)}")
     # First boot: no map in the region, refused; a map saved; the reset asked.
@@ -540,7 +562,7 @@ def mapflash_run(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path) -
     saved = mapflash_info(first, "S saved")
     if not (saved["bytes"] > 0 and saved["tiles"] > 0 and saved["bytes"] == 48 + 40 * saved["tiles"] + 4):
         raise M4Error(f"the first boot saved {saved}: not a map of 48 + 40 n + 4 bytes with n > 0 tiles")
-    if not first.rstrip().endswith("rsm mapflash: saved, resetting"):
+    if not first.rstrip().endswith(f"rsm {name}: saved, resetting"):
         raise M4Error(f"the first boot did not end by resetting:\n{first[-2000:]}")
     # Second boot: the same map loaded, localized, frozen, done.
     if "L refused" in second:
@@ -551,7 +573,7 @@ def mapflash_run(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path) -
         raise M4Error(f"saved {saved}, loaded {loaded} after the reset")
     end = re.search(r"^E scans (\d+) accepted (\d+) map_bytes (\d+)$", second, re.M)
     target_map, target_loc = pose_lines(first), pose_lines(second)
-    if end is None or not second.rstrip().endswith("rsm mapflash: done"):
+    if end is None or not second.rstrip().endswith(f"rsm {name}: done"):
         raise M4Error(f"the second boot did not finish:\n{second[-2000:]}")
     if not target_map or not target_loc or int(end.group(1)) != len(target_loc):
         raise M4Error(f"{len(target_map)} poses mapping, {len(target_loc)} localizing, summary {end.group(0)}")
@@ -570,10 +592,28 @@ def mapflash_run(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path) -
     compare_poses("mapping, host", target_map, {p[0]: p for p in host_map}, MAPFLASH_HOST_TOL, True)
     host_worst = compare_poses("localizing, host", target_loc, {p[0]: p for p in host_loc}, MAPFLASH_HOST_TOL, True)
     bits = sum(a == b for a, b in zip(lines_of(out, "P"), lines_of(host.stdout, "P")))
-    # The uninterrupted run: mapping is its beginning; localizing in the
-    # saved map stays near where it carries on.
+    # The uninterrupted run: mapping is its beginning (the same run, but
+    # for a pool that lets tiles go: beams through a place only the store
+    # holds do not clear it, rsm/tilestore.h); localizing in the saved map
+    # stays near where it carries on.
     mapper = {p[0]: p for p in pose_lines(ref.stdout)}
-    compare_poses("mapping, rsm-replay-host", target_map, mapper, MAPFLASH_HOST_TOL, True)
+    compare_poses("mapping, rsm-replay-host", target_map, mapper,
+                  MAPFLASH_MAPPER_TOL if store else MAPFLASH_HOST_TOL, not store)
+    stored = ""
+    if store:
+        # The map outgrew the pool while mapping and was saved whole; the
+        # second boot took tiles back from flash, and the host did the same.
+        t_map, t_loc = store_line(first), store_line(second)
+        if t_map != store_line(host_boots[0]) or t_loc != store_line(host_boots[1]):
+            raise M4Error(f"store: target {t_map}, {t_loc}; host {store_line(host_boots[0])}, "
+                          f"{store_line(host_boots[1])}")
+        if not (t_map["let_go"] > 0 and t_map["lost"] == 0 and t_map["held"] > 0
+                and saved["tiles"] > t_map["held"]):
+            raise M4Error(f"mapping: the map never outgrew the pool, or tiles were lost: {t_map}")
+        if not (t_loc["held"] > 0 and t_loc["taken"] > 0 and t_loc["lost"] == 0):
+            raise M4Error(f"localizing: no tile came back from flash, or tiles were lost: {t_loc}")
+        stored = (f"; the pool held {saved['tiles'] - t_map['held']} of the map's {saved['tiles']} tiles when it "
+                  f"was saved, localizing took {t_loc['taken']} back from flash")
     worst = compare_poses("localizing, the uninterrupted run", target_loc, mapper, MAPFLASH_MAPPER_TOL, False)
     # The global search in the loaded map: as the host's, and where it proves
     # a pose, near the uninterrupted run's at that scan.
@@ -589,13 +629,14 @@ def mapflash_run(elf: Path, host_exe: Path, replay_host_exe: Path, work: Path) -
         compare_poses("global search, the uninterrupted run", [last], mapper, MAPFLASH_MAPPER_TOL, False)
     found = (f"a pose proven after {cost['scans']} scans" if cost["proven"]
              else f"no pose proven within {cost['scans']} scans")
-    summary = (f"mapflash: first boot refused the region ({refused.group(1)}), mapped {len(target_map)} scans, "
+    summary = (f"{name}: first boot refused the region ({refused.group(1)}), mapped {len(target_map)} scans, "
                f"saved {saved['bytes']} bytes ({saved['tiles']} tiles), reset; second boot loaded the same and "
                f"localized {len(target_loc)} scans in the frozen map: {bits} of {len(target_map) + len(target_loc)} "
                f"poses equal the host's bit for bit (largest difference {host_worst[0]:.2g} m, {host_worst[1]:.2g} "
                f"rad), within {worst[0]:.3f} m and {worst[1]:.3f} rad of the uninterrupted run; then a global search "
                f"in the map loaded again, as the host's: {found} ({cost['work']} reads, at most {cost['max_work']} "
-               f"in one scan), instructions per scan on the M4 worst {cost['max']:.0f}, mean {cost['mean']:.0f}")
+               f"in one scan), instructions per scan on the M4 worst {cost['max']:.0f}, mean {cost['mean']:.0f}"
+               f"{stored}")
     return summary, cost
 
 
@@ -753,6 +794,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     mf.add_argument("host_exe", type=Path, help="rsm-mapflash-host, both boots on the host")
     mf.add_argument("replay_host_exe", type=Path, help="rsm-replay-host, the uninterrupted run")
     mf.add_argument("work", type=Path, help="folder for the outputs")
+    ms = sub.add_parser("mapstore", help="the same for the image whose map is larger than its pool")
+    ms.add_argument("elf", type=Path, help="the image (rsm_mapstore_m4.elf)")
+    ms.add_argument("host_exe", type=Path, help="rsm-mapstore-host, both boots on the host")
+    ms.add_argument("replay_host_exe", type=Path, help="rsm-replay-host, the uninterrupted run")
+    ms.add_argument("work", type=Path, help="folder for the outputs")
     pr = sub.add_parser("profile", help="instructions per function of one run (QEMU's block log; slow)")
     pr.add_argument("elf", type=Path, help="a firmware image, e.g. rsm_replay_m4.elf")
     pr.add_argument("--top", type=int, default=25, help="functions to print (default 25)")
@@ -767,8 +813,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(check_example_rplidar(a.elf, a.work))
         elif a.cmd == "example-rplidar-answered":
             print(check_example_rplidar_answered(a.elf, a.work))
-        elif a.cmd == "mapflash":
-            print(check_mapflash(a.elf, a.host_exe, a.replay_host_exe, a.work))
+        elif a.cmd in ("mapflash", "mapstore"):
+            print(check_mapflash(a.elf, a.host_exe, a.replay_host_exe, a.work, a.cmd == "mapstore"))
         elif a.cmd == "profile":
             print(format_profile(profile(a.elf, machine=a.machine), a.top))
         elif a.cmd == "costs":

@@ -70,15 +70,21 @@ static void put_pose(const rsm_replay_io_t *io, const rsm_pose_t *p)
     put_bits(io, p->theta);
 }
 
+/* " name value", as the lines name their figures. */
+static void put_field(const rsm_replay_io_t *io, const char *name, uint32_t value)
+{
+    rsm_replay_put_str(io, " ");
+    rsm_replay_put_str(io, name);
+    rsm_replay_put_str(io, " ");
+    rsm_replay_put_dec(io, value);
+}
+
 static void put_info(const rsm_replay_io_t *io, const char *what, const rsm_mapfile_info_t *info)
 {
     rsm_replay_put_str(io, what);
-    rsm_replay_put_str(io, " bytes ");
-    rsm_replay_put_dec(io, info->bytes);
-    rsm_replay_put_str(io, " tiles ");
-    rsm_replay_put_dec(io, info->tiles);
-    rsm_replay_put_str(io, " stamp ");
-    rsm_replay_put_dec(io, info->stamp);
+    put_field(io, "bytes", info->bytes);
+    put_field(io, "tiles", info->tiles);
+    put_field(io, "stamp", info->stamp);
     rsm_replay_put_str(io, " pose");
     put_pose(io, &info->pose);
     rsm_replay_put_str(io, "\n");
@@ -101,6 +107,55 @@ static rsm_mapflash_result_t fail(const rsm_replay_io_t *io, const char *what, i
     rsm_replay_put_str(io, "\n");
     return RSM_MAPFLASH_FAILED;
 }
+
+#if RSM_MAPFLASH_STORE
+typedef char rsm_mapflash_index_fits[((1u << RSM_MAPFLASH_INDEX_LOG2) * 3u >= 4u * RSM_MAPFLASH_MAX_TILES) ? 1 : -1];
+
+/* rsm_tilestore_program_fn over the region: index word `at`, after the
+ * map, as the part's word programming would write it. */
+static int program_word(void *ctx, uint32_t at, uint32_t value)
+{
+    uint8_t b[4];
+    memcpy(b, &value, sizeof b);
+    return rsm_mapflash_write(ctx, RSM_MAPFLASH_INDEX_AT + 4u * at, b, sizeof b);
+}
+
+/* The saved map's length, from its header's tile count (docs/mapfile.md:
+ * offset 24, little-endian); 0 when the region holds no map that fits. */
+static uint32_t saved_bytes(const rsm_mapflash_region_t *flash)
+{
+    const uint8_t *h = flash->bytes;
+    const uint32_t tiles = (uint32_t)h[24] | ((uint32_t)h[25] << 8) | ((uint32_t)h[26] << 16) | ((uint32_t)h[27] << 24);
+    if (tiles > RSM_MAPFLASH_MAX_TILES) {
+        return 0u;
+    }
+    return RSM_MAPFILE_HEADER_BYTES + tiles * RSM_MAPFILE_TILE_BYTES + 4u;
+}
+
+/* The flash store over the region's map and index, given to m->loc: what
+ * the pool cannot hold stays in flash. Not a map (the first boot): no
+ * store, and the load that follows refuses the region. */
+static void attach_flash_store(rsm_mapflash_t *m, rsm_mapflash_region_t *flash)
+{
+    const uint32_t len = saved_bytes(flash);
+    if (len > 0u &&
+        rsm_tilestore_rom_init(&m->rom, flash->bytes, len, (const uint32_t *)(const void *)(flash->bytes + RSM_MAPFLASH_INDEX_AT),
+                               RSM_MAPFLASH_INDEX_LOG2, m->rom_out, (uint32_t)sizeof m->rom_out, &m->store) == RSM_OK) {
+        (void)rsm_localizer_set_store(&m->loc, &m->store);
+    }
+}
+
+static void put_store(const rsm_replay_io_t *io, const rsm_mapflash_t *m)
+{
+    const rsm_tmap_counters_t *c = &m->loc.state.persistent.map.counters;
+    rsm_replay_put_str(io, "T store");
+    put_field(io, "held", m->store.count != NULL ? m->store.count(m->store.ctx) : 0u);
+    put_field(io, "let_go", c->stored);
+    put_field(io, "taken", c->fetched);
+    put_field(io, "lost", c->unstored);
+    rsm_replay_put_str(io, "\n");
+}
+#endif
 
 /* The index of the step that brings scan `scan` (1-based); the step count
  * if none does. */
@@ -155,9 +210,25 @@ static void run_steps(rsm_mapflash_t *m, const rsm_replay_io_t *io, uint32_t fir
 static rsm_mapflash_result_t map_and_save(rsm_mapflash_t *m, rsm_mapflash_region_t *flash, const rsm_replay_io_t *io)
 {
     int rc;
+#if RSM_MAPFLASH_STORE
+    /* What the pool lets go is kept in RAM meanwhile. */
+    rc = rsm_tilestore_mem_init(&m->mem, m->mem_tiles, RSM_MAPFLASH_STORE_TILES, m->mem_index,
+                                RSM_MAPFLASH_INDEX_LOG2, &m->store);
+    if (rc == RSM_OK) {
+        rc = rsm_localizer_set_store(&m->loc, &m->store);
+    }
+    if (rc != RSM_OK) {
+        return fail(io, "store", rc);
+    }
+#endif
     run_steps(m, io, 0u, RSM_MAPFLASH_MAP_SCANS);
-    /* Erase only what the map needs, as a flash driver would. */
+    /* Erase only what the map needs, as a flash driver would (and the
+     * index's words after it). */
+#if RSM_MAPFLASH_STORE
+    rc = rsm_mapflash_erase(flash, RSM_MAPFLASH_REGION);
+#else
     rc = rsm_mapflash_erase(flash, rsm_localizer_map_bytes(&m->loc));
+#endif
     if (rc != RSM_OK) {
         return fail(io, "erase", rc);
     }
@@ -166,7 +237,16 @@ static rsm_mapflash_result_t map_and_save(rsm_mapflash_t *m, rsm_mapflash_region
         return fail(io, "save", rc);
     }
     put_info(io, "S saved", &m->info);
-    rsm_replay_put_str(io, "rsm mapflash: saved, resetting\n");
+#if RSM_MAPFLASH_STORE
+    rc = rsm_tilestore_rom_build_index(flash->bytes, m->info.bytes,
+                                       (const uint32_t *)(const void *)(flash->bytes + RSM_MAPFLASH_INDEX_AT),
+                                       RSM_MAPFLASH_INDEX_LOG2, program_word, flash);
+    if (rc != RSM_OK) {
+        return fail(io, "index", rc);
+    }
+    put_store(io, m);
+#endif
+    rsm_replay_put_str(io, RSM_MAPFLASH_NAME ": saved, resetting\n");
     return RSM_MAPFLASH_RESET;
 }
 
@@ -196,6 +276,9 @@ static rsm_mapflash_result_t global_search(rsm_mapflash_t *m, rsm_mapflash_regio
     if (rc != RSM_OK) {
         return fail(io, "init", rc);
     }
+#if RSM_MAPFLASH_STORE
+    attach_flash_store(m, flash);
+#endif
     rc = rsm_localizer_load_map(&m->loc, rsm_mapflash_read, flash, &m->info);
     if (rc != RSM_OK) {
         return fail(io, "load_map", rc);
@@ -276,10 +359,13 @@ static rsm_mapflash_result_t localize(rsm_mapflash_t *m, rsm_mapflash_region_t *
     rsm_replay_put_str(io, " map_bytes ");
     rsm_replay_put_dec(io, rsm_localizer_map_bytes(&m->loc));
     rsm_replay_put_str(io, "\n");
+#if RSM_MAPFLASH_STORE
+    put_store(io, m);
+#endif
     if (global_search(m, flash, io) != RSM_MAPFLASH_DONE) {
         return RSM_MAPFLASH_FAILED;
     }
-    rsm_replay_put_str(io, "rsm mapflash: done\n");
+    rsm_replay_put_str(io, RSM_MAPFLASH_NAME ": done\n");
     return RSM_MAPFLASH_DONE;
 }
 
@@ -292,7 +378,7 @@ rsm_mapflash_result_t rsm_mapflash_boot(rsm_mapflash_t *m, rsm_mapflash_region_t
     rsm_replay_put_str(io, " page ");
     rsm_replay_put_dec(io, RSM_MAPFLASH_PAGE);
     rsm_replay_put_str(io, "\n");
-    if (flash->size < RSM_MAPFILE_MAX_BYTES) {
+    if (flash->size < RSM_MAPFLASH_REGION) {
         return fail(io, "the region holds no map of this build", RSM_ERR_NOMEM);
     }
     /* The default configuration (RSM_METHOD_MAP), frozen for localizing in
@@ -304,6 +390,9 @@ rsm_mapflash_result_t rsm_mapflash_boot(rsm_mapflash_t *m, rsm_mapflash_region_t
     if (rc != RSM_OK) {
         return fail(io, "init", rc);
     }
+#if RSM_MAPFLASH_STORE
+    attach_flash_store(m, flash);
+#endif
     rc = rsm_localizer_load_map(&m->loc, rsm_mapflash_read, flash, &m->info);
     if (rc != RSM_OK) {
         rsm_replay_put_str(io, "L refused ");

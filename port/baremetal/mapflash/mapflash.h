@@ -72,11 +72,42 @@
  * only clears bits (writing a 1 over a 0 fails, as programming an unerased
  * word would). */
 #define RSM_MAPFLASH_PAGE 4096u
-#define RSM_MAPFLASH_REGION \
-    ((RSM_MAPFILE_MAX_BYTES + RSM_MAPFLASH_PAGE - 1u) / RSM_MAPFLASH_PAGE * RSM_MAPFLASH_PAGE)
+#define RSM_MAPFLASH_PAGES(bytes) (((bytes) + RSM_MAPFLASH_PAGE - 1u) / RSM_MAPFLASH_PAGE * RSM_MAPFLASH_PAGE)
+
+/* The map larger than the pool (RSM_MAPFLASH_STORE 1: the rsm_mapstore
+ * images, whose core is built with a pool smaller than the excerpt's map,
+ * RSM_TMAP_TILES): mapping, the tiles the pool lets go are kept in a store
+ * in RAM (rsm_tilestore_mem_t: external RAM on a real robot); the map is
+ * saved whole, and the index of its tiles (rsm_tilestore_rom_build_index)
+ * is programmed after it. Each later boot localizes on the map where it
+ * lies, the flash store (rsm_tilestore_rom_t) serving from flash what the
+ * pool does not hold: in RAM only the pool and a bit a tile. One more line:
+ *   T store held <n> let_go <n> taken <n> lost <n>   after S and after E: the
+ *                                                 store's tiles, and the map's
+ *                                                 counters (rsm/tilestore.h) */
+#ifndef RSM_MAPFLASH_STORE
+#define RSM_MAPFLASH_STORE 0
+#endif
+#if RSM_MAPFLASH_STORE
+#define RSM_MAPFLASH_NAME "rsm mapstore"
+/* Tiles the RAM store holds while mapping. */
+#ifndef RSM_MAPFLASH_STORE_TILES
+#define RSM_MAPFLASH_STORE_TILES 1024u
+#endif
+/* Index words: 2^11, at least 4/3 of any map this build saves. */
+#define RSM_MAPFLASH_INDEX_LOG2 11u
+#define RSM_MAPFLASH_MAX_TILES ((uint32_t)RSM_TMAP_TILES + RSM_MAPFLASH_STORE_TILES)
+#define RSM_MAPFLASH_INDEX_AT \
+    RSM_MAPFLASH_PAGES(RSM_MAPFILE_HEADER_BYTES + RSM_MAPFLASH_MAX_TILES * RSM_MAPFILE_TILE_BYTES + 4u)
+#define RSM_MAPFLASH_REGION RSM_MAPFLASH_PAGES(RSM_MAPFLASH_INDEX_AT + (4u << RSM_MAPFLASH_INDEX_LOG2))
+#include "rsm/tilestore.h"
+#else
+#define RSM_MAPFLASH_NAME "rsm mapflash"
+#define RSM_MAPFLASH_REGION RSM_MAPFLASH_PAGES(RSM_MAPFILE_MAX_BYTES)
+#endif
 
 typedef struct rsm_mapflash_region {
-    uint8_t *bytes; /* RSM_MAPFLASH_REGION of them */
+    uint8_t *bytes; /* RSM_MAPFLASH_REGION of them, word-aligned (the index is read as words) */
     uint32_t size;
 } rsm_mapflash_region_t;
 
@@ -93,6 +124,14 @@ typedef struct rsm_mapflash {
     rsm_scan_t scan;
     rsm_localizer_report_t rep;
     rsm_mapfile_info_t info;
+#if RSM_MAPFLASH_STORE
+    rsm_tile_store_t store;
+    rsm_tilestore_mem_t mem; /* mapping */
+    rsm_tile_t mem_tiles[RSM_MAPFLASH_STORE_TILES];
+    uint32_t mem_index[1u << RSM_MAPFLASH_INDEX_LOG2];
+    rsm_tilestore_rom_t rom; /* localizing: over the region */
+    uint8_t rom_out[(RSM_MAPFLASH_MAX_TILES + 7u) / 8u];
+#endif
 } rsm_mapflash_t;
 
 typedef enum rsm_mapflash_result {

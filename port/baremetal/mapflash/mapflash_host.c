@@ -13,7 +13,7 @@ static void host_write(void *ctx, const char *s, size_t n)
 
 int main(void)
 {
-    static uint8_t bytes[RSM_MAPFLASH_REGION];
+    static uint32_t words[RSM_MAPFLASH_REGION / 4u]; /* words: the index is read as such */
     static rsm_mapflash_t state;
     rsm_mapflash_region_t flash;
     rsm_replay_io_t io;
@@ -23,15 +23,15 @@ int main(void)
     io.ctx = stdout;
     io.clock_fn = NULL;
     io.clock_ctx = NULL;
-    flash.bytes = bytes;
-    flash.size = (uint32_t)sizeof bytes;
-    memset(bytes, 0xFF, sizeof bytes); /* a new part comes erased */
+    flash.bytes = (uint8_t *)words;
+    flash.size = (uint32_t)sizeof words;
+    memset(words, 0xFF, sizeof words); /* a new part comes erased */
     for (boot = 1; boot <= 2; ++boot) {
         memset(&state, 0, sizeof state);
-        printf("rsm mapflash on host, boot %d\n", boot);
+        printf("%s on host, boot %d\n", RSM_MAPFLASH_NAME, boot);
         res = rsm_mapflash_boot(&state, &flash, &io);
         if (res != (boot == 1 ? RSM_MAPFLASH_RESET : RSM_MAPFLASH_DONE)) {
-            fprintf(stderr, "rsm-mapflash-host: boot %d ended with %d\n", boot, (int)res);
+            fprintf(stderr, "%s host: boot %d ended with %d\n", RSM_MAPFLASH_NAME, boot, (int)res);
             return 1;
         }
     }

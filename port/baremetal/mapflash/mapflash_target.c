@@ -15,7 +15,7 @@
 
 /* The region's bytes: a NOLOAD section, never zeroed by anyone; at power-up
  * they are whatever the memory holds, which the load refuses. */
-uint8_t rsm_mapflash_bytes[RSM_MAPFLASH_REGION] __attribute__((section(".mapflash")));
+uint32_t rsm_mapflash_words[RSM_MAPFLASH_REGION / 4u] __attribute__((section(".mapflash")));
 
 /* Application Interrupt and Reset Control (ARMv7-M ARM, B3.2.6): the
  * write key, the priority grouping kept, SYSRESETREQ. */
@@ -57,12 +57,12 @@ int main(void)
     io.ctx = NULL;
     io.clock_fn = target_clock;
     io.clock_ctx = NULL;
-    flash.bytes = rsm_mapflash_bytes;
-    flash.size = (uint32_t)sizeof rsm_mapflash_bytes;
-    rsm_replay_put_str(&io, "rsm mapflash on ");
+    flash.bytes = (uint8_t *)rsm_mapflash_words;
+    flash.size = (uint32_t)sizeof rsm_mapflash_words;
+    rsm_replay_put_str(&io, RSM_MAPFLASH_NAME " on ");
     rsm_replay_put_str(&io, rsm_board_name);
     rsm_replay_put_str(&io, ", region at 0x");
-    rsm_replay_put_hex(&io, (uint32_t)(uintptr_t)rsm_mapflash_bytes);
+    rsm_replay_put_hex(&io, (uint32_t)(uintptr_t)rsm_mapflash_words);
     rsm_replay_put_str(&io, "\n");
     rsm_calib_put(&io);
     res = rsm_mapflash_boot(&fw_mapflash, &flash, &io);
