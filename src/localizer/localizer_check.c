@@ -37,6 +37,7 @@ static int check_method_part(const rsm_localizer_config_t *cfg, const char **fie
         RSM_CHECK_FIELD(cfg->map_frozen <= 1u, "map_frozen");
         RSM_CHECK_FIELD(cfg->global_min_share >= 0.0f && cfg->global_min_share <= 1.0f, "global_min_share");
         RSM_CHECK_FIELD(cfg->global_min_fit >= 0.0f && cfg->global_min_fit <= 1.0f, "global_min_fit");
+        RSM_CHECK_FIELD(cfg->global_crowded_fit >= 0.0f && cfg->global_crowded_fit <= 1.0f, "global_crowded_fit");
         RSM_CHECK_FIELD(cfg->global_when_lost <= 1u, "global_when_lost");
         RSM_CHECK_FIELD(cfg->recover_margin >= 0.0f && cfg->recover_margin <= 10.0f, "recover_margin");
         RSM_CHECK_FIELD(cfg->refute_margin >= 0.0f && cfg->refute_margin <= 10.0f, "refute_margin");

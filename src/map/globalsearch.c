@@ -156,6 +156,11 @@ float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven,
     return share > min_share ? share : min_share;
 }
 
+float rsm_global_fit_share(const rsm_global_t *g, float min_fit, float crowded_fit)
+{
+    return g->unkept > 0u && crowded_fit > min_fit ? crowded_fit : min_fit;
+}
+
 int rsm_global_check(const rsm_tmap_t *map)
 {
     int32_t b[4];
@@ -482,6 +487,7 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
     g->pass = 0;
     g->depth = 0;
     g->found = 0;
+    g->unkept = 0;
     g->best_score = 0.0f;
     g->floor_score = min_share * (float)g->npts;
     g->work = 0;
@@ -990,6 +996,8 @@ static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score, 
     }
     g->found = kept;
     if (g->found == (uint32_t)RSM_GLOBAL_CANDIDATES) {
+        /* One of the two is not kept: the proof cannot weigh it. */
+        g->unkept++;
         if (!(fine > g->cand[g->found - 1u].fine)) {
             return;
         }

@@ -165,6 +165,84 @@ static void test_spread_search_finds_the_same(void)
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&g1.cand[0].pose, &loc.ekf.x) < 0.45f);
 }
 
+/* A search that finds more distinct poses at its bar than it keeps says
+ * so (unkept), and its winner must then fit about as well as the map's own
+ * scans (global_crowded_fit): the proof cannot weigh the poses it did not
+ * keep. (On the bench's logs such searches came from long corridors and
+ * look-alike rooms: docs/globalsearch.md.) */
+static void test_a_crowded_search_asks_a_closer_fit(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_tmap_t *map = &loc.state.persistent.map;
+    rsm_localizer_report_t rep;
+    size_t proof_at = 0;
+    size_t k;
+    /* The rule itself. */
+    g1.unkept = 0u;
+    TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_fit_share(&g1, 0.8f, 0.9f));
+    g1.unkept = 1u;
+    TEST_ASSERT_EQUAL_FLOAT(0.9f, rsm_global_fit_share(&g1, 0.8f, 0.9f));
+    TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_fit_share(&g1, 0.8f, 0.7f));
+    /* The room: every pose that passes is kept. */
+    make_path();
+    map_path(&world, path_len - 80u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, grid1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.97f));
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g1, grid1, map, 0u, NULL));
+    TEST_ASSERT_TRUE(g1.found >= 1u);
+    TEST_ASSERT_EQUAL_UINT32(0u, g1.unkept);
+    /* The same room's search, its count made crowded once it ends, and the
+     * map's own fit set so that its winner's fit (a first run's) passes at
+     * global_min_fit (0.8) but not at a crowded share of 1: the room's
+     * pose is proven at the proof's end only where the crowded share is no
+     * higher; at 1 the verdict finds the winner fitting too poorly and
+     * searches again. */
+    cfg.global_budget = 5000u;
+    cfg.map_frozen = 1u;
+    cfg.global_min_fit = 0.8f;
+    before = loc;
+    for (k = 0; k < 3u; ++k) {
+        const rsm_global_t *g = &loc.state.persistent.global;
+        size_t at;
+        int proven = 0;
+        cfg.global_crowded_fit = k < 2u ? 0.8f : 1.0f;
+        loc = before;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+        for (at = path_len - 80u; at < path_len - 20u && g->phase != RSM_GLOBAL_PROVING; ++at) {
+            step(&loc, &world, at, &rep);
+        }
+        TEST_ASSERT_EQUAL_UINT32(RSM_GLOBAL_PROVING, g->phase);
+        loc.state.persistent.global.unkept = 1u;
+        if (k == 0u) {
+            /* The first run: the kept poses' fits, for the bar. */
+            float best = 0.0f;
+            uint32_t q;
+            for (; at < path_len - 20u && g->proved < g->found; ++at) {
+                step(&loc, &world, at, &rep);
+            }
+            TEST_ASSERT_EQUAL_UINT32(g->found, g->proved);
+            for (q = 0; q < g->found; ++q) {
+                best = g->hit[q] > best ? g->hit[q] : best;
+            }
+            TEST_ASSERT_TRUE(best > 0.5f);
+            before.state.persistent.map_fit = best / 0.85f;
+            continue;
+        }
+        for (; at < path_len - 20u && !proven && loc.counters.global_ambiguous == 0u; ++at) {
+            step(&loc, &world, at, &rep);
+            proven = rep.outcome != RSM_SCAN_SEARCHING;
+        }
+        if (k == 1u) {
+            TEST_ASSERT_TRUE(proven);
+            TEST_ASSERT_TRUE(rsm_synth_pos_error(&rep.pose, &path[at - 1u]) < 0.1f);
+            proof_at = at;
+        } else {
+            TEST_ASSERT_FALSE(proven);
+            TEST_ASSERT_EQUAL_UINT32(1u, loc.counters.global_ambiguous);
+            TEST_ASSERT_TRUE(at <= proof_at);
+        }
+    }
+}
+
 /* Grids built ahead (rsm_global_prepare, as a map load does) are the ones
  * a search builds itself, bit for bit: a search begun on them keeps the
  * same poses, and reads exactly the build fewer. */
@@ -710,6 +788,9 @@ static void test_bad_calls(void)
     cfg.global_min_share = 0.8f;
     cfg.global_min_fit = -0.1f;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(&loc, &cfg, &zero, NULL));
+    cfg.global_min_fit = 0.8f;
+    cfg.global_crowded_fit = 1.5f;
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(&loc, &cfg, &zero, NULL));
 }
 
 int main(void)
@@ -717,6 +798,7 @@ int main(void)
     UNITY_BEGIN();
     RUN_TEST(test_a_forgotten_robot_is_found);
     RUN_TEST(test_spread_search_finds_the_same);
+    RUN_TEST(test_a_crowded_search_asks_a_closer_fit);
     RUN_TEST(test_prepared_grids_are_the_ones_a_search_builds);
     RUN_TEST(test_the_bar_falls_after_searches_of_the_whole_map);
     RUN_TEST(test_search_is_exact);

@@ -103,6 +103,7 @@
     U("global_budget", global_budget, uint32_t) \
     F("global_min_share", global_min_share) \
     F("global_min_fit", global_min_fit) \
+    F("global_crowded_fit", global_crowded_fit) \
     U("global_when_lost", global_when_lost, uint8_t) \
     F("doubt_m", doubt_m) \
     F("doubt_rad", doubt_rad) \
