@@ -431,6 +431,29 @@ def test_a_kidnap_run_is_judged_from_the_first_scan_after_the_cut():
     assert not e["cut_seen"] and e["found"] is None and e["wrong"] == 0
 
 
+def test_a_kidnap_run_where_the_run_without_it_was_is_not_wrong():
+    """Scans 1-3 after the cut are 2 m off the mapping run; the run without
+    a kidnap was there too at scans 1-2 (tracking, never lost before) but
+    not at 3: 1-2 count apart and find the run again at 1, 3 stays wrong.
+    A control that was lost before, or is not tracking there, excuses
+    nothing."""
+    rows, traj, ref = kidnap_inputs()
+    c_rows = [(float(t), "accepted", "tracking") for t in range(1, 31)]
+    c_traj = ev.Trajectory([(float(t), t + (2.0 if t in (11, 12) else 0.0), 0.0, 0.0) for t in range(1, 31)])
+    e = km.judge_kidnap(rows, traj, ref, 11.0, (c_rows, c_traj))
+    assert (e["as_control"], e["wrong"], e["first_wrong"]) == (2, 2, 3)  # scan 3 and the 10 deg one
+    assert e["found"] == 1 and e["found_as_control"]
+    assert e["wrong_before_found"] == 0
+    lost_before = [(t, o, "lost" if t == 5.0 else s) for t, o, s in c_rows]
+    e = km.judge_kidnap(rows, traj, ref, 11.0, (lost_before, c_traj))
+    assert (e["as_control"], e["wrong"], e["found"], e["found_as_control"]) == (0, 4, 7, False)
+    uncertain = [(t, o, "uncertain" if t == 11.0 else s) for t, o, s in c_rows]
+    e = km.judge_kidnap(rows, traj, ref, 11.0, (uncertain, c_traj))
+    assert (e["as_control"], e["wrong"], e["found"]) == (1, 3, 2)
+    s = km.aggregate_kidnaps([{**kid(2), "as_control": 1, "found_as_control": True}, kid(3)])
+    assert (s["as_control_runs"], s["as_control_scans"], s["found_as_control"]) == (1, 1, 1)
+
+
 def kid(found, wrong=0, first_wrong=None, lost=None, k=0, before="right", searches=2, proven=1, control=None):
     """A kidnap run's entry; control: (found, wrong) of the run without a kidnap, from the same scan."""
     return {"k": k, "offset_s": 10.0 * k, "cut_seen": True, "found": found, "wrong": wrong,
@@ -460,7 +483,8 @@ def test_kidnap_figures_of_a_log_and_mode():
 def kidnap_part(per_log, runs=3):
     """A made-up kidnapping part: per log, (frozen runs, updates runs)."""
     kd = {"runs": runs, "length_s": km.KIDNAP_S, "tail_s": km.KIDNAP_TAIL_S, "modes": ["frozen", "updates"],
-          "within": km.WITHIN_SCANS, "note": km.KIDNAP_NOTE, "seconds": 4.2, "logs": {}}
+          "within": km.WITHIN_SCANS, "note": km.KIDNAP_NOTE, "control_note": km.KIDNAP_CONTROL_NOTE, "seconds": 4.2,
+          "logs": {}}
     for label, (frozen, updates) in per_log.items():
         r = {"frozen": frozen, "updates": updates}
         kd["logs"][label] = {"span_s": 500.0, "offsets": [10.0 * k for k in range(runs)], "runs": r,
@@ -485,9 +509,10 @@ def test_kidnap_floors_and_report():
     assert (fl[2]["value"], fl[2]["limit"], fl[3]["value"], fl[3]["limit"]) == (1, 3, 1, 0)
     text = "\n".join(km.report_knownmap(s))
     assert "<!-- table: knownmap kidnap -->" in text
-    assert "| a | frozen | 3 | 3 | 3 | 5 / 20 | 0 | 0 | 3 | 6 / 3 | 2 / 1 |" in text
-    assert "| a | with updates | 3 | 1 | 2 | 21 / never | 1 (1 234 scans) | 0 | 3 | 6 / 3 | n/a |" in text
+    assert "| a | frozen | 3 | 3 | 3 | 5 / 20 | 0 | 0 / 0 | 0 | 3 | 6 / 3 | 2 / 1 |" in text
+    assert "| a | with updates | 3 | 1 | 2 | 21 / never | 1 (1 234 scans) | 0 / 0 | 0 | 3 | 6 / 3 | n/a |" in text
     assert "a run is judged from the first scan after the cut" in text and "global_when_lost=1" in text
+    assert "the run of the same mode on the log without a kidnap, which tracked there" in text
     assert "- a, with updates: never found again in runs 2; found again later (scan) in runs 1 (21); wrong trusted " \
            "scans (from scan) in runs 2 (1 234 from scan 8)." in text
     assert "- a, frozen" not in text

@@ -119,6 +119,13 @@ KIDNAP_NOTE = (f"a run is judged from the first scan after the cut (scan 1) to i
                f"scan log says `tracking`; the run is found again at its first trusted scan within {RIGHT_M:g} m and "
                f"{RIGHT_DEG:g} deg of the mapping run's pose; a trusted scan more than {WRONG_M:g} m or "
                f"{WRONG_DEG:g} deg off is wrong, wherever it comes")
+# Where the mapping run is no reference (on ACES its pose early in the log is
+# about a metre off the map it ended with), the same run on the log without
+# the kidnap says where localization on that map puts the robot.
+KIDNAP_CONTROL_NOTE = (f"a trusted scan off the mapping run's pose but within {RIGHT_M:g} m and {RIGHT_DEG:g} deg of "
+                       "the run of the same mode on the log without a kidnap, which tracked there and had not been "
+                       "lost before, is where localization on that map puts the robot: it counts as found again, "
+                       "and apart from the wrong ones (the mapping run's pose is off there)")
 
 
 # ---------------------------------------------------------------------------
@@ -272,7 +279,8 @@ def read_scan_log(path: Path) -> List[Tuple[float, str, str]]:
 
 
 def judge_kidnap(rows: Sequence[Tuple[float, str, str]], traj: ev.Trajectory, ref: ev.Trajectory,
-                 cut_stamp: float) -> dict:
+                 cut_stamp: float,
+                 control: Optional[Tuple[Sequence[Tuple[float, str, str]], ev.Trajectory]] = None) -> dict:
     """One kidnap run (KIDNAP_NOTE): ``rows`` its scan log, ``traj`` its
     trajectory, ``ref`` the mapping run's, ``cut_stamp`` the stamp of the
     first scan after the cut. Scans are counted from that scan, which is 1.
@@ -280,10 +288,25 @@ def judge_kidnap(rows: Sequence[Tuple[float, str, str]], traj: ev.Trajectory, re
     wrong scans after the cut, first_wrong the first of them; first_trusted,
     first_lost: the first scan trusted, reported lost; before: the last
     judged scan before the cut (tracking state and verdict), whether the run
-    was right when the robot was carried off."""
+    was right when the robot was carried off. With ``control`` (the scan
+    log and trajectory of the same run on the log without a kidnap), a
+    trusted scan that is wrong against the mapping run but right against
+    the control there, which tracked and had never been lost till then, is
+    the reference's, not the run's (KIDNAP_CONTROL_NOTE): counted in
+    as_control, not in wrong; such a scan also finds the run again."""
     out = {"cut_seen": False, "after": 0, "judged": 0, "found": None, "first_trusted": None, "first_lost": None,
            "wrong": 0, "first_wrong": None, "first_wrong_error": None, "wrong_before_found": 0,
-           "no_reference": 0, "before": None}
+           "no_reference": 0, "before": None, "as_control": 0, "found_as_control": False}
+    c_rows = {ev.time_key(r[0]): r[2] for r in control[0]} if control is not None else {}
+    c_lost = min((r[0] for r in control[0] if r[2] == "lost"), default=math.inf) if control is not None else None
+
+    def as_control(stamp: float, est) -> bool:
+        """The run is where the unkidnapped run, tracking all along, was."""
+        if control is None or c_rows.get(ev.time_key(stamp)) != "tracking" or not stamp < c_lost:
+            return False
+        c = control[1].lookup(stamp, 0.0)
+        return c is not None and verdict(est, c) == "right"
+
     key = ev.time_key(cut_stamp)
     i0 = next((i for i, r in enumerate(rows) if ev.time_key(r[0]) == key), None)
     if i0 is None:
@@ -312,6 +335,13 @@ def judge_kidnap(rows: Sequence[Tuple[float, str, str]], traj: ev.Trajectory, re
         if not trusted:
             continue
         v = verdict(est, r)
+        if v != "right" and as_control(stamp, est):
+            if v == "wrong":
+                out["as_control"] += 1
+            if out["found"] is None:
+                out["found"] = j
+                out["found_as_control"] = True
+            continue
         if v == "right" and out["found"] is None:
             out["found"] = j
         elif v == "wrong":
@@ -345,6 +375,9 @@ def aggregate_kidnaps(runs: Sequence[dict], within: int = WITHIN_SCANS) -> dict:
             "found": sum(1 for v in found if v is not None), "never": sum(1 for v in found if v is None),
             "scans_to_found": _stat_never(found),
             "wrong_runs": sum(1 for r in runs if r["wrong"]), "wrong_scans": sum(r["wrong"] for r in runs),
+            "as_control_runs": sum(1 for r in runs if r.get("as_control")),
+            "as_control_scans": sum(r.get("as_control") or 0 for r in runs),
+            "found_as_control": sum(1 for r in runs if r.get("found_as_control")),
             "first_wrong": _stat([r["first_wrong"] for r in runs]),
             "earliest_wrong": min((r["first_wrong"] for r in runs if r["first_wrong"] is not None), default=None),
             "lost_runs": sum(1 for r in runs if r["first_lost"] is not None),
@@ -538,7 +571,7 @@ def run_kidnaps(nav: Path, logs: Sequence[Tuple[str, Path, Path]], d: Path, jobs
     t0 = time.monotonic()
     loaded = {label: flt.load_log(log) for label, log, _ in logs}
     out = {"runs": runs, "length_s": KIDNAP_S, "tail_s": KIDNAP_TAIL_S, "modes": [m for m, _ in KIDNAP_MODES],
-           "within": WITHIN_SCANS, "note": KIDNAP_NOTE, "logs": {}}
+           "within": WITHIN_SCANS, "note": KIDNAP_NOTE, "control_note": KIDNAP_CONTROL_NOTE, "logs": {}}
     tasks = []
     for label, _, _ in logs:
         lg = loaded[label]
@@ -599,6 +632,11 @@ def run_kidnaps(nav: Path, logs: Sequence[Tuple[str, Path, Path]], d: Path, jobs
             for r in entry["runs"][mode]:
                 c = judge_kidnap(*control[mode], refs[label], r["cut_stamp"])
                 r["control"] = {key: c[key] for key in ("found", "wrong", "first_wrong", "first_lost")}
+                # judged again beside the control (KIDNAP_CONTROL_NOTE)
+                name = d / label / "kidnap" / f"{mode}-{r['k']}"
+                r.update(judge_kidnap(read_scan_log(name.with_suffix(".scans")),
+                                      ev.load_trajectory(name.with_suffix(".txt")), refs[label], r["cut_stamp"],
+                                      control[mode]))
         entry["summary"] = {mode: aggregate_kidnaps(entry["runs"][mode]) for mode, _ in KIDNAP_MODES}
     out["seconds"] = time.monotonic() - t0
     return out
@@ -719,14 +757,19 @@ def kidnap_floors(kd: Optional[dict], label: str) -> List[dict]:
                          f"within {RIGHT_M:g} m and {RIGHT_DEG:g} deg of the mapping run's) within {s['within']} "
                          f"scans of the cut {'==' if ok else '<'} {n}; scans to it median "
                          f"{_scans_text(sp['median'], s['never'])}, worst {_scans_text(sp['max'], s['never'])}"
-                         + (f" ({s['never']} never)" if s["never"] else "")))
+                         + (f" ({s['never']} never)" if s["never"] else "")
+                         + (f"; {s['found_as_control']} of them found where the run without a kidnap was"
+                            if s.get("found_as_control") else "")))
         ok = s["wrong_runs"] == 0
         out.append(floor("PASS" if ok else "MISS", "knownmap-kidnap-wrong", label, s["wrong_runs"], 0,
                          f"{what}: {s['wrong_runs']} gave a trusted pose more than {WRONG_M:g} m or "
                          f"{WRONG_DEG:g} deg off after the cut "
                          + (f"({_n(s['wrong_scans'])} such scans in all, the earliest at scan "
                             f"{_n(s['earliest_wrong'])} after the cut) " if s["wrong_runs"] else "")
-                         + f"{'==' if ok else '>'} 0"))
+                         + f"{'==' if ok else '>'} 0"
+                         + (f" ({_n(s['as_control_scans'])} more such scans in {s['as_control_runs']} runs where the "
+                            "run without a kidnap was: the mapping run's pose is off there)"
+                            if s.get("as_control_runs") else "")))
     return out
 
 
@@ -744,7 +787,8 @@ def report_kidnap(kd: Optional[dict]) -> List[str]:
          "odometry made to report no motion across the cut, as a robot carried elsewhere) at S = (k + 0.5)/"
          f"{n} of the span that leaves room for the cut and {kd['tail_s']:g} s of log after it; each run the whole "
          "copy on the saved map from the log's first pose, `--load-map MAP --set global_when_lost=1`, frozen "
-         f"(`--freeze-map`) and with updates. Judged: {kd['note']}. Lost: the first scan reported lost after the "
+         f"(`--freeze-map`) and with updates. Judged: {kd['note']}; {kd.get('control_note', 'n/a')}. Lost: the "
+         "first scan reported lost after the "
          "cut; right before: the run was right at the last scan before the cut; global searches: rsm-nav's count "
          "over the whole runs, before the cut too, and those that proved a pose. Without a kidnap (not a floor): "
          "one run of the log itself per mode, with the same options, judged the same way from each run's first "
@@ -759,12 +803,15 @@ def report_kidnap(kd: Optional[dict]) -> List[str]:
             rows.append([label, MODE_WHAT.get(mode, mode), str(s["runs"]), str(s["found_within"]), str(s["found"]),
                          f"{_scans_text(sp['median'], s['never'])} / {_scans_text(sp['max'], s['never'])}",
                          f"{s['wrong_runs']}" + (f" ({_n(s['wrong_scans'])} scans)" if s["wrong_scans"] else ""),
+                         f"{s.get('found_as_control', 0)} / {s.get('as_control_runs', 0)}"
+                         + (f" ({_n(s['as_control_scans'])} scans)" if s.get("as_control_scans") else ""),
                          f"{s['lost_runs']}" + (f" (median scan {_n(fl['median'])})" if fl["n"] else ""),
                          str(s["right_before"]), f"{s['searches']} / {s['searches_found']}",
                          (f"{s['control_found_within']} / {s['control_wrong_runs']}" if s.get("control_runs")
                           else "n/a")])
     L += md_table(["log", "mode", "runs", f"found again within {kd['within']} scans", "found again",
                    "scans to found again, median / worst", "runs with a wrong trusted pose",
+                   "found again / runs off the mapping run, where the run without a kidnap was",
                    "runs reported lost (first lost scan)", "right before the cut", "global searches / proven",
                    f"without a kidnap: right within {kd['within']} scans / runs with a wrong trusted pose"],
                   rows, "knownmap kidnap")
