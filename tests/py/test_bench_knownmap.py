@@ -433,10 +433,9 @@ def test_a_kidnap_run_is_judged_from_the_first_scan_after_the_cut():
 
 def test_a_kidnap_run_where_the_run_without_it_was_is_not_wrong():
     """Scans 1-3 after the cut are 2 m off the mapping run; the run without
-    a kidnap was there too at scans 1-2 (tracking, never lost before) but
-    not at 3: 1-2 count apart and find the run again at 1, 3 stays wrong.
-    A control that was lost before, or is not tracking there, excuses
-    nothing."""
+    a kidnap was there too at scans 1-2 (tracking) but not at 3: 1-2 count
+    apart and find the run again at 1, 3 stays wrong. Lost before, the
+    control still counts; not tracking at a scan, not there."""
     rows, traj, ref = kidnap_inputs()
     c_rows = [(float(t), "accepted", "tracking") for t in range(1, 31)]
     c_traj = ev.Trajectory([(float(t), t + (2.0 if t in (11, 12) else 0.0), 0.0, 0.0) for t in range(1, 31)])
@@ -445,7 +444,8 @@ def test_a_kidnap_run_where_the_run_without_it_was_is_not_wrong():
     assert e["found"] == 1 and e["found_as_control"]
     assert e["wrong_before_found"] == 0
     lost_before = [(t, o, "lost" if t == 5.0 else s) for t, o, s in c_rows]
-    e = km.judge_kidnap(rows, traj, ref, 11.0, (lost_before, c_traj))
+    assert km.judge_kidnap(rows, traj, ref, 11.0, (lost_before, c_traj))["as_control"] == 2
+    e = km.judge_kidnap(rows, traj, ref, 11.0, ([(t, o, "lost") for t, o, _ in c_rows], c_traj))
     assert (e["as_control"], e["wrong"], e["found"], e["found_as_control"]) == (0, 4, 7, False)
     uncertain = [(t, o, "uncertain" if t == 11.0 else s) for t, o, s in c_rows]
     e = km.judge_kidnap(rows, traj, ref, 11.0, (uncertain, c_traj))

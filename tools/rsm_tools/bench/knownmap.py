@@ -123,9 +123,9 @@ KIDNAP_NOTE = (f"a run is judged from the first scan after the cut (scan 1) to i
 # about a metre off the map it ended with), the same run on the log without
 # the kidnap says where localization on that map puts the robot.
 KIDNAP_CONTROL_NOTE = (f"a trusted scan off the mapping run's pose but within {RIGHT_M:g} m and {RIGHT_DEG:g} deg of "
-                       "the run of the same mode on the log without a kidnap, which tracked there and had not been "
-                       "lost before, is where localization on that map puts the robot: it counts as found again, "
-                       "and apart from the wrong ones (the mapping run's pose is off there)")
+                       "the run of the same mode on the log without a kidnap, which tracked there too, is where "
+                       "localization on that map puts the robot, kidnap or not: it counts as found again, and apart "
+                       "from the wrong ones (the mapping run's pose is off there)")
 
 
 # ---------------------------------------------------------------------------
@@ -291,18 +291,20 @@ def judge_kidnap(rows: Sequence[Tuple[float, str, str]], traj: ev.Trajectory, re
     was right when the robot was carried off. With ``control`` (the scan
     log and trajectory of the same run on the log without a kidnap), a
     trusted scan that is wrong against the mapping run but right against
-    the control there, which tracked and had never been lost till then, is
-    the reference's, not the run's (KIDNAP_CONTROL_NOTE): counted in
-    as_control, not in wrong; such a scan also finds the run again."""
+    the control there is the reference's, not the run's
+    (KIDNAP_CONTROL_NOTE): counted in
+    as_control, not in wrong; such a scan also finds the run again. The
+    control must track at that scan (it may have been lost before: two
+    runs that agree there, one carried off and one not, agree on where
+    localization on that map puts the robot)."""
     out = {"cut_seen": False, "after": 0, "judged": 0, "found": None, "first_trusted": None, "first_lost": None,
            "wrong": 0, "first_wrong": None, "first_wrong_error": None, "wrong_before_found": 0,
            "no_reference": 0, "before": None, "as_control": 0, "found_as_control": False}
     c_rows = {ev.time_key(r[0]): r[2] for r in control[0]} if control is not None else {}
-    c_lost = min((r[0] for r in control[0] if r[2] == "lost"), default=math.inf) if control is not None else None
 
     def as_control(stamp: float, est) -> bool:
-        """The run is where the unkidnapped run, tracking all along, was."""
-        if control is None or c_rows.get(ev.time_key(stamp)) != "tracking" or not stamp < c_lost:
+        """The run is where the unkidnapped run, tracking there, was."""
+        if control is None or c_rows.get(ev.time_key(stamp)) != "tracking":
             return False
         c = control[1].lookup(stamp, 0.0)
         return c is not None and verdict(est, c) == "right"
