@@ -123,17 +123,20 @@ uint32_t rsm_tilestore_rom_index_log2(uint32_t tiles);
  * every word is programmed at most once); 0 on success. */
 typedef int (*rsm_tilestore_program_fn)(void *ctx, uint32_t at, uint32_t value);
 
-/* Builds the index of the map's bytes (len of them) into an erased region
+/* Builds the index of the map that begins the len bytes at `map` (its
+ * saved bytes, or a larger flash region that starts with them: the map's
+ * length is in its header) into an erased region
  * of 2^index_log2 words that `index` reads (memory-mapped) and `program`
  * writes. RSM_OK; RSM_ERR_INVAL for NULL pointers or an index smaller than
  * rsm_tilestore_rom_index_log2 asks; RSM_ERR_FORMAT for bytes that are no
- * map (magic, length), or a place held twice; RSM_ERR_IO when program
+ * map (magic, or a length past len), or a place held twice; RSM_ERR_IO when program
  * failed, or the region was not erased. The map's CRC is the load's to
  * check. */
 int rsm_tilestore_rom_build_index(const uint8_t *map, uint32_t len, const uint32_t *index, uint32_t index_log2,
                                   rsm_tilestore_program_fn program, void *ctx);
 
-/* Sets m up over a map's bytes, its index (built as above) and out
+/* Sets m up over a map's bytes (as above: len at least its length), its
+ * index (built as above) and out
  * ((tiles + 7) / 8 bytes of RAM), holding nothing until a load puts the
  * tiles the pool cannot hold, and *store to its callbacks. RSM_OK;
  * RSM_ERR_INVAL for NULL pointers, an index too small or out too short;

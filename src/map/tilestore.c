@@ -178,8 +178,9 @@ static void rom_tile(const uint8_t *map, uint32_t k, rsm_tile_t *t)
     rsm_mapfile_decode_tile(t, map + RSM_MAPFILE_HEADER_BYTES + (size_t)k * RSM_MAPFILE_TILE_BYTES);
 }
 
-/* The saved map's tile count, if its bytes are a map's (magic, header
- * size, length); else 0xFFFFFFFF. */
+/* The tile count of the map that begins the len bytes (magic, header
+ * size; its length, from the header's tile count, within len: the bytes
+ * may be a larger flash region); else 0xFFFFFFFF. */
 static uint32_t rom_tiles(const uint8_t *map, uint32_t len)
 {
     uint32_t tiles;
@@ -188,8 +189,7 @@ static uint32_t rom_tiles(const uint8_t *map, uint32_t len)
         return 0xFFFFFFFFu;
     }
     tiles = rsm_get_u32le(map + 24);
-    if (tiles > (len - RSM_MAPFILE_HEADER_BYTES - 4u) / RSM_MAPFILE_TILE_BYTES ||
-        RSM_MAPFILE_HEADER_BYTES + tiles * RSM_MAPFILE_TILE_BYTES + 4u != len) {
+    if (tiles > (len - RSM_MAPFILE_HEADER_BYTES - 4u) / RSM_MAPFILE_TILE_BYTES) {
         return 0xFFFFFFFFu;
     }
     return tiles;

@@ -584,6 +584,11 @@ static void test_rom_store_should_serve_a_saved_map_from_flash(void)
                           rsm_tilestore_rom_build_index(saved, saved_len, flash_index, ilog, program_word, NULL));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_tilestore_rom_init(&rom, saved, saved_len, flash_index, ilog, out_bits,
                                                                 (info.tiles + 7u) / 8u - 1u, &rs));
+    /* A region longer than the map (flash pages) is taken as the map. */
+    TEST_ASSERT_TRUE(saved_len + RSM_MAPFILE_TILE_BYTES <= sizeof saved);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tilestore_rom_init(&rom, saved, saved_len + RSM_MAPFILE_TILE_BYTES, flash_index,
+                                                         ilog, out_bits, (uint32_t)sizeof out_bits, &rs));
+    TEST_ASSERT_EQUAL_UINT32(info.tiles, rom.tiles);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tilestore_rom_init(&rom, saved, saved_len, flash_index, ilog, out_bits,
                                                          (uint32_t)sizeof out_bits, &rs));
     TEST_ASSERT_EQUAL_UINT32(0u, rs.count(rs.ctx));

@@ -120,26 +120,15 @@ static int program_word(void *ctx, uint32_t at, uint32_t value)
     return rsm_mapflash_write(ctx, RSM_MAPFLASH_INDEX_AT + 4u * at, b, sizeof b);
 }
 
-/* The saved map's length, from its header's tile count (docs/mapfile.md:
- * offset 24, little-endian); 0 when the region holds no map that fits. */
-static uint32_t saved_bytes(const rsm_mapflash_region_t *flash)
-{
-    const uint8_t *h = flash->bytes;
-    const uint32_t tiles = (uint32_t)h[24] | ((uint32_t)h[25] << 8) | ((uint32_t)h[26] << 16) | ((uint32_t)h[27] << 24);
-    if (tiles > RSM_MAPFLASH_MAX_TILES) {
-        return 0u;
-    }
-    return RSM_MAPFILE_HEADER_BYTES + tiles * RSM_MAPFILE_TILE_BYTES + 4u;
-}
-
 /* The flash store over the region's map and index, given to m->loc: what
  * the pool cannot hold stays in flash. Not a map (the first boot): no
  * store, and the load that follows refuses the region. */
 static void attach_flash_store(rsm_mapflash_t *m, rsm_mapflash_region_t *flash)
 {
-    const uint32_t len = saved_bytes(flash);
-    if (len > 0u &&
-        rsm_tilestore_rom_init(&m->rom, flash->bytes, len, (const uint32_t *)(const void *)(flash->bytes + RSM_MAPFLASH_INDEX_AT),
+    /* The map's room before the index: the store reads the map's length
+     * from its header. */
+    if (rsm_tilestore_rom_init(&m->rom, flash->bytes, RSM_MAPFLASH_INDEX_AT,
+                               (const uint32_t *)(const void *)(flash->bytes + RSM_MAPFLASH_INDEX_AT),
                                RSM_MAPFLASH_INDEX_LOG2, m->rom_out, (uint32_t)sizeof m->rom_out, &m->store) == RSM_OK) {
         (void)rsm_localizer_set_store(&m->loc, &m->store);
     }
@@ -154,6 +143,61 @@ static void put_store(const rsm_replay_io_t *io, const rsm_mapflash_t *m)
     put_field(io, "taken", c->fetched);
     put_field(io, "lost", c->unstored);
     rsm_replay_put_str(io, "\n");
+}
+
+/* Mapping: what the pool lets go is kept in RAM meanwhile. */
+static int store_for_mapping(rsm_mapflash_t *m)
+{
+    int rc = rsm_tilestore_mem_init(&m->mem, m->mem_tiles, RSM_MAPFLASH_STORE_TILES, m->mem_index,
+                                    RSM_MAPFLASH_INDEX_LOG2, &m->store);
+    return rc == RSM_OK ? rsm_localizer_set_store(&m->loc, &m->store) : rc;
+}
+
+/* The bytes a save erases first: the map's room and the index's words. */
+static uint32_t erase_bytes(const rsm_mapflash_t *m)
+{
+    (void)m;
+    return RSM_MAPFLASH_REGION;
+}
+
+/* After the save: the index of the map's tiles, programmed after it. */
+static int index_the_map(const rsm_mapflash_t *m, rsm_mapflash_region_t *flash)
+{
+    return rsm_tilestore_rom_build_index(flash->bytes, m->info.bytes,
+                                         (const uint32_t *)(const void *)(flash->bytes + RSM_MAPFLASH_INDEX_AT),
+                                         RSM_MAPFLASH_INDEX_LOG2, program_word, flash);
+}
+#else
+/* The pool holds the whole map: no store, no index, no T line. */
+static void attach_flash_store(rsm_mapflash_t *m, rsm_mapflash_region_t *flash)
+{
+    (void)m;
+    (void)flash;
+}
+
+static void put_store(const rsm_replay_io_t *io, const rsm_mapflash_t *m)
+{
+    (void)io;
+    (void)m;
+}
+
+static int store_for_mapping(rsm_mapflash_t *m)
+{
+    (void)m;
+    return RSM_OK;
+}
+
+/* Only what the map needs, as a flash driver would. */
+static uint32_t erase_bytes(const rsm_mapflash_t *m)
+{
+    return rsm_localizer_map_bytes(&m->loc);
+}
+
+static int index_the_map(const rsm_mapflash_t *m, rsm_mapflash_region_t *flash)
+{
+    (void)m;
+    (void)flash;
+    return RSM_OK;
 }
 #endif
 
@@ -209,26 +253,12 @@ static void run_steps(rsm_mapflash_t *m, const rsm_replay_io_t *io, uint32_t fir
 /* No valid map: map the first scans, save, and ask for the reboot. */
 static rsm_mapflash_result_t map_and_save(rsm_mapflash_t *m, rsm_mapflash_region_t *flash, const rsm_replay_io_t *io)
 {
-    int rc;
-#if RSM_MAPFLASH_STORE
-    /* What the pool lets go is kept in RAM meanwhile. */
-    rc = rsm_tilestore_mem_init(&m->mem, m->mem_tiles, RSM_MAPFLASH_STORE_TILES, m->mem_index,
-                                RSM_MAPFLASH_INDEX_LOG2, &m->store);
-    if (rc == RSM_OK) {
-        rc = rsm_localizer_set_store(&m->loc, &m->store);
-    }
+    int rc = store_for_mapping(m);
     if (rc != RSM_OK) {
         return fail(io, "store", rc);
     }
-#endif
     run_steps(m, io, 0u, RSM_MAPFLASH_MAP_SCANS);
-    /* Erase only what the map needs, as a flash driver would (and the
-     * index's words after it). */
-#if RSM_MAPFLASH_STORE
-    rc = rsm_mapflash_erase(flash, RSM_MAPFLASH_REGION);
-#else
-    rc = rsm_mapflash_erase(flash, rsm_localizer_map_bytes(&m->loc));
-#endif
+    rc = rsm_mapflash_erase(flash, erase_bytes(m));
     if (rc != RSM_OK) {
         return fail(io, "erase", rc);
     }
@@ -237,15 +267,11 @@ static rsm_mapflash_result_t map_and_save(rsm_mapflash_t *m, rsm_mapflash_region
         return fail(io, "save", rc);
     }
     put_info(io, "S saved", &m->info);
-#if RSM_MAPFLASH_STORE
-    rc = rsm_tilestore_rom_build_index(flash->bytes, m->info.bytes,
-                                       (const uint32_t *)(const void *)(flash->bytes + RSM_MAPFLASH_INDEX_AT),
-                                       RSM_MAPFLASH_INDEX_LOG2, program_word, flash);
+    rc = index_the_map(m, flash);
     if (rc != RSM_OK) {
         return fail(io, "index", rc);
     }
     put_store(io, m);
-#endif
     rsm_replay_put_str(io, RSM_MAPFLASH_NAME ": saved, resetting\n");
     return RSM_MAPFLASH_RESET;
 }
@@ -276,9 +302,7 @@ static rsm_mapflash_result_t global_search(rsm_mapflash_t *m, rsm_mapflash_regio
     if (rc != RSM_OK) {
         return fail(io, "init", rc);
     }
-#if RSM_MAPFLASH_STORE
     attach_flash_store(m, flash);
-#endif
     rc = rsm_localizer_load_map(&m->loc, rsm_mapflash_read, flash, &m->info);
     if (rc != RSM_OK) {
         return fail(io, "load_map", rc);
@@ -359,9 +383,7 @@ static rsm_mapflash_result_t localize(rsm_mapflash_t *m, rsm_mapflash_region_t *
     rsm_replay_put_str(io, " map_bytes ");
     rsm_replay_put_dec(io, rsm_localizer_map_bytes(&m->loc));
     rsm_replay_put_str(io, "\n");
-#if RSM_MAPFLASH_STORE
     put_store(io, m);
-#endif
     if (global_search(m, flash, io) != RSM_MAPFLASH_DONE) {
         return RSM_MAPFLASH_FAILED;
     }
@@ -390,9 +412,7 @@ rsm_mapflash_result_t rsm_mapflash_boot(rsm_mapflash_t *m, rsm_mapflash_region_t
     if (rc != RSM_OK) {
         return fail(io, "init", rc);
     }
-#if RSM_MAPFLASH_STORE
     attach_flash_store(m, flash);
-#endif
     rc = rsm_localizer_load_map(&m->loc, rsm_mapflash_read, flash, &m->info);
     if (rc != RSM_OK) {
         rsm_replay_put_str(io, "L refused ");

@@ -608,16 +608,15 @@ def run_kidnaps(nav: Path, logs: Sequence[Tuple[str, Path, Path]], d: Path, jobs
         got = {}
         try:
             for mode, flags in KIDNAP_MODES:
-                summ, rows, traj = nav_kidnap(label, path, mode, flags, f"{mode}-{k}")
-                e = judge_kidnap(rows, traj, refs[label], cut.stamp)
+                # judged below, beside the control's run (KIDNAP_CONTROL_NOTE)
+                summ = nav_kidnap(label, path, mode, flags, f"{mode}-{k}")[0]
                 g, rec = summ.get("global") or {}, summ.get("recovery") or {}
-                e.update({"k": k, "offset_s": s, "cut_stamp": cut.stamp, "removed": cut.removed,
-                          "hidden_m": cut.hidden[0], "hidden_deg": math.degrees(cut.hidden[1]),
-                          "scans": summ.get("scans"), "searches": g.get("searches"),
-                          "searches_found": g.get("found"), "not_proven": g.get("not_proven"),
-                          "work": g.get("work"), "max_work_per_scan": g.get("max_work_per_scan"),
-                          "recoveries": rec.get("taken"), "seconds": summ["seconds"]})
-                got[mode] = e
+                got[mode] = {"k": k, "offset_s": s, "cut_stamp": cut.stamp, "removed": cut.removed,
+                             "hidden_m": cut.hidden[0], "hidden_deg": math.degrees(cut.hidden[1]),
+                             "scans": summ.get("scans"), "searches": g.get("searches"),
+                             "searches_found": g.get("found"), "not_proven": g.get("not_proven"),
+                             "work": g.get("work"), "max_work_per_scan": g.get("max_work_per_scan"),
+                             "recoveries": rec.get("taken"), "seconds": summ["seconds"]}
         finally:
             path.unlink()
         return task, got
@@ -634,7 +633,6 @@ def run_kidnaps(nav: Path, logs: Sequence[Tuple[str, Path, Path]], d: Path, jobs
             for r in entry["runs"][mode]:
                 c = judge_kidnap(*control[mode], refs[label], r["cut_stamp"])
                 r["control"] = {key: c[key] for key in ("found", "wrong", "first_wrong", "first_lost")}
-                # judged again beside the control (KIDNAP_CONTROL_NOTE)
                 name = d / label / "kidnap" / f"{mode}-{r['k']}"
                 r.update(judge_kidnap(read_scan_log(name.with_suffix(".scans")),
                                       ev.load_trajectory(name.with_suffix(".txt")), refs[label], r["cut_stamp"],
