@@ -121,6 +121,16 @@
 #define RSM_GLOBAL_CANDIDATES 8
 #endif
 
+/* Memory the tools and example images lend the global search's grids
+ * (rsm_localizer_set_search_memory), outside the localizer's state: rsm-nav,
+ * the Python module, the map-in-flash images, and the firmware in CCM on the
+ * STM32F407. About 0.6 times the reads of the 2 888 shared bytes on the
+ * Intel log (docs/globalsearch.md). The library uses what it is lent, or
+ * the shared bytes without. */
+#ifndef RSM_GLOBAL_LEND_BYTES
+#define RSM_GLOBAL_LEND_BYTES 24576
+#endif
+
 /* ---- key points and matches ------------------------------------------- */
 
 /* Harris key points kept per image (strongest first). 8 bytes each. */

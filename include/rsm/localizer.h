@@ -384,6 +384,8 @@ typedef struct rsm_localizer {
             float wall_s;                         /* summed (cosines, sines) */
             uint32_t wall_scans;                  /* scans summed so far */
             rsm_global_t global;                  /* the global search, when one runs */
+            uint8_t *search_mem;                  /* memory lent to the search's grids ... */
+            uint32_t search_bytes;                /* ... and its size (rsm_localizer_set_search_memory) */
         } persistent;                             /* RSM_METHOD_MAP */
     } state;
     rsm_point_t pts[RSM_MAX_BEAMS];      /* usable readings, robot frame */
@@ -514,6 +516,20 @@ int rsm_localizer_global_near(rsm_localizer_t *loc, float radius_m);
 /* 1 while a global search is under way (begun or to begin at the next
  * scan), else 0 (also for loc NULL). */
 int rsm_localizer_searching(const rsm_localizer_t *loc);
+
+/* Lends the global search `bytes` of memory at mem for its bound grids,
+ * from now on; mem NULL with bytes 0: none, the grids share the memory of
+ * the scan a map write reads (RSM_GLOBAL_GRID_BYTES), as without a call.
+ * More memory lays the grids' blocks closer: tighter bounds, fewer reads
+ * to the same pose (RSM_GLOBAL_LEND_BYTES, 24 KiB: about 0.6 times the
+ * reads on the Intel log; docs/globalsearch.md); beyond what a map needs
+ * for blocks a quarter of each box apart it is not used. The memory must
+ * outlive its use, untouched by anything else; rsm_localizer_init forgets
+ * it. The grids are built into it at once (as a map load does), and a
+ * search under way begins again. Returns RSM_OK; RSM_ERR_INVAL for loc
+ * never initialised, mem NULL with bytes not 0 or the other way, or fewer
+ * bytes than RSM_GLOBAL_GRID_BYTES; RSM_ERR_NOSYS for another method. */
+int rsm_localizer_set_search_memory(rsm_localizer_t *loc, void *mem, size_t bytes);
 
 /* Sets the odometry geometry and noise at run time, e.g. from the robot's
  * own calibration once its driver has read it (rsm_p3dx_odometry_config).

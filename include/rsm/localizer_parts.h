@@ -263,6 +263,9 @@ typedef struct rsm_tmap {
 #define RSM_GLOBAL_GRID_BYTES_SIDE ((RSM_GLOBAL_SIDE * RSM_GLOBAL_SIDE * 4) / 3 + 4 * RSM_GLOBAL_SIDE + 32)
 #define RSM_GLOBAL_GRID_BYTES                                                                                      \
     (RSM_GLOBAL_GRID_BYTES_SIDE > RSM_MAX_BEAMS * 8 ? RSM_GLOBAL_GRID_BYTES_SIDE : RSM_MAX_BEAMS * 8)
+/* Memory lent to the search (rsm_localizer_set_search_memory) beyond this
+ * is not used: the grids' bit indices stay 32-bit. */
+#define RSM_GLOBAL_MAX_GRID_BYTES (1ul << 24)
 /* Boxes of at most 2^RSM_GLOBAL_MAX_H positions a side (13 km with 0.2 m
  * cells): one bound grid per box size up to it. */
 #define RSM_GLOBAL_MAX_H 16
@@ -310,7 +313,8 @@ typedef struct rsm_global {
     uint32_t npts;
     uint32_t nseen;
     rsm_pose_t seen_at;            /* the estimate at the scan of pts[0 .. nseen) */
-    /* The bound grids (the caller's memory, RSM_GLOBAL_GRID_BYTES), one
+    uint32_t grid_bytes;           /* the grid memory the layout below was made for */
+    /* The bound grids (the caller's memory, grid_bytes of it), one
      * bit a block: grid h (boxes of 2^h positions a side, h >= 1) has
      * grid_nx[h] x grid_ny[h] blocks from bit grid_at[h]; block (a, b)
      * says whether any cell of the search level is nonzero in the

@@ -270,6 +270,19 @@ static int global_running(const rsm_localizer_t *loc)
     return loc->cfg->method == RSM_METHOD_MAP && loc->state.persistent.global.phase != RSM_GLOBAL_IDLE;
 }
 
+/* The global search's grid memory: the caller's (rsm_localizer_set_search_memory),
+ * else that of the scan a map write reads, idle during a search. */
+static uint8_t *search_grid(rsm_localizer_t *loc)
+{
+    return loc->state.persistent.search_mem != NULL ? loc->state.persistent.search_mem : loc->frame.global_grid;
+}
+
+static size_t search_bytes(const rsm_localizer_t *loc)
+{
+    return loc->state.persistent.search_mem != NULL ? (size_t)loc->state.persistent.search_bytes
+                                                    : sizeof loc->frame.global_grid;
+}
+
 void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
 {
     loc->have_scan = 1u;
@@ -288,7 +301,7 @@ void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
      * map the search cannot take (RSM_ERR_NOMEM) is kept: tracking needs
      * none. */
     if (loc->cfg->method == RSM_METHOD_MAP) {
-        (void)rsm_global_prepare(&loc->state.persistent.global, loc->frame.global_grid,
+        (void)rsm_global_prepare(&loc->state.persistent.global, search_grid(loc), search_bytes(loc),
                                  &loc->state.persistent.map, NULL);
     }
     if (global_running(loc)) {
@@ -1322,7 +1335,8 @@ static int write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, 
         return 1;
     }
     (void)rsm_tmap_write_run(map, loc->frame.world, 0u);
-    /* The scan takes the memory of the global search's grids. */
+    /* The scan takes the memory of the global search's grids (unless the
+     * caller lent the search its own); the map changes anyway. */
     loc->state.persistent.global.cached = 0u;
     to_world(loc, est, npts);
     origin.x = cfg->laser_mount.x;
@@ -1404,7 +1418,7 @@ int rsm_localizer_global_near(rsm_localizer_t *loc, float radius_m)
         return RSM_ERR_NOSYS;
     }
     map = &loc->state.persistent.map;
-    if ((rc = rsm_global_check(map)) != RSM_OK) {
+    if ((rc = rsm_global_check(map, search_bytes(loc))) != RSM_OK) {
         return rc;
     }
     begin_global(loc, radius_m);
@@ -1416,6 +1430,33 @@ int rsm_localizer_global_near(rsm_localizer_t *loc, float radius_m)
 int rsm_localizer_searching(const rsm_localizer_t *loc)
 {
     return ready(loc) && global_running(loc);
+}
+
+int rsm_localizer_set_search_memory(rsm_localizer_t *loc, void *mem, size_t bytes)
+{
+    rsm_global_t *g;
+    if (!ready(loc) || (mem == NULL) != (bytes == 0u) || (mem != NULL && bytes < (size_t)RSM_GLOBAL_GRID_BYTES)) {
+        return RSM_ERR_INVAL;
+    }
+    if (loc->cfg->method != RSM_METHOD_MAP) {
+        return RSM_ERR_NOSYS;
+    }
+    g = &loc->state.persistent.global;
+    if (mem == NULL) {
+        /* Back to the shared memory: the write in progress, if any, ends
+         * before the grids take it. */
+        (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world, 0u);
+    }
+    loc->state.persistent.search_mem = (uint8_t *)mem;
+    loc->state.persistent.search_bytes =
+        bytes < (size_t)RSM_GLOBAL_MAX_GRID_BYTES ? (uint32_t)bytes : (uint32_t)RSM_GLOBAL_MAX_GRID_BYTES;
+    g->cached = 0u;
+    if (global_running(loc)) {
+        g->phase = RSM_GLOBAL_PENDING;
+    }
+    /* Built now, as a map load does (an empty map has none to build). */
+    (void)rsm_global_prepare(g, search_grid(loc), search_bytes(loc), &loc->state.persistent.map, NULL);
+    return RSM_OK;
 }
 
 /* The fit a proven place must reach a share of: the map's own (saved with
@@ -1730,7 +1771,8 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         /* The grids take the memory of the scan a map write reads: the
          * write in progress, if any, ends first. */
         (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world, 0u);
-        if (rsm_global_begin(g, loc->frame.global_grid, map, loc->pts, npts, &loc->ekf.x, share) != RSM_OK) {
+        if (rsm_global_begin(g, search_grid(loc), search_bytes(loc), map, loc->pts, npts, &loc->ekf.x, share) !=
+            RSM_OK) {
             /* The map no longer fits the search (written since it was
              * asked for): the search is given up, counted as unproven. */
             loc->counters.global_ambiguous++;
@@ -1740,7 +1782,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         if (g->radius_m > 0.0f) {
             /* Near the estimate, in a window that doubles with every
              * second search that proved nothing, to the whole map. */
-            rsm_global_window(g, loc->frame.global_grid, map, loc->ekf.x.x, loc->ekf.x.y,
+            rsm_global_window(g, search_grid(loc), map, loc->ekf.x.x, loc->ekf.x.y,
                               rsm_global_radius(g->radius_m, g->unproven));
         }
         loc->counters.global_searches++;
@@ -1750,7 +1792,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
             return searching(loc, rep, used);
         }
     }
-    if (rsm_global_run(g, loc->frame.global_grid, map, budget > 0u ? budget - used : 0u, &used) == 0) {
+    if (rsm_global_run(g, search_grid(loc), map, budget > 0u ? budget - used : 0u, &used) == 0) {
         g->phase = RSM_GLOBAL_PROVING;
         g->proved = 0;
         g->rounds = 0;
@@ -1965,7 +2007,7 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
         /* Searching, the estimate is unknown whatever the scans did. */
         rep->track = RSM_TRACK_LOST;
     } else if (rep->track == RSM_TRACK_LOST && loc->cfg->method == RSM_METHOD_MAP && loc->cfg->global_when_lost &&
-               rsm_global_check(&loc->state.persistent.map) == RSM_OK) {
+               rsm_global_check(&loc->state.persistent.map, search_bytes(loc)) == RSM_OK) {
         /* Near where it was lost first (the recovery's reach), the window
          * doubling with each search that proves nothing. */
         begin_global(loc, loc->cfg->recover_m > 0.0f && !carried ? loc->cfg->recover_m : 0.0f);

@@ -40,6 +40,12 @@ static uint32_t direction_level(uint32_t level)
     return level > 0u ? level - 1u : 0u;
 }
 
+/* The grid memory used of grid_bytes: what a bit index holds. */
+static uint32_t grid_cap(size_t grid_bytes)
+{
+    return grid_bytes < (size_t)RSM_GLOBAL_MAX_GRID_BYTES ? (uint32_t)grid_bytes : (uint32_t)RSM_GLOBAL_MAX_GRID_BYTES;
+}
+
 /* Blocks a side of grid h over w cells, its blocks 2^e cells apart: the
  * windows [u, u + 2^h] that touch the map start at u = -2^h .. w - 1. */
 static uint32_t grid_blocks(uint32_t w, uint32_t h, uint32_t e)
@@ -73,11 +79,11 @@ static uint32_t grid_bits(uint32_t w, uint32_t hgt, uint32_t top, const uint8_t 
  * that fits (blocks 2^(h + 1 + r) apart) is made finer a box size at a
  * time, the smallest boxes first: they are the most numerous (measured on
  * the Intel log, exact windows at 0.4 and 0.8 m read 2.5 times fewer
- * blocks than windows twice as wide). RSM_ERR_NOMEM when even the coarsest
- * does not fit. */
-static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t *top, uint8_t *e)
+ * blocks than windows twice as wide), in grid_bytes. RSM_ERR_NOMEM when
+ * even the coarsest does not fit. */
+static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t grid_bytes, uint32_t *top, uint8_t *e)
 {
-    const uint32_t cap = (uint32_t)RSM_GLOBAL_GRID_BYTES * 8u;
+    const uint32_t cap = grid_bytes * 8u;
     const uint32_t side = w > hgt ? w : hgt;
     uint32_t r;
     uint32_t h;
@@ -161,7 +167,7 @@ float rsm_global_fit_share(const rsm_global_t *g, float min_fit, float crowded_f
     return g->unkept > 0u && crowded_fit > min_fit ? crowded_fit : min_fit;
 }
 
-int rsm_global_check(const rsm_tmap_t *map)
+int rsm_global_check(const rsm_tmap_t *map, size_t grid_bytes)
 {
     int32_t b[4];
     uint8_t e[RSM_GLOBAL_MAX_H + 1];
@@ -169,7 +175,7 @@ int rsm_global_check(const rsm_tmap_t *map)
     if (!rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3])) {
         return RSM_ERR_DEGENERATE;
     }
-    return layout((uint32_t)(b[2] - b[0] + 1), (uint32_t)(b[3] - b[1] + 1), 0u, &top, e);
+    return layout((uint32_t)(b[2] - b[0] + 1), (uint32_t)(b[3] - b[1] + 1), 0u, grid_cap(grid_bytes), &top, e);
 }
 
 /* One bit of a grid (rsm_bit_get's, unsigned for the counts below). */
@@ -299,7 +305,7 @@ static int begin_grids(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0,
     uint32_t at = 0;
     uint32_t h;
     int rc;
-    if ((rc = layout(w, hgt, fixed, &g->top_h, e)) != RSM_OK) {
+    if ((rc = layout(w, hgt, fixed, g->grid_bytes, &g->top_h, e)) != RSM_OK) {
         return rc;
     }
     memset(g->grid_at, 0, sizeof g->grid_at);
@@ -376,8 +382,8 @@ static int begin_build(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0,
     return RSM_OK;
 }
 
-int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
-                     const rsm_pose_t *at, float min_share)
+int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rsm_tmap_t *map,
+                     const rsm_point_t *pts, size_t n, const rsm_pose_t *at, float min_share)
 {
     const uint32_t level = search_level(map);
     const float cell = rsm_tmap_cell(map, level);
@@ -393,8 +399,13 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
     if (n < 8u) {
         return RSM_ERR_DEGENERATE;
     }
-    if ((rc = rsm_global_check(map)) != RSM_OK) {
+    if ((rc = rsm_global_check(map, grid_bytes)) != RSM_OK) {
         return rc;
+    }
+    if (grid_cap(grid_bytes) != g->grid_bytes) {
+        /* Other memory: grids laid out for it. */
+        g->cached = 0u;
+        g->grid_bytes = grid_cap(grid_bytes);
     }
     (void)rsm_tmap_bounds(map, level, &gx0, &gy0, &gx1, &gy1);
     g->level = level;
@@ -1061,14 +1072,15 @@ static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t
     return 0;
 }
 
-int rsm_global_prepare(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t *used)
+int rsm_global_prepare(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rsm_tmap_t *map, uint32_t *used)
 {
     int32_t b[4];
     uint32_t work = 0;
     int rc;
-    if ((rc = rsm_global_check(map)) != RSM_OK) {
+    if ((rc = rsm_global_check(map, grid_bytes)) != RSM_OK) {
         return rc;
     }
+    g->grid_bytes = grid_cap(grid_bytes);
     (void)rsm_tmap_bounds(map, search_level(map), &b[0], &b[1], &b[2], &b[3]);
     g->level = search_level(map);
     if ((rc = begin_build(g, grid, b[0], b[1], b[2], b[3])) != RSM_OK) {

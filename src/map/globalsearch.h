@@ -52,19 +52,19 @@ extern "C" {
 /* Whether map can be searched: RSM_OK; RSM_ERR_DEGENERATE when the level
  * the search scores on holds nothing; RSM_ERR_NOMEM when it is too wide for
  * the bound grids (more than 2^RSM_GLOBAL_MAX_H cells of that level a side,
- * 13 km with the defaults, or more than RSM_GLOBAL_GRID_BYTES hold with
- * blocks 2^RSM_GLOBAL_MAX_BASE_H cells apart). */
-int rsm_global_check(const rsm_tmap_t *map);
+ * 13 km with the defaults, or more than grid_bytes of grid memory hold
+ * with blocks 2^RSM_GLOBAL_MAX_BASE_H cells apart). */
+int rsm_global_check(const rsm_tmap_t *map, size_t grid_bytes);
 
 /* Builds the bound grids and the map's wall directions over the whole of
- * map into g and grid (RSM_GLOBAL_GRID_BYTES), at once, and marks them
+ * map into g and grid (grid_bytes of it), at once, and marks them
  * cached: the next rsm_global_begin on the same g and grid, with the map
  * unchanged, reads none of it (a map load does this: nothing else runs
  * then, while a search pays for the build out of its scans' budget). The
  * reads it took (as rsm_global_run counts them) are added to *used (may
  * be NULL). Returns as rsm_global_check, with g and grid untouched on an
  * error. */
-int rsm_global_prepare(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t *used);
+int rsm_global_prepare(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rsm_tmap_t *map, uint32_t *used);
 
 /* The share of kept points a search in map asks for (rsm_global_begin's
  * min_share) after `unproven` searches in a row that proved nothing: 0.97
@@ -90,8 +90,10 @@ float rsm_global_radius(float radius_m, uint32_t unproven);
 /* Starts a search for the readings pts (robot frame, in beam order; up to
  * RSM_GLOBAL_POINTS of them, taken evenly, are kept, and all give the
  * scan's wall directions) over map, whose estimate from odometry at this
- * scan is *at. grid (RSM_GLOBAL_GRID_BYTES) holds the bound grids until
- * the search ends: the caller's, untouched by anything else meanwhile.
+ * scan is *at. grid (grid_bytes of it, at least RSM_GLOBAL_GRID_BYTES;
+ * more lays the grids' blocks closer, for tighter bounds) holds the bound
+ * grids until the search ends: the caller's, untouched by anything else
+ * meanwhile.
  * The grids and the map's wall directions a search built on g are kept for
  * the next search on g while g->cached is set and the map's write counter,
  * tiles and box are as they were: the caller passes the same grid, and
@@ -102,8 +104,8 @@ float rsm_global_radius(float radius_m, uint32_t unproven);
  * go to g->pts[0 .. g->nseen), *at to g->seen_at. Returns RSM_OK, or
  * RSM_ERR_DEGENERATE when the map's coarsest level is empty or fewer than
  * 8 readings are given, or RSM_ERR_NOMEM as rsm_global_check says. */
-int rsm_global_begin(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n,
-                     const rsm_pose_t *at, float min_share);
+int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rsm_tmap_t *map,
+                     const rsm_point_t *pts, size_t n, const rsm_pose_t *at, float min_share);
 
 /* Narrows a search begun (rsm_global_begin, before any rsm_global_run) to
  * the positions within radius_m of (x, y), in a square of a power of two

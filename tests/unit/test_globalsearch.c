@@ -143,10 +143,10 @@ static void test_spread_search_finds_the_same(void)
     make_path();
     map_path(&world, path_len - 80u);
     map = &loc.state.persistent.map;
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, grid1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, grid1, sizeof grid1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
     TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g1, grid1, map, 0u, NULL));
     TEST_ASSERT_TRUE(g1.found >= 1u);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, sizeof grid2, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
     do {
         const uint32_t prev = used;
         more = rsm_global_run(&g2, grid2, map, 300u, &used);
@@ -186,7 +186,7 @@ static void test_a_crowded_search_asks_a_closer_fit(void)
     /* The room: every pose that passes is kept. */
     make_path();
     map_path(&world, path_len - 80u);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, grid1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.97f));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, grid1, sizeof grid1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.97f));
     TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g1, grid1, map, 0u, NULL));
     TEST_ASSERT_TRUE(g1.found >= 1u);
     TEST_ASSERT_EQUAL_UINT32(0u, g1.unkept);
@@ -258,16 +258,16 @@ static void test_prepared_grids_are_the_ones_a_search_builds(void)
     /* Nothing kept from the tests before. */
     memset(&g1, 0, sizeof g1);
     memset(&g2, 0, sizeof g2);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, grid1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, grid1, sizeof grid1, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
     TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g1, grid1, map, 0u, NULL));
     memset(grid2, 0xA5, sizeof grid2);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g2, grid2, map, &prepared));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g2, grid2, sizeof grid2, map, &prepared));
     TEST_ASSERT_EQUAL_UINT32(1u, g2.cached);
     TEST_ASSERT_TRUE(prepared > 0u);
     TEST_ASSERT_EQUAL_UINT32(g1.build_end, g2.build_end);
     TEST_ASSERT_EQUAL_MEMORY(grid1, grid2, (g1.build_end + 7u) / 8u);
     TEST_ASSERT_EQUAL_MEMORY(g1.dir_map, g2.dir_map, sizeof g1.dir_map);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, sizeof grid2, map, loc.pts, loc.last.points, &loc.ekf.x, 0.8f));
     TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g2, grid2, map, 0u, &used));
     TEST_ASSERT_EQUAL_UINT32(g1.work, used + prepared);
     TEST_ASSERT_EQUAL_UINT32(g1.found, g2.found);
@@ -278,7 +278,7 @@ static void test_prepared_grids_are_the_ones_a_search_builds(void)
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&empty, &cfg.tmap));
         g1 = g2;
         prepared = 7u;
-        TEST_ASSERT_EQUAL_INT(RSM_ERR_DEGENERATE, rsm_global_prepare(&g2, grid2, &empty, &prepared));
+        TEST_ASSERT_EQUAL_INT(RSM_ERR_DEGENERATE, rsm_global_prepare(&g2, grid2, sizeof grid2, &empty, &prepared));
         TEST_ASSERT_EQUAL_UINT32(7u, prepared);
         TEST_ASSERT_EQUAL_MEMORY(&g1, &g2, sizeof g1);
     }
@@ -764,7 +764,75 @@ static void test_too_wide_a_map(void)
     before = loc;
     TEST_ASSERT_EQUAL_INT(RSM_ERR_NOMEM, rsm_localizer_global(&loc));
     TEST_ASSERT_EQUAL_MEMORY(&before, &loc, sizeof loc);
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_NOMEM, rsm_global_check(&loc.state.persistent.map));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_NOMEM, rsm_global_check(&loc.state.persistent.map, RSM_GLOBAL_GRID_BYTES));
+}
+
+/* The search proven with grids in memory the caller lends
+ * (rsm_localizer_set_search_memory): from scan `at` of loc as it is, to
+ * the first scan that is not searching; that scan's pose into *x, the
+ * reads into *work. */
+static size_t found_from(const rsm_synth_world_t *world, size_t at, rsm_pose_t *x, uint32_t *work)
+{
+    rsm_localizer_report_t rep;
+    size_t k;
+    rep.outcome = RSM_SCAN_SEARCHING;
+    for (k = at; k < path_len; ++k) {
+        step(&loc, world, k, &rep);
+        if (rep.outcome != RSM_SCAN_SEARCHING) {
+            break;
+        }
+    }
+    TEST_ASSERT_TRUE_MESSAGE(k < path_len, "no pose proven before the path ended");
+    TEST_ASSERT_EQUAL_UINT8(1u, rep.recovered);
+    *x = rep.pose;
+    *work = loc.counters.global_work;
+    return k;
+}
+
+/* Lent memory lays the grids' blocks closer: the same pose, proven at the
+ * same scan, for fewer reads; lent during a search, it begins again. */
+static void test_lent_memory_reads_fewer(void)
+{
+    static uint8_t lent[RSM_GLOBAL_LEND_BYTES];
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_pose_t shared_x;
+    rsm_pose_t lent_x;
+    uint32_t shared_work;
+    uint32_t lent_work;
+    size_t shared_at;
+    size_t lent_at;
+    rsm_localizer_report_t rep;
+    const size_t at = mapped_then_moved(&world, 3.0f, -1.0f, 3.0f);
+    before = loc;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    shared_at = found_from(&world, at, &shared_x, &shared_work);
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&shared_x, &path[shared_at]) < 0.1f);
+
+    loc = before;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_search_memory(&loc, lent, sizeof lent));
+    TEST_ASSERT_TRUE(loc.state.persistent.global.cached != 0u); /* built at once */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    lent_at = found_from(&world, at, &lent_x, &lent_work);
+    TEST_ASSERT_EQUAL_size_t(shared_at, lent_at);
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&lent_x, &shared_x) < 1e-3f);
+    TEST_ASSERT_TRUE(rsm_synth_angle_error(&lent_x, &shared_x) < 1e-3f);
+    TEST_ASSERT_TRUE_MESSAGE(lent_work < shared_work, "lent memory read no fewer cells");
+
+    /* Lent while a search runs: it begins again, in the lent memory, and
+     * proves the same pose. */
+    loc = before;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    step(&loc, &world, at, &rep);
+    TEST_ASSERT_EQUAL_INT(RSM_SCAN_SEARCHING, rep.outcome);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_search_memory(&loc, lent, sizeof lent));
+    TEST_ASSERT_TRUE(rsm_localizer_searching(&loc));
+    TEST_ASSERT_EQUAL_UINT32(RSM_GLOBAL_PENDING, loc.state.persistent.global.phase);
+    lent_at = found_from(&world, at + 1u, &lent_x, &lent_work);
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&lent_x, &path[lent_at]) < 0.1f);
+
+    /* Given back: the shared memory again. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_search_memory(&loc, NULL, 0u));
+    TEST_ASSERT_NULL(loc.state.persistent.search_mem);
 }
 
 static void test_bad_calls(void)
@@ -793,6 +861,32 @@ static void test_bad_calls(void)
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_init(&loc, &cfg, &zero, NULL));
 }
 
+static void test_bad_lends(void)
+{
+    static uint8_t lent[RSM_GLOBAL_GRID_BYTES];
+    rsm_localizer_config_t odo = rsm_localizer_config_default();
+    const rsm_pose_t zero = {0.0f, 0.0f, 0.0f};
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_search_memory(NULL, lent, sizeof lent));
+    memset(&loc, 0, sizeof loc);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_search_memory(&loc, lent, sizeof lent));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &zero, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_search_memory(&loc, NULL, sizeof lent));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_search_memory(&loc, lent, 0u));
+    /* Less than the memory it shares anyway. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_localizer_set_search_memory(&loc, lent, sizeof lent - 1u));
+    TEST_ASSERT_NULL(loc.state.persistent.search_mem);
+    /* An empty map: lent, nothing to build yet. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_search_memory(&loc, lent, sizeof lent));
+    TEST_ASSERT_EQUAL_PTR(lent, loc.state.persistent.search_mem);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.state.persistent.global.cached);
+    /* rsm_localizer_init forgets it. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &zero, NULL));
+    TEST_ASSERT_NULL(loc.state.persistent.search_mem);
+    odo.method = RSM_METHOD_ODOMETRY;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &odo, &zero, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_NOSYS, rsm_localizer_set_search_memory(&loc, lent, sizeof lent));
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -811,6 +905,8 @@ int main(void)
     RUN_TEST(test_few_points_wait);
     RUN_TEST(test_far_readings);
     RUN_TEST(test_too_wide_a_map);
+    RUN_TEST(test_lent_memory_reads_fewer);
     RUN_TEST(test_bad_calls);
+    RUN_TEST(test_bad_lends);
     return UNITY_END();
 }

@@ -198,6 +198,9 @@ static void usage(FILE *f)
             "                            take them back when the robot returns, so that a building\n"
             "                            larger than the pool is kept whole (saved with --save-map;\n"
             "                            40 bytes a tile; 0: none, the default)\n"
+            "  --search-memory BYTES     memory lent to the global search's grids: with more it\n"
+            "                            reads fewer map cells to the same pose (default %lu;\n"
+            "                            0: none, the %lu bytes it shares with a map write)\n"
             "  --global                  no start pose: search the loaded map for the robot; no\n"
             "                            trajectory line until a pose is proven\n"
             "  --global-near R           the same within R m of the start pose (--initial-pose),\n"
@@ -205,7 +208,8 @@ static void usage(FILE *f)
             "  --skip-seconds S          --carmen: start S seconds into the log, as if the robot\n"
             "                            were switched on there\n"
             "  --scans N                 --carmen: stop after N scans; live: once the laser\n"
-            "                            gave N scans and the robot connected\n");
+            "                            gave N scans and the robot connected\n",
+            (unsigned long)RSM_GLOBAL_LEND_BYTES, (unsigned long)RSM_GLOBAL_GRID_BYTES);
     fprintf(f,
             "  --tum FILE                write the trajectory in TUM format too\n"
             "                            (timestamp x y z qx qy qz qw; what evo reads)\n"
@@ -383,6 +387,9 @@ typedef struct nav {
     uint32_t *store_index;
     rsm_tilestore_mem_t store_mem;
     rsm_tile_store_t store;
+    /* --search-memory: lent to the global search's grids (0: none). */
+    unsigned long search_bytes;
+    uint8_t *search_mem;
 } nav_t;
 
 static void on_fused(void *ctx, const rsm_scan_t *scan, int status, const rsm_localizer_report_t *rep);
@@ -534,6 +541,15 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
                                    &nav->store) != RSM_OK ||
             rsm_localizer_set_store(&nav->loc, &nav->store) != RSM_OK) {
             fprintf(stderr, "rsm-nav: cannot set up a tile store of %u tiles\n", (unsigned)nav->store_tiles);
+            return -1;
+        }
+    }
+    if (nav->cfg.method == RSM_METHOD_MAP && nav->search_bytes > 0u) {
+        /* Lent before a load, whose grids are then built into it. */
+        nav->search_mem = (uint8_t *)calloc(nav->search_bytes, 1u);
+        if (nav->search_mem == NULL ||
+            rsm_localizer_set_search_memory(&nav->loc, nav->search_mem, nav->search_bytes) != RSM_OK) {
+            fprintf(stderr, "rsm-nav: cannot lend the global search %lu bytes\n", nav->search_bytes);
             return -1;
         }
     }
@@ -1304,10 +1320,11 @@ static int write_summary_json(nav_t *nav, const char *path)
                 (unsigned)c->contradicted);
         fprintf(f, ",\n  \"fit\": %.4f", (double)nav->loc.state.persistent.fit);
         fprintf(f, ",\n  \"global\": {\"searches\": %u, \"found\": %u, \"not_proven\": %u, \"work\": %u, "
-                   "\"max_work_per_scan\": %u, \"first_trusted_scan\": %llu, \"first_trusted_stamp\": %.6f}",
+                   "\"max_work_per_scan\": %u, \"first_trusted_scan\": %llu, \"first_trusted_stamp\": %.6f, "
+                   "\"grid_bytes\": %lu}",
                 (unsigned)c->global_searches, (unsigned)c->global_found, (unsigned)c->global_ambiguous,
                 (unsigned)c->global_work, (unsigned)nav->max_search_work, (unsigned long long)nav->first_trusted,
-                nav->first_trusted_s);
+                nav->first_trusted_s, nav->search_mem != NULL ? nav->search_bytes : (unsigned long)RSM_GLOBAL_GRID_BYTES);
         if (nav->load_map != NULL) {
             fprintf(f, ",\n  \"loaded_map\": {\"bytes\": %u, \"tiles\": %u}", (unsigned)nav->loaded.bytes,
                     (unsigned)nav->loaded.tiles);
@@ -1361,9 +1378,10 @@ static void print_summary(nav_t *nav)
         }
         if (c->global_searches > 0u || nav->global) {
             printf("  global search   %u begun, %u proved a pose, %u did not; %u cells read, at most %u"
-                   " in a scan\n",
+                   " in a scan; grids in %lu bytes\n",
                    (unsigned)c->global_searches, (unsigned)c->global_found, (unsigned)c->global_ambiguous,
-                   (unsigned)c->global_work, (unsigned)nav->max_search_work);
+                   (unsigned)c->global_work, (unsigned)nav->max_search_work,
+                   nav->search_mem != NULL ? nav->search_bytes : (unsigned long)RSM_GLOBAL_GRID_BYTES);
             if (nav->first_trusted > 0u) {
                 printf("  first pose      scan %llu (%.3f s)\n", (unsigned long long)nav->first_trusted,
                        nav->first_trusted_s);
@@ -1436,7 +1454,7 @@ enum {
     OPT_ROBOT_BAUD, OPT_LMS_BAUD, OPT_LISTEN, OPT_SECONDS, OPT_IDLE_EXIT, OPT_LOST_EXIT, OPT_TICKS_PER_M, OPT_WHEEL_BASE,
     OPT_INITIAL_POSE, OPT_LASER_POSE, OPT_UPSIDE_DOWN, OPT_TRAJECTORY, OPT_SUMMARY_JSON, OPT_TUM, OPT_SCAN_LOG, OPT_EVENTS,
     OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_QUIET, OPT_SAVE_MAP, OPT_LOAD_MAP, OPT_GLOBAL, OPT_FREEZE_MAP,
-    OPT_SKIP_SECONDS, OPT_SCANS, OPT_GLOBAL_NEAR, OPT_TILE_STORE
+    OPT_SKIP_SECONDS, OPT_SCANS, OPT_GLOBAL_NEAR, OPT_TILE_STORE, OPT_SEARCH_MEMORY
 };
 
 /* --lidar, --initial-pose and --laser-pose take more than one value: the
@@ -1480,6 +1498,7 @@ static const struct option nav_options[] = {
     {"scans", required_argument, NULL, OPT_SCANS},
     {"global-near", required_argument, NULL, OPT_GLOBAL_NEAR},
     {"tile-store", required_argument, NULL, OPT_TILE_STORE},
+    {"search-memory", required_argument, NULL, OPT_SEARCH_MEMORY},
     {"help", no_argument, NULL, 'h'},
     {NULL, 0, NULL, 0}
 };
@@ -1540,6 +1559,7 @@ int main(int argc, char **argv)
     memset(&live, 0, sizeof live);
     live.lidar_keep = 1u;
     nav.cfg = rsm_localizer_config_default();
+    nav.search_bytes = (unsigned long)RSM_GLOBAL_LEND_BYTES;
     opterr = 0; /* this program words its own messages */
     while ((opt = getopt_long(argc, argv, "+:h", nav_options, &li)) != -1) {
         const char *name = opt == '?' || opt == ':' ? argv[optind - 1] : nav_options[li].name;
@@ -1759,6 +1779,18 @@ int main(int argc, char **argv)
                 return 2;
             }
             nav.store_tiles = (uint32_t)v;
+            break;
+        }
+        case OPT_SEARCH_MEMORY: {
+            char *end = NULL;
+            const unsigned long v = strtoul(optarg, &end, 10);
+            if (end == optarg || *end != '\0' || optarg[0] == '-' || (v != 0u && v < (unsigned long)RSM_GLOBAL_GRID_BYTES) ||
+                v > (unsigned long)RSM_GLOBAL_MAX_GRID_BYTES) {
+                fprintf(stderr, "rsm-nav: bad --search-memory '%s' (bytes: 0, or %lu to %lu)\n", optarg,
+                        (unsigned long)RSM_GLOBAL_GRID_BYTES, (unsigned long)RSM_GLOBAL_MAX_GRID_BYTES);
+                return 2;
+            }
+            nav.search_bytes = v;
             break;
         }
         case OPT_GLOBAL_NEAR: {

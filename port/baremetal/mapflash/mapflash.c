@@ -108,6 +108,18 @@ static rsm_mapflash_result_t fail(const rsm_replay_io_t *io, const char *what, i
     return RSM_MAPFLASH_FAILED;
 }
 
+/* m->loc from m->cfg, its global search's grids in memory of their own
+ * (RSM_GLOBAL_LEND_BYTES: fewer reads to a pose than in the memory they
+ * share with a map write). */
+static int start_localizer(rsm_mapflash_t *m, const rsm_pose_t *start)
+{
+    int rc = rsm_localizer_init(&m->loc, &m->cfg, start, NULL);
+    if (rc == RSM_OK && m->cfg.method == RSM_METHOD_MAP) {
+        rc = rsm_localizer_set_search_memory(&m->loc, m->search, sizeof m->search);
+    }
+    return rc;
+}
+
 #if RSM_MAPFLASH_STORE
 typedef char rsm_mapflash_index_fits[((1u << RSM_MAPFLASH_INDEX_LOG2) * 3u >= 4u * RSM_MAPFLASH_MAX_TILES) ? 1 : -1];
 
@@ -298,7 +310,7 @@ static rsm_mapflash_result_t global_search(rsm_mapflash_t *m, rsm_mapflash_regio
     uint32_t i;
     uint32_t scans = 0u;
     int trusted = 0;
-    int rc = rsm_localizer_init(&m->loc, &m->cfg, &start, NULL);
+    int rc = start_localizer(m, &start);
     if (rc != RSM_OK) {
         return fail(io, "init", rc);
     }
@@ -408,7 +420,7 @@ rsm_mapflash_result_t rsm_mapflash_boot(rsm_mapflash_t *m, rsm_mapflash_region_t
      * saturation against it. */
     m->cfg = rsm_localizer_config_default();
     m->cfg.map_frozen = 1u;
-    rc = rsm_localizer_init(&m->loc, &m->cfg, &start, NULL);
+    rc = start_localizer(m, &start);
     if (rc != RSM_OK) {
         return fail(io, "init", rc);
     }
@@ -420,7 +432,7 @@ rsm_mapflash_result_t rsm_mapflash_boot(rsm_mapflash_t *m, rsm_mapflash_region_t
         rsm_replay_put_str(io, "\n");
         /* Refused, loc is as init left it: start over mapping. */
         m->cfg.map_frozen = 0u;
-        rc = rsm_localizer_init(&m->loc, &m->cfg, &start, NULL);
+        rc = start_localizer(m, &start);
         if (rc != RSM_OK) {
             return fail(io, "init", rc);
         }

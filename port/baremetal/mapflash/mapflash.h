@@ -124,6 +124,7 @@ typedef struct rsm_mapflash {
     rsm_scan_t scan;
     rsm_localizer_report_t rep;
     rsm_mapfile_info_t info;
+    uint8_t search[RSM_GLOBAL_LEND_BYTES]; /* the global search's grids */
 #if RSM_MAPFLASH_STORE
     rsm_tile_store_t store;
     rsm_tilestore_mem_t mem; /* mapping */
