@@ -121,12 +121,12 @@
 #define RSM_GLOBAL_CANDIDATES 8
 #endif
 
-/* Memory the tools and example images lend the global search's grids
- * (rsm_localizer_set_search_memory), outside the localizer's state: rsm-nav,
- * the Python module, the map-in-flash images, and the firmware in CCM on the
- * STM32F407. About 0.6 times the reads of the 2 888 shared bytes on the
- * Intel log (docs/globalsearch.md). The library uses what it is lent, or
- * the shared bytes without. */
+/* Memory rsm-nav and the map-in-flash images lend the global search's
+ * grids (rsm_localizer_set_search_memory), outside the localizer's state:
+ * about 0.6 times the reads of the 2 888 shared bytes on the Intel log
+ * (docs/globalsearch.md). The library uses what it is lent, or the shared
+ * bytes without. On an STM32F407 it fits the core-coupled RAM beside the
+ * stack (docs/bringup-stm32f4.md). */
 #ifndef RSM_GLOBAL_LEND_BYTES
 #define RSM_GLOBAL_LEND_BYTES 24576
 #endif
