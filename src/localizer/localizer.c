@@ -1615,9 +1615,11 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts)
     rsm_pose_t near[2];
     rsm_mapmatch_result_t res;
     rsm_mapmatch_result_t r2;
+    rsm_mapmatch_result_t other;
     int n = 0;
     int m;
     int have = 0;
+    int have_other = 0;
     reach_m = reach_m < cfg->recover_m ? reach_m : cfg->recover_m;
     reach_rad = reach_rad < cfg->recover_rad ? reach_rad : cfg->recover_rad;
     reach_m = reach_m > 2.0f * cell ? reach_m : 2.0f * cell;
@@ -1635,11 +1637,27 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts)
         n = 1;
     }
     for (m = 0; m < n; ++m) {
-        if (rsm_mapmatch(map, &cfg->mapmatch, loc->pts, npts, &start, wide, &near[m], NULL, &r2) == RSM_OK &&
-            (!have || r2.hit > res.hit)) {
+        if (rsm_mapmatch(map, &cfg->mapmatch, loc->pts, npts, &start, wide, &near[m], NULL, &r2) != RSM_OK) {
+            continue;
+        }
+        if (!have || r2.hit > res.hit) {
+            other = res;
+            have_other = have;
             res = r2;
             have = 1;
+        } else {
+            other = r2;
+            have_other = 1;
         }
+    }
+    /* Two places within odometry's drift, the better not ahead by
+     * recover_margin: a look-alike along the corridor the robot drove
+     * since the kept scan, which only the kept scan's verdict ruled out
+     * (measured on ACES: an office 0.76 m on fitted 0.8617 against the
+     * true place's 0.8613). In doubt until the robot moves on. */
+    if (have && have_other && beyond_doubt(cfg, &other.pose, &res.pose) &&
+        !(res.hit > other.hit * (1.0f + cfg->recover_margin))) {
+        return 0;
     }
     /* This scan must fit as the verdict asked of the kept one: a winner
      * that only the kept scan's share of readings bore out is no proof
