@@ -521,7 +521,7 @@ int rsm_localizer_searching(const rsm_localizer_t *loc);
  * from now on; mem NULL with bytes 0: none, the grids share the memory of
  * the scan a map write reads (RSM_GLOBAL_GRID_BYTES), as without a call.
  * More memory lays the grids' blocks closer: tighter bounds, fewer reads
- * to the same pose (RSM_GLOBAL_LEND_BYTES, 24 KiB: about 0.6 times the
+ * to the same pose (RSM_GLOBAL_LEND_BYTES: about 0.6 times the
  * reads on the Intel log; docs/globalsearch.md); beyond what a map needs
  * for blocks a quarter of each box apart it is not used. The memory must
  * outlive its use, untouched by anything else; rsm_localizer_init forgets
