@@ -331,12 +331,14 @@ typedef struct rsm_global {
     uint32_t build_end;            /* the grids' bits */
     /* The grids and dir_map, once built, hold for the next search while
      * the map is not written (the localizer clears cached when it writes
-     * the map or the grids' memory, or replaces the map): the map's write
-     * counter, tiles and box on the search level they were built from. */
+     * the map or the grids' memory, or replaces the map): the map's writes
+     * (counters.updates: its stamp ticks with a store's fetches too), the
+     * tiles of the levels read (their count and a signature of their
+     * places) and box on the search level they were built from. */
     uint32_t cached;
     uint32_t cache_stamp;
-    uint32_t cache_used;
-    uint32_t cache_fetched;
+    uint32_t cache_tiles;
+    uint32_t cache_sig;
     int32_t cache_box[4];
     int32_t root_i;                /* the root box: 2^root_h positions a side from here */
     int32_t root_j;

@@ -1789,6 +1789,9 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         /* The grids take the memory of the scan a map write reads: the
          * write in progress, if any, ends first. */
         (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world, 0u);
+        /* The levels it reads whole: what tracking let go into the store
+         * comes back first (a frozen map then keeps its grids). */
+        used += rsm_global_take_back(&loc->state.persistent.map);
         if (rsm_global_begin(g, search_grid(loc), search_bytes(loc), map, loc->pts, npts, &loc->ekf.x, share) !=
             RSM_OK) {
             /* The map no longer fits the search (written since it was

@@ -382,6 +382,46 @@ static int begin_build(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0,
     return RSM_OK;
 }
 
+uint32_t rsm_global_take_back(rsm_tmap_t *map)
+{
+    uint32_t looked = 0;
+    const uint32_t got = rsm_tmap_take_back(map, direction_level(search_level(map)), &looked);
+    return looked + 16u * got;
+}
+
+/* The tiles of the levels a search on `level` reads (it, and the finer
+ * one its directions come from). */
+static uint32_t read_tiles(const rsm_tmap_t *map, uint32_t level)
+{
+    return (uint32_t)map->level_used[level] + (uint32_t)map->level_used[direction_level(level)];
+}
+
+/* Which tiles those are, as a sum over them of a hash of their place:
+ * with the write counter, whether the grids and directions built from
+ * them still stand. A frozen map's tiles come and go with a store
+ * (rsm_tmap_fetch) the same as they were; only when those levels' tiles
+ * are others must the grids be built again (before, any tile taken back
+ * anywhere rebuilt them: a robot lost after tracking on a map with a
+ * store paid the whole build again). */
+static uint32_t read_signature(const rsm_tmap_t *map, uint32_t level)
+{
+    const uint32_t dir = direction_level(level);
+    uint32_t sig = 0;
+    uint32_t k;
+    for (k = 0; k < map->used; ++k) {
+        const rsm_tile_t *t = &map->tile[k];
+        const uint32_t lv = t->stamp >> 30;
+        if (lv == level || lv == dir) {
+            uint32_t h = (((uint32_t)(uint16_t)t->tx << 16) | (uint32_t)(uint16_t)t->ty) * 0x9E3779B1u;
+            h ^= lv * 0x85EBCA77u;
+            h ^= h >> 15;
+            h *= 0x2C1B3C6Du;
+            sig += h ^ (h >> 12);
+        }
+    }
+    return sig;
+}
+
 int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rsm_tmap_t *map,
                      const rsm_point_t *pts, size_t n, const rsm_pose_t *at, float min_share)
 {
@@ -480,8 +520,8 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rs
         g->headings += g->headings & 1u;
     }
     g->step_rad = 2.0f * RSM_PI / (float)g->headings;
-    if (g->cached != 0u && g->cache_stamp == map->stamp && g->cache_used == map->used &&
-        g->cache_fetched == map->counters.fetched && g->cache_box[0] == gx0 &&
+    if (g->cached != 0u && g->cache_stamp == map->counters.updates && g->cache_tiles == read_tiles(map, level) &&
+        g->cache_sig == read_signature(map, level) && g->cache_box[0] == gx0 &&
         g->cache_box[1] == gy0 && g->cache_box[2] == gx1 && g->cache_box[3] == gy1) {
         /* The map as the last search built its grids and directions from:
          * they stand (only the agreement with this scan is new). */
@@ -1064,9 +1104,9 @@ static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t
     }
     if (g->dir_next == map->used && g->build_next == g->build_end) {
         g->cached = 1u;
-        g->cache_stamp = map->stamp;
-        g->cache_used = map->used;
-        g->cache_fetched = map->counters.fetched;
+        g->cache_stamp = map->counters.updates;
+        g->cache_tiles = read_tiles(map, g->level);
+        g->cache_sig = read_signature(map, g->level);
         return 1;
     }
     return 0;

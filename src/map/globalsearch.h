@@ -56,6 +56,13 @@ extern "C" {
  * with blocks 2^RSM_GLOBAL_MAX_BASE_H cells apart). */
 int rsm_global_check(const rsm_tmap_t *map, size_t grid_bytes);
 
+/* Takes back from map's store (rsm/tilestore.h) the tiles of the levels a
+ * search reads, the level it scores on and the one finer that gives the
+ * map's directions (rsm_tmap_take_back): tracking in a map larger than the
+ * pool lets some of them go, and a search does not fetch. Returns the reads
+ * it counts: a tile looked at in the store, 16 a tile taken back. */
+uint32_t rsm_global_take_back(rsm_tmap_t *map);
+
 /* Builds the bound grids and the map's wall directions over the whole of
  * map into g and grid (grid_bytes of it), at once, and marks them
  * cached: the next rsm_global_begin on the same g and grid, with the map

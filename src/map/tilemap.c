@@ -1042,6 +1042,40 @@ static int fetch_tile(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty, i
     return 1;
 }
 
+uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t *looked)
+{
+    uint32_t got = 0;
+    uint32_t i = 0;
+    int ticked = 0;
+    if (map->store == NULL) {
+        return 0u;
+    }
+    /* A take changes which tile index i holds (and a tile let go to make
+     * room joins the store): i moves on only past a tile left there. Each
+     * tile taken back is the newest, so none is let go again, and the
+     * walk ends. */
+    while (i < map->store->count(map->store->ctx)) {
+        rsm_tile_t t;
+        int f = 0;
+        if (map->store->at(map->store->ctx, i, &t) != RSM_OK) {
+            break;
+        }
+        ++*looked;
+        if (tile_level(&t) >= level_min && tile_level(&t) < (uint32_t)map->cfg.levels) {
+            f = fetch_tile(map, tile_level(&t), t.tx, t.ty, &ticked);
+            if (f < 0) {
+                break; /* every slot holds a tile taken back now */
+            }
+        }
+        if (f == 0) {
+            ++i;
+        } else {
+            ++got;
+        }
+    }
+    return got;
+}
+
 /* Cells beyond the margin that a read may touch: its bilinear neighbour,
  * and one more for a match that moves by a cell on the coarsest level. */
 #define FETCH_READ_CELLS 2

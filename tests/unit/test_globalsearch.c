@@ -9,6 +9,7 @@
 
 #include "core/fmath.h"
 #include "map/globalsearch.h"
+#include "map/tmap_read.h"
 #include "rsm/config.h"
 #include "rsm/localizer.h"
 #include "rsm/status.h"
@@ -282,6 +283,56 @@ static void test_prepared_grids_are_the_ones_a_search_builds(void)
         TEST_ASSERT_EQUAL_UINT32(7u, prepared);
         TEST_ASSERT_EQUAL_MEMORY(&g1, &g2, sizeof g1);
     }
+}
+
+/* Grids built for a map stand while the tiles of the levels a search
+ * reads are the same: a finest-level tile coming or going (a store
+ * giving one back while a frozen map is tracked in) leaves them; a tile of
+ * the level searched, or a write, does not. */
+static void test_grids_stand_while_the_levels_read_do(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_tmap_t *map;
+    rsm_tile_t t;
+    uint32_t used = 0;
+    make_path();
+    map_path(&world, 5u); /* a map the pool holds with room to spare */
+    map = &loc.state.persistent.map;
+    memset(&g2, 0, sizeof g2);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g2, grid2, sizeof grid2, map, NULL));
+    /* A tile of a level no search reads (the finest with four levels, the
+     * coarsest with three), beside the map: the grids stand. */
+    {
+        const uint32_t searched = (uint32_t)map->cfg.levels - 2u;
+        const uint32_t other = map->cfg.levels >= 4u ? 0u : (uint32_t)map->cfg.levels - 1u;
+        memset(&t, 0, sizeof t);
+        t.tx = (int16_t)((other < searched ? g2.ox * (1 << (searched - other)) : g2.ox / (1 << (other - searched))) >>
+                         RSM_TMAP_TILE_LOG2);
+        t.ty = (int16_t)((other < searched ? g2.oy * (1 << (searched - other)) : g2.oy / (1 << (other - searched))) >>
+                         RSM_TMAP_TILE_LOG2);
+        t.stamp = other << 30;
+        while (rsm_tmap_find_slot(map, other, t.tx, t.ty) != RSM_TMAP_NONE) {
+            t.tx--;
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(map, &t));
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, sizeof grid2, map, loc.pts, loc.last.points,
+                                                   &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_UINT32(g2.build_end, g2.build_next);
+    TEST_ASSERT_EQUAL_UINT32(map->used, g2.dir_next);
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g2, grid2, map, 0u, &used));
+    TEST_ASSERT_EQUAL_UINT32(1u, g2.cached);
+    /* A tile of the level searched, inside the map's box: built again. */
+    t.tx = (int16_t)(g2.ox >> RSM_TMAP_TILE_LOG2);
+    t.ty = (int16_t)(g2.oy >> RSM_TMAP_TILE_LOG2);
+    t.stamp = (uint32_t)(map->cfg.levels - 2u) << 30;
+    while (rsm_tmap_find_slot(map, map->cfg.levels - 2u, t.tx, t.ty) != RSM_TMAP_NONE) {
+        t.tx++;
+    }
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(map, &t));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, sizeof grid2, map, loc.pts, loc.last.points,
+                                                   &loc.ekf.x, 0.8f));
+    TEST_ASSERT_TRUE(g2.build_next < g2.build_end || g2.dir_next < map->used);
 }
 
 /* The bar: 0.97 of the kept points first, then 0.95, 0.90, ... down to
@@ -976,6 +1027,7 @@ int main(void)
     RUN_TEST(test_spread_search_finds_the_same);
     RUN_TEST(test_a_crowded_search_asks_a_closer_fit);
     RUN_TEST(test_prepared_grids_are_the_ones_a_search_builds);
+    RUN_TEST(test_grids_stand_while_the_levels_read_do);
     RUN_TEST(test_the_bar_falls_after_searches_of_the_whole_map);
     RUN_TEST(test_search_is_exact);
     RUN_TEST(test_a_symmetric_room_gives_no_pose);

@@ -172,8 +172,14 @@ static void test_round_trip_is_bit_for_bit(void)
     /* The global search's grids are built with the load, for the map as
      * loaded. */
     TEST_ASSERT_EQUAL_UINT32(1u, other.state.persistent.global.cached);
-    TEST_ASSERT_EQUAL_UINT32(map_of(&other)->stamp, other.state.persistent.global.cache_stamp);
-    TEST_ASSERT_EQUAL_UINT32(map_of(&other)->used, other.state.persistent.global.cache_used);
+    TEST_ASSERT_EQUAL_UINT32(map_of(&other)->counters.updates, other.state.persistent.global.cache_stamp);
+    {
+        /* The tiles of the level searched and the one finer. */
+        const rsm_tmap_t *m = map_of(&other);
+        const uint32_t searched = (uint32_t)m->cfg.levels - 2u;
+        TEST_ASSERT_EQUAL_UINT32((uint32_t)m->level_used[searched] + (uint32_t)m->level_used[searched - 1u],
+                                 other.state.persistent.global.cache_tiles);
+    }
     /* Every cell reads the same through the index too. */
     {
         int32_t x0;

@@ -256,6 +256,52 @@ static void test_map_should_keep_what_its_pool_lets_go_in_the_store(void)
     }
 }
 
+/* The coarse levels a search reads come back whole (rsm_tmap_take_back):
+ * into a full pool, each coarse tile the store holds with its cells, the
+ * finest tiles left there, the pool's oldest let go into the store in
+ * their place; a second call finds nothing to take. */
+static void test_map_should_take_back_the_coarse_levels(void)
+{
+    const rsm_tmap_config_t tc = rsm_tmap_config_default();
+    const uint32_t top = (uint32_t)tc.levels - 1u;
+    uint32_t looked = 0;
+    uint32_t before;
+    uint32_t k;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &tc));
+    map.store = &store;
+    for (k = 0; k < 6u; ++k) {
+        rsm_tile_t t = tile_at(1u, (int32_t)k, 40, 0x55);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
+        t = tile_at(top, (int32_t)k, -40, 0x33);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
+        t = tile_at(0u, (int32_t)k, 90, 0x77);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
+    }
+    for (k = 0; k < (uint32_t)RSM_TMAP_TILES; ++k) {
+        raise_newer(&map, cell_x(k), 5, 9u);
+    }
+    TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_TILES, map.used);
+    before = store.count(store.ctx);
+    TEST_ASSERT_EQUAL_UINT32(18u, before);
+    TEST_ASSERT_EQUAL_UINT32(12u, rsm_tmap_take_back(&map, 1u, &looked));
+    TEST_ASSERT_TRUE(looked >= before);
+    for (k = 0; k < 6u; ++k) {
+        TEST_ASSERT_TRUE(rsm_tmap_find_slot(&map, 1u, (int32_t)k, 40) != RSM_TMAP_NONE);
+        TEST_ASSERT_EQUAL_UINT8(5u, rsm_tmap_value(&map, 1u, (int32_t)k * RSM_TMAP_TILE_SIDE, 40 * RSM_TMAP_TILE_SIDE));
+        TEST_ASSERT_TRUE(rsm_tmap_find_slot(&map, top, (int32_t)k, -40) != RSM_TMAP_NONE);
+        TEST_ASSERT_EQUAL_UINT8(3u, rsm_tmap_value(&map, top, (int32_t)k * RSM_TMAP_TILE_SIDE, -40 * RSM_TMAP_TILE_SIDE));
+        TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_NONE, rsm_tmap_find_slot(&map, 0u, (int32_t)k, 90));
+    }
+    /* As many of the pool's oldest went into the store: nothing lost. */
+    TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_TILES, map.used);
+    TEST_ASSERT_EQUAL_UINT32(before, store.count(store.ctx));
+    TEST_ASSERT_EQUAL_UINT32(0u, map.counters.unstored);
+    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_take_back(&map, 1u, &looked));
+    /* No store: nothing to do. */
+    map.store = NULL;
+    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_take_back(&map, 0u, &looked));
+}
+
 /* A return written into a place the store holds starts from the stored
  * tile, not from an empty one. */
 static void test_map_write_should_start_from_the_stored_tile(void)
@@ -655,6 +701,7 @@ int main(void)
     RUN_TEST(test_mem_store_should_match_a_model_through_many_puts_and_takes);
     RUN_TEST(test_map_should_keep_what_its_pool_lets_go_in_the_store);
     RUN_TEST(test_map_write_should_start_from_the_stored_tile);
+    RUN_TEST(test_map_should_take_back_the_coarse_levels);
     RUN_TEST(test_localizer_should_take_the_room_back_from_the_store);
     RUN_TEST(test_saved_map_should_hold_the_pool_and_the_store);
     RUN_TEST(test_damaged_map_with_store_tiles_should_be_refused_whole);
