@@ -386,7 +386,7 @@ uint32_t rsm_global_take_back(rsm_tmap_t *map)
 {
     uint32_t looked = 0;
     const uint32_t got = rsm_tmap_take_back(map, direction_level(search_level(map)), &looked);
-    return looked + 16u * got;
+    return 4u * looked + 16u * got;
 }
 
 /* The tiles of the levels a search on `level` reads (it, and the finer

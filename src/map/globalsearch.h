@@ -60,7 +60,8 @@ int rsm_global_check(const rsm_tmap_t *map, size_t grid_bytes);
  * search reads, the level it scores on and the one finer that gives the
  * map's directions (rsm_tmap_take_back): tracking in a map larger than the
  * pool lets some of them go, and a search does not fetch. Returns the reads
- * it counts: a tile looked at in the store, 16 a tile taken back. */
+ * it counts: 4 a place looked up (a hash probe in the pool and one in the
+ * store), 16 a tile taken back. */
 uint32_t rsm_global_take_back(rsm_tmap_t *map);
 
 /* Builds the bound grids and the map's wall directions over the whole of

@@ -173,6 +173,12 @@ static void find_victims(rsm_tmap_t *map)
         if (age == 0u) {
             continue; /* written by the update in progress */
         }
+        if (map->store != NULL && tile_level(t) + 1u == (uint32_t)map->cfg.levels) {
+            /* With a store the coarsest level stays whole (a 64th of the
+             * finest's tiles with four levels): the levels below come back
+             * under it by place (rsm_tmap_take_back). */
+            continue;
+        }
         scaled = scaled_age(map, t, age);
         if (n == (uint32_t)RSM_TMAP_VICTIMS && !(scaled > best[n - 1u])) {
             continue;
@@ -1045,32 +1051,46 @@ static int fetch_tile(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty, i
 uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t *looked)
 {
     uint32_t got = 0;
-    uint32_t i = 0;
-    int ticked = 0;
-    if (map->store == NULL) {
+    uint32_t level;
+    int ticked;
+    uint32_t k;
+    if (map->store == NULL || map->cfg.levels < 2u) {
         return 0u;
     }
-    /* A take changes which tile index i holds (and a tile let go to make
-     * room joins the store): i moves on only past a tile left there. Each
-     * tile taken back is the newest, so none is let go again, and the
-     * walk ends. */
-    while (i < map->store->count(map->store->ctx)) {
-        rsm_tile_t t;
-        int f = 0;
-        if (map->store->at(map->store->ctx, i, &t) != RSM_OK) {
-            break;
+    /* Those levels' tiles in the pool become the newest, as those taken
+     * back will: the slots the walk takes are the finer levels' (else a
+     * tile already walked past could be let go to make room). */
+    map->stamp = (map->stamp + 1u) & STAMP_MASK;
+    map->victims = 0;
+    ticked = 1;
+    for (k = 0; k < map->used; ++k) {
+        rsm_tile_t *t = &map->tile[k];
+        if (tile_level(t) >= level_min) {
+            t->stamp = (t->stamp & ~STAMP_MASK) | map->stamp;
         }
-        ++*looked;
-        if (tile_level(&t) >= level_min && tile_level(&t) < (uint32_t)map->cfg.levels) {
-            f = fetch_tile(map, tile_level(&t), t.tx, t.ty, &ticked);
-            if (f < 0) {
-                break; /* every slot holds a tile taken back now */
+    }
+    /* Top down, by place, not by the store's list (a store in flash
+     * finds a tile by place at once, but its i-th only by counting): a
+     * tile of level + 1 spans four of level, and a return written at one
+     * level was written at every coarser one, so each tile the store holds
+     * has its parent in the pool once the level above is back. The
+     * coarsest level stays whole: a pool with a store never lets it go. */
+    for (level = (uint32_t)map->cfg.levels - 1u; level-- > level_min;) {
+        for (k = 0; k < map->used; ++k) {
+            const rsm_tile_t *p = &map->tile[k];
+            uint32_t c;
+            if (tile_level(p) != level + 1u) {
+                continue;
             }
-        }
-        if (f == 0) {
-            ++i;
-        } else {
-            ++got;
+            for (c = 0; c < 4u; ++c) {
+                const int f = fetch_tile(map, level, 2 * (int32_t)p->tx + (int32_t)(c & 1u),
+                                         2 * (int32_t)p->ty + (int32_t)(c >> 1), &ticked);
+                ++*looked;
+                if (f < 0) {
+                    return got; /* every slot holds a tile taken back now */
+                }
+                got += f > 0 ? 1u : 0u;
+            }
         }
     }
     return got;

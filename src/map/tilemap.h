@@ -167,12 +167,14 @@ void rsm_tmap_reset(rsm_tmap_t *map);
 uint32_t rsm_tmap_fetch(rsm_tmap_t *map, const rsm_pose_t *pose, const rsm_point_t *pts, size_t n,
                         float margin_m);
 
-/* Takes back from the store every tile of level_min and coarser it holds,
- * as rsm_tmap_fetch takes one (stamped newest, so that none of them goes
- * again to make room for the others), while the pool has slots: a search
- * of the whole map reads those levels everywhere, and tracking may have
- * let some go. Adds the tiles looked at to *looked. Returns the tiles taken
- * back. Cursors on the map may hold a slot it reused: forget them. */
+/* Takes back from the store the tiles of level_min and coarser (but the
+ * coarsest, which a pool with a store never lets go) it holds under a tile
+ * of the level above in the pool, top down, as rsm_tmap_fetch takes one (stamped newest, so that none of them
+ * goes again to make room for the others), while the pool has slots: a
+ * search of the whole map reads those levels everywhere, and tracking may
+ * have let some go. Adds the places looked up to *looked (four a tile of
+ * the levels above). Returns the tiles taken back. Cursors on the map may
+ * hold a slot it reused: forget them. */
 uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t *looked);
 
 /* Raises cell (gx, gy) of the cursor's level to at least v (at most 15),

@@ -257,9 +257,10 @@ static void test_map_should_keep_what_its_pool_lets_go_in_the_store(void)
 }
 
 /* The coarse levels a search reads come back whole (rsm_tmap_take_back):
- * into a full pool, each coarse tile the store holds with its cells, the
- * finest tiles left there, the pool's oldest let go into the store in
- * their place; a second call finds nothing to take. */
+ * into a full pool, the tiles the store holds under a coarsest tile in the
+ * pool, with their cells; a tile of a finer level than asked stays there;
+ * the pool's oldest go into the store in their place; a second call finds
+ * nothing to take. */
 static void test_map_should_take_back_the_coarse_levels(void)
 {
     const rsm_tmap_config_t tc = rsm_tmap_config_default();
@@ -267,36 +268,44 @@ static void test_map_should_take_back_the_coarse_levels(void)
     uint32_t looked = 0;
     uint32_t before;
     uint32_t k;
+    rsm_tile_t t;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &tc));
     map.store = &store;
-    for (k = 0; k < 6u; ++k) {
-        rsm_tile_t t = tile_at(1u, (int32_t)k, 40, 0x55);
-        TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
-        t = tile_at(top, (int32_t)k, -40, 0x33);
-        TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
-        t = tile_at(0u, (int32_t)k, 90, 0x77);
+    /* Two coarsest tiles in the pool; the four under the first, and one
+     * under the second, in the store, with a tile of the finest level. */
+    t = tile_at(top, 3, 5, 0xFF);
+    t.stamp = (top << 30) | (1u << 29); /* saturated: kept like the building's outline */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(&map, &t));
+    t.tx = 4;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(&map, &t));
+    for (k = 0; k < 4u; ++k) {
+        t = tile_at(top - 1u, 6 + (int32_t)(k & 1u), 10 + (int32_t)(k >> 1), 0x55);
         TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
     }
-    for (k = 0; k < (uint32_t)RSM_TMAP_TILES; ++k) {
+    t = tile_at(top - 1u, 9, 11, 0x33);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
+    t = tile_at(0u, 90, 90, 0x77);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
+    for (k = 0; map.used < (uint32_t)RSM_TMAP_TILES; ++k) {
         raise_newer(&map, cell_x(k), 5, 9u);
     }
-    TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_TILES, map.used);
     before = store.count(store.ctx);
-    TEST_ASSERT_EQUAL_UINT32(18u, before);
-    TEST_ASSERT_EQUAL_UINT32(12u, rsm_tmap_take_back(&map, 1u, &looked));
-    TEST_ASSERT_TRUE(looked >= before);
-    for (k = 0; k < 6u; ++k) {
-        TEST_ASSERT_TRUE(rsm_tmap_find_slot(&map, 1u, (int32_t)k, 40) != RSM_TMAP_NONE);
-        TEST_ASSERT_EQUAL_UINT8(5u, rsm_tmap_value(&map, 1u, (int32_t)k * RSM_TMAP_TILE_SIDE, 40 * RSM_TMAP_TILE_SIDE));
-        TEST_ASSERT_TRUE(rsm_tmap_find_slot(&map, top, (int32_t)k, -40) != RSM_TMAP_NONE);
-        TEST_ASSERT_EQUAL_UINT8(3u, rsm_tmap_value(&map, top, (int32_t)k * RSM_TMAP_TILE_SIDE, -40 * RSM_TMAP_TILE_SIDE));
-        TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_NONE, rsm_tmap_find_slot(&map, 0u, (int32_t)k, 90));
+    TEST_ASSERT_EQUAL_UINT32(6u, before);
+    TEST_ASSERT_EQUAL_UINT32(5u, rsm_tmap_take_back(&map, top - 1u, &looked));
+    TEST_ASSERT_EQUAL_UINT32(8u, looked); /* four places under each coarsest tile */
+    for (k = 0; k < 4u; ++k) {
+        const int32_t tx = 6 + (int32_t)(k & 1u);
+        const int32_t ty = 10 + (int32_t)(k >> 1);
+        TEST_ASSERT_TRUE(rsm_tmap_find_slot(&map, top - 1u, tx, ty) != RSM_TMAP_NONE);
+        TEST_ASSERT_EQUAL_UINT8(5u, rsm_tmap_value(&map, top - 1u, tx * RSM_TMAP_TILE_SIDE, ty * RSM_TMAP_TILE_SIDE));
     }
+    TEST_ASSERT_EQUAL_UINT8(3u, rsm_tmap_value(&map, top - 1u, 9 * RSM_TMAP_TILE_SIDE, 11 * RSM_TMAP_TILE_SIDE));
+    TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_NONE, rsm_tmap_find_slot(&map, 0u, 90, 90));
     /* As many of the pool's oldest went into the store: nothing lost. */
     TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_TILES, map.used);
     TEST_ASSERT_EQUAL_UINT32(before, store.count(store.ctx));
     TEST_ASSERT_EQUAL_UINT32(0u, map.counters.unstored);
-    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_take_back(&map, 1u, &looked));
+    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_take_back(&map, top - 1u, &looked));
     /* No store: nothing to do. */
     map.store = NULL;
     TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_take_back(&map, 0u, &looked));
