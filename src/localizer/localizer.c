@@ -1790,8 +1790,16 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
          * write in progress, if any, ends first. */
         (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world, 0u);
         /* The levels it reads whole: what tracking let go into the store
-         * comes back first (a frozen map then keeps its grids). */
-        used += rsm_global_take_back(&loc->state.persistent.map);
+         * comes back first (a frozen map then keeps its grids), within the
+         * scans' budget (on ACES a thousand tiles may come back). */
+        {
+            int more = 0;
+            used += rsm_global_take_back(&loc->state.persistent.map,
+                                         budget > 0u ? (budget > used ? budget - used : 1u) : 0u, &more);
+            if (more) {
+                return searching(loc, rep, used);
+            }
+        }
         if (rsm_global_begin(g, search_grid(loc), search_bytes(loc), map, loc->pts, npts, &loc->ekf.x, share) !=
             RSM_OK) {
             /* The map no longer fits the search (written since it was

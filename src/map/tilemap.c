@@ -1048,7 +1048,7 @@ static int fetch_tile(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty, i
     return 1;
 }
 
-uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t *looked)
+uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t most, uint32_t *looked)
 {
     uint32_t got = 0;
     uint32_t level;
@@ -1069,6 +1069,7 @@ uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t *looke
             t->stamp = (t->stamp & ~STAMP_MASK) | map->stamp;
         }
     }
+    *looked += map->used / 16u;
     /* Top down, by place, not by the store's list (a store in flash
      * finds a tile by place at once, but its i-th only by counting): a
      * tile of level + 1 spans four of level, and a return written at one
@@ -1090,6 +1091,9 @@ uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t *looke
                     return got; /* every slot holds a tile taken back now */
                 }
                 got += f > 0 ? 1u : 0u;
+                if (got >= most) {
+                    return got; /* the rest with the next call */
+                }
             }
         }
     }

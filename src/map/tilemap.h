@@ -172,10 +172,12 @@ uint32_t rsm_tmap_fetch(rsm_tmap_t *map, const rsm_pose_t *pose, const rsm_point
  * of the level above in the pool, top down, as rsm_tmap_fetch takes one (stamped newest, so that none of them
  * goes again to make room for the others), while the pool has slots: a
  * search of the whole map reads those levels everywhere, and tracking may
- * have let some go. Adds the places looked up to *looked (four a tile of
- * the levels above). Returns the tiles taken back. Cursors on the map may
- * hold a slot it reused: forget them. */
-uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t *looked);
+ * have let some go. At most `most` tiles a call: one that took `most` may
+ * leave some for the next. Adds to *looked the places looked up (four a
+ * tile of the levels above) and a sixteenth of the pool's tiles (made the
+ * newest). Returns the tiles taken back. Cursors on the map may hold a
+ * slot it reused: forget them. */
+uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t most, uint32_t *looked);
 
 /* Raises cell (gx, gy) of the cursor's level to at least v (at most 15),
  * taking a tile for it when none is held there (a free slot, else the one
