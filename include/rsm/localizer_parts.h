@@ -360,6 +360,7 @@ typedef struct rsm_global {
      * end with fit hit; then the winner, carried to the scan at hand. */
     uint32_t proved;               /* kept poses descended so far (found + 1: the winner too) */
     uint32_t rounds;               /* proofs of the same kept poses that were left in doubt */
+    uint32_t taken_back;           /* the levels read are back from the store for the next search */
     float hit[RSM_GLOBAL_CANDIDATES];
     rsm_pose_t end[RSM_GLOBAL_CANDIDATES];
     uint32_t work;                 /* cells and blocks read so far */

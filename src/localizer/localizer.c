@@ -1792,11 +1792,19 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         /* The levels it reads whole: what tracking let go into the store
          * comes back first (a frozen map then keeps its grids), within the
          * scans' budget (on ACES a thousand tiles may come back). */
-        {
+        if (loc->state.persistent.map.store != NULL && g->taken_back == 0u) {
             int more = 0;
-            used += rsm_global_take_back(&loc->state.persistent.map,
-                                         budget > 0u ? (budget > used ? budget - used : 1u) : 0u, &more);
+            if (budget > 0u && used > 0u) {
+                /* With a scan of its own: looking the levels' places up
+                 * costs thousands of reads beside the tiles taken. */
+                return searching(loc, rep, used);
+            }
+            used += rsm_global_take_back(&loc->state.persistent.map, budget, &more);
             if (more) {
+                return searching(loc, rep, used);
+            }
+            g->taken_back = 1u;
+            if (budget > 0u && used + BEGIN_WORK >= budget) {
                 return searching(loc, rep, used);
             }
         }
@@ -1816,6 +1824,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         }
         loc->counters.global_searches++;
         g->phase = RSM_GLOBAL_RUNNING;
+        g->taken_back = 0u; /* the next search takes back again */
         used += BEGIN_WORK;
         if (budget > 0u && used >= budget) {
             return searching(loc, rep, used);

@@ -384,8 +384,9 @@ static int begin_build(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0,
 
 uint32_t rsm_global_take_back(rsm_tmap_t *map, uint32_t budget, int *more)
 {
-    /* Tiles taken back at 16 reads each fill at most half the budget. */
-    const uint32_t most = budget == 0u ? UINT32_MAX : (budget / 32u > 0u ? budget / 32u : 1u);
+    /* Tiles taken back at 16 reads each fill at most a quarter of the
+     * budget: the places looked up take about as much on ACES. */
+    const uint32_t most = budget == 0u ? UINT32_MAX : (budget / 64u > 0u ? budget / 64u : 1u);
     uint32_t looked = 0;
     const uint32_t got = rsm_tmap_take_back(map, direction_level(search_level(map)), most, &looked);
     *more = got >= most ? 1 : 0;

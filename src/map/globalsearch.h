@@ -59,8 +59,8 @@ int rsm_global_check(const rsm_tmap_t *map, size_t grid_bytes);
 /* Takes back from map's store (rsm/tilestore.h) the tiles of the levels a
  * search reads, the level it scores on and the one finer that gives the
  * map's directions (rsm_tmap_take_back): tracking in a map larger than the
- * pool lets some of them go, and a search does not fetch. At most half of
- * budget reads' worth of tiles a call (0: all); *more is set when some may
+ * pool lets some of them go, and a search does not fetch. At most a
+ * quarter of budget reads' worth of tiles a call (0: all); *more is set when some may
  * be left for the next. Returns the reads it counts: 4 a place looked up
  * (a hash probe in the pool and one in the store), 16 a tile taken back,
  * and a quarter of the pool's tiles. */
