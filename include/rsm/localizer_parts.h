@@ -336,7 +336,7 @@ typedef struct rsm_global {
      * tiles of the levels read (their count and a signature of their
      * places) and box on the search level they were built from. */
     uint32_t cached;
-    uint32_t cache_stamp;
+    uint32_t cache_writes;
     uint32_t cache_tiles;
     uint32_t cache_sig;
     int32_t cache_box[4];

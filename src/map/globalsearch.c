@@ -524,7 +524,7 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rs
         g->headings += g->headings & 1u;
     }
     g->step_rad = 2.0f * RSM_PI / (float)g->headings;
-    if (g->cached != 0u && g->cache_stamp == map->counters.updates && g->cache_tiles == read_tiles(map, level) &&
+    if (g->cached != 0u && g->cache_writes == map->counters.updates && g->cache_tiles == read_tiles(map, level) &&
         g->cache_sig == read_signature(map, level) && g->cache_box[0] == gx0 &&
         g->cache_box[1] == gy0 && g->cache_box[2] == gx1 && g->cache_box[3] == gy1) {
         /* The map as the last search built its grids and directions from:
@@ -1108,7 +1108,7 @@ static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t
     }
     if (g->dir_next == map->used && g->build_next == g->build_end) {
         g->cached = 1u;
-        g->cache_stamp = map->counters.updates;
+        g->cache_writes = map->counters.updates;
         g->cache_tiles = read_tiles(map, g->level);
         g->cache_sig = read_signature(map, g->level);
         return 1;

@@ -172,7 +172,7 @@ static void test_round_trip_is_bit_for_bit(void)
     /* The global search's grids are built with the load, for the map as
      * loaded. */
     TEST_ASSERT_EQUAL_UINT32(1u, other.state.persistent.global.cached);
-    TEST_ASSERT_EQUAL_UINT32(map_of(&other)->counters.updates, other.state.persistent.global.cache_stamp);
+    TEST_ASSERT_EQUAL_UINT32(map_of(&other)->counters.updates, other.state.persistent.global.cache_writes);
     {
         /* The tiles of the level searched and the one finer. */
         const rsm_tmap_t *m = map_of(&other);
