@@ -239,6 +239,13 @@ typedef struct rsm_tmap {
     uint32_t stamp;                    /* update counter (29 bits used) */
     uint16_t used;                     /* slots in use */
     uint16_t level_used[RSM_TMAP_LEVELS];  /* of those, per level */
+    /* On each level, the tiles writes began (empty, not from the store)
+     * less those that ended (freed, or let go with no store to keep them),
+     * and the same sum of their places mixed (rsm_tmap_place_sig): a
+     * global search's grids kept through writes tell by them the tiles of
+     * those writes from tiles come from elsewhere (globalsearch.c). */
+    uint32_t churn[RSM_TMAP_LEVELS];
+    uint32_t churn_sig[RSM_TMAP_LEVELS];
     uint16_t hash[RSM_TMAP_HASH];      /* slot of a key, linear probing; RSM_TMAP_NONE empty */
     rsm_tile_t tile[RSM_TMAP_TILES];
     uint8_t echo[RSM_TMAP_ECHO_BYTES];  /* hashed wall_level cells of the last write's returns */
@@ -339,6 +346,8 @@ typedef struct rsm_global {
     uint32_t cache_writes;
     uint32_t cache_tiles;
     uint32_t cache_sig;
+    uint32_t cache_churn;          /* the map's churn of the levels read, and its sum, */
+    uint32_t cache_churn_sig;      /* when the grids were built (rsm_global_keep) */
     int32_t cache_box[4];
     int32_t root_i;                /* the root box: 2^root_h positions a side from here */
     int32_t root_j;

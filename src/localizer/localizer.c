@@ -1322,9 +1322,11 @@ static int write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, 
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     rsm_tmap_t *map = &loc->state.persistent.map;
+    rsm_global_t *g = &loc->state.persistent.global;
     const rsm_pose_t d = rsm_pose_between(&loc->state.persistent.written, est);
     uint8_t isolated[(RSM_MAX_BEAMS + 7) / 8];
     rsm_point_t origin;
+    int keep;
     if (!first && sqrtf(d.x * d.x + d.y * d.y) < cfg->map_update_m && fabsf(d.theta) < cfg->map_update_rad) {
         return 0;
     }
@@ -1335,9 +1337,14 @@ static int write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, 
         return 1;
     }
     (void)rsm_tmap_write_run(map, loc->frame.world, 0u);
-    /* The scan takes the memory of the global search's grids (unless the
-     * caller lent the search its own); the map changes anyway. */
-    loc->state.persistent.global.cached = 0u;
+    /* The scan takes the memory of the global search's grids, unless the
+     * caller lent the search its own: then grids that stand are kept
+     * through the write (a search after tracking with updates on need not
+     * build them again). */
+    keep = loc->state.persistent.search_mem != NULL && rsm_global_can_keep(g, map);
+    if (!keep) {
+        g->cached = 0u;
+    }
     to_world(loc, est, npts);
     origin.x = cfg->laser_mount.x;
     origin.y = cfg->laser_mount.y;
@@ -1361,6 +1368,9 @@ static int write_tmap(rsm_localizer_t *loc, const rsm_pose_t *est, size_t npts, 
     }
     if (rsm_tmap_write_begin(map, &origin, loc->frame.world, npts) == RSM_OK) {
         loc->state.persistent.written = *est;
+        if (keep) {
+            rsm_global_keep(g, search_grid(loc), map, loc->frame.world, npts);
+        }
     }
     return 0;
 }

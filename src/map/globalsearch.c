@@ -416,14 +416,99 @@ static uint32_t read_signature(const rsm_tmap_t *map, uint32_t level)
         const rsm_tile_t *t = &map->tile[k];
         const uint32_t lv = t->stamp >> 30;
         if (lv == level || lv == dir) {
-            uint32_t h = (((uint32_t)(uint16_t)t->tx << 16) | (uint32_t)(uint16_t)t->ty) * 0x9E3779B1u;
-            h ^= lv * 0x85EBCA77u;
-            h ^= h >> 15;
-            h *= 0x2C1B3C6Du;
-            sig += h ^ (h >> 12);
+            sig += rsm_tmap_place_sig(lv, t->tx, t->ty);
         }
     }
     return sig;
+}
+
+/* The map's churn (rsm_tmap_t.churn) on the levels read, and its sum. */
+static uint32_t churn_tiles(const rsm_tmap_t *map, uint32_t level)
+{
+    return map->churn[level] + map->churn[direction_level(level)];
+}
+
+static uint32_t churn_signature(const rsm_tmap_t *map, uint32_t level)
+{
+    return map->churn_sig[level] + (level > 0u ? map->churn_sig[direction_level(level)] : 0u);
+}
+
+/* Whether the grids and directions built last stand for map as it is now,
+ * searched on level over the box (gx0, gy0) .. (gx1, gy1): no write since
+ * but those kept (rsm_global_keep), and the tiles of the levels read those
+ * they were built from, with those the kept writes began and less those
+ * that ended (a grid block stays set for a tile gone: a bound only looser). */
+static int stands(const rsm_global_t *g, const rsm_tmap_t *map, uint32_t level, int32_t gx0, int32_t gy0, int32_t gx1,
+                  int32_t gy1)
+{
+    return g->cached != 0u && g->level == level && g->cache_writes == map->counters.updates &&
+           g->cache_box[0] == gx0 && g->cache_box[1] == gy0 && g->cache_box[2] == gx1 && g->cache_box[3] == gy1 &&
+           read_tiles(map, level) == g->cache_tiles + (churn_tiles(map, level) - g->cache_churn) &&
+           read_signature(map, level) == g->cache_sig + (churn_signature(map, level) - g->cache_churn_sig);
+}
+
+int rsm_global_can_keep(const rsm_global_t *g, const rsm_tmap_t *map)
+{
+    return g->cached != 0u && g->level == search_level(map) && g->cache_writes == map->counters.updates;
+}
+
+/* Sets the blocks of every grid whose windows hold a cell of the search
+ * level in [x0, x1] x [y0, y1] (counted from the grids' first cell). */
+static void mark_cells(const rsm_global_t *g, uint8_t *grid, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1)
+{
+    uint32_t h;
+    for (h = 1; h <= g->top_h; ++h) {
+        const uint32_t e = g->grid_e[h];
+        const uint32_t nx = g->grid_nx[h];
+        const uint32_t a1 = ((x1 + (1u << h)) >> e) < nx ? (x1 + (1u << h)) >> e : nx - 1u;
+        const uint32_t b1 = ((y1 + (1u << h)) >> e) < g->grid_ny[h] ? (y1 + (1u << h)) >> e : g->grid_ny[h] - 1u;
+        uint32_t b;
+        for (b = y0 >> e; b <= b1; ++b) {
+            uint32_t a;
+            for (a = x0 >> e; a <= a1; ++a) {
+                rsm_bit_set(grid, g->grid_at[h] + b * nx + a);
+            }
+        }
+    }
+}
+
+void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n)
+{
+    const float inv = 1.0f / rsm_tmap_cell(map, g->level);
+    int32_t last_i = INT32_MIN;
+    int32_t last_j = INT32_MIN;
+    size_t k;
+    for (k = 0; k < n; ++k) {
+        /* The cells a hit may raise: the two either side of the point in
+         * x and in y (a hit's bilinear shares, rsm_bilinear_at), which
+         * hold the one cell it lands in when not shared. */
+        const float u = rsm_floorf(pts[k].x * inv - 0.5f);
+        const float v = rsm_floorf(pts[k].y * inv - 0.5f);
+        int32_t i;
+        int32_t j;
+        if (!(u > (float)g->cache_box[0] - 2.0f && u <= (float)g->cache_box[2] && v > (float)g->cache_box[1] - 2.0f &&
+              v <= (float)g->cache_box[3])) {
+            /* Beyond the grids' box (or NaN): a hit there widens the map's
+             * bounds, and the next search builds the grids again. */
+            continue;
+        }
+        i = (int32_t)u;
+        j = (int32_t)v;
+        if (i == last_i && j == last_j) {
+            continue; /* the scan's next reading, most often in the same cells */
+        }
+        last_i = i;
+        last_j = j;
+        {
+            const int32_t x0 = i > g->cache_box[0] ? i : g->cache_box[0];
+            const int32_t y0 = j > g->cache_box[1] ? j : g->cache_box[1];
+            const int32_t x1 = i + 1 < g->cache_box[2] ? i + 1 : g->cache_box[2];
+            const int32_t y1 = j + 1 < g->cache_box[3] ? j + 1 : g->cache_box[3];
+            mark_cells(g, grid, (uint32_t)(x0 - g->ox), (uint32_t)(y0 - g->oy), (uint32_t)(x1 - g->ox),
+                       (uint32_t)(y1 - g->oy));
+        }
+    }
+    g->cache_writes = map->counters.updates;
 }
 
 int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rsm_tmap_t *map,
@@ -524,9 +609,7 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rs
         g->headings += g->headings & 1u;
     }
     g->step_rad = 2.0f * RSM_PI / (float)g->headings;
-    if (g->cached != 0u && g->cache_writes == map->counters.updates && g->cache_tiles == read_tiles(map, level) &&
-        g->cache_sig == read_signature(map, level) && g->cache_box[0] == gx0 &&
-        g->cache_box[1] == gy0 && g->cache_box[2] == gx1 && g->cache_box[3] == gy1) {
+    if (stands(g, map, level, gx0, gy0, gx1, gy1)) {
         /* The map as the last search built its grids and directions from:
          * they stand (only the agreement with this scan is new). */
         g->dir_next = map->used;
@@ -1111,6 +1194,8 @@ static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t
         g->cache_writes = map->counters.updates;
         g->cache_tiles = read_tiles(map, g->level);
         g->cache_sig = read_signature(map, g->level);
+        g->cache_churn = churn_tiles(map, g->level);
+        g->cache_churn_sig = churn_signature(map, g->level);
         return 1;
     }
     return 0;

@@ -76,6 +76,24 @@ uint32_t rsm_global_take_back(rsm_tmap_t *map, uint32_t budget, int *more);
  * error. */
 int rsm_global_prepare(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rsm_tmap_t *map, uint32_t *used);
 
+/* Whether a write on map may keep the grids and directions in g (and its
+ * grid memory) standing for the next search (rsm_global_keep): they were
+ * built and every write since was kept. */
+int rsm_global_can_keep(const rsm_global_t *g, const rsm_tmap_t *map);
+
+/* Keeps the grids standing through a write of the points pts[0..n) (world
+ * frame) begun on map (rsm_tmap_write_begin) when rsm_global_can_keep said
+ * so before it: sets every block whose windows hold a cell of the search
+ * level a hit may raise, and counts the write as in the grids. A block set
+ * stays set when a write lowers cells (a bound only looser), and the
+ * map's wall directions stay as built (they order the headings searched;
+ * a building's walls keep their directions). The tiles the write begins
+ * or ends are told apart from others (rsm_tmap_t.churn): with a store,
+ * tiles of the levels read come and go while tracking, and the search
+ * takes them back before it begins; a tile from elsewhere, or a hit
+ * beyond the grids' box, still has the next search build them again. */
+void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n);
+
 /* The share of kept points a search in map asks for (rsm_global_begin's
  * min_share) after `unproven` searches in a row that proved nothing: 0.97
  * for the first (a box whose window misses a single point is dropped),

@@ -228,16 +228,25 @@ static uint32_t oldest_slot(rsm_tmap_t *map)
     return RSM_TMAP_NONE; /* every slot was written by this update */
 }
 
+/* A tile that ends (rsm_tmap_t.churn). */
+static void ended(rsm_tmap_t *map, const rsm_tile_t *t)
+{
+    const uint32_t level = tile_level(t);
+    map->churn[level]--;
+    map->churn_sig[level] -= rsm_tmap_place_sig(level, t->tx, t->ty);
+}
+
 /* The tile in slot s is let go: into the store, if there is one. */
 static void let_go(rsm_tmap_t *map, uint32_t s)
 {
-    if (map->store != NULL) {
-        if (map->store->put(map->store->ctx, &map->tile[s]) == RSM_OK) {
-            map->counters.stored++;
-        } else {
-            map->counters.unstored++;
-        }
+    if (map->store != NULL && map->store->put(map->store->ctx, &map->tile[s]) == RSM_OK) {
+        map->counters.stored++;
+        return;
     }
+    if (map->store != NULL) {
+        map->counters.unstored++;
+    }
+    ended(map, &map->tile[s]);
 }
 
 /* Slot for a tile that is not held: a free one, else oldest_slot's (its
@@ -309,6 +318,8 @@ static uint32_t take_slot(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t t
         rsm_tile_t *t = &map->tile[s];
         t->stamp = (level << 30) | map->stamp;
         memset(t->cell, 0, sizeof t->cell);
+        map->churn[level]++;
+        map->churn_sig[level] += rsm_tmap_place_sig(level, tx, ty);
     }
     return s;
 }
@@ -343,6 +354,7 @@ int rsm_tmap_restore(rsm_tmap_t *map, const rsm_tile_t *t)
 static void free_slot(rsm_tmap_t *map, uint32_t s)
 {
     const uint32_t last = (uint32_t)map->used - 1u;
+    ended(map, &map->tile[s]);
     hash_remove(map, s);
     map->level_used[tile_level(&map->tile[s])]--;
     if (s != last) {

@@ -37,6 +37,18 @@ static inline uint32_t rsm_tmap_place_hash(uint32_t level, int32_t tx, int32_t t
     return rsm_tmap_mix(rsm_tmap_pack(tx, ty) ^ (level * 0x9E3779B9u), bits);
 }
 
+/* A tile's place (level, column, row) mixed into a word, for sums over a
+ * set of tiles that tell one set from another (a global search's grids,
+ * globalsearch.c, and the tiles writes began, tilemap.c). */
+static inline uint32_t rsm_tmap_place_sig(uint32_t level, int32_t tx, int32_t ty)
+{
+    uint32_t h = (((uint32_t)(uint16_t)tx << 16) | (uint32_t)(uint16_t)ty) * 0x9E3779B1u;
+    h ^= level * 0x85EBCA77u;
+    h ^= h >> 15;
+    h *= 0x2C1B3C6Du;
+    return h ^ (h >> 12);
+}
+
 /* Slot of a tile, or RSM_TMAP_NONE (the index lookup, in tilemap.c). */
 uint32_t rsm_tmap_find_slot(const rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty);
 

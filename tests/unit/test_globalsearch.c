@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "core/bits.h"
 #include "core/fmath.h"
 #include "map/globalsearch.h"
 #include "map/tmap_read.h"
@@ -886,6 +887,106 @@ static void test_lent_memory_reads_fewer(void)
     TEST_ASSERT_NULL(loc.state.persistent.search_mem);
 }
 
+/* Grids in lent memory stand through the map's writes (a robot tracking
+ * with updates on, then carried: its search need not build them again):
+ * a post put down in the room after the grids were built, mapped by the
+ * writes that follow, is in the kept grids wherever grids built afresh
+ * have it, and the search in them proves the pose as a search that builds
+ * them again does, no later and for fewer reads. */
+static void test_grids_stand_through_writes(void)
+{
+    static uint8_t lent[RSM_GLOBAL_LEND_BYTES];
+    static uint8_t before_writes[RSM_GLOBAL_LEND_BYTES];
+    static rsm_synth_segment_t seg[64];
+    const rsm_synth_world_t room = rsm_synth_world_room();
+    /* A post 0.1 m square near the north-west corner: on tiles of the
+     * levels read that the walls already hold. */
+    static const rsm_synth_segment_t post[] = {{-1.7f, 1.1f, -1.6f, 1.1f},
+                                               {-1.6f, 1.1f, -1.6f, 1.2f},
+                                               {-1.6f, 1.2f, -1.7f, 1.2f},
+                                               {-1.7f, 1.2f, -1.7f, 1.1f}};
+    rsm_synth_world_t changed;
+    rsm_global_t *g = &loc.state.persistent.global;
+    const rsm_tmap_t *map = &loc.state.persistent.map;
+    uint32_t writes;
+    uint32_t bytes;
+    uint32_t fresh_bits = 0;
+    uint32_t new_bits = 0;
+    uint32_t missed = 0;
+    size_t at;
+    size_t k;
+    rsm_pose_t kept_x;
+    rsm_pose_t fresh_x;
+    uint32_t kept_work;
+    uint32_t fresh_work;
+    size_t fresh_at;
+    TEST_ASSERT_TRUE(room.count + 4u <= sizeof seg / sizeof seg[0]);
+    memcpy(seg, room.seg, room.count * sizeof seg[0]);
+    memcpy(seg + room.count, post, sizeof post);
+    changed.seg = seg;
+    changed.count = room.count + 4u;
+    make_path();
+    at = path_len - 80u;
+    map_path(&room, at - 120u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_search_memory(&loc, lent, sizeof lent));
+    TEST_ASSERT_EQUAL_UINT32(1u, g->cached);
+    bytes = (g->build_end + 7u) / 8u;
+    memcpy(before_writes, lent, bytes);
+    writes = map->counters.updates;
+    for (k = at - 120u; k < at; ++k) {
+        step(&loc, &changed, k, NULL);
+    }
+    TEST_ASSERT_TRUE_MESSAGE(map->counters.updates >= writes + 4u, "the scans after the lend were not written");
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(1u, g->cached, "a write let the grids go");
+    TEST_ASSERT_TRUE(rsm_global_can_keep(g, map));
+    /* A search begun now builds nothing. */
+    g1 = *g;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g1, lent, sizeof lent, map, loc.pts, loc.last.points, &loc.ekf.x,
+                                                   0.8f));
+    TEST_ASSERT_EQUAL_UINT32(g1.build_end, g1.build_next);
+    TEST_ASSERT_EQUAL_UINT32(map->used, g1.dir_next);
+    /* Grids built afresh from the map as written: every block they set, the
+     * kept grids set; and the post set blocks the grids before the writes
+     * did not (else the check above proves nothing). */
+    memset(&g2, 0, sizeof g2);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g2, grid2, sizeof lent < sizeof grid2 ? sizeof lent : sizeof grid2,
+                                                     map, NULL));
+    if (g2.build_end == g->build_end) {
+        uint32_t i;
+        for (i = 0; i < g2.build_end; ++i) {
+            if (rsm_bit_get(grid2, i)) {
+                fresh_bits++;
+                new_bits += rsm_bit_get(before_writes, i) ? 0u : 1u;
+                missed += rsm_bit_get(lent, i) ? 0u : 1u;
+            }
+        }
+    }
+    TEST_ASSERT_TRUE_MESSAGE(fresh_bits > 0u, "no grids to compare (other layouts)");
+    TEST_ASSERT_TRUE_MESSAGE(new_bits > 0u, "the post set no block the grids lacked");
+    TEST_ASSERT_EQUAL_UINT32(0u, missed);
+    /* A search in the kept grids proves the pose a search in fresh ones
+     * does (the robot carried 3 m and turned). */
+    {
+        rsm_pose_t moved = path[at];
+        moved.x += 3.0f;
+        moved.y -= 1.0f;
+        moved.theta = rsm_wrap_angle(moved.theta + 3.0f);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_pose(&loc, &moved, NULL));
+    }
+    before = loc;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    k = found_from(&changed, at, &kept_x, &kept_work);
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&kept_x, &path[k]) < 0.1f);
+    loc = before;
+    g->cached = 0u; /* built again by the search */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    fresh_at = found_from(&changed, at, &fresh_x, &fresh_work);
+    TEST_ASSERT_TRUE(rsm_synth_pos_error(&fresh_x, &path[fresh_at]) < 0.1f);
+    /* The kept grids spare the build: no later, for fewer reads. */
+    TEST_ASSERT_TRUE(k <= fresh_at);
+    TEST_ASSERT_TRUE(kept_work < fresh_work);
+}
+
 /* A corridor 14 m long whose north wall has a niche every metre from
  * x = 3 to x = 13, its west end an alcove, its east end a pillar: with a
  * laser that sees 2.4 m, a robot in the middle sees one niche like the
@@ -1040,6 +1141,7 @@ int main(void)
     RUN_TEST(test_far_readings);
     RUN_TEST(test_too_wide_a_map);
     RUN_TEST(test_lent_memory_reads_fewer);
+    RUN_TEST(test_grids_stand_through_writes);
     RUN_TEST(test_a_twin_where_the_winner_was_carried);
     RUN_TEST(test_bad_calls);
     RUN_TEST(test_bad_lends);

@@ -471,6 +471,22 @@ void test_tmap_update_should_free_a_tile_that_beams_have_cleared(void)
     }
     TEST_ASSERT_EQUAL_UINT32(1u, map.counters.freed);
     TEST_ASSERT_EQUAL_UINT32(3u, map.used);
+    /* Every tile the writes began less the one freed, on each level, by
+     * count and by place (rsm_tmap_t.churn). */
+    {
+        uint32_t level;
+        for (level = 0; level < (uint32_t)cfg.levels; ++level) {
+            uint32_t sig = 0;
+            uint32_t k;
+            for (k = 0; k < map.used; ++k) {
+                if ((map.tile[k].stamp >> 30) == level) {
+                    sig += rsm_tmap_place_sig(level, map.tile[k].tx, map.tile[k].ty);
+                }
+            }
+            TEST_ASSERT_EQUAL_UINT32(rsm_tmap_tiles(&map, level), map.churn[level]);
+            TEST_ASSERT_EQUAL_UINT32(sig, map.churn_sig[level]);
+        }
+    }
     TEST_ASSERT_EQUAL_UINT32(3u, rsm_tmap_tiles(&map, 0u));
     TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell(0.55f), 0));
     TEST_ASSERT_EQUAL_UINT8(cfg.hit_inc, rsm_tmap_value(&map, 0u, 0, (int32_t)b_cell_y));

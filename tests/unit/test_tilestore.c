@@ -201,6 +201,24 @@ static int32_t cell_x(uint32_t k)
 /* A pool filled twice over: without a store the first places are
  * forgotten; with one, they are kept, each in the pool or the store (never
  * both), and come back with their cells when a scan's points fall in them. */
+/* The sum of the places of level 0's tiles in the pool (and the store). */
+static uint32_t places_sig(const rsm_tmap_t *m, int with_store)
+{
+    uint32_t sig = 0;
+    uint32_t k;
+    for (k = 0; k < m->used; ++k) {
+        if ((m->tile[k].stamp >> 30) == 0u) {
+            sig += rsm_tmap_place_sig(0u, m->tile[k].tx, m->tile[k].ty);
+        }
+    }
+    for (k = 0; with_store && k < store.count(store.ctx); ++k) {
+        rsm_tile_t t;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, store.at(store.ctx, k, &t));
+        sig += (t.stamp >> 30) == 0u ? rsm_tmap_place_sig(0u, t.tx, t.ty) : 0u;
+    }
+    return sig;
+}
+
 static void test_map_should_keep_what_its_pool_lets_go_in_the_store(void)
 {
     const uint32_t n = (uint32_t)RSM_TMAP_TILES + 40u;
@@ -220,6 +238,11 @@ static void test_map_should_keep_what_its_pool_lets_go_in_the_store(void)
         TEST_ASSERT_EQUAL_UINT32(40u, map.counters.evicted);
         TEST_ASSERT_EQUAL_UINT32(with ? 40u : 0u, map.counters.stored);
         TEST_ASSERT_EQUAL_UINT32(with ? 40u : 0u, store.count(store.ctx));
+        /* The tiles writes began less those that ended: with a store, every
+         * one (kept there), else the pool's (rsm_tmap_t.churn, what a global
+         * search's grids count on). */
+        TEST_ASSERT_EQUAL_UINT32(with ? n : (uint32_t)RSM_TMAP_TILES, map.churn[0]);
+        TEST_ASSERT_EQUAL_UINT32(places_sig(&map, with), map.churn_sig[0]);
         /* The oldest went, the newest stayed. */
         TEST_ASSERT_EQUAL_UINT8(0u, rsm_tmap_value(&map, 0u, cell_x(0), 5));
         TEST_ASSERT_EQUAL_UINT8(9u + ((n - 1u) & 3u), rsm_tmap_value(&map, 0u, cell_x(n - 1u), 5));
@@ -233,6 +256,9 @@ static void test_map_should_keep_what_its_pool_lets_go_in_the_store(void)
             TEST_ASSERT_EQUAL_UINT8(with ? 9u + (k & 3u) : 0u, rsm_tmap_value(&map, 0u, cell_x(k), 5));
         }
         TEST_ASSERT_EQUAL_UINT32(with ? 8u : 0u, map.counters.fetched);
+        /* Tiles back from the store are none begun. */
+        TEST_ASSERT_EQUAL_UINT32(with ? n : (uint32_t)RSM_TMAP_TILES, map.churn[0]);
+        TEST_ASSERT_EQUAL_UINT32(places_sig(&map, with), map.churn_sig[0]);
         if (with) {
             /* Eight others made room, into the store; each place once. */
             TEST_ASSERT_EQUAL_UINT32(48u, map.counters.stored);
