@@ -371,6 +371,12 @@ typedef struct rsm_global {
     uint32_t rounds;               /* proofs of the same kept poses that were left in doubt */
     uint32_t taken_back;           /* the levels read are back from the store for the next search */
     float hit[RSM_GLOBAL_CANDIDATES];
+    /* Over the rounds before this one: the sum of each kept pose's log fit,
+     * and the pose that fitted best in every one of them (the views add
+     * up: a place a little better than a look-alike from each of several
+     * views is proven; RSM_GLOBAL_CANDIDATES: none led them all). */
+    float log_hit[RSM_GLOBAL_CANDIDATES];
+    uint32_t leader;
     rsm_pose_t end[RSM_GLOBAL_CANDIDATES];
     uint32_t work;                 /* cells and blocks read so far */
 } rsm_global_t;

@@ -1571,34 +1571,11 @@ static rsm_pose_t proved_now(const rsm_localizer_t *loc, uint32_t k)
 static int prove_verdict(const rsm_localizer_t *loc, uint32_t *win)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
-    const rsm_global_t *g = &loc->state.persistent.global;
-    float rival = 0.0f;
-    uint32_t k;
-    uint32_t best = 0;
-    if (g->found == 0u) {
-        return -1;
-    }
-    for (k = 1; k < g->found; ++k) {
-        if (g->hit[k] > g->hit[best]) {
-            best = k;
-        }
-    }
     /* A place the map holds fits about as well as the map's own scans did
      * (saved with it): a wrong place in a building of look-alike rooms fits
      * half as well (measured on ACES: 0.41 to 0.44 against 0.86). */
-    if (!(g->hit[best] >= win_fit(loc))) {
-        return -1;
-    }
-    for (k = 0; k < g->found; ++k) {
-        if (k != best && g->hit[k] > rival && beyond_doubt(cfg, &g->end[k], &g->end[best])) {
-            rival = g->hit[k];
-        }
-    }
-    if (g->hit[best] <= rival * (1.0f + cfg->recover_margin)) {
-        return 0;
-    }
-    *win = best;
-    return 1;
+    return rsm_global_verdict(&loc->state.persistent.global, win_fit(loc), cfg->recover_margin, cfg->doubt_m,
+                              cfg->doubt_rad, win);
 }
 
 /* The winner with the scan at hand: carried forward by odometry's motion
@@ -1773,6 +1750,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
              * (the robot moved on: a rival along a corridor or in a
              * look-alike room falls behind), before any new search. */
             uint32_t k;
+            rsm_global_add_round(g);
             for (k = 0; k < g->found; ++k) {
                 g->cand[k].pose = proved_now(loc, k);
             }

@@ -1377,3 +1377,78 @@ void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, fl
     g->root_j = (int32_t)fy0;
     g->root_h = h;
 }
+
+/* The kept pose that fits the kept scan best this round. */
+static uint32_t round_best(const rsm_global_t *g)
+{
+    uint32_t best = 0;
+    uint32_t k;
+    for (k = 1; k < g->found; ++k) {
+        if (g->hit[k] > g->hit[best]) {
+            best = k;
+        }
+    }
+    return best;
+}
+
+/* A fit's log, floored: a pose that fell off the map loses for good, in
+ * finite sums. */
+static float log_fit(float hit)
+{
+    return logf(hit > 1.0e-3f ? hit : 1.0e-3f);
+}
+
+int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float doubt_m, float doubt_rad,
+                       uint32_t *win)
+{
+    const float log_margin = logf(1.0f + margin);
+    float rival = 0.0f;
+    uint32_t k;
+    uint32_t best;
+    int summed;
+    if (g->found == 0u) {
+        return -1;
+    }
+    best = round_best(g);
+    if (!(g->hit[best] >= min_fit)) {
+        return -1;
+    }
+    /* Beyond doubt of every rival, by this view alone or, when it led
+     * every view before, by all of them together: each pose's fits
+     * multiplied over the views, as independent evidence. */
+    summed = g->rounds > 0u && g->leader == best;
+    for (k = 0; k < g->found; ++k) {
+        const rsm_pose_t d = rsm_pose_between(&g->end[k], &g->end[best]);
+        if (k == best || (sqrtf(d.x * d.x + d.y * d.y) < doubt_m && fabsf(d.theta) < doubt_rad)) {
+            continue; /* the same place */
+        }
+        if (g->hit[k] > rival) {
+            rival = g->hit[k];
+        }
+        if (summed && !(g->log_hit[best] + log_fit(g->hit[best]) - (g->log_hit[k] + log_fit(g->hit[k])) > log_margin)) {
+            summed = 0;
+        }
+    }
+    if (g->hit[best] <= rival * (1.0f + margin) && !summed) {
+        return 0;
+    }
+    *win = best;
+    return 1;
+}
+
+void rsm_global_add_round(rsm_global_t *g)
+{
+    const uint32_t best = round_best(g);
+    uint32_t k;
+    if (g->rounds == 0u) {
+        g->leader = best;
+        for (k = 0; k < g->found; ++k) {
+            g->log_hit[k] = 0.0f;
+        }
+    } else if (g->leader != best) {
+        g->leader = (uint32_t)RSM_GLOBAL_CANDIDATES;
+    }
+    for (k = 0; k < g->found; ++k) {
+        g->log_hit[k] += log_fit(g->hit[k]);
+    }
+}

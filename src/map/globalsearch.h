@@ -157,4 +157,19 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
 }
 #endif
 
+/* The verdict of a proof round, on the kept poses' fits with the kept
+ * scan (g->hit, where their descents ended g->end): 1 with *win the best,
+ * when it fits at least min_fit and beats by margin (a share) every rival
+ * beyond doubt of it (doubt_m or doubt_rad apart), on this round's fits
+ * or, when it fitted best in every round before this one (g->rounds of
+ * them, summed by rsm_global_add_round), on its fits multiplied over
+ * all the rounds against each rival's; 0 in doubt (a rival too close);
+ * -1 when nothing fits (or nothing was kept). */
+int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float doubt_m, float doubt_rad,
+                       uint32_t *win);
+
+/* Adds a round left in doubt to the sums the next verdicts read (the
+ * caller counts g->rounds after it). */
+void rsm_global_add_round(rsm_global_t *g);
+
 #endif /* RSM_GLOBALSEARCH_H */

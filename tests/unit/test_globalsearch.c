@@ -987,6 +987,56 @@ static void test_grids_stand_through_writes(void)
     TEST_ASSERT_TRUE(kept_work < fresh_work);
 }
 
+/* A proof's verdict (rsm_global_verdict): a place a little better than a
+ * look-alike 3 m away from each of two views is proven by the two
+ * together, not by either alone; not when another place led the first
+ * view, nor when the second barely favours it; a kept pose at the same
+ * place is no rival; nothing is proven under the fit asked. */
+static void test_views_add_up(void)
+{
+    const float margin = 0.1f;
+    const float doubt_m = 0.5f;
+    const float doubt_rad = 0.5f;
+    uint32_t win = 99u;
+    memset(&g1, 0, sizeof g1);
+    g1.found = 3u;
+    g1.end[1].x = 3.0f;  /* a look-alike */
+    g1.end[2].x = 0.05f; /* the same place as pose 0 */
+    g1.hit[0] = 0.93f;
+    g1.hit[1] = 0.88f; /* 1.057 times less: in doubt by one view */
+    g1.hit[2] = 0.20f;
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(-1, rsm_global_verdict(&g1, 0.95f, margin, doubt_m, doubt_rad, &win));
+    g2 = g1;
+    rsm_global_add_round(&g1);
+    g1.rounds = 1u;
+    /* The same again from a second view: 1.057^2 = 1.117 beyond 1.1. */
+    TEST_ASSERT_EQUAL_INT(1, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_UINT32(0u, win);
+    /* The second view barely favours it: 1.057 x 1.02 is not enough. */
+    g1.hit[1] = 0.93f / 1.02f;
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    /* One view: the same place fitting as well is no rival. */
+    g2.hit[1] = 0.80f;
+    g2.hit[2] = 0.92f;
+    TEST_ASSERT_EQUAL_INT(1, rsm_global_verdict(&g2, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_UINT32(0u, win);
+    g2.hit[1] = 0.88f;
+    g2.hit[2] = 0.20f;
+    /* The look-alike led the first view: the views do not add up. */
+    g1 = g2;
+    g1.hit[0] = 0.88f;
+    g1.hit[1] = 0.93f;
+    rsm_global_add_round(&g1);
+    g1.rounds = 1u;
+    g1.hit[0] = 0.93f;
+    g1.hit[1] = 0.88f;
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    /* Nothing kept: nothing proven. */
+    g1.found = 0u;
+    TEST_ASSERT_EQUAL_INT(-1, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+}
+
 /* A corridor 14 m long whose north wall has a niche every metre from
  * x = 3 to x = 13, its west end an alcove, its east end a pillar: with a
  * laser that sees 2.4 m, a robot in the middle sees one niche like the
@@ -1142,6 +1192,7 @@ int main(void)
     RUN_TEST(test_too_wide_a_map);
     RUN_TEST(test_lent_memory_reads_fewer);
     RUN_TEST(test_grids_stand_through_writes);
+    RUN_TEST(test_views_add_up);
     RUN_TEST(test_a_twin_where_the_winner_was_carried);
     RUN_TEST(test_bad_calls);
     RUN_TEST(test_bad_lends);

@@ -1382,10 +1382,12 @@ static void print_summary(nav_t *nav)
                    (unsigned)c->global_searches, (unsigned)c->global_found, (unsigned)c->global_ambiguous,
                    (unsigned)c->global_work, (unsigned)nav->max_search_work,
                    nav->search_mem != NULL ? nav->search_bytes : (unsigned long)RSM_GLOBAL_GRID_BYTES);
-            if (nav->first_trusted > 0u) {
+            /* Only a run begun with no pose (--global) waits for its
+             * first one; a search after tracking was lost says so above. */
+            if (nav->global && nav->first_trusted > 0u) {
                 printf("  first pose      scan %llu (%.3f s)\n", (unsigned long long)nav->first_trusted,
                        nav->first_trusted_s);
-            } else {
+            } else if (nav->global) {
                 printf("  first pose      none: no pose was proven\n");
             }
         }
