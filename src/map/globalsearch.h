@@ -163,8 +163,9 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
  * beyond doubt of it (doubt_m or doubt_rad apart), on this round's fits
  * or, when it fitted best in every round before this one (g->rounds of
  * them, summed by rsm_global_add_round), on its fits multiplied over
- * all the rounds against each rival's; 0 in doubt (a rival too close);
- * -1 when nothing fits (or nothing was kept). */
+ * all the rounds against each rival's; 0 in doubt (a rival too close,
+ * or the best a little under min_fit: within a tenth); -1 when nothing
+ * fits (or nothing was kept). */
 int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float doubt_m, float doubt_rad,
                        uint32_t *win);
 
