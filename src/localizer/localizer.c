@@ -1750,7 +1750,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
              * (the robot moved on: a rival along a corridor or in a
              * look-alike room falls behind), before any new search. */
             uint32_t k;
-            rsm_global_add_round(g);
+            rsm_global_add_round(g, win_fit(loc));
             for (k = 0; k < g->found; ++k) {
                 g->cand[k].pose = proved_now(loc, k);
             }

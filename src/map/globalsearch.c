@@ -1082,7 +1082,7 @@ static float leaf_threshold(const rsm_global_t *g)
  * search level, interpolated, summed. Leaves that reach the bar often all
  * score the most (every point's window of two cells a side on a wall), so
  * this, not the leaf's score, ranks them. */
-static float fine_score(const rsm_global_t *g, const rsm_tmap_t *map, const rsm_pose_t *x)
+static float fine_score(const rsm_global_t *g, const rsm_tmap_t *map, const rsm_pose_t *x, float stop, uint32_t *read)
 {
     float c;
     float s;
@@ -1096,9 +1096,33 @@ static float fine_score(const rsm_global_t *g, const rsm_tmap_t *map, const rsm_
         const rsm_point_t *p = &g->pts[k];
         float dx;
         float dy;
+        if (sum + (float)(g->npts - k) <= stop) {
+            break; /* even a perfect rest (1 a point) would not reach it */
+        }
         sum += rsm_tmap_sample_at(map, &cur, x->x + c * p->x - s * p->y, x->y + s * p->x + c * p->y, &dx, &dy);
     }
+    *read = k;
     return sum;
+}
+
+/* The fine a leaf of the given score must exceed for keep to keep it or
+ * drop a kept pose for it: a full list, none of whose poses the score
+ * would leave behind, keeps a leaf only above its last one's fine (any
+ * fine at or under it changes nothing but the counts, which do not depend
+ * on it). -1 when any fine may matter. */
+static float no_gain(const rsm_global_t *g, float score)
+{
+    const float best = score > g->best_score ? score : g->best_score;
+    uint32_t m;
+    if (g->found < (uint32_t)RSM_GLOBAL_CANDIDATES) {
+        return -1.0f;
+    }
+    for (m = 0; m < g->found; ++m) {
+        if (g->cand[m].score < (1.0f - KEEP_SHARE) * best) {
+            return -1.0f;
+        }
+    }
+    return g->cand[g->found - 1u].fine;
 }
 
 /* Keeps a leaf among the best distinct poses, ranked by fine: one within
@@ -1275,8 +1299,15 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
             x.x = ((float)b.i + 0.5f) * cell;
             x.y = ((float)b.j + 0.5f) * cell;
             x.theta = rsm_wrap_angle((float)(g->heading - 1u) * g->step_rad);
-            keep(g, cell, &x, b.bound, fine_score(g, map, &x));
-            work += 4u * g->npts;
+            {
+                /* A leaf that cannot enter a full list is read only until
+                 * that is sure (keep gives it the same verdict: a basin of
+                 * a kept pose, or one not kept). */
+                uint32_t read = 0;
+                const float fine = fine_score(g, map, &x, no_gain(g, b.bound), &read);
+                keep(g, cell, &x, b.bound, fine);
+                work += 4u * read;
+            }
             continue;
         }
         {
@@ -1444,7 +1475,7 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
     return 1;
 }
 
-void rsm_global_add_round(rsm_global_t *g)
+void rsm_global_add_round(rsm_global_t *g, float min_fit)
 {
     const uint32_t best = round_best(g);
     uint32_t k;
@@ -1454,6 +1485,13 @@ void rsm_global_add_round(rsm_global_t *g)
             g->log_hit[k] = 0.0f;
         }
     } else if (g->leader != best) {
+        g->leader = (uint32_t)RSM_GLOBAL_CANDIDATES;
+    }
+    if (!(g->hit[best] >= min_fit)) {
+        /* A view the best fits poorly from is evidence against it, not
+         * for it: its sums count no more (traced on ACES start 5, a
+         * search crowded with 856 look-alikes: a pose 15 m off that fitted
+         * under the bar in one of three views, proven by the other two). */
         g->leader = (uint32_t)RSM_GLOBAL_CANDIDATES;
     }
     for (k = 0; k < g->found; ++k) {

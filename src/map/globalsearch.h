@@ -170,7 +170,8 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
                        uint32_t *win);
 
 /* Adds a round left in doubt to the sums the next verdicts read (the
- * caller counts g->rounds after it). */
-void rsm_global_add_round(rsm_global_t *g);
+ * caller counts g->rounds after it); a round whose best fitted under
+ * min_fit (the verdict's) leaves no pose that led every round. */
+void rsm_global_add_round(rsm_global_t *g, float min_fit);
 
 #endif /* RSM_GLOBALSEARCH_H */

@@ -1014,7 +1014,7 @@ static void test_views_add_up(void)
     TEST_ASSERT_EQUAL_INT(-1, rsm_global_verdict(&g1, 1.05f, margin, doubt_m, doubt_rad, &win));
     g1.hit[1] = 0.88f;
     g2 = g1;
-    rsm_global_add_round(&g1);
+    rsm_global_add_round(&g1, 0.8f);
     g1.rounds = 1u;
     /* The same again from a second view: 1.057^2 = 1.117 beyond 1.1. */
     TEST_ASSERT_EQUAL_INT(1, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
@@ -1033,10 +1033,16 @@ static void test_views_add_up(void)
     g1 = g2;
     g1.hit[0] = 0.88f;
     g1.hit[1] = 0.93f;
-    rsm_global_add_round(&g1);
+    rsm_global_add_round(&g1, 0.8f);
     g1.rounds = 1u;
     g1.hit[0] = 0.93f;
     g1.hit[1] = 0.88f;
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    /* The pose led the first view but fitted it under the bar: that view
+     * counts against it, and the next alone does not prove it. */
+    g1 = g2;
+    rsm_global_add_round(&g1, 0.95f);
+    g1.rounds = 1u;
     TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
     /* Nothing kept: nothing proven. */
     g1.found = 0u;
