@@ -526,7 +526,9 @@ int rsm_localizer_searching(const rsm_localizer_t *loc);
  * for blocks a quarter of each box apart it is not used. The memory must
  * outlive its use, untouched by anything else; rsm_localizer_init forgets
  * it. The grids are built into it at once (as a map load does), and a
- * search under way begins again. Returns RSM_OK; RSM_ERR_INVAL for loc
+ * search under way begins again; in lent memory they stay through the
+ * map's writes (a search after tracking with updates on does not build
+ * them again; docs/globalsearch.md, "Grids kept through writes"). Returns RSM_OK; RSM_ERR_INVAL for loc
  * never initialised, mem NULL with bytes not 0 or the other way, or fewer
  * bytes than RSM_GLOBAL_GRID_BYTES; RSM_ERR_NOSYS for another method. */
 int rsm_localizer_set_search_memory(rsm_localizer_t *loc, void *mem, size_t bytes);
