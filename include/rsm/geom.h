@@ -36,6 +36,10 @@ rsm_pose_t rsm_pose_inverse(const rsm_pose_t *a);
 /* inverse(a) (+) b: pose b expressed in the frame of pose a. */
 rsm_pose_t rsm_pose_between(const rsm_pose_t *a, const rsm_pose_t *b);
 
+/* 1 when b is at least m metres or rad radians from a (as seen from a),
+ * else 0. */
+int rsm_pose_apart(const rsm_pose_t *a, const rsm_pose_t *b, float m, float rad);
+
 /* Applies pose a to point p (robot frame -> the frame a is expressed in). */
 rsm_point_t rsm_pose_apply(const rsm_pose_t *a, const rsm_point_t *p);
 

@@ -51,6 +51,12 @@ rsm_pose_t rsm_pose_between(const rsm_pose_t *a, const rsm_pose_t *b)
     return rsm_pose_compose(&inv, b);
 }
 
+int rsm_pose_apart(const rsm_pose_t *a, const rsm_pose_t *b, float m, float rad)
+{
+    const rsm_pose_t d = rsm_pose_between(a, b);
+    return sqrtf(d.x * d.x + d.y * d.y) >= m || fabsf(d.theta) >= rad;
+}
+
 rsm_point_t rsm_pose_apply(const rsm_pose_t *a, const rsm_point_t *p)
 {
     float c;

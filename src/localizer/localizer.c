@@ -896,8 +896,7 @@ static int refuting(const rsm_localizer_config_t *cfg)
 /* Whether b is at least doubt_m or doubt_rad from a. */
 static int beyond_doubt(const rsm_localizer_config_t *cfg, const rsm_pose_t *a, const rsm_pose_t *b)
 {
-    const rsm_pose_t d = rsm_pose_between(a, b);
-    return sqrtf(d.x * d.x + d.y * d.y) >= cfg->doubt_m || fabsf(d.theta) >= cfg->doubt_rad;
+    return rsm_pose_apart(a, b, cfg->doubt_m, cfg->doubt_rad);
 }
 
 /* Whether odometry since the last scan left its prediction too uncertain

@@ -203,13 +203,30 @@ static uint32_t grid_read(const rsm_global_t *g, const uint8_t *grid, uint32_t h
     return get_bit(grid, g->grid_at[h] + b * g->grid_nx[h] + a);
 }
 
+/* Sets the blocks of grid h whose windows hold a cell of the search level
+ * in [x0, x1] x [y0, y1] (counted from the grids' first cell): block a
+ * holds the cells a 2^e - 2^h .. a 2^e + 2^e - 1. */
+static void mark_grid(const rsm_global_t *g, uint8_t *grid, uint32_t h, uint32_t x0, uint32_t y0, uint32_t x1,
+                      uint32_t y1)
+{
+    const uint32_t e = g->grid_e[h];
+    const uint32_t nx = g->grid_nx[h];
+    const uint32_t a1 = ((x1 + (1u << h)) >> e) < nx ? (x1 + (1u << h)) >> e : nx - 1u;
+    const uint32_t b1 = ((y1 + (1u << h)) >> e) < g->grid_ny[h] ? (y1 + (1u << h)) >> e : g->grid_ny[h] - 1u;
+    uint32_t b;
+    for (b = y0 >> e; b <= b1; ++b) {
+        uint32_t a;
+        for (a = x0 >> e; a <= a1; ++a) {
+            rsm_bit_set(grid, g->grid_at[h] + b * nx + a);
+        }
+    }
+}
+
 /* A tile of the search level into the finest grid: each nonzero cell of
  * the grids' box (g->cache_box) sets the blocks whose windows hold it.
  * Returns the cells looked at. */
 static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t *t)
 {
-    const uint32_t e = g->grid_e[1];
-    const uint32_t nx = g->grid_nx[1];
     uint32_t c;
     for (c = 0; c < (uint32_t)RSM_TMAP_TILE_CELLS; c += 2u) {
         uint32_t k;
@@ -223,13 +240,7 @@ static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t
                 cx <= g->cache_box[2] && cy >= g->cache_box[1] && cy <= g->cache_box[3]) {
                 const uint32_t x = (uint32_t)(cx - g->ox);
                 const uint32_t y = (uint32_t)(cy - g->oy);
-                uint32_t b;
-                for (b = y >> e; b <= (y + 2u) >> e; ++b) {
-                    uint32_t a;
-                    for (a = x >> e; a <= (x + 2u) >> e; ++a) {
-                        rsm_bit_set(grid, g->grid_at[1] + b * nx + a);
-                    }
-                }
+                mark_grid(g, grid, 1u, x, y, x, y);
             }
         }
     }
@@ -394,10 +405,12 @@ uint32_t rsm_global_take_back(rsm_tmap_t *map, uint32_t budget, int *more)
 }
 
 /* The tiles of the levels a search on `level` reads (it, and the finer
- * one its directions come from). */
+ * one its directions come from; one level when the search level is the
+ * finest). */
 static uint32_t read_tiles(const rsm_tmap_t *map, uint32_t level)
 {
-    return (uint32_t)map->level_used[level] + (uint32_t)map->level_used[direction_level(level)];
+    const uint32_t dir = direction_level(level);
+    return (uint32_t)map->level_used[level] + (dir != level ? (uint32_t)map->level_used[dir] : 0u);
 }
 
 /* Which tiles those are, as a sum over them of a hash of their place:
@@ -425,26 +438,14 @@ static uint32_t read_signature(const rsm_tmap_t *map, uint32_t level)
 /* The map's churn (rsm_tmap_t.churn) on the levels read, and its sum. */
 static uint32_t churn_tiles(const rsm_tmap_t *map, uint32_t level)
 {
-    return map->churn[level] + map->churn[direction_level(level)];
+    const uint32_t dir = direction_level(level);
+    return map->churn[level] + (dir != level ? map->churn[dir] : 0u);
 }
 
 static uint32_t churn_signature(const rsm_tmap_t *map, uint32_t level)
 {
-    return map->churn_sig[level] + (level > 0u ? map->churn_sig[direction_level(level)] : 0u);
-}
-
-/* Whether the grids and directions built last stand for map as it is now,
- * searched on level over the box (gx0, gy0) .. (gx1, gy1): no write since
- * but those kept (rsm_global_keep), and the tiles of the levels read those
- * they were built from, with those the kept writes began and less those
- * that ended (a grid block stays set for a tile gone: a bound only looser). */
-static int stands(const rsm_global_t *g, const rsm_tmap_t *map, uint32_t level, int32_t gx0, int32_t gy0, int32_t gx1,
-                  int32_t gy1)
-{
-    return g->cached != 0u && g->level == level && g->cache_writes == map->counters.updates &&
-           g->cache_box[0] == gx0 && g->cache_box[1] == gy0 && g->cache_box[2] == gx1 && g->cache_box[3] == gy1 &&
-           read_tiles(map, level) == g->cache_tiles + (churn_tiles(map, level) - g->cache_churn) &&
-           read_signature(map, level) == g->cache_sig + (churn_signature(map, level) - g->cache_churn_sig);
+    const uint32_t dir = direction_level(level);
+    return map->churn_sig[level] + (dir != level ? map->churn_sig[dir] : 0u);
 }
 
 int rsm_global_can_keep(const rsm_global_t *g, const rsm_tmap_t *map)
@@ -452,24 +453,18 @@ int rsm_global_can_keep(const rsm_global_t *g, const rsm_tmap_t *map)
     return g->cached != 0u && g->level == search_level(map) && g->cache_writes == map->counters.updates;
 }
 
-/* Sets the blocks of every grid whose windows hold a cell of the search
- * level in [x0, x1] x [y0, y1] (counted from the grids' first cell). */
-static void mark_cells(const rsm_global_t *g, uint8_t *grid, uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1)
+/* Whether the grids and directions built last stand for map as it is now,
+ * over the box (gx0, gy0) .. (gx1, gy1) of its search level: no write
+ * since but those kept (rsm_global_keep), and the tiles of the levels read
+ * those they were built from, with those the kept writes began and less
+ * those that ended (a grid block stays set for a tile gone: a bound only
+ * looser). */
+static int stands(const rsm_global_t *g, const rsm_tmap_t *map, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1)
 {
-    uint32_t h;
-    for (h = 1; h <= g->top_h; ++h) {
-        const uint32_t e = g->grid_e[h];
-        const uint32_t nx = g->grid_nx[h];
-        const uint32_t a1 = ((x1 + (1u << h)) >> e) < nx ? (x1 + (1u << h)) >> e : nx - 1u;
-        const uint32_t b1 = ((y1 + (1u << h)) >> e) < g->grid_ny[h] ? (y1 + (1u << h)) >> e : g->grid_ny[h] - 1u;
-        uint32_t b;
-        for (b = y0 >> e; b <= b1; ++b) {
-            uint32_t a;
-            for (a = x0 >> e; a <= a1; ++a) {
-                rsm_bit_set(grid, g->grid_at[h] + b * nx + a);
-            }
-        }
-    }
+    return rsm_global_can_keep(g, map) && g->cache_box[0] == gx0 && g->cache_box[1] == gy0 &&
+           g->cache_box[2] == gx1 && g->cache_box[3] == gy1 &&
+           read_tiles(map, g->level) == g->cache_tiles + (churn_tiles(map, g->level) - g->cache_churn) &&
+           read_signature(map, g->level) == g->cache_sig + (churn_signature(map, g->level) - g->cache_churn_sig);
 }
 
 void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n)
@@ -504,8 +499,11 @@ void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
             const int32_t y0 = j > g->cache_box[1] ? j : g->cache_box[1];
             const int32_t x1 = i + 1 < g->cache_box[2] ? i + 1 : g->cache_box[2];
             const int32_t y1 = j + 1 < g->cache_box[3] ? j + 1 : g->cache_box[3];
-            mark_cells(g, grid, (uint32_t)(x0 - g->ox), (uint32_t)(y0 - g->oy), (uint32_t)(x1 - g->ox),
-                       (uint32_t)(y1 - g->oy));
+            uint32_t h;
+            for (h = 1; h <= g->top_h; ++h) {
+                mark_grid(g, grid, h, (uint32_t)(x0 - g->ox), (uint32_t)(y0 - g->oy), (uint32_t)(x1 - g->ox),
+                          (uint32_t)(y1 - g->oy));
+            }
         }
     }
     g->cache_writes = map->counters.updates;
@@ -609,7 +607,7 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rs
         g->headings += g->headings & 1u;
     }
     g->step_rad = 2.0f * RSM_PI / (float)g->headings;
-    if (stands(g, map, level, gx0, gy0, gx1, gy1)) {
+    if (stands(g, map, gx0, gy0, gx1, gy1)) {
         /* The map as the last search built its grids and directions from:
          * they stand (only the agreement with this scan is new). */
         g->dir_next = map->used;
@@ -1457,8 +1455,7 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
      * multiplied over the views, as independent evidence. */
     summed = g->rounds > 0u && g->leader == best;
     for (k = 0; k < g->found; ++k) {
-        const rsm_pose_t d = rsm_pose_between(&g->end[k], &g->end[best]);
-        if (k == best || (sqrtf(d.x * d.x + d.y * d.y) < doubt_m && fabsf(d.theta) < doubt_rad)) {
+        if (k == best || !rsm_pose_apart(&g->end[k], &g->end[best], doubt_m, doubt_rad)) {
             continue; /* the same place */
         }
         if (g->hit[k] > rival) {

@@ -153,10 +153,6 @@ void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, fl
  * Adds the reads to g->work and to *used (may be NULL). */
 int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
 
-#ifdef __cplusplus
-}
-#endif
-
 /* The verdict of a proof round, on the kept poses' fits with the kept
  * scan (g->hit, where their descents ended g->end): 1 with *win the best,
  * when it fits at least min_fit and beats by margin (a share) every rival
@@ -173,5 +169,9 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
  * caller counts g->rounds after it); a round whose best fitted under
  * min_fit (the verdict's) leaves no pose that led every round. */
 void rsm_global_add_round(rsm_global_t *g, float min_fit);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* RSM_GLOBALSEARCH_H */
