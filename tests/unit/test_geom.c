@@ -243,6 +243,32 @@ void test_pose_apply_should_preserve_distances(void)
     }
 }
 
+/* Poses apart: by distance or by heading, at the thresholds themselves,
+ * and the distance seen from a (a turned a does not change it). */
+static void test_pose_apart_should_judge_distance_and_heading(void)
+{
+    const rsm_pose_t a = {1.0f, 2.0f, 1.2f};
+    rsm_pose_t b = a;
+    TEST_ASSERT_EQUAL_INT(0, rsm_pose_apart(&a, &b, 0.1f, 0.1f));
+    b.x += 0.09f;
+    TEST_ASSERT_EQUAL_INT(0, rsm_pose_apart(&a, &b, 0.1f, 0.1f));
+    b.y += 0.05f; /* 0.103 m away */
+    TEST_ASSERT_EQUAL_INT(1, rsm_pose_apart(&a, &b, 0.1f, 0.1f));
+    TEST_ASSERT_EQUAL_INT(0, rsm_pose_apart(&a, &b, 0.2f, 0.1f));
+    b = a;
+    b.theta = rsm_wrap_angle(a.theta - 0.15f);
+    TEST_ASSERT_EQUAL_INT(1, rsm_pose_apart(&a, &b, 0.1f, 0.1f));
+    TEST_ASSERT_EQUAL_INT(0, rsm_pose_apart(&a, &b, 0.1f, 0.2f));
+    /* Across the wrap of the heading: 0.04 rad apart, not 2 pi. */
+    b = a;
+    b.theta = 3.12f;
+    {
+        rsm_pose_t c = a;
+        c.theta = -3.12f;
+        TEST_ASSERT_EQUAL_INT(0, rsm_pose_apart(&b, &c, 0.1f, 0.1f));
+    }
+}
+
 int main(void)
 {
     UNITY_BEGIN();
@@ -258,5 +284,6 @@ int main(void)
     RUN_TEST(test_pose_between_should_be_the_relative_pose_on_random_poses);
     RUN_TEST(test_pose_compose_should_be_associative_and_agree_with_apply);
     RUN_TEST(test_pose_apply_should_preserve_distances);
+    RUN_TEST(test_pose_apart_should_judge_distance_and_heading);
     return UNITY_END();
 }
