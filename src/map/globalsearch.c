@@ -946,11 +946,26 @@ static void leaf_bounds(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *
     }
 }
 
+/* A child's miss at point q: its count up, and once past allowed it dies
+ * there (its bit out of *live), having read the points up to q. The cold
+ * path: most reads hit. */
+static void child_miss(int32_t *miss, uint32_t *live, uint32_t *reads, uint32_t c, uint32_t q, int32_t allowed)
+{
+    if (++miss[c] > allowed) {
+        *live &= ~(1u << c);
+        *reads += q + 1u;
+    }
+}
+
 /* The four children of box (i, j, h + 1), boxes of 2^h positions a side
  * (h >= 1), their bounds into bound[] (child c at (i + (c & 1) 2^h, j +
  * (c >> 1) 2^h)), as box_bound gives each, in one pass over the points: a
  * child whose misses could no longer leave thr is given up, the reads stop
- * when all four are. Adds the blocks read to *work. */
+ * when all four are. A hit costs a test of the live children's mask and
+ * the bit; the counts, the deaths and the reads (each child's, up to the
+ * point it died at) are kept only on a miss: on the M4, a test of each
+ * count at every read cost more than the read. Adds the blocks read to
+ * *work. */
 static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int32_t *fy, int32_t i,
                          int32_t j, uint32_t h, float thr, float *bound, uint32_t *work)
 {
@@ -969,25 +984,22 @@ static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int3
     const float slack = (float)g->npts - thr;
     /* A child is given up once its misses exceed this. */
     const int32_t allowed = slack >= 0.0f ? (int32_t)slack : -1;
-    int32_t m0 = 0;
-    int32_t m1 = 0;
-    int32_t m2 = 0;
-    int32_t m3 = 0;
+    int32_t miss[4] = {0, 0, 0, 0};
+    uint32_t reads = 0;
+    uint32_t live = allowed >= 0 ? 15u : 0u;
     uint32_t q;
+    uint32_t c;
     if (e > h) {
         /* Blocks wider than the children: each child's own block (rare:
          * the coarsest grids of a wide map). */
-        for (q = 0; q < n && (m0 <= allowed || m1 <= allowed || m2 <= allowed || m3 <= allowed); ++q) {
-            const uint32_t k = q;
-            uint32_t c;
+        for (q = 0; q < n && live != 0u; ++q) {
             for (c = 0; c < 4u; ++c) {
-                const uint32_t a = (uint32_t)(fx[k] + x0 + ((c & 1u) != 0u ? half : 0)) >> e;
-                const uint32_t b = (uint32_t)(fy[k] + y0 + ((c & 2u) != 0u ? half : 0)) >> e;
-                const uint32_t bit = a < nx && b < ny ? get_bit(grid, at + b * nx + a) : 0u;
-                int32_t *m = c == 0u ? &m0 : c == 1u ? &m1 : c == 2u ? &m2 : &m3;
-                *m += (int32_t)(1u - bit);
+                const uint32_t a = (uint32_t)(fx[q] + x0 + ((c & 1u) != 0u ? half : 0)) >> e;
+                const uint32_t b = (uint32_t)(fy[q] + y0 + ((c & 2u) != 0u ? half : 0)) >> e;
+                if ((live & (1u << c)) != 0u && !(a < nx && b < ny && get_bit(grid, at + b * nx + a) != 0u)) {
+                    child_miss(miss, &live, &reads, c, q, allowed);
+                }
             }
-            *work += 4u;
         }
     } else {
         /* The children's blocks are d apart; where all four lie in the
@@ -996,27 +1008,22 @@ static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int3
         const uint32_t row = d * nx;
         const uint32_t nx_in = nx > d ? nx - d : 0u;
         const uint32_t ny_in = ny > d ? ny - d : 0u;
-        uint32_t reads = 0;
-        for (q = 0; q < n && (m0 <= allowed || m1 <= allowed || m2 <= allowed || m3 <= allowed); ++q) {
+        for (q = 0; q < n && live != 0u; ++q) {
             const uint32_t a = (uint32_t)(fx[q] + x0) >> e;
             const uint32_t b = (uint32_t)(fy[q] + y0) >> e;
-            const uint32_t first = at + b * nx + a;
             if (a < nx_in && b < ny_in) {
-                if (m0 <= allowed) {
-                    m0 += (int32_t)(1u - get_bit(grid, first));
-                    reads++;
+                const uint32_t first = at + b * nx + a;
+                if ((live & 1u) != 0u && get_bit(grid, first) == 0u) {
+                    child_miss(miss, &live, &reads, 0u, q, allowed);
                 }
-                if (m1 <= allowed) {
-                    m1 += (int32_t)(1u - get_bit(grid, first + d));
-                    reads++;
+                if ((live & 2u) != 0u && get_bit(grid, first + d) == 0u) {
+                    child_miss(miss, &live, &reads, 1u, q, allowed);
                 }
-                if (m2 <= allowed) {
-                    m2 += (int32_t)(1u - get_bit(grid, first + row));
-                    reads++;
+                if ((live & 4u) != 0u && get_bit(grid, first + row) == 0u) {
+                    child_miss(miss, &live, &reads, 2u, q, allowed);
                 }
-                if (m3 <= allowed) {
-                    m3 += (int32_t)(1u - get_bit(grid, first + row + d));
-                    reads++;
+                if ((live & 8u) != 0u && get_bit(grid, first + row + d) == 0u) {
+                    child_miss(miss, &live, &reads, 3u, q, allowed);
                 }
             } else {
                 /* At the grid's edge: each child's block from its own
@@ -1024,38 +1031,29 @@ static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int3
                  * so the blocks are not d apart there). */
                 const uint32_t a1 = (uint32_t)(fx[q] + x0 + half) >> e;
                 const uint32_t b1 = (uint32_t)(fy[q] + y0 + half) >> e;
-                const uint32_t left = a < nx ? 1u : 0u;
-                const uint32_t right = a1 < nx ? 1u : 0u;
-                const uint32_t low = b < ny ? 1u : 0u;
-                const uint32_t high = b1 < ny ? 1u : 0u;
-                if (m0 <= allowed) {
-                    m0 += (left & low) != 0u ? (int32_t)(1u - get_bit(grid, at + b * nx + a)) : 1;
-                    reads++;
-                }
-                if (m1 <= allowed) {
-                    m1 += (right & low) != 0u ? (int32_t)(1u - get_bit(grid, at + b * nx + a1)) : 1;
-                    reads++;
-                }
-                if (m2 <= allowed) {
-                    m2 += (left & high) != 0u ? (int32_t)(1u - get_bit(grid, at + b1 * nx + a)) : 1;
-                    reads++;
-                }
-                if (m3 <= allowed) {
-                    m3 += (right & high) != 0u ? (int32_t)(1u - get_bit(grid, at + b1 * nx + a1)) : 1;
-                    reads++;
+                for (c = 0; c < 4u; ++c) {
+                    const uint32_t ac = (c & 1u) != 0u ? a1 : a;
+                    const uint32_t bc = (c & 2u) != 0u ? b1 : b;
+                    if ((live & (1u << c)) != 0u && !(ac < nx && bc < ny && get_bit(grid, at + bc * nx + ac) != 0u)) {
+                        child_miss(miss, &live, &reads, c, q, allowed);
+                    }
                 }
             }
         }
-        *work += reads;
     }
-    if (q > 0u && m0 > allowed && m1 > allowed && m2 > allowed && m3 > allowed) {
+    /* The live read every point; the dead up to the one they died at
+     * (child_miss), the last of them at the last point read. */
+    for (c = 0; c < 4u; ++c) {
+        if ((live & (1u << c)) != 0u) {
+            reads += q;
+        }
+        bound[c] = (float)((int32_t)g->npts - miss[c]);
+    }
+    *work += reads;
+    if (live == 0u && q > 0u) {
         /* The point that ended the last child's bound moves up. */
         promote(g, fx, fy, q - 1u);
     }
-    bound[0] = (float)((int32_t)g->npts - m0);
-    bound[1] = (float)((int32_t)g->npts - m1);
-    bound[2] = (float)((int32_t)g->npts - m2);
-    bound[3] = (float)((int32_t)g->npts - m3);
 }
 
 /* The score a box must reach to be split or kept. */
@@ -1315,21 +1313,24 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
             float leaf[4];
             uint32_t c;
             uint32_t nc = 0;
+            /* The bar of the children (the best score does not change
+             * while they are bounded). */
+            const float bar = h == 0u ? leaf_threshold(g) : threshold(g);
             if (h == 0u) {
-                leaf_bounds(g, grid, map, fx, fy, b.i, b.j, leaf_threshold(g), leaf, &work);
+                leaf_bounds(g, grid, map, fx, fy, b.i, b.j, bar, leaf, &work);
             } else {
-                child_bounds(g, grid, fx, fy, b.i, b.j, h, threshold(g), leaf, &work);
+                child_bounds(g, grid, fx, fy, b.i, b.j, h, bar, leaf, &work);
             }
             for (c = 0; c < 4u; ++c) {
                 rsm_global_box_t ch;
                 uint32_t at;
+                if (leaf[c] < bar) {
+                    continue;
+                }
                 ch.i = b.i + ((c & 1u) ? half : 0);
                 ch.j = b.j + ((c & 2u) ? half : 0);
                 ch.h = h;
                 ch.bound = leaf[c];
-                if (ch.bound < (h == 0u ? leaf_threshold(g) : threshold(g))) {
-                    continue;
-                }
                 /* Ascending, so that the best is pushed last, popped first. */
                 for (at = nc; at > 0u && child[at - 1u].bound > ch.bound; --at) {
                     child[at] = child[at - 1u];

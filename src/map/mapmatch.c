@@ -336,11 +336,121 @@ static void keep_candidate(rsm_pose_t *best, float *cost, int32_t *ij, size_t k,
     *found = kept + 1u;
 }
 
+/* Candidates a side of the window whose costs search_heading sums point by
+ * point: each point's cells for every candidate lie in at most four tiles
+ * (2 RSM_MAPMATCH_BLOCK_HALF + 1 <= the tile side). */
+#define RSM_MAPMATCH_BLOCK_HALF 3
+typedef char rsm_mapmatch_block_fits[(2 * RSM_MAPMATCH_BLOCK_HALF + 1 <= RSM_TMAP_TILE_SIDE) ? 1 : -1];
+#define BLOCK_SIDE (2 * RSM_MAPMATCH_BLOCK_HALF + 1)
+
+/* Adds to cost[] (the candidates i, j = -half .. half, row-major) what the
+ * point at cell (gx, gy) of x0 costs each: the cell moved i, j, read tile
+ * by tile (at most four) rather than looked up per candidate. The whole
+ * block lies within the map's reach. */
+static void add_block(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, int32_t gx, int32_t gy, int32_t half,
+                      const float *miss, float *cost)
+{
+    const int32_t side = 2 * half + 1;
+    int32_t y0 = gy - half;
+    while (y0 <= gy + half) {
+        /* The rows of this tile row. */
+        const int32_t y1 =
+            (y0 | (int32_t)RSM_TMAP_TILE_MASK) < gy + half ? (y0 | (int32_t)RSM_TMAP_TILE_MASK) : gy + half;
+        int32_t x0 = gx - half;
+        while (x0 <= gx + half) {
+            const int32_t x1 =
+                (x0 | (int32_t)RSM_TMAP_TILE_MASK) < gx + half ? (x0 | (int32_t)RSM_TMAP_TILE_MASK) : gx + half;
+            const uint32_t slot = rsm_tmap_cursor_slot(map, cur, x0, y0);
+            int32_t u;
+            int32_t w;
+            for (w = y0; w <= y1; ++w) {
+                float *row = &cost[(w - gy + half) * side - gx + half];
+                if (slot == RSM_TMAP_NONE) {
+                    for (u = x0; u <= x1; ++u) {
+                        row[u] += miss[0];
+                    }
+                } else {
+                    const rsm_tile_t *t = &map->tile[slot];
+                    for (u = x0; u <= x1; ++u) {
+                        row[u] += miss[rsm_tmap_get_cell(t, rsm_tmap_cell_index(u, w))];
+                    }
+                }
+            }
+            x0 = x1 + 1;
+        }
+        y0 = y1 + 1;
+    }
+}
+
+/* The coarse costs of one heading's candidates (x0 moved i, j cells of the
+ * level, at x's heading), each kept or not as rsm_mapmatch_search goes.
+ * A point's cell is found once for the heading, at x0; a candidate's is
+ * that cell moved i, j: coarse_cost's sum over the same cells in the same
+ * order, without a coordinate transform and a cell search per point and
+ * candidate (on the M4 the search of a recovery cost 1 to 2 million
+ * instructions). A small window's costs are summed point by point, a
+ * point's cells read tile by tile. A point whose block of cells is not all
+ * within the map's reach is looked up as coarse_cost does. */
+static void search_heading(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, size_t stride,
+                           const rsm_pose_t *x0, rsm_pose_t *x, int32_t half, const float *miss, rsm_pose_t *best,
+                           float *cost_of, int32_t *ij, size_t k, size_t *found)
+{
+    const float inv = map->inv_cell[level];
+    const float step = rsm_tmap_cell(map, level);
+    const int32_t side = 2 * half + 1;
+    const int32_t lim = RSM_TMAP_CELL_LIMIT - 1 - half;
+    float cost[BLOCK_SIDE * BLOCK_SIDE];
+    float c;
+    float sn;
+    size_t q;
+    int32_t i;
+    int32_t j;
+    rsm_tmap_cursor_t cur;
+    rsm_sincosf(x->theta, &sn, &c);
+    rsm_tmap_cursor_init(&cur, level);
+    if (half <= RSM_MAPMATCH_BLOCK_HALF) {
+        memset(cost, 0, sizeof cost);
+        for (q = 0; q < n; q += stride) {
+            const int32_t gx = rsm_tmap_cell_of(x0->x + c * pts[q].x - sn * pts[q].y, inv);
+            const int32_t gy = rsm_tmap_cell_of(x0->y + sn * pts[q].x + c * pts[q].y, inv);
+            if (gx > -lim && gx < lim && gy > -lim && gy < lim) {
+                add_block(map, &cur, gx, gy, half, miss, cost);
+                continue;
+            }
+            for (j = -half; j <= half; ++j) {
+                for (i = -half; i <= half; ++i) {
+                    const float wx0 = x0->x + (float)i * step;
+                    const float wy0 = x0->y + (float)j * step;
+                    const float r = 1.0f - rsm_tmap_occupancy_at(map, &cur, wx0 + c * pts[q].x - sn * pts[q].y,
+                                                                 wy0 + sn * pts[q].x + c * pts[q].y);
+                    cost[(j + half) * side + i + half] += r * r;
+                }
+            }
+        }
+        for (j = -half; j <= half; ++j) {
+            for (i = -half; i <= half; ++i) {
+                x->x = x0->x + (float)i * step;
+                x->y = x0->y + (float)j * step;
+                keep_candidate(best, cost_of, ij, k, found, x, cost[(j + half) * side + i + half], i, j);
+            }
+        }
+        return;
+    }
+    for (j = -half; j <= half; ++j) {
+        for (i = -half; i <= half; ++i) {
+            x->x = x0->x + (float)i * step;
+            x->y = x0->y + (float)j * step;
+            keep_candidate(best, cost_of, ij, k, found, x, coarse_cost(map, level, pts, n, stride, x), i, j);
+        }
+    }
+}
+
 int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
                         const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k)
 {
     /* Every stride-th point: the score only ranks candidates. */
-    const size_t stride = n > 64u ? (n + 63u) / 64u : 1u;
+    const size_t stride =
+        n > RSM_MAPMATCH_SEARCH_POINTS ? (n + RSM_MAPMATCH_SEARCH_POINTS - 1u) / RSM_MAPMATCH_SEARCH_POINTS : 1u;
     float cost_of[RSM_MAPMATCH_MAX_CANDIDATES];
     int32_t ij[2 * RSM_MAPMATCH_MAX_CANDIDATES];
     size_t found = 0;
@@ -349,8 +459,6 @@ int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg,
     int32_t half;
     int32_t fan;
     int32_t a;
-    int32_t i;
-    int32_t j;
     /* Everything is checked before map or cfg is read, and the radii before
      * they are converted to counts. */
     if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || best == NULL || k < 1u ||
@@ -365,15 +473,18 @@ int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg,
     }
     half = (int32_t)(radius_m / step);
     fan = cfg->search_step_rad > 0.0f ? (int32_t)(radius_rad / cfg->search_step_rad) : 0;
-    for (a = -fan; a <= fan; ++a) {
-        rsm_pose_t x;
-        x.theta = rsm_wrap_angle(x0->theta + (float)a * cfg->search_step_rad);
-        for (j = -half; j <= half; ++j) {
-            for (i = -half; i <= half; ++i) {
-                x.x = x0->x + (float)i * step;
-                x.y = x0->y + (float)j * step;
-                keep_candidate(best, cost_of, ij, k, &found, &x, coarse_cost(map, level, pts, n, stride, &x), i, j);
-            }
+    {
+        /* (1 - occupancy)^2 of each cell value, as coarse_cost sums it. */
+        float miss[RSM_TMAP_MAX_VALUE + 1u];
+        uint32_t v;
+        for (v = 0; v <= RSM_TMAP_MAX_VALUE; ++v) {
+            const float r = 1.0f - map->occ[v];
+            miss[v] = r * r;
+        }
+        for (a = -fan; a <= fan; ++a) {
+            rsm_pose_t x;
+            x.theta = rsm_wrap_angle(x0->theta + (float)a * cfg->search_step_rad);
+            search_heading(map, level, pts, n, stride, x0, &x, half, miss, best, cost_of, ij, k, &found);
         }
     }
     return (int)found;

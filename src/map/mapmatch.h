@@ -79,6 +79,8 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
 
 /* Most candidates rsm_mapmatch_search returns. */
 #define RSM_MAPMATCH_MAX_CANDIDATES 8u
+/* Most points it scores (every stride-th of the scan). */
+#define RSM_MAPMATCH_SEARCH_POINTS 64u
 
 /* Exhaustive search on the coarsest level for the poses that best fit the
  * points: positions on that level's cell grid within +-radius_m of x0, each

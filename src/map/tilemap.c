@@ -401,16 +401,10 @@ static void set_cell(rsm_tile_t *t, uint32_t i, uint32_t v)
     t->cell[i >> 1] = (uint8_t)(((uint32_t)t->cell[i >> 1] & ~(15u << sh)) | (v << sh));
 }
 
-static int in_range(int32_t gx, int32_t gy)
-{
-    return gx > -RSM_TMAP_CELL_LIMIT && gx < RSM_TMAP_CELL_LIMIT && gy > -RSM_TMAP_CELL_LIMIT &&
-           gy < RSM_TMAP_CELL_LIMIT;
-}
-
 uint8_t rsm_tmap_value(const rsm_tmap_t *map, uint32_t level, int32_t gx, int32_t gy)
 {
     uint32_t s;
-    if (map == NULL || level >= map->cfg.levels || !in_range(gx, gy)) {
+    if (map == NULL || level >= map->cfg.levels || !rsm_tmap_in_range(gx, gy)) {
         return 0;
     }
     s = rsm_tmap_find_slot(map, level, gx >> RSM_TMAP_TILE_LOG2, gy >> RSM_TMAP_TILE_LOG2);
@@ -448,22 +442,6 @@ int rsm_tmap_bounds(const rsm_tmap_t *map, uint32_t level, int32_t *gx0, int32_t
         any = 1;
     }
     return any;
-}
-
-/* Cell of a world coordinate at a level: floor, not truncation. */
-static int32_t cell_of(float v, float inv_a)
-{
-    const float u = v * inv_a;
-    int32_t i;
-    /* floor(u) lies in (-L, L) exactly for u in [1 - L, L). Beyond (or
-     * NaN): a cell in_range refuses, and no float-to-int conversion that
-     * overflows. Within, the truncation stepped down where it rounded up
-     * is the floor, without rsm_floorf's tests for the range it knows. */
-    if (!(u >= (float)(1 - RSM_TMAP_CELL_LIMIT) && u < (float)RSM_TMAP_CELL_LIMIT)) {
-        return RSM_TMAP_CELL_LIMIT;
-    }
-    i = (int32_t)u;
-    return (float)i > u ? i - 1 : i;
 }
 
 /* Lowers the cells from (x0, y0) towards (x1, y1), stopping margin + 1
@@ -621,17 +599,17 @@ uint32_t rsm_tmap_beams_crossing(const rsm_tmap_t *map, uint32_t level, const rs
     }
     inv = 1.0f / rsm_tmap_cell(map, level);
     o = rsm_pose_apply(pose, origin);
-    ox = cell_of(o.x, inv);
-    oy = cell_of(o.y, inv);
-    if (!in_range(ox, oy)) {
+    ox = rsm_tmap_cell_of(o.x, inv);
+    oy = rsm_tmap_cell_of(o.y, inv);
+    if (!rsm_tmap_in_range(ox, oy)) {
         return 0u;
     }
     rsm_tmap_cursor_init(&c, level);
     for (k = 0; k < n; k += stride) {
         const rsm_point_t w = rsm_pose_apply(pose, &pts[k]);
-        const int32_t gx = cell_of(w.x, inv);
-        const int32_t gy = cell_of(w.y, inv);
-        if (!in_range(gx, gy)) {
+        const int32_t gx = rsm_tmap_cell_of(w.x, inv);
+        const int32_t gy = rsm_tmap_cell_of(w.y, inv);
+        if (!rsm_tmap_in_range(gx, gy)) {
             continue;
         }
         ++looked;
@@ -696,12 +674,12 @@ static void mark_lone(rsm_tmap_t *map, uint32_t judge, const rsm_point_t *points
     size_t k;
     rsm_tmap_cursor_init(&c, judge);
     for (k = 0; k < n && k < (size_t)RSM_MAX_BEAMS; ++k) {
-        const int32_t gx = cell_of(points[k].x, inv_a);
-        const int32_t gy = cell_of(points[k].y, inv_a);
+        const int32_t gx = rsm_tmap_cell_of(points[k].x, inv_a);
+        const int32_t gy = rsm_tmap_cell_of(points[k].y, inv_a);
         int32_t dx;
         int32_t dy;
         int seen = 0;
-        if (!in_range(gx - 1, gy - 1) || !in_range(gx + 1, gy + 1)) {
+        if (!rsm_tmap_in_range(gx - 1, gy - 1) || !rsm_tmap_in_range(gx + 1, gy + 1)) {
             continue; /* refused later as outside */
         }
         for (dy = -1; dy <= 1 && !seen; ++dy) {
@@ -716,9 +694,9 @@ static void mark_lone(rsm_tmap_t *map, uint32_t judge, const rsm_point_t *points
     }
     memset(map->echo, 0, sizeof map->echo);
     for (k = 0; k < n; ++k) {
-        const int32_t gx = cell_of(points[k].x, inv_a);
-        const int32_t gy = cell_of(points[k].y, inv_a);
-        if (in_range(gx, gy)) {
+        const int32_t gx = rsm_tmap_cell_of(points[k].x, inv_a);
+        const int32_t gy = rsm_tmap_cell_of(points[k].y, inv_a);
+        if (rsm_tmap_in_range(gx, gy)) {
             rsm_bit_set(map->echo, echo_bit(gx, gy));
         }
     }
@@ -743,7 +721,8 @@ int rsm_tmap_write_begin(rsm_tmap_t *map, const rsm_point_t *origin, const rsm_p
         return RSM_ERR_INVAL;
     }
     for (level = 0; level < map->cfg.levels; ++level) {
-        if (!in_range(cell_of(origin->x, map->inv_cell[level]), cell_of(origin->y, map->inv_cell[level]))) {
+        const float inv = map->inv_cell[level];
+        if (!rsm_tmap_in_range(rsm_tmap_cell_of(origin->x, inv), rsm_tmap_cell_of(origin->y, inv))) {
             return RSM_ERR_INVAL;
         }
     }
@@ -777,9 +756,9 @@ static uint32_t clear_one(rsm_tmap_t *map, rsm_tmap_cursor_t *c, uint32_t idx, i
     if (!(fabsf(p->x) < 1.0e6f && fabsf(p->y) < 1.0e6f)) {
         return 1u;
     }
-    gx = cell_of(p->x, inv_a);
-    gy = cell_of(p->y, inv_a);
-    if (!in_range(gx, gy)) {
+    gx = rsm_tmap_cell_of(p->x, inv_a);
+    gy = rsm_tmap_cell_of(p->y, inv_a);
+    if (!rsm_tmap_in_range(gx, gy)) {
         return 1u;
     }
     top = clear_beam(map, c, ox, oy, gx, gy, map->cfg.miss_dec, map->cfg.clear_margin);
@@ -815,7 +794,7 @@ static void hit_one(rsm_tmap_t *map, rsm_tmap_cursor_t *c, const rsm_point_t *p,
         const float du = b.du;
         const float dv = b.dv;
         const float f = (float)map->cfg.hit_inc;
-        if (!in_range(gx, gy) || !in_range(gx + 1, gy + 1)) {
+        if (!rsm_tmap_in_range(gx, gy) || !rsm_tmap_in_range(gx + 1, gy + 1)) {
             map->counters.outside++;
             return;
         }
@@ -824,9 +803,9 @@ static void hit_one(rsm_tmap_t *map, rsm_tmap_cursor_t *c, const rsm_point_t *p,
         add_hit(map, c, level, gx, gy + 1, (uint32_t)(f * (1.0f - du) * dv + 0.5f));
         add_hit(map, c, level, gx + 1, gy + 1, (uint32_t)(f * du * dv + 0.5f));
     } else {
-        const int32_t gx = cell_of(p->x, inv_a);
-        const int32_t gy = cell_of(p->y, inv_a);
-        if (!in_range(gx, gy)) {
+        const int32_t gx = rsm_tmap_cell_of(p->x, inv_a);
+        const int32_t gy = rsm_tmap_cell_of(p->y, inv_a);
+        if (!rsm_tmap_in_range(gx, gy)) {
             map->counters.outside++;
             return;
         }
@@ -846,8 +825,8 @@ int rsm_tmap_write_run(rsm_tmap_t *map, const rsm_point_t *points, uint32_t budg
         const uint32_t idx = job->pass;
         const uint32_t level = pass_level(map, idx);
         const float inv_a = map->inv_cell[level];
-        const int32_t ox = cell_of(job->origin.x, inv_a);
-        const int32_t oy = cell_of(job->origin.y, inv_a);
+        const int32_t ox = rsm_tmap_cell_of(job->origin.x, inv_a);
+        const int32_t oy = rsm_tmap_cell_of(job->origin.y, inv_a);
         uint32_t end = job->next;
         uint32_t k;
         rsm_tmap_cursor_t c;
@@ -911,9 +890,9 @@ float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y
 float rsm_tmap_occupancy_at(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, float x, float y)
 {
     const float inv_a = map->inv_cell[c->level];
-    const int32_t gx = cell_of(x, inv_a);
-    const int32_t gy = cell_of(y, inv_a);
-    return in_range(gx, gy) ? map->occ[rsm_tmap_cell_value(map, c, gx, gy)] : 0.0f;
+    const int32_t gx = rsm_tmap_cell_of(x, inv_a);
+    const int32_t gy = rsm_tmap_cell_of(y, inv_a);
+    return rsm_tmap_in_range(gx, gy) ? map->occ[rsm_tmap_cell_value(map, c, gx, gy)] : 0.0f;
 }
 
 /* Read where the pool holds no tile: its cells are 0, as such a place
@@ -1009,7 +988,7 @@ int rsm_tmap_raise(rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy
     uint32_t i;
     uint32_t old;
     rsm_tile_t *t;
-    if (level >= (uint32_t)map->cfg.levels || !in_range(gx, gy)) {
+    if (level >= (uint32_t)map->cfg.levels || !rsm_tmap_in_range(gx, gy)) {
         return RSM_ERR_RANGE;
     }
     if (v == 0u) {
@@ -1144,12 +1123,12 @@ uint32_t rsm_tmap_fetch(rsm_tmap_t *map, const rsm_pose_t *pose, const rsm_point
         for (k = 0; k < n; ++k) {
             const float x = pose->x + c * pts[k].x - sn * pts[k].y;
             const float y = pose->y + sn * pts[k].x + c * pts[k].y;
-            const int32_t gx = cell_of(x, inv);
-            const int32_t gy = cell_of(y, inv);
+            const int32_t gx = rsm_tmap_cell_of(x, inv);
+            const int32_t gy = rsm_tmap_cell_of(y, inv);
             int32_t r[4];
             int32_t tx;
             int32_t ty;
-            if (!in_range(gx - m, gy - m) || !in_range(gx + m, gy + m)) {
+            if (!rsm_tmap_in_range(gx - m, gy - m) || !rsm_tmap_in_range(gx + m, gy + m)) {
                 continue;
             }
             r[0] = (gx - m) >> RSM_TMAP_TILE_LOG2;

@@ -102,6 +102,32 @@ static inline uint32_t rsm_tmap_slot_value(const rsm_tmap_t *map, uint32_t s, in
     return s == RSM_TMAP_NONE ? 0u : rsm_tmap_get_cell(&map->tile[s], rsm_tmap_cell_index(gx, gy));
 }
 
+/* Cell of a world coordinate at a level (inv_a: 1 / its cell side): floor,
+ * not truncation. */
+static inline int32_t rsm_tmap_cell_of(float v, float inv_a)
+{
+    const float u = v * inv_a;
+    int32_t i;
+    /* floor(u) lies in (-L, L) exactly for u in [1 - L, L). Beyond (or
+     * NaN): a cell rsm_tmap_in_range refuses, and no float-to-int
+     * conversion that overflows. Within, the truncation stepped down where
+     * it rounded up is the floor, without rsm_floorf's tests for the range
+     * it knows. */
+    if (!(u >= (float)(1 - RSM_TMAP_CELL_LIMIT) && u < (float)RSM_TMAP_CELL_LIMIT)) {
+        return RSM_TMAP_CELL_LIMIT;
+    }
+    i = (int32_t)u;
+    return (float)i > u ? i - 1 : i;
+}
+
+/* Whether a cell lies within the map's reach (rsm_tmap_cell_of's cells
+ * beyond it do not). */
+static inline int rsm_tmap_in_range(int32_t gx, int32_t gy)
+{
+    return gx > -RSM_TMAP_CELL_LIMIT && gx < RSM_TMAP_CELL_LIMIT && gy > -RSM_TMAP_CELL_LIMIT &&
+           gy < RSM_TMAP_CELL_LIMIT;
+}
+
 /* Value of a cell through a cursor; 0 where no tile is held. */
 static inline uint32_t rsm_tmap_cell_value(const rsm_tmap_t *map, rsm_tmap_cursor_t *c, int32_t gx, int32_t gy)
 {
