@@ -37,7 +37,7 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.odometry.sigma_rot_per_m = 0.2f;
     c.odometry.sigma_rot_per_rad = 0.1f;
     c.map_frozen = 0u;
-    c.global_budget = 20000u;
+    c.global_budget = 45000u;
     c.global_min_share = 0.8f;
     c.global_min_fit = 0.8f;
     c.global_crowded_fit = 0.9f;
@@ -1067,7 +1067,7 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
     wide[4] += radius_m * radius_m;
     wide[8] += cfg->recover_rad * cfg->recover_rad;
     found = rsm_mapmatch_search(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, radius_m,
-                                cfg->recover_rad, start, RECOVER_STARTS);
+                                cfg->recover_rad, start, RECOVER_STARTS, RSM_MAPMATCH_SEARCH_POINTS);
     /* The coarse score only ranks basins: descend from each. */
     for (k = 0; k < found; ++k) {
         rsm_mapmatch_result_t alt;
@@ -1487,15 +1487,18 @@ static float win_fit(const rsm_localizer_t *loc)
            bar_fit(loc);
 }
 
-/* What the proof's steps cost, in the search's reads (about 45
- * instructions each on the M4), so that global_budget spreads the proof
- * over scans too: a kept pose's descent with the kept share of a scan,
- * and the winner's with the whole scan at hand (measured on the M4). */
-#define PROVE_WORK 3000u
-#define WIN_WORK 12000u
+/* What the proof's steps cost, in the search's work (rsm_global_run's
+ * units: about 18 M4 instructions), so that global_budget spreads the
+ * proof over scans too: a kept pose's descent with the kept share of a
+ * scan (about 170 000 M4 instructions), and the winner's with the whole
+ * scan at hand, a near search and up to two descents (up to about 720 000:
+ * always a scan of its own). Measured on the M4 (docs/globalsearch.md,
+ * "What a scan costs on the M4"). */
+#define PROVE_WORK 9500u
+#define WIN_WORK 40000u
 /* A search's beginning (the scan's points and wall directions, the
- * grids' layout) costs about this much. */
-#define BEGIN_WORK 3000u
+ * grids' layout) costs about this much (about 200 000 instructions). */
+#define BEGIN_WORK 11000u
 /* Proofs of the same kept poses, each with a scan that follows, while the
  * best fits well but a rival is too close or the scan does not pin it,
  * before a new search; each once the robot has moved this far or turned
@@ -1614,7 +1617,8 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts)
     if (reach_m > 2.0f * cell + NEAR_FROM_M) {
         /* Carried far (odometry's drift past the descent's basin): look
          * for it again around where odometry puts it. */
-        n = rsm_mapmatch_search(map, &cfg->mapmatch, loc->pts, npts, &start, reach_m, reach_rad, near, 2u);
+        n = rsm_mapmatch_search(map, &cfg->mapmatch, loc->pts, npts, &start, reach_m, reach_rad, near, 2u,
+                                RSM_MAPMATCH_SEARCH_POINTS);
     }
     if (n <= 0) {
         near[0] = start;
@@ -1709,7 +1713,8 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
     if (g->phase == RSM_GLOBAL_PROVING) {
         /* The kept poses first, as many a scan as global_budget pays for
          * (at least one; all with no budget); the winner with a scan of
-         * its own unless the budget pays for it too. */
+         * its own (with a budget: its near search and descents cost about
+         * as much as a scan may). */
         int verdict = 1;
         uint32_t win = 0;
         while (g->proved < g->found && (budget == 0u || used == 0u || used + PROVE_WORK <= budget)) {
@@ -1718,7 +1723,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         }
         if (g->proved == g->found) {
             verdict = prove_verdict(loc, &win);
-            if (verdict > 0 && (budget == 0u || used == 0u || used + WIN_WORK <= budget)) {
+            if (verdict > 0 && (budget == 0u || used == 0u)) {
                 used += WIN_WORK;
                 if (prove_win(loc, win, npts)) {
                     g->phase = RSM_GLOBAL_IDLE;

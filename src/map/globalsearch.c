@@ -395,13 +395,13 @@ static int begin_build(rsm_global_t *g, uint8_t *grid, int32_t gx0, int32_t gy0,
 
 uint32_t rsm_global_take_back(rsm_tmap_t *map, uint32_t budget, int *more)
 {
-    /* Tiles taken back at 16 reads each fill at most a quarter of the
-     * budget: the places looked up take about as much on ACES. */
-    const uint32_t most = budget == 0u ? UINT32_MAX : (budget / 64u > 0u ? budget / 64u : 1u);
+    /* Tiles taken back at 40 each fill at most a quarter of the budget:
+     * the places looked up take about as much on ACES. */
+    const uint32_t most = budget == 0u ? UINT32_MAX : (budget / 160u > 0u ? budget / 160u : 1u);
     uint32_t looked = 0;
     const uint32_t got = rsm_tmap_take_back(map, direction_level(search_level(map)), most, &looked);
     *more = got >= most ? 1 : 0;
-    return 4u * looked + 16u * got;
+    return 10u * looked + 40u * got;
 }
 
 /* The tiles of the levels a search on `level` reads (it, and the finer
@@ -847,8 +847,8 @@ static void promote(rsm_global_t *g, int32_t *fx, int32_t *fy, uint32_t q)
  * 1 where the grid of h holds a nonzero cell over the window, else 0;
  * points not read count 1). Stops as soon as the points left could not
  * lift the sum to thr (each adds 1 at most): what it returns is then below
- * thr, which is all the caller asks. Adds the reads (a grid block, or the
- * four cells of a leaf's window: 4) to *work. */
+ * thr, which is all the caller asks. Adds the work (a grid block read,
+ * or a leaf's point: RSM_GLOBAL_LEAF_WORK) to *work. */
 static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, int32_t *fx, int32_t *fy,
                        int32_t i, int32_t j, uint32_t h, float thr, uint32_t *work)
 {
@@ -864,12 +864,12 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
                 sum += map->occ[window4(map, g->level, u, v)];
             }
             if (sum + (float)(g->npts - q - 1u) < thr) {
-                *work += 4u * (q + 1u);
+                *work += RSM_GLOBAL_LEAF_WORK * (q + 1u);
                 promote(g, fx, fy, q);
                 return sum;
             }
         }
-        *work += 4u * g->npts;
+        *work += RSM_GLOBAL_LEAF_WORK * g->npts;
         return sum;
     } else {
         /* Grid h's block of a window [u, u + 2^h] is (u - ox + 2^h) >>
@@ -912,7 +912,8 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
  * (i + (c & 1), j + (c >> 1))): each point's 3 x 3 window, read once,
  * holds the four leaves' 2 x 2 ones. A leaf whose points left could not
  * lift it to thr is given up (its sum so far, below thr); the reads stop
- * when all four are. Adds 4 a point read to *work. */
+ * when all four are. Adds RSM_GLOBAL_LEAF_WORK a point read, and
+ * RSM_GLOBAL_SPLIT_WORK, to *work. */
 static void leaf_bounds(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, int32_t *fx,
                         int32_t *fy, int32_t i, int32_t j, float thr, float *bound, uint32_t *work)
 {
@@ -942,8 +943,9 @@ static void leaf_bounds(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *
                 }
             }
         }
-        *work += 4u;
+        *work += RSM_GLOBAL_LEAF_WORK;
     }
+    *work += RSM_GLOBAL_SPLIT_WORK;
 }
 
 /* A child's miss at point q: its count up, and once past allowed it dies
@@ -964,8 +966,8 @@ static void child_miss(int32_t *miss, uint32_t *live, uint32_t *reads, uint32_t 
  * when all four are. A hit costs a test of the live children's mask and
  * the bit; the counts, the deaths and the reads (each child's, up to the
  * point it died at) are kept only on a miss: on the M4, a test of each
- * count at every read cost more than the read. Adds the blocks read to
- * *work. */
+ * count at every read cost more than the read. Adds the blocks read, and
+ * RSM_GLOBAL_SPLIT_WORK, to *work. */
 static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int32_t *fy, int32_t i,
                          int32_t j, uint32_t h, float thr, float *bound, uint32_t *work)
 {
@@ -1049,7 +1051,7 @@ static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int3
         }
         bound[c] = (float)((int32_t)g->npts - miss[c]);
     }
-    *work += reads;
+    *work += reads + RSM_GLOBAL_SPLIT_WORK;
     if (live == 0u && q > 0u) {
         /* The point that ended the last child's bound moves up. */
         promote(g, fx, fy, q - 1u);
@@ -1195,10 +1197,10 @@ static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t
             break;
         }
         if (level == g->level && in_box(g, t, 0u)) {
-            *work += grid_tile(g, grid, t);
+            *work += RSM_GLOBAL_BUILD_WORK * grid_tile(g, grid, t);
         }
         if (level == direction_level(g->level) && in_box(g, t, g->level - level)) {
-            *work += tile_directions(g, t);
+            *work += RSM_GLOBAL_BUILD_WORK * tile_directions(g, t);
         }
         g->dir_next++;
     }
@@ -1206,7 +1208,7 @@ static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t
         if (budget > 0u && *work >= budget) {
             break;
         }
-        *work += grid_up(g, grid, g->build_next);
+        *work += RSM_GLOBAL_BUILD_WORK * grid_up(g, grid, g->build_next);
         g->build_next++;
     }
     if (g->dir_next == map->used && g->build_next == g->build_end) {
@@ -1276,6 +1278,7 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
             }
             offsets(g, cell, g->heading, fx, fy);
             g->heading++;
+            work += RSM_GLOBAL_HEADING_WORK;
             b.i = g->root_i;
             b.j = g->root_j;
             b.h = g->root_h;
@@ -1302,7 +1305,7 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
                 uint32_t read = 0;
                 const float fine = fine_score(g, map, &x, no_gain(g, b.bound), &read);
                 keep(g, cell, &x, b.bound, fine);
-                work += 4u * read;
+                work += RSM_GLOBAL_FIT_WORK * read;
             }
             continue;
         }

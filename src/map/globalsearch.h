@@ -26,7 +26,11 @@
  * proves them (src/localizer/localizer.c, prove_one, prove_verdict, prove_win).
  *
  * The work is spread over scans: rsm_global_run stops after a budget of
- * reads and resumes where it stopped. Everything lives in rsm_global_t
+ * work and resumes where it stopped. Work is counted in units of about
+ * the M4 instructions a bound grid's block read costs (about 18 at -O2):
+ * each step counts what it was measured to cost (RSM_GLOBAL_*_WORK), so
+ * that a budget bounds the instructions of a scan (docs/globalsearch.md,
+ * "What a scan costs on the M4"). Everything lives in rsm_global_t
  * (include/rsm/localizer_parts.h) and the grid memory the caller lends;
  * no heap. */
 #ifndef RSM_GLOBALSEARCH_H
@@ -42,6 +46,22 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* What the search's steps count, in units of a bound grid's block read,
+ * from their M4 instructions (-O2, QEMU mps2-an386, regressed over the
+ * scans of global searches on the Intel and ACES maps: a block read about
+ * 18, a split's four children bounded 350 beside their reads, a leaf's
+ * point 690, a kept leaf's point fitted 280, a heading begun 3 300, a
+ * cell of the grids' build 50). */
+#define RSM_GLOBAL_SPLIT_WORK 20u
+#define RSM_GLOBAL_LEAF_WORK 38u
+#define RSM_GLOBAL_FIT_WORK 15u
+#define RSM_GLOBAL_HEADING_WORK 185u
+#define RSM_GLOBAL_BUILD_WORK 3u
+/* The most one step of rsm_global_run adds past its budget: a heading
+ * begun and the four leaves of a box bounded. */
+#define RSM_GLOBAL_STEP_WORK                                                                                           \
+    (RSM_GLOBAL_HEADING_WORK + RSM_GLOBAL_SPLIT_WORK + RSM_GLOBAL_LEAF_WORK * (uint32_t)RSM_GLOBAL_POINTS)
 
 /* rsm_global_t.phase */
 #define RSM_GLOBAL_IDLE 0u
@@ -60,10 +80,10 @@ int rsm_global_check(const rsm_tmap_t *map, size_t grid_bytes);
  * search reads, the level it scores on and the one finer that gives the
  * map's directions (rsm_tmap_take_back): tracking in a map larger than the
  * pool lets some of them go, and a search does not fetch. At most a
- * quarter of budget reads' worth of tiles a call (0: all); *more is set when some may
- * be left for the next. Returns the reads it counts: 4 a place looked up
- * (a hash probe in the pool and one in the store), 16 a tile taken back,
- * and a quarter of the pool's tiles. */
+ * quarter of budget's worth of tiles a call (0: all); *more is set when
+ * some may be left for the next. Returns the work it counts: 10 a place
+ * looked up (a hash probe in the pool and one in the store), 40 a tile
+ * taken back. */
 uint32_t rsm_global_take_back(rsm_tmap_t *map, uint32_t budget, int *more);
 
 /* Builds the bound grids and the map's wall directions over the whole of
@@ -143,14 +163,15 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rs
  * rsm_global_begin). */
 void rsm_global_window(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, float x, float y, float radius_m);
 
-/* Goes on with the search for about budget reads (0 = to the end): bound
- * grid blocks, map cells (four a point for a leaf), the grids' build (a
- * tile's cells, two a direction tile's cell) and a kept leaf's fit (four a
- * point). It stops before the next step once budget is reached, so a run
- * reads at most one split beyond it (four boxes, at most 16 reads a kept
- * point). Returns 1 while work remains, 0 once every heading is done
- * (g->cand[0 .. g->found) then hold the kept poses, best ranked first).
- * Adds the reads to g->work and to *used (may be NULL). */
+/* Goes on with the search for about budget work (0 = to the end): bound
+ * grid blocks, leaves' points, the grids' build (a tile's cells, two a
+ * direction tile's cell, each RSM_GLOBAL_BUILD_WORK), headings begun and
+ * kept leaves' fits, each as RSM_GLOBAL_*_WORK says. It stops before the
+ * next step once budget is reached, so a run does at most
+ * RSM_GLOBAL_STEP_WORK beyond it. Returns 1 while work remains, 0 once
+ * every heading is done (g->cand[0 .. g->found) then hold the kept poses,
+ * best ranked first). Adds the work to g->work and to *used (may be
+ * NULL). */
 int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t budget, uint32_t *used);
 
 /* The verdict of a proof round, on the kept poses' fits with the kept

@@ -446,11 +446,12 @@ static void search_heading(const rsm_tmap_t *map, uint32_t level, const rsm_poin
 }
 
 int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                        const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k)
+                        const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k,
+                        size_t max_points)
 {
     /* Every stride-th point: the score only ranks candidates. */
-    const size_t stride =
-        n > RSM_MAPMATCH_SEARCH_POINTS ? (n + RSM_MAPMATCH_SEARCH_POINTS - 1u) / RSM_MAPMATCH_SEARCH_POINTS : 1u;
+    const size_t most = max_points > 0u ? max_points : 1u;
+    const size_t stride = n > most ? (n + most - 1u) / most : 1u;
     float cost_of[RSM_MAPMATCH_MAX_CANDIDATES];
     int32_t ij[2 * RSM_MAPMATCH_MAX_CANDIDATES];
     size_t found = 0;
@@ -462,7 +463,7 @@ int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg,
     /* Everything is checked before map or cfg is read, and the radii before
      * they are converted to counts. */
     if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || best == NULL || k < 1u ||
-        k > RSM_MAPMATCH_MAX_CANDIDATES) {
+        k > RSM_MAPMATCH_MAX_CANDIDATES || max_points < 1u || max_points > RSM_MAPMATCH_SEARCH_POINTS) {
         return RSM_ERR_INVAL;
     }
     level = (uint32_t)map->cfg.levels - 1u;

@@ -84,15 +84,18 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
 
 /* Exhaustive search on the coarsest level for the poses that best fit the
  * points: positions on that level's cell grid within +-radius_m of x0, each
- * with headings within +-radius_rad, cfg->search_step_rad apart; points are subsampled to at most 64. For
- * recovery after a large odometry error (about (2r/cell)^2 x fan x 64 cell
- * reads). Writes the k (1..RSM_MAPMATCH_MAX_CANDIDATES) lowest-cost poses to
- * best[], lowest first, no two within one grid step of each other (separate
- * basins for a descent to start from). Returns how many were written (1..k),
- * or RSM_ERR_INVAL (radius negative or above 100 cells, radius_rad negative,
- * above 1 or 64 steps, k out of range). */
+ * with headings within +-radius_rad, cfg->search_step_rad apart; points
+ * are subsampled to at most max_points (1 .. RSM_MAPMATCH_SEARCH_POINTS).
+ * For recovery after a large odometry error (about (2r/cell)^2 x fan x
+ * max_points cell reads). Writes the k (1..RSM_MAPMATCH_MAX_CANDIDATES)
+ * lowest-cost poses to best[], lowest first, no two within one grid step
+ * of each other (separate basins for a descent to start from). Returns how
+ * many were written (1..k), or RSM_ERR_INVAL (radius negative or above 100
+ * cells, radius_rad negative, above 1 or 64 steps, k or max_points out of
+ * range). */
 int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                        const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k);
+                        const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k,
+                        size_t max_points);
 
 /* How well the scan's surfaces pin the position: the ratio (0 to 1) of the
  * smaller to the larger eigenvalue of the sum of t t^T over the unit chords

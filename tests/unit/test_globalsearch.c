@@ -111,7 +111,7 @@ static void test_a_forgotten_robot_is_found(void)
         step(&loc, &world, k, &rep);
         if (rep.outcome == RSM_SCAN_SEARCHING) {
             TEST_ASSERT_EQUAL_INT(RSM_TRACK_LOST, rep.track);
-            TEST_ASSERT_TRUE(rep.search_work <= cfg.global_budget + 16u * RSM_GLOBAL_POINTS);
+            TEST_ASSERT_TRUE(rep.search_work <= cfg.global_budget + RSM_GLOBAL_STEP_WORK);
         } else {
             found = k;
         }
@@ -152,9 +152,9 @@ static void test_spread_search_finds_the_same(void)
     do {
         const uint32_t prev = used;
         more = rsm_global_run(&g2, grid2, map, 300u, &used);
-        /* A run stops within one split of its budget: four children, four
-         * reads a point each. */
-        TEST_ASSERT_TRUE(used - prev <= 300u + 16u * RSM_GLOBAL_POINTS);
+        /* A run stops within one step of its budget (a heading begun, a
+         * box's four leaves bounded). */
+        TEST_ASSERT_TRUE(used - prev <= 300u + RSM_GLOBAL_STEP_WORK);
         runs++;
     } while (more);
     TEST_ASSERT_TRUE(runs > 3u);

@@ -408,6 +408,7 @@ void test_mapmatch_should_not_drag_a_scan_back_along_a_bare_corridor(void)
 
 void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
 {
+    const size_t ALL = RSM_MAPMATCH_SEARCH_POINTS; /* every point the search may score */
     const rsm_pose_t truth_w = {-0.5f, 0.3f, 0.3f};
     const rsm_pose_t truth = in_map(&truth_w);
     rsm_pose_t pred = truth;
@@ -421,7 +422,7 @@ void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
     pred.y -= 0.5f;
     pred.theta += 4.0f * DEG;
     n = points_at(&truth_w);
-    TEST_ASSERT_EQUAL_INT(1, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, &best, 1u));
+    TEST_ASSERT_EQUAL_INT(1, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, &best, 1u, ALL));
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&best, &truth) < coarse);
     TEST_ASSERT_TRUE(rsm_synth_angle_error(&best, &truth) < 2.0f * DEG);
     /* and the descent from there lands on it, under the prior widened by
@@ -434,20 +435,24 @@ void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, wide, &best, NULL, &res));
     }
     TEST_ASSERT_TRUE(rsm_synth_pos_error(&res.pose, &truth) < 0.02f);
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, -1.0f, 0.1f, &best, 1u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, -1.0f, 0.1f, &best, 1u, ALL));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL,
-                          rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 200.0f * coarse, 0.1f, &best, 1u));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, -0.1f, &best, 1u));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 1.5f, &best, 1u));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 0.1f, &best, 0u));
+                          rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 200.0f * coarse, 0.1f, &best, 1u, ALL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, -0.1f, &best, 1u, ALL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 1.5f, &best, 1u, ALL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 0.1f, &best, 0u, ALL));
     TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 0.1f, &best,
-                                                             RSM_MAPMATCH_MAX_CANDIDATES + 1u));
+                                                             RSM_MAPMATCH_MAX_CANDIDATES + 1u, ALL));
+    /* At least one point scored, and no more than it holds room for. */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 0.1f, &best, 1u, 0u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL,
+                          rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, 0.1f, &best, 1u, ALL + 1u));
     /* NULL map or config, and NaN radii, are refused before anything is
      * read or converted (the sanitizer build would flag either). */
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(NULL, &cfg, pts, n, &pred, 1.0f, 0.1f, &best, 1u));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, NULL, pts, n, &pred, 1.0f, 0.1f, &best, 1u));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, NAN, 0.1f, &best, 1u));
-    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, NAN, &best, 1u));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(NULL, &cfg, pts, n, &pred, 1.0f, 0.1f, &best, 1u, ALL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, NULL, pts, n, &pred, 1.0f, 0.1f, &best, 1u, ALL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, NAN, 0.1f, &best, 1u, ALL));
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, NAN, &best, 1u, ALL));
     /* The candidates a recovery descends from: the same best first, then
      * others no closer than two grid steps to any kept one, so that a wrong
      * basin ranked first along a corridor does not hide the right one
@@ -455,11 +460,12 @@ void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
     {
         rsm_pose_t some[RSM_MAPMATCH_MAX_CANDIDATES];
         const int found =
-            rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, some, RSM_MAPMATCH_MAX_CANDIDATES);
+            rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, some, RSM_MAPMATCH_MAX_CANDIDATES,
+                                ALL);
         int a;
         int b;
         TEST_ASSERT_TRUE(found >= 2 && found <= 9);
-        rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, &best, 1u);
+        rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, &best, 1u, RSM_MAPMATCH_SEARCH_POINTS);
         TEST_ASSERT_EQUAL_MEMORY(&best, &some[0], sizeof best);
         for (a = 0; a < found; ++a) {
             for (b = a + 1; b < found; ++b) {
