@@ -1651,7 +1651,7 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts)
      * that only the kept scan's share of readings bore out is no proof
      * (measured on an Intel kidnap: a pose 9 m off fitted the share 0.80
      * and this scan 0.69 of the map's own 0.93). */
-    if (!have || !(res.hit >= win_fit(loc))) {
+    if (!have || !(res.hit >= win_fit(loc)) || !(res.hit >= cfg->global_crowded_fit * bar_fit(loc))) {
         return 0;
     }
     /* Its covariance says what the scan pins (under a prior at least two

@@ -1457,7 +1457,7 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
     /* Beyond doubt of every rival, by this view alone or, when it led
      * every view before, by all of them together: each pose's fits
      * multiplied over the views, as independent evidence. */
-    summed = g->rounds > 0u && g->leader == best;
+    summed = g->rounds > 0u && g->leader == best && g->unkept == 0u;
     for (k = 0; k < g->found; ++k) {
         if (k == best || !rsm_pose_apart(&g->end[k], &g->end[best], doubt_m, doubt_rad)) {
             continue; /* the same place */
