@@ -154,7 +154,7 @@ def test_floors_on_made_up_numbers():
                    ("a", "knownmap-wrong", "PASS"),
                    ("b", "knownmap-roundtrip", "MISS"), ("b", "knownmap-localization", "MISS"),
                    ("b", "knownmap-localization", "MISS"), ("b", "knownmap-global", "MISS"),
-                   ("b", "knownmap-wrong", "MISS"), (None, "knownmap-cost", "SKIP")]
+                   ("b", "knownmap-wrong", "MISS"), (None, "knownmap-cost", "SKIP"), (None, "m4-real", "SKIP")]
     assert all(": known map, " in f["line"] and f["line"].startswith(f["status"] + " ") for f in fl)
     g = fl[8]
     assert (g["value"], g["limit"]) == (80, 86)  # 95 % of the 90 held starts
@@ -190,7 +190,7 @@ def test_the_cost_floor_judges_the_worst_scan_of_the_global_search_on_the_m4():
     f = cost[0]
     assert f["status"] == "MISS" and (f["value"], f["limit"]) == (4336270.0, 1000000)
     for part in ("Cortex-M4F: known map, global search", "the excerpt's map (small: 265 tiles, 10 652 bytes",
-                 "first 350 scans", "default global_budget (100 000 reads a scan)", "worst 4 336 270 > 1 000 000",
+                 "first 350 scans", "default global_budget (100 000 a scan)", "worst 4 336 270 > 1 000 000",
                  "mean 3 221 950 over 6 scans", "first proven pose after 6 scans"):
         assert part in f["line"], (part, f["line"])
     ok = dict(M4_GLOBAL, max=999999.0, proven=False, scans_to_pose=None, scans=100)
@@ -218,7 +218,8 @@ def test_report_section_holds_the_tables_and_the_floors():
     assert "| intel | localization, frozen | 0.0215 |" in text
     assert "| intel | 4 | 1 | 3 | 3 | 0 | 0 | 0 | 4 / 4 |" in text
     assert "fit_ratio" in text and "at least 0.8" in text  # the held rule is said
-    assert "not measured on these logs" in text and "map-in-flash firmware" in text  # the M4's cost
+    # the M4's cost: on the excerpt's map and on each log's saved map
+    assert "map-in-flash firmware" in text and "rsm_tools.m4cost global" in text
     for f in km.knownmap_floors(s):
         assert f["line"] in text
     assert km.report_knownmap(None)[-2] == "Not measured in this run."
@@ -535,3 +536,52 @@ def test_bench_option_of_the_kidnapping():
     assert p.parse_args(["--only", "knownmap", "--kidnap-runs", "3"]).kidnap_runs == 3
     assert p.parse_args([]).kidnap_runs is None
     assert "--kidnap-runs" in p.format_help()
+
+
+M4_REAL = {"scans": 60, "replay_scans": 600, "logs": {
+    "aces": {"global": [{"offset_s": 136.5, "max": 899805.0, "mean": 862596.0, "scans": 60, "proven": False,
+                         "max_work": 45200, "budget": 45000},
+                        {"offset_s": 955.9, "max": 866395.0, "mean": 785755.0, "scans": 15, "proven": True,
+                         "max_work": 45018, "budget": 45000}],
+             "replay": {"scans": 600, "mean": 387355.0, "p99": 1055950.0, "max": 1800955.0,
+                        "matching_worst": {"scan": 269, "insns": 1800955.0, "mapmatch": 1643940.0}}}}}
+
+
+def test_the_full_logs_cost_floors():
+    floors = km.m4_real_floors(M4_REAL)
+    assert [f["kind"] for f in floors] == ["m4-real-global", "m4-real-recovery"]
+    g, r = floors
+    # the worst scan of every search judged: both under the floor
+    assert g["status"] == "PASS" and (g["value"], g["limit"]) == (899805.0, 1000000) and g["log"] == "aces"
+    for part in ("worst scan 899 805 <= 1 000 000", "136 s: worst 899 805, mean 862 596 over 60 scans, none proven",
+                 "956 s: worst 866 395", "global_budget (45 000)"):
+        assert part in g["line"], (part, g["line"])
+    # the recovery's scan over it: a MISS naming the scan
+    assert r["status"] == "MISS" and r["value"] == 1800955.0
+    for part in ("scan 269: 1 800 955 > 1 000 000", "1 643 940 matching", "p99 1 055 950", "first 600 scans"):
+        assert part in r["line"], (part, r["line"])
+    # not run: one SKIP line saying why
+    skip = km.m4_real_floors({"skipped": "--no-m4"})
+    assert len(skip) == 1 and skip[0]["status"] == "SKIP" and "--no-m4" in skip[0]["line"]
+    assert km.m4_real_floors(None)[0]["status"] == "SKIP"
+
+
+def test_a_log_is_cut_from_a_point_for_the_target(tmp_path):
+    from rsm_tools import m4cost
+    src = tmp_path / "in.clf"
+    lines = []
+    for k in range(10):
+        t = 100.0 + k
+        lines.append(f"ODOM 0 0 0 0 0 0 {t:.1f} host {t:.1f}\n")
+        lines.append("FLASER 3 1 1 1 0 0 0 0 0 0 " + f"{t + 0.5:.1f} host {t + 0.5:.1f}\n")
+        lines.append("# a comment line\n")
+    src.write_text("".join(lines))
+    out = tmp_path / "cut.clf"
+    # from 4.2 s after the first record: the scan at 104.5 is the first kept
+    assert m4cost.cut_log(src, out, 4.2, 3) == 3
+    kept = out.read_text().splitlines()
+    assert kept[0].startswith("FLASER") and " 104.5 " in kept[0]
+    assert [l.split()[0] for l in kept] == ["FLASER", "ODOM", "FLASER", "ODOM", "FLASER"]
+    assert all(not l.startswith("#") for l in kept)
+    # past the end: what is left
+    assert m4cost.cut_log(src, out, 8.0, 5) == 2

@@ -361,6 +361,10 @@ def run(args: argparse.Namespace) -> Path:
     if "skipped" not in ctx["knownmap"]:
         # the section's cost floor is the M4's, measured in the stage above
         ctx["knownmap"]["m4_global"] = _knownmap.m4_global_entry(ctx["m4"])
+        # and on the full logs, in the maps the section saved
+        ctx["knownmap"]["m4_real"] = ({"skipped": "--no-m4"} if args.no_m4 else
+                                      stage("m4 on the full logs", _knownmap.run_m4_real, logs, work,
+                                            ctx["knownmap"]))
     ctx["memory"] = stage("memory", run_memory, {"default": stages_bin, "small": small["stages"]}, main_log, build)
     ctx["cross_check"] = ({"skipped": "--no-cross-check"} if args.no_cross_check
                           else stage("cross-check", run_cross_check, root))

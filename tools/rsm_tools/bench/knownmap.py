@@ -50,12 +50,14 @@ least FLOOR_RIGHT_SHARE of the held starts right within WITHIN_SCANS scans;
 no start wrong; after every kidnap, in both modes, a trusted right pose
 within WITHIN_SCANS scans and no trusted wrong one. The issue's cost floor,
 at most FLOOR_GLOBAL_M4 instructions per scan of the global search on the
-M4, is not measured on these logs (the section prints their reads per
-scan): the bench's m4 stage runs the map-in-flash firmware under QEMU, whose
-global search in the excerpt's small map, at the default global_budget, is
-timed scan by scan (:func:`rsm_tools.m4.mapflash_run`); its worst scan is
-judged (one line, not per log; a SKIP line where the stage did not run, as
-with ``--only knownmap``).
+M4, is judged twice: the bench's m4 stage runs the map-in-flash firmware
+under QEMU, whose global search in the excerpt's small map, at the default
+global_budget, is timed scan by scan (:func:`rsm_tools.m4.mapflash_run`;
+one line); and, after it, the same firmware searches each log's saved pool
+map from M4_REAL_STARTS (:func:`run_m4_real`, rsm_tools.m4cost), beside
+the replay firmware on each log's first scans, whose costliest map matching
+(a recovery's) is issue 29's floor. SKIP lines where the stages did not
+run, as with ``--only knownmap``.
 """
 
 import math
@@ -69,6 +71,7 @@ from typing import List, Optional, Sequence, Tuple
 
 from .. import evaluate as ev
 from .. import faults as flt
+from .. import m4cost
 from .common import BenchError, LOCAL_SPAN, floor, fmt_int, fmt_q, provenance_line, ratio
 
 STARTS = 100          # global starts per log
@@ -231,7 +234,7 @@ def aggregate(starts: Sequence[dict], within: int = WITHIN_SCANS) -> dict:
     """The figures of one log's starts: how many ran, were held (a start not
     judged counts as held), right, right within ``within`` scans, between,
     wrong, none; wrong among all starts, held or not; scans to the first
-    pose of the held starts that gave one; reads in all and in one scan."""
+    pose of the held starts that gave one; work in all and in one scan."""
     kept = [s for s in starts if s["held"] is not False]
     count = {v: sum(1 for s in kept if s["verdict"] == v) for v in VERDICTS}
     found = [s for s in kept if s["verdict"] not in ("none",)]
@@ -694,6 +697,7 @@ def knownmap_floors(km: Optional[dict]) -> List[dict]:
                          + f"{'==' if ok else '>'} 0"))
         out += kidnap_floors(km.get("kidnap"), label)
     out.append(m4_global_floor(km.get("m4_global")))
+    out += m4_real_floors(km.get("m4_real"))
     return out
 
 
@@ -720,10 +724,86 @@ def m4_global_floor(g: Optional[dict]) -> dict:
     return floor("PASS" if ok else "MISS", "knownmap-cost", None, g["max"], FLOOR_GLOBAL_M4,
                  f"{what}{kept}, the excerpt's map (small: {fmt_int(g['map_tiles'])} tiles, {fmt_int(g['map_bytes'])} "
                  f"bytes, mapped from its first {g['mapped_scans']} scans; the map-in-flash firmware, -O2, QEMU) at "
-                 f"the default global_budget ({fmt_int(g['budget'])} reads a scan): worst "
+                 f"the default global_budget ({fmt_int(g['budget'])} a scan): worst "
                  f"{fmt_int(round(g['max']))} {'<=' if ok else '>'} {fmt_int(FLOOR_GLOBAL_M4)}, mean "
-                 f"{fmt_int(round(g['mean']))} over {g['scans']} scans (at most {fmt_int(g['max_work'])} reads in "
+                 f"{fmt_int(round(g['mean']))} over {g['scans']} scans (at most {fmt_int(g['max_work'])} work in "
                  f"one); {found}")
+
+
+# The M4's cost on the full logs (rsm_tools.m4cost): a global search in
+# each log's pool-sized saved map (map-pool.rsmm) from the global starts at
+# these shares of the starts (percent), each at most M4_REAL_SCANS scans;
+# and the replay image on each log's first M4_REPLAY_SCANS scans, whose
+# costliest map matching is a recovery's where the log has one (ACES: scans
+# 239 and 269).
+M4_REAL_STARTS = (10, 50, 90)
+M4_REAL_SCANS = 60
+M4_REPLAY_SCANS = 600
+
+
+def run_m4_real(logs: Sequence[Tuple[str, Path, Path]], work: Path, km: dict) -> dict:
+    """M4 instructions per scan on the full logs: the global search in each
+    log's saved pool map at M4_REAL_STARTS, and the replay of its first
+    M4_REPLAY_SCANS scans (rsm_tools.m4cost)."""
+    missing = m4cost.tools_missing()
+    if missing:
+        return {"skipped": missing}
+    out = {"scans": M4_REAL_SCANS, "replay_scans": M4_REPLAY_SCANS, "logs": {}}
+    for label, log, _ in logs:
+        entry = (km.get("logs") or {}).get(label)
+        pool = work / "knownmap" / label / "map-pool.rsmm"
+        if not entry or not pool.is_file():
+            continue
+        offsets = entry["offsets"]
+        searches = []
+        for share in M4_REAL_STARTS:
+            s = offsets[min(len(offsets) - 1, share * len(offsets) // 100)]
+            try:
+                f = m4cost.global_cost(Path(log), pool, s, M4_REAL_SCANS, work / "m4real" / label / f"global-{share}")
+            except m4cost.M4CostError as e:
+                raise BenchError(str(e))
+            searches.append({"offset_s": s, "max": f["max"], "mean": f["mean"], "scans": f["scans"],
+                             "proven": f["proven"], "max_work": f["max_work"], "budget": f["budget"]})
+        try:
+            r = m4cost.replay_cost(Path(log), M4_REPLAY_SCANS, work / "m4real" / label / "replay")
+        except m4cost.M4CostError as e:
+            raise BenchError(str(e))
+        out["logs"][label] = {"global": searches,
+                              "replay": {k: r[k] for k in ("scans", "mean", "p99", "max", "matching_worst")}}
+    return out
+
+
+def m4_real_floors(m: Optional[dict]) -> List[dict]:
+    """The cost floors on the full logs (run_m4_real): the global search's
+    worst scan (issue 31) and the costliest map matching of the replay, a
+    recovery's (issue 29), each at most FLOOR_GLOBAL_M4; SKIP without them."""
+    what = f"Cortex-M4F: {MARK}, the full logs"
+    if not m or "skipped" in m:
+        return [floor("SKIP", "m4-real", None, None, FLOOR_GLOBAL_M4,
+                      f"{what}, instructions per scan: not measured ({(m or {}).get('skipped', 'not run')})")]
+    out = []
+    for label, e in m["logs"].items():
+        g = e["global"]
+        worst = max(x["max"] for x in g)
+        ok = worst <= FLOOR_GLOBAL_M4
+        starts = ", ".join(f"{x['offset_s']:.0f} s: worst {fmt_int(round(x['max']))}, mean {fmt_int(round(x['mean']))} "
+                           f"over {x['scans']} scans{'' if x['proven'] else ', none proven'}" for x in g)
+        out.append(floor("PASS" if ok else "MISS", "m4-real-global", label, worst, FLOOR_GLOBAL_M4,
+                         f"{what}: {label}: global search in the saved pool map on the M4 (map-in-flash "
+                         f"firmware, -O2, QEMU; rsm_tools.m4cost), default global_budget ({fmt_int(g[0]['budget'])}): "
+                         f"worst scan {fmt_int(round(worst))} {'<=' if ok else '>'} {fmt_int(FLOOR_GLOBAL_M4)} "
+                         f"instructions ({starts})"))
+        r = e["replay"]
+        w = r["matching_worst"]
+        ok = w["insns"] <= FLOOR_GLOBAL_M4
+        out.append(floor("PASS" if ok else "MISS", "m4-real-recovery", label, w["insns"], FLOOR_GLOBAL_M4,
+                         f"{what}: {label}: the replay firmware on the first {r['scans']} scans (-O2, QEMU): the "
+                         f"scan whose map matching cost most (a recovery's search and descents where the scans "
+                         f"have one), scan {w['scan']}: {fmt_int(round(w['insns']))} "
+                         f"{'<=' if ok else '>'} {fmt_int(FLOOR_GLOBAL_M4)} instructions "
+                         f"({fmt_int(round(w['mapmatch']))} matching); all scans: mean {fmt_int(round(r['mean']))}, "
+                         f"p99 {fmt_int(round(r['p99']))}, worst {fmt_int(round(r['max']))}"))
+    return out
 
 
 MODE_WHAT = {"frozen": "frozen", "updates": "with updates"}
@@ -864,17 +944,21 @@ def report_knownmap(km: Optional[dict]) -> List[str]:
           f"(all relations and local ones, span <= {LOCAL_SPAN:g} s) beside the mapping run's. "
           f"*Global localization*: {km['starts']} starts per log spread evenly over it (start k at k/{km['starts']} "
           f"of its span), each `--load-map MAP --freeze-map --global --skip-seconds S --scans {km['cap']}`: no start "
-          "pose, the log resumed at S, the global search at its default budget of reads per scan. The first trusted "
+          "pose, the log resumed at S, the global search at its default budget of work per scan. The first trusted "
           f"pose (the trajectory's first line) against the mapping run's pose at that stamp: right within "
           f"{RIGHT_M:g} m and {RIGHT_DEG:g} deg, wrong beyond {WRONG_M:g} m or {WRONG_DEG:g} deg, else between; "
           f"none: no pose within the {km['cap']} scans (or the scans the log had left). Scans to the first trusted "
-          "pose (rsm-nav's `first_trusted_scan`, counted from the start), map reads of the search in all "
+          "pose (rsm-nav's `first_trusted_scan`, counted from the start), the search's work in all "
           f"(`work`) and in one scan (`max_work_per_scan`). Held: {km['held_note']}. "
-          "The issue's cost floor, instructions per scan on the M4, is not measured on these logs, only their "
-          "reads per scan: it is measured on the target, where the map-in-flash firmware "
-          "(`port/baremetal/mapflash/`, -O2, QEMU mps2-an386; the subsection \"On the target: Cortex-M4F\") "
-          "searches the excerpt's small map globally at the default budget of reads per scan and times each scan; "
-          "the floor judges its worst scan.", ""]
+          "The issue's cost floor, instructions per scan on the M4, is measured on the target: the map-in-flash "
+          "firmware (`port/baremetal/mapflash/`, -O2, QEMU mps2-an386; the subsection \"On the target: "
+          "Cortex-M4F\") searches the excerpt's small map globally at the default budget and times each scan; "
+          "and the same firmware, built with its input cut from each log (`python3 -m rsm_tools.m4cost global`), "
+          "searches the log's saved pool map (the map-in-flash region filled by QEMU's loader) from the starts at "
+          f"{', '.join(str(p) for p in M4_REAL_STARTS)} % of the starts, at most {M4_REAL_SCANS} scans each, beside "
+          f"the replay firmware on each log's first {M4_REPLAY_SCANS} scans (`python3 -m rsm_tools.m4cost "
+          "replay`), whose costliest map matching is a recovery's where the log has one (issue 29's floor). "
+          "The search's work is counted in units of about 18 M4 instructions (src/map/globalsearch.h).", ""]
     rows = []
     for label, e in km["logs"].items():
         rt, st = e["round_trip"], e.get("state") or {}
@@ -923,7 +1007,7 @@ def report_knownmap(km: Optional[dict]) -> List[str]:
     head = ["log", "starts", "not held", "right", f"right within {km['within']} scans", "between",
             "wrong (all starts)", f"none within {km['cap']} scans",
             "scans to the first pose (starts that gave one), median / worst",
-            "reads per start, median / worst", "most reads in one scan, median / worst"]
+            "work per start, median / worst", "most work in one scan, median / worst"]
     L += md_table(head, rows, "knownmap global")
     near = [(label, e["summary_near"]) for label, e in km["logs"].items() if e.get("summary_near")]
     if near:
