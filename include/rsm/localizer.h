@@ -162,13 +162,13 @@ typedef struct rsm_localizer_config {
                                      * on Intel's relations whatever the filter's own said */
     float cov_floor_rad;            /* ... and in heading; default 0.002 */
     /* The global search (rsm_localizer_global; docs/globalsearch.md). */
-    uint32_t global_budget;         /* the search's work a scan may take at most, in reads of its
-                                     * bound grids and map cells (about 45 instructions each on a
-                                     * Cortex-M4; its proof's steps count as many reads as they
-                                     * cost); 0 = the whole search and proof in one scan; default
-                                     * 20000, about a million instructions a scan (a search of the
-                                     * Intel map reads about 0.6 million, of ACES 1 to 4 million:
-                                     * docs/globalsearch.md has the cost and the time it takes) */
+    uint32_t global_budget;         /* the search's work a scan may take at most, in units of
+                                     * about 18 Cortex-M4 instructions (a bound grid's block read;
+                                     * every other step of the search and its proof counts what it
+                                     * was measured to cost); 0 = the whole search and proof in one
+                                     * scan; default 45000: at most about 0.9 million instructions
+                                     * a scan on the M4, measured on the Intel and ACES maps
+                                     * (docs/globalsearch.md: the cost and the time it takes) */
     float global_min_share;         /* a pose is kept only when the occupancy summed under the
                                      * scan's points (cells of about 0.2 m) reaches a share of
                                      * their count: 0.97 in the first search, then 0.95, 0.90, ...
@@ -180,8 +180,10 @@ typedef struct rsm_localizer_config {
     float global_crowded_fit;       /* the same share when more distinct poses reached the search's
                                      * bar than it keeps (RSM_GLOBAL_CANDIDATES): a rival the proof
                                      * could not weigh may fit better than those it did, so the
-                                     * winner must fit about as well as the map's own scans;
-                                     * default 0.9 (below global_min_fit: that one) */
+                                     * winner must fit about as well as the map's own scans; and
+                                     * what the winner must fit with the whole scan at hand,
+                                     * whatever the search; default 0.9 (below global_min_fit:
+                                     * that one) */
     uint8_t global_when_lost;       /* 1: a localizer that reports lost starts a global search by
                                      * itself, within recover_m of the estimate first, the window
                                      * doubling with every second search that proves nothing
@@ -480,7 +482,7 @@ int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const floa
 /* Forgets where the robot is and searches the whole persistent map for it
  * (RSM_METHOD_MAP): the robot was switched on somewhere in a loaded map,
  * or carried. From the next scan with enough readings on, the search runs
- * over that scan, global_budget reads a scan, while odometry
+ * over that scan, global_budget work a scan, while odometry
  * keeps counting; scans report RSM_SCAN_SEARCHING and RSM_TRACK_LOST, and
  * nothing is written into the map. When it is done, each pose it kept is
  * descended with a share of that scan (as many a scan as global_budget
@@ -488,7 +490,8 @@ int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const floa
  * global_min_fit of the map's own (global_crowded_fit when more distinct
  * poses passed the search than it keeps) and beats every distinct rival's
  * (doubt_m, doubt_rad away) by recover_margin; the winner, carried by
- * odometry to the scan at hand, must fit it as well and be pinned by it:
+ * odometry to the scan at hand, must fit it as well (and at least
+ * global_crowded_fit of the map's own) and be pinned by it:
  * that scan is RSM_SCAN_ACCEPTED with report.recovered set and the
  * estimate tracking again. A verdict left in doubt is made again with the
  * same poses once the robot has moved on, up to 4 times; otherwise, or
