@@ -19,6 +19,10 @@
 /* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart. */
 #define FINEST_BELOW 2u
 
+/* A crowded search's winner is proven only against a kept rival fitting
+ * at least this share of it: a place weighed against nothing alike. */
+#define CROWDED_RIVAL 0.5f
+
 /* Floor division by 2^h for any sign. */
 static int32_t floor_shift(int32_t v, uint32_t h)
 {
@@ -1484,6 +1488,15 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
         }
     }
     if (g->hit[best] <= rival * (1.0f + margin) && !summed) {
+        return 0;
+    }
+    if (g->unkept > 0u && !(rival >= CROWDED_RIVAL * g->hit[best])) {
+        /* A crowded search whose kept poses came down to one place: it
+         * was weighed against none of the many others that reached the
+         * bar (measured on an ACES kidnap: three of the eight kept poses
+         * descended to one place, the rest fitted under a tenth of it,
+         * and the place proven was the true one turned half round, 3.5 m
+         * along a symmetric corridor). In doubt, for another view. */
         return 0;
     }
     *win = best;
