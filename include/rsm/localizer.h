@@ -180,10 +180,8 @@ typedef struct rsm_localizer_config {
     float global_crowded_fit;       /* the same share when more distinct poses reached the search's
                                      * bar than it keeps (RSM_GLOBAL_CANDIDATES): a rival the proof
                                      * could not weigh may fit better than those it did, so the
-                                     * winner must fit about as well as the map's own scans; and
-                                     * what the winner must fit with the whole scan at hand,
-                                     * whatever the search; default 0.9 (below global_min_fit:
-                                     * that one) */
+                                     * winner must fit about as well as the map's own scans;
+                                     * default 0.9 (below global_min_fit: that one) */
     uint8_t global_when_lost;       /* 1: a localizer that reports lost starts a global search by
                                      * itself, within recover_m of the estimate first, the window
                                      * doubling with every second search that proves nothing
@@ -490,8 +488,7 @@ int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const floa
  * global_min_fit of the map's own (global_crowded_fit when more distinct
  * poses passed the search than it keeps) and beats every distinct rival's
  * (doubt_m, doubt_rad away) by recover_margin; the winner, carried by
- * odometry to the scan at hand, must fit it as well (and at least
- * global_crowded_fit of the map's own) and be pinned by it:
+ * odometry to the scan at hand, must fit it as well and be pinned by it:
  * that scan is RSM_SCAN_ACCEPTED with report.recovered set and the
  * estimate tracking again. A verdict left in doubt is made again with the
  * same poses once the robot has moved on, up to 4 times; otherwise, or
