@@ -1005,54 +1005,42 @@ static void child_bounds(rsm_global_t *g, const uint8_t *grid, int32_t *fx, int3
     uint32_t live = allowed >= 0 ? 15u : 0u;
     uint32_t q;
     uint32_t c;
-    if (e > h) {
-        /* Blocks wider than the children: each child's own block (rare:
-         * the coarsest grids of a wide map). */
-        for (q = 0; q < n && live != 0u; ++q) {
-            for (c = 0; c < 4u; ++c) {
-                const uint32_t a = (uint32_t)(fx[q] + x0 + ((c & 1u) != 0u ? half : 0)) >> e;
-                const uint32_t b = (uint32_t)(fy[q] + y0 + ((c & 2u) != 0u ? half : 0)) >> e;
-                if ((live & (1u << c)) != 0u && !(a < nx && b < ny && get_bit(grid, at + b * nx + a) != 0u)) {
-                    child_miss(miss, &live, &reads, c, q, allowed);
-                }
+    /* The children's blocks are d apart where they are no wider than a
+     * child; where all four lie in the grid (most points: they fall on the
+     * map) no bound is tested. Blocks wider than the children (rare: the
+     * coarsest grids of a wide map) take the edge's way at every point. */
+    const uint32_t d = e <= h ? (uint32_t)half >> e : 0u;
+    const uint32_t row = d * nx;
+    const uint32_t nx_in = d > 0u && nx > d ? nx - d : 0u;
+    const uint32_t ny_in = d > 0u && ny > d ? ny - d : 0u;
+    for (q = 0; q < n && live != 0u; ++q) {
+        const uint32_t a = (uint32_t)(fx[q] + x0) >> e;
+        const uint32_t b = (uint32_t)(fy[q] + y0) >> e;
+        if (a < nx_in && b < ny_in) {
+            const uint32_t first = at + b * nx + a;
+            if ((live & 1u) != 0u && get_bit(grid, first) == 0u) {
+                child_miss(miss, &live, &reads, 0u, q, allowed);
             }
-        }
-    } else {
-        /* The children's blocks are d apart; where all four lie in the
-         * grid (most points: they fall on the map) no bound is tested. */
-        const uint32_t d = (uint32_t)half >> e;
-        const uint32_t row = d * nx;
-        const uint32_t nx_in = nx > d ? nx - d : 0u;
-        const uint32_t ny_in = ny > d ? ny - d : 0u;
-        for (q = 0; q < n && live != 0u; ++q) {
-            const uint32_t a = (uint32_t)(fx[q] + x0) >> e;
-            const uint32_t b = (uint32_t)(fy[q] + y0) >> e;
-            if (a < nx_in && b < ny_in) {
-                const uint32_t first = at + b * nx + a;
-                if ((live & 1u) != 0u && get_bit(grid, first) == 0u) {
-                    child_miss(miss, &live, &reads, 0u, q, allowed);
-                }
-                if ((live & 2u) != 0u && get_bit(grid, first + d) == 0u) {
-                    child_miss(miss, &live, &reads, 1u, q, allowed);
-                }
-                if ((live & 4u) != 0u && get_bit(grid, first + row) == 0u) {
-                    child_miss(miss, &live, &reads, 2u, q, allowed);
-                }
-                if ((live & 8u) != 0u && get_bit(grid, first + row + d) == 0u) {
-                    child_miss(miss, &live, &reads, 3u, q, allowed);
-                }
-            } else {
-                /* At the grid's edge: each child's block from its own
-                 * window (a window left of the grid wraps to a huge index,
-                 * so the blocks are not d apart there). */
-                const uint32_t a1 = (uint32_t)(fx[q] + x0 + half) >> e;
-                const uint32_t b1 = (uint32_t)(fy[q] + y0 + half) >> e;
-                for (c = 0; c < 4u; ++c) {
-                    const uint32_t ac = (c & 1u) != 0u ? a1 : a;
-                    const uint32_t bc = (c & 2u) != 0u ? b1 : b;
-                    if ((live & (1u << c)) != 0u && !(ac < nx && bc < ny && get_bit(grid, at + bc * nx + ac) != 0u)) {
-                        child_miss(miss, &live, &reads, c, q, allowed);
-                    }
+            if ((live & 2u) != 0u && get_bit(grid, first + d) == 0u) {
+                child_miss(miss, &live, &reads, 1u, q, allowed);
+            }
+            if ((live & 4u) != 0u && get_bit(grid, first + row) == 0u) {
+                child_miss(miss, &live, &reads, 2u, q, allowed);
+            }
+            if ((live & 8u) != 0u && get_bit(grid, first + row + d) == 0u) {
+                child_miss(miss, &live, &reads, 3u, q, allowed);
+            }
+        } else {
+            /* Each child's block from its own window (a window left of
+             * the grid wraps to a huge index, so the blocks are not d
+             * apart there). */
+            const uint32_t a1 = (uint32_t)(fx[q] + x0 + half) >> e;
+            const uint32_t b1 = (uint32_t)(fy[q] + y0 + half) >> e;
+            for (c = 0; c < 4u; ++c) {
+                const uint32_t ac = (c & 1u) != 0u ? a1 : a;
+                const uint32_t bc = (c & 2u) != 0u ? b1 : b;
+                if ((live & (1u << c)) != 0u && !(ac < nx && bc < ny && get_bit(grid, at + bc * nx + ac) != 0u)) {
+                    child_miss(miss, &live, &reads, c, q, allowed);
                 }
             }
         }

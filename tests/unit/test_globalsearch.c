@@ -970,6 +970,13 @@ static void test_grids_stand_through_writes(void)
     TEST_ASSERT_TRUE(kept_work < fresh_work);
 }
 
+/* rsm_global_verdict as the tests below ask it: a 10 % margin, poses 0.5 m
+ * or 0.5 rad apart distinct. */
+static int verdict(const rsm_global_t *g, float min_fit, uint32_t *win)
+{
+    return rsm_global_verdict(g, min_fit, 0.1f, 0.5f, 0.5f, win);
+}
+
 /* A proof's verdict (rsm_global_verdict): a place a little better than a
  * look-alike 3 m away from each of two views is proven by the two
  * together, not by either alone; not when another place led the first
@@ -978,9 +985,6 @@ static void test_grids_stand_through_writes(void)
  * another view), one far under it proves nothing. */
 static void test_views_add_up(void)
 {
-    const float margin = 0.1f;
-    const float doubt_m = 0.5f;
-    const float doubt_rad = 0.5f;
     uint32_t win = 99u;
     memset(&g1, 0, sizeof g1);
     g1.found = 3u;
@@ -989,26 +993,26 @@ static void test_views_add_up(void)
     g1.hit[0] = 0.93f;
     g1.hit[1] = 0.88f; /* 1.057 times less: in doubt by one view */
     g1.hit[2] = 0.20f;
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
     /* Under the fit asked: by a little, in doubt (another view may show
      * it); by more, nothing proven. */
     g1.hit[1] = 0.70f;
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.95f, margin, doubt_m, doubt_rad, &win));
-    TEST_ASSERT_EQUAL_INT(-1, rsm_global_verdict(&g1, 1.05f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.95f, &win));
+    TEST_ASSERT_EQUAL_INT(-1, verdict(&g1, 1.05f, &win));
     g1.hit[1] = 0.88f;
     g2 = g1;
     rsm_global_add_round(&g1, 0.8f);
     g1.rounds = 1u;
     /* The same again from a second view: 1.057^2 = 1.117 beyond 1.1. */
-    TEST_ASSERT_EQUAL_INT(1, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
     TEST_ASSERT_EQUAL_UINT32(0u, win);
     /* The second view barely favours it: 1.057 x 1.02 is not enough. */
     g1.hit[1] = 0.93f / 1.02f;
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
     /* One view: the same place fitting as well is no rival. */
     g2.hit[1] = 0.80f;
     g2.hit[2] = 0.92f;
-    TEST_ASSERT_EQUAL_INT(1, rsm_global_verdict(&g2, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(1, verdict(&g2, 0.8f, &win));
     TEST_ASSERT_EQUAL_UINT32(0u, win);
     g2.hit[1] = 0.88f;
     g2.hit[2] = 0.20f;
@@ -1020,24 +1024,24 @@ static void test_views_add_up(void)
     g1.rounds = 1u;
     g1.hit[0] = 0.93f;
     g1.hit[1] = 0.88f;
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
     /* The pose led the first view but fitted it under the bar: that view
      * counts against it, and the next alone does not prove it. */
     g1 = g2;
     rsm_global_add_round(&g1, 0.95f);
     g1.rounds = 1u;
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
     /* Nothing kept: nothing proven. */
     g1.found = 0u;
-    TEST_ASSERT_EQUAL_INT(-1, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(-1, verdict(&g1, 0.8f, &win));
     /* After a crowded search the views do not add up (its kept poses are
      * a few of many alike, a corridor's). */
     g1 = g2;
     rsm_global_add_round(&g1, 0.8f);
     g1.rounds = 1u;
-    TEST_ASSERT_EQUAL_INT(1, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
     g1.unkept = 1u;
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
 }
 
 /* A crowded search's winner is proven against a kept rival fitting at
@@ -1046,32 +1050,29 @@ static void test_views_add_up(void)
  * bar. */
 static void test_a_crowded_winner_needs_a_rival(void)
 {
-    const float margin = 0.1f;
-    const float doubt_m = 0.5f;
-    const float doubt_rad = 0.5f;
     uint32_t win = 99u;
     memset(&g1, 0, sizeof g1);
     g1.found = 2u;
     g1.end[1].x = 3.0f;
     g1.hit[0] = 0.90f;
     g1.hit[1] = 0.50f; /* more than half of 0.90, 1.8 times less */
-    TEST_ASSERT_EQUAL_INT(1, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
     g1.unkept = 5u;
-    TEST_ASSERT_EQUAL_INT(1, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
     TEST_ASSERT_EQUAL_UINT32(0u, win);
     g1.hit[1] = 0.40f; /* under half */
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
     g1.unkept = 0u;
-    TEST_ASSERT_EQUAL_INT(1, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
     /* A rival at the same place is none: one kept place alone. */
     g1.end[1].x = 0.05f;
     g1.hit[1] = 0.85f;
     g1.unkept = 5u;
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
     g1.found = 1u;
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
     g1.unkept = 0u;
-    TEST_ASSERT_EQUAL_INT(1, rsm_global_verdict(&g1, 0.8f, margin, doubt_m, doubt_rad, &win));
+    TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
 }
 
 /* A corridor 14 m long whose north wall has a niche every metre from

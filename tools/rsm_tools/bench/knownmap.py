@@ -749,27 +749,24 @@ def run_m4_real(logs: Sequence[Tuple[str, Path, Path]], work: Path, km: dict) ->
     if missing:
         return {"skipped": missing}
     out = {"scans": M4_REAL_SCANS, "replay_scans": M4_REPLAY_SCANS, "logs": {}}
-    for label, log, _ in logs:
-        entry = (km.get("logs") or {}).get(label)
-        pool = work / "knownmap" / label / "map-pool.rsmm"
-        if not entry or not pool.is_file():
-            continue
-        offsets = entry["offsets"]
-        searches = []
-        for share in M4_REAL_STARTS:
-            s = offsets[min(len(offsets) - 1, share * len(offsets) // 100)]
-            try:
+    try:
+        for label, log, _ in logs:
+            entry = (km.get("logs") or {}).get(label)
+            pool = work / "knownmap" / label / "map-pool.rsmm"
+            if not entry or not pool.is_file():
+                continue
+            offsets = entry["offsets"]
+            searches = []
+            for share in M4_REAL_STARTS:
+                s = offsets[min(len(offsets) - 1, share * len(offsets) // 100)]
                 f = m4cost.global_cost(Path(log), pool, s, M4_REAL_SCANS, work / "m4real" / label / f"global-{share}")
-            except m4cost.M4CostError as e:
-                raise BenchError(str(e))
-            searches.append({"offset_s": s, "max": f["max"], "mean": f["mean"], "scans": f["scans"],
-                             "proven": f["proven"], "max_work": f["max_work"], "budget": f["budget"]})
-        try:
+                searches.append({"offset_s": s, "max": f["max"], "mean": f["mean"], "scans": f["scans"],
+                                 "proven": f["proven"], "max_work": f["max_work"], "budget": f["budget"]})
             r = m4cost.replay_cost(Path(log), M4_REPLAY_SCANS, work / "m4real" / label / "replay")
-        except m4cost.M4CostError as e:
-            raise BenchError(str(e))
-        out["logs"][label] = {"global": searches,
-                              "replay": {k: r[k] for k in ("scans", "mean", "p99", "max", "matching_worst")}}
+            out["logs"][label] = {"global": searches,
+                                  "replay": {k: r[k] for k in ("scans", "mean", "p99", "max", "matching_worst")}}
+    except m4cost.M4CostError as e:
+        raise BenchError(str(e))
     return out
 
 
