@@ -113,6 +113,13 @@ typedef struct rsm_localizer_config {
     float recover_margin;           /* a search's winner is taken only when its fit beats every
                                      * pose a doubt (doubt_m, doubt_rad) away from it by this
                                      * share, else the scan is left ambiguous; default 0.1 */
+    uint32_t recover_budget;        /* a recovery's search and proof are spread over the scans
+                                     * after the one that asked for it, this much work a scan at
+                                     * most (units of about 18 Cortex-M4 instructions, as
+                                     * global_budget), the robot carried by odometry meanwhile;
+                                     * 0 = all of it in that scan; default 35000: at most about
+                                     * 0.6 million instructions of it a scan (docs/robustness.md,
+                                     * "A recovery spread over scans") */
     /* Odometry is evidence, not truth (RSM_METHOD_MAP): its step since the
      * last scan is matched against a second prediction when the scans give
      * cause to doubt it, and the prediction the scan fits better is kept
@@ -265,6 +272,8 @@ typedef struct rsm_localizer_report {
     rsm_odometry_verdict_t odometry; /* what the scan made of odometry's step */
     uint8_t recovered;        /* 1: a recovery search placed this scan (or a global search
                                * proved its pose) */
+    uint8_t recovering;       /* 1: this scan began a tracking recovery or gave its time to
+                               * one (recover_budget), the scan that one placed included */
     uint32_t search_work;     /* cells and blocks the global search read in this scan */
     rsm_pose_t pose;          /* estimate after this scan */
     float cov[9];             /* its covariance, row-major */
@@ -329,6 +338,41 @@ typedef struct rsm_localizer_counters {
  * functions refuse a localizer without it (never initialised, or zeroed). */
 #define RSM_LOCALIZER_MAGIC 0x52534d4cUL
 
+/* A tracking recovery spread over scans (RSM_METHOD_MAP): a search within
+ * +-radius_m and recover_rad of where the scan that asked for it was
+ * predicted, the basins it found descended with that scan's readings, and
+ * the winner, once proven, carried by odometry to the scan at hand. The
+ * readings are kept in the global search's memory, idle while tracking. */
+#define RSM_RECOVER_STARTS 3
+typedef struct rsm_recovery {
+    uint8_t phase;                    /* idle, searching, descending, proving, taking, resting */
+    uint8_t stage;                    /* 0: headings only (a turn misjudged), 1: positions within
+                                       * a coarse cell too, 2: within recover_m (each after the one
+                                       * before proved nothing) */
+    uint8_t fresh;                    /* no scan of it has run yet */
+    uint8_t found;                    /* basins the search kept */
+    uint8_t done;                     /* descents made (the tracked pose's fit first) */
+    uint8_t best;                     /* the winner among them */
+    uint8_t proved;                   /* a bit a basin: matched with a scan of the proof */
+    uint8_t checked;                  /* the scan searched was checked against the map's walls */
+    int32_t heading;                  /* the search's next heading (-fan .. fan) */
+    float radius_m;
+    float prior[9];                   /* the filter's covariance at the scan searched */
+    rsm_pose_t pred;                  /* the prediction there: the search's centre, the prior's mean */
+    rsm_pose_t tracked;               /* where tracking put that scan: the rival to beat */
+    float tracked_hit;                /* its fit with the scan of the proof */
+    rsm_pose_t base;                  /* the estimate that scan ended at: odometry carries the
+                                       * winner from there; at rest, where the robot was */
+    rsm_pose_t start[RSM_RECOVER_STARTS]; /* the basins, best first */
+    float cost[RSM_RECOVER_STARTS];
+    int32_t ij[2 * RSM_RECOVER_STARTS];
+    rsm_pose_t end[RSM_RECOVER_STARTS];   /* where their descents ended, then their matches
+                                           * with the proof's scans (carried back to the
+                                           * scan searched) */
+    float hit[RSM_RECOVER_STARTS];        /* their descents' fits (< 0: failed, or out of the
+                                           * proof); at the verdict, the scan's */
+} rsm_recovery_t;
+
 typedef struct rsm_localizer {
     uint32_t magic;                      /* RSM_LOCALIZER_MAGIC once initialised */
     const rsm_localizer_config_t *cfg;   /* kept by pointer */
@@ -384,6 +428,8 @@ typedef struct rsm_localizer {
             float wall_s;                         /* summed (cosines, sines) */
             uint32_t wall_scans;                  /* scans summed so far */
             rsm_global_t global;                  /* the global search, when one runs */
+            rsm_recovery_t recovery;              /* a recovery in progress, its readings kept in
+                                                   * global's (idle while the robot tracks) */
             uint8_t *search_mem;                  /* memory lent to the search's grids ... */
             uint32_t search_bytes;                /* ... and its size (rsm_localizer_set_search_memory) */
         } persistent;                             /* RSM_METHOD_MAP */

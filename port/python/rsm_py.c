@@ -70,7 +70,7 @@ static const rsmpy_field_t fields[] = {
     FLT(mapmatch.search_rad), FLT(mapmatch.search_step_rad), UNS(mapmatch.fan), FLT(mapmatch.gate_d2),
     FLT(mapmatch.basin), FLT(mapmatch.unpin_lo), FLT(mapmatch.unpin_hi),
     FLT(map_update_m), FLT(map_update_rad), FLT(recover_ratio), FLT(recover_m), FLT(recover_rad),
-    FLT(recover_margin), FLT(refute_margin), FLT(conflict_max), FLT(doubt_m), FLT(doubt_rad),
+    FLT(recover_margin), UNS(recover_budget), FLT(refute_margin), FLT(conflict_max), FLT(doubt_m), FLT(doubt_rad),
     FLT(wall_sigma_rad), FLT(wall_window_rad), FLT(cov_floor_m), FLT(cov_floor_rad),
     UNS(global_budget), FLT(global_min_share), FLT(global_min_fit), FLT(global_crowded_fit), UNS(global_when_lost),
     UNS(map_frozen), UNS(map_min_hits), UNS(map_on_reject), UNS(min_points), UNS(refuse_poor),
@@ -283,7 +283,8 @@ int rsmpy_scan(rsmpy_t *p, uint64_t stamp_us, size_t n, const float *ranges, con
  * values), listed once for both. */
 #define RSMPY_REPORT(X)                                                                                        \
     X(outcome, r->outcome) X(track, r->track) X(odometry, r->odometry) X(fit_ratio, r->fit_ratio)              \
-    X(recovered, r->recovered) X(search_work, r->search_work) X(x, r->pose.x) X(y, r->pose.y)                  \
+    X(recovered, r->recovered) X(recovering, r->recovering) X(search_work, r->search_work)                     \
+    X(x, r->pose.x) X(y, r->pose.y)                                                                            \
     X(theta, r->pose.theta) X(cov0, r->cov[0]) X(cov1, r->cov[1]) X(cov2, r->cov[2]) X(cov3, r->cov[3])        \
     X(cov4, r->cov[4]) X(cov5, r->cov[5]) X(cov6, r->cov[6]) X(cov7, r->cov[7]) X(cov8, r->cov[8])             \
     X(measured_x, r->measured.x) X(measured_y, r->measured.y) X(measured_theta, r->measured.theta)             \

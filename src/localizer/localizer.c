@@ -71,6 +71,7 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.recover_m = 1.0f;
     c.recover_rad = 0.3f;
     c.recover_margin = 0.1f;
+    c.recover_budget = 38000u;
     c.refute_margin = 0.1f;
     c.track_min_fit = 0.7f;
     c.conflict_max = 0.5f;
@@ -270,6 +271,19 @@ static int global_running(const rsm_localizer_t *loc)
     return loc->cfg->method == RSM_METHOD_MAP && loc->state.persistent.global.phase != RSM_GLOBAL_IDLE;
 }
 
+/* The recovery's phases (rsm_recovery_t.phase). Resting: one ended
+ * without a pose, and none begins again until the robot has moved to a new
+ * view (PROVE_AGAIN_M, PROVE_AGAIN_RAD from base): the same view would
+ * prove nothing again, and the scans that begin one are not written. */
+enum {
+    RECOVER_IDLE = 0,
+    RECOVER_SEARCHING = 1,
+    RECOVER_DESCENDING = 2,
+    RECOVER_PROVING = 3,
+    RECOVER_TAKING = 4,
+    RECOVER_RESTING = 5
+};
+
 /* The global search's grid memory: the caller's (rsm_localizer_set_search_memory),
  * else that of the scan a map write reads, idle during a search. */
 static uint8_t *search_grid(rsm_localizer_t *loc)
@@ -290,6 +304,7 @@ void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
     loc->state.persistent.fit = fit;
     loc->state.persistent.map_fit = fit;
     loc->state.persistent.global.cached = 0u;
+    loc->state.persistent.recovery.phase = RECOVER_IDLE;
     /* Another map, another grid: learnt again from the scans tracking in it. */
     loc->state.persistent.wall_c = 0.0f;
     loc->state.persistent.wall_s = 0.0f;
@@ -324,6 +339,7 @@ int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const floa
         loc->state.persistent.trusted = ekf.x;
         loc->state.persistent.since = none;
         loc->state.persistent.last_step = none;
+        loc->state.persistent.recovery.phase = RECOVER_IDLE;
     }
     loc->poor_run = 0u;
     loc->last.track = RSM_TRACK_TRACKING;
@@ -846,9 +862,6 @@ static void apply_mount(rsm_localizer_t *loc, size_t n)
     }
 }
 
-/* Basins a recovery search descends from. */
-#define RECOVER_STARTS 3
-
 /* The conflict check (conflict_max): beams are looked at on the finest
  * level, up to CONFLICT_BEAMS of them spread over the scan (a share needs
  * no more, and each costs a walk of its length), and a wall counts only
@@ -969,7 +982,7 @@ static int plausible_step(const rsm_localizer_t *loc, const rsm_pose_t *pred, fl
  * around pred. Returns what was made of the step. */
 static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred,
                                          int odometry_moved, int driven, int *rc, rsm_mapmatch_result_t *res,
-                                         int *doubted)
+                                         int *doubted, uint32_t *passes)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const rsm_pose_t *anchor = &loc->state.persistent.anchor;
@@ -1010,9 +1023,12 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
         rsm_mapmatch_unpin_t unpin;
         rsm_mapmatch_result_t alt;
         rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, alt_pred[k].theta, &unpin);
-        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &alt_pred[k], loc->ekf.p, NULL,
-                         &unpin, &alt) == RSM_OK &&
-            alt.used >= cfg->min_points / 2u && alt.hit >= cfg->recover_ratio * loc->state.persistent.fit &&
+        int ok;
+        alt.passes = 0u;
+        ok = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &alt_pred[k], loc->ekf.p, NULL,
+                          &unpin, &alt) == RSM_OK;
+        *passes += alt.passes;
+        if (ok && alt.used >= cfg->min_points / 2u && alt.hit >= cfg->recover_ratio * loc->state.persistent.fit &&
             (*rc != RSM_OK || (k == 0 && counted_first ? res->hit <= alt.hit * (1.0f + cfg->refute_margin)
                                                        : alt.hit > res->hit * (1.0f + cfg->refute_margin)))) {
             if (kind[k] == RSM_ODOMETRY_REFUTED && *rc == RSM_OK &&
@@ -1028,171 +1044,475 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
     return verdict;
 }
 
-/* What a recovery search made of the scan. */
+/* What a recovery made of the scans so far. */
 typedef enum recovery {
     RECOVERY_NONE = 0,      /* nothing fitted well enough */
     RECOVERY_TAKEN = 1,     /* *res replaced by a proven winner */
-    RECOVERY_AMBIGUOUS = 2  /* a winner, but a pose a doubt away fitted nearly as well */
+    RECOVERY_AMBIGUOUS = 2, /* a winner, but a pose a doubt away fitted nearly as well */
+    RECOVERY_RUNNING = 3    /* more to do in the next scan */
 } recovery_t;
 
-/* One recovery search within +-radius_m and +-recover_rad of pred: descends
- * from the best few candidates under a prior widened as far and replaces
- * *res with the best fit if it fits well again (at least half of what was
- * lost regained; need is above the first *res, so each replacement fits
- * better than the last) and is proven: it beats every pose a doubt away
- * from it (another basin's descent, or the plain match) by recover_margin.
- * The winner's whole result is kept: descending it again cost a
- * recovery's scan a fifth of a million M4 instructions. A winner
- * that would not track by its fit (track_min_fit) and contradicts the map
- * (conflict_max: a look-alike place within reach of a robot carried
- * farther) is not taken. */
-static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
-                          rsm_mapmatch_result_t *res)
+
+/* A new view: the robot moved this far or turned this much (a proof left
+ * in doubt, or a recovery that proved nothing, tries again only from one). */
+#define PROVE_AGAIN_M 0.3f
+#define PROVE_AGAIN_RAD 0.2f
+
+/* Readings a recovery keeps of the scan it searches: as many as its coarse
+ * search scores, within the global search's memory for them. */
+#define RECOVER_POINTS                                                                                                 \
+    (RSM_MAPMATCH_SEARCH_POINTS < 2u * RSM_GLOBAL_POINTS ? RSM_MAPMATCH_SEARCH_POINTS : 2u * RSM_GLOBAL_POINTS)
+
+/* Of them, the coarse search scores every other: it only ranks basins for
+ * the descents (which read them all) and the proof (the whole scan). */
+#ifndef RECOVER_SEARCH_POINTS
+#define RECOVER_SEARCH_POINTS (RECOVER_POINTS / 2u)
+#endif
+
+/* What its steps cost, in recover_budget's units (about 18 M4
+ * instructions), measured on the M4 (docs/robustness.md, "A recovery
+ * spread over scans"): a match's pass over a reading (each reads the
+ * reading's cells on one level: rsm_mapmatch_result_t.passes), about 200
+ * instructions, and a fit at a pose is one; a match not yet made is
+ * counted at RECOVER_MATCH_PASSES, a descent with the kept readings too;
+ * the check of a scan against the map's walls (contradicts: 64 beams
+ * walked) about 200 000; a heading of the coarse search, a fixed part
+ * beside a quarter of RECOVER_CELL_WORK a scored reading at a position
+ * (about 30 instructions). */
+#define RECOVER_PASS_WORK 11u
+#define RECOVER_MATCH_PASSES 16u
+#define RECOVER_CONFLICT_WORK 11000u
+/* The first stage in the scan that asks for it: its search (RECOVER_SEARCH_POINTS
+ * readings at one position, 16 headings) and its proof (a match of the kept
+ * readings and a fit). */
+#define RECOVER_FIRST_WORK (16u * (RECOVER_HEADING_WORK + RECOVER_SEARCH_POINTS * RECOVER_CELL_WORK / 4u) + \
+                            (RECOVER_MATCH_PASSES + 1u) * RECOVER_PASS_WORK * RECOVER_POINTS)
+#define RECOVER_HEADING_WORK 200u
+#define RECOVER_CELL_WORK 7u
+
+/* The proof's matches' prior: the filter's, and this much more. */
+#define PROOF_SLACK_M 0.03f
+#define PROOF_SLACK_RAD 0.01f
+/* The basins the proof matches: those whose descents with the kept
+ * readings fitted at least this share of the best's. */
+#define PROOF_BAND 0.7f
+
+static int recovering(const rsm_localizer_t *loc)
+{
+    const uint8_t phase = loc->state.persistent.recovery.phase;
+    return phase != RECOVER_IDLE && phase != RECOVER_RESTING;
+}
+
+/* Begins a recovery of the scan at hand (loc->pts), searched around pred
+ * (recovery_step's stages), res the match tracking made of it. */
+static void recovery_begin(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred,
+                           const rsm_mapmatch_result_t *res)
+{
+    rsm_recovery_t *r = &loc->state.persistent.recovery;
+    rsm_global_t *g = &loc->state.persistent.global;
+    const size_t stride = npts > RECOVER_POINTS ? (npts + RECOVER_POINTS - 1u) / RECOVER_POINTS : 1u;
+    size_t q;
+    uint32_t m = 0;
+    /* The readings the coarse search would score of the whole scan. */
+    for (q = 0; q < npts; q += stride) {
+        g->pts[m++] = loc->pts[q];
+    }
+    g->npts = m;
+    r->phase = RECOVER_SEARCHING;
+    r->stage = 0u;
+    r->fresh = 1u;
+    r->found = 0u;
+    r->done = 0u;
+    r->heading = -RSM_MAPMATCH_MAX_FAN;
+    r->radius_m = 0.0f;
+    memcpy(r->prior, loc->ekf.p, sizeof r->prior);
+    r->pred = *pred;
+    r->tracked = res->pose;
+    r->base = *pred;
+}
+
+/* The verdict on the basins' fits with the scan of the proof (hit, at end)
+ * and the tracked pose's (tracked_hit at tracked): the best wins if it fits
+ * well again (recover_ratio of recent scans, and half of what the tracked
+ * pose lost regained) and beats every pose a doubt away from it (another
+ * basin, or the tracked pose) by recover_margin. */
+static recovery_t recovery_verdict(rsm_localizer_t *loc, const rsm_pose_t *tracked)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
+    rsm_recovery_t *r = &loc->state.persistent.recovery;
     const float fit = loc->state.persistent.fit;
-    const float need = res->hit + 0.5f * (fit - res->hit);
-    rsm_pose_t start[RECOVER_STARTS];
-    rsm_pose_t found_pose[RECOVER_STARTS];
-    rsm_mapmatch_result_t won;
-    float share;
-    float found_hit[RECOVER_STARTS];
+    const float need = r->tracked_hit + 0.5f * (fit - r->tracked_hit);
     float rival;
-    float wide[9];
-    int found;
-    int k;
     int best = -1;
-    memcpy(wide, loc->ekf.p, sizeof wide);
-    wide[0] += radius_m * radius_m;
-    wide[4] += radius_m * radius_m;
-    wide[8] += cfg->recover_rad * cfg->recover_rad;
-    found = rsm_mapmatch_search(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, radius_m,
-                                cfg->recover_rad, start, RECOVER_STARTS, RSM_MAPMATCH_SEARCH_POINTS);
-    /* The coarse score only ranks basins: descend from each. */
-    for (k = 0; k < found; ++k) {
-        rsm_mapmatch_result_t alt;
-        /* Not unpinned: each descent starts where the search put it and
-         * only the fit decides, measured against the plain match. */
-        found_hit[k] = -1.0f;
-        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[k], NULL,
-                         &alt) == RSM_OK) {
-            found_hit[k] = alt.hit;
-            found_pose[k] = alt.pose;
-            if (best < 0 || alt.hit > found_hit[best]) {
-                best = k;
-                won = alt;
-            }
+    int k;
+    for (k = 0; k < (int)r->found; ++k) {
+        if (r->hit[k] >= 0.0f && (best < 0 || r->hit[k] > r->hit[best])) {
+            best = k;
         }
     }
-    if (best < 0 || !(found_hit[best] >= cfg->recover_ratio * fit && found_hit[best] >= need &&
-                      found_hit[best] > res->hit)) {
+    if (best < 0 ||
+        !(r->hit[best] >= cfg->recover_ratio * fit && r->hit[best] >= need && r->hit[best] > r->tracked_hit)) {
         return RECOVERY_NONE;
     }
-    rival = beyond_doubt(cfg, &res->pose, &found_pose[best]) ? res->hit : 0.0f;
-    for (k = 0; k < found; ++k) {
-        if (k != best && found_hit[k] > rival && beyond_doubt(cfg, &found_pose[k], &found_pose[best])) {
-            rival = found_hit[k];
+    rival = beyond_doubt(cfg, tracked, &r->end[best]) ? r->tracked_hit : 0.0f;
+    for (k = 0; k < (int)r->found; ++k) {
+        if (k != best && r->hit[k] > rival && beyond_doubt(cfg, &r->end[k], &r->end[best])) {
+            rival = r->hit[k];
         }
     }
-    if (found_hit[best] <= rival * (1.0f + cfg->recover_margin)) {
+    if (r->hit[best] <= rival * (1.0f + cfg->recover_margin)) {
         return RECOVERY_AMBIGUOUS;
     }
-    if (won.hit < cfg->track_min_fit * fit && contradicts(loc, &won.pose, npts, &share)) {
-        return RECOVERY_NONE;
-    }
-    *res = won;
+    r->best = (uint8_t)best;
     return RECOVERY_TAKEN;
 }
 
-static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_moved, float dt_s,
-                              rsm_localizer_report_t *rep, stage_clock_t *clk, int *contradicted, int *carried)
+/* Ends a recovery without a pose: none begins again before a new view. */
+static recovery_t recovery_rest(rsm_localizer_t *loc, recovery_t v)
+{
+    loc->state.persistent.recovery.phase = RECOVER_RESTING;
+    loc->state.persistent.recovery.base = loc->ekf.x;
+    return v;
+}
+
+/* A pose of the scan searched carried by odometry to the scan at hand, and
+ * back. */
+static rsm_pose_t recovery_carry(const rsm_localizer_t *loc, const rsm_pose_t *then)
+{
+    const rsm_pose_t moved_by = rsm_pose_between(&loc->state.persistent.recovery.base, &loc->ekf.x);
+    return rsm_pose_compose(then, &moved_by);
+}
+
+static rsm_pose_t recovery_uncarry(const rsm_localizer_t *loc, const rsm_pose_t *now)
+{
+    const rsm_pose_t back = rsm_pose_between(&loc->ekf.x, &loc->state.persistent.recovery.base);
+    return rsm_pose_compose(now, &back);
+}
+
+/* The scan at hand matched from a basin's pose (of the scan searched) carried
+ * to it, free to settle a little farther than the filter's prior says (the
+ * descent with the kept readings placed it no closer). */
+static int recovery_match(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *then, rsm_mapmatch_result_t *m)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
-    const rsm_pose_t pred = loc->ekf.x;
-    const int driven = dt_s > UNSURE_GAP_S && odometry_moved && plausible_step(loc, &pred, dt_s);
-    int gap;
-    rsm_mapmatch_result_t res;
+    const rsm_pose_t from = recovery_carry(loc, then);
     rsm_mapmatch_unpin_t unpin;
-    int ambiguous = 0;
-    int doubted = 0;
-    int poor;
-    int rc;
-    if (!loc->have_scan) {
-        return RSM_SCAN_FIRST;
+    float prior[9];
+    memcpy(prior, loc->ekf.p, sizeof prior);
+    prior[0] += PROOF_SLACK_M * PROOF_SLACK_M;
+    prior[4] += PROOF_SLACK_M * PROOF_SLACK_M;
+    prior[8] += PROOF_SLACK_RAD * PROOF_SLACK_RAD;
+    rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, from.theta, &unpin);
+    return rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &from, prior, NULL, &unpin, m) ==
+               RSM_OK &&
+           m->used >= cfg->min_points / 2u;
+}
+
+/* Whether the winner's match m may be taken: one that would not track by
+ * its fit (track_min_fit) and contradicts the map (conflict_max: a look-alike
+ * place within reach of a robot carried farther) may not. */
+static int recovery_takes(rsm_localizer_t *loc, size_t npts, const rsm_mapmatch_result_t *m)
+{
+    float share;
+    return m->hit >= loc->cfg->recover_ratio * loc->state.persistent.fit &&
+           !(m->hit < loc->cfg->track_min_fit * loc->state.persistent.fit && contradicts(loc, &m->pose, npts, &share));
+}
+
+/* Runs the recovery in progress for one scan, within recover_budget (0: to
+ * its end; spent: the work this scan did before, in its units; with must,
+ * the first step is taken whatever it costs, so that every scan given to a
+ * recovery moves it on):
+ * - the coarse search, a few headings at a time;
+ * - a descent a basin with the readings kept of the scan searched: where
+ *   each basin is;
+ * - the proof: the basins that fitted within PROOF_BAND of the best, one a
+ *   scan, each carried by odometry to the scan at hand and matched with it,
+ *   the best last; then, with the last scan, every one's fit at its match
+ *   carried there and the tracked pose's, and the verdict on them (a few
+ *   dozen kept readings tell look-alike basins apart less surely than a
+ *   whole scan: a row of posts a period apart fitted 0.28 and 0.23 with
+ *   them, 0.31 and 0.23 so matched);
+ * - the winner, when not the basin matched last, matched with the next scan.
+ * A search within a coarse cell that proves nothing is followed by one
+ * within recover_m (an ambiguous one is not: a farther pose would have the
+ * same rival, and the wider search might not see it). RECOVERY_TAKEN leaves
+ * the winner's match with the scan at hand in *res. */
+static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spent, int must,
+                                 rsm_mapmatch_result_t *res)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_tmap_t *map = &loc->state.persistent.map;
+    rsm_recovery_t *r = &loc->state.persistent.recovery;
+    rsm_global_t *g = &loc->state.persistent.global;
+    const uint32_t budget = cfg->recover_budget;
+    const uint32_t started = must ? spent : 0u;
+    /* The scan that asks for a recovery: its first stage is cheap (one
+     * position, a few dozen readings) and runs there whatever the budget,
+     * so that a turn misjudged is put right in that scan. */
+    int first = !must;
+    const uint32_t match_work = RECOVER_MATCH_PASSES * RECOVER_PASS_WORK * (uint32_t)npts;
+    const uint32_t fit_work = RECOVER_PASS_WORK * (uint32_t)npts;
+    uint32_t work = spent;
+    if (r->fresh) {
+        /* The scan searched went its way (fused, or kept at its prediction);
+         * odometry carries the basins on from where it ended. */
+        r->fresh = 0u;
+        r->base = loc->state.persistent.anchor;
     }
-    if (driven && loc->state.persistent.walk_apart) {
-        /* Scans missing for a while, and odometry's motion over them one
-         * the robot could have driven: it may have come in one piece, and
-         * one step's noise stretched over metres is no prior at all (a
-         * heading error of 0.2 rad per metre driven, squared: 1.3 rad
-         * after 6.5 m; measured, 1 to 14 degrees). Intel and ACES with 15 s
-         * gaps: a match with nothing to hold it slid 1.5 m along a
-         * corridor, or turned 28 degrees on 22 points. A step no robot
-         * drives in the time (a counter reset, a spike) keeps the wide
-         * prior: doubt_step weighs it. */
-        memcpy(loc->ekf.p, loc->state.persistent.walk_p, sizeof loc->ekf.p);
-    }
-    gap = unsure(loc, dt_s); /* of the prediction, before any match moves it */
-    stage_switch(clk, RSM_STAGE_MAPMATCH);
-    rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, pred.theta, &unpin);
-    rep->unpinned = unpin.frac;
-    if (unpin.frac > 0.0f) {
-        loc->counters.unpinned++;
-    }
-    rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
-                      &res);
-    if (dt_s > UNSURE_GAP_S && !odometry_moved && cfg->recover_m > 0.0f && loc->counters.scans > 1u &&
-        loc->last.track == RSM_TRACK_TRACKING &&
-        (rc != RSM_OK || res.used < cfg->min_points / 2u || res.hit < cfg->track_min_fit * loc->state.persistent.fit)) {
-        /* No scan for a while, odometry still, and the scan no longer
-         * fits where the robot stood and tracked: it was carried (or the
-         * building changed around it), as far as the time allowed. (Not
-         * tracking before, the pause says nothing new: a map that does
-         * not hold the place fits no better before than after; nor the
-         * first scan on a loaded map.) A search near
-         * the old pose would find a look-alike within its reach and
-         * "prove" it against rivals there only (Intel's kidnaps: a room
-         * 7 m off the truth, fitting as well as the map's own); the
-         * caller reports lost at once, and the global search, if on,
-         * covers the whole map. Kept at the prediction, not written. */
-        rep->fit_ratio = rc == RSM_OK && loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 0.0f;
-        *carried = 1;
-        return RSM_SCAN_POOR_FIT;
-    }
-    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, driven, &rc, &res, &doubted);
-    if (rep->odometry == RSM_ODOMETRY_CAUGHT_UP) {
-        loc->counters.caught_up++;
-    } else if (rep->odometry == RSM_ODOMETRY_REFUTED) {
-        loc->counters.refuted++;
-    } else if (rep->odometry == RSM_ODOMETRY_RECOUNTED) {
-        loc->counters.recounted++;
-    }
-    poor = rc == RSM_OK && res.hit < cfg->recover_ratio * loc->state.persistent.fit;
-    if ((poor || doubted || gap) && cfg->recover_m > 0.0f) {
-        /* Far worse than recent scans, or odometry's step doubted with no
-         * prediction fitting well: odometry may be off by more than any
-         * basin. The smallest correction that explains the scan first: a
-         * turn misjudged (every heading within recover_rad, the position
-         * within one coarse cell), and only if that does not fit, a shift up
-         * to recover_m (a bump, a kidnap). Along a corridor a shifted pose
-         * can fit about as well as the right one. */
-        const float near_m = rsm_tmap_cell(&loc->state.persistent.map, (uint32_t)cfg->tmap.levels - 1u);
-        loc->counters.searches++;
-        /* An ambiguous near search is not widened: a farther pose would
-         * have that same rival, and the wider search might not see it. */
-        recovery_t r = recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res);
-        if (r == RECOVERY_NONE && near_m < cfg->recover_m) {
-            r = recover(loc, npts, &pred, cfg->recover_m, &res);
+    for (;;) {
+        if (r->phase == RECOVER_SEARCHING) {
+            const uint32_t scored = g->npts > RECOVER_SEARCH_POINTS ? RECOVER_SEARCH_POINTS : g->npts;
+            int32_t fan;
+            uint32_t positions;
+            uint32_t each;
+            uint32_t count;
+            size_t found = r->found;
+            /* Headings only (stage 0): twice as far apart, the match of
+             * the proof sets the heading within them. */
+            rsm_mapmatch_config_t mm = cfg->mapmatch;
+            mm.search_step_rad *= r->stage == 0u ? 2.0f : 1.0f;
+            if (rsm_mapmatch_search_size(map, &mm, r->radius_m, cfg->recover_rad, &fan, &positions) !=
+                RSM_OK) {
+                return recovery_rest(loc, RECOVERY_NONE);
+            }
+            r->heading = r->heading < -fan ? -fan : r->heading;
+            each = RECOVER_HEADING_WORK + (positions * scored * RECOVER_CELL_WORK) / 4u;
+            count = (uint32_t)(fan + 1 - r->heading);
+            if (budget > 0u && !(first && r->stage == 0u)) {
+                const uint32_t room = work < budget ? (budget - work) / each : 0u;
+                if (room == 0u && work > started) {
+                    return RECOVERY_RUNNING;
+                }
+                count = room < 1u ? 1u : room < count ? room : count;
+            }
+            (void)rsm_mapmatch_search_part(map, &mm, g->pts, g->npts, &r->pred, r->radius_m,
+                                           cfg->recover_rad, r->heading, r->heading + (int32_t)count, r->start,
+                                           r->cost, r->ij, RSM_RECOVER_STARTS, &found, RECOVER_SEARCH_POINTS);
+            r->found = (uint8_t)found;
+            r->heading += (int32_t)count;
+            work += count * each;
+            if (r->heading > fan) {
+                r->phase = RECOVER_DESCENDING;
+                r->done = 0u;
+                if (r->stage == 0u) {
+                    /* One position: its best heading goes to the proof as
+                     * the search placed it (the proof's match is its
+                     * descent). */
+                    uint32_t k;
+                    for (k = 0; k < r->found; ++k) {
+                        r->end[k] = r->start[k];
+                        r->hit[k] = 1.0f;
+                    }
+                    r->done = r->found;
+                }
+            }
+        } else if (r->phase == RECOVER_DESCENDING) {
+            const uint32_t cost = RECOVER_MATCH_PASSES * RECOVER_PASS_WORK * g->npts;
+            const uint32_t k = r->done;
+            float wide[9];
+            rsm_mapmatch_result_t alt;
+            if (k == r->found) {
+                /* The proof takes the basins that fitted near the best. */
+                float top = 0.0f;
+                uint32_t j;
+                for (j = 0; j < r->found; ++j) {
+                    top = r->hit[j] > top ? r->hit[j] : top;
+                }
+                for (j = 0; j < r->found; ++j) {
+                    if (!(r->hit[j] >= PROOF_BAND * top && top > 0.0f)) {
+                        r->hit[j] = -1.0f;
+                    }
+                }
+                r->proved = 0u;
+                r->phase = RECOVER_PROVING;
+                continue;
+            }
+            if (budget > 0u && work > started && work + cost > budget) {
+                return RECOVERY_RUNNING;
+            }
+            work += cost;
+            memcpy(wide, r->prior, sizeof wide);
+            wide[0] += r->radius_m * r->radius_m;
+            wide[4] += r->radius_m * r->radius_m;
+            wide[8] += cfg->recover_rad * cfg->recover_rad;
+            /* Not unpinned: each starts where the search put it. */
+            r->hit[k] = -1.0f;
+            if (rsm_mapmatch(map, &cfg->mapmatch, g->pts, g->npts, &r->pred, wide, &r->start[k], NULL, &alt) ==
+                RSM_OK) {
+                r->hit[k] = alt.hit;
+                r->end[k] = alt.pose;
+            }
+            r->done++;
+        } else if (r->phase == RECOVER_PROVING && first && r->stage == 0u) {
+            /* A turn misjudged, proven in the scan that asked, with the
+             * readings kept of it (a third of its cost matched with all;
+             * measured on ACES, alike in accuracy): the best heading's
+             * match against the tracked pose's fit, taken as that scan's
+             * match. Scans of a fast turn whose odometry misjudged it (ACES)
+             * were otherwise placed poorly until a later scan's proof. */
+            rsm_mapmatch_result_t m;
+            rsm_mapmatch_unpin_t unpin;
+            recovery_t v = RECOVERY_NONE;
+            float prior[9];
+            work += (RECOVER_MATCH_PASSES + 1u) * RECOVER_PASS_WORK * g->npts;
+            /* The filter's prior in position; in heading, the search's
+             * step (it placed the heading that near): a narrow prior, a
+             * descent from a fine level. */
+            memcpy(prior, r->prior, sizeof prior);
+            prior[2] = prior[5] = prior[6] = prior[7] = 0.0f;
+            prior[8] = 4.0f * cfg->mapmatch.search_step_rad * cfg->mapmatch.search_step_rad;
+            r->proved = 1u;
+            r->hit[0] = -1.0f;
+            if (r->found > 0u) {
+                rsm_mapmatch_unpin_for(&cfg->mapmatch, g->pts, g->npts, r->start[0].theta, &unpin);
+                if (rsm_mapmatch(map, &cfg->mapmatch, g->pts, g->npts, &r->start[0], prior, NULL, &unpin, &m) ==
+                        RSM_OK &&
+                    m.used >= cfg->min_points / 2u) {
+                    r->hit[0] = m.hit;
+                    r->end[0] = m.pose;
+                    r->tracked_hit = rsm_mapmatch_fit(map, g->pts, g->npts, &r->tracked);
+                    v = recovery_verdict(loc, &r->tracked);
+                }
+            }
+            if (v == RECOVERY_TAKEN &&
+                !rsm_pose_apart(&r->start[0], &m.pose, 0.5f * rsm_tmap_cell(map, (uint32_t)cfg->tmap.levels - 1u),
+                                RSM_PI) &&
+                m.hit >= cfg->track_min_fit * loc->state.persistent.fit) {
+                r->phase = RECOVER_IDLE;
+                *res = m;
+                return RECOVERY_TAKEN;
+            }
+            /* Else the whole scan weighs the same basin: the next one's, or
+             * this one's with no budget. */
+            r->proved = 0u;
+            r->hit[0] = 1.0f;
+            r->end[0] = r->start[0];
+            first = 0;
+            if (budget > 0u) {
+                return RECOVERY_RUNNING;
+            }
+            continue;
+        } else if (r->phase == RECOVER_PROVING) {
+            /* The next basin to match: the worst-fitting not yet matched. */
+            rsm_mapmatch_result_t m;
+            recovery_t v;
+            int next = -1;
+            int last = 1;
+            uint32_t k;
+            for (k = 0; k < r->found; ++k) {
+                if (r->hit[k] >= 0.0f && !(r->proved & (1u << k))) {
+                    if (next >= 0) {
+                        last = 0;
+                    }
+                    if (next < 0 || r->hit[k] < r->hit[next]) {
+                        next = (int)k;
+                    }
+                }
+            }
+            if (next < 0) {
+                return recovery_rest(loc, RECOVERY_NONE);
+            }
+            if (budget > 0u && work > started &&
+                work + match_work + (last ? fit_work * r->found + RECOVER_CONFLICT_WORK : 0u) > budget) {
+                return RECOVERY_RUNNING;
+            }
+            work += match_work;
+            r->proved = (uint8_t)(r->proved | (1u << (uint32_t)next));
+            if (recovery_match(loc, npts, &r->end[next], &m)) {
+                r->end[next] = recovery_uncarry(loc, &m.pose);
+            } else {
+                r->hit[next] = -1.0f;
+            }
+            if (!last) {
+                continue;
+            }
+            /* The verdict, every fit on this scan. */
+            work += fit_work * r->found;
+            for (k = 0; k < r->found; ++k) {
+                if (r->hit[k] >= 0.0f) {
+                    const rsm_pose_t at = recovery_carry(loc, &r->end[k]);
+                    r->hit[k] = (int)k == next ? m.hit : rsm_mapmatch_fit(map, loc->pts, npts, &at);
+                }
+            }
+            {
+                const rsm_pose_t tracked = recovery_carry(loc, &r->tracked);
+                r->tracked_hit = rsm_mapmatch_fit(map, loc->pts, npts, &tracked);
+                v = recovery_verdict(loc, &r->tracked);
+            }
+            if (v == RECOVERY_TAKEN && r->stage == 0u &&
+                rsm_pose_apart(&r->start[r->best], &r->end[r->best],
+                               0.5f * rsm_tmap_cell(map, (uint32_t)cfg->tmap.levels - 1u), RSM_PI)) {
+                /* Only headings were searched, and no rival beside the
+                 * tracked pose weighed: the winner's match must have kept
+                 * to its place (within half a coarse cell). One that went
+                 * farther is no misjudged turn; the next stage searches
+                 * its positions, with their rivals. */
+                v = RECOVERY_NONE;
+            }
+            if (v == RECOVERY_NONE && r->stage < 2u) {
+                /* The next stage searches the same kept scan around its
+                 * prediction, farther: positions within a coarse cell,
+                 * then within recover_m. */
+                const float near_m = rsm_tmap_cell(map, (uint32_t)cfg->tmap.levels - 1u);
+                r->stage = r->stage == 0u && near_m < cfg->recover_m ? 1u : 2u;
+                r->radius_m = r->stage == 1u ? near_m : cfg->recover_m;
+                r->phase = RECOVER_SEARCHING;
+                r->heading = -RSM_MAPMATCH_MAX_FAN;
+                r->found = 0u;
+                continue;
+            }
+            if (v == RECOVERY_AMBIGUOUS) {
+                loc->counters.ambiguous++;
+            }
+            if (v != RECOVERY_TAKEN) {
+                return recovery_rest(loc, v);
+            }
+            if ((int)r->best != next) {
+                r->phase = RECOVER_TAKING;
+                continue;
+            }
+            if (!recovery_takes(loc, npts, &m)) {
+                return recovery_rest(loc, RECOVERY_NONE);
+            }
+            r->phase = RECOVER_IDLE;
+            *res = m;
+            return RECOVERY_TAKEN;
+        } else if (r->phase == RECOVER_TAKING) {
+            rsm_mapmatch_result_t m;
+            if (budget > 0u && work > started && work + match_work > budget) {
+                return RECOVERY_RUNNING;
+            }
+            if (!recovery_match(loc, npts, &r->end[r->best], &m) || !recovery_takes(loc, npts, &m)) {
+                return recovery_rest(loc, RECOVERY_NONE);
+            }
+            r->phase = RECOVER_IDLE;
+            *res = m;
+            return RECOVERY_TAKEN;
+        } else {
+            return RECOVERY_NONE;
         }
-        if (r == RECOVERY_TAKEN) {
-            loc->counters.recovered++;
-            rep->recovered = 1u;
-            poor = 0;
-        } else if (r == RECOVERY_AMBIGUOUS) {
-            loc->counters.ambiguous++;
-            ambiguous = 1;
-        }
     }
+}
+
+/* Whether a recovery may begin at pred: none runs, and one that ended
+ * without a pose did so from another view. */
+static int recovery_may_begin(const rsm_localizer_t *loc, const rsm_pose_t *pred)
+{
+    const rsm_recovery_t *r = &loc->state.persistent.recovery;
+    return r->phase == RECOVER_IDLE ||
+           (r->phase == RECOVER_RESTING && rsm_pose_apart(&r->base, pred, PROVE_AGAIN_M, PROVE_AGAIN_RAD));
+}
+
+/* What step_map makes of its match (rc, res) once any recovery is done:
+ * refused, fused, and the recent fit updated. poor: it fitted far worse
+ * than recent scans and no search proved a pose; ambiguous: a search
+ * found rival poses. */
+static rsm_outcome_t settle(rsm_localizer_t *loc, size_t npts, int odometry_moved, int rc,
+                            const rsm_mapmatch_result_t *r, int poor, int ambiguous, rsm_localizer_report_t *rep,
+                            stage_clock_t *clk, int *contradicted)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_mapmatch_result_t res = *r;
     rep->inliers = res.used;
     rep->iterations = res.iterations;
     rep->measured = res.pose;
@@ -1243,6 +1563,168 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
         loc->state.persistent.fit = res.hit;
     }
     return RSM_SCAN_ACCEPTED;
+}
+
+static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_moved, float dt_s,
+                              rsm_localizer_report_t *rep, stage_clock_t *clk, int *contradicted, int *carried)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_pose_t pred = loc->ekf.x;
+    const int driven = dt_s > UNSURE_GAP_S && odometry_moved && plausible_step(loc, &pred, dt_s);
+    int gap;
+    rsm_mapmatch_result_t res;
+    rsm_mapmatch_unpin_t unpin;
+    int ambiguous = 0;
+    int doubted = 0;
+    int poor;
+    int rc;
+    uint32_t passes; /* over the scan's points: the match from pred's, then doubt_step's */
+    if (!loc->have_scan) {
+        return RSM_SCAN_FIRST;
+    }
+    if (driven && loc->state.persistent.walk_apart) {
+        /* Scans missing for a while, and odometry's motion over them one
+         * the robot could have driven: it may have come in one piece, and
+         * one step's noise stretched over metres is no prior at all (a
+         * heading error of 0.2 rad per metre driven, squared: 1.3 rad
+         * after 6.5 m; measured, 1 to 14 degrees). Intel and ACES with 15 s
+         * gaps: a match with nothing to hold it slid 1.5 m along a
+         * corridor, or turned 28 degrees on 22 points. A step no robot
+         * drives in the time (a counter reset, a spike) keeps the wide
+         * prior: doubt_step weighs it. */
+        memcpy(loc->ekf.p, loc->state.persistent.walk_p, sizeof loc->ekf.p);
+    }
+    if (recovering(loc)) {
+        /* A recovery in progress: a scan whose match where it was
+         * predicted is not poor ends it, as it would have begun none (the
+         * trouble passed: a person in front of the laser, a bump odometry
+         * saw), judged first by its fit there without a descent (one
+         * pass); else the rest of the scan's time goes to the recovery, the
+         * robot carried by odometry meanwhile, nothing fused or written,
+         * until it ends. */
+        const float fit = loc->state.persistent.fit;
+        uint32_t spent = RECOVER_PASS_WORK * (uint32_t)npts;
+        recovery_t r;
+        stage_switch(clk, RSM_STAGE_MAPMATCH);
+        rep->recovering = 1u;
+        if (rsm_mapmatch_fit(&loc->state.persistent.map, loc->pts, npts, &pred) >= cfg->recover_ratio * fit) {
+            rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, pred.theta, &unpin);
+            res.passes = 0u;
+            rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL,
+                              &unpin, &res);
+            if (rc == RSM_OK && res.used >= cfg->min_points / 2u && res.hit >= cfg->recover_ratio * fit) {
+                loc->state.persistent.recovery.phase = RECOVER_IDLE;
+                return settle(loc, npts, odometry_moved, rc, &res, 0, 0, rep, clk, contradicted);
+            }
+            spent += RECOVER_PASS_WORK * (uint32_t)npts * res.passes;
+        }
+        if (!loc->state.persistent.recovery.checked) {
+            /* The check the scan searched had no time for, of this one
+             * where it was predicted. */
+            loc->state.persistent.recovery.checked = 1u;
+            spent += RECOVER_CONFLICT_WORK;
+            *contradicted = contradicts(loc, &pred, npts, &rep->crossing);
+        }
+        r = recovery_step(loc, npts, spent, 1, &res);
+        if (r != RECOVERY_TAKEN) {
+            return RSM_SCAN_POOR_FIT;
+        }
+        loc->counters.recovered++;
+        rep->recovered = 1u;
+        return settle(loc, npts, odometry_moved, RSM_OK, &res, 0, 0, rep, clk, contradicted);
+    }
+    gap = unsure(loc, dt_s); /* of the prediction, before any match moves it */
+    stage_switch(clk, RSM_STAGE_MAPMATCH);
+    rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, pred.theta, &unpin);
+    rep->unpinned = unpin.frac;
+    if (unpin.frac > 0.0f) {
+        loc->counters.unpinned++;
+    }
+    res.passes = 0u;
+    rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL, &unpin,
+                      &res);
+    if (dt_s > UNSURE_GAP_S && !odometry_moved && cfg->recover_m > 0.0f && loc->counters.scans > 1u &&
+        loc->last.track == RSM_TRACK_TRACKING &&
+        (rc != RSM_OK || res.used < cfg->min_points / 2u || res.hit < cfg->track_min_fit * loc->state.persistent.fit)) {
+        /* No scan for a while, odometry still, and the scan no longer
+         * fits where the robot stood and tracked: it was carried (or the
+         * building changed around it), as far as the time allowed. (Not
+         * tracking before, the pause says nothing new: a map that does
+         * not hold the place fits no better before than after; nor the
+         * first scan on a loaded map.) A search near
+         * the old pose would find a look-alike within its reach and
+         * "prove" it against rivals there only (Intel's kidnaps: a room
+         * 7 m off the truth, fitting as well as the map's own); the
+         * caller reports lost at once, and the global search, if on,
+         * covers the whole map. Kept at the prediction, not written. */
+        rep->fit_ratio = rc == RSM_OK && loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 0.0f;
+        *carried = 1;
+        return RSM_SCAN_POOR_FIT;
+    }
+    passes = res.passes;
+    rep->odometry = doubt_step(loc, npts, &pred, odometry_moved, driven, &rc, &res, &doubted, &passes);
+    if (rep->odometry == RSM_ODOMETRY_CAUGHT_UP) {
+        loc->counters.caught_up++;
+    } else if (rep->odometry == RSM_ODOMETRY_REFUTED) {
+        loc->counters.refuted++;
+    } else if (rep->odometry == RSM_ODOMETRY_RECOUNTED) {
+        loc->counters.recounted++;
+    }
+    poor = rc == RSM_OK && res.hit < cfg->recover_ratio * loc->state.persistent.fit;
+    if ((poor || doubted || gap) && cfg->recover_m > 0.0f) {
+        /* Far worse than recent scans, or odometry's step doubted with no
+         * prediction fitting well: odometry may be off by more than any
+         * basin. A recovery searches (recovery_step): the smallest
+         * correction that explains the scan first, a turn misjudged (every
+         * heading within recover_rad), then the position within a coarse
+         * cell, and only if neither fits a shift up to recover_m (a bump, a
+         * kidnap); along a corridor a shifted pose can fit about as well as
+         * the right one. Begun here, with this scan's readings and what is
+         * left of its time (recover_budget, after its matches), run on in
+         * the scans that follow, the scan kept at its prediction. Not for a
+         * scan that found too little map to match: the search would find
+         * no more, and it is written at the prediction (new ground). */
+        if (recovery_may_begin(loc, &pred) && rc == RSM_OK && res.used >= cfg->min_points / 2u) {
+            rsm_recovery_t *rr = &loc->state.persistent.recovery;
+            recovery_t r;
+            loc->counters.searches++;
+            rep->recovering = 1u;
+            recovery_begin(loc, npts, &pred, &res);
+            /* A proof in this scan carries its basins by nothing; one in
+             * the next from where this scan ends. */
+            rr->fresh = 0u;
+            /* What this scan's matches took. */
+            r = recovery_step(loc, npts, RECOVER_PASS_WORK * (uint32_t)npts * passes, 0, &res);
+            if (recovering(loc)) {
+                /* Kept at its prediction (its poor match is no better a
+                 * guess). Its match is checked against the map's walls here
+                 * when the time allows, else the next scan where it was
+                 * predicted: one that contradicts the map is lost at once
+                 * (with global_when_lost the global search takes over; else
+                 * the recovery runs on). */
+                rr->fresh = 1u;
+                rr->checked = 0u;
+                rep->fit_ratio =
+                    rc == RSM_OK && loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 0.0f;
+                if (rc == RSM_OK && (cfg->recover_budget == 0u ||
+                                     RECOVER_PASS_WORK * (uint32_t)npts * passes + RECOVER_FIRST_WORK +
+                                             RECOVER_CONFLICT_WORK <=
+                                         cfg->recover_budget)) {
+                    rr->checked = 1u;
+                    *contradicted = contradicts(loc, &res.pose, npts, &rep->crossing);
+                }
+                return RSM_SCAN_POOR_FIT;
+            }
+            if (r == RECOVERY_TAKEN) {
+                loc->counters.recovered++;
+                rep->recovered = 1u;
+                poor = 0;
+            } else if (r == RECOVERY_AMBIGUOUS) {
+                ambiguous = 1;
+            }
+        }
+    }
+    return settle(loc, npts, odometry_moved, rc, &res, poor, ambiguous, rep, clk, contradicted);
 }
 
 /* The walls' grid is learnt from this many scans with walls enough
@@ -1400,6 +1882,8 @@ static rsm_outcome_t step_icp(rsm_localizer_t *loc, size_t npts, rsm_localizer_r
  * within radius_m of the estimate then (0: the whole map). */
 static void begin_global(rsm_localizer_t *loc, float radius_m)
 {
+    /* The search takes the memory a recovery keeps its readings in. */
+    loc->state.persistent.recovery.phase = RECOVER_IDLE;
     loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
     loc->state.persistent.global.unproven = 0u;
     loc->state.persistent.global.radius_m = radius_m;
@@ -1504,8 +1988,6 @@ static float win_fit(const rsm_localizer_t *loc)
  * before a new search; each once the robot has moved this far or turned
  * this much since the last. */
 #define PROVE_ROUNDS 4u
-#define PROVE_AGAIN_M 0.3f
-#define PROVE_AGAIN_RAD 0.2f
 /* The winner is looked for again around where odometry carried it (a near
  * search: most of a descent's cost) only when its reach is this much
  * beyond two cells: within it, the descent from the wide prior finds it. */
@@ -2001,7 +2483,8 @@ int rsm_localizer_scan_checked(rsm_localizer_t *loc, const rsm_scan_t *scan, siz
              * map there was evicted) is written at the prediction, or the
              * map could never grow back; one that was refused, or whose beams
              * pass through the map's walls (conflict_max), is not. */
-            if ((fused || outcome == RSM_SCAN_LOW_SUPPORT) && !contradicted && !loc->cfg->map_frozen) {
+            if ((fused || outcome == RSM_SCAN_LOW_SUPPORT) && !contradicted && !loc->cfg->map_frozen &&
+                !recovering(loc)) {
                 contradicted = write_tmap(loc, &est, npts, outcome == RSM_SCAN_FIRST,
                                           outcome == RSM_SCAN_LOW_SUPPORT, rep);
             }

@@ -445,35 +445,50 @@ static void search_heading(const rsm_tmap_t *map, uint32_t level, const rsm_poin
     }
 }
 
-int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                        const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k,
-                        size_t max_points)
+int rsm_mapmatch_search_size(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, float radius_m,
+                             float radius_rad, int32_t *fan, uint32_t *positions)
 {
-    /* Every stride-th point: the score only ranks candidates. */
-    const size_t most = max_points > 0u ? max_points : 1u;
-    const size_t stride = n > most ? (n + most - 1u) / most : 1u;
-    float cost_of[RSM_MAPMATCH_MAX_CANDIDATES];
-    int32_t ij[2 * RSM_MAPMATCH_MAX_CANDIDATES];
-    size_t found = 0;
-    uint32_t level;
     float step;
     int32_t half;
-    int32_t fan;
-    int32_t a;
-    /* Everything is checked before map or cfg is read, and the radii before
-     * they are converted to counts. */
-    if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || best == NULL || k < 1u ||
-        k > RSM_MAPMATCH_MAX_CANDIDATES || max_points < 1u || max_points > RSM_MAPMATCH_SEARCH_POINTS) {
+    /* The radii are checked before they are converted to counts. */
+    if (map == NULL || cfg == NULL || fan == NULL || positions == NULL) {
         return RSM_ERR_INVAL;
     }
-    level = (uint32_t)map->cfg.levels - 1u;
-    step = rsm_tmap_cell(map, level);
+    step = rsm_tmap_cell(map, (uint32_t)map->cfg.levels - 1u);
     if (!(radius_m >= 0.0f) || radius_m > 100.0f * step || !(radius_rad >= 0.0f) || radius_rad > 1.0f ||
         (radius_rad > 0.0f && !(radius_rad <= 64.0f * cfg->search_step_rad))) {
         return RSM_ERR_INVAL;
     }
     half = (int32_t)(radius_m / step);
-    fan = cfg->search_step_rad > 0.0f ? (int32_t)(radius_rad / cfg->search_step_rad) : 0;
+    *fan = cfg->search_step_rad > 0.0f ? (int32_t)(radius_rad / cfg->search_step_rad) : 0;
+    *positions = (uint32_t)((2 * half + 1) * (2 * half + 1));
+    return RSM_OK;
+}
+
+int rsm_mapmatch_search_part(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts,
+                             size_t n, const rsm_pose_t *x0, float radius_m, float radius_rad, int32_t from,
+                             int32_t to, rsm_pose_t *best, float *cost_of, int32_t *ij, size_t k, size_t *found,
+                             size_t max_points)
+{
+    /* Every stride-th point: the score only ranks candidates. */
+    const size_t most = max_points > 0u ? max_points : 1u;
+    const size_t stride = n > most ? (n + most - 1u) / most : 1u;
+    uint32_t level;
+    uint32_t positions;
+    int32_t half;
+    int32_t fan;
+    int32_t a;
+    /* Everything is checked before map or cfg is read. */
+    if (map == NULL || cfg == NULL || (n > 0u && pts == NULL) || x0 == NULL || best == NULL || cost_of == NULL ||
+        ij == NULL || found == NULL || k < 1u || k > RSM_MAPMATCH_MAX_CANDIDATES || *found > k || max_points < 1u ||
+        max_points > RSM_MAPMATCH_SEARCH_POINTS ||
+        rsm_mapmatch_search_size(map, cfg, radius_m, radius_rad, &fan, &positions) != RSM_OK) {
+        return RSM_ERR_INVAL;
+    }
+    level = (uint32_t)map->cfg.levels - 1u;
+    half = (int32_t)(radius_m / rsm_tmap_cell(map, level));
+    from = from < -fan ? -fan : from;
+    to = to > fan + 1 ? fan + 1 : to;
     {
         /* (1 - occupancy)^2 of each cell value, as coarse_cost sums it. */
         float miss[RSM_TMAP_MAX_VALUE + 1u];
@@ -482,13 +497,35 @@ int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg,
             const float r = 1.0f - map->occ[v];
             miss[v] = r * r;
         }
-        for (a = -fan; a <= fan; ++a) {
+        for (a = from; a < to; ++a) {
             rsm_pose_t x;
             x.theta = rsm_wrap_angle(x0->theta + (float)a * cfg->search_step_rad);
-            search_heading(map, level, pts, n, stride, x0, &x, half, miss, best, cost_of, ij, k, &found);
+            search_heading(map, level, pts, n, stride, x0, &x, half, miss, best, cost_of, ij, k, found);
         }
     }
-    return (int)found;
+    return (int)*found;
+}
+
+int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
+                        const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k,
+                        size_t max_points)
+{
+    float cost_of[RSM_MAPMATCH_MAX_CANDIDATES];
+    int32_t ij[2 * RSM_MAPMATCH_MAX_CANDIDATES];
+    size_t found = 0;
+    return rsm_mapmatch_search_part(map, cfg, pts, n, x0, radius_m, radius_rad, -RSM_MAPMATCH_MAX_FAN,
+                                    RSM_MAPMATCH_MAX_FAN + 1, best, cost_of, ij, k, &found, max_points);
+}
+
+float rsm_mapmatch_fit(const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *pose)
+{
+    sums_t s;
+    float mean;
+    if (map == NULL || pts == NULL || pose == NULL || n == 0u) {
+        return 0.0f;
+    }
+    level_sums(map, 0u, pts, n, points_reach(pts, n, &mean), pose, &s);
+    return s.hit / (float)n;
 }
 
 /* The prior of a descent: its mean, information and the residual weight;
@@ -594,7 +631,7 @@ static void unpin_sums(sums_t *s, const rsm_mapmatch_unpin_t *un)
  * estimate, s the finest level's sums there and the result the objective
  * (residuals plus prior) on the finest level. */
 static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
-                     const prior_t *pr, rsm_pose_t *x, sums_t *s, uint32_t *iterations)
+                     const prior_t *pr, rsm_pose_t *x, sums_t *s, uint32_t *iterations, uint32_t *passes)
 {
     float f = 0.0f;
     int level;
@@ -604,6 +641,7 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
         float scale = 1.0f; /* halved for good once a step overshoots */
         uint32_t it;
         level_sums(map, (uint32_t)level, pts, n, pr->reach, x, s);
+        ++*passes;
         unpin_sums(s, pr->unpin);
         diff(x, pr->x0, e);
         f = s->cost * pr->w + quad(pr->lam, e);
@@ -658,6 +696,7 @@ static float descend(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, co
                 cand.y = x->y + step[1];
                 cand.theta = rsm_wrap_angle(x->theta + step[2]);
                 level_sums(map, (uint32_t)level, pts, n, pr->reach, &cand, &cs);
+                ++*passes;
                 unpin_sums(&cs, pr->unpin);
                 diff(&cand, pr->x0, ce);
                 cf = cs.cost * pr->w + quad(pr->lam, ce);
@@ -717,7 +756,7 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
     }
     x = start != NULL ? *start : *x0;
     {
-        const float f = descend(map, cfg, pts, n, &pr, &x, &s, &res->iterations);
+        const float f = descend(map, cfg, pts, n, &pr, &x, &s, &res->iterations, &res->passes);
         if (start == NULL && cfg->fan && cfg->search_rad > 0.0f && cfg->search_step_rad > 0.0f) {
             /* The fan's best heading is only a coarse guess: descend from it
              * too and keep whichever ends lower on the finest level. */
@@ -725,7 +764,7 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
             alt.theta = best_heading(map, cfg, pts, n, x0, pr.w, pr.lam[8]);
             if (fabsf(rsm_wrap_angle(alt.theta - x0->theta)) > 0.5f * cfg->search_step_rad) {
                 sums_t as;
-                const float af = descend(map, cfg, pts, n, &pr, &alt, &as, &res->iterations);
+                const float af = descend(map, cfg, pts, n, &pr, &alt, &as, &res->iterations, &res->passes);
                 if (af < f && as.used >= 3u) {
                     x = alt;
                     s = as;

@@ -61,6 +61,8 @@ typedef struct rsm_mapmatch_result {
     float hit;              /* mean M over all points at the finest level, in [0, 1] */
     uint32_t used;          /* points with a gradient at the finest level */
     uint32_t iterations;    /* steps taken, all levels */
+    uint32_t passes;        /* passes over the points (each reads every point's cells on a
+                             * level): what the match cost */
     uint32_t top;           /* the level the descent started on (cfg->basin) */
     float d2;               /* (x - x0)^T P0^-1 (x - x0): how far the scan moved the estimate */
 } rsm_mapmatch_result_t;
@@ -81,6 +83,8 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
 #define RSM_MAPMATCH_MAX_CANDIDATES 8u
 /* Most points it scores (every stride-th of the scan). */
 #define RSM_MAPMATCH_SEARCH_POINTS 64u
+/* Most headings either side of the centre (the radius_rad limit). */
+#define RSM_MAPMATCH_MAX_FAN 64
 
 /* Exhaustive search on the coarsest level for the poses that best fit the
  * points: positions on that level's cell grid within +-radius_m of x0, each
@@ -96,6 +100,27 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
 int rsm_mapmatch_search(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n,
                         const rsm_pose_t *x0, float radius_m, float radius_rad, rsm_pose_t *best, size_t k,
                         size_t max_points);
+
+/* The size of that search: headings -*fan .. *fan (each cfg->search_step_rad
+ * apart) and *positions a heading. RSM_OK, or RSM_ERR_INVAL for the radii
+ * rsm_mapmatch_search refuses. */
+int rsm_mapmatch_search_size(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, float radius_m,
+                             float radius_rad, int32_t *fan, uint32_t *positions);
+
+/* Part of rsm_mapmatch_search: its headings from .. to - 1 (of -fan .. fan,
+ * clamped), their candidates merged into the *found kept so far (0 at
+ * first) in best, cost_of (their costs) and ij (2 a candidate: their
+ * position on the grid), all k long, so that a search can be spread over
+ * calls. Parts that cover the headings in order find what the whole search
+ * finds. Returns *found, or RSM_ERR_INVAL as rsm_mapmatch_search. */
+int rsm_mapmatch_search_part(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts,
+                             size_t n, const rsm_pose_t *x0, float radius_m, float radius_rad, int32_t from,
+                             int32_t to, rsm_pose_t *best, float *cost_of, int32_t *ij, size_t k, size_t *found,
+                             size_t max_points);
+
+/* The points' fit at pose without a descent: their mean occupancy on the
+ * finest level, interpolated (rsm_mapmatch_result_t.hit); 0 for no points. */
+float rsm_mapmatch_fit(const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *pose);
 
 /* How well the scan's surfaces pin the position: the ratio (0 to 1) of the
  * smaller to the larger eigenvalue of the sum of t t^T over the unit chords

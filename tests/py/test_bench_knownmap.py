@@ -544,7 +544,9 @@ M4_REAL = {"scans": 60, "replay_scans": 600, "logs": {
                         {"offset_s": 955.9, "max": 866395.0, "mean": 785755.0, "scans": 15, "proven": True,
                          "max_work": 45018, "budget": 45000}],
              "replay": {"scans": 600, "mean": 387355.0, "p99": 1055950.0, "max": 1800955.0,
-                        "matching_worst": {"scan": 269, "insns": 1800955.0, "mapmatch": 1643940.0}}}}}
+                        "matching_worst": {"scan": 227, "insns": 1004665.0, "mapmatch": 963690.0},
+                        "recovery_scans": 6,
+                        "recovery_worst": {"scan": 269, "insns": 1800955.0, "mapmatch": 1643940.0}}}}}
 
 
 def test_the_full_logs_cost_floors():
@@ -556,10 +558,19 @@ def test_the_full_logs_cost_floors():
     for part in ("worst scan 899 805 <= 1 000 000", "136 s: worst 899 805, mean 862 596 over 60 scans, none proven",
                  "956 s: worst 866 395", "global_budget (45 000)"):
         assert part in g["line"], (part, g["line"])
-    # the recovery's scan over it: a MISS naming the scan
+    # the recovery's costliest scan over it: a MISS naming the scan, the
+    # costliest matching of all beside it
     assert r["status"] == "MISS" and r["value"] == 1800955.0
-    for part in ("scan 269: 1 800 955 > 1 000 000", "1 643 940 matching", "p99 1 055 950", "first 600 scans"):
+    for part in ("the 6 scans tracking recoveries took", "scan 269: 1 800 955 > 1 000 000", "1 643 940 matching",
+                 "of all, scan 227: 1 004 665 (963 690 matching)", "p99 1 055 950", "first 600 scans"):
         assert part in r["line"], (part, r["line"])
+    # under it: a PASS; no recovery in the scans: a SKIP saying so
+    under = json.loads(json.dumps(M4_REAL))
+    under["logs"]["aces"]["replay"]["recovery_worst"] = {"scan": 240, "insns": 736000.0, "mapmatch": 600000.0}
+    assert km.m4_real_floors(under)[1]["status"] == "PASS"
+    under["logs"]["aces"]["replay"]["recovery_worst"] = None
+    none = km.m4_real_floors(under)[1]
+    assert none["status"] == "SKIP" and "no tracking recovery in them" in none["line"]
     # not run: one SKIP line saying why
     skip = km.m4_real_floors({"skipped": "--no-m4"})
     assert len(skip) == 1 and skip[0]["status"] == "SKIP" and "--no-m4" in skip[0]["line"]

@@ -1006,6 +1006,78 @@ void test_localizer_scan_should_recover_from_being_carried_by_searching(void)
     TEST_ASSERT_TRUE(rad < 1.0f * RSM_PI / 180.0f);
 }
 
+/* Carried as run_carried, then twenty steps more; returns the scan (its step
+ * from K0) whose search placed the robot (0: none), the scans a recovery
+ * took (rep.recovering) in *took, and whether every scan between the one
+ * that began it and the one it placed was kept at its prediction and not
+ * written in *kept. */
+static size_t run_carried_spread(size_t skip, uint32_t *took, int *kept, float *err)
+{
+    rsm_localizer_report_t rep;
+    rsm_pose_t est;
+    size_t placed = 0;
+    size_t k;
+    uint32_t writes = 0;
+    int begun = 0;
+    *took = 0u;
+    *kept = 1;
+    start_at_k0(&loc, 10u, &odo_err);
+    make_scan(&path[K0 + 9u + skip], NULL, (uint64_t)(K0 + 10u) * STEP_US);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    for (k = K0 + 10u + skip;; ++k) {
+        if (rep.recovering) {
+            ++*took;
+            if (!begun) {
+                begun = 1;
+                writes = loc.state.persistent.map.counters.updates;
+            } else if (!rep.recovered &&
+                       (rep.outcome != RSM_SCAN_POOR_FIT || loc.state.persistent.map.counters.updates != writes)) {
+                *kept = 0;
+            }
+        }
+        if (rep.recovered && placed == 0u) {
+            placed = k - K0 - skip;
+        }
+        if (k >= K0 + 30u + skip) {
+            break;
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, step(&loc, k, &odo_err, NULL, &rep));
+    }
+    est = rsm_localizer_pose(&loc);
+    *err = rsm_synth_pos_error(&est, &path[K0 + 29u + skip]);
+    return placed;
+}
+
+void test_localizer_scan_should_spread_a_recovery_over_scans(void)
+{
+    /* recover_budget 0: the search and its proof in the scan that asks for
+     * them (the first after the carry, step 10). By default they take the
+     * scans that follow, and half the budget takes more of them; meanwhile
+     * the robot is carried by odometry (not fused, nothing written), and
+     * each ends at the map's quantisation. */
+    size_t at[3];
+    uint32_t took[3];
+    char msg[200];
+    int i;
+    for (i = 0; i < 3; ++i) {
+        int kept;
+        float err;
+        cfg = rsm_localizer_config_default();
+        cfg.recover_budget = i == 0 ? 0u : rsm_localizer_config_default().recover_budget / (uint32_t)i;
+        at[i] = run_carried_spread(CARRIED, &took[i], &kept, &err);
+        snprintf(msg, sizeof msg, "budget %u: placed at step %u, %u scans, %.3f m at the end",
+                 (unsigned)cfg.recover_budget, (unsigned)at[i], (unsigned)took[i], (double)err);
+        TEST_MESSAGE(msg);
+        TEST_ASSERT_TRUE_MESSAGE(at[i] >= 10u, msg);
+        TEST_ASSERT_TRUE_MESSAGE(kept, msg);
+        TEST_ASSERT_TRUE_MESSAGE(err < QUANT + 0.01f, msg);
+    }
+    TEST_ASSERT_EQUAL_UINT32(10u, (uint32_t)at[0]);
+    TEST_ASSERT_EQUAL_UINT32(1u, took[0]);
+    TEST_ASSERT_TRUE(at[1] > at[0] && took[1] >= 2u);
+    TEST_ASSERT_TRUE(at[2] > at[1] && took[2] > took[1]);
+}
+
 /* ---- odometry that lies ---------------------------------------------------------- */
 
 /* The first scan of the loop's second corner (a quarter turn in place). */
@@ -1059,6 +1131,11 @@ void test_localizer_scan_should_count_a_stalled_odometrys_catch_up_once(void)
     float rad;
     float err;
     cfg.refute_margin = 0.0f;
+    /* Each recovery in the scan that asks for it: spread over scans, the
+     * robot carried by odometry that stands still meanwhile, the first one
+     * in the stall ends without a pose and the estimate stays put through
+     * the turn (the catch-up then lands right by luck). */
+    cfg.recover_budget = 0u;
     err = run_stall(STALL, &rad);
     snprintf(msg, sizeof msg, "odometry trusted: %.3f m, %.1f deg after the catch-up", (double)err,
              (double)(rad / DEG));
@@ -1221,11 +1298,17 @@ static float run_posts_bump(void)
     scan_cfg.max_range_m = 4.0f; /* no return beyond: the rows' ends are out of sight */
     scan_cfg.start_rad = -RSM_PI; /* 270 degrees: posts behind too */
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &truth, p0_start));
-    for (k = 0; k <= 20u; ++k) {
+    /* 8 m along the posts and 4 m back: at the bump the map holds every
+     * post the true pose or one a period off sees, each seen from all
+     * round. (Driven only up to there, the pose a period back sees only
+     * posts already mapped and the true one some not yet: the former fits
+     * better, a difference of the map, not of the place.) */
+    for (k = 0; k <= 120u; ++k) {
         if (k > 0u) {
-            const rsm_motion_t u = {0.1f, 0.0f, 0.0f};
+            const float dx = k <= 80u ? 0.1f : -0.1f;
+            const rsm_motion_t u = {dx, 0.0f, 0.0f};
             TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
-            truth.x += 0.1f;
+            truth.x += dx;
         }
         make_scan(&truth, NULL, (uint64_t)k * STEP_US);
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
@@ -1237,6 +1320,14 @@ static float run_posts_bump(void)
     truth.x += 0.5f * PERIOD;
     make_scan(&truth, NULL, (uint64_t)k * STEP_US);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    /* The robot stands there while the search that scan began runs on in
+     * the scans that follow (recover_budget). */
+    while (rep.recovering && !rep.recovered && k < 160u) {
+        ++k;
+        make_scan(&truth, NULL, (uint64_t)k * STEP_US);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    }
+    TEST_ASSERT_TRUE(k < 160u);
     est = rsm_localizer_pose(&loc);
     return fabsf(est.x - truth.x);
 }
@@ -1273,7 +1364,8 @@ void test_localizer_scan_should_not_take_an_ambiguous_recovery(void)
     TEST_ASSERT_EQUAL_UINT32_MESSAGE(1u, loc.counters.ambiguous, msg);
     TEST_ASSERT_EQUAL_INT_MESSAGE((int)RSM_SCAN_POOR_FIT, (int)loc.last.outcome, msg);
     TEST_ASSERT_EQUAL_INT_MESSAGE((int)RSM_TRACK_UNCERTAIN, (int)rsm_localizer_track(&loc), msg);
-    /* Without the margin the best basin is taken: here the wrong one. */
+    /* Without the margin the best basin is taken (here the right one, by
+     * 5 %: which of two look-alikes fits better is the scan's luck). */
     cfg.recover_margin = 0.0f;
     scan_cfg = rsm_synth_scan_config_default();
     err = run_posts_bump();
@@ -1281,7 +1373,7 @@ void test_localizer_scan_should_not_take_an_ambiguous_recovery(void)
              (unsigned)loc.counters.recovered, (double)err);
     TEST_MESSAGE(msg);
     TEST_ASSERT_GREATER_OR_EQUAL_UINT32_MESSAGE(1u, loc.counters.recovered, msg);
-    TEST_ASSERT_TRUE_MESSAGE(err > 0.5f * PERIOD, msg);
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, loc.counters.ambiguous, msg);
 }
 
 void test_localizer_should_say_when_it_is_uncertain_and_when_lost(void)
@@ -1362,6 +1454,8 @@ void test_localizer_scan_should_map_new_ground_it_drives_into(void)
     rsm_localizer_report_t rep;
     rsm_pose_t est;
     rsm_pose_t dead = start;
+    uint32_t refused = 0;
+    uint32_t searching = 0;
     char msg[200];
     size_t n = rsm_synth_path(&start, legs, 3u, 0.1f, 0.1f, route, 120u);
     size_t k;
@@ -1377,17 +1471,29 @@ void test_localizer_scan_should_map_new_ground_it_drives_into(void)
         }
         make_scan(&route[k], NULL, (uint64_t)k * STEP_US);
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+        if (rep.outcome == RSM_SCAN_POOR_FIT && !rep.recovering) {
+            ++refused;
+        }
+        if (rep.recovering) {
+            ++searching;
+        }
     }
     est = rsm_localizer_pose(&loc);
-    snprintf(msg, sizeof msg, "%u scans, %u searches, %u refused as poor, %u not tracking, final %.3f m, %.2f deg "
-             "(odometry alone %.3f m)",
-             (unsigned)n, (unsigned)loc.counters.searches, (unsigned)loc.counters.outcome[RSM_SCAN_POOR_FIT],
+    snprintf(msg, sizeof msg, "%u scans, %u searches (%u scans), %u refused as poor, %u not tracking, final %.3f m, "
+             "%.2f deg (odometry alone %.3f m)",
+             (unsigned)n, (unsigned)loc.counters.searches, (unsigned)searching, (unsigned)refused,
              (unsigned)(loc.counters.track[RSM_TRACK_UNCERTAIN] + loc.counters.track[RSM_TRACK_LOST]),
              (double)rsm_synth_pos_error(&est, &route[n - 1u]),
              (double)(rsm_synth_angle_error(&est, &route[n - 1u]) / DEG),
              (double)rsm_synth_pos_error(&dead, &route[n - 1u]));
     TEST_MESSAGE(msg);
-    TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, loc.counters.outcome[RSM_SCAN_POOR_FIT], msg);
+    /* None refused but those recovery searches took (the robot carried by
+     * odometry meanwhile, recover_budget): each poor fit in the hall's
+     * first metres begins one, which searches headings, then positions
+     * within a coarse cell, then within recover_m before it ends, and the
+     * next waits for a new view (measured: 3 searches, 30 of 102 scans). */
+    TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, refused, msg);
+    TEST_ASSERT_TRUE_MESSAGE(searching < n / 3u, msg);
     /* Measured: 0.12 m at the end (10 cm cells: 0.26 m), odometry alone
      * 1.16 m; refused, those scans left 0.18 m and 66 scans not tracking. */
     TEST_ASSERT_TRUE_MESSAGE(rsm_synth_pos_error(&est, &route[n - 1u]) <
@@ -1888,6 +1994,7 @@ int main(void)
     RUN_TEST(test_localizer_scan_should_refuse_scans_after_a_one_metre_odometry_jump);
     RUN_TEST(test_localizer_scan_should_stay_finite_after_a_one_metre_jump_with_map_on_reject);
     RUN_TEST(test_localizer_scan_should_recover_from_being_carried_by_searching);
+    RUN_TEST(test_localizer_scan_should_spread_a_recovery_over_scans);
     RUN_TEST(test_localizer_scan_should_count_a_stalled_odometrys_catch_up_once);
     RUN_TEST(test_localizer_scan_should_refute_a_spike_and_a_counter_reset);
     RUN_TEST(test_localizer_scan_should_search_before_dropping_a_step_the_scan_fits_weakly_without);

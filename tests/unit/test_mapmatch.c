@@ -476,6 +476,51 @@ void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
     }
 }
 
+void test_mapmatch_search_should_find_in_parts_what_it_finds_whole(void)
+{
+    /* A recovery spreads its search over scans a few headings at a time:
+     * the parts, in order, keep the candidates the whole search keeps, bit
+     * for bit; and the fit at a pose is the descent's own at its end. */
+    const rsm_pose_t truth_w = {-0.5f, 0.3f, 0.3f};
+    const rsm_pose_t truth = in_map(&truth_w);
+    rsm_pose_t pred = truth;
+    rsm_pose_t whole[3];
+    rsm_pose_t part[3];
+    float cost[3];
+    int32_t ij[6];
+    size_t found = 0;
+    uint32_t positions = 0;
+    int32_t fan = 0;
+    int32_t a;
+    int n_whole;
+    size_t n;
+    rsm_mapmatch_result_t res;
+    build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
+    pred.x += 0.7f;
+    pred.y -= 0.5f;
+    pred.theta += 4.0f * DEG;
+    n = points_at(&truth_w);
+    n_whole = rsm_mapmatch_search(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, whole, 3u, 32u);
+    TEST_ASSERT_TRUE(n_whole >= 2);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch_search_size(&map, &cfg, 1.0f, cfg.search_rad, &fan, &positions));
+    TEST_ASSERT_EQUAL_INT32((int32_t)(cfg.search_rad / cfg.search_step_rad), fan);
+    TEST_ASSERT_EQUAL_UINT32(25u, positions); /* 5 x 5 coarse cells within 1 m */
+    for (a = -fan; a <= fan; a += 3) {
+        TEST_ASSERT_TRUE(rsm_mapmatch_search_part(&map, &cfg, pts, n, &pred, 1.0f, cfg.search_rad, a, a + 3, part, cost,
+                                                  ij, 3u, &found, 32u) >= 1);
+    }
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)n_whole, (uint32_t)found);
+    TEST_ASSERT_EQUAL_MEMORY(whole, part, (size_t)n_whole * sizeof whole[0]);
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search_size(&map, &cfg, -1.0f, 0.1f, &fan, &positions));
+    found = 4u; /* more than k: a caller's state gone wrong */
+    TEST_ASSERT_EQUAL_INT(RSM_ERR_INVAL, rsm_mapmatch_search_part(&map, &cfg, pts, n, &pred, 1.0f, 0.1f, 0, 1, part,
+                                                                  cost, ij, 3u, &found, 32u));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_mapmatch(&map, &cfg, pts, n, &pred, p_wide, &whole[0], NULL, &res));
+    TEST_ASSERT_EQUAL_FLOAT(res.hit, rsm_mapmatch_fit(&map, pts, n, &res.pose));
+    TEST_ASSERT_TRUE(res.passes > res.iterations);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, rsm_mapmatch_fit(&map, pts, 0u, &res.pose));
+}
+
 void test_mapmatch_should_report_an_empty_map_as_degenerate(void)
 {
     const rsm_pose_t pred = {1.0f, 2.0f, 0.5f};
@@ -556,6 +601,7 @@ int main(void)
     RUN_TEST(test_mapmatch_spread_should_tell_a_corridor_from_a_room);
     RUN_TEST(test_mapmatch_should_not_drag_a_scan_back_along_a_bare_corridor);
     RUN_TEST(test_mapmatch_search_should_find_a_pose_a_metre_off);
+    RUN_TEST(test_mapmatch_search_should_find_in_parts_what_it_finds_whole);
     RUN_TEST(test_mapmatch_should_report_an_empty_map_as_degenerate);
     RUN_TEST(test_mapmatch_should_check_its_arguments_and_config);
     RUN_TEST(test_mapmatch_should_be_deterministic);

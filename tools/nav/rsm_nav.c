@@ -95,6 +95,7 @@
     F("recover_m", recover_m) \
     F("recover_rad", recover_rad) \
     F("recover_margin", recover_margin) \
+    U("recover_budget", recover_budget, uint32_t) \
     F("refute_margin", refute_margin) \
     F("track_min_fit", track_min_fit) \
     F("conflict_max", conflict_max) \

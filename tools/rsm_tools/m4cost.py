@@ -10,9 +10,10 @@ excerpt cannot show them.
   and then searches from the next, each scan timed. Figures: the
   instructions of every scan of the search (``rsm_localizer_scan``).
 - ``replay``: the replay image (port/baremetal/replay/) on a log's first
-  scans: every scan's instructions and stages; the scan whose map matching
-  cost most is a recovery's (a search and its descents) where the log has
-  one.
+  scans: every scan's instructions and stages, the scan whose map matching
+  cost most, and the costliest of the scans a tracking recovery took (the
+  image's R lines: the scan that began one, those its search and proof
+  were spread over, the scan it placed).
 
     python3 -m rsm_tools.m4cost global LOG MAP --offset S [--scans N] --work DIR
     python3 -m rsm_tools.m4cost replay LOG [--scans N] --work DIR
@@ -133,6 +134,15 @@ def replay_cost(log: Path, scans: int, work: Path) -> Dict[str, object]:
             for r in m4.lines_of(text, "T")]
     worst = max(rows, key=lambda r: r[2])
     c["matching_worst"] = {"scan": worst[0], "insns": worst[1], "mapmatch": worst[2]}
+    # The scans a tracking recovery took (R lines: the one that began it,
+    # those its search and proof were spread over, the one it placed).
+    took = {int(r[0]) for r in m4.lines_of(text, "R")}
+    rec = [r for r in rows if r[0] in took]
+    c["recovery_scans"] = len(rec)
+    c["recovery_worst"] = None
+    if rec:
+        w = max(rec, key=lambda r: r[1])
+        c["recovery_worst"] = {"scan": w[0], "insns": w[1], "mapmatch": w[2]}
     return c
 
 
@@ -175,6 +185,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(m4.format_costs(c))
             print(f"costliest matching: scan {w['scan']}, {w['insns']:.0f} instructions "
                   f"({w['mapmatch']:.0f} matching)")
+            r = c["recovery_worst"]
+            if r is None:
+                print("no tracking recovery in these scans")
+            else:
+                print(f"tracking recoveries: {c['recovery_scans']} scans; the costliest, scan {r['scan']}: "
+                      f"{r['insns']:.0f} instructions ({r['mapmatch']:.0f} matching); floor {FLOOR}: "
+                      f"{'met' if r['insns'] <= FLOOR else 'MISSED'}")
     except (M4CostError, m4.M4Error, subprocess.TimeoutExpired) as e:
         print(f"rsm-m4cost: {e}", file=sys.stderr)
         return 1

@@ -51,6 +51,12 @@ static void put_report(const rsm_replay_io_t *io, uint32_t scan, const rsm_local
     if (io->clock_fn == NULL) {
         return;
     }
+    if (rep->recovering) {
+        /* The scans a tracking recovery took, for the cost of one. */
+        rsm_replay_put_str(io, "R ");
+        rsm_replay_put_dec(io, scan);
+        rsm_replay_put_str(io, "\n");
+    }
     rsm_replay_put_str(io, "T ");
     rsm_replay_put_dec(io, scan);
     rsm_replay_put_str(io, " ");
