@@ -113,13 +113,14 @@ typedef struct rsm_localizer_config {
     float recover_margin;           /* a search's winner is taken only when its fit beats every
                                      * pose a doubt (doubt_m, doubt_rad) away from it by this
                                      * share, else the scan is left ambiguous; default 0.1 */
-    uint32_t recover_budget;        /* a recovery's search and proof are spread over the scans
-                                     * after the one that asked for it, this much work a scan at
-                                     * most (units of about 18 Cortex-M4 instructions, as
-                                     * global_budget), the robot carried by odometry meanwhile;
-                                     * 0 = all of it in that scan; default 35000: at most about
-                                     * 0.6 million instructions of it a scan (docs/robustness.md,
-                                     * "A recovery spread over scans") */
+    uint32_t recover_budget;        /* 0, the default: a recovery's search and proof whole in the
+                                     * scan that asks for it (up to 1.8 million Cortex-M4
+                                     * instructions on ACES). Else spread over the scans after
+                                     * it in stages, this much work a scan at most (units of
+                                     * about 18 instructions, as global_budget; 38000 kept ACES's
+                                     * recovery scans under a million), the robot carried by
+                                     * odometry meanwhile: at a cost in accuracy and in faults
+                                     * (docs/robustness.md, "A recovery spread over scans") */
     /* Odometry is evidence, not truth (RSM_METHOD_MAP): its step since the
      * last scan is matched against a second prediction when the scans give
      * cause to doubt it, and the prediction the scan fits better is kept

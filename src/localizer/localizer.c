@@ -71,7 +71,7 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.recover_m = 1.0f;
     c.recover_rad = 0.3f;
     c.recover_margin = 0.1f;
-    c.recover_budget = 38000u;
+    c.recover_budget = 0u;
     c.refute_margin = 0.1f;
     c.track_min_fit = 0.7f;
     c.conflict_max = 0.5f;
@@ -1249,7 +1249,7 @@ static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spen
     /* The scan that asks for a recovery: its first stage is cheap (one
      * position, a few dozen readings) and runs there whatever the budget,
      * so that a turn misjudged is put right in that scan. */
-    int first = !must;
+    const int first = !must;
     const uint32_t match_work = RECOVER_MATCH_PASSES * RECOVER_PASS_WORK * (uint32_t)npts;
     const uint32_t fit_work = RECOVER_PASS_WORK * (uint32_t)npts;
     uint32_t work = spent;
@@ -1382,16 +1382,11 @@ static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spen
                 *res = m;
                 return RECOVERY_TAKEN;
             }
-            /* Else the whole scan weighs the same basin: the next one's, or
-             * this one's with no budget. */
+            /* Else the whole scan weighs the same basin, the next one. */
             r->proved = 0u;
             r->hit[0] = 1.0f;
             r->end[0] = r->start[0];
-            first = 0;
-            if (budget > 0u) {
-                return RECOVERY_RUNNING;
-            }
-            continue;
+            return RECOVERY_RUNNING;
         } else if (r->phase == RECOVER_PROVING) {
             /* The next basin to match: the worst-fitting not yet matched. */
             rsm_mapmatch_result_t m;
@@ -1492,6 +1487,76 @@ static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spen
             return RECOVERY_NONE;
         }
     }
+}
+
+/* recover_budget 0: one recovery search, whole in the scan that asks for
+ * it, within +-radius_m and +-recover_rad of pred: descends
+ * from the best few candidates under a prior widened as far and replaces
+ * *res with the best fit if it fits well again (at least half of what was
+ * lost regained; need is above the first *res, so each replacement fits
+ * better than the last) and is proven: it beats every pose a doubt away
+ * from it (another basin's descent, or the plain match) by recover_margin.
+ * The winner's whole result is kept: descending it again cost a
+ * recovery's scan a fifth of a million M4 instructions. A winner
+ * that would not track by its fit (track_min_fit) and contradicts the map
+ * (conflict_max: a look-alike place within reach of a robot carried
+ * farther) is not taken. */
+static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *pred, float radius_m,
+                          rsm_mapmatch_result_t *res)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const float fit = loc->state.persistent.fit;
+    const float need = res->hit + 0.5f * (fit - res->hit);
+    rsm_pose_t start[RSM_RECOVER_STARTS];
+    rsm_pose_t found_pose[RSM_RECOVER_STARTS];
+    rsm_mapmatch_result_t won;
+    float share;
+    float found_hit[RSM_RECOVER_STARTS];
+    float rival;
+    float wide[9];
+    int found;
+    int k;
+    int best = -1;
+    memcpy(wide, loc->ekf.p, sizeof wide);
+    wide[0] += radius_m * radius_m;
+    wide[4] += radius_m * radius_m;
+    wide[8] += cfg->recover_rad * cfg->recover_rad;
+    found = rsm_mapmatch_search(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, radius_m,
+                                cfg->recover_rad, start, RSM_RECOVER_STARTS, RSM_MAPMATCH_SEARCH_POINTS);
+    /* The coarse score only ranks basins: descend from each. */
+    for (k = 0; k < found; ++k) {
+        rsm_mapmatch_result_t alt;
+        /* Not unpinned: each descent starts where the search put it and
+         * only the fit decides, measured against the plain match. */
+        found_hit[k] = -1.0f;
+        if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[k], NULL,
+                         &alt) == RSM_OK) {
+            found_hit[k] = alt.hit;
+            found_pose[k] = alt.pose;
+            if (best < 0 || alt.hit > found_hit[best]) {
+                best = k;
+                won = alt;
+            }
+        }
+    }
+    if (best < 0 || !(found_hit[best] >= cfg->recover_ratio * fit && found_hit[best] >= need &&
+                      found_hit[best] > res->hit)) {
+        return RECOVERY_NONE;
+    }
+    rival = beyond_doubt(cfg, &res->pose, &found_pose[best]) ? res->hit : 0.0f;
+    for (k = 0; k < found; ++k) {
+        if (k != best && found_hit[k] > rival && beyond_doubt(cfg, &found_pose[k], &found_pose[best])) {
+            rival = found_hit[k];
+        }
+    }
+    if (found_hit[best] <= rival * (1.0f + cfg->recover_margin)) {
+        return RECOVERY_AMBIGUOUS;
+    }
+    if (won.hit < cfg->track_min_fit * fit && contradicts(loc, &won.pose, npts, &share)) {
+        return RECOVERY_NONE;
+    }
+    *res = won;
+    return RECOVERY_TAKEN;
 }
 
 /* Whether a recovery may begin at pred: none runs, and one that ended
@@ -1684,7 +1749,29 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
          * the scans that follow, the scan kept at its prediction. Not for a
          * scan that found too little map to match: the search would find
          * no more, and it is written at the prediction (new ground). */
-        if (recovery_may_begin(loc, &pred) && rc == RSM_OK && res.used >= cfg->min_points / 2u) {
+        if (cfg->recover_budget == 0u) {
+            /* The smallest correction first: every heading within
+             * recover_rad and the position within one coarse cell, and only
+             * if that does not fit, a shift up to recover_m. An ambiguous
+             * near search is not widened: a farther pose would have that
+             * same rival, and the wider search might not see it. */
+            const float near_m = rsm_tmap_cell(&loc->state.persistent.map, (uint32_t)cfg->tmap.levels - 1u);
+            recovery_t r;
+            loc->counters.searches++;
+            rep->recovering = 1u;
+            r = recover(loc, npts, &pred, near_m < cfg->recover_m ? near_m : cfg->recover_m, &res);
+            if (r == RECOVERY_NONE && near_m < cfg->recover_m) {
+                r = recover(loc, npts, &pred, cfg->recover_m, &res);
+            }
+            if (r == RECOVERY_TAKEN) {
+                loc->counters.recovered++;
+                rep->recovered = 1u;
+                poor = 0;
+            } else if (r == RECOVERY_AMBIGUOUS) {
+                loc->counters.ambiguous++;
+                ambiguous = 1;
+            }
+        } else if (recovery_may_begin(loc, &pred) && rc == RSM_OK && res.used >= cfg->min_points / 2u) {
             rsm_recovery_t *rr = &loc->state.persistent.recovery;
             recovery_t r;
             loc->counters.searches++;
@@ -1706,10 +1793,8 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
                 rr->checked = 0u;
                 rep->fit_ratio =
                     rc == RSM_OK && loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 0.0f;
-                if (rc == RSM_OK && (cfg->recover_budget == 0u ||
-                                     RECOVER_PASS_WORK * (uint32_t)npts * passes + RECOVER_FIRST_WORK +
-                                             RECOVER_CONFLICT_WORK <=
-                                         cfg->recover_budget)) {
+                if (RECOVER_PASS_WORK * (uint32_t)npts * passes + RECOVER_FIRST_WORK + RECOVER_CONFLICT_WORK <=
+                    cfg->recover_budget) {
                     rr->checked = 1u;
                     *contradicted = contradicts(loc, &res.pose, npts, &rep->crossing);
                 }

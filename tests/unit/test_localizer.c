@@ -1006,6 +1006,10 @@ void test_localizer_scan_should_recover_from_being_carried_by_searching(void)
     TEST_ASSERT_TRUE(rad < 1.0f * RSM_PI / 180.0f);
 }
 
+/* A budget that keeps a recovery's scans within a million M4 instructions
+ * on ACES (docs/robustness.md, "A recovery spread over scans"). */
+#define SPREAD_BUDGET 38000u
+
 /* Carried as run_carried, then twenty steps more; returns the scan (its step
  * from K0) whose search placed the robot (0: none), the scans a recovery
  * took (rep.recovering) in *took, and whether every scan between the one
@@ -1050,11 +1054,11 @@ static size_t run_carried_spread(size_t skip, uint32_t *took, int *kept, float *
 
 void test_localizer_scan_should_spread_a_recovery_over_scans(void)
 {
-    /* recover_budget 0: the search and its proof in the scan that asks for
-     * them (the first after the carry, step 10). By default they take the
-     * scans that follow, and half the budget takes more of them; meanwhile
-     * the robot is carried by odometry (not fused, nothing written), and
-     * each ends at the map's quantisation. */
+    /* recover_budget 0 (the default): the search and its proof in the scan
+     * that asks for them (the first after the carry, step 10). With a
+     * budget they take the scans that follow, and half the budget more of
+     * them; meanwhile the robot is carried by odometry (not fused, nothing
+     * written), and each ends at the map's quantisation. */
     size_t at[3];
     uint32_t took[3];
     char msg[200];
@@ -1063,7 +1067,7 @@ void test_localizer_scan_should_spread_a_recovery_over_scans(void)
         int kept;
         float err;
         cfg = rsm_localizer_config_default();
-        cfg.recover_budget = i == 0 ? 0u : rsm_localizer_config_default().recover_budget / (uint32_t)i;
+        cfg.recover_budget = i == 0 ? 0u : SPREAD_BUDGET / (uint32_t)i;
         at[i] = run_carried_spread(CARRIED, &took[i], &kept, &err);
         snprintf(msg, sizeof msg, "budget %u: placed at step %u, %u scans, %.3f m at the end",
                  (unsigned)cfg.recover_budget, (unsigned)at[i], (unsigned)took[i], (double)err);
@@ -1298,17 +1302,11 @@ static float run_posts_bump(void)
     scan_cfg.max_range_m = 4.0f; /* no return beyond: the rows' ends are out of sight */
     scan_cfg.start_rad = -RSM_PI; /* 270 degrees: posts behind too */
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &truth, p0_start));
-    /* 8 m along the posts and 4 m back: at the bump the map holds every
-     * post the true pose or one a period off sees, each seen from all
-     * round. (Driven only up to there, the pose a period back sees only
-     * posts already mapped and the true one some not yet: the former fits
-     * better, a difference of the map, not of the place.) */
-    for (k = 0; k <= 120u; ++k) {
+    for (k = 0; k <= 20u; ++k) {
         if (k > 0u) {
-            const float dx = k <= 80u ? 0.1f : -0.1f;
-            const rsm_motion_t u = {dx, 0.0f, 0.0f};
+            const rsm_motion_t u = {0.1f, 0.0f, 0.0f};
             TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
-            truth.x += dx;
+            truth.x += 0.1f;
         }
         make_scan(&truth, NULL, (uint64_t)k * STEP_US);
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
@@ -1320,14 +1318,6 @@ static float run_posts_bump(void)
     truth.x += 0.5f * PERIOD;
     make_scan(&truth, NULL, (uint64_t)k * STEP_US);
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
-    /* The robot stands there while the search that scan began runs on in
-     * the scans that follow (recover_budget). */
-    while (rep.recovering && !rep.recovered && k < 160u) {
-        ++k;
-        make_scan(&truth, NULL, (uint64_t)k * STEP_US);
-        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
-    }
-    TEST_ASSERT_TRUE(k < 160u);
     est = rsm_localizer_pose(&loc);
     return fabsf(est.x - truth.x);
 }
@@ -1364,8 +1354,7 @@ void test_localizer_scan_should_not_take_an_ambiguous_recovery(void)
     TEST_ASSERT_EQUAL_UINT32_MESSAGE(1u, loc.counters.ambiguous, msg);
     TEST_ASSERT_EQUAL_INT_MESSAGE((int)RSM_SCAN_POOR_FIT, (int)loc.last.outcome, msg);
     TEST_ASSERT_EQUAL_INT_MESSAGE((int)RSM_TRACK_UNCERTAIN, (int)rsm_localizer_track(&loc), msg);
-    /* Without the margin the best basin is taken (here the right one, by
-     * 5 %: which of two look-alikes fits better is the scan's luck). */
+    /* Without the margin the best basin is taken: here the wrong one. */
     cfg.recover_margin = 0.0f;
     scan_cfg = rsm_synth_scan_config_default();
     err = run_posts_bump();
@@ -1373,7 +1362,7 @@ void test_localizer_scan_should_not_take_an_ambiguous_recovery(void)
              (unsigned)loc.counters.recovered, (double)err);
     TEST_MESSAGE(msg);
     TEST_ASSERT_GREATER_OR_EQUAL_UINT32_MESSAGE(1u, loc.counters.recovered, msg);
-    TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, loc.counters.ambiguous, msg);
+    TEST_ASSERT_TRUE_MESSAGE(err > 0.5f * PERIOD, msg);
 }
 
 void test_localizer_should_say_when_it_is_uncertain_and_when_lost(void)
@@ -1487,11 +1476,12 @@ void test_localizer_scan_should_map_new_ground_it_drives_into(void)
              (double)(rsm_synth_angle_error(&est, &route[n - 1u]) / DEG),
              (double)rsm_synth_pos_error(&dead, &route[n - 1u]));
     TEST_MESSAGE(msg);
-    /* None refused but those recovery searches took (the robot carried by
-     * odometry meanwhile, recover_budget): each poor fit in the hall's
-     * first metres begins one, which searches headings, then positions
-     * within a coarse cell, then within recover_m before it ends, and the
-     * next waits for a new view (measured: 3 searches, 30 of 102 scans). */
+    /* None refused but those recovery searches took (with recover_budget
+     * the robot is carried by odometry while one runs: each poor fit in the
+     * hall's first metres begins one, which searches headings, then
+     * positions within a coarse cell, then within recover_m before it ends,
+     * and the next waits for a new view; measured with 38 000: 3 searches,
+     * 30 of 102 scans; by default 5 searches, each in its own scan). */
     TEST_ASSERT_EQUAL_UINT32_MESSAGE(0u, refused, msg);
     TEST_ASSERT_TRUE_MESSAGE(searching < n / 3u, msg);
     /* Measured: 0.12 m at the end (10 cm cells: 0.26 m), odometry alone
