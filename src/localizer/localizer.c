@@ -1218,10 +1218,20 @@ static int recovery_takes(rsm_localizer_t *loc, size_t npts, const rsm_mapmatch_
            !(m->hit < loc->cfg->track_min_fit * loc->state.persistent.fit && contradicts(loc, &m->pose, npts, &share));
 }
 
-/* Runs the recovery in progress for one scan, within recover_budget (0: to
- * its end; spent: the work this scan did before, in its units; with must,
- * the first step is taken whatever it costs, so that every scan given to a
- * recovery moves it on):
+/* Whether a first-stage winner's match (at) kept to where the search of
+ * headings only placed it (from), within half a coarse cell: one that slid
+ * farther is no misjudged turn, and had no rival weighed there. */
+static int recovery_kept_place(const rsm_localizer_t *loc, const rsm_pose_t *from, const rsm_pose_t *at)
+{
+    const rsm_tmap_t *map = &loc->state.persistent.map;
+    return !rsm_pose_apart(from, at, 0.5f * rsm_tmap_cell(map, (uint32_t)loc->cfg->tmap.levels - 1u), RSM_PI);
+}
+
+/* Runs the recovery in progress for one scan, within recover_budget (above
+ * 0; spent: the work this scan did before, in its units). must: a scan
+ * after the one that asked, whose first step is taken whatever it costs, so
+ * that every scan given to a recovery moves it on; else the scan that
+ * asked, where only the first stage runs:
  * - the coarse search, a few headings at a time;
  * - a descent a basin with the readings kept of the scan searched: where
  *   each basin is;
@@ -1253,8 +1263,8 @@ static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spen
     const uint32_t match_work = RECOVER_MATCH_PASSES * RECOVER_PASS_WORK * (uint32_t)npts;
     const uint32_t fit_work = RECOVER_PASS_WORK * (uint32_t)npts;
     uint32_t work = spent;
-    if (r->fresh) {
-        /* The scan searched went its way (fused, or kept at its prediction);
+    if (must && r->fresh) {
+        /* The scan searched went its way (kept at its prediction);
          * odometry carries the basins on from where it ended. */
         r->fresh = 0u;
         r->base = loc->state.persistent.anchor;
@@ -1278,7 +1288,7 @@ static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spen
             r->heading = r->heading < -fan ? -fan : r->heading;
             each = RECOVER_HEADING_WORK + (positions * scored * RECOVER_CELL_WORK) / 4u;
             count = (uint32_t)(fan + 1 - r->heading);
-            if (budget > 0u && !(first && r->stage == 0u)) {
+            if (!(first && r->stage == 0u)) {
                 const uint32_t room = work < budget ? (budget - work) / each : 0u;
                 if (room == 0u && work > started) {
                     return RECOVERY_RUNNING;
@@ -1327,7 +1337,7 @@ static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spen
                 r->phase = RECOVER_PROVING;
                 continue;
             }
-            if (budget > 0u && work > started && work + cost > budget) {
+            if (work > started && work + cost > budget) {
                 return RECOVERY_RUNNING;
             }
             work += cost;
@@ -1374,9 +1384,7 @@ static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spen
                     v = recovery_verdict(loc, &r->tracked);
                 }
             }
-            if (v == RECOVERY_TAKEN &&
-                !rsm_pose_apart(&r->start[0], &m.pose, 0.5f * rsm_tmap_cell(map, (uint32_t)cfg->tmap.levels - 1u),
-                                RSM_PI) &&
+            if (v == RECOVERY_TAKEN && recovery_kept_place(loc, &r->start[0], &m.pose) &&
                 m.hit >= cfg->track_min_fit * loc->state.persistent.fit) {
                 r->phase = RECOVER_IDLE;
                 *res = m;
@@ -1407,7 +1415,7 @@ static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spen
             if (next < 0) {
                 return recovery_rest(loc, RECOVERY_NONE);
             }
-            if (budget > 0u && work > started &&
+            if (work > started &&
                 work + match_work + (last ? fit_work * r->found + RECOVER_CONFLICT_WORK : 0u) > budget) {
                 return RECOVERY_RUNNING;
             }
@@ -1435,8 +1443,7 @@ static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spen
                 v = recovery_verdict(loc, &r->tracked);
             }
             if (v == RECOVERY_TAKEN && r->stage == 0u &&
-                rsm_pose_apart(&r->start[r->best], &r->end[r->best],
-                               0.5f * rsm_tmap_cell(map, (uint32_t)cfg->tmap.levels - 1u), RSM_PI)) {
+                !recovery_kept_place(loc, &r->start[r->best], &r->end[r->best])) {
                 /* Only headings were searched, and no rival beside the
                  * tracked pose weighed: the winner's match must have kept
                  * to its place (within half a coarse cell). One that went
@@ -1474,7 +1481,7 @@ static recovery_t recovery_step(rsm_localizer_t *loc, size_t npts, uint32_t spen
             return RECOVERY_TAKEN;
         } else if (r->phase == RECOVER_TAKING) {
             rsm_mapmatch_result_t m;
-            if (budget > 0u && work > started && work + match_work > budget) {
+            if (work > started && work + match_work > budget) {
                 return RECOVERY_RUNNING;
             }
             if (!recovery_match(loc, npts, &r->end[r->best], &m) || !recovery_takes(loc, npts, &m)) {
@@ -1777,9 +1784,6 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
             loc->counters.searches++;
             rep->recovering = 1u;
             recovery_begin(loc, npts, &pred, &res);
-            /* A proof in this scan carries its basins by nothing; one in
-             * the next from where this scan ends. */
-            rr->fresh = 0u;
             /* What this scan's matches took. */
             r = recovery_step(loc, npts, RECOVER_PASS_WORK * (uint32_t)npts * passes, 0, &res);
             if (recovering(loc)) {
@@ -1789,7 +1793,6 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
                  * predicted: one that contradicts the map is lost at once
                  * (with global_when_lost the global search takes over; else
                  * the recovery runs on). */
-                rr->fresh = 1u;
                 rr->checked = 0u;
                 rep->fit_ratio =
                     rc == RSM_OK && loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 0.0f;
