@@ -269,11 +269,12 @@ static void test_prepared_grids_are_the_ones_a_search_builds(void)
     }
 }
 
-/* Grids built for a map stand while the tiles of the levels a search
- * reads are the same: a finest-level tile coming or going (a store
- * giving one back while a frozen map is tracked in) leaves them; a tile of
- * the level searched, or a write, does not. */
-static void test_grids_stand_while_the_levels_read_do(void)
+/* Grids built for a map stand while the tiles of the level searched are
+ * the same: a tile of a finer level coming or going (a store giving one
+ * back while a frozen map is tracked in, or keeping one the take-back
+ * cannot reach) leaves them; a tile of the level searched, or a write,
+ * does not. */
+static void test_grids_stand_while_the_level_searched_does(void)
 {
     const rsm_synth_world_t world = rsm_synth_world_room();
     rsm_tmap_t *map;
@@ -306,6 +307,26 @@ static void test_grids_stand_while_the_levels_read_do(void)
     TEST_ASSERT_EQUAL_UINT32(map->used, g2.dir_next);
     TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g2, grid2, map, 0u, &used));
     TEST_ASSERT_EQUAL_UINT32(1u, g2.cached);
+    /* A tile of the level the map's directions come from (one finer than
+     * the level searched), inside the map's box, as from a store: the
+     * grids stand (the directions only choose the headings searched). */
+    if (map->cfg.levels >= 3u) {
+        const uint32_t dir = (uint32_t)map->cfg.levels - 3u;
+        memset(&t, 0, sizeof t);
+        t.tx = (int16_t)((g2.ox * 2) >> RSM_TMAP_TILE_LOG2);
+        t.ty = (int16_t)((g2.oy * 2) >> RSM_TMAP_TILE_LOG2);
+        t.stamp = dir << 30;
+        memset(t.cell, 0x99, sizeof t.cell);
+        while (rsm_tmap_find_slot(map, dir, t.tx, t.ty) != RSM_TMAP_NONE) {
+            t.tx++;
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(map, &t));
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, sizeof grid2, map, loc.pts, loc.last.points,
+                                                       &loc.ekf.x, 0.8f));
+        TEST_ASSERT_EQUAL_UINT32(g2.build_end, g2.build_next);
+        TEST_ASSERT_EQUAL_UINT32(map->used, g2.dir_next);
+        TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g2, grid2, map, 0u, &used));
+    }
     /* A tile of the level searched, inside the map's box: built again. */
     t.tx = (int16_t)(g2.ox >> RSM_TMAP_TILE_LOG2);
     t.ty = (int16_t)(g2.oy >> RSM_TMAP_TILE_LOG2);
@@ -1219,7 +1240,7 @@ int main(void)
     RUN_TEST(test_spread_search_finds_the_same);
     RUN_TEST(test_a_crowded_search_asks_a_closer_fit);
     RUN_TEST(test_prepared_grids_are_the_ones_a_search_builds);
-    RUN_TEST(test_grids_stand_while_the_levels_read_do);
+    RUN_TEST(test_grids_stand_while_the_level_searched_does);
     RUN_TEST(test_the_bar_falls_after_searches_of_the_whole_map);
     RUN_TEST(test_search_is_exact);
     RUN_TEST(test_a_symmetric_room_gives_no_pose);
