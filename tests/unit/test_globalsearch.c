@@ -269,6 +269,17 @@ static void test_prepared_grids_are_the_ones_a_search_builds(void)
     }
 }
 
+/* A search begun on map in g2's grids finds them standing (no build, no
+ * directions to make) and runs to its end. */
+static void assert_grids_stand(const rsm_tmap_t *map, uint32_t *used)
+{
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, sizeof grid2, map, loc.pts, loc.last.points,
+                                                   &loc.ekf.x, 0.8f));
+    TEST_ASSERT_EQUAL_UINT32(g2.build_end, g2.build_next);
+    TEST_ASSERT_EQUAL_UINT32(map->used, g2.dir_next);
+    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g2, grid2, map, 0u, used));
+}
+
 /* Grids built for a map stand while the tiles of the level searched are
  * the same: a tile of a finer level coming or going (a store giving one
  * back while a frozen map is tracked in, or keeping one the take-back
@@ -301,11 +312,7 @@ static void test_grids_stand_while_the_level_searched_does(void)
         }
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(map, &t));
     }
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, sizeof grid2, map, loc.pts, loc.last.points,
-                                                   &loc.ekf.x, 0.8f));
-    TEST_ASSERT_EQUAL_UINT32(g2.build_end, g2.build_next);
-    TEST_ASSERT_EQUAL_UINT32(map->used, g2.dir_next);
-    TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g2, grid2, map, 0u, &used));
+    assert_grids_stand(map, &used);
     TEST_ASSERT_EQUAL_UINT32(1u, g2.cached);
     /* A tile of the level the map's directions come from (one finer than
      * the level searched), inside the map's box, as from a store: the
@@ -321,11 +328,7 @@ static void test_grids_stand_while_the_level_searched_does(void)
             t.tx++;
         }
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(map, &t));
-        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_begin(&g2, grid2, sizeof grid2, map, loc.pts, loc.last.points,
-                                                       &loc.ekf.x, 0.8f));
-        TEST_ASSERT_EQUAL_UINT32(g2.build_end, g2.build_next);
-        TEST_ASSERT_EQUAL_UINT32(map->used, g2.dir_next);
-        TEST_ASSERT_EQUAL_INT(0, rsm_global_run(&g2, grid2, map, 0u, &used));
+        assert_grids_stand(map, &used);
     }
     /* A tile of the level searched, inside the map's box: built again. */
     t.tx = (int16_t)(g2.ox >> RSM_TMAP_TILE_LOG2);
