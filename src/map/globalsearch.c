@@ -413,7 +413,8 @@ uint32_t rsm_global_take_back(rsm_tmap_t *map, uint32_t budget, int *more)
  * cannot reach (its parent worn away: measured on Intel's kidnaps with
  * updates, one such tile made a search build everything again, about
  * 700 000 of its units, 15 scans), and the directions only choose the
- * headings searched, as after the writes the grids are kept through. */
+ * headings searched: they stay as built through the writes the grids are
+ * kept through as well. */
 static uint32_t read_tiles(const rsm_tmap_t *map, uint32_t level)
 {
     return (uint32_t)map->level_used[level];
