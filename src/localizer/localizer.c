@@ -1131,18 +1131,39 @@ static void recovery_begin(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *
     r->base = *pred;
 }
 
-/* The verdict on the basins' fits with the scan of the proof (hit, at end)
- * and the tracked pose's (tracked_hit at tracked): the best wins if it fits
- * well again (recover_ratio of recent scans, and half of what the tracked
- * pose lost regained) and beats every pose a doubt away from it (another
- * basin, or the tracked pose) by recover_margin. */
-static recovery_t recovery_verdict(rsm_localizer_t *loc, const rsm_pose_t *tracked)
+/* The verdict on a recovery's basins, fitted with one scan (hit[k] at
+ * end[k]; below 0: no fit), beside the tracked pose's fit (tracked_hit at
+ * tracked): basin best wins if it fits well again (recover_ratio of recent
+ * scans, and half of what the tracked pose lost regained) and beats every
+ * pose a doubt away from it (another basin, or the tracked pose) by
+ * recover_margin. Both recoveries weigh so: whole in a scan (recover), and
+ * spread over scans (recovery_verdict). */
+static recovery_t recovery_weigh(const rsm_localizer_t *loc, const float *hit, const rsm_pose_t *end, int n, int best,
+                                 float tracked_hit, const rsm_pose_t *tracked)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
-    rsm_recovery_t *r = &loc->state.persistent.recovery;
     const float fit = loc->state.persistent.fit;
-    const float need = r->tracked_hit + 0.5f * (fit - r->tracked_hit);
+    const float need = tracked_hit + 0.5f * (fit - tracked_hit);
     float rival;
+    int k;
+    if (best < 0 || !(hit[best] >= cfg->recover_ratio * fit && hit[best] >= need && hit[best] > tracked_hit)) {
+        return RECOVERY_NONE;
+    }
+    rival = beyond_doubt(cfg, tracked, &end[best]) ? tracked_hit : 0.0f;
+    for (k = 0; k < n; ++k) {
+        if (k != best && hit[k] > rival && beyond_doubt(cfg, &end[k], &end[best])) {
+            rival = hit[k];
+        }
+    }
+    return hit[best] <= rival * (1.0f + cfg->recover_margin) ? RECOVERY_AMBIGUOUS : RECOVERY_TAKEN;
+}
+
+/* The spread recovery's verdict on its basins' fits with the scan of the
+ * proof (recovery_weigh); the winner into r->best. */
+static recovery_t recovery_verdict(rsm_localizer_t *loc, const rsm_pose_t *tracked)
+{
+    rsm_recovery_t *r = &loc->state.persistent.recovery;
+    recovery_t v;
     int best = -1;
     int k;
     for (k = 0; k < (int)r->found; ++k) {
@@ -1150,21 +1171,11 @@ static recovery_t recovery_verdict(rsm_localizer_t *loc, const rsm_pose_t *track
             best = k;
         }
     }
-    if (best < 0 ||
-        !(r->hit[best] >= cfg->recover_ratio * fit && r->hit[best] >= need && r->hit[best] > r->tracked_hit)) {
-        return RECOVERY_NONE;
+    v = recovery_weigh(loc, r->hit, r->end, (int)r->found, best, r->tracked_hit, tracked);
+    if (v == RECOVERY_TAKEN) {
+        r->best = (uint8_t)best;
     }
-    rival = beyond_doubt(cfg, tracked, &r->end[best]) ? r->tracked_hit : 0.0f;
-    for (k = 0; k < (int)r->found; ++k) {
-        if (k != best && r->hit[k] > rival && beyond_doubt(cfg, &r->end[k], &r->end[best])) {
-            rival = r->hit[k];
-        }
-    }
-    if (r->hit[best] <= rival * (1.0f + cfg->recover_margin)) {
-        return RECOVERY_AMBIGUOUS;
-    }
-    r->best = (uint8_t)best;
-    return RECOVERY_TAKEN;
+    return v;
 }
 
 /* Ends a recovery without a pose: none begins again before a new view. */
@@ -1512,14 +1523,12 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
                           rsm_mapmatch_result_t *res)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
-    const float fit = loc->state.persistent.fit;
-    const float need = res->hit + 0.5f * (fit - res->hit);
     rsm_pose_t start[RSM_RECOVER_STARTS];
     rsm_pose_t found_pose[RSM_RECOVER_STARTS];
     rsm_mapmatch_result_t won;
+    recovery_t v;
     float share;
     float found_hit[RSM_RECOVER_STARTS];
-    float rival;
     float wide[9];
     int found;
     int k;
@@ -1546,20 +1555,11 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
             }
         }
     }
-    if (best < 0 || !(found_hit[best] >= cfg->recover_ratio * fit && found_hit[best] >= need &&
-                      found_hit[best] > res->hit)) {
-        return RECOVERY_NONE;
+    v = recovery_weigh(loc, found_hit, found_pose, found, best, res->hit, &res->pose);
+    if (v != RECOVERY_TAKEN) {
+        return v;
     }
-    rival = beyond_doubt(cfg, &res->pose, &found_pose[best]) ? res->hit : 0.0f;
-    for (k = 0; k < found; ++k) {
-        if (k != best && found_hit[k] > rival && beyond_doubt(cfg, &found_pose[k], &found_pose[best])) {
-            rival = found_hit[k];
-        }
-    }
-    if (found_hit[best] <= rival * (1.0f + cfg->recover_margin)) {
-        return RECOVERY_AMBIGUOUS;
-    }
-    if (won.hit < cfg->track_min_fit * fit && contradicts(loc, &won.pose, npts, &share)) {
+    if (won.hit < cfg->track_min_fit * loc->state.persistent.fit && contradicts(loc, &won.pose, npts, &share)) {
         return RECOVERY_NONE;
     }
     *res = won;

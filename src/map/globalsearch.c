@@ -408,20 +408,9 @@ uint32_t rsm_global_take_back(rsm_tmap_t *map, uint32_t budget, int *more)
     return 10u * looked + 40u * got;
 }
 
-/* The tiles of the level searched. Only those: the finer level the map's
- * directions come from may lose a tile to the store that the take-back
- * cannot reach (its parent worn away: measured on Intel's kidnaps with
- * updates, one such tile made a search build everything again, about
- * 700 000 of its units, 15 scans), and the directions only choose the
- * headings searched: they stay as built through the writes the grids are
- * kept through as well. */
-static uint32_t read_tiles(const rsm_tmap_t *map, uint32_t level)
-{
-    return (uint32_t)map->level_used[level];
-}
-
-/* Which tiles those are, as a sum over them of a hash of their place:
- * with the write counter, whether the grids built from them still stand.
+/* The tiles of the level searched, as a sum over them of a hash of their
+ * place: with their count and the write counter, whether the grids built
+ * from them still stand.
  * A frozen map's tiles come and go with a store (rsm_tmap_fetch) the same
  * as they were; only when the level's tiles are others must the grids be
  * built again (before, any tile taken back anywhere rebuilt them: a robot
@@ -439,17 +428,6 @@ static uint32_t read_signature(const rsm_tmap_t *map, uint32_t level)
     return sig;
 }
 
-/* The map's churn (rsm_tmap_t.churn) on the level searched, and its sum. */
-static uint32_t churn_tiles(const rsm_tmap_t *map, uint32_t level)
-{
-    return map->churn[level];
-}
-
-static uint32_t churn_signature(const rsm_tmap_t *map, uint32_t level)
-{
-    return map->churn_sig[level];
-}
-
 int rsm_global_can_keep(const rsm_global_t *g, const rsm_tmap_t *map)
 {
     return g->cached != 0u && g->level == search_level(map) && g->cache_writes == map->counters.updates;
@@ -460,13 +438,19 @@ int rsm_global_can_keep(const rsm_global_t *g, const rsm_tmap_t *map)
  * since but those kept (rsm_global_keep), and the tiles of the level
  * searched those they were built from, with those the kept writes began
  * and less those that ended (a grid block stays set for a tile gone: a
- * bound only looser). */
+ * bound only looser). The level searched alone: the finer one the map's
+ * directions come from may lose a tile to the store that the take-back
+ * cannot reach (its parent worn away: measured on Intel's kidnaps with
+ * updates, one such tile made a search build everything again, about
+ * 700 000 of its units, 15 scans), and the directions only choose the
+ * headings searched: they stay as built through the writes the grids are
+ * kept through as well. */
 static int stands(const rsm_global_t *g, const rsm_tmap_t *map, int32_t gx0, int32_t gy0, int32_t gx1, int32_t gy1)
 {
     return rsm_global_can_keep(g, map) && g->cache_box[0] == gx0 && g->cache_box[1] == gy0 &&
            g->cache_box[2] == gx1 && g->cache_box[3] == gy1 &&
-           read_tiles(map, g->level) == g->cache_tiles + (churn_tiles(map, g->level) - g->cache_churn) &&
-           read_signature(map, g->level) == g->cache_sig + (churn_signature(map, g->level) - g->cache_churn_sig);
+           (uint32_t)map->level_used[g->level] == g->cache_tiles + (map->churn[g->level] - g->cache_churn) &&
+           read_signature(map, g->level) == g->cache_sig + (map->churn_sig[g->level] - g->cache_churn_sig);
 }
 
 void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, const rsm_point_t *pts, size_t n)
@@ -1214,10 +1198,10 @@ static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t
     if (g->dir_next == map->used && g->build_next == g->build_end) {
         g->cached = 1u;
         g->cache_writes = map->counters.updates;
-        g->cache_tiles = read_tiles(map, g->level);
+        g->cache_tiles = map->level_used[g->level];
         g->cache_sig = read_signature(map, g->level);
-        g->cache_churn = churn_tiles(map, g->level);
-        g->cache_churn_sig = churn_signature(map, g->level);
+        g->cache_churn = map->churn[g->level];
+        g->cache_churn_sig = map->churn_sig[g->level];
         return 1;
     }
     return 0;
