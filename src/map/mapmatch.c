@@ -352,6 +352,30 @@ static void add_block(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, int32_t gx,
 {
     const int32_t side = 2 * half + 1;
     int32_t y0 = gy - half;
+    if (((gx - half) ^ (gx + half)) >> RSM_TMAP_TILE_LOG2 == 0 &&
+        ((gy - half) ^ (gy + half)) >> RSM_TMAP_TILE_LOG2 == 0) {
+        /* Within one tile (most points at a coarse cell's reach): one
+         * lookup, the rows read straight, the same sums in the same
+         * order. */
+        const uint32_t slot = rsm_tmap_cursor_slot(map, cur, gx, gy);
+        int32_t u;
+        int32_t w;
+        if (slot == RSM_TMAP_NONE) {
+            for (w = 0; w < side * side; ++w) {
+                cost[w] += miss[0];
+            }
+        } else {
+            const rsm_tile_t *t = &map->tile[slot];
+            for (w = 0; w < side; ++w) {
+                const uint32_t at = rsm_tmap_cell_index(gx - half, gy - half + w);
+                float *row = &cost[w * side];
+                for (u = 0; u < side; ++u) {
+                    row[u] += miss[rsm_tmap_get_cell(t, at + (uint32_t)u)];
+                }
+            }
+        }
+        return;
+    }
     while (y0 <= gy + half) {
         /* The rows of this tile row. */
         const int32_t y1 =

@@ -14,6 +14,8 @@
 #include "rsm/scan.h"
 #include "rsm/status.h"
 #include "map/tilemap.h"
+#include "map/tmap_read.h"
+#include "core/fmath.h"
 #include "synth.h"
 #include "unity.h"
 
@@ -476,6 +478,69 @@ void test_mapmatch_search_should_find_a_pose_a_metre_off(void)
     }
 }
 
+/* The coarse cost search_heading gives candidate (i, j) at heading theta
+ * of a search around x0: each scored point's cell at x0, moved i, j, read
+ * one by one (the search reads them a block at a time). */
+static float candidate_cost(const rsm_pose_t *x0, float theta, int32_t i, int32_t j, size_t n, size_t most)
+{
+    const uint32_t level = (uint32_t)mcfg.levels - 1u;
+    const size_t stride = n > most ? (n + most - 1u) / most : 1u;
+    rsm_tmap_cursor_t cur;
+    float cost = 0.0f;
+    float c;
+    float sn;
+    size_t q;
+    rsm_sincosf(theta, &sn, &c);
+    rsm_tmap_cursor_init(&cur, level);
+    for (q = 0; q < n; q += stride) {
+        const int32_t gx = rsm_tmap_cell_of(x0->x + c * pts[q].x - sn * pts[q].y, map.inv_cell[level]) + i;
+        const int32_t gy = rsm_tmap_cell_of(x0->y + sn * pts[q].x + c * pts[q].y, map.inv_cell[level]) + j;
+        const float r = 1.0f - map.occ[rsm_tmap_slot_value(&map, rsm_tmap_cursor_slot(&map, &cur, gx, gy), gx, gy)];
+        cost += r * r;
+    }
+    return cost;
+}
+
+void test_mapmatch_search_should_score_every_candidate_on_its_cells(void)
+{
+    /* The search sums a window of candidates a point at a time, a tile at
+     * a time, and a block within one tile in one go: every kept
+     * candidate's cost is the sum over its own cells, bit for bit, for
+     * windows of 3 and 5 cells a side (within a coarse cell, and 1 m). */
+    const rsm_pose_t truth_w = {-0.5f, 0.3f, 0.3f};
+    const rsm_pose_t truth = in_map(&truth_w);
+    const float radii[2] = {0.0f, 1.0f};
+    rsm_pose_t pred = truth;
+    rsm_pose_t kept[RSM_MAPMATCH_MAX_CANDIDATES];
+    float cost[RSM_MAPMATCH_MAX_CANDIDATES];
+    int32_t ij[2 * RSM_MAPMATCH_MAX_CANDIDATES];
+    size_t n;
+    size_t r;
+    size_t checked = 0;
+    build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
+    pred.x += 0.3f;
+    pred.y -= 0.2f;
+    n = points_at(&truth_w);
+    for (r = 0; r < 2u; ++r) {
+        const float radius = r == 0u ? rsm_tmap_cell(&map, (uint32_t)mcfg.levels - 1u) : radii[r];
+        int32_t a;
+        for (a = -2; a <= 2; ++a) {
+            size_t found = 0;
+            size_t k;
+            const float theta = rsm_wrap_angle(pred.theta + (float)a * cfg.search_step_rad);
+            TEST_ASSERT_TRUE(rsm_mapmatch_search_part(&map, &cfg, pts, n, &pred, radius, cfg.search_rad, a, a + 1,
+                                                      kept, cost, ij, RSM_MAPMATCH_MAX_CANDIDATES, &found, 32u) >= 1);
+            for (k = 0; k < found; ++k) {
+                const float want = candidate_cost(&pred, theta, ij[2 * k], ij[2 * k + 1u], n, 32u);
+                TEST_ASSERT_TRUE(want == cost[k]);
+                TEST_ASSERT_TRUE(kept[k].theta == theta);
+                ++checked;
+            }
+        }
+    }
+    TEST_ASSERT_TRUE(checked >= 10u);
+}
+
 void test_mapmatch_search_should_find_in_parts_what_it_finds_whole(void)
 {
     /* A recovery spreads its search over scans a few headings at a time:
@@ -601,6 +666,7 @@ int main(void)
     RUN_TEST(test_mapmatch_spread_should_tell_a_corridor_from_a_room);
     RUN_TEST(test_mapmatch_should_not_drag_a_scan_back_along_a_bare_corridor);
     RUN_TEST(test_mapmatch_search_should_find_a_pose_a_metre_off);
+    RUN_TEST(test_mapmatch_search_should_score_every_candidate_on_its_cells);
     RUN_TEST(test_mapmatch_search_should_find_in_parts_what_it_finds_whole);
     RUN_TEST(test_mapmatch_should_report_an_empty_map_as_degenerate);
     RUN_TEST(test_mapmatch_should_check_its_arguments_and_config);
