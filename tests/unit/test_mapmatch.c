@@ -501,28 +501,23 @@ static float candidate_cost(const rsm_pose_t *x0, float theta, int32_t i, int32_
     return cost;
 }
 
-void test_mapmatch_search_should_score_every_candidate_on_its_cells(void)
+/* Every candidate a search around truth_w (moved 0.3 m, -0.2 m) keeps, at
+ * five headings, windows of 3 and 5 cells a side (within a coarse cell,
+ * and 1 m), against candidate_cost; returns how many were checked. */
+static size_t check_candidates(const rsm_pose_t *truth_w)
 {
-    /* The search sums a window of candidates a point at a time, a tile at
-     * a time, and a block within one tile in one go: every kept
-     * candidate's cost is the sum over its own cells, bit for bit, for
-     * windows of 3 and 5 cells a side (within a coarse cell, and 1 m). */
-    const rsm_pose_t truth_w = {-0.5f, 0.3f, 0.3f};
-    const rsm_pose_t truth = in_map(&truth_w);
-    const float radii[2] = {0.0f, 1.0f};
+    const rsm_pose_t truth = in_map(truth_w);
     rsm_pose_t pred = truth;
     rsm_pose_t kept[RSM_MAPMATCH_MAX_CANDIDATES];
     float cost[RSM_MAPMATCH_MAX_CANDIDATES];
     int32_t ij[2 * RSM_MAPMATCH_MAX_CANDIDATES];
-    size_t n;
+    const size_t n = points_at(truth_w);
     size_t r;
     size_t checked = 0;
-    build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
     pred.x += 0.3f;
     pred.y -= 0.2f;
-    n = points_at(&truth_w);
     for (r = 0; r < 2u; ++r) {
-        const float radius = r == 0u ? rsm_tmap_cell(&map, (uint32_t)mcfg.levels - 1u) : radii[r];
+        const float radius = r == 0u ? rsm_tmap_cell(&map, (uint32_t)mcfg.levels - 1u) : 1.0f;
         int32_t a;
         for (a = -2; a <= 2; ++a) {
             size_t found = 0;
@@ -538,7 +533,25 @@ void test_mapmatch_search_should_score_every_candidate_on_its_cells(void)
             }
         }
     }
-    TEST_ASSERT_TRUE(checked >= 10u);
+    return checked;
+}
+
+void test_mapmatch_search_should_score_every_candidate_on_its_cells(void)
+{
+    /* The search sums a window of candidates a point at a time, a tile at
+     * a time, and a block within one tile in one go: every kept
+     * candidate's cost is the sum over its own cells, bit for bit, in the
+     * room and in the hall with its boxes (cells that differ from their
+     * neighbours). */
+    const rsm_pose_t room_truth = {-0.5f, 0.3f, 0.3f};
+    const rsm_pose_t hall_poses[] = {{0.0f, 0.0f, 0.0f}, {0.5f, 0.5f, 1.6f}, {-0.5f, -0.5f, 3.1f}};
+    const rsm_pose_t hall_truth = {0.2f, -0.1f, 0.3f};
+    const rsm_synth_world_t w = {hall, sizeof hall / sizeof hall[0]};
+    build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
+    TEST_ASSERT_TRUE(check_candidates(&room_truth) >= 10u);
+    world = w;
+    build_map(hall_poses, sizeof hall_poses / sizeof hall_poses[0]);
+    TEST_ASSERT_TRUE(check_candidates(&hall_truth) >= 10u);
 }
 
 void test_mapmatch_search_should_find_in_parts_what_it_finds_whole(void)
