@@ -343,6 +343,30 @@ static void keep_candidate(rsm_pose_t *best, float *cost, int32_t *ij, size_t k,
 typedef char rsm_mapmatch_block_fits[(2 * RSM_MAPMATCH_BLOCK_HALF + 1 <= RSM_TMAP_TILE_SIDE) ? 1 : -1];
 #define BLOCK_SIDE (2 * RSM_MAPMATCH_BLOCK_HALF + 1)
 
+/* Adds to the rows of cost[] from row (side floats apart) what the cells
+ * (x0 .. x1, y0 .. y1) of the tile in slot cost, the first at row[0]:
+ * cells that lie in one tile, each row read from its first cell on. */
+static void add_cells(const rsm_tmap_t *map, uint32_t slot, int32_t x0, int32_t y0, int32_t x1, int32_t y1,
+                      int32_t side, const float *miss, float *row)
+{
+    const uint32_t len = (uint32_t)(x1 - x0) + 1u;
+    uint32_t u;
+    int32_t w;
+    for (w = y0; w <= y1; ++w, row += side) {
+        if (slot == RSM_TMAP_NONE) {
+            for (u = 0; u < len; ++u) {
+                row[u] += miss[0];
+            }
+        } else {
+            const rsm_tile_t *t = &map->tile[slot];
+            const uint32_t at = rsm_tmap_cell_index(x0, w);
+            for (u = 0; u < len; ++u) {
+                row[u] += miss[rsm_tmap_get_cell(t, at + u)];
+            }
+        }
+    }
+}
+
 /* Adds to cost[] (the candidates i, j = -half .. half, row-major) what the
  * point at cell (gx, gy) of x0 costs each: the cell moved i, j, read tile
  * by tile (at most four) rather than looked up per candidate. The whole
@@ -354,26 +378,10 @@ static void add_block(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, int32_t gx,
     int32_t y0 = gy - half;
     if (((gx - half) ^ (gx + half)) >> RSM_TMAP_TILE_LOG2 == 0 &&
         ((gy - half) ^ (gy + half)) >> RSM_TMAP_TILE_LOG2 == 0) {
-        /* Within one tile (most points at a coarse cell's reach): one
-         * lookup, the rows read straight, the same sums in the same
-         * order. */
-        const uint32_t slot = rsm_tmap_cursor_slot(map, cur, gx, gy);
-        int32_t u;
-        int32_t w;
-        if (slot == RSM_TMAP_NONE) {
-            for (w = 0; w < side * side; ++w) {
-                cost[w] += miss[0];
-            }
-        } else {
-            const rsm_tile_t *t = &map->tile[slot];
-            for (w = 0; w < side; ++w) {
-                const uint32_t at = rsm_tmap_cell_index(gx - half, gy - half + w);
-                float *row = &cost[w * side];
-                for (u = 0; u < side; ++u) {
-                    row[u] += miss[rsm_tmap_get_cell(t, at + (uint32_t)u)];
-                }
-            }
-        }
+        /* Within one tile (most blocks at a coarse cell's reach): one
+         * lookup, without the walk over tiles below. */
+        add_cells(map, rsm_tmap_cursor_slot(map, cur, gx, gy), gx - half, gy - half, gx + half, gy + half, side,
+                  miss, cost);
         return;
     }
     while (y0 <= gy + half) {
@@ -384,22 +392,8 @@ static void add_block(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, int32_t gx,
         while (x0 <= gx + half) {
             const int32_t x1 =
                 (x0 | (int32_t)RSM_TMAP_TILE_MASK) < gx + half ? (x0 | (int32_t)RSM_TMAP_TILE_MASK) : gx + half;
-            const uint32_t slot = rsm_tmap_cursor_slot(map, cur, x0, y0);
-            int32_t u;
-            int32_t w;
-            for (w = y0; w <= y1; ++w) {
-                float *row = &cost[(w - gy + half) * side - gx + half];
-                if (slot == RSM_TMAP_NONE) {
-                    for (u = x0; u <= x1; ++u) {
-                        row[u] += miss[0];
-                    }
-                } else {
-                    const rsm_tile_t *t = &map->tile[slot];
-                    for (u = x0; u <= x1; ++u) {
-                        row[u] += miss[rsm_tmap_get_cell(t, rsm_tmap_cell_index(u, w))];
-                    }
-                }
-            }
+            add_cells(map, rsm_tmap_cursor_slot(map, cur, x0, y0), x0, y0, x1, y1, side, miss,
+                      &cost[(y0 - gy + half) * side + x0 - gx + half]);
             x0 = x1 + 1;
         }
         y0 = y1 + 1;
