@@ -780,8 +780,8 @@ static void window9(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, uint32_t leve
         return;
     }
     if ((u & RSM_TMAP_TILE_MASK) < RSM_TMAP_TILE_MASK - 1 && (v & RSM_TMAP_TILE_MASK) < RSM_TMAP_TILE_MASK - 1) {
-        /* Within one tile (most windows: 14 of 16 places a side): one
-         * lookup, the rows read straight. */
+        /* Within one tile (most windows: all but the last two places a
+         * side of a tile): one lookup, the rows read straight. */
         const uint32_t sl = rsm_tmap_cursor_slot(map, cur, u, v);
         if (sl == RSM_TMAP_NONE) {
             for (x = 0; x < 9u; ++x) {
