@@ -19,6 +19,15 @@
 /* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart. */
 #define FINEST_BELOW 2u
 
+/* Headings are spaced so that the scan's far points (its upper decile of
+ * range) move this many cells of the search level from one to the next.
+ * At 1, a heading costs a whole branch and bound and the searches on the
+ * bench's maps took 20 to 90 headings a pass; at 2 they read about half,
+ * and the leaf slack and the proof's descents (two heading steps of prior)
+ * take up the coarser lattice (docs/globalsearch.md, "Half the
+ * headings"). */
+#define HEADING_CELLS 2.0f
+
 /* A crowded search's winner is proven only against a kept rival fitting
  * at least this share of it: a place weighed against nothing alike. */
 #define CROWDED_RIVAL 0.5f
@@ -578,14 +587,14 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rs
     }
     g->seen_at = *at;
     /* Headings so spaced that the scan's far points (its upper decile)
-     * move one cell from one heading to the next. */
+     * move HEADING_CELLS cells from one heading to the next. */
     reach = range[(g->npts * 9u) / 10u];
     if (reach < cell) {
         reach = cell;
     }
     {
         /* Capped as a float, before it becomes a count. */
-        float h = ceilf(2.0f * RSM_PI * reach / cell);
+        float h = ceilf(2.0f * RSM_PI * reach / (HEADING_CELLS * cell));
         h = h < (float)RSM_GLOBAL_MAX_HEADINGS ? h : (float)RSM_GLOBAL_MAX_HEADINGS;
         g->headings = h > 8.0f ? (uint32_t)h : 8u;
         /* Even: a pose and the one turned half round are both searched
