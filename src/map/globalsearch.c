@@ -21,10 +21,10 @@
 
 /* Headings are spaced so that the scan's far points (its upper decile of
  * range) move this many cells of the search level from one to the next.
- * At 1, a heading costs a whole branch and bound and the searches on the
- * bench's maps took 20 to 90 headings a pass; at 2 they read about half,
- * and the leaf slack and the proof's descents (two heading steps of prior)
- * take up the coarser lattice (docs/globalsearch.md, "Half the
+ * Each heading costs a whole branch and bound: at 1, the bench's searches
+ * took 25 to 90 headings; at 2 a start's search did about 0.6 times the
+ * work, and the leaf slack and the proof's descents (two heading steps of
+ * prior) take up the coarser lattice (docs/globalsearch.md, "Half the
  * headings"). */
 #define HEADING_CELLS 2.0f
 
