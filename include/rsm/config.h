@@ -121,6 +121,17 @@
 #define RSM_GLOBAL_CANDIDATES 8
 #endif
 
+/* The global search's headings are spaced so that the scan's far points
+ * move this many cells of its level (0.2 m) from one to the next: each
+ * heading costs a whole branch and bound. At 2, with 32 readings and 8
+ * kept poses, starts and kidnaps were found about 1.6 times sooner on the
+ * Intel and ACES maps and no more poses went wrong (300 starts a log); with
+ * the small preset's 24 readings and 4 kept poses, 2 proved look-alikes
+ * (docs/globalsearch.md, "Half the headings"). */
+#ifndef RSM_GLOBAL_HEADING_CELLS
+#define RSM_GLOBAL_HEADING_CELLS 2
+#endif
+
 /* Memory rsm-nav and the map-in-flash images lend the global search's
  * grids (rsm_localizer_set_search_memory), outside the localizer's state:
  * about 0.6 times the reads of the 2 888 shared bytes on the Intel log
@@ -262,6 +273,7 @@ RSM_STATIC_ASSERT(tmap_hash_room, RSM_TMAP_HASH_LOG2 <= 16 && (1L << RSM_TMAP_HA
 RSM_STATIC_ASSERT(global_side_range, RSM_GLOBAL_SIDE >= 4 && RSM_GLOBAL_SIDE <= 1024);
 RSM_STATIC_ASSERT(global_points_range, RSM_GLOBAL_POINTS >= 8 && RSM_GLOBAL_POINTS <= 1024);
 RSM_STATIC_ASSERT(global_candidates_range, RSM_GLOBAL_CANDIDATES >= 2 && RSM_GLOBAL_CANDIDATES <= 64);
+RSM_STATIC_ASSERT(global_heading_cells_range, RSM_GLOBAL_HEADING_CELLS >= 1 && RSM_GLOBAL_HEADING_CELLS <= 4);
 RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
 RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONAR <= 255);
 RSM_STATIC_ASSERT(aria_str_size, RSM_ARIA_STR_SIZE >= 8 && RSM_ARIA_STR_SIZE <= 256);

@@ -20,13 +20,9 @@
 #define FINEST_BELOW 2u
 
 /* Headings are spaced so that the scan's far points (its upper decile of
- * range) move this many cells of the search level from one to the next.
- * Each heading costs a whole branch and bound: at 1, the bench's searches
- * took 25 to 90 headings; at 2 a start's search did about 0.6 times the
- * work, and the leaf slack and the proof's descents (two heading steps of
- * prior) take up the coarser lattice (docs/globalsearch.md, "Half the
- * headings"). */
-#define HEADING_CELLS 2.0f
+ * range) move this many cells of the search level from one to the next
+ * (rsm/config.h says why the presets differ). */
+#define HEADING_CELLS ((float)RSM_GLOBAL_HEADING_CELLS)
 
 /* A crowded search's winner is proven only against a kept rival fitting
  * at least this share of it: a place weighed against nothing alike. */
