@@ -19,11 +19,6 @@
 /* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart. */
 #define FINEST_BELOW 2u
 
-/* Headings are spaced so that the scan's far points (its upper decile of
- * range) move this many cells of the search level from one to the next
- * (rsm/config.h says why the presets differ). */
-#define HEADING_CELLS ((float)RSM_GLOBAL_HEADING_CELLS)
-
 /* A crowded search's winner is proven only against a kept rival fitting
  * at least this share of it: a place weighed against nothing alike. */
 #define CROWDED_RIVAL 0.5f
@@ -583,14 +578,15 @@ int rsm_global_begin(rsm_global_t *g, uint8_t *grid, size_t grid_bytes, const rs
     }
     g->seen_at = *at;
     /* Headings so spaced that the scan's far points (its upper decile)
-     * move HEADING_CELLS cells from one heading to the next. */
+     * move RSM_GLOBAL_HEADING_CELLS cells from one heading to the next
+     * (rsm/config.h says why the presets differ). */
     reach = range[(g->npts * 9u) / 10u];
     if (reach < cell) {
         reach = cell;
     }
     {
         /* Capped as a float, before it becomes a count. */
-        float h = ceilf(2.0f * RSM_PI * reach / (HEADING_CELLS * cell));
+        float h = ceilf(2.0f * RSM_PI * reach / ((float)RSM_GLOBAL_HEADING_CELLS * cell));
         h = h < (float)RSM_GLOBAL_MAX_HEADINGS ? h : (float)RSM_GLOBAL_MAX_HEADINGS;
         g->headings = h > 8.0f ? (uint32_t)h : 8u;
         /* Even: a pose and the one turned half round are both searched
