@@ -2346,7 +2346,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         }
     }
     if (g->phase == RSM_GLOBAL_PENDING) {
-        /* The bar falls with each search that proved nothing
+        /* The bar falls after searches that proved nothing
          * (rsm_global_share). */
         const float share = rsm_global_share(map, g->radius_m, g->unproven, cfg->global_min_share);
         /* The grids take the memory of the scan a map write reads: the

@@ -117,9 +117,10 @@ void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
 /* The share of kept points a search in map asks for (rsm_global_begin's
  * min_share) after `unproven` searches in a row that proved nothing: 0.97
  * for the first (a box whose window misses a single point is dropped),
- * then 0.95, 0.90, ... down to min_share (global_min_share). A search near
- * the estimate (radius_m > 0; 0: the whole map) searches each window at
- * 0.97 then 0.95 before it doubles (rsm_global_radius), and the bar falls
+ * then 0.95, 0.90, ... down to min_share (global_min_share), each bar
+ * below the first for three searches (BAR_SEARCHES). A search near the
+ * estimate (radius_m > 0; 0: the whole map) searches each window at 0.97
+ * then 0.95 before it doubles (rsm_global_radius), and the bar falls
  * further only once the window holds the whole map. */
 float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven, float min_share);
 
