@@ -6,7 +6,8 @@
  * summed under the scan's points, each read at its cell of the second
  * coarsest level (0.2 m by default: the coarsest is too full to tell places
  * apart). The positions are that level's cells; the headings are spaced so
- * that the scan's far points move about one cell from one to the next, and
+ * that the scan's far points move RSM_GLOBAL_HEADING_CELLS cells from one
+ * to the next (rsm/config.h), and
  * only those at which the scan's wall directions agree with the map's are
  * searched, the best agreeing first. For one heading, a box of 2^h x 2^h
  * cells of positions (a leaf, h = 0, is one cell: positions anywhere in it)
