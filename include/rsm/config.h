@@ -132,6 +132,18 @@
 #define RSM_GLOBAL_HEADING_CELLS 2
 #endif
 
+/* Searches of the whole map at each of the global search's bars below the
+ * first (0.95, 0.90, 0.85), each from a new scan, before the bar falls: a
+ * lower bar reads several times as much, and a scan whose reading a person
+ * hides fails where the next may not. At 3, with 32 readings and 8 kept
+ * poses, starts and kidnaps that took several searches were found sooner
+ * on the Intel and ACES maps; with the small preset's 24 readings and 4
+ * kept poses, the searches repeated proved more look-alikes
+ * (docs/globalsearch.md, "Each bar three times"). */
+#ifndef RSM_GLOBAL_BAR_SEARCHES
+#define RSM_GLOBAL_BAR_SEARCHES 3
+#endif
+
 /* Memory rsm-nav and the map-in-flash images lend the global search's
  * grids (rsm_localizer_set_search_memory), outside the localizer's state:
  * about 0.6 times the reads of the 2 888 shared bytes on the Intel log
@@ -274,6 +286,7 @@ RSM_STATIC_ASSERT(global_side_range, RSM_GLOBAL_SIDE >= 4 && RSM_GLOBAL_SIDE <= 
 RSM_STATIC_ASSERT(global_points_range, RSM_GLOBAL_POINTS >= 8 && RSM_GLOBAL_POINTS <= 1024);
 RSM_STATIC_ASSERT(global_candidates_range, RSM_GLOBAL_CANDIDATES >= 2 && RSM_GLOBAL_CANDIDATES <= 64);
 RSM_STATIC_ASSERT(global_heading_cells_range, RSM_GLOBAL_HEADING_CELLS >= 1 && RSM_GLOBAL_HEADING_CELLS <= 4);
+RSM_STATIC_ASSERT(global_bar_searches_range, RSM_GLOBAL_BAR_SEARCHES >= 1 && RSM_GLOBAL_BAR_SEARCHES <= 8);
 RSM_STATIC_ASSERT(aria_packet_size, RSM_ARIA_MAX_PACKET >= 258);
 RSM_STATIC_ASSERT(aria_sonar_range, RSM_ARIA_MAX_SONAR >= 1 && RSM_ARIA_MAX_SONAR <= 255);
 RSM_STATIC_ASSERT(aria_str_size, RSM_ARIA_STR_SIZE >= 8 && RSM_ARIA_STR_SIZE <= 256);

@@ -5,9 +5,10 @@
  * written tiles are reused beyond that): with so few tiles, 5 cm cells would
  * forget the building too soon. The global search keeps 24 readings, 4
  * candidates and bound grids of 16 blocks a side (60 tiles gave way for
- * it), and searches every heading the default searches every other of:
- * with so few readings and poses kept, the coarser lattice proved
- * look-alikes on ACES. Under 64 KiB of localizer state; tools/bench prints
+ * it), searches every heading the default searches every other of, and
+ * each bar once where the default searches each three times: with so few
+ * readings and poses kept, the coarser lattice and the repeated searches
+ * proved look-alikes on ACES. Under 64 KiB of localizer state; tools/bench prints
  * its accuracy beside the default's. */
 #ifndef RSM_CONFIG_SMALL_H
 #define RSM_CONFIG_SMALL_H
@@ -23,4 +24,5 @@
 #define RSM_GLOBAL_POINTS 24
 #define RSM_GLOBAL_CANDIDATES 4
 #define RSM_GLOBAL_HEADING_CELLS 1
+#define RSM_GLOBAL_BAR_SEARCHES 1
 #endif

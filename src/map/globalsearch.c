@@ -23,12 +23,6 @@
  * at least this share of it: a place weighed against nothing alike. */
 #define CROWDED_RIVAL 0.5f
 
-/* Searches of the whole map at each bar below the first, each from a new
- * scan, before the bar falls (rsm_global_share): a lower bar reads several
- * times as much, and a scan whose readings a person hides fails where the
- * next one may not. */
-#define BAR_SEARCHES 3u
-
 /* Floor division by 2^h for any sign. */
 static int32_t floor_shift(int32_t v, uint32_t h)
 {
@@ -162,9 +156,10 @@ float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven,
      * pass the first bar alone), and one that does not costs little, where
      * a lower bar over a wide window reads ten times as much as the first
      * (a robot carried away). The whole map is searched at the first bar
-     * once, then at each lower one BAR_SEARCHES times. */
+     * once, then at each lower one RSM_GLOBAL_BAR_SEARCHES times
+     * (rsm/config.h says why). */
     const uint32_t whole = unproven < 2u * widen ? unproven % 2u : unproven - 2u * widen;
-    const uint32_t lowered = whole == 0u ? 0u : 1u + (whole - 1u) / BAR_SEARCHES;
+    const uint32_t lowered = whole == 0u ? 0u : 1u + (whole - 1u) / (uint32_t)RSM_GLOBAL_BAR_SEARCHES;
     /* Measured on the Intel and ACES logs (docs/globalsearch.md): a first
      * search at 0.97, where a box whose window misses a single point is
      * dropped, read about half of what one at 0.95 (a miss allowed) did,

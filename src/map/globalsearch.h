@@ -119,7 +119,7 @@ void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
  * min_share) after `unproven` searches in a row that proved nothing: 0.97
  * for the first (a box whose window misses a single point is dropped),
  * then 0.95, 0.90, ... down to min_share (global_min_share), each bar
- * below the first for three searches (BAR_SEARCHES). A search near the
+ * below the first for RSM_GLOBAL_BAR_SEARCHES searches. A search near the
  * estimate (radius_m > 0; 0: the whole map) searches each window at 0.97
  * then 0.95 before it doubles (rsm_global_radius), and the bar falls
  * further only once the window holds the whole map. */

@@ -344,29 +344,31 @@ static void test_grids_stand_while_the_level_searched_does(void)
 }
 
 /* The bar: 0.97 of the kept points first, then 0.95, 0.90, ... down to
- * global_min_share, each bar below the first for three searches of the
- * whole map; a near search searches each window at 0.97 and 0.95 before it
- * doubles, to the whole map, and only then lowers the bar. */
+ * global_min_share, each bar below the first for RSM_GLOBAL_BAR_SEARCHES
+ * searches of the whole map; a near search searches each window at 0.97
+ * and 0.95 before it doubles, to the whole map, and only then lowers the
+ * bar. */
 static void test_the_bar_falls_after_searches_of_the_whole_map(void)
 {
     const rsm_synth_world_t world = rsm_synth_world_room();
     const rsm_tmap_t *map;
     int32_t b[4];
     float width;
+    const uint32_t n = (uint32_t)RSM_GLOBAL_BAR_SEARCHES;
     uint32_t widen = 0;
     uint32_t k;
     make_path();
     map_path(&world, 60u);
     map = &loc.state.persistent.map;
     TEST_ASSERT_EQUAL_FLOAT(0.97f, rsm_global_share(map, 0.0f, 0u, 0.8f));
-    for (k = 1u; k <= 3u; ++k) {
+    for (k = 1u; k <= n; ++k) {
         TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.0f, k, 0.8f));
-        TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.9f, rsm_global_share(map, 0.0f, k + 3u, 0.8f));
-        TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.85f, rsm_global_share(map, 0.0f, k + 6u, 0.8f));
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.9f, rsm_global_share(map, 0.0f, k + n, 0.8f));
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.85f, rsm_global_share(map, 0.0f, k + 2u * n, 0.8f));
     }
-    TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_share(map, 0.0f, 10u, 0.8f));
+    TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_share(map, 0.0f, 3u * n + 1u, 0.8f));
     TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_share(map, 0.0f, 1000u, 0.8f));
-    TEST_ASSERT_EQUAL_FLOAT(0.9f, rsm_global_share(map, 0.0f, 7u, 0.9f));
+    TEST_ASSERT_EQUAL_FLOAT(0.9f, rsm_global_share(map, 0.0f, 2u * n + 1u, 0.9f));
     /* A window of 0.1 m doubles this often before it is as wide as the
      * map's box on the search level. */
     TEST_ASSERT_TRUE(rsm_tmap_bounds(map, (uint32_t)map->cfg.levels - 2u, &b[0], &b[1], &b[2], &b[3]));
@@ -382,11 +384,12 @@ static void test_the_bar_falls_after_searches_of_the_whole_map(void)
         TEST_ASSERT_EQUAL_FLOAT(0.97f, rsm_global_share(map, 0.1f, 2u * k, 0.8f));
         TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.1f, 2u * k + 1u, 0.8f));
     }
-    /* The whole map: 0.97 once (above), then each lower bar three times. */
-    TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.1f, 2u * widen + 2u, 0.8f));
-    TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.1f, 2u * widen + 3u, 0.8f));
-    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.9f, rsm_global_share(map, 0.1f, 2u * widen + 4u, 0.8f));
-    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.85f, rsm_global_share(map, 0.1f, 2u * widen + 7u, 0.8f));
+    /* The whole map: 0.97 once (above), then each lower bar n times. */
+    for (k = 1u; k <= n; ++k) {
+        TEST_ASSERT_EQUAL_FLOAT(0.95f, rsm_global_share(map, 0.1f, 2u * widen + k, 0.8f));
+        TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.9f, rsm_global_share(map, 0.1f, 2u * widen + k + n, 0.8f));
+    }
+    TEST_ASSERT_FLOAT_WITHIN(1e-6f, 0.85f, rsm_global_share(map, 0.1f, 2u * widen + 2u * n + 1u, 0.8f));
 }
 
 /* The best leaf score of every position of the search's root box and every
