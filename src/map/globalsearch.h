@@ -7,12 +7,11 @@
  * coarsest level (0.2 m by default: the coarsest is too full to tell places
  * apart). The positions are that level's cells; the headings are spaced so
  * that the scan's far points move RSM_GLOBAL_HEADING_CELLS cells from one
- * to the next (rsm/config.h), and
- * only those at which the scan's wall directions agree with the map's are
- * searched, the best agreeing first. For one heading, a box of 2^h x 2^h
- * cells of positions (a leaf, h = 0, is one cell: positions anywhere in it)
- * scores at most the number of points whose window of 2^h + 1 cells a side
- * holds a nonzero cell: one bit a point, read from a bit grid per box size
+ * to the next (rsm/config.h), and only those at which the scan's wall
+ * directions agree with the map's are searched, the best agreeing first.
+ * For one heading, a box of 2^h x 2^h cells of positions (a leaf, h = 0,
+ * is one cell: positions anywhere in it) scores at most the number of
+ * points whose window of 2^h + 1 cells a side holds a nonzero cell: one bit a point, read from a bit grid per box size
  * whose blocks bound those windows (built from the map's tiles within the
  * scan budget, laid out to fit the memory the caller lends, kept for the
  * next search while the map is unchanged). Large boxes read a quarter or
