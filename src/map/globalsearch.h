@@ -6,25 +6,25 @@
  * summed under the scan's points, each read at its cell of the second
  * coarsest level (0.2 m by default: the coarsest is too full to tell places
  * apart). The positions are that level's cells; the headings are spaced so
- * that the scan's far points move RSM_GLOBAL_HEADING_CELLS cells from one
- * to the next (rsm/config.h), and only those at which the scan's wall
- * directions agree with the map's are searched, the best agreeing first.
- * For one heading, a box of 2^h x 2^h cells of positions (a leaf, h = 0,
- * is one cell: positions anywhere in it) scores at most the number of
- * points whose window of 2^h + 1 cells a side holds a nonzero cell: one
- * bit a point, read from a bit grid per box size whose blocks bound those
- * windows (built from the map's tiles within the scan budget, laid out to
- * fit the memory the caller lends, kept for the next search while the map
- * is unchanged). Large boxes read a quarter or
- * half of the points, the others counted as on a wall. A leaf's score is
- * exact: each point's largest cell value in its window of two cells a side,
- * read from the map; the four leaves of a box share each point's 3 x 3
- * window. Boxes are split depth first, the best child first, and a box
- * whose bound cannot reach the bar is dropped; a point sum that can no
- * longer reach it stops early, and the point that ended it is read earlier
- * from then on. The search keeps the RSM_GLOBAL_CANDIDATES best distinct
- * leaves, ranked by their fit at the leaf's centre; the localizer then
- * proves them (src/localizer/localizer.c, prove_one, prove_verdict, prove_win).
+ * that the scan's far points move RSM_GLOBAL_HEADING_CELLS cells from one to
+ * the next (rsm/config.h), and only those at which the scan's wall
+ * directions agree with the map's are searched, the best agreeing first. For
+ * one heading, a box of 2^h x 2^h cells of positions (a leaf, h = 0, is one
+ * cell: positions anywhere in it) scores at most the number of points whose
+ * window of 2^h + 1 cells a side holds a nonzero cell: one bit a point, read
+ * from a bit grid per box size whose blocks bound those windows (built from
+ * the map's tiles within the scan budget, laid out to fit the memory the
+ * caller lends, kept for the next search while the map is unchanged). Large
+ * boxes read a quarter or half of the points, the others counted as on a
+ * wall. A leaf's score is exact: each point's largest cell value in its
+ * window of two cells a side, read from the map; the four leaves of a box
+ * share each point's 3 x 3 window. Boxes are split depth first, the best
+ * child first, and a box whose bound cannot reach the bar is dropped; a
+ * point sum that can no longer reach it stops early, and the point that
+ * ended it is read earlier from then on. The search keeps the
+ * RSM_GLOBAL_CANDIDATES best distinct leaves, ranked by their fit at the
+ * leaf's centre; the localizer then proves them (src/localizer/localizer.c,
+ * prove_one, prove_verdict, prove_win).
  *
  * The work is spread over scans: rsm_global_run stops after a budget of
  * work and resumes where it stopped. Work is counted in units of about

@@ -81,13 +81,14 @@ def vm_hwm_kib(pid: int) -> Optional[int]:
     return None
 
 
-def peak_rss_kib(nav: Path, lines: Sequence[bytes], scans: int, work: Path,
-                 checkpoint: int = 0) -> Dict[str, Optional[int]]:
+def peak_rss_kib(nav: Path, lines: Sequence[bytes], scans: int, work: Path, checkpoint: int) -> Dict[str, int]:
     """Runs rsm-nav on ``scans`` scans fed through a named pipe; returns its
     peak resident set (KiB, as its summary prints it), the scans it wrote a
-    pose for, and with checkpoint (0 < checkpoint < scans) its peak read from
-    /proc once the first checkpoint scans are in the pipe (rsm-nav is then
-    at most the pipe's buffer, a few dozen scans, behind)."""
+    pose for, and its peak read from /proc once the first ``checkpoint``
+    scans are in the pipe (rsm-nav is then at most the pipe's buffer, a few
+    dozen scans, behind)."""
+    if not 0 < checkpoint < scans:
+        raise BenchError(f"a checkpoint of {checkpoint} scans is not within a run of {scans}")
     work.mkdir(parents=True, exist_ok=True)
     fifo = work / f"scans-{scans}.fifo"
     if fifo.exists():
@@ -117,12 +118,10 @@ def peak_rss_kib(nav: Path, lines: Sequence[bytes], scans: int, work: Path,
                 os.set_blocking(fd, True)
                 try:
                     with os.fdopen(fd, "wb") as fh:
-                        first = checkpoint if 0 < checkpoint < scans else 0
-                        n = write_scans(lines, first, fh)
-                        if first:
-                            fh.flush()
-                            at_checkpoint.append(vm_hwm_kib(proc.pid))
-                        written.append(n + write_scans(lines, scans, fh, first))
+                        n = write_scans(lines, checkpoint, fh)
+                        fh.flush()
+                        at_checkpoint.append(vm_hwm_kib(proc.pid))
+                        written.append(n + write_scans(lines, scans, fh, checkpoint))
                 except BrokenPipeError:
                     pass
                 return
@@ -149,13 +148,10 @@ def peak_rss_kib(nav: Path, lines: Sequence[bytes], scans: int, work: Path,
     m = re.search(r"^\s*memory\s+peak (\d+) KiB resident", stdout, re.M)
     if m is None:
         raise BenchError(f"rsm-nav printed no peak memory (not Linux?):\n{stdout[-1000:]}")
-    res: Dict[str, Optional[int]] = {"scans": written[-1], "poses": poses, "peak_kib": int(m.group(1))}
-    if 0 < checkpoint < scans:
-        if not at_checkpoint or at_checkpoint[0] is None:
-            raise BenchError(f"no peak memory of rsm-nav in /proc after {checkpoint} scans (not Linux?)")
-        res["checkpoint_scans"] = checkpoint
-        res["checkpoint_kib"] = at_checkpoint[0]
-    return res
+    if not at_checkpoint or at_checkpoint[0] is None:
+        raise BenchError(f"no peak memory of rsm-nav in /proc after {checkpoint} scans (not Linux?)")
+    return {"scans": written[-1], "poses": poses, "peak_kib": int(m.group(1)), "checkpoint_scans": checkpoint,
+            "checkpoint_kib": at_checkpoint[0]}
 
 
 def run(nav: Path, log: Path, work: Path, counts: Sequence[int] = SCANS) -> dict:
