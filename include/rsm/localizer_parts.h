@@ -370,6 +370,12 @@ typedef struct rsm_global {
     uint32_t proved;               /* kept poses descended so far (found + 1: the winner too) */
     uint32_t rounds;               /* proofs of the same kept poses that were left in doubt */
     uint32_t taken_back;           /* the levels read are back from the store for the next search */
+    /* A crowded search's winner waiting for a second search to prove it
+     * too, and the estimate then (odometry carries it from there); valid
+     * while pending is 1. */
+    uint32_t pending;
+    rsm_pose_t pending_pose;
+    rsm_pose_t pending_at;
     float hit[RSM_GLOBAL_CANDIDATES];
     /* Over the rounds before this one: the sum of each kept pose's log fit,
      * and the pose that fitted best in every one of them (the views add

@@ -1974,6 +1974,7 @@ static void begin_global(rsm_localizer_t *loc, float radius_m)
     loc->state.persistent.recovery.phase = RECOVER_IDLE;
     loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
     loc->state.persistent.global.unproven = 0u;
+    loc->state.persistent.global.pending = 0u;
     loc->state.persistent.global.radius_m = radius_m;
     if (!(loc->state.persistent.map_fit > 0.0f)) {
         /* A map made in this run: its scans' recent fit is the bar. */
@@ -2151,22 +2152,36 @@ static int prove_verdict(const rsm_localizer_t *loc, uint32_t *win)
 /* The winner with the scan at hand: carried forward by odometry's motion
  * since the kept scan, looked for again around there when the robot drove
  * far meanwhile (the search was spread over scans), and descended under a
- * prior as wide as odometry's drift. Taken when it fits this scan as the
- * verdict asked of the kept one and the scan pins it. 1: taken into the
- * filter; 0: not. */
-static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts)
+ * prior as wide as odometry's drift. Proven when it fits this scan as the
+ * verdict asked of the kept one and the scan pins it. 1: proven, its match
+ * in *out; 0: not. */
+/* How far odometry may have drifted over the motion moved (since a kept
+ * scan): two of the search's cells and heading steps, and 10 % of the
+ * travel and 0.05 rad a metre or radian, within the recovery search's
+ * reach. */
+static void drift_reach(const rsm_localizer_t *loc, const rsm_pose_t *moved, float *reach_m, float *reach_rad)
+{
+    const rsm_localizer_config_t *cfg = loc->cfg;
+    const rsm_global_t *g = &loc->state.persistent.global;
+    const float cell = rsm_tmap_cell(&loc->state.persistent.map, g->level);
+    const float travelled = sqrtf(moved->x * moved->x + moved->y * moved->y);
+    float m = 2.0f * cell + 0.1f * travelled;
+    float rad = 2.0f * g->step_rad + 0.05f * (travelled + fabsf(moved->theta));
+    m = m < cfg->recover_m ? m : cfg->recover_m;
+    rad = rad < cfg->recover_rad ? rad : cfg->recover_rad;
+    *reach_m = m > 2.0f * cell ? m : 2.0f * cell;
+    *reach_rad = rad;
+}
+
+static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts, rsm_mapmatch_result_t *out)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     rsm_global_t *g = &loc->state.persistent.global;
     const rsm_tmap_t *map = &loc->state.persistent.map;
     const rsm_pose_t moved = rsm_pose_between(&g->seen_at, &loc->ekf.x);
     const float cell = rsm_tmap_cell(map, g->level);
-    const float travelled = sqrtf(moved.x * moved.x + moved.y * moved.y);
-    /* How far odometry may have drifted since the kept scan: 10 % of the
-     * travel and 0.05 rad a metre or radian, within the recovery search's
-     * reach. */
-    float reach_m = 2.0f * cell + 0.1f * travelled;
-    float reach_rad = 2.0f * g->step_rad + 0.05f * (travelled + fabsf(moved.theta));
+    float reach_m;
+    float reach_rad;
     float wide[9];
     rsm_pose_t start = proved_now(loc, win);
     rsm_pose_t near[2];
@@ -2177,9 +2192,7 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts)
     int m;
     int have = 0;
     int have_other = 0;
-    reach_m = reach_m < cfg->recover_m ? reach_m : cfg->recover_m;
-    reach_rad = reach_rad < cfg->recover_rad ? reach_rad : cfg->recover_rad;
-    reach_m = reach_m > 2.0f * cell ? reach_m : 2.0f * cell;
+    drift_reach(loc, &moved, &reach_m, &reach_rad);
     memset(wide, 0, sizeof wide);
     wide[0] = wide[4] = reach_m * reach_m;
     wide[8] = reach_rad * reach_rad;
@@ -2243,12 +2256,31 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts)
             return 0;
         }
     }
-    loc->ekf.x = res.pose;
-    memcpy(loc->ekf.p, res.cov, sizeof loc->ekf.p);
-    loc->ekf.updates++;
-    loc->state.persistent.fit = res.hit;
-    loc->state.persistent.written = res.pose;
+    *out = res;
     return 1;
+}
+
+/* Whether a proven winner (at pose) may be taken (rsm_global_take): a
+ * crowded search's only once a later search proves the same place, within
+ * odometry's drift since (drift_reach). */
+static int winner_taken(rsm_localizer_t *loc, const rsm_pose_t *pose)
+{
+    rsm_global_t *g = &loc->state.persistent.global;
+    const rsm_pose_t moved = rsm_pose_between(&g->pending_at, &loc->ekf.x);
+    float reach_m;
+    float reach_rad;
+    drift_reach(loc, &moved, &reach_m, &reach_rad);
+    return rsm_global_take(g, pose, &loc->ekf.x, reach_m, reach_rad);
+}
+
+/* Takes a proven winner's match (prove_win) into the filter. */
+static void take_win(rsm_localizer_t *loc, const rsm_mapmatch_result_t *res)
+{
+    loc->ekf.x = res->pose;
+    memcpy(loc->ekf.p, res->cov, sizeof loc->ekf.p);
+    loc->ekf.updates++;
+    loc->state.persistent.fit = res->hit;
+    loc->state.persistent.written = res->pose;
 }
 
 /* A scan while a global search is under way (RSM_METHOD_MAP). */
@@ -2297,8 +2329,18 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         if (g->proved == g->found) {
             verdict = prove_verdict(loc, &win);
             if (verdict > 0 && (budget == 0u || used == 0u)) {
+                rsm_mapmatch_result_t won;
                 used += WIN_WORK;
-                if (prove_win(loc, win, npts)) {
+                if (prove_win(loc, win, npts, &won)) {
+                    if (!winner_taken(loc, &won.pose)) {
+                        /* Crowded, and not yet proven by a second search:
+                         * searched again at the same bar, from the next
+                         * scan. */
+                        loc->counters.global_ambiguous++;
+                        g->phase = RSM_GLOBAL_PENDING;
+                        return searching(loc, rep, used);
+                    }
+                    take_win(loc, &won);
                     g->phase = RSM_GLOBAL_IDLE;
                     loc->counters.global_found++;
                     rep->recovered = 1u;
@@ -2397,6 +2439,14 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         g->phase = RSM_GLOBAL_PROVING;
         g->proved = 0;
         g->rounds = 0;
+        if (g->pending && g->unkept > 0u) {
+            /* A crowded search after one whose winner waits (winner_taken):
+             * that winner, carried to the scan searched, is weighed against
+             * this search's poses too, whether or not this one kept it. */
+            const rsm_pose_t moved = rsm_pose_between(&g->pending_at, &g->seen_at);
+            const rsm_pose_t then = rsm_pose_compose(&g->pending_pose, &moved);
+            rsm_global_weigh_also(g, map, &then);
+        }
     }
     return searching(loc, rep, used);
 }

@@ -188,6 +188,24 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
 int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float doubt_m, float doubt_rad,
                        uint32_t *win);
 
+/* Whether a proven winner at pose may be taken, at estimate `at` (which
+ * odometry carries). A crowded search's proof (g->unkept > 0) weighed a
+ * few of the places that reached its bar, and one it never weighed may
+ * fit better: its winner is taken only when a later search proves the
+ * same place too (g->pending_pose, carried from g->pending_at to at,
+ * within reach_m and reach_rad: odometry's drift over that motion), and
+ * else becomes the pending winner, in place of any before. An uncrowded
+ * search weighed every place that reached its bar: its winner is taken.
+ * 1: taken (nothing pending after); 0: waits. */
+int rsm_global_take(rsm_global_t *g, const rsm_pose_t *pose, const rsm_pose_t *at, float reach_m, float reach_rad);
+
+/* Puts pose (in the map, at the scan searched) among the kept poses for
+ * the proof, in place of the one ranked last, unless a kept pose is
+ * within two lattice steps and two heading steps of it (its basin, kept
+ * already). For a pose a search before proved: weighed again against
+ * this search's own. */
+void rsm_global_weigh_also(rsm_global_t *g, const rsm_tmap_t *map, const rsm_pose_t *pose);
+
 /* Adds a round left in doubt to the sums the next verdicts read (the
  * caller counts g->rounds after it); a round whose best fitted under
  * min_fit (the verdict's) leaves no pose that led every round. */
