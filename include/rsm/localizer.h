@@ -314,7 +314,9 @@ typedef struct rsm_localizer_counters {
                                               * global_when_lost, or one that proved nothing) */
     uint32_t global_found;                   /* ... that proved a pose, which was taken */
     uint32_t global_ambiguous;               /* ... whose winner fitted too poorly or a rival
-                                              * nearly as well: begun again on a later scan */
+                                              * nearly as well, or, crowded, waits for a later
+                                              * search to prove it too: begun again on a later
+                                              * scan */
     uint32_t global_work;                    /* their cells and blocks read, all scans */
     uint32_t caught_up;                      /* odometry steps that reported motion matching had
                                               * already found (RSM_ODOMETRY_CAUGHT_UP) */

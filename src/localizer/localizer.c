@@ -2149,12 +2149,6 @@ static int prove_verdict(const rsm_localizer_t *loc, uint32_t *win)
                               cfg->doubt_rad, win);
 }
 
-/* The winner with the scan at hand: carried forward by odometry's motion
- * since the kept scan, looked for again around there when the robot drove
- * far meanwhile (the search was spread over scans), and descended under a
- * prior as wide as odometry's drift. Proven when it fits this scan as the
- * verdict asked of the kept one and the scan pins it. 1: proven, its match
- * in *out; 0: not. */
 /* How far odometry may have drifted over the motion moved (since a kept
  * scan): two of the search's cells and heading steps, and 10 % of the
  * travel and 0.05 rad a metre or radian, within the recovery search's
@@ -2173,6 +2167,12 @@ static void drift_reach(const rsm_localizer_t *loc, const rsm_pose_t *moved, flo
     *reach_rad = rad;
 }
 
+/* The winner with the scan at hand: carried forward by odometry's motion
+ * since the kept scan, looked for again around there when the robot drove
+ * far meanwhile (the search was spread over scans), and descended under a
+ * prior as wide as odometry's drift. Proven when it fits this scan as the
+ * verdict asked of the kept one and the scan pins it. 1: proven, its match
+ * in *out; 0: not (*out then undefined). */
 static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts, rsm_mapmatch_result_t *out)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
@@ -2185,7 +2185,7 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts, rsm_mapmat
     float wide[9];
     rsm_pose_t start = proved_now(loc, win);
     rsm_pose_t near[2];
-    rsm_mapmatch_result_t res;
+    rsm_mapmatch_result_t *res = out;
     rsm_mapmatch_result_t r2;
     rsm_mapmatch_result_t other;
     int n = 0;
@@ -2211,10 +2211,10 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts, rsm_mapmat
         if (rsm_mapmatch(map, &cfg->mapmatch, loc->pts, npts, &start, wide, &near[m], NULL, &r2) != RSM_OK) {
             continue;
         }
-        if (!have || r2.hit > res.hit) {
-            other = res;
+        if (!have || r2.hit > res->hit) {
+            other = *res;
             have_other = have;
-            res = r2;
+            *res = r2;
             have = 1;
         } else {
             other = r2;
@@ -2226,8 +2226,8 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts, rsm_mapmat
      * since the kept scan, which only the kept scan's verdict ruled out
      * (measured on ACES: an office 0.76 m on fitted 0.8617 against the
      * true place's 0.8613). In doubt until the robot moves on. */
-    if (have && have_other && beyond_doubt(cfg, &other.pose, &res.pose) &&
-        !(res.hit > other.hit * (1.0f + cfg->recover_margin))) {
+    if (have && have_other && beyond_doubt(cfg, &other.pose, &res->pose) &&
+        !(res->hit > other.hit * (1.0f + cfg->recover_margin))) {
         return 0;
     }
     /* This scan must fit as the verdict asked of the kept one: a winner
@@ -2237,7 +2237,7 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts, rsm_mapmat
      * global_crowded_fit of every winner's whole scan kept an ACES corridor
      * 18 m from the truth, at 0.81, from being proven, but no scan with a
      * tenth of its readings unmatched is then proven anywhere.) */
-    if (!have || !(res.hit >= win_fit(loc))) {
+    if (!have || !(res->hit >= win_fit(loc))) {
         return 0;
     }
     /* Its covariance says what the scan pins (under a prior at least two
@@ -2248,15 +2248,14 @@ static int prove_win(rsm_localizer_t *loc, uint32_t win, size_t npts, rsm_mapmat
          * position is the search lattice's, not the scan's: measured on
          * ACES, 0.3 to 0.6 m off) is no proof: its position's largest
          * standard deviation must be within half a cell. */
-        const float a = res.cov[0];
-        const float d = res.cov[4];
-        const float b = res.cov[1];
+        const float a = res->cov[0];
+        const float d = res->cov[4];
+        const float b = res->cov[1];
         const float largest = 0.5f * (a + d) + sqrtf(0.25f * (a - d) * (a - d) + b * b);
         if (!(largest <= 0.25f * cell * cell)) {
             return 0;
         }
     }
-    *out = res;
     return 1;
 }
 

@@ -1140,13 +1140,20 @@ static float no_gain(const rsm_global_t *g, float score)
     return g->cand[g->found - 1u].fine;
 }
 
-/* Keeps a leaf among the best distinct poses, ranked by fine: one within
- * two lattice steps and two heading steps of a better kept one is its
- * basin, not a rival. */
-static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score, float fine)
+/* Whether kept pose o stands for x: x within two lattice steps and two
+ * heading steps of it (its basin). */
+static int in_basin(const rsm_global_t *g, float cell, const rsm_pose_t *o, const rsm_pose_t *x)
 {
     const float near_m = 2.0f * cell + 1e-3f;
     const float near_rad = 2.0f * g->step_rad + 1e-4f;
+    return fabsf(o->x - x->x) <= near_m && fabsf(o->y - x->y) <= near_m &&
+           fabsf(rsm_wrap_angle(o->theta - x->theta)) <= near_rad;
+}
+
+/* Keeps a leaf among the best distinct poses, ranked by fine: one within
+ * the basin of a better kept one is not a rival. */
+static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score, float fine)
+{
     uint32_t m;
     uint32_t kept = 0;
     uint32_t at;
@@ -1154,9 +1161,7 @@ static void keep(rsm_global_t *g, float cell, const rsm_pose_t *x, float score, 
         g->best_score = score;
     }
     for (m = 0; m < g->found; ++m) {
-        const rsm_pose_t *o = &g->cand[m].pose;
-        if (fabsf(o->x - x->x) <= near_m && fabsf(o->y - x->y) <= near_m &&
-            fabsf(rsm_wrap_angle(o->theta - x->theta)) <= near_rad) {
+        if (in_basin(g, cell, &g->cand[m].pose, x)) {
             if (g->cand[m].fine >= fine) {
                 return;
             }
@@ -1535,13 +1540,9 @@ int rsm_global_take(rsm_global_t *g, const rsm_pose_t *pose, const rsm_pose_t *a
 void rsm_global_weigh_also(rsm_global_t *g, const rsm_tmap_t *map, const rsm_pose_t *pose)
 {
     const float cell = rsm_tmap_cell(map, g->level);
-    const float near_m = 2.0f * cell + 1e-3f;
-    const float near_rad = 2.0f * g->step_rad + 1e-4f;
     uint32_t m;
     for (m = 0; m < g->found; ++m) {
-        const rsm_pose_t *o = &g->cand[m].pose;
-        if (fabsf(o->x - pose->x) <= near_m && fabsf(o->y - pose->y) <= near_m &&
-            fabsf(rsm_wrap_angle(o->theta - pose->theta)) <= near_rad) {
+        if (in_basin(g, cell, &g->cand[m].pose, pose)) {
             return;
         }
     }
