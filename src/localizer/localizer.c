@@ -322,6 +322,8 @@ void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
     if (global_running(loc)) {
         loc->state.persistent.global.phase = RSM_GLOBAL_PENDING;
     }
+    /* A winner waiting for a second proof was found in the map before. */
+    loc->state.persistent.global.pending = 0u;
 }
 
 int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const float p[9])

@@ -10,6 +10,7 @@
 #include "core/bits.h"
 #include "core/fmath.h"
 #include "map/globalsearch.h"
+#include "map/mapstate.h"
 #include "map/tmap_read.h"
 #include "rsm/config.h"
 #include "rsm/localizer.h"
@@ -1194,6 +1195,12 @@ static void test_a_crowded_winner_is_proven_twice(void)
     TEST_ASSERT_EQUAL_UINT32((uint32_t)RSM_GLOBAL_CANDIDATES, g2.found);
     TEST_ASSERT_EQUAL_MEMORY(g1.cand, g2.cand, (g1.found - 1u) * sizeof g1.cand[0]);
     TEST_ASSERT_EQUAL_FLOAT(-9.0f, g2.cand[RSM_GLOBAL_CANDIDATES - 1].pose.x);
+    /* A map loaded meanwhile: what waited was found in the map before. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    loc.state.persistent.global.pending = 1u;
+    rsm_localizer_map_replaced(&loc, 0.9f);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.state.persistent.global.pending);
+    TEST_ASSERT_EQUAL_UINT32(RSM_GLOBAL_PENDING, loc.state.persistent.global.phase);
 }
 
 /* A corridor 14 m long whose north wall has a niche every metre from
