@@ -2444,8 +2444,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
             /* A crowded search after one whose winner waits (winner_taken):
              * that winner, carried to the scan searched, is weighed against
              * this search's poses too, whether or not this one kept it. */
-            const rsm_pose_t moved = rsm_pose_between(&g->pending_at, &g->seen_at);
-            const rsm_pose_t then = rsm_pose_compose(&g->pending_pose, &moved);
+            const rsm_pose_t then = rsm_global_pending_carried(g, &g->seen_at);
             rsm_global_weigh_also(g, map, &then);
         }
     }

@@ -1512,6 +1512,12 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
     return 1;
 }
 
+rsm_pose_t rsm_global_pending_carried(const rsm_global_t *g, const rsm_pose_t *at)
+{
+    const rsm_pose_t moved = rsm_pose_between(&g->pending_at, at);
+    return rsm_pose_compose(&g->pending_pose, &moved);
+}
+
 /* Each search begins from a later scan and keeps its own few poses, the
  * pending winner weighed among them (rsm_global_weigh_also). Measured on
  * the bench's ACES kidnaps: crowded winners 4.7 m (turned half round) and
@@ -1524,8 +1530,7 @@ int rsm_global_take(rsm_global_t *g, const rsm_pose_t *pose, const rsm_pose_t *a
         return 1;
     }
     if (g->pending) {
-        const rsm_pose_t moved = rsm_pose_between(&g->pending_at, at);
-        const rsm_pose_t carried = rsm_pose_compose(&g->pending_pose, &moved);
+        const rsm_pose_t carried = rsm_global_pending_carried(g, at);
         if (!rsm_pose_apart(&carried, pose, reach_m, reach_rad)) {
             g->pending = 0u;
             return 1;

@@ -188,6 +188,10 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
 int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float doubt_m, float doubt_rad,
                        uint32_t *win);
 
+/* The waiting winner (g->pending_pose) carried by odometry from the
+ * estimate then (g->pending_at) to the estimate at. */
+rsm_pose_t rsm_global_pending_carried(const rsm_global_t *g, const rsm_pose_t *at);
+
 /* Whether a proven winner at pose may be taken, at estimate `at` (which
  * odometry carries). A crowded search's proof (g->unkept > 0) weighed a
  * few of the places that reached its bar, and one it never weighed may

@@ -1135,6 +1135,12 @@ static void test_a_crowded_winner_is_proven_twice(void)
     g1.unkept = 3u;
     TEST_ASSERT_EQUAL_INT(0, rsm_global_take(&g1, &place, &at0, 0.4f, 0.2f));
     TEST_ASSERT_EQUAL_UINT32(1u, g1.pending);
+    /* Odometry carries it as it carries the estimate. */
+    same = rsm_global_pending_carried(&g1, &at1);
+    other = rsm_pose_compose(&place, &step);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, other.x, same.x);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, other.y, same.y);
+    TEST_ASSERT_FLOAT_WITHIN(1e-5f, other.theta, same.theta);
     /* A later crowded search proves the same place, the robot moved on:
      * taken, a little off within the reach too. */
     g2 = g1;
