@@ -22,14 +22,25 @@
 
 #include "fuzz_check.h"
 
-/* zlib reads files by name: one scratch file per process, rewritten per input. */
+/* zlib reads files by name: one scratch file per process, rewritten per
+ * input, in TMPDIR, and removed when the run ends (every test run left
+ * one behind). */
+static char scratch[4096];
+
+static void remove_scratch(void)
+{
+    (void)remove(scratch);
+}
+
 static const char *scratch_path(void)
 {
-    static char path[64];
-    if (path[0] == '\0') {
-        snprintf(path, sizeof path, "/tmp/rsm-fuzz-carmen-%ld.clf", (long)getpid());
+    if (scratch[0] == '\0') {
+        const char *dir = getenv("TMPDIR");
+        snprintf(scratch, sizeof scratch, "%s/rsm-fuzz-carmen-%ld.clf", dir != NULL && dir[0] != '\0' ? dir : "/tmp",
+                 (long)getpid());
+        (void)atexit(remove_scratch);
     }
-    return path;
+    return scratch;
 }
 
 static void check_finite(const rsm_localizer_t *loc)
