@@ -198,6 +198,13 @@ typedef struct rsm_localizer_config {
                                      * written (a map loaded with rsm_localizer_load_map stays as
                                      * it was saved); 0: scans keep updating it (the building
                                      * changes: doors, furniture); default 0 */
+    uint8_t map_loaded_hit;         /* with updates on, what a return adds to a cell of a map that
+                                     * was loaded or imported (rsm_localizer_load_map,
+                                     * rsm_localizer_import_ros_map), in place of tmap.hit_inc: a
+                                     * saved map holds many passes' evidence, and scans written
+                                     * into it at a new map's rate blur it to one pass's
+                                     * (docs/mapfile.md, "After a load"); 0: tmap.hit_inc;
+                                     * default 1 */
     uint8_t map_min_hits;           /* map cells with this many hits are occupied; default 1 */
     uint8_t map_on_reject;          /* 1: superimpose rejected scans at the prediction; default 1 */
     uint16_t min_points;            /* usable readings needed; default 20 */

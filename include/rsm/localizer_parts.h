@@ -239,6 +239,8 @@ typedef struct rsm_tmap {
     uint32_t stamp;                    /* update counter (29 bits used) */
     uint16_t used;                     /* slots in use */
     uint16_t level_used[RSM_TMAP_LEVELS];  /* of those, per level */
+    uint8_t write_hit;                 /* what a return adds on writes: cfg.hit_inc, or a loaded
+                                        * map's rate (rsm_localizer_config_t.map_loaded_hit) */
     /* On each level, the tiles writes began (empty, not from the store)
      * less those that ended (freed, or let go with no store to keep them),
      * and the same sum of their places mixed (rsm_tmap_place_sig): a

@@ -37,6 +37,7 @@ rsm_localizer_config_t rsm_localizer_config_default(void)
     c.odometry.sigma_rot_per_m = 0.2f;
     c.odometry.sigma_rot_per_rad = 0.1f;
     c.map_frozen = 0u;
+    c.map_loaded_hit = 1u;
     c.global_budget = 45000u;
     c.global_min_share = 0.8f;
     c.global_min_fit = 0.8f;
@@ -305,6 +306,10 @@ void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
     loc->state.persistent.map_fit = fit;
     loc->state.persistent.global.cached = 0u;
     loc->state.persistent.recovery.phase = RECOVER_IDLE;
+    /* Written at a loaded map's rate from now on (map_loaded_hit). */
+    if (loc->cfg->map_loaded_hit > 0u) {
+        loc->state.persistent.map.write_hit = loc->cfg->map_loaded_hit;
+    }
     /* Another map, another grid: learnt again from the scans tracking in it. */
     loc->state.persistent.wall_c = 0.0f;
     loc->state.persistent.wall_s = 0.0f;

@@ -35,6 +35,7 @@ static int check_method_part(const rsm_localizer_config_t *cfg, const char **fie
                         "recover_rad");
         RSM_CHECK_FIELD(cfg->refuse_poor <= 1u, "refuse_poor");
         RSM_CHECK_FIELD(cfg->map_frozen <= 1u, "map_frozen");
+        RSM_CHECK_FIELD(cfg->map_loaded_hit <= RSM_TMAP_MAX_VALUE, "map_loaded_hit");
         RSM_CHECK_FIELD(cfg->global_min_share >= 0.0f && cfg->global_min_share <= 1.0f, "global_min_share");
         RSM_CHECK_FIELD(cfg->global_min_fit >= 0.0f && cfg->global_min_fit <= 1.0f, "global_min_fit");
         RSM_CHECK_FIELD(cfg->global_crowded_fit >= 0.0f && cfg->global_crowded_fit <= 1.0f, "global_crowded_fit");

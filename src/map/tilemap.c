@@ -69,6 +69,7 @@ int rsm_tmap_init(rsm_tmap_t *map, const rsm_tmap_config_t *cfg)
     }
     memset(map, 0, sizeof *map);
     map->cfg = *cfg;
+    map->write_hit = cfg->hit_inc;
     for (v = 0; v <= RSM_TMAP_MAX_VALUE; ++v) {
         map->occ[v] = v >= cfg->saturation ? 1.0f : (float)v / (float)cfg->saturation;
     }
@@ -793,7 +794,7 @@ static void hit_one(rsm_tmap_t *map, rsm_tmap_cursor_t *c, const rsm_point_t *p,
         const int32_t gy = b.j;
         const float du = b.du;
         const float dv = b.dv;
-        const float f = (float)map->cfg.hit_inc;
+        const float f = (float)map->write_hit;
         if (!rsm_tmap_in_range(gx, gy) || !rsm_tmap_in_range(gx + 1, gy + 1)) {
             map->counters.outside++;
             return;
@@ -809,7 +810,7 @@ static void hit_one(rsm_tmap_t *map, rsm_tmap_cursor_t *c, const rsm_point_t *p,
             map->counters.outside++;
             return;
         }
-        add_hit(map, c, level, gx, gy, map->cfg.hit_inc);
+        add_hit(map, c, level, gx, gy, map->write_hit);
     }
 }
 

@@ -391,6 +391,8 @@ void test_localizer_init_should_reject_bad_configs(void)
     BAD(recover_margin, -0.1f);
     BAD(recover_margin, 11.0f);
     BAD(refuse_poor, 2u);
+    BAD(map_frozen, 2u);
+    BAD(map_loaded_hit, 16u);
     BAD(doubt_rad, 7.0f);
     BAD(lost_scans, 0u);
     BAD(refute_margin, -0.1f);

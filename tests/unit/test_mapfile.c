@@ -232,6 +232,8 @@ static void test_run_after_load_is_the_same(void)
         const rsm_tmap_t *src = map_of(&loc);
         uint32_t s;
         m->stamp = src->stamp;
+        /* The continuation a load sets writes at a loaded map's rate. */
+        m->write_hit = cfg.map_loaded_hit;
         for (s = 0; s < src->used; ++s) {
             TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(m, &src->tile[s]));
         }
@@ -264,6 +266,59 @@ static void test_frozen_map_is_never_written(void)
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_load_map(&other, store_read, &store, NULL));
     run_on(&other, at, track_b);
     TEST_ASSERT_TRUE(map_of(&other)->counters.updates > 0u);
+}
+
+/* With updates on, a loaded map learns what changed at its own rate
+ * (map_loaded_hit): a new wall comes into it, more slowly than into the
+ * map of the run that made it (tmap.hit_inc), and both runs stay on the
+ * path. */
+static void test_a_loaded_map_learns_a_change_at_its_own_rate(void)
+{
+    /* The room with a new wall, 0.5 m long, in its south-east part, where
+     * the rest of the path looks. */
+    static rsm_synth_segment_t seg[64];
+    const rsm_synth_segment_t added = {1.3f, -1.1f, 1.3f, -0.6f};
+    const rsm_synth_world_t room = rsm_synth_world_room();
+    const size_t at = 60u;
+    rsm_synth_world_t changed;
+    uint32_t learnt[2] = {0u, 0u};
+    int r;
+    size_t k;
+    TEST_ASSERT_TRUE(room.count < sizeof seg / sizeof seg[0]);
+    memcpy(seg, room.seg, room.count * sizeof seg[0]);
+    seg[room.count] = added;
+    changed.seg = seg;
+    changed.count = room.count + 1u;
+    map_room(at);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_save_map(&loc, store_write, &store, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&other, &cfg, &loc.ekf.x, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_load_map(&other, store_read, &store, NULL));
+    mapper = loc;
+    for (r = 0; r < 2; ++r) {
+        rsm_localizer_t *l = r == 0 ? &mapper : &other;
+        const rsm_tmap_t *m = map_of(l);
+        const float inv = 1.0f / m->cfg.cell_m;
+        for (k = at; k < path_len; ++k) {
+            const rsm_motion_t u = rsm_synth_motion(&path[k - 1u], &path[k], NULL);
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(l, &u));
+            TEST_ASSERT_EQUAL_INT(RSM_OK,
+                                  rsm_synth_scan(&changed, &path[k], &scan_cfg, NULL, (uint64_t)k * STEP_US, &scan));
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(l, &scan, NULL));
+            (r == 0 ? track_m : track_a)[k] = rsm_localizer_pose(l);
+        }
+        /* The finest cells along the new wall, either side of it. */
+        for (k = 0; k <= 20u; ++k) {
+            const float y = added.y0 + (added.y1 - added.y0) * (float)k / 20.0f;
+            const int32_t gy = (int32_t)floorf(y * inv);
+            learnt[r] += rsm_tmap_value(m, 0u, (int32_t)floorf((added.x0 - 0.01f) * inv), gy);
+            learnt[r] += rsm_tmap_value(m, 0u, (int32_t)floorf((added.x0 + 0.01f) * inv), gy);
+        }
+    }
+    TEST_ASSERT_EQUAL_UINT8(1u, map_of(&other)->write_hit);
+    TEST_ASSERT_EQUAL_UINT8(cfg.tmap.hit_inc, map_of(&mapper)->write_hit);
+    TEST_ASSERT_TRUE(learnt[1] > 0u);
+    TEST_ASSERT_TRUE(learnt[1] < learnt[0]);
+    assert_near_mapper(track_a, at);
 }
 
 /* A localizer that holds a map of its own, to show that a refused load
@@ -476,6 +531,7 @@ int main(void)
     RUN_TEST(test_round_trip_is_bit_for_bit);
     RUN_TEST(test_run_after_load_is_the_same);
     RUN_TEST(test_frozen_map_is_never_written);
+    RUN_TEST(test_a_loaded_map_learns_a_change_at_its_own_rate);
     RUN_TEST(test_every_bit_flip_is_refused);
     RUN_TEST(test_every_truncation_is_refused);
     RUN_TEST(test_foreign_maps_are_refused);

@@ -74,6 +74,7 @@
     U("map_levels", tmap.levels, uint8_t) \
     U("map_hit", tmap.hit_inc, uint8_t) \
     U("map_miss", tmap.miss_dec, uint8_t) \
+    U("map_loaded_hit", map_loaded_hit, uint8_t) \
     U("map_sat", tmap.saturation, uint8_t) \
     U("map_margin", tmap.clear_margin, uint8_t) \
     U("map_splat_from", tmap.splat_from, uint8_t) \
