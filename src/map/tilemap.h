@@ -5,7 +5,8 @@
  * RSM_TMAP_TILE_SIDE x RSM_TMAP_TILE_SIDE cells; a tile takes a pool slot the
  * first time a laser return lands in it, so the map costs memory only where
  * there are walls, wherever the robot goes. Each cell is a 4-bit occupancy
- * value: a return adds hit_inc, a beam passing through subtracts miss_dec,
+ * value: a return adds hit_inc (write_hit: a loaded map's lower rate, set by
+ * the localizer), a beam passing through subtracts miss_dec,
  * clamped to 0..15; a missing tile reads as 0 (free or never seen). So moving
  * people, outliers and wrongly placed scans fade once beams pass where they
  * were.
