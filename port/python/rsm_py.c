@@ -73,7 +73,7 @@ static const rsmpy_field_t fields[] = {
     FLT(recover_margin), UNS(recover_budget), FLT(refute_margin), FLT(conflict_max), FLT(doubt_m), FLT(doubt_rad),
     FLT(wall_sigma_rad), FLT(wall_window_rad), FLT(cov_floor_m), FLT(cov_floor_rad),
     UNS(global_budget), FLT(global_min_share), FLT(global_min_fit), FLT(global_crowded_fit), UNS(global_when_lost),
-    UNS(map_frozen), UNS(map_min_hits), UNS(map_on_reject), UNS(min_points), UNS(refuse_poor),
+    UNS(map_frozen), UNS(map_loaded_hit), UNS(map_min_hits), UNS(map_on_reject), UNS(min_points), UNS(refuse_poor),
     FLT(track_min_fit), UNS(lost_scans), UNS(min_keypoints), FLT(match_window_m), FLT(search_sigmas),
     FLT(search_min_m), FLT(search_max_m), FLT(gate_d2), ENU(noise, RSM_NOISE_FIXED), FLT(r_min_xy_m),
     FLT(r_min_theta_rad), UNS(refine_iterations), UNS(refine_saturation), FLT(refine_noise_scale),
