@@ -307,9 +307,8 @@ void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
     loc->state.persistent.global.cached = 0u;
     loc->state.persistent.recovery.phase = RECOVER_IDLE;
     /* Written at a loaded map's rate from now on (map_loaded_hit). */
-    if (loc->cfg->map_loaded_hit > 0u) {
-        loc->state.persistent.map.write_hit = loc->cfg->map_loaded_hit;
-    }
+    loc->state.persistent.map.write_hit = loc->cfg->map_loaded_hit > 0u ? loc->cfg->map_loaded_hit
+                                                                         : loc->state.persistent.map.cfg.hit_inc;
     /* Another map, another grid: learnt again from the scans tracking in it. */
     loc->state.persistent.wall_c = 0.0f;
     loc->state.persistent.wall_s = 0.0f;
@@ -2445,7 +2444,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         g->phase = RSM_GLOBAL_PROVING;
         g->proved = 0;
         g->rounds = 0;
-        if (g->pending && g->unkept > 0u) {
+        if (g->pending && rsm_global_crowded(g)) {
             /* A crowded search after one whose winner waits (winner_taken):
              * that winner, carried to the scan searched, is weighed against
              * this search's poses too, whether or not this one kept it. */

@@ -168,9 +168,14 @@ float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven,
     return share > min_share ? share : min_share;
 }
 
+int rsm_global_crowded(const rsm_global_t *g)
+{
+    return g->unkept > 0u;
+}
+
 float rsm_global_fit_share(const rsm_global_t *g, float min_fit, float crowded_fit)
 {
-    return g->unkept > 0u && crowded_fit > min_fit ? crowded_fit : min_fit;
+    return rsm_global_crowded(g) && crowded_fit > min_fit ? crowded_fit : min_fit;
 }
 
 int rsm_global_check(const rsm_tmap_t *map, size_t grid_bytes)
@@ -1484,7 +1489,7 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
      * (a corridor's, whose views differ little and together; measured on
      * an ACES start: eight poses along one corridor, the leader 15 m from
      * the truth summed over two views). */
-    summed = g->rounds > 0u && g->leader == best && g->unkept == 0u;
+    summed = g->rounds > 0u && g->leader == best && !rsm_global_crowded(g);
     for (k = 0; k < g->found; ++k) {
         if (k == best || !rsm_pose_apart(&g->end[k], &g->end[best], doubt_m, doubt_rad)) {
             continue; /* the same place */
@@ -1499,7 +1504,7 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
     if (g->hit[best] <= rival * (1.0f + margin) && !summed) {
         return 0;
     }
-    if (g->unkept > 0u && !(rival >= CROWDED_RIVAL * g->hit[best])) {
+    if (rsm_global_crowded(g) && !(rival >= CROWDED_RIVAL * g->hit[best])) {
         /* A crowded search whose kept poses came down to one place: it
          * was weighed against none of the many others that reached the
          * bar (measured on an ACES kidnap: three of the eight kept poses
@@ -1525,7 +1530,7 @@ rsm_pose_t rsm_global_pending_carried(const rsm_global_t *g, const rsm_pose_t *a
  * (docs/globalsearch.md, "A crowded winner proven twice"). */
 int rsm_global_take(rsm_global_t *g, const rsm_pose_t *pose, const rsm_pose_t *at, float reach_m, float reach_rad)
 {
-    if (g->unkept == 0u) {
+    if (!rsm_global_crowded(g)) {
         g->pending = 0u;
         return 1;
     }

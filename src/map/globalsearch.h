@@ -125,11 +125,14 @@ void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
  * further only once the window holds the whole map. */
 float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven, float min_share);
 
+/* Whether the search just run was crowded: more distinct poses reached
+ * its bar than it keeps (g->unkept), so its proof weighs only a few of
+ * them and one it never weighed may fit better. */
+int rsm_global_crowded(const rsm_global_t *g);
+
 /* The share of the map's own fit a winner of search g must reach:
- * min_fit (global_min_fit), or crowded_fit (global_crowded_fit) when more
- * distinct poses reached the search's bar than it keeps (g->unkept): the
- * proof weighs the kept ones only, and one it could not weigh may fit
- * better than the best of them. */
+ * min_fit (global_min_fit), or crowded_fit (global_crowded_fit) after a
+ * crowded search (rsm_global_crowded). */
 float rsm_global_fit_share(const rsm_global_t *g, float min_fit, float crowded_fit);
 
 /* The window's radius for a search near the estimate begun with radius_m,
