@@ -38,6 +38,27 @@ static uint32_t search_level(const rsm_tmap_t *map)
     return map->cfg.levels >= 2u ? (uint32_t)map->cfg.levels - 2u : 0u;
 }
 
+/* The least cell value the search counts as a wall: half of what one
+ * return adds (tmap.hit_inc), at least 1. On the levels that share a
+ * return's hit among the four cells around it by their bilinear weights,
+ * a cell under that never had a return land nearer it than a neighbour,
+ * or beams have worn it down to its last counts. Counted as walls, those
+ * cells thicken every wall by a cell: more boxes pass, more places reach
+ * the bar and more searches are crowded (docs/globalsearch.md, "Faint
+ * cells"). */
+static uint32_t wall_value(const rsm_tmap_t *map)
+{
+    const uint32_t half = (uint32_t)map->cfg.hit_inc / 2u;
+    return half > 1u ? half : 1u;
+}
+
+/* What a point on a cell of value v scores: its occupancy where it is a
+ * wall (wall_value), else nothing. */
+static float cell_score(const rsm_tmap_t *map, uint32_t v, uint32_t wall)
+{
+    return v >= wall ? map->occ[v] : 0.0f;
+}
+
 /* The level whose walls give the map's directions: one finer. */
 static uint32_t direction_level(uint32_t level)
 {
@@ -195,7 +216,7 @@ static uint32_t get_bit(const uint8_t *grid, uint32_t i)
     return (uint32_t)rsm_bit_get(grid, i);
 }
 
-/* Whether grid h holds a nonzero cell in the window [u, u + 2^h] x [v, v +
+/* Whether grid h holds a wall cell (wall_value) in the window [u, u + 2^h] x [v, v +
  * 2^h] (cells of the search level): 1 when it may, 0 when it holds none. */
 static uint32_t grid_read(const rsm_global_t *g, const uint8_t *grid, uint32_t h, int32_t u, int32_t v)
 {
@@ -233,10 +254,10 @@ static void mark_grid(const rsm_global_t *g, uint8_t *grid, uint32_t h, uint32_t
     }
 }
 
-/* A tile of the search level into the finest grid: each nonzero cell of
- * the grids' box (g->cache_box) sets the blocks whose windows hold it.
- * Returns the cells looked at. */
-static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t *t)
+/* A tile of the search level into the finest grid: each wall cell
+ * (wall_value) of the grids' box (g->cache_box) sets the blocks whose
+ * windows hold it. Returns the cells looked at. */
+static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t *t, uint32_t wall)
 {
     uint32_t c;
     for (c = 0; c < (uint32_t)RSM_TMAP_TILE_CELLS; c += 2u) {
@@ -247,7 +268,7 @@ static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t
         for (k = c; k < c + 2u; ++k) {
             const int32_t cx = (int32_t)t->tx * RSM_TMAP_TILE_SIDE + (int32_t)(k & (RSM_TMAP_TILE_SIDE - 1u));
             const int32_t cy = (int32_t)t->ty * RSM_TMAP_TILE_SIDE + (int32_t)(k >> RSM_TMAP_TILE_LOG2);
-            if (((((uint32_t)t->cell[k >> 1]) >> ((k & 1u) << 2)) & 15u) != 0u && cx >= g->cache_box[0] &&
+            if (((((uint32_t)t->cell[k >> 1]) >> ((k & 1u) << 2)) & 15u) >= wall && cx >= g->cache_box[0] &&
                 cx <= g->cache_box[2] && cy >= g->cache_box[1] && cy <= g->cache_box[3]) {
                 const uint32_t x = (uint32_t)(cx - g->ox);
                 const uint32_t y = (uint32_t)(cy - g->oy);
@@ -864,9 +885,10 @@ static void promote(rsm_global_t *g, int32_t *fx, int32_t *fy, uint32_t q)
 }
 
 /* The most a pose of box (i, j, h) scores at this heading: each point's
- * largest cell value in the window of 2^h + 1 cells a side it can reach
- * (for leaves, h = 0, the score itself, from the map; for larger boxes
- * 1 where the grid of h holds a nonzero cell over the window, else 0;
+ * score (cell_score) of the largest cell value in the window of 2^h + 1
+ * cells a side it can reach (for leaves, h = 0, the score itself, from the
+ * map; for larger boxes 1 where the grid of h holds a wall cell over the
+ * window, else 0;
  * points not read count 1). Stops as soon as the points left could not
  * lift the sum to thr (each adds 1 at most): what it returns is then below
  * thr, which is all the caller asks. Adds the work (a grid block read,
@@ -876,6 +898,7 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
 {
     uint32_t q;
     if (h == 0u) {
+        const uint32_t wall = wall_value(map);
         float sum = 0.0f;
         for (q = 0; q < g->npts; ++q) {
             const uint32_t k = q;
@@ -883,7 +906,7 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
             const int32_t v = fy[k] + j;
             /* Grid 1 bounds a wider window: nothing there, nothing here. */
             if (grid_read(g, grid, 1u, u, v) != 0u) {
-                sum += map->occ[window4(map, g->level, u, v)];
+                sum += cell_score(map, window4(map, g->level, u, v), wall);
             }
             if (sum + (float)(g->npts - q - 1u) < thr) {
                 *work += RSM_GLOBAL_LEAF_WORK * (q + 1u);
@@ -940,6 +963,7 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
 static uint32_t leaf_bounds(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, int32_t *fx,
                             int32_t *fy, int32_t i, int32_t j, float thr, float *bound, uint32_t *work)
 {
+    const uint32_t wall = wall_value(map);
     uint32_t q;
     uint32_t live = 15u;
     rsm_tmap_cursor_t cur;
@@ -955,10 +979,10 @@ static uint32_t leaf_bounds(rsm_global_t *g, const uint8_t *grid, const rsm_tmap
         if (grid_read(g, grid, 1u, u, v) != 0u) {
             uint32_t w[9];
             window9(map, &cur, g->level, u, v, w);
-            bound[0] += map->occ[max4(w[0], w[1], w[3], w[4])];
-            bound[1] += map->occ[max4(w[1], w[2], w[4], w[5])];
-            bound[2] += map->occ[max4(w[3], w[4], w[6], w[7])];
-            bound[3] += map->occ[max4(w[4], w[5], w[7], w[8])];
+            bound[0] += cell_score(map, max4(w[0], w[1], w[3], w[4]), wall);
+            bound[1] += cell_score(map, max4(w[1], w[2], w[4], w[5]), wall);
+            bound[2] += cell_score(map, max4(w[3], w[4], w[6], w[7]), wall);
+            bound[3] += cell_score(map, max4(w[4], w[5], w[7], w[8]), wall);
         }
         for (c = 0; c < 4u; ++c) {
             if ((live & (1u << c)) != 0u && bound[c] + rest < thr) {
@@ -1224,7 +1248,7 @@ static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t
             break;
         }
         if (level == g->level && in_box(g, t, 0u)) {
-            *work += RSM_GLOBAL_BUILD_WORK * grid_tile(g, grid, t);
+            *work += RSM_GLOBAL_BUILD_WORK * grid_tile(g, grid, t, wall_value(map));
         }
         if (level == direction_level(g->level) && in_box(g, t, g->level - level)) {
             *work += RSM_GLOBAL_BUILD_WORK * tile_directions(g, t);
