@@ -216,8 +216,9 @@ static uint32_t get_bit(const uint8_t *grid, uint32_t i)
     return (uint32_t)rsm_bit_get(grid, i);
 }
 
-/* Whether grid h holds a wall cell (wall_value) in the window [u, u + 2^h] x [v, v +
- * 2^h] (cells of the search level): 1 when it may, 0 when it holds none. */
+/* Whether grid h holds a wall cell (wall_value) in the window [u, u + 2^h]
+ * x [v, v + 2^h] (cells of the search level): 1 when it may, 0 when it
+ * holds none. */
 static uint32_t grid_read(const rsm_global_t *g, const uint8_t *grid, uint32_t h, int32_t u, int32_t v)
 {
     const int32_t x = u - g->ox + (int32_t)(1u << h);
@@ -490,7 +491,8 @@ void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
     for (k = 0; k < n; ++k) {
         /* The cells a hit may raise: the two either side of the point in
          * x and in y (a hit's bilinear shares, rsm_bilinear_at), which
-         * hold the one cell it lands in when not shared. */
+         * hold the one cell it lands in when not shared. Marked whether or
+         * not they reach wall_value: a bound may only be too high. */
         const float u = rsm_floorf(pts[k].x * inv - 0.5f);
         const float v = rsm_floorf(pts[k].y * inv - 0.5f);
         int32_t i;
@@ -888,8 +890,7 @@ static void promote(rsm_global_t *g, int32_t *fx, int32_t *fy, uint32_t q)
  * score (cell_score) of the largest cell value in the window of 2^h + 1
  * cells a side it can reach (for leaves, h = 0, the score itself, from the
  * map; for larger boxes 1 where the grid of h holds a wall cell over the
- * window, else 0;
- * points not read count 1). Stops as soon as the points left could not
+ * window, else 0; points not read count 1). Stops as soon as the points left could not
  * lift the sum to thr (each adds 1 at most): what it returns is then below
  * thr, which is all the caller asks. Adds the work (a grid block read,
  * or a leaf's point: RSM_GLOBAL_LEAF_WORK) to *work. */

@@ -13,15 +13,14 @@
  * cell: positions anywhere in it) scores at most the number of points whose
  * window of 2^h + 1 cells a side holds a wall cell (at least half of what
  * one return adds: fainter cells count as free to the search): one bit a
- * point, read
- * from a bit grid per box size whose blocks bound those windows (built from
- * the map's tiles within the scan budget, laid out to fit the memory the
- * caller lends, kept for the next search while the map is unchanged). Large
- * boxes read a quarter or half of the points, the others counted as on a
- * wall. A leaf's score is exact: each point's occupancy at the largest cell
- * value in its window of two cells a side, read from the map, where that is
- * a wall cell; the four leaves of a box share each point's 3 x 3 window.
- * Boxes are split depth first, the best
+ * point, read from a bit grid per box size whose blocks bound those windows
+ * (built from the map's tiles within the scan budget, laid out to fit the
+ * memory the caller lends, kept for the next search while the map is
+ * unchanged). Large boxes read a quarter or half of the points, the others
+ * counted as on a wall. A leaf's score is exact: each point's occupancy at
+ * the largest cell value in its window of two cells a side, read from the
+ * map, where that is a wall cell; the four leaves of a box share each
+ * point's 3 x 3 window. Boxes are split depth first, the best
  * child first, and a box whose bound cannot reach the bar is dropped; a
  * point sum that can no longer reach it stops early, and the point that
  * ended it is read earlier from then on. The search keeps the
