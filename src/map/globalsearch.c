@@ -39,17 +39,16 @@ static uint32_t search_level(const rsm_tmap_t *map)
 }
 
 /* The least cell value the search counts as a wall: half of what one
- * return adds (tmap.hit_inc), at least 1. On the levels that share a
- * return's hit among the four cells around it by their bilinear weights,
- * a cell under that never had a return land nearer it than a neighbour,
+ * return adds (tmap.hit_inc), rounded up (so at least 1, as hit_inc is).
+ * On the levels that share a return's hit among the four cells around it
+ * by their bilinear weights, a cell under that never had a return land nearer it than a neighbour,
  * or beams have worn it down to its last counts. Counted as walls, those
  * cells thicken every wall by a cell: more boxes pass, more places reach
  * the bar and more searches are crowded (docs/globalsearch.md, "Faint
  * cells"). */
 static uint32_t wall_value(const rsm_tmap_t *map)
 {
-    const uint32_t half = (uint32_t)map->cfg.hit_inc / 2u;
-    return half > 1u ? half : 1u;
+    return ((uint32_t)map->cfg.hit_inc + 1u) / 2u;
 }
 
 /* What a point on a cell of value v scores: its occupancy where it is a

@@ -458,7 +458,8 @@ static float exhaustive_best(const rsm_tmap_t *map)
  * scores, counted one by one, when that reaches the bar (its bounds never prune a box that holds a
  * better leaf; they did at the map's lower edge, where a window's block
  * index wraps, which the symmetric room's scans reach). Sums of eighths:
- * exact in either order. */
+ * exact in either order. The room once more with an odd tmap.hit_inc,
+ * whose half the wall rule rounds up. */
 static void test_search_is_exact(void)
 {
     static const rsm_synth_segment_t box[4] = {
@@ -472,15 +473,16 @@ static void test_search_is_exact(void)
     float best;
     size_t k;
     int world;
-    for (world = 0; world < 2; ++world) {
-        const rsm_synth_world_t *w = world == 0 ? &room : &bare;
+    for (world = 0; world < 3; ++world) {
+        const rsm_synth_world_t *w = world == 1 ? &bare : &room;
         size_t from;
-        if (world == 0) {
-            make_path();
-        } else {
+        if (world == 1) {
             path_len = rsm_synth_path(&start, legs, sizeof legs / sizeof legs[0], 0.05f, 0.05f, path, PATH_CAP);
+        } else {
+            make_path();
         }
-        from = world == 0 ? path_len - 80u : path_len / 2u;
+        cfg.tmap.hit_inc = world == 2 ? 5u : rsm_localizer_config_default().tmap.hit_inc;
+        from = world == 1 ? path_len / 2u : path_len - 80u;
         cfg.global_budget = 0u; /* each search whole in the scan that begins it */
         map_path(w, from);
         for (k = from; k < from + 16u && k < path_len; ++k) {
@@ -512,7 +514,7 @@ static void search_with_faint_cells(const rsm_synth_world_t *world, size_t at, i
     map_path(world, at);
     if (faint) {
         /* Just under half a hit: 1 of tmap.hit_inc's 4. */
-        const uint32_t v = (uint32_t)map->cfg.hit_inc / 2u - 1u;
+        const uint32_t v = ((uint32_t)map->cfg.hit_inc + 1u) / 2u - 1u;
         rsm_tmap_cursor_t cur;
         uint32_t s;
         uint32_t cells = 0;
