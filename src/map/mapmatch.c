@@ -400,6 +400,104 @@ static void add_block(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, int32_t gx,
     }
 }
 
+/* The values of cells x0, x0 + 1 and x0 + 2 of row y in nibbles 0, 1 and
+ * 2 (higher bits are left over): two bytes read at once where the three
+ * lie in one tile (a row's nibbles lie in its bytes in order), else cell by
+ * cell; 0 where no tile is held. */
+static RSM_ALWAYS_INLINE uint32_t row3(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, int32_t x0, int32_t y)
+{
+    const uint32_t s = rsm_tmap_cursor_slot(map, cur, x0, y);
+    if (((x0 ^ (x0 + 2)) >> RSM_TMAP_TILE_LOG2) == 0) {
+        const uint8_t *b;
+        if (s == RSM_TMAP_NONE) {
+            return 0u;
+        }
+        b = &map->tile[s].cell[rsm_tmap_cell_index(x0, y) >> 1];
+        return ((uint32_t)b[0] | ((uint32_t)b[1] << 8)) >> (((uint32_t)x0 & 1u) << 2);
+    }
+    {
+        const uint32_t s2 = rsm_tmap_cursor_slot(map, cur, x0 + 2, y);
+        const uint32_t s1 = ((x0 ^ (x0 + 1)) >> RSM_TMAP_TILE_LOG2) == 0 ? s : s2;
+        return rsm_tmap_slot_value(map, s, x0, y) | (rsm_tmap_slot_value(map, s1, x0 + 1, y) << 4) |
+               (rsm_tmap_slot_value(map, s2, x0 + 2, y) << 8);
+    }
+}
+
+/* Adds the costs of the three cells of row3's word w to a[0..2]. */
+static RSM_ALWAYS_INLINE void add_row3(float *a, const float *miss, uint32_t w)
+{
+    a[0] += miss[w & 15u];
+    a[1] += miss[(w >> 4) & 15u];
+    a[2] += miss[(w >> 8) & 15u];
+}
+
+/* search_heading's sums for a window of 3 x 3 candidates (a recovery's
+ * first search, within one coarse cell: the common one), into cost[0..8]:
+ * the same sums in the same order as add_block's, each point's three rows
+ * read as three words and the nine sums kept in registers, not in memory
+ * (on the M4 a third of the instructions of the general path). */
+static void search_window3(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, const rsm_point_t *pts, size_t n,
+                           size_t stride, const rsm_pose_t *x0, float c, float sn, float inv, float step,
+                           const float *miss, float *cost)
+{
+    const int32_t lim = RSM_TMAP_CELL_LIMIT - 2;
+    float a[9] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    size_t q;
+    for (q = 0; q < n; q += stride) {
+        const int32_t gx = rsm_tmap_cell_of(x0->x + c * pts[q].x - sn * pts[q].y, inv);
+        const int32_t gy = rsm_tmap_cell_of(x0->y + sn * pts[q].x + c * pts[q].y, inv);
+        if (gx > -lim && gx < lim && gy > -lim && gy < lim) {
+            uint32_t w0 = 0u;
+            uint32_t w1 = 0u;
+            uint32_t w2 = 0u;
+            if ((((gx - 1) ^ (gx + 1)) >> RSM_TMAP_TILE_LOG2) == 0 &&
+                (((gy - 1) ^ (gy + 1)) >> RSM_TMAP_TILE_LOG2) == 0) {
+                /* The block in one tile (most of them): one lookup, and
+                 * the rows a row's bytes apart. */
+                const uint32_t s = rsm_tmap_cursor_slot(map, cur, gx, gy);
+                if (s != RSM_TMAP_NONE) {
+                    const uint8_t *b = &map->tile[s].cell[rsm_tmap_cell_index(gx - 1, gy - 1) >> 1];
+                    const uint32_t sh = ((uint32_t)(gx - 1) & 1u) << 2;
+                    const uint32_t rb = (uint32_t)RSM_TMAP_TILE_SIDE / 2u;
+                    w0 = ((uint32_t)b[0] | ((uint32_t)b[1] << 8)) >> sh;
+                    w1 = ((uint32_t)b[rb] | ((uint32_t)b[rb + 1u] << 8)) >> sh;
+                    w2 = ((uint32_t)b[2u * rb] | ((uint32_t)b[2u * rb + 1u] << 8)) >> sh;
+                }
+            } else {
+                w0 = row3(map, cur, gx - 1, gy - 1);
+                w1 = row3(map, cur, gx - 1, gy);
+                w2 = row3(map, cur, gx - 1, gy + 1);
+            }
+            add_row3(&a[0], miss, w0);
+            add_row3(&a[3], miss, w1);
+            add_row3(&a[6], miss, w2);
+        } else {
+            float p[9];
+            int32_t i;
+            int32_t j;
+            for (j = -1; j <= 1; ++j) {
+                for (i = -1; i <= 1; ++i) {
+                    const float wx0 = x0->x + (float)i * step;
+                    const float wy0 = x0->y + (float)j * step;
+                    const float r = 1.0f - rsm_tmap_occupancy_at(map, cur, wx0 + c * pts[q].x - sn * pts[q].y,
+                                                                 wy0 + sn * pts[q].x + c * pts[q].y);
+                    p[(j + 1) * 3 + i + 1] = r * r;
+                }
+            }
+            a[0] += p[0];
+            a[1] += p[1];
+            a[2] += p[2];
+            a[3] += p[3];
+            a[4] += p[4];
+            a[5] += p[5];
+            a[6] += p[6];
+            a[7] += p[7];
+            a[8] += p[8];
+        }
+    }
+    memcpy(cost, a, sizeof a);
+}
+
 /* The coarse costs of one heading's candidates (x0 moved i, j cells of the
  * level, at x's heading), each kept or not as rsm_mapmatch_search goes.
  * A point's cell is found once for the heading, at x0; a candidate's is
@@ -407,8 +505,9 @@ static void add_block(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, int32_t gx,
  * order, without a coordinate transform and a cell search per point and
  * candidate (on the M4 the search of a recovery cost 1 to 2 million
  * instructions). A small window's costs are summed point by point, a
- * point's cells read tile by tile. A point whose block of cells is not all
- * within the map's reach is looked up as coarse_cost does. */
+ * point's cells read tile by tile (a window of 3 x 3, a row at a time:
+ * search_window3). A point whose block of cells is not all within the
+ * map's reach is looked up as coarse_cost does. */
 static void search_heading(const rsm_tmap_t *map, uint32_t level, const rsm_point_t *pts, size_t n, size_t stride,
                            const rsm_pose_t *x0, rsm_pose_t *x, int32_t half, const float *miss, rsm_pose_t *best,
                            float *cost_of, int32_t *ij, size_t k, size_t *found)
@@ -426,7 +525,9 @@ static void search_heading(const rsm_tmap_t *map, uint32_t level, const rsm_poin
     rsm_tmap_cursor_t cur;
     rsm_sincosf(x->theta, &sn, &c);
     rsm_tmap_cursor_init(&cur, level);
-    if (half <= RSM_MAPMATCH_BLOCK_HALF) {
+    if (half == 1) {
+        search_window3(map, &cur, pts, n, stride, x0, c, sn, inv, step, miss, cost);
+    } else if (half <= RSM_MAPMATCH_BLOCK_HALF) {
         memset(cost, 0, sizeof cost);
         for (q = 0; q < n; q += stride) {
             const int32_t gx = rsm_tmap_cell_of(x0->x + c * pts[q].x - sn * pts[q].y, inv);
@@ -445,6 +546,8 @@ static void search_heading(const rsm_tmap_t *map, uint32_t level, const rsm_poin
                 }
             }
         }
+    }
+    if (half <= RSM_MAPMATCH_BLOCK_HALF) {
         for (j = -half; j <= half; ++j) {
             for (i = -half; i <= half; ++i) {
                 x->x = x0->x + (float)i * step;

@@ -554,6 +554,45 @@ void test_mapmatch_search_should_score_every_candidate_on_its_cells(void)
     TEST_ASSERT_TRUE(check_candidates(&hall_truth) >= 10u);
 }
 
+void test_mapmatch_search_should_cost_places_the_map_does_not_hold_as_misses(void)
+{
+    /* Where no tile is held (10 m off the room) and where points lie
+     * beyond the map's reach (a pose 2 m short of it: those read one
+     * candidate at a time, rsm_tmap_occupancy_at), every scored point of every
+     * candidate is a whole miss (occupancy 0): the cost is their count. */
+    const rsm_pose_t truth = {-0.5f, 0.3f, 0.3f};
+    rsm_pose_t far[2];
+    size_t n;
+    size_t stride;
+    float reach;
+    size_t f;
+    build_map(room_poses, sizeof room_poses / sizeof room_poses[0]);
+    n = points_at(&truth);
+    stride = (n + 31u) / 32u;
+    reach = (float)RSM_TMAP_CELL_LIMIT * rsm_tmap_cell(&map, (uint32_t)mcfg.levels - 1u);
+    TEST_ASSERT_TRUE(map.occ[0] == 0.0f);
+    far[0] = in_map(&truth);
+    far[0].x += 10.0f;
+    far[1] = far[0];
+    far[1].x = reach - 2.0f;
+    for (f = 0; f < 2u; ++f) {
+        size_t r;
+        for (r = 0; r < 2u; ++r) {
+            const float radius = r == 0u ? rsm_tmap_cell(&map, (uint32_t)mcfg.levels - 1u) : 1.0f;
+            rsm_pose_t kept[RSM_MAPMATCH_MAX_CANDIDATES];
+            float cost[RSM_MAPMATCH_MAX_CANDIDATES];
+            int32_t ij[2 * RSM_MAPMATCH_MAX_CANDIDATES];
+            size_t found = 0;
+            size_t k;
+            TEST_ASSERT_TRUE(rsm_mapmatch_search_part(&map, &cfg, pts, n, &far[f], radius, cfg.search_rad, 0, 1, kept,
+                                                      cost, ij, RSM_MAPMATCH_MAX_CANDIDATES, &found, 32u) >= 1);
+            for (k = 0; k < found; ++k) {
+                TEST_ASSERT_EQUAL_FLOAT((float)((n + stride - 1u) / stride), cost[k]);
+            }
+        }
+    }
+}
+
 void test_mapmatch_search_should_find_in_parts_what_it_finds_whole(void)
 {
     /* A recovery spreads its search over scans a few headings at a time:
@@ -680,6 +719,7 @@ int main(void)
     RUN_TEST(test_mapmatch_should_not_drag_a_scan_back_along_a_bare_corridor);
     RUN_TEST(test_mapmatch_search_should_find_a_pose_a_metre_off);
     RUN_TEST(test_mapmatch_search_should_score_every_candidate_on_its_cells);
+    RUN_TEST(test_mapmatch_search_should_cost_places_the_map_does_not_hold_as_misses);
     RUN_TEST(test_mapmatch_search_should_find_in_parts_what_it_finds_whole);
     RUN_TEST(test_mapmatch_should_report_an_empty_map_as_degenerate);
     RUN_TEST(test_mapmatch_should_check_its_arguments_and_config);
