@@ -441,15 +441,15 @@ static void search_window3(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, const 
                            const float *miss, float *cost)
 {
     const int32_t lim = RSM_TMAP_CELL_LIMIT - 2;
+    /* In locals: the cursor's writes could alias them for the compiler. */
+    const float ox = x0->x;
+    const float oy = x0->y;
     float a[9] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
     size_t q;
     for (q = 0; q < n; q += stride) {
-        const int32_t gx = rsm_tmap_cell_of(x0->x + c * pts[q].x - sn * pts[q].y, inv);
-        const int32_t gy = rsm_tmap_cell_of(x0->y + sn * pts[q].x + c * pts[q].y, inv);
+        const int32_t gx = rsm_tmap_cell_of(ox + c * pts[q].x - sn * pts[q].y, inv);
+        const int32_t gy = rsm_tmap_cell_of(oy + sn * pts[q].x + c * pts[q].y, inv);
         if (gx > -lim && gx < lim && gy > -lim && gy < lim) {
-            uint32_t w0 = 0u;
-            uint32_t w1 = 0u;
-            uint32_t w2 = 0u;
             if ((((gx - 1) ^ (gx + 1)) >> RSM_TMAP_TILE_LOG2) == 0 &&
                 (((gy - 1) ^ (gy + 1)) >> RSM_TMAP_TILE_LOG2) == 0) {
                 /* The block in one tile (most of them): one lookup, and
@@ -459,26 +459,27 @@ static void search_window3(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, const 
                     const uint8_t *b = &map->tile[s].cell[rsm_tmap_cell_index(gx - 1, gy - 1) >> 1];
                     const uint32_t sh = ((uint32_t)(gx - 1) & 1u) << 2;
                     const uint32_t rb = (uint32_t)RSM_TMAP_TILE_SIDE / 2u;
-                    w0 = ((uint32_t)b[0] | ((uint32_t)b[1] << 8)) >> sh;
-                    w1 = ((uint32_t)b[rb] | ((uint32_t)b[rb + 1u] << 8)) >> sh;
-                    w2 = ((uint32_t)b[2u * rb] | ((uint32_t)b[2u * rb + 1u] << 8)) >> sh;
+                    add_row3(&a[0], miss, ((uint32_t)b[0] | ((uint32_t)b[1] << 8)) >> sh);
+                    add_row3(&a[3], miss, ((uint32_t)b[rb] | ((uint32_t)b[rb + 1u] << 8)) >> sh);
+                    add_row3(&a[6], miss, ((uint32_t)b[2u * rb] | ((uint32_t)b[2u * rb + 1u] << 8)) >> sh);
+                } else {
+                    add_row3(&a[0], miss, 0u);
+                    add_row3(&a[3], miss, 0u);
+                    add_row3(&a[6], miss, 0u);
                 }
             } else {
-                w0 = row3(map, cur, gx - 1, gy - 1);
-                w1 = row3(map, cur, gx - 1, gy);
-                w2 = row3(map, cur, gx - 1, gy + 1);
+                add_row3(&a[0], miss, row3(map, cur, gx - 1, gy - 1));
+                add_row3(&a[3], miss, row3(map, cur, gx - 1, gy));
+                add_row3(&a[6], miss, row3(map, cur, gx - 1, gy + 1));
             }
-            add_row3(&a[0], miss, w0);
-            add_row3(&a[3], miss, w1);
-            add_row3(&a[6], miss, w2);
         } else {
             float p[9];
             int32_t i;
             int32_t j;
             for (j = -1; j <= 1; ++j) {
                 for (i = -1; i <= 1; ++i) {
-                    const float wx0 = x0->x + (float)i * step;
-                    const float wy0 = x0->y + (float)j * step;
+                    const float wx0 = ox + (float)i * step;
+                    const float wy0 = oy + (float)j * step;
                     const float r = 1.0f - rsm_tmap_occupancy_at(map, cur, wx0 + c * pts[q].x - sn * pts[q].y,
                                                                  wy0 + sn * pts[q].x + c * pts[q].y);
                     p[(j + 1) * 3 + i + 1] = r * r;
