@@ -1028,7 +1028,7 @@ static rsm_odometry_verdict_t doubt_step(rsm_localizer_t *loc, size_t npts, cons
     for (k = 0; k < n; ++k) {
         rsm_mapmatch_unpin_t unpin;
         rsm_mapmatch_result_t alt;
-        rsm_mapmatch_unpin_at(&cfg->mapmatch, &loc->state.persistent.map, loc->pts, npts, &alt_pred[k], &unpin);
+        rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, alt_pred[k].theta, &unpin);
         int ok;
         alt.passes = 0u;
         ok = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &alt_pred[k], loc->ekf.p, NULL,
@@ -1219,7 +1219,7 @@ static int recovery_match(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *t
     prior[0] += PROOF_SLACK_M * PROOF_SLACK_M;
     prior[4] += PROOF_SLACK_M * PROOF_SLACK_M;
     prior[8] += PROOF_SLACK_RAD * PROOF_SLACK_RAD;
-    rsm_mapmatch_unpin_at(&cfg->mapmatch, &loc->state.persistent.map, loc->pts, npts, &from, &unpin);
+    rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, from.theta, &unpin);
     return rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &from, prior, NULL, &unpin, m) ==
                RSM_OK &&
            m->used >= cfg->min_points / 2u;
@@ -1686,7 +1686,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
         stage_switch(clk, RSM_STAGE_MAPMATCH);
         rep->recovering = 1u;
         if (rsm_mapmatch_fit(&loc->state.persistent.map, loc->pts, npts, &pred) >= cfg->recover_ratio * fit) {
-            rsm_mapmatch_unpin_at(&cfg->mapmatch, &loc->state.persistent.map, loc->pts, npts, &pred, &unpin);
+            rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, pred.theta, &unpin);
             res.passes = 0u;
             rc = rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, &pred, loc->ekf.p, NULL,
                               &unpin, &res);
@@ -1713,7 +1713,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
     }
     gap = unsure(loc, dt_s); /* of the prediction, before any match moves it */
     stage_switch(clk, RSM_STAGE_MAPMATCH);
-    rsm_mapmatch_unpin_at(&cfg->mapmatch, &loc->state.persistent.map, loc->pts, npts, &pred, &unpin);
+    rsm_mapmatch_unpin_for(&cfg->mapmatch, loc->pts, npts, pred.theta, &unpin);
     rep->unpinned = unpin.frac;
     if (unpin.frac > 0.0f) {
         loc->counters.unpinned++;

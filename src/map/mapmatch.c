@@ -929,48 +929,8 @@ int rsm_mapmatch(const rsm_tmap_t *map, const rsm_mapmatch_config_t *cfg, const 
  * least SPREAD_GAP_M. */
 #define SPREAD_GAP_REL 0.15f
 #define SPREAD_GAP_M 0.1f
-/* A scan whose spread is under this many times unpin_hi is weighed again
- * on the chords across it that the map holds (rsm_mapmatch_unpin_at):
- * above, its surfaces run every way. */
-#define UNPIN_HELD_BELOW 4.0f
-/* A chord runs across the main direction when the square of its sine to
- * it is above this (45 degrees). */
-#define UNPIN_ACROSS 0.5f
 
-/* The spread of chords whose sums of t t^T are (a b; b c), and their main
- * direction into dir (rsm_mapmatch_spread). */
-static float spread_from(float a, float b, float c, float dir[2])
-{
-    /* Eigenvalues of (a b; b c): m +- dd; the larger one's vector. */
-    const float h = 0.5f * (a - c);
-    const float dd = sqrtf(h * h + b * b);
-    const float m = 0.5f * (a + c);
-    float vx;
-    float vy;
-    float len;
-    dir[0] = 1.0f;
-    dir[1] = 0.0f;
-    if (!(m + dd > 0.0f)) {
-        return 1.0f; /* no chord: nothing says the scan is one-sided */
-    }
-    if (h >= 0.0f) {
-        vx = h + dd;
-        vy = b;
-    } else {
-        vx = b;
-        vy = dd - h;
-    }
-    len = sqrtf(vx * vx + vy * vy);
-    if (len > 0.0f) {
-        dir[0] = vx / len;
-        dir[1] = vy / len;
-    }
-    return (m - dd) / (m + dd);
-}
-
-/* rsm_mapmatch_spread; with reach (NULL: not kept), the chords summed:
- * reach[k] = j - k for the chord from point k to point j, 0 for none. */
-static float spread_of(const rsm_point_t *pts, size_t n, uint16_t *reach, float dir[2])
+float rsm_mapmatch_spread(const rsm_point_t *pts, size_t n, float dir[2])
 {
     float a = 0.0f; /* sum of t t^T over the unit chords t: (a b; b c) */
     float b = 0.0f;
@@ -978,6 +938,8 @@ static float spread_of(const rsm_point_t *pts, size_t n, uint16_t *reach, float 
     size_t j = 1;
     size_t joined = 0; /* points 1..joined are known to join the point before */
     size_t k;
+    dir[0] = 1.0f;
+    dir[1] = 0.0f;
     /* Each point's chord runs to the first point at least SPREAD_CHORD_M
      * away on its surface; j only moves forward, so this is one pass (and
      * each gap is tested once, though the chords of several points may
@@ -1012,9 +974,6 @@ static float spread_of(const rsm_point_t *pts, size_t n, uint16_t *reach, float 
         }
         if (d2 >= SPREAD_CHORD_M * SPREAD_CHORD_M) {
             const float inv = 1.0f / d2;
-            if (reach != NULL) {
-                reach[k] = (uint16_t)(j - k);
-            }
             a += dx * dx * inv;
             b += dx * dy * inv;
             c += dy * dy * inv;
@@ -1024,21 +983,45 @@ static float spread_of(const rsm_point_t *pts, size_t n, uint16_t *reach, float 
             k = j - 1u;
         }
     }
-    return spread_from(a, b, c, dir);
+    {
+        /* Eigenvalues of (a b; b c): m +- dd; the larger one's vector. */
+        const float h = 0.5f * (a - c);
+        const float dd = sqrtf(h * h + b * b);
+        const float m = 0.5f * (a + c);
+        float vx;
+        float vy;
+        float len;
+        if (!(m + dd > 0.0f)) {
+            return 1.0f; /* no chord: nothing says the scan is one-sided */
+        }
+        if (h >= 0.0f) {
+            vx = h + dd;
+            vy = b;
+        } else {
+            vx = b;
+            vy = dd - h;
+        }
+        len = sqrtf(vx * vx + vy * vy);
+        if (len > 0.0f) {
+            dir[0] = vx / len;
+            dir[1] = vy / len;
+        }
+        return (m - dd) / (m + dd);
+    }
 }
 
-float rsm_mapmatch_spread(const rsm_point_t *pts, size_t n, float dir[2])
+void rsm_mapmatch_unpin_for(const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n, float theta,
+                            rsm_mapmatch_unpin_t *un)
 {
-    return spread_of(pts, n, NULL, dir);
-}
-
-/* The unpinning of a spread along dir (robot frame) at heading theta. */
-static void unpin_of(const rsm_mapmatch_config_t *cfg, float spread, const float dir[2], float theta,
-                     rsm_mapmatch_unpin_t *un)
-{
+    float dir[2];
+    float spread;
     un->dir[0] = 1.0f;
     un->dir[1] = 0.0f;
     un->frac = 0.0f;
+    if (!(cfg->unpin_hi > cfg->unpin_lo)) {
+        return;
+    }
+    spread = rsm_mapmatch_spread(pts, n, dir);
     if (spread < cfg->unpin_hi) {
         const float f = (cfg->unpin_hi - spread) / (cfg->unpin_hi - cfg->unpin_lo);
         float c;
@@ -1047,107 +1030,5 @@ static void unpin_of(const rsm_mapmatch_config_t *cfg, float spread, const float
         un->dir[0] = c * dir[0] - s * dir[1];
         un->dir[1] = s * dir[0] + c * dir[1];
         un->frac = f < 1.0f ? f : 1.0f;
-    }
-}
-
-void rsm_mapmatch_unpin_for(const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n, float theta,
-                            rsm_mapmatch_unpin_t *un)
-{
-    float dir[2];
-    un->dir[0] = 1.0f;
-    un->dir[1] = 0.0f;
-    un->frac = 0.0f;
-    if (!(cfg->unpin_hi > cfg->unpin_lo)) {
-        return;
-    }
-    unpin_of(cfg, rsm_mapmatch_spread(pts, n, dir), dir, theta, un);
-}
-
-/* Whether the map holds a surface within a cell of the point at (wx, wy)
- * on the cursor's level: a cell of the 3 x 3 around its own at least
- * `least`. */
-static int held_near(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, float wx, float wy, uint32_t least)
-{
-    const float inv = map->inv_cell[cur->level];
-    const int32_t gx = rsm_tmap_cell_of(wx, inv);
-    const int32_t gy = rsm_tmap_cell_of(wy, inv);
-    int32_t i;
-    int32_t j;
-    if (!rsm_tmap_in_range(gx - 1, gy - 1) || !rsm_tmap_in_range(gx + 1, gy + 1)) {
-        return 0;
-    }
-    for (j = -1; j <= 1; ++j) {
-        for (i = -1; i <= 1; ++i) {
-            if (rsm_tmap_cell_value(map, cur, gx + i, gy + j) >= least) {
-                return 1;
-            }
-        }
-    }
-    return 0;
-}
-
-void rsm_mapmatch_unpin_at(const rsm_mapmatch_config_t *cfg, const rsm_tmap_t *map, const rsm_point_t *pts,
-                           size_t n, const rsm_pose_t *x, rsm_mapmatch_unpin_t *un)
-{
-    uint16_t reach[RSM_MAX_BEAMS];
-    float dir[2];
-    float spread;
-    if (n > RSM_MAX_BEAMS) {
-        rsm_mapmatch_unpin_for(cfg, pts, n, x->theta, un);
-        return;
-    }
-    un->dir[0] = 1.0f;
-    un->dir[1] = 0.0f;
-    un->frac = 0.0f;
-    if (!(cfg->unpin_hi > cfg->unpin_lo)) {
-        return;
-    }
-    memset(reach, 0, n * sizeof reach[0]);
-    spread = spread_of(pts, n, reach, dir);
-    unpin_of(cfg, spread, dir, x->theta, un);
-    if (un->frac < 1.0f && spread < UNPIN_HELD_BELOW * cfg->unpin_hi) {
-        /* The chords again, in the same order, but those across the main
-         * direction whose two ends lie where the map holds no surface: the
-         * scan sees them, the map cannot pin the pose with them. Only when
-         * nothing across is left is the scan unpinned for it: a new
-         * surface near a mapped one is mostly that surface going on, and
-         * its pull aligns them. */
-        const uint32_t level = map->cfg.levels >= 2u ? (uint32_t)map->cfg.levels - 2u : 0u;
-        const uint32_t least = ((uint32_t)map->cfg.hit_inc + 1u) / 2u;
-        rsm_mapmatch_unpin_t alt;
-        rsm_tmap_cursor_t cur;
-        float a = 0.0f;
-        float b = 0.0f;
-        float c = 0.0f;
-        float hdir[2];
-        float co;
-        float sn;
-        size_t k;
-        rsm_sincosf(x->theta, &sn, &co);
-        rsm_tmap_cursor_init(&cur, level);
-        for (k = 0; k < n; ++k) {
-            if (reach[k] != 0u) {
-                const size_t j = k + reach[k];
-                const float dx = pts[j].x - pts[k].x;
-                const float dy = pts[j].y - pts[k].y;
-                const float d2 = dx * dx + dy * dy;
-                const float inv = 1.0f / d2;
-                const float across = dx * dir[1] - dy * dir[0];
-                if (across * across > UNPIN_ACROSS * d2 &&
-                    !held_near(map, &cur, x->x + co * pts[k].x - sn * pts[k].y, x->y + sn * pts[k].x + co * pts[k].y,
-                               least) &&
-                    !held_near(map, &cur, x->x + co * pts[j].x - sn * pts[j].y, x->y + sn * pts[j].x + co * pts[j].y,
-                               least)) {
-                    continue;
-                }
-                a += dx * dx * inv;
-                b += dx * dy * inv;
-                c += dy * dy * inv;
-            }
-        }
-        unpin_of(cfg, spread_from(a, b, c, hdir), hdir, x->theta, &alt);
-        if (alt.frac >= 1.0f) {
-            *un = alt;
-        }
     }
 }

@@ -135,14 +135,6 @@ float rsm_mapmatch_spread(const rsm_point_t *pts, size_t n, float dir[2]);
 void rsm_mapmatch_unpin_for(const rsm_mapmatch_config_t *cfg, const rsm_point_t *pts, size_t n, float theta,
                             rsm_mapmatch_unpin_t *un);
 
-/* The same for the points at pose x in map, but wholly unpinned along
- * the scan's main direction when every chord across it runs where the map
- * holds no surface near x (a corridor's end wall first seen at the
- * laser's range: its points would pull the pose along the corridor onto
- * the side walls' last mapped cells). */
-void rsm_mapmatch_unpin_at(const rsm_mapmatch_config_t *cfg, const rsm_tmap_t *map, const rsm_point_t *pts,
-                           size_t n, const rsm_pose_t *x, rsm_mapmatch_unpin_t *un);
-
 #ifdef __cplusplus
 }
 #endif
