@@ -400,26 +400,6 @@ static void add_block(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, int32_t gx,
     }
 }
 
-/* What a point (px, py) costs each candidate of a window half cells a side
- * around (ox, oy) at heading (c, sn), into out[] (row-major, 2 half + 1 a
- * side): each candidate's cell looked up on its own, as coarse_cost does,
- * for points whose block of cells is not all within the map's reach. */
-static void point_misses(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, float px, float py, float ox, float oy,
-                         float c, float sn, float step, int32_t half, float *out)
-{
-    const int32_t side = 2 * half + 1;
-    int32_t i;
-    int32_t j;
-    for (j = -half; j <= half; ++j) {
-        for (i = -half; i <= half; ++i) {
-            const float wx0 = ox + (float)i * step;
-            const float wy0 = oy + (float)j * step;
-            const float r = 1.0f - rsm_tmap_occupancy_at(map, cur, wx0 + c * px - sn * py, wy0 + sn * px + c * py);
-            out[(j + half) * side + i + half] = r * r;
-        }
-    }
-}
-
 /* The values of cells x0, x0 + 1 and x0 + 2 of row y in nibbles 0, 1 and
  * 2 (higher bits are left over): two bytes read at once where the three
  * lie in one tile (a row's nibbles lie in its bytes in order), else cell by
@@ -497,7 +477,17 @@ static void search_window3(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, const 
             }
         } else {
             float p[9];
-            point_misses(map, cur, pts[q].x, pts[q].y, ox, oy, c, sn, step, 1, p);
+            int32_t i;
+            int32_t j;
+            for (j = -1; j <= 1; ++j) {
+                for (i = -1; i <= 1; ++i) {
+                    const float wx0 = ox + (float)i * step;
+                    const float wy0 = oy + (float)j * step;
+                    const float r = 1.0f - rsm_tmap_occupancy_at(map, cur, wx0 + c * pts[q].x - sn * pts[q].y,
+                                                                 wy0 + sn * pts[q].x + c * pts[q].y);
+                    p[(j + 1) * 3 + i + 1] = r * r;
+                }
+            }
             a[0] += p[0];
             a[1] += p[1];
             a[2] += p[2];
@@ -546,15 +536,18 @@ static void search_heading(const rsm_tmap_t *map, uint32_t level, const rsm_poin
         for (q = 0; q < n; q += stride) {
             const int32_t gx = rsm_tmap_cell_of(x0->x + c * pts[q].x - sn * pts[q].y, inv);
             const int32_t gy = rsm_tmap_cell_of(x0->y + sn * pts[q].x + c * pts[q].y, inv);
-            float p[BLOCK_SIDE * BLOCK_SIDE];
-            int32_t m;
             if (gx > -lim && gx < lim && gy > -lim && gy < lim) {
                 add_block(map, &cur, gx, gy, half, miss, cost);
                 continue;
             }
-            point_misses(map, &cur, pts[q].x, pts[q].y, x0->x, x0->y, c, sn, step, half, p);
-            for (m = 0; m < side * side; ++m) {
-                cost[m] += p[m];
+            for (j = -half; j <= half; ++j) {
+                for (i = -half; i <= half; ++i) {
+                    const float wx0 = x0->x + (float)i * step;
+                    const float wy0 = x0->y + (float)j * step;
+                    const float r = 1.0f - rsm_tmap_occupancy_at(map, &cur, wx0 + c * pts[q].x - sn * pts[q].y,
+                                                                 wy0 + sn * pts[q].x + c * pts[q].y);
+                    cost[(j + half) * side + i + half] += r * r;
+                }
             }
         }
     }
