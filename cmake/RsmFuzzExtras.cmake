@@ -4,7 +4,7 @@
 function(rsm_fuzz_extras target name)
   set(nav ${PROJECT_SOURCE_DIR}/tools/nav)
   if(name STREQUAL "fuzz_capture")
-    target_sources(${target} PRIVATE ${nav}/capture.c ${nav}/devices.c)
+    target_sources(${target} PRIVATE ${nav}/capture.c ${nav}/devices.c ${nav}/heap.c)
     target_include_directories(${target} PRIVATE ${nav})
     target_compile_definitions(${target} PRIVATE _POSIX_C_SOURCE=200809L)
   elseif(name STREQUAL "fuzz_carmen")

@@ -276,7 +276,7 @@ def c_reader(tmp_path_factory):
     out = tmp_path_factory.mktemp("cdrv") / "capture_dump"
     nav = REPO_ROOT / "tools" / "nav"
     cmd = [cc, "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wconversion", "-Werror",
-           "-O1", "-DRSM_CAPTURE_DUMP_MAIN", "-I", str(nav), str(nav / "capture.c"), "-o", str(out)]
+           "-O1", "-DRSM_CAPTURE_DUMP_MAIN", "-I", str(nav), str(nav / "capture.c"), str(nav / "heap.c"), "-o", str(out)]
     res = subprocess.run(cmd, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     return out

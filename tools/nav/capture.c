@@ -1,5 +1,6 @@
 /* Streaming reader for rsm capture files; see capture.h and docs/capture.md. */
 #include "capture.h"
+#include "heap.h"
 
 #include <errno.h>
 #include <stdlib.h>
@@ -193,17 +194,17 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
     if (hlen > CAP_MAX_HEADER) {
         return fail(r, CAP_ERR_HEADER, "implausible header length");
     }
-    body = (uint8_t *)malloc(hlen ? hlen : 1u);
+    body = (uint8_t *)nav_malloc(hlen ? hlen : 1u);
     if (body == NULL) {
         return fail(r, CAP_ERR_NOMEM, "out of memory for the capture header");
     }
     if (read_full(fp, body, hlen) < hlen || read_full(fp, crcb, 4) < 4) {
-        free(body);
+        nav_free(body);
         return ferror(fp) ? io_fail(r) : fail(r, CAP_ERR_HEADER, "capture header truncated");
     }
     crc = cap_crc32(cap_crc32(0, fixed, 16), body, hlen);
     if (crc != rd32(crcb)) {
-        free(body);
+        nav_free(body);
         return fail(r, CAP_ERR_HEADER, "capture header CRC mismatch (header corrupt)");
     }
     /* channels */
@@ -248,11 +249,11 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
         }
         if (o != hlen) goto malformed;
     }
-    r->meta_buf = (char *)malloc(text ? text : 1u);
-    r->meta_keys = (const char **)malloc((nmeta ? nmeta : 1u) * sizeof(char *));
-    r->meta_values = (const char **)malloc((nmeta ? nmeta : 1u) * sizeof(char *));
+    r->meta_buf = (char *)nav_malloc(text ? text : 1u);
+    r->meta_keys = (const char **)nav_malloc((nmeta ? nmeta : 1u) * sizeof(char *));
+    r->meta_values = (const char **)nav_malloc((nmeta ? nmeta : 1u) * sizeof(char *));
     if (!r->meta_buf || !r->meta_keys || !r->meta_values) {
-        free(body);
+        nav_free(body);
         cap_close(r);
         return fail(r, CAP_ERR_NOMEM, "out of memory for the capture metadata");
     }
@@ -274,19 +275,19 @@ int cap_open(cap_reader *r, FILE *fp, int lenient)
         off += vl;
     }
     r->n_meta = nmeta;
-    free(body);
+    nav_free(body);
     r->base = 16u + (uint64_t)hlen + 4u;
     return CAP_OK;
 malformed:
-    free(body);
+    nav_free(body);
     return fail(r, CAP_ERR_HEADER, "capture header body malformed");
 }
 
 void cap_close(cap_reader *r)
 {
-    free(r->meta_buf);
-    free((void *)r->meta_keys);
-    free((void *)r->meta_values);
+    nav_free(r->meta_buf);
+    nav_free((void *)r->meta_keys);
+    nav_free((void *)r->meta_values);
     r->meta_buf = NULL;
     r->meta_keys = NULL;
     r->meta_values = NULL;
@@ -582,7 +583,7 @@ int main(int argc, char **argv)
         printf("channel %u %s %s %" PRIu32 "\n", (unsigned)c->id, c->name, proto_name(c->protocol),
                c->baud);
     }
-    idx = (size_t *)malloc((reader.n_meta ? reader.n_meta : 1u) * sizeof *idx);
+    idx = (size_t *)nav_malloc((reader.n_meta ? reader.n_meta : 1u) * sizeof *idx);
     if (idx == NULL) return 2;
     for (i = 0; i < reader.n_meta; ++i) idx[i] = i;
     sort_reader = &reader;
@@ -592,7 +593,7 @@ int main(int argc, char **argv)
         if (i + 1u < reader.n_meta && strcmp(k, reader.meta_keys[idx[i + 1u]]) == 0) continue;
         printf("meta %s=%s\n", k, cap_meta(&reader, k));
     }
-    free(idx);
+    nav_free(idx);
     while ((st = cap_next(&reader, &rec, recbuf, sizeof recbuf)) == CAP_OK) {
         printf("record %" PRIu64 " %" PRIu64 " %u %u %u ", rec.offset, rec.timestamp_us,
                (unsigned)rec.channel, (unsigned)rec.direction, (unsigned)rec.length);

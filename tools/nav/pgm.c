@@ -1,4 +1,5 @@
 #include "pgm.h"
+#include "heap.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -20,8 +21,8 @@ int hitmap_init(hitmap_t *h, float res_m)
 
 void hitmap_free(hitmap_t *h)
 {
-    free(h->keys);
-    free(h->hits);
+    nav_free(h->keys);
+    nav_free(h->hits);
     h->keys = NULL;
     h->hits = NULL;
     h->cap = h->count = 0;
@@ -49,11 +50,11 @@ static int grow(hitmap_t *h)
     hitmap_t n = *h;
     size_t i;
     n.cap = h->cap ? h->cap * 2u : 4096u;
-    n.keys = (uint64_t *)calloc(n.cap, sizeof *n.keys);
-    n.hits = (uint8_t *)calloc(n.cap, sizeof *n.hits);
+    n.keys = (uint64_t *)nav_calloc(n.cap, sizeof *n.keys);
+    n.hits = (uint8_t *)nav_calloc(n.cap, sizeof *n.hits);
     if (n.keys == NULL || n.hits == NULL) {
-        free(n.keys);
-        free(n.hits);
+        nav_free(n.keys);
+        nav_free(n.hits);
         return -1;
     }
     for (i = 0; i < h->cap; ++i) {
@@ -63,8 +64,8 @@ static int grow(hitmap_t *h)
             n.hits[j] = h->hits[i];
         }
     }
-    free(h->keys);
-    free(h->hits);
+    nav_free(h->keys);
+    nav_free(h->hits);
     *h = n;
     return 0;
 }
@@ -159,7 +160,7 @@ int pgm_write_map(const char *pgm_path, const hitmap_t *h, double off_x, double 
     if (w > PGM_MAX_SIDE || hgt > PGM_MAX_SIDE) {
         return PGM_TOO_LARGE;
     }
-    img = (unsigned char *)malloc((size_t)w * (size_t)hgt);
+    img = (unsigned char *)nav_malloc((size_t)w * (size_t)hgt);
     if (img == NULL) {
         return -1;
     }
@@ -174,7 +175,7 @@ int pgm_write_map(const char *pgm_path, const hitmap_t *h, double off_x, double 
     }
     f = fopen(pgm_path, "wb");
     if (f == NULL) {
-        free(img);
+        nav_free(img);
         return -1;
     }
     fprintf(f, "P5\n# rsm-nav map, %.3f m per pixel\n%lld %lld\n255\n", (double)h->res_m, (long long)w,
@@ -183,7 +184,7 @@ int pgm_write_map(const char *pgm_path, const hitmap_t *h, double off_x, double 
     for (i = (size_t)hgt; i-- > 0;) {
         fwrite(img + i * (size_t)w, 1, (size_t)w, f);
     }
-    free(img);
+    nav_free(img);
     if (fclose(f) != 0) {
         return -1;
     }

@@ -2,6 +2,7 @@
  * contract. Host code: reads both files whole (heap), checks all of them,
  * then imports. */
 #include "rosmap.h"
+#include "heap.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -69,10 +70,10 @@ static unsigned char *read_all(const char *path, const char *what, long max_byte
         if (n + 1u >= cap) {
             unsigned char *nb;
             cap = cap ? cap * 2u : 65536u;
-            nb = (unsigned char *)realloc(buf, cap);
+            nb = (unsigned char *)nav_realloc(buf, cap);
             if (nb == NULL) {
                 say(err, errcap, "out of memory reading %s %s", what, path);
-                free(buf);
+                nav_free(buf);
                 (void)fclose(f);
                 return NULL;
             }
@@ -82,7 +83,7 @@ static unsigned char *read_all(const char *path, const char *what, long max_byte
         n += got;
         if (max_bytes > 0 && n > (size_t)max_bytes) {
             say(err, errcap, "%s %s: larger than %ld bytes, not a map", what, path, max_bytes);
-            free(buf);
+            nav_free(buf);
             (void)fclose(f);
             return NULL;
         }
@@ -92,7 +93,7 @@ static unsigned char *read_all(const char *path, const char *what, long max_byte
     }
     if (ferror(f)) {
         say(err, errcap, "read error in %s %s: %s", what, path, strerror(errno));
-        free(buf);
+        nav_free(buf);
         (void)fclose(f);
         return NULL;
     }
@@ -377,14 +378,14 @@ static int read_pgm(const char *path, pgm_image_t *img, char *err, size_t errcap
     if (len < 2u || buf[0] != 'P' || (buf[1] != '5' && buf[1] != '2')) {
         say(err, errcap, "%s: not a PGM (P5 or P2): %s", path,
             len >= 2u && buf[0] == 'P' ? "another netpbm kind" : "no P5/P2 magic (PNG and others are not read)");
-        free(buf);
+        nav_free(buf);
         return -1;
     }
     ascii = buf[1] == '2';
     p.at = 2;
     if (p.at < len && !isspace(buf[p.at]) && buf[p.at] != '#') {
         say(err, errcap, "%s: bad PGM magic", path);
-        free(buf);
+        nav_free(buf);
         return -1;
     }
     w = pgm_int(&p, 1000000L);
@@ -392,43 +393,43 @@ static int read_pgm(const char *path, pgm_image_t *img, char *err, size_t errcap
     maxval = h > 0 ? pgm_int(&p, 1000000L) : h;
     if (w == -1 || h == -1 || maxval == -1) {
         say(err, errcap, "%s: PGM header ends early (want width, height, maxval)", path);
-        free(buf);
+        nav_free(buf);
         return -1;
     }
     if (w <= 0 || h <= 0) {
         say(err, errcap, "%s: PGM width and height must be whole numbers from 1 to 1000000", path);
-        free(buf);
+        nav_free(buf);
         return -1;
     }
     if (maxval > 65535) {
         say(err, errcap, "%s: PGM maxval %ld is beyond 65535: not a PGM", path, maxval);
-        free(buf);
+        nav_free(buf);
         return -1;
     }
     if (maxval > 255) {
         say(err, errcap, "%s: 16-bit PGM (maxval %ld) is not supported: save the map with 8 bits (maxval 255)",
             path, maxval);
-        free(buf);
+        nav_free(buf);
         return -1;
     }
     if (maxval <= 0) {
         say(err, errcap, "%s: PGM maxval must be a whole number from 1 to 255", path);
-        free(buf);
+        nav_free(buf);
         return -1;
     }
     if ((double)w * (double)h > PGM_MAX_PIXELS) {
         say(err, errcap, "%s: %ld x %ld pixels: more than %.0f", path, w, h, PGM_MAX_PIXELS);
-        free(buf);
+        nav_free(buf);
         return -1;
     }
     n = (size_t)w * (size_t)h;
     img->w = (uint32_t)w;
     img->h = (uint32_t)h;
     img->maxval = (uint32_t)maxval;
-    img->px = (unsigned char *)malloc(n);
+    img->px = (unsigned char *)nav_malloc(n);
     if (img->px == NULL) {
         say(err, errcap, "%s: out of memory for %ld x %ld pixels", path, w, h);
-        free(buf);
+        nav_free(buf);
         return -1;
     }
     if (!ascii) {
@@ -479,12 +480,12 @@ static int read_pgm(const char *path, pgm_image_t *img, char *err, size_t errcap
             goto fail;
         }
     }
-    free(buf);
+    nav_free(buf);
     return 0;
 fail:
-    free(img->px);
+    nav_free(img->px);
     img->px = NULL;
-    free(buf);
+    nav_free(buf);
     return -1;
 }
 
@@ -523,11 +524,11 @@ int rsm_rosmap_load(const char *yaml_path, rsm_localizer_t *loc, rsm_import_repo
     }
     if (memchr(text, '\0', len) != NULL) {
         say(err, errcap, "%s: not a text file", yaml_path);
-        free(text);
+        nav_free(text);
         return -1;
     }
     rc = parse_yaml((char *)text, yaml_path, &y, err, errcap);
-    free(text);
+    nav_free(text);
     if (rc != 0) {
         return -1;
     }
@@ -563,10 +564,10 @@ int rsm_rosmap_load(const char *yaml_path, rsm_localizer_t *loc, rsm_import_repo
         return -1;
     }
     grid.width = img.w;
-    row = (unsigned char *)malloc(img.w);
+    row = (unsigned char *)nav_malloc(img.w);
     if (row == NULL) {
         say(err, errcap, "out of memory");
-        free(img.px);
+        nav_free(img.px);
         return -1;
     }
     {
@@ -579,8 +580,8 @@ int rsm_rosmap_load(const char *yaml_path, rsm_localizer_t *loc, rsm_import_repo
         if (k == n) {
             say(err, errcap, "%s: no occupied pixel in %s (occupied_thresh %g%s): nothing to localize in",
                 yaml_path, image_path, y.occupied_thresh, y.negate ? ", negate" : "");
-            free(row);
-            free(img.px);
+            nav_free(row);
+            nav_free(img.px);
             return -1;
         }
     }
@@ -589,8 +590,8 @@ int rsm_rosmap_load(const char *yaml_path, rsm_localizer_t *loc, rsm_import_repo
     if (rc != RSM_OK) {
         say(err, errcap, "%s: cannot import into this localizer: %s%s", yaml_path, rsm_strerror(rc),
             rc == RSM_ERR_NOSYS ? " (a map is only for the map method)" : "");
-        free(row);
-        free(img.px);
+        nav_free(row);
+        nav_free(img.px);
         return -1;
     }
     for (r = 0; r < img.h; ++r) {
@@ -605,14 +606,14 @@ int rsm_rosmap_load(const char *yaml_path, rsm_localizer_t *loc, rsm_import_repo
             say(err, errcap, "%s: resolution %g m or origin [%g, %g, %g] refused by the localizer (%s); its map "
                              "is left empty",
                 yaml_path, y.resolution, y.origin[0], y.origin[1], y.origin[2], rsm_strerror(rc));
-            free(row);
-            free(img.px);
+            nav_free(row);
+            nav_free(img.px);
             (void)rsm_localizer_import_begin(loc, NULL);
             return -1;
         }
     }
-    free(row);
-    free(img.px);
+    nav_free(row);
+    nav_free(img.px);
     if (report != NULL) {
         *report = rep;
     }

@@ -24,6 +24,7 @@
 #include "pgm.h"
 #include "rosmap.h"
 #include "devices.h"
+#include "heap.h"
 #include "rsm/localizer.h"
 #include "rsm/mapfile.h"
 #include "rsm/tilestore.h"
@@ -536,8 +537,8 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
     }
     if (nav->store_tiles > 0u) {
         const uint32_t ilog = rsm_tilestore_mem_index_log2(nav->store_tiles);
-        nav->store_tile = (rsm_tile_t *)calloc(nav->store_tiles, sizeof *nav->store_tile);
-        nav->store_index = (uint32_t *)calloc((size_t)1u << ilog, sizeof *nav->store_index);
+        nav->store_tile = (rsm_tile_t *)nav_calloc(nav->store_tiles, sizeof *nav->store_tile);
+        nav->store_index = (uint32_t *)nav_calloc((size_t)1u << ilog, sizeof *nav->store_index);
         if (nav->store_tile == NULL || nav->store_index == NULL ||
             rsm_tilestore_mem_init(&nav->store_mem, nav->store_tile, nav->store_tiles, nav->store_index, ilog,
                                    &nav->store) != RSM_OK ||
@@ -548,7 +549,7 @@ static int nav_start(nav_t *nav, const double *x0, const char *where)
     }
     if (nav->cfg.method == RSM_METHOD_MAP && nav->search_bytes > 0u) {
         /* Lent before a load, whose grids are then built into it. */
-        nav->search_mem = (uint8_t *)calloc(nav->search_bytes, 1u);
+        nav->search_mem = (uint8_t *)nav_calloc(nav->search_bytes, 1u);
         if (nav->search_mem == NULL ||
             rsm_localizer_set_search_memory(&nav->loc, nav->search_mem, nav->search_bytes) != RSM_OK) {
             fprintf(stderr, "rsm-nav: cannot lend the global search %lu bytes\n", nav->search_bytes);
@@ -930,8 +931,8 @@ static void load_restore_table(nav_t *nav, const char *text)
         if (sscanf(p, "%31s %llu %lld %lld", kind, &idx, &orig, &written) == 4 && strcmp(kind, "FLASER") == 0) {
             if (nav->nrestore == cap) {
                 cap = cap ? cap * 2 : 256;
-                nav->restore_idx = (uint64_t *)realloc(nav->restore_idx, cap * sizeof *nav->restore_idx);
-                nav->restore_us = (int64_t *)realloc(nav->restore_us, cap * sizeof *nav->restore_us);
+                nav->restore_idx = (uint64_t *)nav_realloc(nav->restore_idx, cap * sizeof *nav->restore_idx);
+                nav->restore_us = (int64_t *)nav_realloc(nav->restore_us, cap * sizeof *nav->restore_us);
                 if (nav->restore_idx == NULL || nav->restore_us == NULL) {
                     fprintf(stderr, "rsm-nav: out of memory\n");
                     exit(1);
@@ -1196,22 +1197,25 @@ static void print_mount(const nav_t *nav)
 }
 
 /* Peak resident memory of this program, where the system tells it
- * (Linux: VmHWM; getrusage would count the parent's memory at the fork). */
+ * (Linux: VmHWM; getrusage would count the parent's memory at the fork),
+ * then the most this program's own blocks held (tools/nav/heap.h): the
+ * resident figure moves with the allocator, a sanitizer and the machine's
+ * load, the count does not. */
 static void print_peak_memory(void)
 {
     char line[128];
     FILE *f = fopen("/proc/self/status", "r");
-    if (f == NULL) {
-        return;
-    }
-    while (fgets(line, sizeof line, f) != NULL) {
+    while (f != NULL && fgets(line, sizeof line, f) != NULL) {
         unsigned long kib;
         if (sscanf(line, "VmHWM: %lu kB", &kib) == 1) {
             printf("  memory          peak %lu KiB resident\n", kib);
             break;
         }
     }
-    fclose(f);
+    if (f != NULL) {
+        fclose(f);
+    }
+    printf("  heap            peak %lu bytes held by rsm-nav's own blocks\n", (unsigned long)nav_heap_peak());
 }
 
 /* Median and 95th percentile of the per-scan wall times, in seconds. */
@@ -1984,9 +1988,9 @@ int main(int argc, char **argv)
         rc = 1;
     }
     hitmap_free(&nav.hits);
-    free(nav.store_tile);
-    free(nav.store_index);
-    free(nav.restore_idx);
-    free(nav.restore_us);
+    nav_free(nav.store_tile);
+    nav_free(nav.store_index);
+    nav_free(nav.restore_idx);
+    nav_free(nav.restore_us);
     return rc;
 }
