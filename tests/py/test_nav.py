@@ -534,11 +534,13 @@ def test_memory_stays_flat_over_a_long_run(tmp_path, head_log):
         return out
 
     def heap_peak(log: Path) -> int:
-        summary = run_nav(log, tmp_path / "t.txt", "rsm")
+        js = tmp_path / "s.json"
+        summary = run_nav(log, tmp_path / "t.txt", "rsm", "--summary-json", str(js))
         m = re.search(r"memory\s+peak (\d+) KiB resident", summary)
         h = re.search(r"heap\s+peak (\d+) bytes held by rsm-nav's own blocks", summary)
         t = re.search(r"time per scan\s+median ([0-9.]+) us, p95 ([0-9.]+) us", summary)
         assert m and h and t and int(m.group(1)) > 0 and 0 < float(t.group(1)) <= float(t.group(2)), summary
+        assert json.loads(js.read_text())["heap_peak_bytes"] == int(h.group(1))
         return int(h.group(1))
 
     # The short run long enough to take every path the long one takes once.

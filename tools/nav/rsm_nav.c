@@ -1291,6 +1291,7 @@ static int write_summary_json(nav_t *nav, const char *path)
             (unsigned)c->track[RSM_TRACK_TRACKING], (unsigned)c->track[RSM_TRACK_UNCERTAIN],
             (unsigned)c->track[RSM_TRACK_LOST], rsm_track_name(rsm_localizer_track(&nav->loc)));
     fprintf(f, ",\n  \"median_us\": %.1f,\n  \"p95_us\": %.1f,\n", median * 1e6, p95 * 1e6);
+    fprintf(f, "  \"heap_peak_bytes\": %lu,\n", (unsigned long)nav_heap_peak());
     fprintf(f, "  \"timestamps\": {\"clamped\": %llu, \"odd\": %llu, \"jumps\": %llu},\n",
             (unsigned long long)nav->repair.clamped, (unsigned long long)nav->repair.odd_stamps,
             (unsigned long long)nav->repair.time_jumps);
