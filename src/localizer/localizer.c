@@ -1143,25 +1143,42 @@ static void recovery_begin(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *
  * scans, and half of what the tracked pose lost regained) and beats every
  * pose a doubt away from it (another basin, or the tracked pose) by
  * recover_margin. Both recoveries weigh so: whole in a scan (recover), and
- * spread over scans (recovery_verdict). */
+ * spread over scans (recovery_verdict). With share (not NULL: share[k] the
+ * wall share at end[k], tracked_share the tracked pose's), best must beat
+ * them by recover_margin in that too: a fit also grows with how often the
+ * map saw a wall, and among posts a period apart the place nearer where
+ * the robot mapped fitted 16 % better than the true one, both wholly in
+ * the map, while their wall shares parted by 8 %. */
 static recovery_t recovery_weigh(const rsm_localizer_t *loc, const float *hit, const rsm_pose_t *end, int n, int best,
-                                 float tracked_hit, const rsm_pose_t *tracked)
+                                 float tracked_hit, const rsm_pose_t *tracked, const float *share, float tracked_share)
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     const float fit = loc->state.persistent.fit;
     const float need = tracked_hit + 0.5f * (fit - tracked_hit);
     float rival;
+    float rival_share = 0.0f;
     int k;
     if (best < 0 || !(hit[best] >= cfg->recover_ratio * fit && hit[best] >= need && hit[best] > tracked_hit)) {
         return RECOVERY_NONE;
     }
-    rival = beyond_doubt(cfg, tracked, &end[best]) ? tracked_hit : 0.0f;
+    rival = 0.0f;
+    if (beyond_doubt(cfg, tracked, &end[best])) {
+        rival = tracked_hit;
+        rival_share = tracked_share;
+    }
     for (k = 0; k < n; ++k) {
-        if (k != best && hit[k] > rival && beyond_doubt(cfg, &end[k], &end[best])) {
-            rival = hit[k];
+        if (k != best && hit[k] >= 0.0f && beyond_doubt(cfg, &end[k], &end[best])) {
+            rival = hit[k] > rival ? hit[k] : rival;
+            if (share != NULL && share[k] > rival_share) {
+                rival_share = share[k];
+            }
         }
     }
-    return hit[best] <= rival * (1.0f + cfg->recover_margin) ? RECOVERY_AMBIGUOUS : RECOVERY_TAKEN;
+    if (hit[best] <= rival * (1.0f + cfg->recover_margin)) {
+        return RECOVERY_AMBIGUOUS;
+    }
+    return share != NULL && share[best] <= rival_share * (1.0f + cfg->recover_margin) ? RECOVERY_AMBIGUOUS
+                                                                                       : RECOVERY_TAKEN;
 }
 
 /* The spread recovery's verdict on its basins' fits with the scan of the
@@ -1177,7 +1194,7 @@ static recovery_t recovery_verdict(rsm_localizer_t *loc, const rsm_pose_t *track
             best = k;
         }
     }
-    v = recovery_weigh(loc, r->hit, r->end, (int)r->found, best, r->tracked_hit, tracked);
+    v = recovery_weigh(loc, r->hit, r->end, (int)r->found, best, r->tracked_hit, tracked, NULL, 0.0f);
     if (v == RECOVERY_TAKEN) {
         r->best = (uint8_t)best;
     }
@@ -1535,6 +1552,7 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
     recovery_t v;
     float share;
     float found_hit[RSM_RECOVER_STARTS];
+    float found_share[RSM_RECOVER_STARTS];
     float wide[9];
     int found;
     int k;
@@ -1561,7 +1579,16 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
             }
         }
     }
-    v = recovery_weigh(loc, found_hit, found_pose, found, best, res->hit, &res->pose);
+    {
+        const rsm_tmap_t *map = &loc->state.persistent.map;
+        const uint32_t wall = ((uint32_t)map->cfg.hit_inc + 1u) / 2u;
+        for (k = 0; k < found; ++k) {
+            found_share[k] = found_hit[k] >= 0.0f ? rsm_mapmatch_wall_share(map, loc->pts, npts, &found_pose[k], wall)
+                                                  : 0.0f;
+        }
+        v = recovery_weigh(loc, found_hit, found_pose, found, best, res->hit, &res->pose, found_share,
+                           rsm_mapmatch_wall_share(map, loc->pts, npts, &res->pose, wall));
+    }
     if (v != RECOVERY_TAKEN) {
         return v;
     }

@@ -653,6 +653,37 @@ float rsm_mapmatch_fit(const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, 
     return s.hit / (float)n;
 }
 
+float rsm_mapmatch_wall_share(const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *pose,
+                              uint32_t wall)
+{
+    rsm_tmap_cursor_t cur;
+    float inv_a;
+    float half;
+    float c;
+    float sn;
+    size_t k;
+    size_t on = 0;
+    if (map == NULL || pts == NULL || pose == NULL || n == 0u) {
+        return 0.0f;
+    }
+    inv_a = map->inv_cell[0];
+    half = 0.5f / inv_a; /* cell centres at whole cells: the four around a point start half a cell back */
+    rsm_sincosf(pose->theta, &sn, &c);
+    rsm_tmap_cursor_init(&cur, 0u);
+    for (k = 0; k < n; ++k) {
+        const float wx = pose->x + c * pts[k].x - sn * pts[k].y;
+        const float wy = pose->y + sn * pts[k].x + c * pts[k].y;
+        const int32_t i = rsm_tmap_cell_of(wx - half, inv_a);
+        const int32_t j = rsm_tmap_cell_of(wy - half, inv_a);
+        if (rsm_tmap_in_range(i, j) && rsm_tmap_in_range(i + 1, j + 1) &&
+            (rsm_tmap_cell_value(map, &cur, i, j) >= wall || rsm_tmap_cell_value(map, &cur, i + 1, j) >= wall ||
+             rsm_tmap_cell_value(map, &cur, i, j + 1) >= wall || rsm_tmap_cell_value(map, &cur, i + 1, j + 1) >= wall)) {
+            ++on;
+        }
+    }
+    return (float)on / (float)n;
+}
+
 /* The prior of a descent: its mean, information and the residual weight;
  * and how far the scan reaches. */
 typedef struct prior {

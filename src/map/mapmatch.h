@@ -122,6 +122,14 @@ int rsm_mapmatch_search_part(const rsm_tmap_t *map, const rsm_mapmatch_config_t 
  * finest level, interpolated (rsm_mapmatch_result_t.hit); 0 for no points. */
 float rsm_mapmatch_fit(const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *pose);
 
+/* The share (0 to 1) of the points at pose that land within a cell of a
+ * wall on the finest level: one of the four cells around the point holds
+ * at least wall. Unlike the fit it does not grow with how often a wall
+ * was seen: two places that look alike score alike, though the map saw one
+ * of them more (a recovery's proof, docs/robustness.md). */
+float rsm_mapmatch_wall_share(const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *pose,
+                              uint32_t wall);
+
 /* How well the scan's surfaces pin the position: the ratio (0 to 1) of the
  * smaller to the larger eigenvalue of the sum of t t^T over the unit chords
  * t of the points (pts in beam order; a chord runs from a point to the
