@@ -112,7 +112,8 @@ typedef struct rsm_localizer_config {
                                      * misjudged); default 0.3 */
     float recover_margin;           /* a search's winner is taken only when its fit beats every
                                      * pose a doubt (doubt_m, doubt_rad) away from it by this
-                                     * share, else the scan is left ambiguous; default 0.1 */
+                                     * share, and (recover_budget 0) its share of readings on
+                                     * walls too, else the scan is left ambiguous; default 0.1 */
     uint32_t recover_budget;        /* 0, the default: a recovery's search and proof whole in the
                                      * scan that asks for it (up to 1.8 million Cortex-M4
                                      * instructions on ACES). Else spread over the scans after
@@ -120,7 +121,8 @@ typedef struct rsm_localizer_config {
                                      * about 18 instructions, as global_budget; 38000 kept ACES's
                                      * recovery scans under a million), the robot carried by
                                      * odometry meanwhile: at a cost in accuracy and in faults
-                                     * (docs/robustness.md, "A recovery spread over scans") */
+                                     * (docs/robustness.md, "A recovery spread over scans");
+                                     * its proof weighs fits alone, not wall shares */
     /* Odometry is evidence, not truth (RSM_METHOD_MAP): its step since the
      * last scan is matched against a second prediction when the scans give
      * cause to doubt it, and the prediction the scan fits better is kept
@@ -316,7 +318,8 @@ typedef struct rsm_localizer_counters {
     uint32_t searches;                       /* recovery searches run (RSM_METHOD_MAP) */
     uint32_t recovered;                      /* ... whose pose was taken */
     uint32_t ambiguous;                      /* ... whose winner a distinct pose fitted nearly
-                                              * as well: not taken (recover_margin) */
+                                              * as well, or put nearly as many readings on
+                                              * walls: not taken (recover_margin) */
     uint32_t global_searches;                /* global searches begun (rsm_localizer_global,
                                               * global_when_lost, or one that proved nothing) */
     uint32_t global_found;                   /* ... that proved a pose, which was taken */

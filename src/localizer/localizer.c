@@ -1145,10 +1145,13 @@ static void recovery_begin(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *
  * recover_margin. Both recoveries weigh so: whole in a scan (recover), and
  * spread over scans (recovery_verdict). With share (not NULL: share[k] the
  * wall share at end[k], tracked_share the tracked pose's), best must beat
- * them by recover_margin in that too: a fit also grows with how often the
- * map saw a wall, and among posts a period apart the place nearer where
- * the robot mapped fitted 16 % better than the true one, both wholly in
- * the map, while their wall shares parted by 8 %. */
+ * the same rivals by recover_margin in that too: a fit also grows with how
+ * often the map saw a wall, and among posts a period apart the place
+ * nearer where the robot mapped fitted 16 % better than the true one, both
+ * wholly in the map, while their wall shares parted by 8 %. Only the
+ * recovery whole in a scan passes shares: the spread one's fits come from
+ * kept readings and carried poses, which would need their shares carried
+ * through its stages too (not done; recover_budget is off by default). */
 static recovery_t recovery_weigh(const rsm_localizer_t *loc, const float *hit, const rsm_pose_t *end, int n, int best,
                                  float tracked_hit, const rsm_pose_t *tracked, const float *share, float tracked_share)
 {
@@ -1177,8 +1180,10 @@ static recovery_t recovery_weigh(const rsm_localizer_t *loc, const float *hit, c
     if (hit[best] <= rival * (1.0f + cfg->recover_margin)) {
         return RECOVERY_AMBIGUOUS;
     }
-    return share != NULL && share[best] <= rival_share * (1.0f + cfg->recover_margin) ? RECOVERY_AMBIGUOUS
-                                                                                       : RECOVERY_TAKEN;
+    /* A rival with no reading on a wall is none to beat in shares. */
+    return share != NULL && rival_share > 0.0f && share[best] <= rival_share * (1.0f + cfg->recover_margin)
+               ? RECOVERY_AMBIGUOUS
+               : RECOVERY_TAKEN;
 }
 
 /* The spread recovery's verdict on its basins' fits with the scan of the
@@ -1557,6 +1562,9 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
     int found;
     int k;
     int best = -1;
+    for (k = 0; k < RSM_RECOVER_STARTS; ++k) {
+        found_hit[k] = -1.0f; /* no basin */
+    }
     memcpy(wide, loc->ekf.p, sizeof wide);
     wide[0] += radius_m * radius_m;
     wide[4] += radius_m * radius_m;
@@ -1579,9 +1587,12 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
             }
         }
     }
-    {
+    v = recovery_weigh(loc, found_hit, found_pose, found, best, res->hit, &res->pose, NULL, 0.0f);
+    if (v == RECOVERY_TAKEN) {
+        /* Taken on its fit: weighed on the wall shares too (read only
+         * now, the fit's verdict being the same either way). */
         const rsm_tmap_t *map = &loc->state.persistent.map;
-        const uint32_t wall = ((uint32_t)map->cfg.hit_inc + 1u) / 2u;
+        const uint32_t wall = rsm_tmap_wall_value(map);
         for (k = 0; k < found; ++k) {
             found_share[k] = found_hit[k] >= 0.0f ? rsm_mapmatch_wall_share(map, loc->pts, npts, &found_pose[k], wall)
                                                   : 0.0f;

@@ -38,21 +38,9 @@ static uint32_t search_level(const rsm_tmap_t *map)
     return map->cfg.levels >= 2u ? (uint32_t)map->cfg.levels - 2u : 0u;
 }
 
-/* The least cell value the search counts as a wall: half of what one
- * return adds (tmap.hit_inc), rounded up (so at least 1, as hit_inc is).
- * On the levels that share a return's hit among the four cells around it
- * by their bilinear weights, a cell under that never had a return land nearer it than a neighbour,
- * or beams have worn it down to its last counts. Counted as walls, those
- * cells thicken every wall by a cell: more boxes pass, more places reach
- * the bar and more searches are crowded (docs/globalsearch.md, "Faint
- * cells"). */
-static uint32_t wall_value(const rsm_tmap_t *map)
-{
-    return ((uint32_t)map->cfg.hit_inc + 1u) / 2u;
-}
 
 /* What a point on a cell of value v scores: its occupancy where it is a
- * wall (wall_value), else nothing. */
+ * wall (rsm_tmap_wall_value), else nothing. */
 static float cell_score(const rsm_tmap_t *map, uint32_t v, uint32_t wall)
 {
     return v >= wall ? map->occ[v] : 0.0f;
@@ -215,7 +203,7 @@ static uint32_t get_bit(const uint8_t *grid, uint32_t i)
     return (uint32_t)rsm_bit_get(grid, i);
 }
 
-/* Whether grid h holds a wall cell (wall_value) in the window [u, u + 2^h]
+/* Whether grid h holds a wall cell (rsm_tmap_wall_value) in the window [u, u + 2^h]
  * x [v, v + 2^h] (cells of the search level): 1 when it may, 0 when it
  * holds none. */
 static uint32_t grid_read(const rsm_global_t *g, const uint8_t *grid, uint32_t h, int32_t u, int32_t v)
@@ -255,7 +243,7 @@ static void mark_grid(const rsm_global_t *g, uint8_t *grid, uint32_t h, uint32_t
 }
 
 /* A tile of the search level into the finest grid: each wall cell
- * (wall_value) of the grids' box (g->cache_box) sets the blocks whose
+ * (rsm_tmap_wall_value) of the grids' box (g->cache_box) sets the blocks whose
  * windows hold it. Returns the cells looked at. */
 static uint32_t grid_tile(const rsm_global_t *g, uint8_t *grid, const rsm_tile_t *t, uint32_t wall)
 {
@@ -491,7 +479,7 @@ void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
         /* The cells a hit may raise: the two either side of the point in
          * x and in y (a hit's bilinear shares, rsm_bilinear_at), which
          * hold the one cell it lands in when not shared. Marked whether or
-         * not they reach wall_value: a bound may only be too high. */
+         * not they reach rsm_tmap_wall_value: a bound may only be too high. */
         const float u = rsm_floorf(pts[k].x * inv - 0.5f);
         const float v = rsm_floorf(pts[k].y * inv - 0.5f);
         int32_t i;
@@ -898,7 +886,7 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
 {
     uint32_t q;
     if (h == 0u) {
-        const uint32_t wall = wall_value(map);
+        const uint32_t wall = rsm_tmap_wall_value(map);
         float sum = 0.0f;
         for (q = 0; q < g->npts; ++q) {
             const uint32_t k = q;
@@ -963,7 +951,7 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
 static uint32_t leaf_bounds(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *map, int32_t *fx,
                             int32_t *fy, int32_t i, int32_t j, float thr, float *bound, uint32_t *work)
 {
-    const uint32_t wall = wall_value(map);
+    const uint32_t wall = rsm_tmap_wall_value(map);
     uint32_t q;
     uint32_t live = 15u;
     rsm_tmap_cursor_t cur;
@@ -1248,7 +1236,7 @@ static int build(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32_t
             break;
         }
         if (level == g->level && in_box(g, t, 0u)) {
-            *work += RSM_GLOBAL_BUILD_WORK * grid_tile(g, grid, t, wall_value(map));
+            *work += RSM_GLOBAL_BUILD_WORK * grid_tile(g, grid, t, rsm_tmap_wall_value(map));
         }
         if (level == direction_level(g->level) && in_box(g, t, g->level - level)) {
             *work += RSM_GLOBAL_BUILD_WORK * tile_directions(g, t);

@@ -98,6 +98,20 @@ uint32_t rsm_tmap_beams_crossing(const rsm_tmap_t *map, uint32_t level, const rs
 /* Occupancy in [0, 1] of the cell holding world (x, y) on a level. */
 float rsm_tmap_occupancy(const rsm_tmap_t *map, uint32_t level, float x, float y);
 
+/* The least cell value a proof counts as a wall (the global search's, a
+ * recovery's wall share): half of what one return adds (cfg.hit_inc),
+ * rounded up (so at least 1, as hit_inc is). On the levels that share a
+ * return's hit among the four cells around it by their bilinear weights, a
+ * cell under that never had a return land nearer it than a neighbour, or
+ * beams have worn it down to its last counts. Counted as walls, those
+ * cells thicken every wall by a cell: more of the global search's boxes
+ * pass, more places reach its bar and more searches are crowded
+ * (docs/globalsearch.md, "Faint cells"). */
+static inline uint32_t rsm_tmap_wall_value(const rsm_tmap_t *map)
+{
+    return ((uint32_t)map->cfg.hit_inc + 1u) / 2u;
+}
+
 /* A read position on one level of one map: remembers the last tiles found,
  * so that reads of nearby points (a scan's, in beam order) skip the index.
  * RSM_TMAP_CURSOR_WAYS^2 ways, one per tile column and row modulo that, so

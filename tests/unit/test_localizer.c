@@ -1272,10 +1272,10 @@ void test_localizer_scan_should_doubt_no_step_of_honest_odometry(void)
  * robot 0.6 m along, half a period, where odometry says 0.1 (beyond the
  * match's basin and the search's first ring, so the scan searches up to
  * recover_m), and that scan sees 4 m: the map holds every post it sees
- * from the true pose and from the pose a period back, so the two fit alike
- * by what the scene is, not by a last bit of the descents (with an 8 m
- * walk the true pose saw posts the map never held, and fitted worse than
- * the false one). Returns the position error along x after that scan. */
+ * from the true pose and from the pose a period back, so the two look
+ * alike by what the scene is, not by a last bit of the descents (with a 4
+ * m walk the true pose saw posts the map never held). Returns the
+ * position error along x after that scan. */
 #define POSTS 34u
 #define PERIOD 1.2f
 static float run_posts_bump(void)
@@ -1330,10 +1330,13 @@ static float run_posts_bump(void)
 
 void test_localizer_scan_should_not_take_an_ambiguous_recovery(void)
 {
-    /* Among posts a period apart, poses a period apart fit alike: a search
-     * there has no proven winner, and one taken anyway puts the robot a
-     * period off (a false recovery). Refused, it is counted as ambiguous
-     * and the estimate stays near odometry's. */
+    /* Among posts a period apart, poses a period apart look alike: a
+     * search there has no proven winner, and one taken anyway puts the
+     * robot a period off (a false recovery). The false one fits 16 %
+     * better (0.298 against 0.257: its posts are nearer the walk, seen more
+     * often), past recover_margin; their shares of readings on walls part
+     * by 8 % (0.387 against 0.359), within it, and that refuses it. Refused,
+     * it is counted as ambiguous and the estimate stays near odometry's. */
     char msg[160];
     float err;
     cfg.refute_margin = 0.0f; /* the search alone: odometry's step is not doubted */
@@ -1354,7 +1357,7 @@ void test_localizer_scan_should_not_take_an_ambiguous_recovery(void)
     /* Refused (its match between the posts found too little to hold:
      * low support), the scan leaves the estimate at odometry's prediction,
      * 0.5 m short of the truth. */
-    TEST_ASSERT_TRUE_MESSAGE(loc.last.outcome == RSM_SCAN_POOR_FIT || loc.last.outcome == RSM_SCAN_LOW_SUPPORT, msg);
+    TEST_ASSERT_EQUAL_INT_MESSAGE((int)RSM_SCAN_LOW_SUPPORT, (int)loc.last.outcome, msg);
     TEST_ASSERT_FLOAT_WITHIN_MESSAGE(0.05f, 0.5f, err, msg);
     TEST_ASSERT_EQUAL_INT_MESSAGE((int)RSM_TRACK_UNCERTAIN, (int)rsm_localizer_track(&loc), msg);
     /* Without the margin the best basin is taken: here the wrong one. */

@@ -700,13 +700,15 @@ void test_mapmatch_wall_share_should_count_walls_not_how_often_they_were_seen(vo
      * no readings. */
     const rsm_pose_t truth_w = {-0.5f, 0.3f, 0.3f};
     const rsm_pose_t truth = in_map(&truth_w);
-    const uint32_t wall = ((uint32_t)mcfg.hit_inc + 1u) / 2u;
+    uint32_t wall;
     rsm_pose_t off = truth;
     float once_share;
     float once_fit;
     float share;
     size_t n;
     write_map(room_poses, sizeof room_poses / sizeof room_poses[0], 1);
+    wall = rsm_tmap_wall_value(&map);
+    TEST_ASSERT_EQUAL_UINT32(((uint32_t)mcfg.hit_inc + 1u) / 2u, wall); /* half a return's hit */
     n = points_at(&truth_w);
     once_share = rsm_mapmatch_wall_share(&map, pts, n, &truth, wall);
     once_fit = rsm_mapmatch_fit(&map, pts, n, &truth);

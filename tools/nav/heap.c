@@ -2,10 +2,11 @@
 
 #include <stdint.h>
 #include <stdlib.h>
-#include <string.h>
 
 /* Each block carries its size in front, so that nav_free knows what it
- * gives back; the prefix keeps the alignment malloc promises. */
+ * gives back; the prefix is as large as the most aligned of these types,
+ * so that on the hosts this tool is built for (x86-64, aarch64: 16 bytes)
+ * the block keeps malloc's alignment. */
 typedef union heap_head {
     size_t size;
     long double ld;
@@ -44,15 +45,24 @@ void *nav_malloc(size_t n)
 
 void *nav_calloc(size_t count, size_t size)
 {
-    void *p;
+    heap_head_t *h;
+    size_t n;
     if (size != 0u && count > SIZE_MAX / size) {
         return NULL;
     }
-    p = nav_malloc(count * size);
-    if (p != NULL) {
-        memset(p, 0, count * size);
+    n = count * size;
+    if (n > SIZE_MAX - sizeof *h) {
+        return NULL;
     }
-    return p;
+    /* calloc, not malloc and a memset: a large block's pages stay
+     * untouched (and not resident) until used, as the tile store's are. */
+    h = (heap_head_t *)calloc(1u, sizeof *h + n);
+    if (h == NULL) {
+        return NULL;
+    }
+    h->size = n;
+    heap_add(n);
+    return h + 1;
 }
 
 void *nav_realloc(void *p, size_t n)

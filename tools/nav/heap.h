@@ -1,9 +1,10 @@
-/* rsm-nav's heap, counted: every block the host tool allocates goes
+/* rsm-nav's heap, counted: every block the tool's own files allocate goes
  * through these four calls, which keep the bytes it holds now and the most
- * it ever held. The summary prints the peak, and the tests compare it
- * between a short and a long run: a count that, unlike resident memory, is
- * the same on every machine and under any load or sanitizer (issue 30: an
- * array that grew with every scan). The library itself has no heap. */
+ * it ever held (zlib's and stdio's blocks are not counted). The summary
+ * prints the peak, and the tests compare it between a short and a long
+ * run: a count that, unlike resident memory, is the same on every run of a
+ * build under any load or sanitizer (issue 30: an array that grew with
+ * every scan). The library itself has no heap. */
 #ifndef RSM_NAV_HEAP_H
 #define RSM_NAV_HEAP_H
 
