@@ -740,43 +740,6 @@ static void offsets(const rsm_global_t *g, float cell, uint32_t a, int32_t *fx, 
     }
 }
 
-/* The largest cell value of the search level in the window [u, u + 1] x
- * [v, v + 1]: one tile lookup when the four cells share a tile. */
-static uint32_t window4(const rsm_tmap_t *map, uint32_t level, int32_t u, int32_t v)
-{
-    const int32_t lim = RSM_TMAP_CELL_LIMIT - 2;
-    uint32_t best;
-    if ((u & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (v & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK &&
-        u > -lim && u < lim && v > -lim && v < lim) {
-        const uint32_t s = rsm_tmap_find_slot(map, level, u >> RSM_TMAP_TILE_LOG2, v >> RSM_TMAP_TILE_LOG2);
-        const rsm_tile_t *t;
-        uint32_t k;
-        uint32_t c;
-        if (s == RSM_TMAP_NONE) {
-            return 0u;
-        }
-        t = &map->tile[s];
-        k = rsm_tmap_cell_index(u, v);
-        best = rsm_tmap_get_cell(t, k);
-        c = rsm_tmap_get_cell(t, k + 1u);
-        best = c > best ? c : best;
-        c = rsm_tmap_get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE);
-        best = c > best ? c : best;
-        c = rsm_tmap_get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u);
-        return c > best ? c : best;
-    }
-    {
-        uint32_t c;
-        best = rsm_tmap_value(map, level, u, v);
-        c = rsm_tmap_value(map, level, u + 1, v);
-        best = c > best ? c : best;
-        c = rsm_tmap_value(map, level, u, v + 1);
-        best = c > best ? c : best;
-        c = rsm_tmap_value(map, level, u + 1, v + 1);
-        return c > best ? c : best;
-    }
-}
-
 /* The cells of the search level in the window [u, u + 2] x [v, v + 2],
  * row by row into c[9]: one tile lookup when they share a tile. */
 static void window9(const rsm_tmap_t *map, rsm_tmap_cursor_t *cur, uint32_t level, int32_t u, int32_t v,
@@ -894,7 +857,7 @@ static float box_bound(rsm_global_t *g, const uint8_t *grid, const rsm_tmap_t *m
             const int32_t v = fy[k] + j;
             /* Grid 1 bounds a wider window: nothing there, nothing here. */
             if (grid_read(g, grid, 1u, u, v) != 0u) {
-                sum += cell_score(map, window4(map, g->level, u, v), wall);
+                sum += cell_score(map, rsm_tmap_window_max(map, g->level, u, v), wall);
             }
             if (sum + (float)(g->npts - q - 1u) < thr) {
                 *work += RSM_GLOBAL_LEAF_WORK * (q + 1u);

@@ -656,7 +656,6 @@ float rsm_mapmatch_fit(const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, 
 float rsm_mapmatch_wall_share(const rsm_tmap_t *map, const rsm_point_t *pts, size_t n, const rsm_pose_t *pose,
                               uint32_t wall)
 {
-    rsm_tmap_cursor_t cur;
     float inv_a;
     float half;
     float c;
@@ -669,15 +668,13 @@ float rsm_mapmatch_wall_share(const rsm_tmap_t *map, const rsm_point_t *pts, siz
     inv_a = map->inv_cell[0];
     half = 0.5f / inv_a; /* cell centres at whole cells: the four around a point start half a cell back */
     rsm_sincosf(pose->theta, &sn, &c);
-    rsm_tmap_cursor_init(&cur, 0u);
     for (k = 0; k < n; ++k) {
         const float wx = pose->x + c * pts[k].x - sn * pts[k].y;
         const float wy = pose->y + sn * pts[k].x + c * pts[k].y;
-        const int32_t i = rsm_tmap_cell_of(wx - half, inv_a);
-        const int32_t j = rsm_tmap_cell_of(wy - half, inv_a);
-        if (rsm_tmap_in_range(i, j) && rsm_tmap_in_range(i + 1, j + 1) &&
-            (rsm_tmap_cell_value(map, &cur, i, j) >= wall || rsm_tmap_cell_value(map, &cur, i + 1, j) >= wall ||
-             rsm_tmap_cell_value(map, &cur, i, j + 1) >= wall || rsm_tmap_cell_value(map, &cur, i + 1, j + 1) >= wall)) {
+        /* Out of the cells' range (or not finite) rsm_tmap_cell_of gives
+         * a cell the window reads as empty. */
+        if (rsm_tmap_window_max(map, 0u, rsm_tmap_cell_of(wx - half, inv_a), rsm_tmap_cell_of(wy - half, inv_a)) >=
+            wall) {
             ++on;
         }
     }

@@ -149,6 +149,45 @@ static inline void rsm_tmap_occ_pair(const rsm_tmap_t *map, const rsm_tile_t *t,
     }
 }
 
+/* The largest cell value of a level in the window [u, u + 1] x [v, v + 1]
+ * (0 where no tile is held, or out of the cells' range): one tile lookup
+ * when the four cells share a tile. The global search's bounds and a
+ * recovery's wall share read walls so. */
+static inline uint32_t rsm_tmap_window_max(const rsm_tmap_t *map, uint32_t level, int32_t u, int32_t v)
+{
+    const int32_t lim = RSM_TMAP_CELL_LIMIT - 2;
+    uint32_t best;
+    if ((u & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK && (v & RSM_TMAP_TILE_MASK) != RSM_TMAP_TILE_MASK &&
+        u > -lim && u < lim && v > -lim && v < lim) {
+        const uint32_t s = rsm_tmap_find_slot(map, level, u >> RSM_TMAP_TILE_LOG2, v >> RSM_TMAP_TILE_LOG2);
+        const rsm_tile_t *t;
+        uint32_t k;
+        uint32_t c;
+        if (s == RSM_TMAP_NONE) {
+            return 0u;
+        }
+        t = &map->tile[s];
+        k = rsm_tmap_cell_index(u, v);
+        best = rsm_tmap_get_cell(t, k);
+        c = rsm_tmap_get_cell(t, k + 1u);
+        best = c > best ? c : best;
+        c = rsm_tmap_get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE);
+        best = c > best ? c : best;
+        c = rsm_tmap_get_cell(t, k + (uint32_t)RSM_TMAP_TILE_SIDE + 1u);
+        return c > best ? c : best;
+    }
+    {
+        uint32_t c;
+        best = rsm_tmap_value(map, level, u, v);
+        c = rsm_tmap_value(map, level, u + 1, v);
+        best = c > best ? c : best;
+        c = rsm_tmap_value(map, level, u, v + 1);
+        best = c > best ? c : best;
+        c = rsm_tmap_value(map, level, u + 1, v + 1);
+        return c > best ? c : best;
+    }
+}
+
 /* Metres from the origin within which every read is inside the cells'
  * range on every level (two finest cells short of it, for rounding). */
 static inline float rsm_tmap_read_reach(const rsm_tmap_t *map)
