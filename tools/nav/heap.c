@@ -20,71 +20,62 @@ typedef union heap_head {
 static size_t heap_now;
 static size_t heap_max;
 
-static void heap_add(size_t n)
+/* Whether a block of n bytes and its header fit in a size_t. */
+static int heap_fits(size_t n)
 {
+    return n <= SIZE_MAX - sizeof(heap_head_t);
+}
+
+/* A block from the allocator (or NULL) stamped with its size n and
+ * counted: what the caller gets. */
+static void *heap_took(heap_head_t *h, size_t n)
+{
+    if (h == NULL) {
+        return NULL;
+    }
+    h->size = n;
     heap_now += n;
     if (heap_now > heap_max) {
         heap_max = heap_now;
     }
+    return h + 1;
 }
 
 void *nav_malloc(size_t n)
 {
-    heap_head_t *h;
-    if (n > SIZE_MAX - sizeof *h) {
-        return NULL;
-    }
-    h = (heap_head_t *)malloc(sizeof *h + n);
-    if (h == NULL) {
-        return NULL;
-    }
-    h->size = n;
-    heap_add(n);
-    return h + 1;
+    return heap_fits(n) ? heap_took((heap_head_t *)malloc(sizeof(heap_head_t) + n), n) : NULL;
 }
 
 void *nav_calloc(size_t count, size_t size)
 {
-    heap_head_t *h;
-    size_t n;
-    if (size != 0u && count > SIZE_MAX / size) {
-        return NULL;
-    }
-    n = count * size;
-    if (n > SIZE_MAX - sizeof *h) {
+    const size_t n = count * size;
+    if ((size != 0u && count > SIZE_MAX / size) || !heap_fits(n)) {
         return NULL;
     }
     /* calloc, not malloc and a memset: a large block's pages stay
      * untouched (and not resident) until used, as the tile store's are. */
-    h = (heap_head_t *)calloc(1u, sizeof *h + n);
-    if (h == NULL) {
-        return NULL;
-    }
-    h->size = n;
-    heap_add(n);
-    return h + 1;
+    return heap_took((heap_head_t *)calloc(1u, sizeof(heap_head_t) + n), n);
 }
 
 void *nav_realloc(void *p, size_t n)
 {
     heap_head_t *h;
+    void *q;
     size_t old;
     if (p == NULL) {
         return nav_malloc(n);
     }
-    if (n > SIZE_MAX - sizeof *h) {
+    if (!heap_fits(n)) {
         return NULL;
     }
     h = (heap_head_t *)p - 1;
     old = h->size;
-    h = (heap_head_t *)realloc(h, sizeof *h + n);
-    if (h == NULL) {
-        return NULL; /* the old block stays, as realloc leaves it */
-    }
-    h->size = n;
     heap_now -= old;
-    heap_add(n);
-    return h + 1;
+    q = heap_took((heap_head_t *)realloc(h, sizeof *h + n), n);
+    if (q == NULL) {
+        heap_now += old; /* the old block stays, as realloc leaves it */
+    }
+    return q;
 }
 
 void nav_free(void *p)
@@ -96,11 +87,6 @@ void nav_free(void *p)
     h = (heap_head_t *)p - 1;
     heap_now -= h->size;
     free(h);
-}
-
-size_t nav_heap_bytes(void)
-{
-    return heap_now;
 }
 
 size_t nav_heap_peak(void)

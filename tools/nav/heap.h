@@ -18,9 +18,8 @@ void *nav_calloc(size_t count, size_t size);
 void *nav_realloc(void *p, size_t n);
 void nav_free(void *p);
 
-/* Bytes the program asked for and holds now, and the most it held at once
- * since it started (requested sizes, not the allocator's rounding). */
-size_t nav_heap_bytes(void);
+/* The most bytes the program held at once since it started (requested
+ * sizes, not the allocator's rounding). */
 size_t nav_heap_peak(void);
 
 #endif
