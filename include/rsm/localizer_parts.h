@@ -371,7 +371,9 @@ typedef struct rsm_global {
      * end with fit hit; then the winner, carried to the scan at hand. */
     uint32_t proved;               /* kept poses descended so far (found + 1: the winner too) */
     uint32_t rounds;               /* proofs of the same kept poses that were left in doubt */
-    uint32_t taken_back;           /* the levels read are back from the store for the next search */
+    uint32_t taken_back;           /* the levels read came back from the store whole ... */
+    uint32_t back_stored;          /* ... when the map had let this many tiles go into it
+                                    * (counters.stored): none let go since, none to take back */
     /* A crowded search's winner waiting for a second search to prove it
      * too, and the estimate then (odometry carries it from there); valid
      * while pending is 1. */

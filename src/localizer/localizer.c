@@ -305,6 +305,7 @@ void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
     loc->state.persistent.fit = fit;
     loc->state.persistent.map_fit = fit;
     loc->state.persistent.global.cached = 0u;
+    loc->state.persistent.global.taken_back = 0u;
     loc->state.persistent.recovery.phase = RECOVER_IDLE;
     /* Written at a loaded map's rate from now on (map_loaded_hit). */
     loc->state.persistent.map.write_hit = loc->cfg->map_loaded_hit > 0u ? loc->cfg->map_loaded_hit
@@ -2437,10 +2438,13 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         /* The grids take the memory of the scan a map write reads: the
          * write in progress, if any, ends first. */
         (void)rsm_tmap_write_run(&loc->state.persistent.map, loc->frame.world, 0u);
-        /* The levels it reads whole: what tracking let go into the store
-         * comes back first (a frozen map then keeps its grids), within the
-         * scans' budget (on ACES a thousand tiles may come back). */
-        if (loc->state.persistent.map.store != NULL && g->taken_back == 0u) {
+        /* The levels it reads whole: what tracking or a proof let go into
+         * the store comes back first (a frozen map then keeps its grids),
+         * within the scans' budget (on ACES a thousand tiles may come
+         * back). With nothing let go since they last came back, nothing is
+         * looked up (on ACES that look-up alone took a scan's budget). */
+        if (loc->state.persistent.map.store != NULL &&
+            (g->taken_back == 0u || g->back_stored != loc->state.persistent.map.counters.stored)) {
             int more = 0;
             if (budget > 0u && used > 0u) {
                 /* With a scan of its own: looking the levels' places up
@@ -2452,6 +2456,7 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
                 return searching(loc, rep, used);
             }
             g->taken_back = 1u;
+            g->back_stored = loc->state.persistent.map.counters.stored;
             if (budget > 0u && used + BEGIN_WORK >= budget) {
                 return searching(loc, rep, used);
             }
@@ -2472,7 +2477,6 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
         }
         loc->counters.global_searches++;
         g->phase = RSM_GLOBAL_RUNNING;
-        g->taken_back = 0u; /* the next search takes back again */
         used += BEGIN_WORK;
         if (budget > 0u && used >= budget) {
             return searching(loc, rep, used);

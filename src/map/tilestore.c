@@ -167,6 +167,7 @@ int rsm_localizer_set_store(rsm_localizer_t *loc, const rsm_tile_store_t *store)
         return RSM_ERR_NOSYS;
     }
     loc->state.persistent.map.store = store;
+    loc->state.persistent.global.taken_back = 0u; /* another store: what it holds is not known */
     return RSM_OK;
 }
 

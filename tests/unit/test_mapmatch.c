@@ -729,6 +729,48 @@ void test_mapmatch_wall_share_should_count_walls_not_how_often_they_were_seen(vo
     TEST_ASSERT_EQUAL_FLOAT(0.0f, rsm_mapmatch_wall_share(&map, pts, n, &truth, wall));
 }
 
+void test_mapmatch_wall_share_should_read_the_cells_the_fit_reads(void)
+{
+    /* One wall cell: a reading counts on it exactly where the fit's
+     * bilinear read takes some of it, from half a cell before the cell to
+     * half a cell past the next one on each axis (cell g spans [g, g + 1)
+     * cells, its value sits at its centre); a window half a cell off
+     * either way fails at the edges. Sampled off the edges, where the
+     * bilinear weight is not zero. */
+    const rsm_pose_t at = {0.0f, 0.0f, 0.0f};
+    const int32_t g = 10;
+    rsm_tmap_cursor_t cur;
+    uint32_t wall;
+    float a;
+    float empty;
+    int i;
+    int j;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &mcfg));
+    rsm_tmap_cursor_init(&cur, 0u);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_raise(&map, &cur, g, g, (uint32_t)mcfg.saturation));
+    wall = rsm_tmap_wall_value(&map);
+    TEST_ASSERT_TRUE((uint32_t)mcfg.saturation >= wall);
+    a = rsm_tmap_cell(&map, 0u);
+    pts[0].x = (float)(g + 40) * a; /* far from the wall: what an empty cell reads */
+    pts[0].y = (float)g * a;
+    empty = rsm_mapmatch_fit(&map, pts, 1u, &at);
+    TEST_ASSERT_EQUAL_FLOAT(0.0f, rsm_mapmatch_wall_share(&map, pts, 1u, &at, wall));
+    for (j = -25; j < 35; ++j) {
+        for (i = -25; i < 35; ++i) {
+            /* Offsets of 0.1 cell from g + 0.05: never on an edge. */
+            const float u = (float)g + 0.05f + 0.1f * (float)i;
+            const float v = (float)g + 0.05f + 0.1f * (float)j;
+            const int inside = u > (float)g - 0.5f && u < (float)g + 1.5f && v > (float)g - 0.5f && v < (float)g + 1.5f;
+            float share;
+            pts[0].x = u * a;
+            pts[0].y = v * a;
+            share = rsm_mapmatch_wall_share(&map, pts, 1u, &at, wall);
+            TEST_ASSERT_EQUAL_FLOAT(inside ? 1.0f : 0.0f, share);
+            TEST_ASSERT_EQUAL_INT(inside, rsm_mapmatch_fit(&map, pts, 1u, &at) > empty);
+        }
+    }
+}
+
 void test_mapmatch_should_report_an_empty_map_as_degenerate(void)
 {
     const rsm_pose_t pred = {1.0f, 2.0f, 0.5f};
@@ -814,6 +856,7 @@ int main(void)
     RUN_TEST(test_mapmatch_search_should_cost_places_the_map_does_not_hold_as_misses);
     RUN_TEST(test_mapmatch_search_should_find_in_parts_what_it_finds_whole);
     RUN_TEST(test_mapmatch_wall_share_should_count_walls_not_how_often_they_were_seen);
+    RUN_TEST(test_mapmatch_wall_share_should_read_the_cells_the_fit_reads);
     RUN_TEST(test_mapmatch_should_report_an_empty_map_as_degenerate);
     RUN_TEST(test_mapmatch_should_check_its_arguments_and_config);
     RUN_TEST(test_mapmatch_should_be_deterministic);

@@ -461,6 +461,55 @@ static void test_localizer_should_take_the_room_back_from_the_store(void)
     }
 }
 
+/* A global search looks the store up for the levels it reads only when
+ * the pool let tiles go since they last came back: a search with none let
+ * go since the last costs the look-up less than the same search with one
+ * counted gone, and finds the same; once the room went into the store,
+ * the next search looks it up again. */
+static void test_global_search_should_look_the_store_up_only_after_tiles_went(void)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_synth_scan_config_t sc = rsm_synth_scan_config_default();
+    const rsm_global_t *g = &loc.state.persistent.global;
+    const rsm_tmap_t *m = &loc.state.persistent.map;
+    rsm_localizer_report_t rep;
+    rsm_localizer_report_t rep_other;
+    uint32_t stored;
+    size_t len;
+    store.clear(store.ctx);
+    cfg.global_budget = 0u; /* each search whole in the scan after the request */
+    len = map_room(&loc);
+    TEST_ASSERT_EQUAL_UINT32(0u, m->counters.stored); /* the pool holds the room */
+    TEST_ASSERT_EQUAL_INT(RSM_OK,
+                          rsm_synth_scan(&world, &path[len - 1u], &sc, NULL, (uint64_t)(len + 10u) * STEP_US, &scan));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    TEST_ASSERT_EQUAL_UINT32(1u, g->taken_back);
+    TEST_ASSERT_EQUAL_UINT32(m->counters.stored, g->back_stored);
+    /* Again, nothing let go since; beside it a copy that counts a tile
+     * gone. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    other = loc;
+    other.state.persistent.global.back_stored++;
+    scan.stamp_us += STEP_US;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&other, &scan, &rep_other));
+    TEST_ASSERT_TRUE(rep.search_work > 0u);
+    TEST_ASSERT_TRUE(rep_other.search_work > rep.search_work);
+    TEST_ASSERT_EQUAL_INT(rep_other.outcome, rep.outcome);
+    TEST_ASSERT_EQUAL_MEMORY(&rep_other.pose, &rep.pose, sizeof rep.pose);
+    /* The room let go into the store: the next search looks it up again
+     * (counted when the levels came back: tiles taken back take slots,
+     * and newer places go into the store in turn). */
+    flood(&loc);
+    stored = m->counters.stored;
+    TEST_ASSERT_TRUE(stored > g->back_stored);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    scan.stamp_us += STEP_US;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    TEST_ASSERT_TRUE(g->back_stored >= stored);
+}
+
 /* A map with tiles in the store saves whole and loads back into a pool
  * and a store: the same tiles; without a store, or with one too small,
  * it is refused and the localizer keeps its map. */
@@ -741,6 +790,7 @@ int main(void)
     RUN_TEST(test_map_write_should_start_from_the_stored_tile);
     RUN_TEST(test_map_should_take_back_the_coarse_levels);
     RUN_TEST(test_localizer_should_take_the_room_back_from_the_store);
+    RUN_TEST(test_global_search_should_look_the_store_up_only_after_tiles_went);
     RUN_TEST(test_saved_map_should_hold_the_pool_and_the_store);
     RUN_TEST(test_damaged_map_with_store_tiles_should_be_refused_whole);
     RUN_TEST(test_rom_store_should_serve_a_saved_map_from_flash);
