@@ -184,10 +184,12 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
 /* The verdict of a proof round, on the kept poses' fits with the kept
  * scan (g->hit, where their descents ended g->end): 1 with *win the best,
  * when it fits at least min_fit and beats by margin (a share) every rival
- * beyond doubt of it (doubt_m or doubt_rad apart), on this round's fits
- * or, when it fitted best in every round before this one (g->rounds of
- * them, summed by rsm_global_add_round), on its fits multiplied over
- * all the rounds against each rival's; 0 in doubt (a rival too close,
+ * beyond doubt of it (doubt_m or doubt_rad apart) on its fits multiplied
+ * over all the rounds (g->rounds before this one, summed by
+ * rsm_global_add_round) against each rival's (where both fitted in each
+ * round before), and on this round's fits alone too unless it fitted
+ * best in every round before, each above the bar (after a crowded search
+ * this round's alone are always asked too); 0 in doubt (a rival too close,
  * or the best a little under min_fit: within a tenth); -1 when nothing
  * fits (or nothing was kept). */
 int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float doubt_m, float doubt_rad,

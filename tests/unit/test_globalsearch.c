@@ -1112,9 +1112,11 @@ static int verdict(const rsm_global_t *g, float min_fit, uint32_t *win)
 /* A proof's verdict (rsm_global_verdict): a place a little better than a
  * look-alike 3 m away from each of two views is proven by the two
  * together, not by either alone; not when another place led the first
- * view, nor when the second barely favours it; a kept pose at the same
- * place is no rival; a best a little under the fit asked is in doubt (for
- * another view), one far under it proves nothing. */
+ * view, nor when the second barely favours it; a view that alone would
+ * prove it does not after one that favoured the look-alike, until the
+ * views together do; a kept pose at the same place is no rival; a best a
+ * little under the fit asked is in doubt (for another view), one far
+ * under it proves nothing. */
 static void test_views_add_up(void)
 {
     uint32_t win = 99u;
@@ -1163,6 +1165,24 @@ static void test_views_add_up(void)
     rsm_global_add_round(&g1, 0.95f);
     g1.rounds = 1u;
     TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
+    /* The look-alike led the first view by under the margin, the pose
+     * leads the second by more: the two together are not beyond doubt
+     * (0.86 x 0.93 against 0.93 x 0.82: 1.049), a third view like the
+     * second is (1.19). */
+    g1 = g2;
+    g1.hit[0] = 0.86f;
+    g1.hit[1] = 0.93f;
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
+    rsm_global_add_round(&g1, 0.8f);
+    g1.rounds = 1u;
+    g1.hit[0] = 0.93f;
+    g1.hit[1] = 0.82f;
+    TEST_ASSERT_TRUE(g1.hit[0] > 1.1f * g1.hit[1]); /* this view alone would prove it */
+    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
+    rsm_global_add_round(&g1, 0.8f);
+    g1.rounds = 2u;
+    TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
+    TEST_ASSERT_EQUAL_UINT32(0u, win);
     /* Nothing kept: nothing proven. */
     g1.found = 0u;
     TEST_ASSERT_EQUAL_INT(-1, verdict(&g1, 0.8f, &win));
