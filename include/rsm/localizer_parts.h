@@ -373,7 +373,8 @@ typedef struct rsm_global {
     uint32_t rounds;               /* proofs of the same kept poses that were left in doubt */
     uint32_t taken_back;           /* the levels read came back from the store whole ... */
     uint32_t back_stored;          /* ... when the map had let this many tiles go into it
-                                    * (counters.stored): none let go since, none to take back */
+                                    * (counters.stored): none let go since, none to take back
+                                    * (cleared for another map or store) */
     /* A crowded search's winner waiting for a second search to prove it
      * too, and the estimate then (odometry carries it from there); valid
      * while pending is 1. */

@@ -298,14 +298,19 @@ static size_t search_bytes(const rsm_localizer_t *loc)
                                                     : sizeof loc->frame.global_grid;
 }
 
+void rsm_localizer_map_cleared(rsm_localizer_t *loc)
+{
+    loc->state.persistent.global.cached = 0u;
+    loc->state.persistent.global.taken_back = 0u;
+}
+
 void rsm_localizer_map_replaced(rsm_localizer_t *loc, float fit)
 {
     loc->have_scan = 1u;
     loc->state.persistent.written = loc->ekf.x;
     loc->state.persistent.fit = fit;
     loc->state.persistent.map_fit = fit;
-    loc->state.persistent.global.cached = 0u;
-    loc->state.persistent.global.taken_back = 0u;
+    rsm_localizer_map_cleared(loc);
     loc->state.persistent.recovery.phase = RECOVER_IDLE;
     /* Written at a loaded map's rate from now on (map_loaded_hit). */
     loc->state.persistent.map.write_hit = loc->cfg->map_loaded_hit > 0u ? loc->cfg->map_loaded_hit
@@ -2452,10 +2457,12 @@ static rsm_outcome_t step_global(rsm_localizer_t *loc, size_t npts, rsm_localize
                 return searching(loc, rep, used);
             }
             used += rsm_global_take_back(&loc->state.persistent.map, budget, &more);
-            if (more) {
+            if (more > 0) {
                 return searching(loc, rep, used);
             }
-            g->taken_back = 1u;
+            /* Whole, unless the pool had no slot for some (then looked up
+             * again by the next search). */
+            g->taken_back = more == 0 ? 1u : 0u;
             g->back_stored = loc->state.persistent.map.counters.stored;
             if (budget > 0u && used + BEGIN_WORK >= budget) {
                 return searching(loc, rep, used);

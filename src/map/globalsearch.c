@@ -419,8 +419,9 @@ uint32_t rsm_global_take_back(rsm_tmap_t *map, uint32_t budget, int *more)
      * the places looked up take about as much on ACES. */
     const uint32_t most = budget == 0u ? UINT32_MAX : (budget / 160u > 0u ? budget / 160u : 1u);
     uint32_t looked = 0;
-    const uint32_t got = rsm_tmap_take_back(map, direction_level(search_level(map)), most, &looked);
-    *more = got >= most ? 1 : 0;
+    int full = 0;
+    const uint32_t got = rsm_tmap_take_back(map, direction_level(search_level(map)), most, &looked, &full);
+    *more = full ? -1 : got >= most ? 1 : 0;
     return 10u * looked + 40u * got;
 }
 
@@ -1438,10 +1439,12 @@ static float log_fit(float hit)
     return logf(hit > 1.0e-3f ? hit : 1.0e-3f);
 }
 
-/* A sum of log fits at or under this holds a view the pose fitted
- * nowhere (log_fit's floor: no fit of a descent that ended is that low,
- * a verdict gives up on a best under a tenth of the fit asked). */
-#define LOG_FIT_FLOOR (-6.9f)
+/* A view where a pose's descent ended nowhere (its hit -1, prove_one)
+ * adds this to its sum of log fits, far under any sum of fits (at least
+ * log_fit's floor, -6.9, a view): a sum under LOG_FIT_FLOOR holds such a
+ * view. */
+#define LOG_NO_FIT (-1000.0f)
+#define LOG_FIT_FLOOR (-100.0f)
 
 int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float doubt_m, float doubt_rad,
                        uint32_t *win)
@@ -1485,8 +1488,8 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
         }
         if (g->rounds > 0u && g->log_hit[best] > LOG_FIT_FLOOR && g->log_hit[k] > LOG_FIT_FLOOR &&
             !(g->log_hit[best] + log_fit(g->hit[best]) - (g->log_hit[k] + log_fit(g->hit[k])) > log_margin)) {
-            /* (Weighed where both fitted in every view before: a pose
-             * whose descent ended nowhere in one has no fit there.) */
+            /* (Weighed where both had a fit in every view before: a pose
+             * whose descent ended nowhere in one has none there.) */
             summed = 0;
         }
     }
@@ -1574,6 +1577,6 @@ void rsm_global_add_round(rsm_global_t *g, float min_fit)
         g->leader = (uint32_t)RSM_GLOBAL_CANDIDATES;
     }
     for (k = 0; k < g->found; ++k) {
-        g->log_hit[k] += log_fit(g->hit[k]);
+        g->log_hit[k] += g->hit[k] < 0.0f ? LOG_NO_FIT : log_fit(g->hit[k]);
     }
 }

@@ -83,8 +83,10 @@ int rsm_global_check(const rsm_tmap_t *map, size_t grid_bytes);
  * search reads, the level it scores on and the one finer that gives the
  * map's directions (rsm_tmap_take_back): tracking in a map larger than the
  * pool lets some of them go, and a search does not fetch. At most a
- * quarter of budget's worth of tiles a call (0: all); *more is set when
- * some may be left for the next. Returns the work it counts: 10 a place
+ * quarter of budget's worth of tiles a call (0: all); *more is 1 when
+ * some may be left for the next, -1 when the pool had no slot left for
+ * them (some stay in the store), 0 when they all came back. Returns the
+ * work it counts: 10 a place
  * looked up (a hash probe in the pool and one in the store), 40 a tile
  * taken back. */
 uint32_t rsm_global_take_back(rsm_tmap_t *map, uint32_t budget, int *more);

@@ -313,6 +313,7 @@ int rsm_localizer_load_map(rsm_localizer_t *loc, rsm_mapfile_read_fn read, void 
     }
     if (rc != RSM_OK) {
         rsm_tmap_reset(map);
+        rsm_localizer_map_cleared(loc);
         return rc;
     }
     rsm_localizer_map_replaced(loc, got.fit);

@@ -48,6 +48,7 @@ int rsm_localizer_import_begin(rsm_localizer_t *loc, rsm_import_report_t *report
         return rc;
     }
     rsm_tmap_reset(&loc->state.persistent.map);
+    rsm_localizer_map_cleared(loc);
     if (report != NULL) {
         memset(report, 0, sizeof *report);
     }

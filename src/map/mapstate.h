@@ -9,6 +9,11 @@
 /* 1 for a localizer rsm_localizer_init set up (magic and cfg), else 0. */
 int rsm_localizer_ready(const rsm_localizer_t *loc);
 
+/* The persistent map was emptied or replaced (a load that failed once
+ * reading began, an import begun, or below): the global search's grids and
+ * its take-back from the store stand for it no more. */
+void rsm_localizer_map_cleared(rsm_localizer_t *loc);
+
 /* The persistent map was replaced (loaded, imported): the next scan is
  * matched against it, not written as a first; writes count from the
  * estimate; fit (0: unknown) is the recent scans' and the map's own; the

@@ -1040,12 +1040,15 @@ static int fetch_tile(rsm_tmap_t *map, uint32_t level, int32_t tx, int32_t ty, i
     return 1;
 }
 
-uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t most, uint32_t *looked)
+uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t most, uint32_t *looked, int *full)
 {
     uint32_t got = 0;
     uint32_t level;
     int ticked;
     uint32_t k;
+    if (full != NULL) {
+        *full = 0;
+    }
     if (map->store == NULL || map->cfg.levels < 2u) {
         return 0u;
     }
@@ -1080,6 +1083,9 @@ uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t most, 
                                          2 * (int32_t)p->ty + (int32_t)(c >> 1), &ticked);
                 ++*looked;
                 if (f < 0) {
+                    if (full != NULL) {
+                        *full = 1;
+                    }
                     return got; /* every slot holds a tile taken back now */
                 }
                 got += f > 0 ? 1u : 0u;

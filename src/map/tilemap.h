@@ -190,9 +190,11 @@ uint32_t rsm_tmap_fetch(rsm_tmap_t *map, const rsm_pose_t *pose, const rsm_point
  * have let some go. At most `most` tiles a call: one that took `most` may
  * leave some for the next. Adds to *looked the places looked up (four a
  * tile of the levels above) and a sixteenth of the pool's tiles (made the
- * newest). Returns the tiles taken back. Cursors on the map may hold a
- * slot it reused: forget them. */
-uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t most, uint32_t *looked);
+ * newest). Returns the tiles taken back; *full (may be NULL) 1 when it
+ * stopped because every slot held a tile of those levels (some may be
+ * left in the store), else 0. Cursors on the map may hold a slot it
+ * reused: forget them. */
+uint32_t rsm_tmap_take_back(rsm_tmap_t *map, uint32_t level_min, uint32_t most, uint32_t *looked, int *full);
 
 /* Raises cell (gx, gy) of the cursor's level to at least v (at most 15),
  * taking a tile for it when none is held there (a free slot, else the one

@@ -1109,6 +1109,21 @@ static int verdict(const rsm_global_t *g, float min_fit, uint32_t *win)
     return rsm_global_verdict(g, min_fit, 0.1f, 0.5f, 0.5f, win);
 }
 
+/* g2's poses judged from two views: the fits of pose 0 and of the
+ * look-alike (pose 1) in the first, then in the second (into g1); the
+ * verdict after the second. */
+static int two_views(float first0, float first1, float second0, float second1, uint32_t *win)
+{
+    g1 = g2;
+    g1.hit[0] = first0;
+    g1.hit[1] = first1;
+    rsm_global_add_round(&g1, 0.8f);
+    g1.rounds = 1u;
+    g1.hit[0] = second0;
+    g1.hit[1] = second1;
+    return verdict(&g1, 0.8f, win);
+}
+
 /* A proof's verdict (rsm_global_verdict): a place a little better than a
  * look-alike 3 m away from each of two views is proven by the two
  * together, not by either alone; not when another place led the first
@@ -1151,14 +1166,7 @@ static void test_views_add_up(void)
     g2.hit[1] = 0.88f;
     g2.hit[2] = 0.20f;
     /* The look-alike led the first view: the views do not add up. */
-    g1 = g2;
-    g1.hit[0] = 0.88f;
-    g1.hit[1] = 0.93f;
-    rsm_global_add_round(&g1, 0.8f);
-    g1.rounds = 1u;
-    g1.hit[0] = 0.93f;
-    g1.hit[1] = 0.88f;
-    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
+    TEST_ASSERT_EQUAL_INT(0, two_views(0.88f, 0.93f, 0.93f, 0.88f, &win));
     /* The pose led the first view but fitted it under the bar: that view
      * counts against it, and the next alone does not prove it. */
     g1 = g2;
@@ -1166,23 +1174,20 @@ static void test_views_add_up(void)
     g1.rounds = 1u;
     TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
     /* The look-alike led the first view by under the margin, the pose
-     * leads the second by more: the two together are not beyond doubt
-     * (0.86 x 0.93 against 0.93 x 0.82: 1.049), a third view like the
-     * second is (1.19). */
-    g1 = g2;
-    g1.hit[0] = 0.86f;
-    g1.hit[1] = 0.93f;
-    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
-    rsm_global_add_round(&g1, 0.8f);
-    g1.rounds = 1u;
-    g1.hit[0] = 0.93f;
-    g1.hit[1] = 0.82f;
-    TEST_ASSERT_TRUE(g1.hit[0] > 1.1f * g1.hit[1]); /* this view alone would prove it */
-    TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
+     * leads the second by more (0.93 against 0.82: alone, beyond it): the
+     * two together are not beyond doubt (0.86 x 0.93 against 0.93 x 0.82:
+     * 1.049), a third view like the second is (1.19). */
+    TEST_ASSERT_EQUAL_INT(0, two_views(0.86f, 0.93f, 0.93f, 0.82f, &win));
     rsm_global_add_round(&g1, 0.8f);
     g1.rounds = 2u;
     TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
     TEST_ASSERT_EQUAL_UINT32(0u, win);
+    /* A view where the pose's descent ended nowhere holds no fit of it
+     * to weigh against the look-alike's: the next view alone decides (and
+     * so where the look-alike's ended nowhere). */
+    TEST_ASSERT_EQUAL_INT(1, two_views(-1.0f, 0.85f, 0.93f, 0.82f, &win));
+    TEST_ASSERT_EQUAL_UINT32(0u, win);
+    TEST_ASSERT_EQUAL_INT(1, two_views(0.93f, -1.0f, 0.93f, 0.82f, &win));
     /* Nothing kept: nothing proven. */
     g1.found = 0u;
     TEST_ASSERT_EQUAL_INT(-1, verdict(&g1, 0.8f, &win));

@@ -10,6 +10,7 @@
 #include "rsm/config.h"
 #include "rsm/localizer.h"
 #include "rsm/mapfile.h"
+#include "rsm/mapimport.h"
 #include "rsm/status.h"
 #include "rsm/tilestore.h"
 #include "synth.h"
@@ -286,7 +287,7 @@ static void test_map_should_keep_what_its_pool_lets_go_in_the_store(void)
  * into a full pool, the tiles the store holds under a coarsest tile in the
  * pool, with their cells; a tile of a finer level than asked stays there;
  * the pool's oldest go into the store in their place; a second call finds
- * nothing to take. */
+ * nothing to take; a pool with no slot but the coarse levels' says so. */
 static void test_map_should_take_back_the_coarse_levels(void)
 {
     const rsm_tmap_config_t tc = rsm_tmap_config_default();
@@ -294,6 +295,7 @@ static void test_map_should_take_back_the_coarse_levels(void)
     uint32_t looked = 0;
     uint32_t before;
     uint32_t k;
+    int full = -1;
     rsm_tile_t t;
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &tc));
     map.store = &store;
@@ -318,8 +320,8 @@ static void test_map_should_take_back_the_coarse_levels(void)
     before = store.count(store.ctx);
     TEST_ASSERT_EQUAL_UINT32(6u, before);
     /* Three at most, then the rest. */
-    TEST_ASSERT_EQUAL_UINT32(3u, rsm_tmap_take_back(&map, top - 1u, 3u, &looked));
-    TEST_ASSERT_EQUAL_UINT32(2u, rsm_tmap_take_back(&map, top - 1u, 3u, &looked));
+    TEST_ASSERT_EQUAL_UINT32(3u, rsm_tmap_take_back(&map, top - 1u, 3u, &looked, NULL));
+    TEST_ASSERT_EQUAL_UINT32(2u, rsm_tmap_take_back(&map, top - 1u, 3u, &looked, NULL));
     /* Four places under each coarsest tile, a sixteenth of the pool. */
     TEST_ASSERT_TRUE(looked >= 8u + (uint32_t)RSM_TMAP_TILES / 16u);
     for (k = 0; k < 4u; ++k) {
@@ -334,10 +336,28 @@ static void test_map_should_take_back_the_coarse_levels(void)
     TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_TILES, map.used);
     TEST_ASSERT_EQUAL_UINT32(before, store.count(store.ctx));
     TEST_ASSERT_EQUAL_UINT32(0u, map.counters.unstored);
-    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_take_back(&map, top - 1u, 100u, &looked));
+    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_take_back(&map, top - 1u, 100u, &looked, &full));
+    TEST_ASSERT_EQUAL_INT(0, full);
+    /* A pool of coarsest tiles alone, a stored tile under one of them: no
+     * slot for it (said), and it stays in the store. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_init(&map, &tc));
+    map.store = &store;
+    store.clear(store.ctx);
+    for (k = 0; map.used < (uint32_t)RSM_TMAP_TILES; ++k) {
+        t = tile_at(top, (int32_t)k, 0, 0xFF);
+        t.stamp = (top << 30) | (1u << 29);
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(&map, &t));
+    }
+    t = tile_at(top - 1u, 0, 0, 0x55);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
+    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_take_back(&map, top - 1u, 100u, &looked, &full));
+    TEST_ASSERT_EQUAL_INT(1, full);
+    TEST_ASSERT_EQUAL_UINT32(1u, store.count(store.ctx));
+    TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_NONE, rsm_tmap_find_slot(&map, top - 1u, 0, 0));
     /* No store: nothing to do. */
     map.store = NULL;
-    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_take_back(&map, 0u, 100u, &looked));
+    TEST_ASSERT_EQUAL_UINT32(0u, rsm_tmap_take_back(&map, 0u, 100u, &looked, &full));
+    TEST_ASSERT_EQUAL_INT(0, full);
 }
 
 /* A return written into a place the store holds starts from the stored
@@ -486,6 +506,20 @@ static void test_global_search_should_look_the_store_up_only_after_tiles_went(vo
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
     TEST_ASSERT_EQUAL_UINT32(1u, g->taken_back);
     TEST_ASSERT_EQUAL_UINT32(m->counters.stored, g->back_stored);
+    /* Another store (here the same again): looked up anew. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_store(&loc, &store));
+    TEST_ASSERT_EQUAL_UINT32(0u, g->taken_back);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    scan.stamp_us += STEP_US;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    TEST_ASSERT_EQUAL_UINT32(1u, g->taken_back);
+    /* An import begun empties the map: what was built and taken back for
+     * it stands no more. */
+    TEST_ASSERT_EQUAL_UINT32(1u, g->cached);
+    other = loc;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_import_begin(&other, NULL));
+    TEST_ASSERT_EQUAL_UINT32(0u, other.state.persistent.global.taken_back);
+    TEST_ASSERT_EQUAL_UINT32(0u, other.state.persistent.global.cached);
     /* Again, nothing let go since; beside it a copy that counts a tile
      * gone. */
     TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
