@@ -1569,7 +1569,7 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
     int k;
     int best = -1;
     for (k = 0; k < RSM_RECOVER_STARTS; ++k) {
-        found_hit[k] = -1.0f; /* no basin */
+        found_hit[k] = -1.0f; /* no basin, until its descent ends */
     }
     memcpy(wide, loc->ekf.p, sizeof wide);
     wide[0] += radius_m * radius_m;
@@ -1582,7 +1582,6 @@ static recovery_t recover(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
         rsm_mapmatch_result_t alt;
         /* Not unpinned: each descent starts where the search put it and
          * only the fit decides, measured against the plain match. */
-        found_hit[k] = -1.0f;
         if (rsm_mapmatch(&loc->state.persistent.map, &cfg->mapmatch, loc->pts, npts, pred, wide, &start[k], NULL,
                          &alt) == RSM_OK) {
             found_hit[k] = alt.hit;

@@ -38,7 +38,6 @@ static uint32_t search_level(const rsm_tmap_t *map)
     return map->cfg.levels >= 2u ? (uint32_t)map->cfg.levels - 2u : 0u;
 }
 
-
 /* What a point on a cell of value v scores: its occupancy where it is a
  * wall (rsm_tmap_wall_value), else nothing. */
 static float cell_score(const rsm_tmap_t *map, uint32_t v, uint32_t wall)
