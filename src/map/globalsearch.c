@@ -16,12 +16,20 @@
 #define LEAF_SLACK 0.05f
 #define MAX_H ((uint32_t)RSM_GLOBAL_MAX_H)
 #define MAX_BASE_H ((uint32_t)RSM_GLOBAL_MAX_BASE_H)
-/* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart. */
+/* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart while
+ * memory is short; memory left once every grid is so fine lays them finer
+ * still (layout). */
 #define FINEST_BELOW 2u
 
 /* A crowded search's winner is proven only against a kept rival fitting
  * at least this share of it: a place weighed against nothing alike. */
 #define CROWDED_RIVAL 0.5f
+/* A search is crowded when at least this many distinct poses that reached
+ * its bar were not kept: more than it kept and weighs. A few left out
+ * beside eight weighed asked the same second search, which on the bench's
+ * logs only made the first pose later (docs/globalsearch.md, "A few poses
+ * not kept"). */
+#define CROWDED_UNKEPT ((uint32_t)RSM_GLOBAL_CANDIDATES)
 
 /* Floor division by 2^h for any sign. */
 static int32_t floor_shift(int32_t v, uint32_t h)
@@ -96,6 +104,7 @@ static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t grid_bytes,
 {
     const uint32_t cap = grid_bytes * 8u;
     const uint32_t side = w > hgt ? w : hgt;
+    uint32_t pass;
     uint32_t r;
     uint32_t h;
     *top = fixed > 1u ? fixed : 1u;
@@ -116,15 +125,26 @@ static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t grid_bytes,
             break;
         }
     }
-    for (h = 1; h <= *top; ++h) {
-        /* Blocks a quarter of the box apart at the finest: beyond that the
-         * bound hardly tightens (windows of 1.8 m and more hold walls
-         * anyway), and every bit costs its build. */
-        while (e[h] > 0u && e[h] + FINEST_BELOW > h) {
-            e[h]--;
-            if (grid_bits(w, hgt, *top, e) > cap) {
-                e[h]++;
-                break;
+    /* Blocks a quarter of the box apart for every box size first: finer,
+     * the bound of the larger boxes hardly tightens (windows of 1.8 m and
+     * more hold walls anyway), and every bit costs its build. In memory
+     * lent beyond the shared bytes (built at a map load, kept through
+     * writes: built once for many searches) what is left then goes to
+     * blocks finer still, down to a cell, the smallest boxes first: on the
+     * ACES map, 40 KiB so laid out took a median 0.78 times the reads to a
+     * first pose of 24 KiB at a quarter, where 40 KiB at a quarter took
+     * 0.87 (docs/globalsearch.md, "Lent memory"). In the shared bytes,
+     * built again in a search after every write, the finer blocks' build
+     * cost more than they saved. */
+    for (pass = 0; pass < (grid_bytes > (uint32_t)RSM_GLOBAL_GRID_BYTES ? 2u : 1u); ++pass) {
+        const uint32_t below = pass == 0u ? FINEST_BELOW : MAX_H;
+        for (h = 1; h <= *top; ++h) {
+            while (e[h] > 0u && e[h] + below > h) {
+                e[h]--;
+                if (grid_bits(w, hgt, *top, e) > cap) {
+                    e[h]++;
+                    break;
+                }
             }
         }
     }
@@ -177,7 +197,7 @@ float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven,
 
 int rsm_global_crowded(const rsm_global_t *g)
 {
-    return g->unkept > 0u;
+    return g->unkept >= CROWDED_UNKEPT;
 }
 
 float rsm_global_fit_share(const rsm_global_t *g, float min_fit, float crowded_fit)

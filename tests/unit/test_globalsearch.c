@@ -169,9 +169,10 @@ static void test_spread_search_finds_the_same(void)
 }
 
 /* A search that finds more distinct poses at its bar than it keeps says
- * so (unkept), and its winner must then fit about as well as the map's own
- * scans (global_crowded_fit) and beat a kept rival: the proof cannot weigh
- * the poses it did not keep. (On the bench's logs such searches came from
+ * so (unkept), and when they are at least as many as it keeps (crowded)
+ * its winner must fit about as well as the map's own scans
+ * (global_crowded_fit) and beat a kept rival: the proof cannot weigh the
+ * poses it did not keep. (On the bench's logs such searches came from
  * long corridors and look-alike rooms: docs/globalsearch.md.) */
 static void test_a_crowded_search_asks_a_closer_fit(void)
 {
@@ -180,10 +181,15 @@ static void test_a_crowded_search_asks_a_closer_fit(void)
     rsm_localizer_report_t rep;
     size_t proof_at = 0;
     size_t k;
-    /* The rule itself. */
+    /* The rule itself: a few left out beside those kept do not make it
+     * crowded. */
     g1.unkept = 0u;
     TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_fit_share(&g1, 0.8f, 0.9f));
-    g1.unkept = 1u;
+    g1.unkept = RSM_GLOBAL_CANDIDATES - 1u;
+    TEST_ASSERT_FALSE(rsm_global_crowded(&g1));
+    TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_fit_share(&g1, 0.8f, 0.9f));
+    g1.unkept = RSM_GLOBAL_CANDIDATES;
+    TEST_ASSERT_TRUE(rsm_global_crowded(&g1));
     TEST_ASSERT_EQUAL_FLOAT(0.9f, rsm_global_fit_share(&g1, 0.8f, 0.9f));
     TEST_ASSERT_EQUAL_FLOAT(0.8f, rsm_global_fit_share(&g1, 0.8f, 0.7f));
     /* The room: every pose that passes is kept. */
@@ -216,7 +222,7 @@ static void test_a_crowded_search_asks_a_closer_fit(void)
         }
         TEST_ASSERT_EQUAL_UINT32(RSM_GLOBAL_PROVING, g->phase);
         g->found = 1u;
-        g->unkept = k == 0u ? 0u : 1u;
+        g->unkept = k == 0u ? 0u : RSM_GLOBAL_CANDIDATES;
         ambiguous = loc.counters.global_ambiguous;
         for (; at < path_len - 20u && !proven && loc.counters.global_ambiguous == ambiguous; ++at) {
             step(&loc, &world, at, &rep);
@@ -956,6 +962,33 @@ static size_t found_from(const rsm_synth_world_t *world, size_t at, rsm_pose_t *
     return k;
 }
 
+/* In the shared bytes the grids' blocks come no closer than a quarter of
+ * their box; memory lent beyond them lays them finer still, down to a
+ * cell (the room's map is small enough for every grid to be exact). */
+static void test_lent_memory_lays_blocks_finer_than_a_quarter(void)
+{
+    static uint8_t lent[RSM_GLOBAL_LEND_BYTES];
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    uint32_t h;
+    uint32_t coarser = 0;
+    make_path();
+    map_path(&world, path_len / 2u);
+    memset(&g1, 0, sizeof g1);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g1, grid1, sizeof grid1, &loc.state.persistent.map, NULL));
+    TEST_ASSERT_TRUE(g1.top_h >= 3u);
+    for (h = 1; h <= g1.top_h; ++h) {
+        TEST_ASSERT_TRUE(g1.grid_e[h] + 2u >= h);
+        coarser += g1.grid_e[h] > 0u ? 1u : 0u;
+    }
+    TEST_ASSERT_TRUE(coarser > 0u);
+    memset(&g2, 0, sizeof g2);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g2, lent, sizeof lent, &loc.state.persistent.map, NULL));
+    TEST_ASSERT_EQUAL_UINT32(g1.top_h, g2.top_h);
+    for (h = 1; h <= g2.top_h; ++h) {
+        TEST_ASSERT_EQUAL_UINT8(0u, g2.grid_e[h]);
+    }
+}
+
 /* Lent memory lays the grids' blocks closer: the same place, proven no
  * later, for fewer reads; lent during a search, it begins again. */
 static void test_lent_memory_reads_fewer(void)
@@ -1012,6 +1045,7 @@ static void test_grids_stand_through_writes(void)
 {
     static uint8_t lent[RSM_GLOBAL_LEND_BYTES];
     static uint8_t before_writes[RSM_GLOBAL_LEND_BYTES];
+    static uint8_t fresh[RSM_GLOBAL_LEND_BYTES];
     static rsm_synth_segment_t seg[64];
     const rsm_synth_world_t room = rsm_synth_world_room();
     /* A post 0.1 m square near the north-west corner: on tiles of the
@@ -1064,12 +1098,11 @@ static void test_grids_stand_through_writes(void)
      * kept grids set; and the post set blocks the grids before the writes
      * did not (else the check above proves nothing). */
     memset(&g2, 0, sizeof g2);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g2, grid2, sizeof lent < sizeof grid2 ? sizeof lent : sizeof grid2,
-                                                     map, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g2, fresh, sizeof fresh, map, NULL));
     if (g2.build_end == g->build_end) {
         uint32_t i;
         for (i = 0; i < g2.build_end; ++i) {
-            if (rsm_bit_get(grid2, i)) {
+            if (rsm_bit_get(fresh, i)) {
                 fresh_bits++;
                 new_bits += rsm_bit_get(before_writes, i) ? 0u : 1u;
                 missed += rsm_bit_get(lent, i) ? 0u : 1u;
@@ -1197,7 +1230,7 @@ static void test_views_add_up(void)
     rsm_global_add_round(&g1, 0.8f);
     g1.rounds = 1u;
     TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
-    g1.unkept = 1u;
+    g1.unkept = RSM_GLOBAL_CANDIDATES;
     TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
 }
 
@@ -1214,7 +1247,7 @@ static void test_a_crowded_winner_needs_a_rival(void)
     g1.hit[0] = 0.90f;
     g1.hit[1] = 0.50f; /* more than half of 0.90, 1.8 times less */
     TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
-    g1.unkept = 5u;
+    g1.unkept = RSM_GLOBAL_CANDIDATES;
     TEST_ASSERT_EQUAL_INT(1, verdict(&g1, 0.8f, &win));
     TEST_ASSERT_EQUAL_UINT32(0u, win);
     g1.hit[1] = 0.40f; /* under half */
@@ -1224,7 +1257,7 @@ static void test_a_crowded_winner_needs_a_rival(void)
     /* A rival at the same place is none: one kept place alone. */
     g1.end[1].x = 0.05f;
     g1.hit[1] = 0.85f;
-    g1.unkept = 5u;
+    g1.unkept = RSM_GLOBAL_CANDIDATES;
     TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
     g1.found = 1u;
     TEST_ASSERT_EQUAL_INT(0, verdict(&g1, 0.8f, &win));
@@ -1251,7 +1284,7 @@ static void test_a_crowded_winner_is_proven_twice(void)
     TEST_ASSERT_EQUAL_INT(1, rsm_global_take(&g1, &place, &at0, 0.4f, 0.2f));
     TEST_ASSERT_EQUAL_UINT32(0u, g1.pending);
     /* Crowded: waits. */
-    g1.unkept = 3u;
+    g1.unkept = RSM_GLOBAL_CANDIDATES;
     TEST_ASSERT_EQUAL_INT(0, rsm_global_take(&g1, &place, &at0, 0.4f, 0.2f));
     TEST_ASSERT_EQUAL_UINT32(1u, g1.pending);
     /* Odometry carries it as it carries the estimate. */
@@ -1484,6 +1517,7 @@ int main(void)
     RUN_TEST(test_few_points_wait);
     RUN_TEST(test_far_readings);
     RUN_TEST(test_too_wide_a_map);
+    RUN_TEST(test_lent_memory_lays_blocks_finer_than_a_quarter);
     RUN_TEST(test_lent_memory_reads_fewer);
     RUN_TEST(test_grids_stand_through_writes);
     RUN_TEST(test_views_add_up);
