@@ -544,6 +544,59 @@ static void test_global_search_should_look_the_store_up_only_after_tiles_went(vo
     TEST_ASSERT_TRUE(g->back_stored >= stored);
 }
 
+/* A pool with no slot for what the store holds of the levels a search
+ * reads (every other tile of the coarsest level, kept whole with a store,
+ * and the one tile of the level searched written by the update in
+ * progress): the search goes on with what the pool holds, the stored tile
+ * stays in the store, and the levels do not count as back whole, so the
+ * next search looks the store up again. */
+static void test_global_search_should_go_on_when_the_pool_has_no_slot(void)
+{
+    const rsm_pose_t at = {0.5f, 0.5f, 0.0f};
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    const rsm_synth_scan_config_t sc = rsm_synth_scan_config_default();
+    const rsm_global_t *g = &loc.state.persistent.global;
+    rsm_tmap_t *m = &loc.state.persistent.map;
+    rsm_localizer_report_t rep;
+    uint32_t top;
+    uint32_t k;
+    rsm_tile_t t;
+    store.clear(store.ctx);
+    cfg.global_budget = 0u; /* each search whole in its scan */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_init(&loc, &cfg, &at, NULL));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_set_store(&loc, &store));
+    top = (uint32_t)m->cfg.levels - 1u;
+    t = tile_at(top - 1u, 0, 0, 0x55);
+    t.stamp = ((top - 1u) << 30) | m->stamp; /* age 0: not the pool's to let go */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(m, &t));
+    for (k = 0; m->used < (uint32_t)RSM_TMAP_TILES; ++k) {
+        t = tile_at(top, (int32_t)k, 0, 0xFF);
+        t.stamp = (top << 30) | m->stamp;
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_tmap_restore(m, &t));
+    }
+    /* Under the first coarsest tile, beside the one the pool holds. */
+    t = tile_at(top - 1u, 1, 0, 0x55);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, store.put(store.ctx, &t));
+    TEST_ASSERT_EQUAL_INT(RSM_OK,
+                          rsm_synth_scan(&world, &at, &sc, NULL, (uint64_t)10u * STEP_US, &scan));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    /* It searched (no scan spent waiting for a slot) and nothing moved. */
+    TEST_ASSERT_EQUAL_UINT32(1u, loc.counters.global_searches);
+    TEST_ASSERT_TRUE(rep.search_work > 0u);
+    TEST_ASSERT_EQUAL_UINT32(0u, g->taken_back);
+    TEST_ASSERT_EQUAL_UINT32(1u, store.count(store.ctx));
+    TEST_ASSERT_EQUAL_UINT32(RSM_TMAP_NONE, rsm_tmap_find_slot(m, top - 1u, 1, 0));
+    TEST_ASSERT_EQUAL_UINT32((uint32_t)RSM_TMAP_TILES, m->used);
+    /* The next search looks the store up again, and goes on again. */
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_global(&loc));
+    scan.stamp_us += STEP_US;
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    TEST_ASSERT_EQUAL_UINT32(2u, loc.counters.global_searches);
+    TEST_ASSERT_EQUAL_UINT32(0u, g->taken_back);
+    TEST_ASSERT_EQUAL_UINT32(1u, store.count(store.ctx));
+}
+
 /* A map with tiles in the store saves whole and loads back into a pool
  * and a store: the same tiles; without a store, or with one too small,
  * it is refused and the localizer keeps its map. */
@@ -825,6 +878,7 @@ int main(void)
     RUN_TEST(test_map_should_take_back_the_coarse_levels);
     RUN_TEST(test_localizer_should_take_the_room_back_from_the_store);
     RUN_TEST(test_global_search_should_look_the_store_up_only_after_tiles_went);
+    RUN_TEST(test_global_search_should_go_on_when_the_pool_has_no_slot);
     RUN_TEST(test_saved_map_should_hold_the_pool_and_the_store);
     RUN_TEST(test_damaged_map_with_store_tiles_should_be_refused_whole);
     RUN_TEST(test_rom_store_should_serve_a_saved_map_from_flash);
