@@ -187,8 +187,8 @@ typedef struct rsm_localizer_config {
     float global_min_fit;           /* the winner's fit (mean occupancy under all its points at the
                                      * finest level) must reach this share of the fit the map's own
                                      * scans had (saved with the map; 1 when unknown); default 0.8 */
-    float global_crowded_fit;       /* the same share when more distinct poses reached the search's
-                                     * bar than it keeps (RSM_GLOBAL_CANDIDATES): a rival the proof
+    float global_crowded_fit;       /* the same share when at least as many poses reached the
+                                     * search's bar unkept as it keeps (RSM_GLOBAL_CANDIDATES): a rival the proof
                                      * could not weigh may fit better than those it did, so the
                                      * winner must fit about as well as the map's own scans;
                                      * default 0.9 (below global_min_fit: that one) */
@@ -544,8 +544,8 @@ int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const floa
  * nothing is written into the map. When it is done, each pose it kept is
  * descended with a share of that scan (as many a scan as global_budget
  * pays for), and the best is the winner when its fit reaches
- * global_min_fit of the map's own (global_crowded_fit when more distinct
- * poses passed the search than it keeps) and beats every distinct rival's
+ * global_min_fit of the map's own (global_crowded_fit when at least as
+ * many poses passed the search unkept as it keeps) and beats every distinct rival's
  * (doubt_m, doubt_rad away) by recover_margin; the winner, carried by
  * odometry to the scan at hand, must fit it as well and be pinned by it:
  * that scan is RSM_SCAN_ACCEPTED with report.recovered set and the

@@ -362,7 +362,8 @@ typedef struct rsm_global {
     uint32_t depth;
     rsm_global_candidate_t cand[RSM_GLOBAL_CANDIDATES];
     uint32_t found;
-    uint32_t unkept;               /* distinct poses that reached the bar when cand was full */
+    uint32_t unkept;               /* leaves that reached the bar outside the kept poses' basins
+                                    * when cand was full (a place may count more than once) */
     float floor_score;             /* a pose must score at least this to be kept */
     float best_score;              /* the best coarse score found */
     uint32_t unproven;             /* searches in a row that proved nothing (each next one

@@ -16,19 +16,21 @@
 #define LEAF_SLACK 0.05f
 #define MAX_H ((uint32_t)RSM_GLOBAL_MAX_H)
 #define MAX_BASE_H ((uint32_t)RSM_GLOBAL_MAX_BASE_H)
-/* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart while
- * memory is short; memory left once every grid is so fine lays them finer
- * still (layout). */
+/* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart; in
+ * memory lent beyond the shared bytes, what is left once every grid is so
+ * fine lays grids up to FINER_TOP_H finer still, down to a cell (layout). */
 #define FINEST_BELOW 2u
+#define FINER_TOP_H 4u
 
 /* A crowded search's winner is proven only against a kept rival fitting
  * at least this share of it: a place weighed against nothing alike. */
 #define CROWDED_RIVAL 0.5f
-/* A search is crowded when at least this many distinct poses that reached
- * its bar were not kept: more than it kept and weighs. A few left out
+/* A search is crowded when it turned away at least this many leaves that
+ * reached its bar outside the basins it kept (g->unkept; a place may count
+ * more than once): as many as it keeps and weighs. A few turned away
  * beside eight weighed asked the same second search, which on the bench's
- * logs only made the first pose later (docs/globalsearch.md, "A few poses
- * not kept"). */
+ * logs only made the first pose later (docs/globalsearch.md, "Finer grids
+ * in lent memory, and a few poses not kept"). */
 #define CROWDED_UNKEPT ((uint32_t)RSM_GLOBAL_CANDIDATES)
 
 /* Floor division by 2^h for any sign. */
@@ -128,17 +130,22 @@ static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t grid_bytes,
     /* Blocks a quarter of the box apart for every box size first: finer,
      * the bound of the larger boxes hardly tightens (windows of 1.8 m and
      * more hold walls anyway), and every bit costs its build. In memory
-     * lent beyond the shared bytes (built at a map load, kept through
-     * writes: built once for many searches) what is left then goes to
-     * blocks finer still, down to a cell, the smallest boxes first: on the
-     * ACES map, 40 KiB so laid out took a median 0.78 times the reads to a
-     * first pose of 24 KiB at a quarter, where 40 KiB at a quarter took
-     * 0.87 (docs/globalsearch.md, "Lent memory"). In the shared bytes,
-     * built again in a search after every write, the finer blocks' build
-     * cost more than they saved. */
+     * lent beyond the shared bytes (the whole map's grids built at a map
+     * load and kept through writes) what is left then goes to blocks finer
+     * still, down to a cell, for boxes up to 2^FINER_TOP_H cells, the
+     * smallest first: on the ACES map, 32 KiB so laid out took a median
+     * 0.83 times the reads to a first pose of 24 KiB at a quarter. Finer
+     * large boxes read hardly fewer, and each hit a kept grid takes from a
+     * write sets (2^h + 2)^2 of its blocks when they are a cell apart
+     * (ACES with updates: every grid laid finer took the scans' 95th
+     * percentile on this host from 253 to 446 us, up to 2^4 to 271). In
+     * the shared bytes, built again in a search after every write, the
+     * finer blocks' build cost more than they saved (docs/globalsearch.md,
+     * "Finer grids in lent memory, and a few poses not kept"). */
     for (pass = 0; pass < (grid_bytes > (uint32_t)RSM_GLOBAL_GRID_BYTES ? 2u : 1u); ++pass) {
         const uint32_t below = pass == 0u ? FINEST_BELOW : MAX_H;
-        for (h = 1; h <= *top; ++h) {
+        const uint32_t last = pass == 0u || *top < FINER_TOP_H ? *top : FINER_TOP_H;
+        for (h = 1; h <= last; ++h) {
             while (e[h] > 0u && e[h] + below > h) {
                 e[h]--;
                 if (grid_bits(w, hgt, *top, e) > cap) {

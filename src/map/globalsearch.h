@@ -129,9 +129,10 @@ void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
  * further only once the window holds the whole map. */
 float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven, float min_share);
 
-/* Whether the search just run was crowded: more distinct poses reached
- * its bar than it keeps (g->unkept), so its proof weighs only a few of
- * them and one it never weighed may fit better. */
+/* Whether the search just run was crowded: it turned away at least as
+ * many leaves that reached its bar outside its kept poses' basins as it
+ * keeps (g->unkept >= RSM_GLOBAL_CANDIDATES), so its proof weighs only a
+ * few of the places and one it never weighed may fit better. */
 int rsm_global_crowded(const rsm_global_t *g);
 
 /* The share of the map's own fit a winner of search g must reach:
@@ -202,7 +203,7 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
 rsm_pose_t rsm_global_pending_carried(const rsm_global_t *g, const rsm_pose_t *at);
 
 /* Whether a proven winner at pose may be taken, at estimate `at` (which
- * odometry carries). A crowded search's proof (g->unkept > 0) weighed a
+ * odometry carries). A crowded search's proof (rsm_global_crowded) weighed a
  * few of the places that reached its bar, and one it never weighed may
  * fit better: its winner is taken only when a later search proves the
  * same place too (g->pending_pose, carried from g->pending_at to at,
