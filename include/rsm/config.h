@@ -146,15 +146,12 @@
 
 /* Memory rsm-nav and the map-in-flash images lend the global search's
  * grids (rsm_localizer_set_search_memory), outside the localizer's state:
- * about 0.6 times the reads of the 2 888 shared bytes on the Intel log,
- * and on the ACES log 0.83 times those of the memory lent before stop 59,
- * whose grids went no finer than a quarter of their box
- * (docs/globalsearch.md, "Finer grids in lent memory"). The library uses
- * what it is lent, or the shared bytes without. On an STM32F407 it fits
- * the core-coupled RAM beside the stack and the drivers of each example
- * image (docs/bringup-stm32f4.md). */
+ * about 0.6 times the reads of the 2 888 shared bytes on the Intel log
+ * (docs/globalsearch.md). The library uses what it is lent, or the shared
+ * bytes without. On an STM32F407 it fits the core-coupled RAM beside the
+ * stack (docs/bringup-stm32f4.md). */
 #ifndef RSM_GLOBAL_LEND_BYTES
-#define RSM_GLOBAL_LEND_BYTES 32768
+#define RSM_GLOBAL_LEND_BYTES 24576
 #endif
 
 /* ---- key points and matches ------------------------------------------- */

@@ -582,7 +582,7 @@ int rsm_localizer_searching(const rsm_localizer_t *loc);
  * More memory lays the grids' blocks closer: tighter bounds, fewer reads
  * to the same pose (RSM_GLOBAL_LEND_BYTES: about 0.6 times the
  * reads on the Intel log; docs/globalsearch.md); beyond what a map needs
- * for blocks a cell apart in every grid it is not used. The memory must
+ * for blocks a quarter of each box apart it is not used. The memory must
  * outlive its use, untouched by anything else; rsm_localizer_init forgets
  * it. The grids are built into it at once (as a map load does), and a
  * search under way begins again; in lent memory they stay through the

@@ -16,11 +16,8 @@
 #define LEAF_SLACK 0.05f
 #define MAX_H ((uint32_t)RSM_GLOBAL_MAX_H)
 #define MAX_BASE_H ((uint32_t)RSM_GLOBAL_MAX_BASE_H)
-/* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart; in
- * memory lent beyond the shared bytes, what is left once every grid is so
- * fine lays grids up to FINER_TOP_H finer still, down to a cell (layout). */
+/* Grid h's blocks start at least 2^(h - FINEST_BELOW) cells apart. */
 #define FINEST_BELOW 2u
-#define FINER_TOP_H 4u
 
 /* A crowded search's winner is proven only against a kept rival fitting
  * at least this share of it: a place weighed against nothing alike. */
@@ -106,7 +103,6 @@ static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t grid_bytes,
 {
     const uint32_t cap = grid_bytes * 8u;
     const uint32_t side = w > hgt ? w : hgt;
-    uint32_t pass;
     uint32_t r;
     uint32_t h;
     *top = fixed > 1u ? fixed : 1u;
@@ -127,31 +123,17 @@ static int layout(uint32_t w, uint32_t hgt, uint32_t fixed, uint32_t grid_bytes,
             break;
         }
     }
-    /* Blocks a quarter of the box apart for every box size first: finer,
-     * the bound of the larger boxes hardly tightens (windows of 1.8 m and
-     * more hold walls anyway), and every bit costs its build. In memory
-     * lent beyond the shared bytes (the whole map's grids built at a map
-     * load and kept through writes) what is left then goes to blocks finer
-     * still, down to a cell, for boxes up to 2^FINER_TOP_H cells, the
-     * smallest first: on the ACES map, 32 KiB so laid out took a median
-     * 0.83 times the reads to a first pose of 24 KiB at a quarter. Finer
-     * large boxes read hardly fewer, and each hit a kept grid takes from a
-     * write sets (2^h + 2)^2 of its blocks when they are a cell apart
-     * (ACES with updates: every grid laid finer took the scans' 95th
-     * percentile on this host from 253 to 446 us, up to 2^4 to 271). In
-     * the shared bytes, built again in a search after every write, the
-     * finer blocks' build cost more than they saved (docs/globalsearch.md,
-     * "Finer grids in lent memory, and a few poses not kept"). */
-    for (pass = 0; pass < (grid_bytes > (uint32_t)RSM_GLOBAL_GRID_BYTES ? 2u : 1u); ++pass) {
-        const uint32_t below = pass == 0u ? FINEST_BELOW : MAX_H;
-        const uint32_t last = pass == 0u || *top < FINER_TOP_H ? *top : FINER_TOP_H;
-        for (h = 1; h <= last; ++h) {
-            while (e[h] > 0u && e[h] + below > h) {
-                e[h]--;
-                if (grid_bits(w, hgt, *top, e) > cap) {
-                    e[h]++;
-                    break;
-                }
+    for (h = 1; h <= *top; ++h) {
+        /* Blocks a quarter of the box apart at the finest: beyond that the
+         * bound hardly tightens (windows of 1.8 m and more hold walls
+         * anyway), and every bit costs its build (and, in grids kept
+         * through writes, each hit a write sets in them: docs/globalsearch.md,
+         * "Finer grids in lent memory, and a few poses not kept"). */
+        while (e[h] > 0u && e[h] + FINEST_BELOW > h) {
+            e[h]--;
+            if (grid_bits(w, hgt, *top, e) > cap) {
+                e[h]++;
+                break;
             }
         }
     }

@@ -962,34 +962,6 @@ static size_t found_from(const rsm_synth_world_t *world, size_t at, rsm_pose_t *
     return k;
 }
 
-/* In the shared bytes the grids' blocks come no closer than a quarter of
- * their box; memory lent beyond them lays those of boxes up to 16 cells
- * finer still, down to a cell (the room's map is small enough for them to
- * be exact), and keeps larger boxes at a quarter. */
-static void test_lent_memory_lays_blocks_finer_than_a_quarter(void)
-{
-    static uint8_t lent[RSM_GLOBAL_LEND_BYTES];
-    const rsm_synth_world_t world = rsm_synth_world_room();
-    uint32_t h;
-    uint32_t coarser = 0;
-    make_path();
-    map_path(&world, path_len / 2u);
-    memset(&g1, 0, sizeof g1);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g1, grid1, sizeof grid1, &loc.state.persistent.map, NULL));
-    TEST_ASSERT_TRUE(g1.top_h >= 3u);
-    for (h = 1; h <= g1.top_h; ++h) {
-        TEST_ASSERT_TRUE(g1.grid_e[h] + 2u >= h);
-        coarser += g1.grid_e[h] > 0u ? 1u : 0u;
-    }
-    TEST_ASSERT_TRUE(coarser > 0u);
-    memset(&g2, 0, sizeof g2);
-    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_global_prepare(&g2, lent, sizeof lent, &loc.state.persistent.map, NULL));
-    TEST_ASSERT_EQUAL_UINT32(g1.top_h, g2.top_h);
-    for (h = 1; h <= g2.top_h; ++h) {
-        TEST_ASSERT_EQUAL_UINT8(h <= 4u ? 0u : h - 2u, g2.grid_e[h]);
-    }
-}
-
 /* Lent memory lays the grids' blocks closer: the same place, proven no
  * later, for fewer reads; lent during a search, it begins again. */
 static void test_lent_memory_reads_fewer(void)
@@ -1518,7 +1490,6 @@ int main(void)
     RUN_TEST(test_few_points_wait);
     RUN_TEST(test_far_readings);
     RUN_TEST(test_too_wide_a_map);
-    RUN_TEST(test_lent_memory_lays_blocks_finer_than_a_quarter);
     RUN_TEST(test_lent_memory_reads_fewer);
     RUN_TEST(test_grids_stand_through_writes);
     RUN_TEST(test_views_add_up);
