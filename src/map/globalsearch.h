@@ -203,8 +203,8 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
 rsm_pose_t rsm_global_pending_carried(const rsm_global_t *g, const rsm_pose_t *at);
 
 /* Whether a proven winner at pose may be taken, at estimate `at` (which
- * odometry carries). A crowded search's proof (rsm_global_crowded) weighed a
- * few of the places that reached its bar, and one it never weighed may
+ * odometry carries). A crowded search's proof (rsm_global_crowded)
+ * weighed a few of the places that reached its bar, and one it never weighed may
  * fit better: its winner is taken only when a later search proves the
  * same place too (g->pending_pose, carried from g->pending_at to at,
  * within reach_m and reach_rad: odometry's drift over that motion), and
