@@ -145,13 +145,15 @@
 #endif
 
 /* Memory rsm-nav and the map-in-flash images lend the global search's
- * grids (rsm_localizer_set_search_memory), outside the localizer's state:
+ * grids (rsm_localizer_set_search_memory), outside the localizer's state,
+ * 24576 bytes, or more with a larger RSM_MAX_BEAMS (it must hold what the
+ * grids share with a map write: RSM_MAX_BEAMS points of 8 bytes):
  * about 0.6 times the reads of the 2 888 shared bytes on the Intel log
  * (docs/globalsearch.md). The library uses what it is lent, or the shared
  * bytes without. On an STM32F407 it fits the core-coupled RAM beside the
  * stack (docs/bringup-stm32f4.md). */
 #ifndef RSM_GLOBAL_LEND_BYTES
-#define RSM_GLOBAL_LEND_BYTES 24576
+#define RSM_GLOBAL_LEND_BYTES (RSM_MAX_BEAMS * 8 > 24576 ? RSM_MAX_BEAMS * 8 : 24576)
 #endif
 
 /* ---- key points and matches ------------------------------------------- */
