@@ -6,9 +6,9 @@
  * forget the building too soon. The global search keeps 24 readings, 4
  * candidates and bound grids of 16 blocks a side (60 tiles gave way for
  * it), searches every heading the default searches every other of, and
- * each bar once where the default searches each three times: with so few
- * readings and poses kept, the coarser lattice and the repeated searches
- * proved look-alikes on ACES. Under 64 KiB of localizer state;
+ * each bar once where the default searches the first twice and each lower
+ * one three times: with so few readings and poses kept, the coarser
+ * lattice and the repeated searches proved look-alikes on ACES. Under 64 KiB of localizer state;
  * tools/bench prints its accuracy beside the default's. */
 #ifndef RSM_CONFIG_SMALL_H
 #define RSM_CONFIG_SMALL_H
@@ -25,4 +25,5 @@
 #define RSM_GLOBAL_CANDIDATES 4
 #define RSM_GLOBAL_HEADING_CELLS 1
 #define RSM_GLOBAL_BAR_SEARCHES 1
+#define RSM_GLOBAL_FIRST_SEARCHES 1
 #endif
