@@ -121,9 +121,10 @@ void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
 
 /* The share of kept points a search in map asks for (rsm_global_begin's
  * min_share) after `unproven` searches in a row that proved nothing: 0.97
- * for the first (a box whose window misses a single point is dropped),
- * then 0.95, 0.90, ... down to min_share (global_min_share), each bar
- * below the first for RSM_GLOBAL_BAR_SEARCHES searches. A search near the
+ * for the first RSM_GLOBAL_FIRST_SEARCHES (a box whose window misses a
+ * single point is dropped), then 0.95, 0.90, ... down to min_share
+ * (global_min_share), each bar below the first for
+ * RSM_GLOBAL_BAR_SEARCHES searches. A search near the
  * estimate (radius_m > 0; 0: the whole map) searches each window at 0.97
  * then 0.95 before it doubles (rsm_global_radius), and the bar falls
  * further only once the window holds the whole map. */
@@ -186,7 +187,9 @@ int rsm_global_run(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, uint32
 
 /* The verdict of a proof round, on the kept poses' fits with the kept
  * scan (g->hit, where their descents ended g->end): 1 with *win the best,
- * when it fits at least min_fit and beats by margin (a share) every rival
+ * when it fits at least min_fit, in this round and over all the rounds
+ * (its fits multiplied over them, as a mean, where it fitted in each
+ * round before), and beats by margin (a share) every rival
  * beyond doubt of it (doubt_m or doubt_rad apart) on its fits multiplied
  * over all the rounds (g->rounds before this one, summed by
  * rsm_global_add_round) against each rival's (where both fitted in each
