@@ -158,17 +158,16 @@
 #define RSM_GLOBAL_BAR_SEARCHES 3
 #endif
 
-/* Memory rsm-nav and the map-in-flash images lend the global search's
- * grids (rsm_localizer_set_search_memory), outside the localizer's state,
- * 24576 bytes, or more with a larger RSM_MAX_BEAMS (it must hold what the
- * grids share with a map write: RSM_MAX_BEAMS points of 8 bytes):
- * about 0.6 times the reads of the 2 888 shared bytes on the Intel log
- * (docs/globalsearch.md). The library uses what it is lent, or the shared
- * bytes without. On an STM32F407 it fits the core-coupled RAM beside the
- * stack (docs/bringup-stm32f4.md). */
-#ifndef RSM_GLOBAL_LEND_BYTES
-#define RSM_GLOBAL_LEND_BYTES (RSM_MAX_BEAMS * 8 > 24576 ? RSM_MAX_BEAMS * 8 : 24576)
-#endif
+/* RSM_GLOBAL_LEND_BYTES: the memory rsm-nav and the map-in-flash images
+ * lend the global search's grids (rsm_localizer_set_search_memory),
+ * outside the localizer's state: about 0.6 times the reads of the 2 888
+ * shared bytes on the Intel log (docs/globalsearch.md). The library uses
+ * what it is lent, or the shared bytes without. By default 24576 bytes, or
+ * the grids' shared bytes where those are more (a larger RSM_MAX_BEAMS or
+ * RSM_GLOBAL_SIDE), set beside them in rsm/localizer_parts.h; a value
+ * given here that cannot hold them stops the build. On an STM32F407 the
+ * default fits the core-coupled RAM beside the stack
+ * (docs/bringup-stm32f4.md). */
 
 /* ---- key points and matches ------------------------------------------- */
 

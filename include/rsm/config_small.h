@@ -8,8 +8,9 @@
  * it), searches every heading the default searches every other of, and
  * each bar once where the default searches the first twice and each lower
  * one three times: with so few readings and poses kept, the coarser
- * lattice and the repeated searches proved look-alikes on ACES. Under 64 KiB of localizer state;
- * tools/bench prints its accuracy beside the default's. */
+ * lattice and the repeated searches proved look-alikes on ACES. Under
+ * 64 KiB of localizer state; tools/bench prints its accuracy beside the
+ * default's. */
 #ifndef RSM_CONFIG_SMALL_H
 #define RSM_CONFIG_SMALL_H
 #define RSM_TMAP_TILES 1140

@@ -190,9 +190,9 @@ typedef struct rsm_localizer_config {
     float global_crowded_fit;       /* the same share when at least as many poses reached the
                                      * search's bar unkept as it keeps (RSM_GLOBAL_CANDIDATES):
                                      * a rival the proof could not weigh may fit better than
-                                     * those it did, so the
-                                     * winner must fit about as well as the map's own scans;
-                                     * default 0.9 (below global_min_fit: that one) */
+                                     * those it did, so the winner must fit about as well as
+                                     * the map's own scans; default 0.9 (below global_min_fit:
+                                     * that one) */
     uint8_t global_when_lost;       /* 1: a localizer that reports lost starts a global search by
                                      * itself, within recover_m of the estimate first, the window
                                      * doubling with every second search that proves nothing
@@ -547,8 +547,8 @@ int rsm_localizer_set_pose(rsm_localizer_t *loc, const rsm_pose_t *x, const floa
  * pays for), and the best is the winner when its fit reaches
  * global_min_fit of the map's own (global_crowded_fit when at least as
  * many poses passed the search unkept as it keeps) and beats every
- * distinct rival's (doubt_m, doubt_rad away) by recover_margin; the winner, carried by
- * odometry to the scan at hand, must fit it as well and be pinned by it:
+ * distinct rival's (doubt_m, doubt_rad away) by recover_margin; the
+ * winner, carried by odometry to the scan at hand, must fit it as well and be pinned by it:
  * that scan is RSM_SCAN_ACCEPTED with report.recovered set and the
  * estimate tracking again. A verdict left in doubt is made again with the
  * same poses once the robot has moved on, up to 4 times; otherwise, or

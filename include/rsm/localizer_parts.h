@@ -275,10 +275,13 @@ typedef struct rsm_tmap {
 /* Memory lent to the search (rsm_localizer_set_search_memory) beyond this
  * is not used: the grids' bit indices stay 32-bit. */
 #define RSM_GLOBAL_MAX_GRID_BYTES (1ul << 24)
-/* What rsm-nav and the map-in-flash images lend (RSM_GLOBAL_LEND_BYTES)
- * must hold the grids: rsm_localizer_set_search_memory refuses less than
- * the shared bytes (a larger RSM_GLOBAL_SIDE asks a larger lend;
- * tests/config/check_asserts.cmake). */
+/* What rsm-nav and the map-in-flash images lend (rsm/config.h says why):
+ * 24576 bytes, or the shared bytes where those are more. A lend set by
+ * hand must hold the grids too: rsm_localizer_set_search_memory refuses
+ * less than the shared bytes (tests/config/check_asserts.cmake). */
+#ifndef RSM_GLOBAL_LEND_BYTES
+#define RSM_GLOBAL_LEND_BYTES (RSM_GLOBAL_GRID_BYTES > 24576 ? RSM_GLOBAL_GRID_BYTES : 24576)
+#endif
 RSM_STATIC_ASSERT(global_lend_holds_grids, RSM_GLOBAL_LEND_BYTES >= RSM_GLOBAL_GRID_BYTES);
 /* Boxes of at most 2^RSM_GLOBAL_MAX_H positions a side (13 km with 0.2 m
  * cells): one bound grid per box size up to it. */

@@ -2099,8 +2099,8 @@ static float bar_fit(const rsm_localizer_t *loc)
 /* The fit a search's winner must reach: global_min_fit of the map's own,
  * or global_crowded_fit when at least as many places reached the search's
  * bar unkept as it kept (rsm_global_fit_share). Measured on the bench's
- * global starts: the winners of such searches that were 33 and 43 m off on ACES fitted 0.85
- * and 0.86 of the map's own, the right ones 0.90 to 1.08 (ACES) and 0.87
+ * global starts: the winners of such searches that were 33 and 43 m off
+ * on ACES fitted 0.85 and 0.86 of the map's own, the right ones 0.90 to 1.08 (ACES) and 0.87
  * to 1.03 (Intel): docs/globalsearch.md, "Crowded searches". */
 static float win_fit(const rsm_localizer_t *loc)
 {

@@ -1456,19 +1456,28 @@ static float log_fit(float hit)
 #define LOG_NO_FIT (-1000.0f)
 #define LOG_FIT_FLOOR (-100.0f)
 
-/* Kept pose k's fit over every view so far, this one too: its fits
- * multiplied over them, as a mean (its fit here where a view before holds
- * none: a descent that ended nowhere). The fit asked of a winner is asked
- * of all its views together, as the margin over its rivals is: measured
- * on an ACES kidnap with updates, a lone pose 3.64 m off and turned half
- * round fitted 0.624 and then 0.745 where 0.690 was asked, and the second
- * view alone took it. */
+/* Whether kept pose k had a fit in every view before this one (its
+ * descent ended somewhere each time), and the log of its fits multiplied
+ * over all the views, this one too. */
+static int fitted_before(const rsm_global_t *g, uint32_t k)
+{
+    return g->rounds > 0u && g->log_hit[k] > LOG_FIT_FLOOR;
+}
+
+static float log_views(const rsm_global_t *g, uint32_t k)
+{
+    return g->log_hit[k] + log_fit(g->hit[k]);
+}
+
+/* Kept pose k's fit over every view so far, as a mean of their logs (its
+ * fit here where a view before holds none). The fit asked of a winner is
+ * asked of all its views together, as the margin over its rivals is:
+ * measured on an ACES kidnap with updates, a lone pose 3.64 m off and
+ * turned half round fitted 0.624 and then 0.745 where 0.690 was asked,
+ * and the second view alone took it. */
 static float fit_views(const rsm_global_t *g, uint32_t k)
 {
-    if (g->rounds == 0u || !(g->log_hit[k] > LOG_FIT_FLOOR)) {
-        return g->hit[k];
-    }
-    return expf((g->log_hit[k] + log_fit(g->hit[k])) / (float)(g->rounds + 1u));
+    return fitted_before(g, k) ? expf(log_views(g, k) / (float)(g->rounds + 1u)) : g->hit[k];
 }
 
 int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float doubt_m, float doubt_rad,
@@ -1511,8 +1520,7 @@ int rsm_global_verdict(const rsm_global_t *g, float min_fit, float margin, float
         if (g->hit[k] > rival) {
             rival = g->hit[k];
         }
-        if (g->rounds > 0u && g->log_hit[best] > LOG_FIT_FLOOR && g->log_hit[k] > LOG_FIT_FLOOR &&
-            !(g->log_hit[best] + log_fit(g->hit[best]) - (g->log_hit[k] + log_fit(g->hit[k])) > log_margin)) {
+        if (fitted_before(g, best) && fitted_before(g, k) && !(log_views(g, best) - log_views(g, k) > log_margin)) {
             /* (Weighed where both had a fit in every view before: a pose
              * whose descent ended nowhere in one has none there.) */
             summed = 0;

@@ -124,10 +124,10 @@ void rsm_global_keep(rsm_global_t *g, uint8_t *grid, const rsm_tmap_t *map, cons
  * for the first RSM_GLOBAL_FIRST_SEARCHES (a box whose window misses a
  * single point is dropped), then 0.95, 0.90, ... down to min_share
  * (global_min_share), each bar below the first for
- * RSM_GLOBAL_BAR_SEARCHES searches. A search near the
- * estimate (radius_m > 0; 0: the whole map) searches each window at 0.97
- * then 0.95 before it doubles (rsm_global_radius), and the bar falls
- * further only once the window holds the whole map. */
+ * RSM_GLOBAL_BAR_SEARCHES searches. A search near the estimate
+ * (radius_m > 0; 0: the whole map) searches each window at 0.97 then 0.95
+ * before it doubles (rsm_global_radius), and the bar falls further only
+ * once the window holds the whole map. */
 float rsm_global_share(const rsm_tmap_t *map, float radius_m, uint32_t unproven, float min_share);
 
 /* Whether the search just run was crowded: it turned away at least as
@@ -207,8 +207,8 @@ rsm_pose_t rsm_global_pending_carried(const rsm_global_t *g, const rsm_pose_t *a
 
 /* Whether a proven winner at pose may be taken, at estimate `at` (which
  * odometry carries). A crowded search's proof (rsm_global_crowded)
- * weighed a few of the places that reached its bar, and one it never weighed may
- * fit better: its winner is taken only when a later search proves the
+ * weighed a few of the places that reached its bar, and one it never
+ * weighed may fit better: its winner is taken only when a later search proves the
  * same place too (g->pending_pose, carried from g->pending_at to at,
  * within reach_m and reach_rad: odometry's drift over that motion), and
  * else becomes the pending winner, in place of any before. An uncrowded

@@ -19,21 +19,26 @@ compile(rc text)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "the default configuration does not compile:\n${text}")
 endif()
-# The widest scans compile too: the lend grows with them.
-compile(rc text -DRSM_MAX_BEAMS=4096)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "-DRSM_MAX_BEAMS=4096 does not compile:\n${text}")
-endif()
+# The widest scans and the largest grids compile too: the default lend
+# grows with them.
+foreach(defs IN ITEMS -DRSM_MAX_BEAMS=4096 -DRSM_GLOBAL_SIDE=200)
+  compile(rc text ${defs})
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${defs} does not compile:\n${text}")
+  endif()
+endforeach()
 
-# Each case: the check's name, then the definitions that break it.
+# Each case: the check's name, then the definitions that break it (comma
+# separated).
 set(cases
   "global_lend_holds_grids|-DRSM_GLOBAL_LEND_BYTES=1024"
-  "global_lend_holds_grids|-DRSM_GLOBAL_SIDE=200"
+  "global_lend_holds_grids|-DRSM_GLOBAL_SIDE=200,-DRSM_GLOBAL_LEND_BYTES=24576"
   "max_beams_positive|-DRSM_MAX_BEAMS=1")
 foreach(c IN LISTS cases)
   string(REPLACE "|" ";" parts "${c}")
   list(GET parts 0 name)
   list(GET parts 1 defs)
+  string(REPLACE "," ";" defs "${defs}")
   compile(rc text ${defs})
   if(rc EQUAL 0)
     message(FATAL_ERROR "${defs}: compiled, where the check ${name} should stop it")
