@@ -83,7 +83,7 @@ from .measure import (build_fixed, build_small, cmake_cache, cpu_info, discover_
     run_accuracy, run_arm_memory, run_callgrind, run_cross_check, run_host_stack, run_m4, run_memory, run_nav,
     run_robustness, run_scaling, run_speed, run_spread, run_stage_speed, run_stages, run_turns, scaling_variants,
     shared_dir, source_digest, spread_updates, stages_exe, variant_header, write_head)
-from .faults import FAULT_RUNS, QUICK_FAULT_RUNS, fault_floors, run_faults
+from .faults import FAULT_NAMES, FAULT_RUNS, QUICK_FAULT_RUNS, fault_floors, report_faults, run_faults
 from .knownmap import (KIDNAP_RUNS, QUICK_KIDNAP_RUNS, QUICK_STARTS, STARTS, START_SCANS, knownmap_floors,
     run_knownmap)
 from . import deskew as _deskew
@@ -157,13 +157,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--kidnap-runs", type=int, help=f"runs per log of the section Known map's kidnapping, one "
                    f"kidnap each, frozen and with updates (default {KIDNAP_RUNS}; quick {QUICK_KIDNAP_RUNS}; 0: skip "
                    "that part)")
-    p.add_argument("--only", choices=("knownmap", "capture", "deskew"), help="run one section alone: knownmap (the "
-                   "section Known map, written into the existing report and the work directory's manifest, the rest "
-                   "left as it is; with --global-starts, --global-scans, --kidnap-runs, --quick, --jobs, --shared, "
-                   "--output, --work-dir); capture (the capture path against the direct run and its jittered runs, "
-                   "on every log; with --jitter-runs, --jobs, --shared, --work-dir) or deskew (de-skew with encoder "
-                   "packets in bursts; with --deskew-seconds, --work-dir): these two print their lines and write "
-                   "WORK/only-NAME.json, and leave the report as it is")
+    p.add_argument("--only", choices=("knownmap", "capture", "deskew", "faults"), help="run one section alone: "
+                   "knownmap (the section Known map, written into the existing report and the work directory's "
+                   "manifest, the rest left as it is; with --global-starts, --global-scans, --kidnap-runs, --quick, "
+                   "--jobs, --shared, --output, --work-dir); capture (the capture path against the direct run and "
+                   "its jittered runs, on every log; with --jitter-runs, --jobs, --shared, --work-dir), deskew "
+                   "(de-skew with encoder packets in bursts; with --deskew-seconds, --work-dir) or faults (the "
+                   "section Faults; with --faults, --fault-names, --quick, --jobs, --shared, --work-dir): these "
+                   "three print their lines and write WORK/only-NAME.json, and leave the report as it is")
+    p.add_argument("--fault-names", help="with --only faults: the faults to run, comma-separated (default all: "
+                   + ", ".join(FAULT_NAMES) + "); the clean runs always")
     p.add_argument("--jitter-runs", type=int, help=f"direct runs with +-{fullchecks.JITTER_M * 1e6:g} um of odometry "
                    f"jitter beside the capture path (default {fullchecks.JITTER_RUNS}; quick "
                    f"{fullchecks.QUICK_JITTER_RUNS})")
@@ -255,6 +258,8 @@ def run(args: argparse.Namespace) -> Path:
         raise BenchError("--global-scans must be at least 1")
     nkidnap = args.kidnap_runs if args.kidnap_runs is not None else (QUICK_KIDNAP_RUNS if args.quick else KIDNAP_RUNS)
     km_jobs = max(args.jobs, os.cpu_count() or 1)  # the section's many short runs: every core
+    if args.fault_names is not None and args.only != "faults":
+        raise BenchError("--fault-names goes with --only faults (the whole bench runs every fault)")
     if args.only == "knownmap":
         if nstarts < 1:
             raise BenchError("--only knownmap needs --global-starts of at least 1")
@@ -270,7 +275,7 @@ def run(args: argparse.Namespace) -> Path:
               f"{work / 'bench.json'}")
         return output
 
-    if args.only in ("capture", "deskew"):
+    if args.only in ("capture", "deskew", "faults"):
         return _run_only_line(args, nav, logs, work, root)
 
     def stage(name, fn, *a):
@@ -462,7 +467,7 @@ def _deskew_seconds(args: argparse.Namespace) -> float:
 
 
 def _run_only_line(args: argparse.Namespace, nav: Path, logs, work: Path, root: Path) -> Path:
-    """--only capture or --only deskew: the lines alone, printed and kept in
+    """--only capture, deskew or faults: the lines alone, printed and kept in
     WORK/only-NAME.json (the report is the whole bench's and is left as it is)."""
     t0 = time.monotonic()
     if args.only == "capture":
@@ -478,6 +483,19 @@ def _run_only_line(args: argparse.Namespace, nav: Path, logs, work: Path, root: 
             res["checks"] += fullchecks.check_capture_path(label, nav, log, relations, errs, d, direct,
                                                            _jitter_runs(args), args.jobs)
         lines = [c["line"] for c in res["checks"]]
+    elif args.only == "faults":
+        names = tuple(n.strip() for n in (args.fault_names or ",".join(FAULT_NAMES)).split(",") if n.strip())
+        unknown = [n for n in names if n not in FAULT_NAMES]
+        if unknown or not names:
+            raise BenchError(f"--fault-names: unknown {', '.join(unknown) or '(none given)'}; "
+                             f"known: {', '.join(FAULT_NAMES)}")
+        runs = args.faults if args.faults is not None else (QUICK_FAULT_RUNS if args.quick else FAULT_RUNS)
+        if runs < 1:
+            raise BenchError("--only faults needs --faults of at least 1")
+        print("rsm-bench: logs " + ", ".join(f"{l} ({shown_path(g, root)})" for l, g, _ in logs)
+              + f"; faults only: {', '.join(names)}, {runs} runs each", flush=True)
+        res = run_faults(nav, logs, runs, work, args.jobs, names=names)
+        lines = report_faults(res) + [f["line"] for f in fault_floors(res)]
     else:
         res = _deskew.run(nav, work, _deskew_seconds(args))
         lines = _deskew.report(res) + [f["line"] for f in _deskew.floors(res)]

@@ -73,6 +73,7 @@ SPARSE_MOUNT = (0.22, 0.0, 0.0)
 SPARSE_OFFSETS = (0.0, 0.25, 0.5, 0.75)  # degrees
 DROP_PERCENT = 25
 GAP_S = 15.0
+LONG_GAP_S = 120.0  # gaps of minutes (issue 29): odometry over them comes in one step
 
 # (name, what it does) in report order.
 FAULTS = (
@@ -87,6 +88,8 @@ FAULTS = (
                "the axle, start angles +" + ", +".join(f"{v:g}" for v in SPARSE_OFFSETS) + " deg in turn"),
     ("drop", f"{DROP_PERCENT} % of the scans dropped at random"),
     ("gap", f"no scan for {GAP_S:g} s once"),
+    ("longgap", f"no scan for {LONG_GAP_S:g} s once (odometry over it in one step, metres and tens of degrees off "
+                "on Intel)"),
 )
 FAULT_NAMES = tuple(n for n, _ in FAULTS)
 
@@ -150,10 +153,11 @@ def plan(name: str, log: flt.LoadedLog, k: int, label: str = "") -> flt.FaultSpe
         return flt.FaultSpec(every_m=SPARSE_M, every_rad=SPARSE_RAD, mount=SPARSE_MOUNT, start_offsets=offs, seed=k)
     if name == "drop":
         return flt.FaultSpec(drop=DROP_PERCENT, seed=k)
-    if name == "gap":
+    if name in ("gap", "longgap"):
+        length = GAP_S if name == "gap" else LONG_GAP_S
         dur = log.scans[-1].stamp - log.first_stamp
-        lo, hi = 0.1 * dur, max(0.1 * dur, 0.9 * dur - GAP_S)
-        return flt.FaultSpec(gaps=[(round(rng.uniform(lo, hi), 3), GAP_S)], seed=k)
+        lo, hi = 0.1 * dur, max(0.1 * dur, 0.9 * dur - length)
+        return flt.FaultSpec(gaps=[(round(rng.uniform(lo, hi), 3), length)], seed=k)
     raise BenchError(f"unknown fault {name!r}")
 
 
@@ -185,7 +189,7 @@ def judged_trajectory(traj: ev.Trajectory, res: flt.FaultResult) -> List[Tuple[f
     return out
 
 
-REMOVING = ("sparse", "drop", "gap")  # faults whose removed scans the judge dead-reckons
+REMOVING = ("sparse", "drop", "gap", "longgap")  # faults whose removed scans the judge dead-reckons
 
 
 def clean_as_judged(clean: ev.Trajectory, run: ev.Trajectory,
