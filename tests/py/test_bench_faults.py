@@ -323,3 +323,18 @@ def test_false_recoveries_are_judged_at_the_laser_with_a_mount():
                               (r.x, r.y, r.yaw))[0] for r in rels]
     assert max(errs) > 0.01
 
+
+
+def test_fault_names_are_checked_before_anything_runs(capsys):
+    """--fault-names picks faults for --only faults; a name the bench does
+    not know, an empty list, or the option without --only faults is refused
+    with the known names, before any build or log is looked for."""
+    from rsm_tools import bench
+
+    assert bench.main(["--only", "faults", "--fault-names", "gap,nope"]) == 1
+    err = capsys.readouterr().err
+    assert "unknown nope" in err and "longgap" in err
+    assert bench.main(["--only", "faults", "--fault-names", " , "]) == 1
+    assert "(none given)" in capsys.readouterr().err
+    assert bench.main(["--fault-names", "gap"]) == 1
+    assert "goes with --only faults" in capsys.readouterr().err

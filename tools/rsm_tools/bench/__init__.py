@@ -66,7 +66,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 from .. import corridors, fullchecks, lidarbench
 from ..fullchecks import check
@@ -220,8 +220,24 @@ def _jsonable(o):
     return o
 
 
+def _fault_names(args: argparse.Namespace) -> Tuple[str, ...]:
+    """--fault-names as a tuple (every fault without it); refused when
+    unknown, empty, or given without --only faults."""
+    if args.fault_names is None:
+        return FAULT_NAMES
+    if args.only != "faults":
+        raise BenchError("--fault-names goes with --only faults (the whole bench runs every fault)")
+    names = tuple(n.strip() for n in args.fault_names.split(",") if n.strip())
+    unknown = [n for n in names if n not in FAULT_NAMES]
+    if unknown or not names:
+        raise BenchError(f"--fault-names: unknown {', '.join(unknown) or '(none given)'}; "
+                         f"known: {', '.join(FAULT_NAMES)}")
+    return names
+
+
 def run(args: argparse.Namespace) -> Path:
     t_start = time.monotonic()
+    _fault_names(args)  # a bad argument is refused before anything is built or read
     root = (args.root or find_root()).resolve()
     build = (args.build_dir or root / "build-release").resolve()
     nav = build / "tools" / "nav" / "rsm-nav"
@@ -258,8 +274,6 @@ def run(args: argparse.Namespace) -> Path:
         raise BenchError("--global-scans must be at least 1")
     nkidnap = args.kidnap_runs if args.kidnap_runs is not None else (QUICK_KIDNAP_RUNS if args.quick else KIDNAP_RUNS)
     km_jobs = max(args.jobs, os.cpu_count() or 1)  # the section's many short runs: every core
-    if args.fault_names is not None and args.only != "faults":
-        raise BenchError("--fault-names goes with --only faults (the whole bench runs every fault)")
     if args.only == "knownmap":
         if nstarts < 1:
             raise BenchError("--only knownmap needs --global-starts of at least 1")
@@ -484,11 +498,7 @@ def _run_only_line(args: argparse.Namespace, nav: Path, logs, work: Path, root: 
                                                            _jitter_runs(args), args.jobs)
         lines = [c["line"] for c in res["checks"]]
     elif args.only == "faults":
-        names = tuple(n.strip() for n in (args.fault_names or ",".join(FAULT_NAMES)).split(",") if n.strip())
-        unknown = [n for n in names if n not in FAULT_NAMES]
-        if unknown or not names:
-            raise BenchError(f"--fault-names: unknown {', '.join(unknown) or '(none given)'}; "
-                             f"known: {', '.join(FAULT_NAMES)}")
+        names = _fault_names(args)
         runs = args.faults if args.faults is not None else (QUICK_FAULT_RUNS if args.quick else FAULT_RUNS)
         if runs < 1:
             raise BenchError("--only faults needs --faults of at least 1")
