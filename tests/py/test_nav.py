@@ -335,6 +335,50 @@ def test_runs_are_bit_identical(tmp_path, head_log):
     assert a.read_bytes() == b.read_bytes() and len(a.read_bytes()) > 10000
 
 
+def predictions(summary: str) -> int:
+    m = re.search(r"predictions\s+(\d+) odometry predictions", summary)
+    assert m, summary
+    return int(m.group(1))
+
+
+def test_odom_lines_are_steps_of_their_own_along_the_same_path(tmp_path, head_log):
+    """--odom-lines feeds each ODOM line after the first scan as an odometry
+    step of its own, as a robot's driver sends them between scans: the
+    localizer predicts once a step, and odometry alone still ends each scan
+    where that scan's own pose puts it (the steps sum to the same path)."""
+    import gzip
+
+    first_scan_seen = False
+    odoms_after = 0
+    with gzip.open(head_log, "rt") as f:
+        for line in f:
+            kind = line.split(" ", 1)[0]
+            if kind in ("FLASER", "ROBOTLASER1"):
+                first_scan_seen = True
+            elif kind == "ODOM" and first_scan_seen:
+                odoms_after += 1
+    assert odoms_after > 100  # the excerpt has ODOM lines between its scans
+    plain = run_nav(head_log, tmp_path / "plain.txt", "odometry")
+    steps = run_nav(head_log, tmp_path / "steps.txt", "odometry", "--odom-lines")
+    assert scans_run(steps) == scans_run(plain)
+    assert predictions(steps) == predictions(plain) + odoms_after
+    a = ev.load_trajectory(tmp_path / "plain.txt").points()
+    b = ev.load_trajectory(tmp_path / "steps.txt").points()
+    assert len(a) == len(b) > 500
+    for p, q in zip(a, b):
+        assert p.t == q.t
+        assert math.hypot(p.x - q.x, p.y - q.y) < 1e-3 and abs(ev.wrap_angle(p.theta - q.theta)) < 1e-4
+    # and rsm runs on them as on the laser lines' poses
+    run_nav(head_log, tmp_path / "rsm.txt", "rsm", "--odom-lines")
+    assert len(ev.load_trajectory(tmp_path / "rsm.txt").points()) == len(a)
+
+
+def test_odom_lines_need_a_carmen_log(tmp_path, excerpt_capture):
+    res = subprocess.run([str(nav_binary()), "--capture", str(excerpt_capture), "--odom-lines", "--trajectory",
+                          str(tmp_path / "t.txt"), "--quiet"], capture_output=True, text=True, timeout=600)
+    assert res.returncode == 2 and "--odom-lines reads the ODOM lines of a CARMEN log" in res.stderr
+
+
 def dropped(summary: str) -> dict:
     line = [l for l in summary.splitlines() if l.strip().startswith("readings dropped:")]
     assert len(line) == 1, summary

@@ -362,7 +362,7 @@ static int run_log(run_t *r)
     static const logrun_ops_t ops = {start_cb, want_cb, motion_cb, scan_cb, done_cb};
     int rc;
     r->reader.fov179 = r->opt.fov179;
-    rc = logrun_carmen(&r->reader, &r->rec, r->opt.carmen, "rsm-stages", &r->repair, &ops, r);
+    rc = logrun_carmen(&r->reader, &r->rec, r->opt.carmen, "rsm-stages", &r->repair, &ops, r, 0);
     return rc < 0 ? 1 : rc;
 }
 

@@ -57,7 +57,7 @@ void logrun_scan(const carmen_record_t *rec, rsm_scan_t *scan)
 }
 
 int logrun_carmen(carmen_reader_t *reader, carmen_record_t *rec, const char *path, const char *prog,
-                  stamp_repair_t *repair, const logrun_ops_t *ops, void *ctx)
+                  stamp_repair_t *repair, const logrun_ops_t *ops, void *ctx, int odom_lines)
 {
     double last_odom[3] = {0.0, 0.0, 0.0};
     int started = 0;
@@ -81,7 +81,18 @@ int logrun_carmen(carmen_reader_t *reader, carmen_record_t *rec, const char *pat
             status = 1;
             break;
         }
-        /* Odometry comes from the pose carried by each laser line. */
+        if (k == CARMEN_ODOM && odom_lines && started) {
+            /* Each step apart, as the robot's driver sends them: the
+             * localizer calibrates and weighs each one (a drive between
+             * two scans far apart, in one step, cannot be calibrated). */
+            const rsm_pose_t d = carmen_between(last_odom, rec->odom_d);
+            const rsm_motion_t u = {d.x, d.y, d.theta};
+            ops->motion(ctx, &u);
+            memcpy(last_odom, rec->odom_d, sizeof last_odom);
+            continue;
+        }
+        /* Odometry comes from the pose carried by each laser line (and,
+         * with odom_lines, the ODOM lines between them). */
         if (k != CARMEN_SCAN || (ops->want != NULL && !ops->want(ctx, rec))) {
             continue;
         }

@@ -58,11 +58,14 @@ typedef struct logrun_ops {
 } logrun_ops_t;
 
 /* Opens path with *reader (fov179 set by the caller), runs every scan
- * record through ops and closes it. rec is the caller's (large) record
+ * record through ops and closes it. With odom_lines, each ODOM record
+ * after the first scan taken is an odometry increment of its own (ops->motion),
+ * as a robot's driver sends them between scans; else odometry comes from
+ * the scan records' poses alone. rec is the caller's (large) record
  * buffer, repair its stamp state. Returns 0; -1 if the log cannot be
  * opened, 1 if reading it failed part way (message on stderr, after prog;
  * what ran is kept); 2 if start refused. */
 int logrun_carmen(carmen_reader_t *reader, carmen_record_t *rec, const char *path, const char *prog,
-                  stamp_repair_t *repair, const logrun_ops_t *ops, void *ctx);
+                  stamp_repair_t *repair, const logrun_ops_t *ops, void *ctx, int odom_lines);
 
 #endif

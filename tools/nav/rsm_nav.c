@@ -170,9 +170,11 @@ static void usage(FILE *f)
             "usage: rsm-nav SOURCE [--method rsm|icp|odometry] --trajectory OUT.txt [--map OUT.pgm]\n"
             "               [--laser-pose X Y THETA] [--upside-down] [--set KEY=VALUE]... [--quiet]\n"
             "SOURCE is one of:\n"
-            "  --carmen LOG [--fov179]   a CARMEN log, plain or gzip (FLASER/ROBOTLASER1 scans;\n"
-            "                            odometry from the pose fields of the laser lines;\n"
-            "                            a pipe is read once: no mount looked up in it)\n"
+            "  --carmen LOG [--fov179] [--odom-lines]   a CARMEN log, plain or gzip\n"
+            "                            (FLASER/ROBOTLASER1 scans; odometry from the pose fields\n"
+            "                            of the laser lines, and with --odom-lines each ODOM line\n"
+            "                            between them a step too; a pipe is read once: no mount\n"
+            "                            looked up in it)\n"
             "  --capture FILE            a capture of the robot (ARIA) and laser (LMS, or an\n"
             "                            rsm-convert --lidar ld06|rplidar stream) links\n"
             "  --robot DEV --lms DEV     live serial links (devices or pseudo-terminals), with\n"
@@ -870,7 +872,7 @@ static void carmen_scan_cb(void *ctx, const carmen_record_t *rec, uint64_t stamp
     nav_result(nav, rc, &rep, now_s() - t0, rec->stamp_s);
 }
 
-static int run_carmen(nav_t *nav, const char *path, int fov179)
+static int run_carmen(nav_t *nav, const char *path, int fov179, int odom_lines)
 {
     static const logrun_ops_t ops = {carmen_start_cb, carmen_want_cb, carmen_motion_cb, carmen_scan_cb,
                                      carmen_done_cb};
@@ -882,7 +884,7 @@ static int run_carmen(nav_t *nav, const char *path, int fov179)
     cr.log_mount.x = cr.log_mount.y = cr.log_mount.theta = 0.0f;
     carmen_mount(nav, path, fov179, &cr.log_mount, &cr.have_log_mount);
     reader.fov179 = fov179;
-    status = logrun_carmen(&reader, &rec, path, "rsm-nav", &nav->repair, &ops, &cr);
+    status = logrun_carmen(&reader, &rec, path, "rsm-nav", &nav->repair, &ops, &cr, odom_lines);
     if (status < 0) {
         return 1; /* not even opened: nothing to sum up */
     }
@@ -1462,7 +1464,7 @@ enum {
     OPT_CARMEN = 256, OPT_CAPTURE, OPT_ROBOT, OPT_LMS, OPT_LIDAR, OPT_LIDAR_KEEP, OPT_NO_DESKEW,
     OPT_ROBOT_BAUD, OPT_LMS_BAUD, OPT_LISTEN, OPT_SECONDS, OPT_IDLE_EXIT, OPT_LOST_EXIT, OPT_TICKS_PER_M, OPT_WHEEL_BASE,
     OPT_INITIAL_POSE, OPT_LASER_POSE, OPT_UPSIDE_DOWN, OPT_TRAJECTORY, OPT_SUMMARY_JSON, OPT_TUM, OPT_SCAN_LOG, OPT_EVENTS,
-    OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_QUIET, OPT_SAVE_MAP, OPT_LOAD_MAP, OPT_GLOBAL, OPT_FREEZE_MAP,
+    OPT_MAP, OPT_METHOD, OPT_SET, OPT_FOV179, OPT_ODOM_LINES, OPT_QUIET, OPT_SAVE_MAP, OPT_LOAD_MAP, OPT_GLOBAL, OPT_FREEZE_MAP,
     OPT_SKIP_SECONDS, OPT_SCANS, OPT_GLOBAL_NEAR, OPT_TILE_STORE, OPT_SEARCH_MEMORY
 };
 
@@ -1498,6 +1500,7 @@ static const struct option nav_options[] = {
     {"method", required_argument, NULL, OPT_METHOD},
     {"set", required_argument, NULL, OPT_SET},
     {"fov179", no_argument, NULL, OPT_FOV179},
+    {"odom-lines", no_argument, NULL, OPT_ODOM_LINES},
     {"quiet", no_argument, NULL, OPT_QUIET},
     {"save-map", required_argument, NULL, OPT_SAVE_MAP},
     {"load-map", required_argument, NULL, OPT_LOAD_MAP},
@@ -1560,6 +1563,7 @@ int main(int argc, char **argv)
     float ticks_per_m = 0.0f;
     float wheel_base = 0.0f;
     int fov179 = 0;
+    int odom_lines = 0;
     int never_back = 0;
     int rc;
     int opt;
@@ -1755,6 +1759,9 @@ int main(int argc, char **argv)
         case OPT_FOV179:
             fov179 = 1;
             break;
+        case OPT_ODOM_LINES:
+            odom_lines = 1;
+            break;
         case OPT_QUIET:
             nav.quiet = 1;
             break;
@@ -1848,6 +1855,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "rsm-nav: --global and --global-near search a known map: give it with --load-map\n");
         return 2;
     }
+    if (odom_lines && carmen == NULL) {
+        fprintf(stderr, "rsm-nav: --odom-lines reads the ODOM lines of a CARMEN log: give it with --carmen\n");
+        return 2;
+    }
     if ((nav.skip_s > 0.0 && carmen == NULL) || (nav.max_scans > 0u && capture != NULL)) {
         fprintf(stderr, "rsm-nav: --skip-seconds works with --carmen, --scans with --carmen and live\n");
         return 2;
@@ -1898,7 +1909,7 @@ int main(int argc, char **argv)
         (void)fflush(nav.traj); /* its header too */
     }
     if (carmen != NULL) {
-        rc = run_carmen(&nav, carmen, fov179);
+        rc = run_carmen(&nav, carmen, fov179, odom_lines);
     } else if (capture != NULL) {
         rc = run_capture(&nav, capture, &sink, &live);
     } else {
