@@ -338,3 +338,5 @@ def test_fault_names_are_checked_before_anything_runs(capsys):
     assert "(none given)" in capsys.readouterr().err
     assert bench.main(["--fault-names", "gap"]) == 1
     assert "goes with --only faults" in capsys.readouterr().err
+    assert bench.main(["--odom-lines"]) == 1
+    assert "--odom-lines goes with --only faults" in capsys.readouterr().err

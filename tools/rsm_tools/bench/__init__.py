@@ -163,10 +163,13 @@ def build_parser() -> argparse.ArgumentParser:
                    "--jobs, --shared, --output, --work-dir); capture (the capture path against the direct run and "
                    "its jittered runs, on every log; with --jitter-runs, --jobs, --shared, --work-dir), deskew "
                    "(de-skew with encoder packets in bursts; with --deskew-seconds, --work-dir) or faults (the "
-                   "section Faults; with --faults, --fault-names, --quick, --jobs, --shared, --work-dir): these "
-                   "three print their lines and write WORK/only-NAME.json, and leave the report as it is")
+                   "section Faults; with --faults, --fault-names, --odom-lines, --quick, --jobs, --shared, "
+                   "--work-dir): these three print their lines and write WORK/only-NAME.json, and leave the report "
+                   "as it is")
     p.add_argument("--fault-names", help="with --only faults: the faults to run, comma-separated (default all: "
                    + ", ".join(FAULT_NAMES) + "); the clean runs always")
+    p.add_argument("--odom-lines", action="store_true", help="with --only faults: every run, clean or faulty, "
+                   "rsm-nav --odom-lines on a log with its ODOM lines (each an odometry step of its own)")
     p.add_argument("--jitter-runs", type=int, help=f"direct runs with +-{fullchecks.JITTER_M * 1e6:g} um of odometry "
                    f"jitter beside the capture path (default {fullchecks.JITTER_RUNS}; quick "
                    f"{fullchecks.QUICK_JITTER_RUNS})")
@@ -223,6 +226,8 @@ def _jsonable(o):
 def _fault_names(args: argparse.Namespace) -> Tuple[str, ...]:
     """--fault-names as a tuple (every fault without it); refused when
     unknown, empty, or given without --only faults."""
+    if args.odom_lines and args.only != "faults":
+        raise BenchError("--odom-lines goes with --only faults (the whole bench runs as the defaults do)")
     if args.fault_names is None:
         return FAULT_NAMES
     if args.only != "faults":
@@ -503,8 +508,9 @@ def _run_only_line(args: argparse.Namespace, nav: Path, logs, work: Path, root: 
         if runs < 1:
             raise BenchError("--only faults needs --faults of at least 1")
         print("rsm-bench: logs " + ", ".join(f"{l} ({shown_path(g, root)})" for l, g, _ in logs)
-              + f"; faults only: {', '.join(names)}, {runs} runs each", flush=True)
-        res = run_faults(nav, logs, runs, work, args.jobs, names=names)
+              + f"; faults only: {', '.join(names)}, {runs} runs each"
+              + (", rsm-nav --odom-lines" if args.odom_lines else ""), flush=True)
+        res = run_faults(nav, logs, runs, work, args.jobs, names=names, odom_lines=args.odom_lines)
         lines = report_faults(res) + [f["line"] for f in fault_floors(res)]
     else:
         res = _deskew.run(nav, work, _deskew_seconds(args))

@@ -337,15 +337,21 @@ def summarize(fault_runs: Sequence[dict], clean_median: float,
 
 
 def run_faults(nav: Path, logs: Sequence[Tuple[str, Path, Path]], runs: int, work: Path, jobs: int,
-               reuse: Optional[Tuple[Path, Sequence[float]]] = None, names: Sequence[str] = FAULT_NAMES) -> dict:
+               reuse: Optional[Tuple[Path, Sequence[float]]] = None, names: Sequence[str] = FAULT_NAMES,
+               odom_lines: bool = False) -> dict:
     """Every fault of ``names`` ``runs`` times on every log, and 2 x runs clean
     runs per log. ``reuse`` is (folder, update distances) of clean runs made
     in this bench run (the spread section's FOLDER/LABEL/clean-U.txt): those
-    are evaluated instead of run again. Returns the manifest entry of the
-    section."""
+    are evaluated instead of run again. With ``odom_lines`` every run, clean
+    or faulty, is ``rsm-nav --odom-lines`` on a log with its ODOM lines (the
+    faulty copies written with theirs; nothing reused). Returns the manifest
+    entry of the section."""
     from .measure import parallel, run_nav
 
     ncl = CLEAN_PER_FAULT_RUN * runs
+    lines_flag = ("--odom-lines",) if odom_lines else ()
+    if odom_lines:
+        reuse = None
     cups = clean_updates(ncl)
     loaded: Dict[str, flt.LoadedLog] = {}
     rels: Dict[str, list] = {}
@@ -368,7 +374,7 @@ def run_faults(nav: Path, logs: Sequence[Tuple[str, Path, Path]], runs: int, wor
             else:
                 traj_path = d / f"clean-{u:.3f}.txt"
                 summary = run_nav(nav, by_label[label], "rsm", traj_path,
-                                  extra=("--set", f"map_update_m={u:g}"))["parsed"]
+                                  extra=("--set", f"map_update_m={u:g}", *lines_flag))["parsed"]
                 reused = False
             e = errors(ev.load_trajectory(traj_path), rels[label])
             rec = (summary or {}).get("recovery") or {}
@@ -380,12 +386,13 @@ def run_faults(nav: Path, logs: Sequence[Tuple[str, Path, Path]], runs: int, wor
         path = d / f"{name}-{k}.clf"
         tmp = d / f"{name}-{k}.clf.tmp{os.getpid()}"
         with open(tmp, "wb") as fh:
-            # without the ODOM lines, which rsm-nav --carmen does not read: the same run, half the writing
-            written = flt.write_result(res, fh, "rsm-faults " + flt.describe(spec), odom_lines=False)
+            # without the ODOM lines, which rsm-nav --carmen reads only with --odom-lines: the same run, half
+            # the writing
+            written = flt.write_result(res, fh, "rsm-faults " + flt.describe(spec), odom_lines=odom_lines)
         os.replace(tmp, path)
         traj_path = d / f"{name}-{k}.txt"
         slog = d / f"{name}-{k}.scans"
-        extra = ["--set", f"map_update_m={u:g}", "--scan-log", str(slog)]
+        extra = ["--set", f"map_update_m={u:g}", "--scan-log", str(slog), *lines_flag]
         if spec.mount is not None:
             extra += ["--laser-pose", *(f"{v:g}" for v in spec.mount)]
         try:
@@ -409,7 +416,7 @@ def run_faults(nav: Path, logs: Sequence[Tuple[str, Path, Path]], runs: int, wor
     done = parallel(one, tasks, jobs)
     out = {"runs": runs, "clean_runs": ncl, "updates": [fault_update(k) for k in range(runs)],
            "clean_updates": cups, "faults": [{"name": n, "what": w} for n, w in FAULTS if n in names],
-           "recovery_note": RECOVERY_NOTE, "logs": {}}
+           "recovery_note": RECOVERY_NOTE, "odom_lines": odom_lines, "logs": {}}
     for label, log, rel in logs:
         clean = [r for (lab, name, _), r in done if lab == label and name == "clean"]
         clean.sort(key=lambda r: r["update"])
@@ -533,6 +540,9 @@ def report_faults(fa: Optional[dict]) -> List[str]:
           "same way: what the judge costs a matcher the fault did not hurt); odometry alone on "
           "the clean log and on the faulty one (median over the runs); recoveries: rsm-nav's count of recoveries "
           "taken (median and most in a run).", ""]
+    if fa.get("odom_lines"):
+        L += ["Every run here, clean or faulty, fed the logs' `ODOM` lines as odometry steps of their own "
+              "(`rsm-nav --odom-lines`, the faulty copies written with theirs): not the bench's default.", ""]
     for f in fa["faults"]:
         L.append(f"- *{f['name']}*: {f['what']}.")
     L.append("")
