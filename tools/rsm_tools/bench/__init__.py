@@ -225,7 +225,8 @@ def _jsonable(o):
 
 def _fault_names(args: argparse.Namespace) -> Tuple[str, ...]:
     """--fault-names as a tuple (every fault without it); refused when
-    unknown, empty, or given without --only faults."""
+    unknown, empty, or given without --only faults, as is --odom-lines
+    without it."""
     if args.odom_lines and args.only != "faults":
         raise BenchError("--odom-lines goes with --only faults (the whole bench runs as the defaults do)")
     if args.fault_names is None:
