@@ -56,6 +56,16 @@ void logrun_scan(const carmen_record_t *rec, rsm_scan_t *scan)
     (void)rsm_scan_set_uniform(scan, rec->count, rec->start_rad, rec->step_rad);
 }
 
+/* The odometry increment from last_odom to rec's pose, to ops->motion;
+ * last_odom moves on to it. */
+static void step_to(const carmen_record_t *rec, double *last_odom, const logrun_ops_t *ops, void *ctx)
+{
+    const rsm_pose_t d = carmen_between(last_odom, rec->odom_d);
+    const rsm_motion_t u = {d.x, d.y, d.theta};
+    ops->motion(ctx, &u);
+    memcpy(last_odom, rec->odom_d, 3u * sizeof *last_odom);
+}
+
 int logrun_carmen(carmen_reader_t *reader, carmen_record_t *rec, const char *path, const char *prog,
                   stamp_repair_t *repair, const logrun_ops_t *ops, void *ctx, int odom_lines)
 {
@@ -85,10 +95,7 @@ int logrun_carmen(carmen_reader_t *reader, carmen_record_t *rec, const char *pat
             /* Each step apart, as the robot's driver sends them: the
              * localizer calibrates and weighs each one (a drive between
              * two scans far apart, in one step, cannot be calibrated). */
-            const rsm_pose_t d = carmen_between(last_odom, rec->odom_d);
-            const rsm_motion_t u = {d.x, d.y, d.theta};
-            ops->motion(ctx, &u);
-            memcpy(last_odom, rec->odom_d, sizeof last_odom);
+            step_to(rec, last_odom, ops, ctx);
             continue;
         }
         /* Odometry comes from the pose carried by each laser line (and,
@@ -102,12 +109,10 @@ int logrun_carmen(carmen_reader_t *reader, carmen_record_t *rec, const char *pat
                 break;
             }
             started = 1;
+            memcpy(last_odom, rec->odom_d, sizeof last_odom);
         } else {
-            const rsm_pose_t d = carmen_between(last_odom, rec->odom_d);
-            const rsm_motion_t u = {d.x, d.y, d.theta};
-            ops->motion(ctx, &u);
+            step_to(rec, last_odom, ops, ctx);
         }
-        memcpy(last_odom, rec->odom_d, sizeof last_odom);
         ops->scan(ctx, rec, stamp_repair(repair, logrun_stamp_us(rec)));
     }
     carmen_close(reader);

@@ -243,7 +243,7 @@ def _fault_names(args: argparse.Namespace) -> Tuple[str, ...]:
 
 def run(args: argparse.Namespace) -> Path:
     t_start = time.monotonic()
-    _fault_names(args)  # a bad argument is refused before anything is built or read
+    fault_names = _fault_names(args)  # a bad argument is refused before anything is built or read
     root = (args.root or find_root()).resolve()
     build = (args.build_dir or root / "build-release").resolve()
     nav = build / "tools" / "nav" / "rsm-nav"
@@ -296,7 +296,7 @@ def run(args: argparse.Namespace) -> Path:
         return output
 
     if args.only in ("capture", "deskew", "faults"):
-        return _run_only_line(args, nav, logs, work, root)
+        return _run_only_line(args, nav, logs, work, root, fault_names)
 
     def stage(name, fn, *a):
         print(f"rsm-bench: {name} ...", flush=True)
@@ -486,7 +486,8 @@ def _deskew_seconds(args: argparse.Namespace) -> float:
     return sec
 
 
-def _run_only_line(args: argparse.Namespace, nav: Path, logs, work: Path, root: Path) -> Path:
+def _run_only_line(args: argparse.Namespace, nav: Path, logs, work: Path, root: Path,
+                   fault_names: Sequence[str]) -> Path:
     """--only capture, deskew or faults: the lines alone, printed and kept in
     WORK/only-NAME.json (the report is the whole bench's and is left as it is)."""
     t0 = time.monotonic()
@@ -504,14 +505,13 @@ def _run_only_line(args: argparse.Namespace, nav: Path, logs, work: Path, root: 
                                                            _jitter_runs(args), args.jobs)
         lines = [c["line"] for c in res["checks"]]
     elif args.only == "faults":
-        names = _fault_names(args)
         runs = args.faults if args.faults is not None else (QUICK_FAULT_RUNS if args.quick else FAULT_RUNS)
         if runs < 1:
             raise BenchError("--only faults needs --faults of at least 1")
         print("rsm-bench: logs " + ", ".join(f"{l} ({shown_path(g, root)})" for l, g, _ in logs)
-              + f"; faults only: {', '.join(names)}, {runs} runs each"
+              + f"; faults only: {', '.join(fault_names)}, {runs} runs each"
               + (", rsm-nav --odom-lines" if args.odom_lines else ""), flush=True)
-        res = run_faults(nav, logs, runs, work, args.jobs, names=names, odom_lines=args.odom_lines)
+        res = run_faults(nav, logs, runs, work, args.jobs, names=fault_names, odom_lines=args.odom_lines)
         lines = report_faults(res) + [f["line"] for f in fault_floors(res)]
     else:
         res = _deskew.run(nav, work, _deskew_seconds(args))
