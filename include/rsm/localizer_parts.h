@@ -374,6 +374,8 @@ typedef struct rsm_global {
                                     * when cand was full (a place may count more than once) */
     float floor_score;             /* a pose must score at least this to be kept */
     float best_score;              /* the best coarse score found */
+    uint32_t give_up;              /* searches that may prove nothing before it ends unproven
+                                    * (a search after a gap in the scans); 0: until one proves */
     uint32_t unproven;             /* searches in a row that proved nothing (each next one
                                     * keeps poses with a lower share of points on walls) */
     /* The proof, spread over scans: every kept pose descended with pts, to
