@@ -1700,10 +1700,11 @@ static void begin_global(rsm_localizer_t *loc, float radius_m);
  * either log none searched. */
 #define GAP_CROSSING 0.5f
 /* Searches after a gap that may prove nothing before the robot maps on from
- * odometry's pose: two at the first bar and one at 0.95 of the points
- * (rsm_global_share). The Intel runs found were found by their second;
- * with eight, odometry alone carried the others on for up to 130 scans
- * and one came out 3.1 m off instead of 0.6 m. */
+ * odometry's pose: the window at 0.97 and at 0.95 of the points, then
+ * twice as wide at 0.97 (rsm_global_share, rsm_global_radius). The Intel
+ * runs found were found by their second; with eight, odometry alone
+ * carried the others on for up to 128 scans and one came out 3.1 m off
+ * instead of 0.6 m. */
 #define GAP_SEARCHES 3u
 
 /* Whether the scan after a gap (res: its match from pred, rc its status)
