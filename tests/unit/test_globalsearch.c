@@ -810,6 +810,49 @@ static void test_carried_during_a_pause(void)
     }
 }
 
+/* After the gap of test_a_step_over_a_gap_that_crosses_the_walls_is_searched_for
+ * (its step already given), the robot in a hall the map does not hold:
+ * every reading 4.5 m, in a room at most 4 m across. */
+static void hall_after_gap(size_t to, size_t at, uint64_t pause_us, uint32_t writes)
+{
+    const rsm_synth_world_t world = rsm_synth_world_room();
+    rsm_localizer_report_t rep;
+    size_t k;
+    size_t b;
+    for (k = 0; to + k < path_len; ++k) {
+        if (k > 0u) {
+            const rsm_motion_t u = rsm_synth_motion(&path[to + k - 1u], &path[to + k], NULL);
+            TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &path[to + k], &scan_cfg, NULL,
+                                                     (uint64_t)(at + k) * STEP_US + pause_us, &scan));
+        for (b = 0; b < scan.count; ++b) {
+            scan.range_m[b] = 4.5f;
+        }
+        TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+        if (k == 0u) {
+            TEST_ASSERT_EQUAL_INT(RSM_SCAN_POOR_FIT, rep.outcome);
+            TEST_ASSERT_TRUE(rsm_localizer_searching(&loc));
+        } else if (!rsm_localizer_searching(&loc)) {
+            break;
+        }
+        TEST_ASSERT_EQUAL_UINT32(writes, loc.state.persistent.map.counters.updates);
+    }
+    TEST_ASSERT_TRUE_MESSAGE(to + k < path_len, "still searching when the path ended");
+    TEST_ASSERT_EQUAL_UINT32(3u, loc.counters.global_searches);
+    TEST_ASSERT_EQUAL_UINT32(0u, loc.counters.global_found);
+    /* The next scan is the tracking's again, not the search's. */
+    k++;
+    TEST_ASSERT_TRUE(to + k < path_len);
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &(rsm_motion_t){0.0f, 0.0f, 0.0f}));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_synth_scan(&world, &path[to + k - 1u], &scan_cfg, NULL,
+                                                 (uint64_t)(at + k) * STEP_US + pause_us, &scan));
+    TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_scan(&loc, &scan, &rep));
+    TEST_ASSERT_TRUE(rep.outcome != RSM_SCAN_SEARCHING);
+    TEST_ASSERT_FALSE(rsm_localizer_searching(&loc));
+    TEST_ASSERT_EQUAL_UINT32(3u, loc.counters.global_searches);
+}
+
 /* Odometry over a gap of a minute in the scans, reported in one step that
  * is off (issue 29's long gaps: on Intel such a step is metres and tens of
  * degrees off). The robot was mapping; the first scan after the gap, from
@@ -817,9 +860,11 @@ static void test_carried_during_a_pause(void)
  * step puts it its beams pass through them: it is not written, the robot
  * is lost and searched for within twice the step's length and recover_m,
  * and the pose proven is the true one. The step reported right tracks on
- * with no search; a search that proves nothing gives up after GAP_SEARCHES
- * (localizer.c) and the robot maps on (test_gaps.c: a gap into ground the
- * map does not hold is written at once). */
+ * with no search. Where the robot comes out in a hall the map does not
+ * hold (every reading 4.5 m), the searches prove nothing and, after three
+ * (GAP_SEARCHES, localizer.c), it maps on from odometry's pose
+ * (test_gaps.c: a gap into ground the map holds nothing of is written at
+ * once). */
 static void test_a_step_over_a_gap_that_crosses_the_walls_is_searched_for(void)
 {
     const rsm_synth_world_t world = rsm_synth_world_room();
@@ -831,7 +876,7 @@ static void test_a_step_over_a_gap_that_crosses_the_walls_is_searched_for(void)
     make_path();
     at = path_len - 120u;
     to = path_len - 40u;
-    for (pass = 0; pass < 2; ++pass) {
+    for (pass = 0; pass < 3; ++pass) {
         rsm_pose_t told = path[to];
         rsm_motion_t u;
         size_t found = 0;
@@ -840,7 +885,7 @@ static void test_a_step_over_a_gap_that_crosses_the_walls_is_searched_for(void)
         float chord;
         cfg.map_frozen = 0u;
         map_path(&world, at);
-        if (pass == 0) {
+        if (pass != 1) {
             /* Reported 2.5 m west of where the robot came out, turned
              * 0.5 rad: a step whose prior is too wide for a match there
              * (unsure() in localizer.c), the recovery's metre too short. */
@@ -851,6 +896,10 @@ static void test_a_step_over_a_gap_that_crosses_the_walls_is_searched_for(void)
         chord = sqrtf(u.dx * u.dx + u.dy * u.dy);
         TEST_ASSERT_EQUAL_INT(RSM_OK, rsm_localizer_motion(&loc, &u));
         writes = loc.state.persistent.map.counters.updates;
+        if (pass == 2) {
+            hall_after_gap(to, at, pause_us, writes);
+            continue;
+        }
         step_elsewhere(&world, to, at, 0u, pause_us, &rep);
         if (pass == 1) {
             TEST_ASSERT_EQUAL_INT(RSM_SCAN_ACCEPTED, rep.outcome);
