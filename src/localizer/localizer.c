@@ -1686,6 +1686,20 @@ static rsm_outcome_t settle(rsm_localizer_t *loc, size_t npts, int odometry_move
     return RSM_SCAN_ACCEPTED;
 }
 
+/* Whether a match (rc its status, res the result) fits as a tracked scan
+ * does: enough of the map under it, and track_min_fit of recent scans'. */
+static int fits_as_tracked(const rsm_localizer_t *loc, int rc, const rsm_mapmatch_result_t *res)
+{
+    return rc == RSM_OK && res->used >= loc->cfg->min_points / 2u &&
+           res->hit >= loc->cfg->track_min_fit * loc->state.persistent.fit;
+}
+
+/* A match's fit over recent scans' (0 when it found none). */
+static float fit_ratio_of(const rsm_localizer_t *loc, int rc, const rsm_mapmatch_result_t *res)
+{
+    return rc == RSM_OK && loc->state.persistent.fit > 0.0f ? res->hit / loc->state.persistent.fit : 0.0f;
+}
+
 static void begin_global(rsm_localizer_t *loc, float radius_m);
 
 /* After a gap in the scans, a scan that neither tracks where odometry put
@@ -1714,9 +1728,7 @@ static int lost_after_gap(rsm_localizer_t *loc, size_t npts, const rsm_pose_t *p
 {
     const rsm_localizer_config_t *cfg = loc->cfg;
     float share = 0.0f;
-    if (cfg->recover_m <= 0.0f || cfg->map_frozen ||
-        (rc == RSM_OK && res->used >= cfg->min_points / 2u &&
-         res->hit >= cfg->track_min_fit * loc->state.persistent.fit)) {
+    if (cfg->recover_m <= 0.0f || cfg->map_frozen || fits_as_tracked(loc, rc, res)) {
         return 0;
     }
     (void)contradicts(loc, rc == RSM_OK ? &res->pose : pred, npts, &share);
@@ -1804,7 +1816,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
                       &res);
     if (dt_s > UNSURE_GAP_S && !odometry_moved && cfg->recover_m > 0.0f && loc->counters.scans > 1u &&
         loc->last.track == RSM_TRACK_TRACKING &&
-        (rc != RSM_OK || res.used < cfg->min_points / 2u || res.hit < cfg->track_min_fit * loc->state.persistent.fit)) {
+        !fits_as_tracked(loc, rc, &res)) {
         /* No scan for a while, odometry still, and the scan no longer
          * fits where the robot stood and tracked: it was carried (or the
          * building changed around it), as far as the time allowed. (Not
@@ -1816,7 +1828,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
          * 7 m off the truth, fitting as well as the map's own); the
          * caller reports lost at once, and the global search, if on,
          * covers the whole map. Kept at the prediction, not written. */
-        rep->fit_ratio = rc == RSM_OK && loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 0.0f;
+        rep->fit_ratio = fit_ratio_of(loc, rc, &res);
         *carried = 1;
         return RSM_SCAN_POOR_FIT;
     }
@@ -1881,8 +1893,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
                  * (with global_when_lost the global search takes over; else
                  * the recovery runs on). */
                 rr->checked = 0u;
-                rep->fit_ratio =
-                    rc == RSM_OK && loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 0.0f;
+                rep->fit_ratio = fit_ratio_of(loc, rc, &res);
                 if (RECOVER_PASS_WORK * (uint32_t)npts * passes + RECOVER_FIRST_WORK + RECOVER_CONFLICT_WORK <=
                     cfg->recover_budget) {
                     rr->checked = 1u;
@@ -1910,7 +1921,7 @@ static rsm_outcome_t step_map(rsm_localizer_t *loc, size_t npts, int odometry_mo
         const rsm_pose_t d = rsm_pose_between(&loc->state.persistent.anchor, &pred);
         begin_global(loc, 2.0f * sqrtf(d.x * d.x + d.y * d.y) + cfg->recover_m);
         loc->state.persistent.global.give_up = GAP_SEARCHES;
-        rep->fit_ratio = rc == RSM_OK && loc->state.persistent.fit > 0.0f ? res.hit / loc->state.persistent.fit : 0.0f;
+        rep->fit_ratio = fit_ratio_of(loc, rc, &res);
         *carried = 1;
         return RSM_SCAN_POOR_FIT;
     }

@@ -697,6 +697,15 @@ static void test_a_window_that_misses_grows(void)
     TEST_ASSERT_TRUE(loc.counters.global_ambiguous >= 1u);
 }
 
+/* The tour (make_path), and two scans of it 80 apart near its end: where
+ * the map is made up to, and where the robot is found again. */
+static void tour_ends(size_t *at, size_t *to)
+{
+    make_path();
+    *at = path_len - 120u;
+    *to = path_len - 40u;
+}
+
 /* Maps the path's first `at` scans, then freezes the map (cfg is kept by
  * pointer: from now on). */
 static void map_then_freeze(const rsm_synth_world_t *world, size_t at)
@@ -735,9 +744,7 @@ static void test_lost_then_found_by_itself(void)
     size_t to;
     size_t k;
     int pass;
-    make_path();
-    at = path_len - 120u;
-    to = path_len - 40u;
+    tour_ends(&at, &to);
     for (pass = 0; pass < 2; ++pass) {
         int lost = 0;
         size_t found = 0;
@@ -780,9 +787,7 @@ static void test_carried_during_a_pause(void)
     size_t to;
     size_t k;
     int pass;
-    make_path();
-    at = path_len - 120u;
-    to = path_len - 40u;
+    tour_ends(&at, &to);
     cfg.global_when_lost = 1u;
     for (pass = 0; pass < 2; ++pass) {
         const size_t from = pass == 0 ? to : at - 1u;
@@ -873,9 +878,7 @@ static void test_a_step_over_a_gap_that_crosses_the_walls_is_searched_for(void)
     size_t at;
     size_t to;
     int pass;
-    make_path();
-    at = path_len - 120u;
-    to = path_len - 40u;
+    tour_ends(&at, &to);
     for (pass = 0; pass < 3; ++pass) {
         rsm_pose_t told = path[to];
         rsm_motion_t u;

@@ -386,8 +386,8 @@ def run_faults(nav: Path, logs: Sequence[Tuple[str, Path, Path]], runs: int, wor
         path = d / f"{name}-{k}.clf"
         tmp = d / f"{name}-{k}.clf.tmp{os.getpid()}"
         with open(tmp, "wb") as fh:
-            # without the ODOM lines, which rsm-nav --carmen reads only with --odom-lines: the same run, half
-            # the writing
+            # the ODOM lines only for --odom-lines: rsm-nav --carmen reads them only then, and without them
+            # the run is the same for half the writing
             written = flt.write_result(res, fh, "rsm-faults " + flt.describe(spec), odom_lines=odom_lines)
         os.replace(tmp, path)
         traj_path = d / f"{name}-{k}.txt"
