@@ -435,10 +435,20 @@ void rsm_odometry_cal_init(rsm_odometry_cal_t *cal)
     }
 }
 
+/* Odometry's sums between two scans no robot makes: a turn over pi (the
+ * heading change would wrap) or 10 m of travel. Within them (and the gate,
+ * which a NaN fails) every sum stays finite and the system solvable. */
+#define CAL_MAX_TRAVEL_M 10.0f
+
+/* A step longer than the spans the correction is fitted on comes over a gap
+ * in the scans: the correction needs the path (the turns summed, the metres
+ * driven), and the step gives only its chord and its turn less whole turns
+ * (on ACES a drift term of 0.022 rad/m times a 23 m chord turned a 120 s
+ * step 30 degrees away; docs/faults.md). It is taken as reported. */
 rsm_motion_t rsm_odometry_cal_apply(const rsm_odometry_cal_t *cal, const rsm_motion_t *u)
 {
     rsm_motion_t v = *u;
-    if (cal != NULL) {
+    if (cal != NULL && u->dx * u->dx + u->dy * u->dy <= CAL_MAX_TRAVEL_M * CAL_MAX_TRAVEL_M) {
         v.dtheta = rsm_wrap_angle(u->dtheta * (1.0f + cal->k_turn) + cal->k_drift * u->dx);
         v.dx = u->dx * (1.0f + cal->k_scale);
         v.dy = u->dy * (1.0f + cal->k_scale);
@@ -553,11 +563,6 @@ static float clamp_abs(float v, float most)
 {
     return v < -most ? -most : (v > most ? most : v);
 }
-
-/* Odometry's sums between two scans no robot makes: a turn over pi (the
- * heading change would wrap) or 10 m of travel. Within them (and the gate,
- * which a NaN fails) every sum stays finite and the system solvable. */
-#define CAL_MAX_TRAVEL_M 10.0f
 
 /* A scan whose position along odometry's way is known to at least this
  * share of the variance that way had without one (the last pinned scan's,

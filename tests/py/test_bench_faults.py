@@ -306,6 +306,31 @@ def test_a_recovery_that_moves_as_the_clean_run_does_is_right():
     assert bf.false_recoveries([10.0], run, rels, None, other) == (1, 1, 0)
 
 
+def test_a_recovery_that_lands_on_the_clean_run_after_a_long_wrong_stretch_is_right():
+    """A run 0.4 m off since long before the span (a gap's step) that a
+    search brings within 0.3 m and 5 deg of the clean run's pose at its scan
+    is right, though every relation across it starts from a wrong pose (the
+    issue's own test). One that jumps to 0.35 m off the clean run's other
+    side is not."""
+    def truth(t):
+        return (0.1 * t, 0.0, 0.0)
+
+    def run_pose(t, after):
+        x, y, th = truth(t)
+        return (x, y + (0.4 if t < 100.0 else after), th)
+
+    stamps = [0.5 * i for i in range(0, 241)]
+    rels = [_rel(truth, 70.0, 101.0), _rel(truth, 95.0, 110.0)]
+    clean = ev.Trajectory((t, *truth(t)) for t in stamps)
+    put_right = ev.Trajectory((t, *run_pose(t, 0.1)) for t in stamps)
+    assert bf.false_recoveries([100.0], put_right, rels) == (1, 1, 0)
+    assert bf.false_recoveries([100.0], put_right, rels, None, clean) == (1, 0, 0)
+    short = ev.Trajectory((t, *run_pose(t, -0.35)) for t in stamps)
+    assert bf.false_recoveries([100.0], short, rels, None, clean) == (1, 1, 0)
+    # with no relation across it, it stays unjudged
+    assert bf.false_recoveries([100.0], put_right, [_rel(truth, 20.0, 30.0)], None, clean) == (0, 0, 1)
+
+
 def test_false_recoveries_are_judged_at_the_laser_with_a_mount():
     """With the laser off the robot's origin the judged trajectory holds the
     laser's pose (judged_trajectory composes the mount), as the relations do."""

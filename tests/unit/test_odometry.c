@@ -805,6 +805,36 @@ static rsm_odometry_cal_config_t with_distance(void)
     return c;
 }
 
+void test_odometry_cal_should_take_a_step_over_a_gap_as_reported(void)
+{
+    /* Odometry turning 6 % too far and drifting 0.03 rad/m, learned; then
+     * one step for a stretch the scans missed. Up to 10 m (the longest
+     * span the correction is fitted on) it is corrected; a longer one is
+     * a chord of an unknown path (its turns summed and its metres driven
+     * are what the correction needs), taken as reported, the distance's
+     * correction too. */
+    const rsm_odometry_cal_config_t c = rsm_odometry_cal_config_default();
+    rsm_odometry_cal_t cal;
+    const rsm_motion_t near = {9.0f, 1.0f, 0.5f};
+    const rsm_motion_t far = {20.0f, -3.0f, 0.5f};
+    const rsm_motion_t back = {-10.5f, 0.0f, -0.2f};
+    rsm_motion_t v;
+    rsm_odometry_cal_init(&cal);
+    (void)drive(&cal, &c, 3000u, 0.06f, 0.03f, 1.0f);
+    TEST_ASSERT_TRUE(cal.k_drift < -0.025f && cal.k_turn < -0.04f);
+    cal.k_scale = 0.05f; /* as if learned (drive() learns no distance) */
+    v = rsm_odometry_cal_apply(&cal, &near);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, rsm_wrap_angle(0.5f * (1.0f + cal.k_turn) + cal.k_drift * 9.0f), v.dtheta);
+    TEST_ASSERT_FLOAT_WITHIN(1e-4f, 9.0f * 1.05f, v.dx);
+    v = rsm_odometry_cal_apply(&cal, &far);
+    TEST_ASSERT_EQUAL_FLOAT(far.dx, v.dx);
+    TEST_ASSERT_EQUAL_FLOAT(far.dy, v.dy);
+    TEST_ASSERT_EQUAL_FLOAT(far.dtheta, v.dtheta);
+    v = rsm_odometry_cal_apply(&cal, &back);
+    TEST_ASSERT_EQUAL_FLOAT(back.dx, v.dx);
+    TEST_ASSERT_EQUAL_FLOAT(back.dtheta, v.dtheta);
+}
+
 void test_odometry_cal_should_learn_the_distance_between_pinned_scans(void)
 {
     const rsm_odometry_cal_config_t c = with_distance();
@@ -1059,6 +1089,7 @@ int main(void)
     RUN_TEST(test_odometry_cal_should_stay_near_zero_for_true_odometry_and_weigh_scans);
     RUN_TEST(test_odometry_cal_should_gate_jumps_and_bound_the_correction);
     RUN_TEST(test_odometry_cal_should_survive_an_absurd_step);
+    RUN_TEST(test_odometry_cal_should_take_a_step_over_a_gap_as_reported);
     RUN_TEST(test_odometry_cal_should_learn_the_distance_between_pinned_scans);
     RUN_TEST(test_odometry_cal_should_gate_and_bound_the_distance);
     RUN_TEST(test_odometry_cal_should_learn_the_distance_over_long_spans_of_a_drifting_heading);

@@ -97,7 +97,8 @@ RECOVERY_NOTE = ("a recovery is false when no relation across it (one end within
                  f"{FALSE_RECOVERY_AFTER_S:g} s after its scan and before the next recovery, the other up to "
                  f"{FALSE_RECOVERY_SPAN_S:g} s before, both at scans the run estimated) agrees, with the ground truth "
                  "or with the clean run's motion over it at the same map_update_m, within "
-                 f"{FALSE_RECOVERY_M:g} m and {FALSE_RECOVERY_DEG:g} deg; with no such relation it is not judged "
+                 f"{FALSE_RECOVERY_M:g} m and {FALSE_RECOVERY_DEG:g} deg, and it does not land that near the clean "
+                 "run's pose at its scan; with no such relation it is not judged "
                  "(rsm-nav --scan-log says which scans a search placed)")
 
 
@@ -254,9 +255,13 @@ def false_recoveries(stamps: Sequence[float], judged: ev.Trajectory, relations: 
     ``clean`` (the clean run at the same map_update_m, laser poses) a
     relation also agrees when the run moved over it as the clean run did:
     where every run jumps back onto a place mapped long before (a drift put
-    right at a loop), the jump is the map's, not the fault's. Relations that
-    do not cross the recovery cannot tell: a wrong pose tracked on stays
-    consistent with itself."""
+    right at a loop), the jump is the map's, not the fault's; and a
+    recovery that relations cross is right too when it lands within
+    FALSE_RECOVERY_M and FALSE_RECOVERY_DEG of the clean run's pose at its
+    scan (the issue's own test): a run that went wrong long before (more
+    than the span) and that a search put right has no right pose for a
+    relation to start from. Relations that do not cross the recovery
+    cannot tell: a wrong pose tracked on stays consistent with itself."""
     span = FALSE_RECOVERY_SPAN_S
     n_judged = n_false = n_not = 0
     order = sorted(stamps)
@@ -287,6 +292,11 @@ def false_recoveries(stamps: Sequence[float], judged: ev.Trajectory, relations: 
                     agreed = True
             if agreed:
                 break
+        if seen and not agreed and clean is not None:
+            at, ref = judged.lookup(t, tolerance=0.0), clean.lookup(t, tolerance=0.0)
+            if at is not None and ref is not None:
+                dt, dr = ev.relation_error(tuple(at), tuple(ref))
+                agreed = dt <= FALSE_RECOVERY_M and math.degrees(dr) <= FALSE_RECOVERY_DEG
         if not seen:
             n_not += 1
         else:
