@@ -251,7 +251,8 @@ void rsm_odometry_cal_init(rsm_odometry_cal_t *cal);
 
 /* u corrected by the correction in force; u as it is if cal is NULL or u
  * is longer than 10 m (a step over a gap in the scans, whose path the
- * correction would need). Pure: rsm_odometry_cal_count counts u once it is used. */
+ * correction would need). Pure: rsm_odometry_cal_count counts u once it is
+ * used. */
 rsm_motion_t rsm_odometry_cal_apply(const rsm_odometry_cal_t *cal, const rsm_motion_t *u);
 
 /* Counts the raw increment u towards the next update (call it for each

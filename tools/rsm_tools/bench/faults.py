@@ -239,6 +239,13 @@ def recovered_stamps(scan_log: Path) -> List[float]:
     return out
 
 
+def _agrees(pose, ref) -> bool:
+    """Whether pose is within FALSE_RECOVERY_M and FALSE_RECOVERY_DEG of ref
+    (a relation's motion, or a pose)."""
+    dt, dr = ev.relation_error(pose, ref)
+    return dt <= FALSE_RECOVERY_M and math.degrees(abs(dr)) <= FALSE_RECOVERY_DEG
+
+
 def false_recoveries(stamps: Sequence[float], judged: ev.Trajectory, relations: Sequence[ev.Relation],
                      estimated: Optional[set] = None, clean: Optional[ev.Trajectory] = None) -> Tuple[int, int, int]:
     """(judged, false, not judged) of the recoveries at ``stamps``. A
@@ -286,17 +293,12 @@ def false_recoveries(stamps: Sequence[float], judged: ev.Trajectory, relations: 
                 ca, cb = clean.lookup(r.t1, tolerance=0.0), clean.lookup(r.t2, tolerance=0.0)
                 if ca is not None and cb is not None:
                     refs.append(ev.between(tuple(ca), tuple(cb)))
-            for ref in refs:
-                dt, dr = ev.relation_error(moved, ref)
-                if dt <= FALSE_RECOVERY_M and math.degrees(abs(dr)) <= FALSE_RECOVERY_DEG:
-                    agreed = True
+            agreed = any(_agrees(moved, ref) for ref in refs)
             if agreed:
                 break
         if seen and not agreed and clean is not None:
             at, ref = judged.lookup(t, tolerance=0.0), clean.lookup(t, tolerance=0.0)
-            if at is not None and ref is not None:
-                dt, dr = ev.relation_error(tuple(at), tuple(ref))
-                agreed = dt <= FALSE_RECOVERY_M and math.degrees(dr) <= FALSE_RECOVERY_DEG
+            agreed = at is not None and ref is not None and _agrees(tuple(at), tuple(ref))
         if not seen:
             n_not += 1
         else:
